@@ -1,0 +1,53 @@
+// voxfx — errors and checks.
+//
+// Invalid input is a user error: it raises voxfx::Error, whose message says what is wrong and
+// where (file, line, triangle, vertex...). Programmer errors are checks: VOXFX_CHECK is always on,
+// VOXFX_DCHECK only in debug builds. Kernels neither throw nor allocate; validation happens at the
+// boundary (io/, public functions) and the CLI is the only place that catches.
+#pragma once
+
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace voxfx {
+
+/// The one error type of the library: a user-facing message, one line, no trailing period.
+class Error : public std::runtime_error {
+public:
+    explicit Error(const std::string& message) : std::runtime_error(message) {}
+};
+
+namespace detail {
+template <class... Args> std::string concat(const Args&... args) {
+    std::ostringstream out;
+    (out << ... << args);
+    return out.str();
+}
+[[noreturn]] void checkFailed(const char* expr, const char* file, int line);
+} // namespace detail
+
+/// Throws voxfx::Error with the arguments streamed into one message.
+template <class... Args> [[noreturn]] void fail(const Args&... args) { throw Error(detail::concat(args...)); }
+
+} // namespace voxfx
+
+#define VOXFX_CHECK(cond)                                                                                    \
+    do {                                                                                                     \
+        if (!(cond)) ::voxfx::detail::checkFailed(#cond, __FILE__, __LINE__);                                \
+    } while (false)
+
+#ifdef NDEBUG
+#define VOXFX_DCHECK(cond)                                                                                   \
+    do {                                                                                                     \
+    } while (false)
+#else
+#define VOXFX_DCHECK(cond) VOXFX_CHECK(cond)
+#endif
+
+// Marks functions that can later be compiled for a CUDA device as well as the host.
+#if defined(__CUDACC__)
+#define VOXFX_HOSTDEV __host__ __device__
+#else
+#define VOXFX_HOSTDEV
+#endif

@@ -1,0 +1,118 @@
+// voxfx — a Frame maps world space to a grid of columns and slices (ED06 §2).
+//
+// A frame is a camera whose image plane holds W x H *columns* and whose depth range is split
+// into D *slices*; cell (x, y, s) is the part of column (x, y) between slice boundaries s and s+1.
+//
+// Grid coordinates (what the rasterizer sees) are (gx, gy, depth):
+//   - gx, gy in column units: column x covers [x, x+1), its centre is x + 0.5;
+//   - orthographic frames: depth in slice units of the uniform slicing, slice s covers [s, s+1)
+//     and its centre is s + 0.5, so cell centres sit at half-integer grid coordinates;
+//   - perspective frames: depth is the world distance along the view direction (not z-buffer
+//     depth), so that uniform slicing is uniform in real distance (ED06 §2).
+// Slicing maps a column's depth to a slice coordinate: slice = (depth - near_c) * scale_c, with
+// one (near, scale) for the whole frame (uniform) or one per column (local, ED06 fig. 2).
+//
+// Orthographic axis convention: slices run along `axis`; columns run along the next two axes in
+// cyclic order, so the grid is right-handed: axis Z -> columns (x, y); axis X -> columns (y, z);
+// axis Y -> columns (z, x).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "voxfx/math.hpp"
+
+namespace voxfx {
+
+enum class Axis : uint8_t { X = 0, Y = 1, Z = 2 };
+enum class Slicing : uint8_t { Uniform, Local };
+
+/// World axis (0, 1, 2) of the grid's column-x, column-y and slice directions for an orthographic
+/// frame sliced along `a`.
+VOXFX_HOSTDEV constexpr int columnXAxis(Axis a) { return (int(a) + 1) % 3; }
+VOXFX_HOSTDEV constexpr int columnYAxis(Axis a) { return (int(a) + 2) % 3; }
+VOXFX_HOSTDEV constexpr int sliceAxis(Axis a) { return int(a); }
+
+const char* toString(Axis a);
+const char* toString(Slicing s);
+
+/// Depth-to-slice map of one column: slice coordinate = (depth - near) * scale.
+struct DepthToSlice {
+    double near = 0;
+    double scale = 1;
+    VOXFX_HOSTDEV double operator()(double depth) const { return (depth - near) * scale; }
+};
+
+class Frame {
+public:
+    Frame() = default;
+
+    /// Orthographic frame whose W x H x D cells tile `box` exactly, sliced along `axis`.
+    /// W and H count cells along columnXAxis(axis) and columnYAxis(axis), D along the axis.
+    /// Throws voxfx::Error for an empty or non-finite box or a zero dimension.
+    static Frame orthographic(const Box3d& box, Axis axis, int64_t w, int64_t h, int64_t d);
+
+    /// Perspective frame for a camera or spot light at `eye` looking at `target`, with vertical
+    /// field of view `fovY` (radians), W x H columns (pixels), and D slices spanning view
+    /// distances [nearDepth, farDepth] along the view direction (world units, 0 < near < far).
+    static Frame perspective(const Vec3d& eye, const Vec3d& target, const Vec3d& up, double fovY, int64_t w,
+                             int64_t h, double nearDepth, double farDepth, int64_t d);
+
+    bool isPerspective() const { return perspective_; }
+    Axis axis() const { return axis_; }
+    int64_t width() const { return w_; }
+    int64_t height() const { return h_; }
+    int64_t depth() const { return d_; }
+    int64_t columnCount() const { return w_ * h_; }
+
+    /// Orthographic: the world box the grid tiles, and the world size of one cell per world axis.
+    const Box3d& box() const { return box_; }
+    Vec3d cellSize() const;
+
+    /// Grid coordinates of a world point (see the file comment). For perspective frames the
+    /// point must lie in front of the eye (view depth > 0).
+    Vec3d gridFromWorld(const Vec3d& p) const;
+    /// World point of grid coordinates (gx, gy, depth).
+    Vec3d worldFromGrid(const Vec3d& g) const;
+    /// World-space centre of cell (x, y, s) under the frame's slicing.
+    Vec3d cellCenter(int64_t x, int64_t y, int64_t s) const;
+
+    /// Perspective: view depth of a world point (distance along the view direction).
+    double viewDepth(const Vec3d& p) const;
+    const Vec3d& eye() const { return eye_; }
+    /// Orthonormal camera basis (right, up, forward); orthographic: the column x, y and slice axes.
+    const Vec3d& right() const { return right_; }
+    const Vec3d& up() const { return up_; }
+    const Vec3d& forward() const { return forward_; }
+    double tanHalfFovY() const { return tanHalfY_; }
+
+    /// Depth range covered by the uniform slicing (orthographic: [0, D]).
+    double nearDepth() const { return near_; }
+    double farDepth() const { return far_; }
+
+    Slicing slicing() const { return local_.empty() ? Slicing::Uniform : Slicing::Local; }
+    /// Switches to ED06's locally adapted slicing: column c covers depths [near[c], far[c]] with
+    /// its D slices. Vectors of columnCount() entries; far[c] <= near[c] marks an empty column
+    /// (it then keeps the uniform range). Throws voxfx::Error on a size mismatch.
+    void setLocalSlicing(const std::vector<double>& nearPerColumn, const std::vector<double>& farPerColumn);
+    void setUniformSlicing() { local_.clear(); }
+    /// The depth-to-slice map of column c = y * width + x.
+    DepthToSlice depthToSlice(int64_t column) const {
+        return local_.empty() ? uniform_ : local_[static_cast<std::size_t>(column)];
+    }
+    /// True when both frames describe the same grid (same camera, dimensions and slicing).
+    bool sameGrid(const Frame& o) const;
+
+private:
+    bool perspective_ = false;
+    Axis axis_ = Axis::Z;
+    int64_t w_ = 0, h_ = 0, d_ = 0;
+    Box3d box_;
+    Vec3d eye_, right_{1, 0, 0}, up_{0, 1, 0}, forward_{0, 0, 1};
+    double tanHalfY_ = 0, tanHalfX_ = 0;
+    double near_ = 0, far_ = 0;
+    DepthToSlice uniform_;
+    std::vector<DepthToSlice> local_;
+};
+
+} // namespace voxfx

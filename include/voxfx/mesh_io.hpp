@@ -1,0 +1,26 @@
+// voxfx — loading triangle meshes: OFF, OBJ, PLY, STL, glTF 2.0 (.gltf/.glb) and what Assimp reads.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "voxfx/mesh.hpp"
+
+namespace voxfx {
+
+struct MeshLoadReport {
+    std::string format; ///< e.g. "off", "obj", "ply", "stl", "gltf"
+    std::size_t fileBytes = 0;
+    std::size_t inputTriangles = 0;    ///< after triangulating polygons, before dropping degenerates
+    std::size_t degenerateRemoved = 0; ///< dropped by removeDegenerateTriangles
+};
+
+/// Loads every triangle of a mesh or scene file into one Mesh, with the scene's node transforms
+/// applied (glTF, OBJ groups, ...). Polygons are triangulated (fan), points and lines ignored,
+/// degenerate triangles removed and counted in `report`.
+/// Throws voxfx::Error naming the file for: unreadable or missing file, unknown format,
+/// malformed or truncated content (with the line or byte offset where known), NaN/Inf
+/// coordinates, out-of-range indices, and a file without any triangle.
+Mesh loadMesh(const std::string& path, MeshLoadReport* report = nullptr);
+
+} // namespace voxfx

@@ -1,0 +1,256 @@
+// voxfx — template part of the rasterizer (included by raster.hpp; not a public entry point).
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+
+#include "voxfx/raster.hpp"
+
+namespace voxfx::detail {
+
+template <class Emit> void RasterSetup::triangle(std::size_t t, Emit&& emit) const {
+    const uint32_t i0 = mesh->index(t, 0), i1 = mesh->index(t, 1), i2 = mesh->index(t, 2);
+    const Vec3d a = vertices[i0], b = vertices[i1], c = vertices[i2];
+    if (!frame->isPerspective()) {
+        RasterTriangle r{{a.x, b.x, c.x}, {a.y, b.y, c.y}, {a.z, b.z, c.z}, uint32_t(t), false};
+        const double det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+        r.front = det < 0; // outward normal points against +depth, towards the viewer
+        emit(r);
+        return;
+    }
+    // Perspective: clip in camera space against forward >= clipDepth (geometry between the eye
+    // and the near plane still counts: depth clamping), then project the pieces.
+    Vec3d poly[4];
+    int n = 0;
+    const Vec3d in[3] = {a, b, c};
+    for (int k = 0; k < 3; ++k) {
+        const Vec3d& p = in[k];
+        const Vec3d& q = in[(k + 1) % 3];
+        const bool pin = p.z >= clipDepth, qin = q.z >= clipDepth;
+        if (pin) poly[n++] = p;
+        if (pin != qin) {
+            const double s = (clipDepth - p.z) / (q.z - p.z);
+            Vec3d x = p + (q - p) * s;
+            x.z = clipDepth;
+            poly[n++] = x;
+        }
+    }
+    if (n < 3) return;
+    const double tx = frame->tanHalfFovY() * double(frame->width()) / double(frame->height());
+    const double ty = frame->tanHalfFovY();
+    const double hw = 0.5 * double(frame->width()), hh = 0.5 * double(frame->height());
+    double gx[4], gy[4], gw[4];
+    for (int k = 0; k < n; ++k) {
+        gx[k] = (poly[k].x / (poly[k].z * tx) + 1.0) * hw;
+        gy[k] = (poly[k].y / (poly[k].z * ty) + 1.0) * hh;
+        gw[k] = 1.0 / poly[k].z;
+    }
+    for (int k = 1; k + 1 < n; ++k) {
+        RasterTriangle r{{gx[0], gx[k], gx[k + 1]},
+                         {gy[0], gy[k], gy[k + 1]},
+                         {gw[0], gw[k], gw[k + 1]},
+                         uint32_t(t),
+                         false};
+        // The camera basis (right, up, forward) is left-handed, so the facing test flips.
+        const double det = (r.x[1] - r.x[0]) * (r.y[2] - r.y[0]) - (r.x[2] - r.x[0]) * (r.y[1] - r.y[0]);
+        r.front = det > 0;
+        emit(r);
+    }
+}
+
+/// One edge of a triangle, stored with its endpoints in canonical (lexicographic) order so that
+/// the two triangles sharing it evaluate bit-identical edge functions.
+struct CanonicalEdge {
+    double ax, ay, dx, dy;
+    int flip; // +1 when the triangle traverses the edge a -> b, -1 when b -> a
+    int tie;  // sign of the edge function at a sample on the edge, perturbed by (+eps, +eps^2)
+
+    void set(double px, double py, double qx, double qy) {
+        const bool swap = qx < px || (qx == px && qy < py);
+        ax = swap ? qx : px;
+        ay = swap ? qy : py;
+        dx = (swap ? px : qx) - ax;
+        dy = (swap ? py : qy) - ay;
+        flip = swap ? -1 : 1;
+        // E(s + (eps, eps^2)) = E(s) - dy * eps + dx * eps^2: the first non-zero term decides.
+        tie = dy != 0 ? (dy < 0 ? 1 : -1) : (dx > 0 ? 1 : -1);
+    }
+    /// Sign (+1 / -1, never 0) of the oriented edge function at sample (sx, sy).
+    int side(double sx, double sy) const {
+        const double e = dx * (sy - ay) - dy * (sx - ax);
+        const int s = e > 0 ? 1 : (e < 0 ? -1 : tie);
+        return s * flip;
+    }
+};
+
+template <class Sink>
+void rasterizeCenter(const RasterTriangle& t, bool perspective, int64_t width, int64_t rowBegin,
+                     int64_t rowEnd, Sink& sink) {
+    CanonicalEdge edges[3];
+    for (int k = 0; k < 3; ++k) edges[k].set(t.x[k], t.y[k], t.x[(k + 1) % 3], t.y[(k + 1) % 3]);
+    // Orientation from the first edge's function at the opposite corner (same arithmetic as the
+    // sample test); a triangle seen edge-on covers no centre.
+    const double e0 = edges[0].dx * (t.y[2] - edges[0].ay) - edges[0].dy * (t.x[2] - edges[0].ax);
+    if (e0 == 0) return;
+    const int orient = (e0 > 0 ? 1 : -1) * edges[0].flip;
+    // Depth plane w(x, y) = w0 + gx (x - x0) + gy (y - y0).
+    const double ux = t.x[1] - t.x[0], uy = t.y[1] - t.y[0], vx = t.x[2] - t.x[0], vy = t.y[2] - t.y[0];
+    const double det = ux * vy - vx * uy;
+    if (det == 0) return;
+    const double uw = t.w[1] - t.w[0], vw = t.w[2] - t.w[0];
+    const double gx = (uw * vy - vw * uy) / det, gy = (ux * vw - vx * uw) / det;
+
+    for (int64_t y = rowBegin; y < rowEnd; ++y) {
+        const double sy = double(y) + 0.5;
+        // Conservative x range of the row from the edge crossings; the exact test decides.
+        double xmin = INFINITY, xmax = -INFINITY;
+        for (int k = 0; k < 3; ++k) {
+            const double y0 = t.y[k], y1 = t.y[(k + 1) % 3];
+            if ((sy < y0 && sy < y1) || (sy > y0 && sy > y1)) continue;
+            const double x0 = t.x[k], x1 = t.x[(k + 1) % 3];
+            const double xc = y1 == y0 ? x0 : x0 + (sy - y0) * (x1 - x0) / (y1 - y0);
+            xmin = std::min({xmin, xc, y1 == y0 ? x1 : xc});
+            xmax = std::max({xmax, xc, y1 == y0 ? x1 : xc});
+        }
+        if (!(xmin <= xmax)) continue;
+        const int64_t xb = std::max<int64_t>(0, int64_t(std::floor(xmin - 0.5)));
+        const int64_t xe = std::min<int64_t>(width - 1, int64_t(std::ceil(xmax - 0.5)));
+        for (int64_t x = xb; x <= xe; ++x) {
+            const double sx = double(x) + 0.5;
+            if (edges[0].side(sx, sy) != orient || edges[1].side(sx, sy) != orient ||
+                edges[2].side(sx, sy) != orient)
+                continue;
+            const double w = t.w[0] + gx * (sx - t.x[0]) + gy * (sy - t.y[0]);
+            sink.fragment(x, y, perspective ? 1.0 / w : w, t.index, t.front);
+        }
+    }
+}
+
+/// A convex polygon in grid space (x, y, w), as produced by clipping a triangle to column prisms.
+struct ClipPolygon {
+    static constexpr int kMax = 9;
+    double x[kMax], y[kMax], w[kMax];
+    int n = 0;
+};
+
+/// Sutherland–Hodgman against one closed half-plane: keeps coord(axis) >= c (keepAbove) or <= c.
+/// Points on the line are kept, so polygons touching a boundary survive as points or segments.
+inline void clipAxis(const ClipPolygon& in, ClipPolygon& out, int axis, double c, bool keepAbove) {
+    out.n = 0;
+    const double* coord = axis == 0 ? in.x : in.y;
+    for (int k = 0; k < in.n; ++k) {
+        const int j = (k + 1) % in.n;
+        const double pk = coord[k], pj = coord[j];
+        const bool kin = keepAbove ? pk >= c : pk <= c;
+        const bool jin = keepAbove ? pj >= c : pj <= c;
+        if (kin) {
+            out.x[out.n] = in.x[k];
+            out.y[out.n] = in.y[k];
+            out.w[out.n] = in.w[k];
+            ++out.n;
+        }
+        if (kin != jin) {
+            const double s = (c - pk) / (pj - pk);
+            out.x[out.n] = axis == 0 ? c : in.x[k] + (in.x[j] - in.x[k]) * s;
+            out.y[out.n] = axis == 1 ? c : in.y[k] + (in.y[j] - in.y[k]) * s;
+            out.w[out.n] = in.w[k] + (in.w[j] - in.w[k]) * s;
+            ++out.n;
+        }
+    }
+}
+
+template <class Sink>
+void rasterizeConservative(const RasterTriangle& t, bool perspective, int64_t width, int64_t rowBegin,
+                           int64_t rowEnd, Sink& sink) {
+    ClipPolygon tri;
+    for (int k = 0; k < 3; ++k) {
+        tri.x[k] = t.x[k];
+        tri.y[k] = t.y[k];
+        tri.w[k] = t.w[k];
+    }
+    tri.n = 3;
+    ClipPolygon tmp, row, cell;
+    for (int64_t y = rowBegin; y < rowEnd; ++y) {
+        clipAxis(tri, tmp, 1, double(y), true);
+        if (tmp.n == 0) continue;
+        clipAxis(tmp, row, 1, double(y + 1), false);
+        if (row.n == 0) continue;
+        double xmin = row.x[0], xmax = row.x[0];
+        for (int k = 1; k < row.n; ++k) {
+            xmin = std::min(xmin, row.x[k]);
+            xmax = std::max(xmax, row.x[k]);
+        }
+        const int64_t xb = std::max<int64_t>(0, int64_t(std::ceil(xmin)) - 1);
+        const int64_t xe = std::min<int64_t>(width - 1, int64_t(std::floor(xmax)));
+        for (int64_t x = xb; x <= xe; ++x) {
+            clipAxis(row, tmp, 0, double(x), true);
+            if (tmp.n == 0) continue;
+            clipAxis(tmp, cell, 0, double(x + 1), false);
+            if (cell.n == 0) continue;
+            double wmin = cell.w[0], wmax = cell.w[0];
+            for (int k = 1; k < cell.n; ++k) {
+                wmin = std::min(wmin, cell.w[k]);
+                wmax = std::max(wmax, cell.w[k]);
+            }
+            // Perspective w is 1 / depth: the order of the bounds flips.
+            if (perspective)
+                sink.span(x, y, 1.0 / wmax, 1.0 / wmin, t.index);
+            else
+                sink.span(x, y, wmin, wmax, t.index);
+        }
+    }
+}
+
+} // namespace voxfx::detail
+
+namespace voxfx {
+
+template <class Consumer>
+void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& options, Consumer& consumer) {
+    const int64_t H = frame.height(), W = frame.width();
+    const int64_t rowsPerTile =
+        options.rowsPerTile > 0 ? options.rowsPerTile : std::max<int64_t>(1, (H + 63) / 64);
+    const detail::RasterSetup setup = detail::prepareVertices(frame, mesh);
+    const detail::TileBins bins = detail::binTriangles(setup, options.coverage, rowsPerTile);
+    const bool perspective = frame.isPerspective();
+
+    std::atomic<bool> cancelled{false};
+    std::atomic<int64_t> tilesDone{0};
+    std::mutex progressMutex;
+    parallelFor(0, bins.tileCount, 1, [&](int64_t tb, int64_t te) {
+        for (int64_t tile = tb; tile < te; ++tile) {
+            if (cancelled.load(std::memory_order_relaxed)) return;
+            const int64_t y0 = tile * rowsPerTile, y1 = std::min(H, y0 + rowsPerTile);
+            auto sink = consumer.tile(y0, y1);
+            for (int64_t i = bins.offsets[size_t(tile)]; i < bins.offsets[size_t(tile) + 1]; ++i) {
+                setup.triangle(bins.entries[size_t(i)], [&](const detail::RasterTriangle& rt) {
+                    int64_t first, last;
+                    detail::coveredRows(rt, options.coverage, H, first, last);
+                    first = std::max(first, y0);
+                    last = std::min(last, y1 - 1);
+                    if (first > last) return;
+                    if (options.coverage == Coverage::Center) {
+                        if constexpr (requires {
+                                          sink.fragment(int64_t(), int64_t(), 0.0, uint32_t(), true);
+                                      })
+                            detail::rasterizeCenter(rt, perspective, W, first, last + 1, sink);
+                    } else {
+                        if constexpr (requires { sink.span(int64_t(), int64_t(), 0.0, 0.0, uint32_t()); })
+                            detail::rasterizeConservative(rt, perspective, W, first, last + 1, sink);
+                    }
+                });
+            }
+            sink.finish();
+            const int64_t done = ++tilesDone;
+            if (options.progress) {
+                std::lock_guard<std::mutex> lock(progressMutex);
+                if (!options.progress->update(double(done) / double(bins.tileCount))) cancelled = true;
+            }
+        }
+    });
+    if (cancelled) fail("cancelled");
+}
+
+} // namespace voxfx

@@ -1,0 +1,115 @@
+#include "voxfx/bitgrid.hpp"
+
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iomanip>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "voxfx/parallel.hpp"
+
+namespace voxfx {
+
+namespace {
+// Columns handled per parallel chunk when touching whole grids: large enough to amortize a task.
+constexpr int64_t kWordsPerChunk = int64_t(1) << 16;
+
+std::string gib(uint64_t bytes) {
+    std::ostringstream s;
+    s << std::fixed << std::setprecision(2) << double(bytes) / double(uint64_t(1) << 30) << " GiB";
+    return s.str();
+}
+} // namespace
+
+uint64_t availableMemoryBytes() {
+    std::ifstream meminfo("/proc/meminfo");
+    std::string key;
+    uint64_t kib = 0;
+    std::string unit;
+    while (meminfo >> key >> kib >> unit)
+        if (key == "MemAvailable:") return kib * 1024;
+    const long pages = sysconf(_SC_PHYS_PAGES), pageSize = sysconf(_SC_PAGE_SIZE);
+    return pages > 0 && pageSize > 0 ? uint64_t(pages) * uint64_t(pageSize) : ~uint64_t(0);
+}
+
+void checkMemory(uint64_t bytes, const char* what) {
+    const uint64_t available = availableMemoryBytes();
+    if (bytes > available)
+        fail(what, " needs ", gib(bytes), ", but only ", gib(available), " of memory is available");
+}
+
+uint64_t BitGrid::requiredBytes(int64_t w, int64_t h, int64_t d) {
+    if (w <= 0 || h <= 0 || d <= 0) return 0;
+    // Saturates instead of overflowing, so absurd requests fail the memory check cleanly.
+    uint64_t bytes = 8;
+    for (const uint64_t f : {uint64_t(w), uint64_t(h), uint64_t((d + 63) / 64)}) {
+        if (bytes > ~uint64_t(0) / f) return ~uint64_t(0);
+        bytes *= f;
+    }
+    return bytes;
+}
+
+void BitGrid::Free::operator()(uint64_t* p) const { std::free(p); }
+
+BitGrid::BitGrid(int64_t w, int64_t h, int64_t d) {
+    if (w <= 0 || h <= 0 || d <= 0) fail("grid dimensions must be positive, got ", w, " x ", h, " x ", d);
+    const uint64_t bytes = requiredBytes(w, h, d);
+    std::ostringstream what;
+    what << "a " << w << " x " << h << " x " << d << " grid";
+    checkMemory(bytes, what.str().c_str());
+    const uint64_t alloc = (bytes + 63) / 64 * 64;
+    auto* p = static_cast<uint64_t*>(std::aligned_alloc(64, alloc));
+    if (!p) fail(what.str(), " needs ", gib(bytes), ", and the allocation failed");
+    w_ = w;
+    h_ = h;
+    d_ = d;
+    wpc_ = (d + 63) / 64;
+    words_.reset(p);
+    clear();
+}
+
+BitGrid::BitGrid(const BitGrid& o) : BitGrid() {
+    if (o.empty()) return;
+    *this = BitGrid(o.w_, o.h_, o.d_);
+    std::memcpy(words_.get(), o.words_.get(), o.byteCount());
+}
+
+BitGrid& BitGrid::operator=(const BitGrid& o) {
+    if (this != &o) *this = BitGrid(o);
+    return *this;
+}
+
+void BitGrid::clear() {
+    // Parallel first touch: each chunk's pages get faulted in by the thread that zeroes them.
+    uint64_t* w = words_.get();
+    parallelFor(0, wordCount(), kWordsPerChunk,
+                [w](int64_t b, int64_t e) { std::memset(w + b, 0, size_t(e - b) * sizeof(uint64_t)); });
+}
+
+int64_t BitGrid::count() const {
+    const int64_t n = wordCount();
+    const int64_t chunks = (n + kWordsPerChunk - 1) / kWordsPerChunk;
+    std::vector<int64_t> partial(size_t(std::max<int64_t>(chunks, 0)), 0);
+    const uint64_t* w = words_.get();
+    parallelFor(0, chunks, 1, [&](int64_t cb, int64_t ce) {
+        for (int64_t c = cb; c < ce; ++c) {
+            int64_t s = 0;
+            for (int64_t i = c * kWordsPerChunk, e = std::min(n, i + kWordsPerChunk); i < e; ++i)
+                s += std::popcount(w[i]);
+            partial[size_t(c)] = s;
+        }
+    });
+    int64_t total = 0;
+    for (int64_t s : partial) total += s;
+    return total;
+}
+
+bool BitGrid::operator==(const BitGrid& o) const {
+    if (w_ != o.w_ || h_ != o.h_ || d_ != o.d_) return false;
+    return empty() || std::memcmp(words_.get(), o.words_.get(), byteCount()) == 0;
+}
+
+} // namespace voxfx

@@ -1,0 +1,140 @@
+#include "voxfx/frame.hpp"
+
+#include <cmath>
+
+namespace voxfx {
+
+const char* toString(Axis a) { return a == Axis::X ? "x" : (a == Axis::Y ? "y" : "z"); }
+const char* toString(Slicing s) { return s == Slicing::Uniform ? "uniform" : "local"; }
+
+Frame Frame::orthographic(const Box3d& box, Axis axis, int64_t w, int64_t h, int64_t d) {
+    if (box.empty() || !isFinite(box.lo) || !isFinite(box.hi))
+        fail("orthographic frame needs a finite, non-empty box");
+    if (w <= 0 || h <= 0 || d <= 0) fail("grid dimensions must be positive, got ", w, " x ", h, " x ", d);
+    Frame f;
+    f.perspective_ = false;
+    f.axis_ = axis;
+    f.w_ = w;
+    f.h_ = h;
+    f.d_ = d;
+    f.box_ = box;
+    const int cx = columnXAxis(axis), cy = columnYAxis(axis), cs = sliceAxis(axis);
+    const Vec3d ext = box.extent();
+    if (!(ext[cx] > 0) || !(ext[cy] > 0) || !(ext[cs] > 0))
+        fail("orthographic frame needs a box with positive extent along every axis");
+    Vec3d r, u, fw;
+    r[cx] = 1;
+    u[cy] = 1;
+    fw[cs] = 1;
+    f.right_ = r;
+    f.up_ = u;
+    f.forward_ = fw;
+    f.eye_ = box.lo;
+    f.near_ = 0;
+    f.far_ = double(d);
+    f.uniform_ = {0.0, 1.0};
+    return f;
+}
+
+Frame Frame::perspective(const Vec3d& eye, const Vec3d& target, const Vec3d& up, double fovY, int64_t w,
+                         int64_t h, double nearDepth, double farDepth, int64_t d) {
+    if (w <= 0 || h <= 0 || d <= 0) fail("grid dimensions must be positive, got ", w, " x ", h, " x ", d);
+    if (!(fovY > 0 && fovY < M_PI)) fail("perspective field of view must lie in (0, pi) radians, got ", fovY);
+    if (!(nearDepth > 0 && farDepth > nearDepth && std::isfinite(farDepth)))
+        fail("perspective depth range needs 0 < near < far, got near ", nearDepth, ", far ", farDepth);
+    const Vec3d fw = normalize(target - eye);
+    const Vec3d r = normalize(cross(fw, up));
+    if (length(fw) == 0 || length(r) == 0)
+        fail("perspective frame: eye equals target or up is parallel to the view");
+    Frame f;
+    f.perspective_ = true;
+    f.axis_ = Axis::Z;
+    f.w_ = w;
+    f.h_ = h;
+    f.d_ = d;
+    f.eye_ = eye;
+    f.forward_ = fw;
+    f.right_ = r;
+    f.up_ = cross(r, fw);
+    f.tanHalfY_ = std::tan(fovY * 0.5);
+    f.tanHalfX_ = f.tanHalfY_ * double(w) / double(h);
+    f.near_ = nearDepth;
+    f.far_ = farDepth;
+    f.uniform_ = {nearDepth, double(d) / (farDepth - nearDepth)};
+    return f;
+}
+
+Vec3d Frame::cellSize() const {
+    const Vec3d ext = box_.extent();
+    Vec3d n;
+    n[columnXAxis(axis_)] = double(w_);
+    n[columnYAxis(axis_)] = double(h_);
+    n[sliceAxis(axis_)] = double(d_);
+    return {ext.x / n.x, ext.y / n.y, ext.z / n.z};
+}
+
+double Frame::viewDepth(const Vec3d& p) const { return dot(p - eye_, forward_); }
+
+Vec3d Frame::gridFromWorld(const Vec3d& p) const {
+    if (!perspective_) {
+        const int cx = columnXAxis(axis_), cy = columnYAxis(axis_), cs = sliceAxis(axis_);
+        const Vec3d ext = box_.extent();
+        return {(p[cx] - box_.lo[cx]) * (double(w_) / ext[cx]),
+                (p[cy] - box_.lo[cy]) * (double(h_) / ext[cy]),
+                (p[cs] - box_.lo[cs]) * (double(d_) / ext[cs])};
+    }
+    const Vec3d q = p - eye_;
+    const double z = dot(q, forward_);
+    return {(dot(q, right_) / (z * tanHalfX_) + 1.0) * 0.5 * double(w_),
+            (dot(q, up_) / (z * tanHalfY_) + 1.0) * 0.5 * double(h_), z};
+}
+
+Vec3d Frame::worldFromGrid(const Vec3d& g) const {
+    if (!perspective_) {
+        const int cx = columnXAxis(axis_), cy = columnYAxis(axis_), cs = sliceAxis(axis_);
+        const Vec3d ext = box_.extent();
+        Vec3d p;
+        p[cx] = box_.lo[cx] + g.x * (ext[cx] / double(w_));
+        p[cy] = box_.lo[cy] + g.y * (ext[cy] / double(h_));
+        p[cs] = box_.lo[cs] + g.z * (ext[cs] / double(d_));
+        return p;
+    }
+    const double z = g.z;
+    const double px = (g.x / (0.5 * double(w_)) - 1.0) * z * tanHalfX_;
+    const double py = (g.y / (0.5 * double(h_)) - 1.0) * z * tanHalfY_;
+    return eye_ + right_ * px + up_ * py + forward_ * z;
+}
+
+Vec3d Frame::cellCenter(int64_t x, int64_t y, int64_t s) const {
+    const DepthToSlice m = depthToSlice(y * w_ + x);
+    const double depth = m.near + (double(s) + 0.5) / m.scale;
+    return worldFromGrid({double(x) + 0.5, double(y) + 0.5, depth});
+}
+
+void Frame::setLocalSlicing(const std::vector<double>& nearPerColumn,
+                            const std::vector<double>& farPerColumn) {
+    const auto n = static_cast<std::size_t>(columnCount());
+    if (nearPerColumn.size() != n || farPerColumn.size() != n)
+        fail("local slicing needs one near and one far depth per column (", n, "), got ",
+             nearPerColumn.size(), " and ", farPerColumn.size());
+    local_.assign(n, uniform_);
+    for (std::size_t c = 0; c < n; ++c) {
+        const double lo = nearPerColumn[c], hi = farPerColumn[c];
+        if (std::isfinite(lo) && std::isfinite(hi) && hi > lo) local_[c] = {lo, double(d_) / (hi - lo)};
+    }
+}
+
+bool Frame::sameGrid(const Frame& o) const {
+    if (perspective_ != o.perspective_ || w_ != o.w_ || h_ != o.h_ || d_ != o.d_ || axis_ != o.axis_)
+        return false;
+    if (!perspective_ && !(box_ == o.box_)) return false;
+    if (perspective_ && !(eye_ == o.eye_ && forward_ == o.forward_ && up_ == o.up_ &&
+                          tanHalfY_ == o.tanHalfY_ && near_ == o.near_ && far_ == o.far_))
+        return false;
+    if (local_.size() != o.local_.size()) return false;
+    for (std::size_t i = 0; i < local_.size(); ++i)
+        if (local_[i].near != o.local_[i].near || local_[i].scale != o.local_[i].scale) return false;
+    return true;
+}
+
+} // namespace voxfx

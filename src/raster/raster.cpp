@@ -1,0 +1,115 @@
+// voxfx — rasterizer set-up and binning (the per-triangle kernels are templates in raster_impl.hpp).
+#include "voxfx/raster.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace voxfx::detail {
+
+namespace {
+// Triangles per chunk in the binning passes; chunks are counted and filled in index order.
+constexpr int64_t kBinChunk = 16384;
+} // namespace
+
+RasterSetup prepareVertices(const Frame& frame, const MeshView& mesh) {
+    RasterSetup s;
+    s.frame = &frame;
+    s.mesh = &mesh;
+    s.vertices.resize(mesh.vertexCount);
+    if (frame.isPerspective()) s.clipDepth = frame.nearDepth() * 1e-3;
+    Vec3d* out = s.vertices.data();
+    parallelFor(0, int64_t(mesh.vertexCount), 65536, [&](int64_t b, int64_t e) {
+        if (!frame.isPerspective()) {
+            for (int64_t i = b; i < e; ++i) out[i] = frame.gridFromWorld(mesh.vertex(size_t(i)));
+        } else {
+            for (int64_t i = b; i < e; ++i) {
+                const Vec3d q = mesh.vertex(size_t(i)) - frame.eye();
+                out[i] = {dot(q, frame.right()), dot(q, frame.up()), dot(q, frame.forward())};
+            }
+        }
+    });
+    return s;
+}
+
+void coveredRows(const RasterTriangle& t, Coverage coverage, int64_t height, int64_t& first, int64_t& last) {
+    const double lo = std::min({t.y[0], t.y[1], t.y[2]}), hi = std::max({t.y[0], t.y[1], t.y[2]});
+    // Clamp in floating point first so that far-away triangles cannot overflow the conversion.
+    const double h = double(height);
+    if (coverage == Coverage::Center) {
+        // Rows whose centre y + 0.5 lies in [lo, hi]; one extra row each side absorbs rounding.
+        first = int64_t(std::clamp(std::floor(lo - 0.5), -1.0, h));
+        last = int64_t(std::clamp(std::ceil(hi - 0.5), -1.0, h));
+    } else {
+        // Rows whose closed extent [y, y + 1] meets [lo, hi].
+        first = int64_t(std::clamp(std::ceil(lo) - 1.0, -1.0, h));
+        last = int64_t(std::clamp(std::floor(hi), -1.0, h));
+    }
+    first = std::max<int64_t>(first, 0);
+    last = std::min<int64_t>(last, height - 1);
+}
+
+TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsPerTile) {
+    const int64_t H = setup.frame->height();
+    const double W = double(setup.frame->width());
+    TileBins bins;
+    bins.rowsPerTile = rowsPerTile;
+    bins.tileCount = (H + rowsPerTile - 1) / rowsPerTile;
+    const int64_t T = int64_t(setup.mesh->triangleCount);
+    const int64_t chunks = (T + kBinChunk - 1) / kBinChunk;
+    const auto tiles = size_t(bins.tileCount);
+
+    // Tile range [first, last] of triangle t (union over its pieces); empty when last < first.
+    auto tileRange = [&](int64_t t, int64_t& first, int64_t& last) {
+        first = bins.tileCount;
+        last = -1;
+        setup.triangle(size_t(t), [&](const RasterTriangle& r) {
+            const double xlo = std::min({r.x[0], r.x[1], r.x[2]}), xhi = std::max({r.x[0], r.x[1], r.x[2]});
+            if (!(xhi >= -1.0 && xlo <= W + 1.0)) return; // entirely left or right of the columns
+            int64_t r0, r1;
+            coveredRows(r, coverage, H, r0, r1);
+            if (r0 > r1) return;
+            first = std::min(first, r0 / rowsPerTile);
+            last = std::max(last, r1 / rowsPerTile);
+        });
+    };
+
+    // Pass 1: count per (chunk, tile).
+    std::vector<int64_t> counts(size_t(chunks) * tiles, 0);
+    parallelFor(0, chunks, 1, [&](int64_t cb, int64_t ce) {
+        for (int64_t c = cb; c < ce; ++c) {
+            int64_t* row = counts.data() + size_t(c) * tiles;
+            for (int64_t t = c * kBinChunk, e = std::min(T, t + kBinChunk); t < e; ++t) {
+                int64_t f, l;
+                tileRange(t, f, l);
+                for (int64_t k = f; k <= l; ++k) ++row[k];
+            }
+        }
+    });
+    // Exclusive prefix sums: tile-major, then chunk order, so each tile lists triangles in order.
+    bins.offsets.assign(tiles + 1, 0);
+    std::vector<int64_t> cursor(size_t(chunks) * tiles, 0);
+    int64_t total = 0;
+    for (size_t k = 0; k < tiles; ++k) {
+        bins.offsets[k] = total;
+        for (int64_t c = 0; c < chunks; ++c) {
+            cursor[size_t(c) * tiles + k] = total;
+            total += counts[size_t(c) * tiles + k];
+        }
+    }
+    bins.offsets[tiles] = total;
+    bins.entries.resize(size_t(total));
+    // Pass 2: fill.
+    parallelFor(0, chunks, 1, [&](int64_t cb, int64_t ce) {
+        for (int64_t c = cb; c < ce; ++c) {
+            int64_t* cur = cursor.data() + size_t(c) * tiles;
+            for (int64_t t = c * kBinChunk, e = std::min(T, t + kBinChunk); t < e; ++t) {
+                int64_t f, l;
+                tileRange(t, f, l);
+                for (int64_t k = f; k <= l; ++k) bins.entries[size_t(cur[k]++)] = uint32_t(t);
+            }
+        }
+    });
+    return bins;
+}
+
+} // namespace voxfx::detail

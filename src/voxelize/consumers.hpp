@@ -1,0 +1,179 @@
+// voxfx — the voxelization consumers of the fragment rasterizer (internal header).
+//
+//   SurfaceConsumer       ED06 §2: a centre fragment sets the bit of its slice (OR).
+//   ConservativeConsumer  every slice whose closed extent meets the fragment's exact depth span.
+//   ParityConsumer        GI08 §4: a fragment flips the first slice whose centre lies behind it;
+//                         one prefix-XOR down each column then gives inside = odd crossings.
+//   WindingConsumer       nonzero winding from signed (front +1 / back -1) crossings, sorted per
+//                         column: the union of overlapping closed parts.
+//   DepthRangeConsumer    ED06 fig. 2 first pass: nearest and farthest fragment per column.
+// Each tile consumer writes only the columns of its own rows, so tiles run in parallel.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "core/bitops.hpp"
+#include "voxfx/bitgrid.hpp"
+#include "voxfx/frame.hpp"
+
+namespace voxfx::detail {
+
+/// Index of the first slice whose centre (s + 0.5) lies strictly behind slice coordinate t,
+/// clamped to [0, D]; D means "no slice behind". Geometry in front of the near plane gives 0
+/// (GI08's depth clamping: it still flips every cell of the column).
+inline int64_t firstSliceBehind(double t, int64_t D) {
+    const double u = t - 0.5;
+    if (!(u >= 0)) return 0; // also catches -inf
+    if (u >= double(D)) return D;
+    return std::min<int64_t>(D, int64_t(std::floor(u)) + 1);
+}
+
+/// Sets slices [s0, s1] (inclusive, within [0, D)) of a column.
+inline void setSliceRange(uint64_t* column, int64_t s0, int64_t s1) {
+    const int64_t w0 = s0 >> 6, w1 = s1 >> 6;
+    if (w0 == w1) {
+        column[w0] |= bitRange(int(s0 & 63), int(s1 & 63) + 1);
+        return;
+    }
+    column[w0] |= bitRange(int(s0 & 63), 64);
+    for (int64_t w = w0 + 1; w < w1; ++w) column[w] = ~uint64_t(0);
+    column[w1] |= bitRange(0, int(s1 & 63) + 1);
+}
+
+struct SurfaceConsumer {
+    const Frame& frame;
+    BitGrid& grid;
+    struct Tile {
+        const Frame& frame;
+        BitGrid& grid;
+        void fragment(int64_t x, int64_t y, double depth, uint32_t, bool) {
+            const int64_t c = y * grid.width() + x;
+            const double t = frame.depthToSlice(c)(depth);
+            const int64_t D = grid.depth();
+            if (!(t >= 0 && t <= double(D))) return; // outside near/far: clipped, as on the GPU
+            const int64_t s = std::min<int64_t>(int64_t(t), D - 1);
+            grid.column(c)[s >> 6] |= uint64_t(1) << (s & 63);
+        }
+        void finish() {}
+    };
+    Tile tile(int64_t, int64_t) { return {frame, grid}; }
+};
+
+struct ConservativeConsumer {
+    const Frame& frame;
+    BitGrid& grid;
+    struct Tile {
+        const Frame& frame;
+        BitGrid& grid;
+        void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t) {
+            const int64_t c = y * grid.width() + x;
+            const DepthToSlice m = frame.depthToSlice(c);
+            const double t0 = m(depthMin), t1 = m(depthMax);
+            const int64_t D = grid.depth();
+            if (!(t1 >= 0 && t0 <= double(D))) return;
+            // Cells [s, s+1] meeting [t0, t1]: s from ceil(t0) - 1 to floor(t1).
+            const int64_t s0 = std::max<int64_t>(0, int64_t(std::ceil(std::max(t0, -1.0))) - 1);
+            const int64_t s1 = std::min<int64_t>(D - 1, int64_t(std::floor(std::min(t1, double(D)))));
+            if (s0 <= s1) setSliceRange(grid.column(c), s0, s1);
+        }
+        void finish() {}
+    };
+    Tile tile(int64_t, int64_t) { return {frame, grid}; }
+};
+
+/// Prefix-XOR every column of rows [y0, y1): bit s becomes the XOR of bits 0..s of the column.
+inline void prefixXorRows(BitGrid& grid, int64_t y0, int64_t y1) {
+    const int64_t wpc = grid.wordsPerColumn();
+    const uint64_t lastMask = grid.lastWordMask();
+    for (int64_t c = y0 * grid.width(), e = y1 * grid.width(); c < e; ++c) {
+        uint64_t* col = grid.column(c);
+        uint64_t carry = 0; // all ones when the parity so far is odd
+        for (int64_t w = 0; w < wpc; ++w) {
+            const uint64_t v = prefixXor(col[w]) ^ carry;
+            col[w] = v;
+            carry = uint64_t(0) - (v >> 63);
+        }
+        col[wpc - 1] &= lastMask;
+    }
+}
+
+struct ParityConsumer {
+    const Frame& frame;
+    BitGrid& grid;
+    struct Tile {
+        const Frame& frame;
+        BitGrid& grid;
+        int64_t y0, y1;
+        void fragment(int64_t x, int64_t y, double depth, uint32_t, bool) {
+            const int64_t c = y * grid.width() + x;
+            const int64_t s = firstSliceBehind(frame.depthToSlice(c)(depth), grid.depth());
+            if (s < grid.depth()) grid.column(c)[s >> 6] ^= uint64_t(1) << (s & 63);
+        }
+        void finish() { prefixXorRows(grid, y0, y1); }
+    };
+    Tile tile(int64_t y0, int64_t y1) { return {frame, grid, y0, y1}; }
+};
+
+struct WindingConsumer {
+    const Frame& frame;
+    BitGrid& grid;
+    struct Crossing {
+        int64_t column;
+        int64_t slice; // first slice behind the crossing
+        int sign;      // +1 entering (front face), -1 leaving (back face)
+        bool operator<(const Crossing& o) const {
+            return column != o.column ? column < o.column : slice < o.slice;
+        }
+    };
+    struct Tile {
+        const Frame& frame;
+        BitGrid& grid;
+        std::vector<Crossing> crossings;
+        void fragment(int64_t x, int64_t y, double depth, uint32_t, bool front) {
+            const int64_t c = y * grid.width() + x;
+            const int64_t s = firstSliceBehind(frame.depthToSlice(c)(depth), grid.depth());
+            if (s < grid.depth()) crossings.push_back({c, s, front ? 1 : -1});
+        }
+        void finish() {
+            // Sort once per tile (deterministic: equal keys carry equal effects, order is irrelevant).
+            std::sort(crossings.begin(), crossings.end());
+            for (std::size_t i = 0; i < crossings.size();) {
+                const int64_t c = crossings[i].column;
+                int winding = 0;
+                while (i < crossings.size() && crossings[i].column == c) {
+                    const int64_t s = crossings[i].slice;
+                    while (i < crossings.size() && crossings[i].column == c && crossings[i].slice == s)
+                        winding += crossings[i++].sign;
+                    const int64_t next =
+                        i < crossings.size() && crossings[i].column == c ? crossings[i].slice : grid.depth();
+                    if (winding != 0 && next > s) setSliceRange(grid.column(c), s, next - 1);
+                }
+            }
+        }
+    };
+    Tile tile(int64_t, int64_t) { return {frame, grid, {}}; }
+};
+
+struct DepthRangeConsumer {
+    int64_t width;
+    std::vector<double>& nearDepth;
+    std::vector<double>& farDepth;
+    struct Tile {
+        int64_t width;
+        std::vector<double>& nearDepth;
+        std::vector<double>& farDepth;
+        void fragment(int64_t x, int64_t y, double depth, uint32_t, bool) { span(x, y, depth, depth, 0); }
+        void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t) {
+            const auto c = size_t(y * width + x);
+            nearDepth[c] = std::min(nearDepth[c], depthMin);
+            farDepth[c] = std::max(farDepth[c], depthMax);
+        }
+        void finish() {}
+    };
+    Tile tile(int64_t, int64_t) { return {width, nearDepth, farDepth}; }
+};
+
+} // namespace voxfx::detail

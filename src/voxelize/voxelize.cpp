@@ -1,0 +1,266 @@
+// voxfx — voxelization driver: surface (ED06 §2), solid by parity (GI08 §4), conservative and
+// interior variants (GI08 §5), robust fills for open meshes, and frame fitting.
+#include "voxfx/voxelize.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "voxelize/consumers.hpp"
+#include "voxelize/fill.hpp"
+#include "voxfx/raster.hpp"
+
+namespace voxfx {
+
+namespace {
+
+template <class T>
+T parseEnum(const std::string& name, const char* what,
+            std::initializer_list<std::pair<const char*, T>> values) {
+    std::string allowed;
+    for (const auto& [n, v] : values) {
+        if (name == n) return v;
+        allowed += allowed.empty() ? "" : ", ";
+        allowed += n;
+    }
+    fail("unknown ", what, " '", name, "' (allowed: ", allowed, ")");
+}
+
+BitGrid rasterizeInto(const Frame& frame, const MeshView& mesh, VoxelizeMode kind, const VoxelizeOptions& o) {
+    BitGrid grid(frame.width(), frame.height(), frame.depth());
+    RasterOptions ro;
+    ro.progress = o.progress;
+    switch (kind) {
+    case VoxelizeMode::Surface: {
+        detail::SurfaceConsumer c{frame, grid};
+        rasterize(frame, mesh, ro, c);
+        break;
+    }
+    case VoxelizeMode::Conservative: {
+        ro.coverage = Coverage::Conservative;
+        detail::ConservativeConsumer c{frame, grid};
+        rasterize(frame, mesh, ro, c);
+        break;
+    }
+    default:
+        VOXFX_CHECK(false);
+    }
+    return grid;
+}
+
+void requireUniformOrthographic(const Frame& frame, Fill fill) {
+    if (frame.isPerspective() || frame.slicing() != Slicing::Uniform)
+        fail("fill '", toString(fill), "' needs an orthographic frame with uniform slicing");
+}
+
+// Inside cells by the requested fill. Flood includes the surface cells.
+BitGrid fillInside(const Frame& frame, const MeshView& mesh, const VoxelizeOptions& o,
+                   const BitGrid* surface) {
+    RasterOptions ro;
+    ro.progress = o.progress;
+    switch (o.fill) {
+    case Fill::Parity: {
+        BitGrid grid(frame.width(), frame.height(), frame.depth());
+        detail::ParityConsumer c{frame, grid};
+        rasterize(frame, mesh, ro, c);
+        return grid;
+    }
+    case Fill::Winding: {
+        BitGrid grid(frame.width(), frame.height(), frame.depth());
+        detail::WindingConsumer c{frame, grid};
+        rasterize(frame, mesh, ro, c);
+        return grid;
+    }
+    case Fill::Flood: {
+        requireUniformOrthographic(frame, o.fill);
+        BitGrid walls = surface ? *surface : rasterizeInto(frame, mesh, VoxelizeMode::Conservative, o);
+        return detail::floodFillInside(walls);
+    }
+    case Fill::Vote: {
+        requireUniformOrthographic(frame, o.fill);
+        VoxelizeOptions parity = o;
+        parity.fill = Fill::Parity;
+        parity.mode = VoxelizeMode::Solid;
+        const VoxelGrid votes[3] = {
+            {frame, fillInside(frame, mesh, parity, nullptr)},
+            reslice(voxelize(mesh, detail::reframe(frame, Axis((int(frame.axis()) + 1) % 3)), parity),
+                    frame.axis()),
+            reslice(voxelize(mesh, detail::reframe(frame, Axis((int(frame.axis()) + 2) % 3)), parity),
+                    frame.axis())};
+        return detail::majority(votes[0].bits, votes[1].bits, votes[2].bits);
+    }
+    }
+    VOXFX_CHECK(false);
+    return {};
+}
+
+void combine(BitGrid& a, const BitGrid& b, bool andNot) {
+    uint64_t* pa = a.words();
+    const uint64_t* pb = b.words();
+    parallelFor(0, a.wordCount(), int64_t(1) << 16, [&](int64_t s, int64_t e) {
+        if (andNot)
+            for (int64_t i = s; i < e; ++i) pa[i] &= ~pb[i];
+        else
+            for (int64_t i = s; i < e; ++i) pa[i] |= pb[i];
+    });
+}
+
+VoxelGrid voxelizeImpl(const MeshView& mesh, const Frame& inFrame, const VoxelizeOptions& o) {
+    Frame frame = inFrame;
+    if (o.slicing == Slicing::Local) {
+        // ED06 fig. 2: a first pass records each column's nearest and farthest geometry, then the
+        // D slices spread over that range only. Conservative coverage when the mode needs spans.
+        std::vector<double> nearDepth(size_t(frame.columnCount()), std::numeric_limits<double>::infinity());
+        std::vector<double> farDepth(size_t(frame.columnCount()), -std::numeric_limits<double>::infinity());
+        detail::DepthRangeConsumer c{frame.width(), nearDepth, farDepth};
+        RasterOptions ro;
+        ro.coverage = o.mode == VoxelizeMode::Surface ? Coverage::Center : Coverage::Conservative;
+        rasterize(frame, mesh, ro, c);
+        frame.setLocalSlicing(nearDepth, farDepth);
+    }
+    const bool needsSurface = o.mode != VoxelizeMode::Solid || o.fill == Fill::Flood;
+    const uint64_t grids =
+        needsSurface && o.mode != VoxelizeMode::Surface && o.mode != VoxelizeMode::Conservative ? 2 : 1;
+    checkMemory(grids * BitGrid::requiredBytes(frame.width(), frame.height(), frame.depth()),
+                "voxelization at this resolution");
+
+    switch (o.mode) {
+    case VoxelizeMode::Surface:
+    case VoxelizeMode::Conservative:
+        return {frame, rasterizeInto(frame, mesh, o.mode, o)};
+    case VoxelizeMode::Solid:
+        return {frame, fillInside(frame, mesh, o, nullptr)};
+    case VoxelizeMode::SolidConservative:
+    case VoxelizeMode::Interior: {
+        BitGrid surface = rasterizeInto(frame, mesh, VoxelizeMode::Conservative, o);
+        BitGrid inside = fillInside(frame, mesh, o, &surface);
+        combine(inside, surface, o.mode == VoxelizeMode::Interior);
+        return {frame, std::move(inside)};
+    }
+    }
+    VOXFX_CHECK(false);
+    return {};
+}
+
+} // namespace
+
+const char* toString(VoxelizeMode m) {
+    switch (m) {
+    case VoxelizeMode::Surface:
+        return "surface";
+    case VoxelizeMode::Conservative:
+        return "conservative";
+    case VoxelizeMode::Solid:
+        return "solid";
+    case VoxelizeMode::SolidConservative:
+        return "solid-conservative";
+    case VoxelizeMode::Interior:
+        return "interior";
+    }
+    return "?";
+}
+
+const char* toString(Fill f) {
+    switch (f) {
+    case Fill::Parity:
+        return "parity";
+    case Fill::Flood:
+        return "flood";
+    case Fill::Vote:
+        return "vote";
+    case Fill::Winding:
+        return "winding";
+    }
+    return "?";
+}
+
+VoxelizeMode parseVoxelizeMode(const std::string& name) {
+    return parseEnum<VoxelizeMode>(name, "voxelization mode",
+                                   {{"surface", VoxelizeMode::Surface},
+                                    {"conservative", VoxelizeMode::Conservative},
+                                    {"solid", VoxelizeMode::Solid},
+                                    {"solid-conservative", VoxelizeMode::SolidConservative},
+                                    {"interior", VoxelizeMode::Interior}});
+}
+
+Fill parseFill(const std::string& name) {
+    return parseEnum<Fill>(
+        name, "fill",
+        {{"parity", Fill::Parity}, {"flood", Fill::Flood}, {"vote", Fill::Vote}, {"winding", Fill::Winding}});
+}
+
+Axis parseAxis(const std::string& name) {
+    return parseEnum<Axis>(name, "axis", {{"x", Axis::X}, {"y", Axis::Y}, {"z", Axis::Z}});
+}
+
+Slicing parseSlicing(const std::string& name) {
+    return parseEnum<Slicing>(name, "slicing", {{"uniform", Slicing::Uniform}, {"local", Slicing::Local}});
+}
+
+Frame fitFrame(const Box3d& meshBounds, const FitOptions& o) {
+    const Box3d bounds = o.bounds.empty() ? meshBounds : o.bounds;
+    if (bounds.empty()) fail("nothing to voxelize: the mesh has no triangles");
+    if (!isFinite(bounds.lo) || !isFinite(bounds.hi)) fail("the bounds are not finite");
+    const int given = (o.resolution > 0) + (o.voxelSize > 0) + (o.dims.x > 0 || o.dims.y > 0 || o.dims.z > 0);
+    if (given != 1) fail("give exactly one of resolution, voxel size or dims");
+    if (o.marginCells < 0) fail("the margin must be >= 0 cells, got ", o.marginCells);
+    const Vec3d ext = bounds.extent();
+    Vec3i dims;
+    Vec3d cell;
+    if (o.dims.x > 0 || o.dims.y > 0 || o.dims.z > 0) {
+        for (int a = 0; a < 3; ++a) {
+            if (o.dims[a] <= 0)
+                fail("dims must all be positive, got ", o.dims.x, " ", o.dims.y, " ", o.dims.z);
+            if (!(ext[a] > 0))
+                fail("the bounds are flat along ", toString(Axis(a)), "; give --bounds or --voxel-size");
+            dims[a] = o.dims[a];
+            cell[a] = ext[a] / double(dims[a]);
+        }
+    } else {
+        double size = o.voxelSize;
+        if (o.resolution > 0) {
+            const double longest = std::max({ext.x, ext.y, ext.z});
+            if (!(longest > 0)) fail("the bounds are a single point; give --voxel-size or --bounds");
+            size = longest / double(o.resolution);
+        }
+        if (!(size > 0) || !std::isfinite(size))
+            fail("the voxel size must be positive and finite, got ", size);
+        for (int a = 0; a < 3; ++a) {
+            // Cells along the axis; the longest axis of a resolution fit gets exactly N (the tiny
+            // tolerance keeps rounding from adding a cell there).
+            const double n = std::ceil(ext[a] / size * (1.0 - 1e-12));
+            if (n > 1e9)
+                fail("the grid would need ", n, " cells along ", toString(Axis(a)),
+                     "; use a larger voxel size");
+            dims[a] = std::max<int64_t>(1, int64_t(n));
+            cell[a] = size;
+        }
+    }
+    Box3d box;
+    for (int a = 0; a < 3; ++a) {
+        const double half = 0.5 * double(dims[a]) * cell[a];
+        const bool exact = o.dims[a] > 0 || (o.resolution > 0 && double(dims[a]) * cell[a] == ext[a]);
+        // Centre the grid on the bounds; keep the bounds exactly where the cells fill them.
+        box.lo[a] = exact ? bounds.lo[a] : bounds.center()[a] - half;
+        box.hi[a] = exact ? bounds.hi[a] : bounds.center()[a] + half;
+        box.lo[a] -= double(o.marginCells) * cell[a];
+        box.hi[a] += double(o.marginCells) * cell[a];
+        dims[a] += 2 * o.marginCells;
+    }
+    const int cx = columnXAxis(o.axis), cy = columnYAxis(o.axis), cs = sliceAxis(o.axis);
+    std::ostringstream what;
+    what << "a " << dims.x << " x " << dims.y << " x " << dims.z << " grid";
+    checkMemory(BitGrid::requiredBytes(dims[cx], dims[cy], dims[cs]), what.str().c_str());
+    return Frame::orthographic(box, o.axis, dims[cx], dims[cy], dims[cs]);
+}
+
+VoxelGrid voxelize(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options) {
+    validateMesh(mesh, "mesh");
+    if (frame.isPerspective() && (options.fill == Fill::Flood || options.fill == Fill::Vote) &&
+        options.mode != VoxelizeMode::Surface && options.mode != VoxelizeMode::Conservative)
+        fail("fill '", toString(options.fill), "' needs an orthographic frame");
+    VoxelGrid result;
+    withThreads(options.threads, [&] { result = voxelizeImpl(mesh, frame, options); });
+    return result;
+}
+
+} // namespace voxfx
