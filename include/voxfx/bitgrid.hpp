@@ -75,7 +75,10 @@ public:
     bool operator==(const BitGrid& o) const;
 
 private:
+    // Large grids are mapped directly (zero pages from the kernel, transparent huge pages
+    // requested), small ones come from the heap; the deleter remembers which.
     struct Free {
+        uint64_t mappedBytes; // value-initialized to 0 (heap) by unique_ptr
         void operator()(uint64_t* p) const;
     };
     int64_t w_ = 0, h_ = 0, d_ = 0, wpc_ = 0;

@@ -88,6 +88,12 @@ struct CanonicalEdge {
 template <class Sink>
 void rasterizeCenter(const RasterTriangle& t, bool perspective, int64_t width, int64_t rowBegin,
                      int64_t rowEnd, Sink& sink) {
+    // Columns whose centre can lie in the bounding box, one extra each side against rounding.
+    const double bxlo = std::min({t.x[0], t.x[1], t.x[2]}), bxhi = std::max({t.x[0], t.x[1], t.x[2]});
+    const int64_t bx0 = std::max<int64_t>(0, int64_t(std::floor(bxlo - 0.5)));
+    const int64_t bx1 = std::min<int64_t>(width - 1, int64_t(std::ceil(bxhi - 0.5)));
+    if (bx0 > bx1) return;
+
     CanonicalEdge edges[3];
     for (int k = 0; k < 3; ++k) edges[k].set(t.x[k], t.y[k], t.x[(k + 1) % 3], t.y[(k + 1) % 3]);
     // Orientation from the first edge's function at the opposite corner (same arithmetic as the
@@ -101,22 +107,28 @@ void rasterizeCenter(const RasterTriangle& t, bool perspective, int64_t width, i
     if (det == 0) return;
     const double uw = t.w[1] - t.w[0], vw = t.w[2] - t.w[0];
     const double gx = (uw * vy - vw * uy) / det, gy = (ux * vw - vx * uw) / det;
+    // Narrow triangles (the common case on real meshes) test every column of the box; wide ones
+    // first narrow each row to the span between its edge crossings.
+    const bool narrow = bx1 - bx0 < 8;
 
     for (int64_t y = rowBegin; y < rowEnd; ++y) {
         const double sy = double(y) + 0.5;
-        // Conservative x range of the row from the edge crossings; the exact test decides.
-        double xmin = INFINITY, xmax = -INFINITY;
-        for (int k = 0; k < 3; ++k) {
-            const double y0 = t.y[k], y1 = t.y[(k + 1) % 3];
-            if ((sy < y0 && sy < y1) || (sy > y0 && sy > y1)) continue;
-            const double x0 = t.x[k], x1 = t.x[(k + 1) % 3];
-            const double xc = y1 == y0 ? x0 : x0 + (sy - y0) * (x1 - x0) / (y1 - y0);
-            xmin = std::min({xmin, xc, y1 == y0 ? x1 : xc});
-            xmax = std::max({xmax, xc, y1 == y0 ? x1 : xc});
+        int64_t xb = bx0, xe = bx1;
+        if (!narrow) {
+            double xmin = INFINITY, xmax = -INFINITY;
+            for (int k = 0; k < 3; ++k) {
+                const double y0 = t.y[k], y1 = t.y[(k + 1) % 3];
+                if ((sy < y0 && sy < y1) || (sy > y0 && sy > y1)) continue;
+                const double x0 = t.x[k], x1 = t.x[(k + 1) % 3];
+                const double xc = y1 == y0 ? x0 : x0 + (sy - y0) * (x1 - x0) / (y1 - y0);
+                const double xd = y1 == y0 ? x1 : xc;
+                xmin = std::min({xmin, xc, xd});
+                xmax = std::max({xmax, xc, xd});
+            }
+            if (!(xmin <= xmax)) continue;
+            xb = std::max<int64_t>(xb, int64_t(std::floor(xmin - 0.5)));
+            xe = std::min<int64_t>(xe, int64_t(std::ceil(xmax - 0.5)));
         }
-        if (!(xmin <= xmax)) continue;
-        const int64_t xb = std::max<int64_t>(0, int64_t(std::floor(xmin - 0.5)));
-        const int64_t xe = std::min<int64_t>(width - 1, int64_t(std::ceil(xmax - 0.5)));
         for (int64_t x = xb; x <= xe; ++x) {
             const double sx = double(x) + 0.5;
             if (edges[0].side(sx, sy) != orient || edges[1].side(sx, sy) != orient ||

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include "voxfx/parallel.hpp"
@@ -52,7 +53,12 @@ uint64_t BitGrid::requiredBytes(int64_t w, int64_t h, int64_t d) {
     return bytes;
 }
 
-void BitGrid::Free::operator()(uint64_t* p) const { std::free(p); }
+void BitGrid::Free::operator()(uint64_t* p) const {
+    if (mappedBytes)
+        munmap(p, mappedBytes);
+    else
+        std::free(p);
+}
 
 BitGrid::BitGrid(int64_t w, int64_t h, int64_t d) {
     if (w <= 0 || h <= 0 || d <= 0) fail("grid dimensions must be positive, got ", w, " x ", h, " x ", d);
@@ -60,15 +66,28 @@ BitGrid::BitGrid(int64_t w, int64_t h, int64_t d) {
     std::ostringstream what;
     what << "a " << w << " x " << h << " x " << d << " grid";
     checkMemory(bytes, what.str().c_str());
-    const uint64_t alloc = (bytes + 63) / 64 * 64;
-    auto* p = static_cast<uint64_t*>(std::aligned_alloc(64, alloc));
-    if (!p) fail(what.str(), " needs ", gib(bytes), ", and the allocation failed");
+    // Fresh anonymous mappings are zero, so large grids skip the clearing pass, and huge pages
+    // cut the page faults of first touch by 512x (they dominate on virtual machines).
+    constexpr uint64_t kMapThreshold = uint64_t(1) << 21;
+    uint64_t* p = nullptr;
+    Free deleter{0};
+    if (bytes >= kMapThreshold) {
+        const uint64_t mapped = (bytes + kMapThreshold - 1) / kMapThreshold * kMapThreshold;
+        void* m = mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        if (m == MAP_FAILED) fail(what.str(), " needs ", gib(bytes), ", and mapping that much memory failed");
+        madvise(m, mapped, MADV_HUGEPAGE);
+        p = static_cast<uint64_t*>(m);
+        deleter.mappedBytes = mapped;
+    } else {
+        p = static_cast<uint64_t*>(std::aligned_alloc(64, (bytes + 63) / 64 * 64));
+        if (!p) fail(what.str(), " needs ", gib(bytes), ", and the allocation failed");
+    }
     w_ = w;
     h_ = h;
     d_ = d;
     wpc_ = (d + 63) / 64;
-    words_.reset(p);
-    clear();
+    words_ = std::unique_ptr<uint64_t[], Free>(p, deleter);
+    if (!deleter.mappedBytes) clear();
 }
 
 BitGrid::BitGrid(const BitGrid& o) : BitGrid() {

@@ -1,0 +1,151 @@
+// Voxelization throughput on real meshes (scripts/fetch-data.sh): every mode at 128..1024, with
+// the mesh already in memory, next to the time to write the output grid's bytes twice (the
+// memory-bandwidth floor the issue compares large grids against), measured in the same run.
+//
+//   ./build/bench/bench_voxelize --benchmark_filter='Solid/bunny' --benchmark_repetitions=5
+//
+// Counters: tri/s (triangles per second), voxels/s (grid cells per second), grid_MiB.
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "voxfx/voxfx.hpp"
+
+namespace {
+
+using namespace voxfx;
+
+// Loop subdivision without smoothing: every triangle into four. Used to build a mesh of about
+// a million triangles from the Chinese dragon (20k triangles -> 1.28M after three rounds).
+Mesh subdivide(const Mesh& in) {
+    Mesh out;
+    out.positions = in.positions;
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
+    auto midpoint = [&](uint32_t a, uint32_t b) {
+        const auto key = std::minmax(a, b);
+        auto [it, inserted] = mid.try_emplace({key.first, key.second}, uint32_t(out.positions.size()));
+        if (inserted) {
+            const Vec3f p = out.positions[a], q = out.positions[b];
+            out.positions.push_back({(p.x + q.x) * 0.5f, (p.y + q.y) * 0.5f, (p.z + q.z) * 0.5f});
+        }
+        return it->second;
+    };
+    for (size_t t = 0; t < in.triangleCount(); ++t) {
+        const uint32_t a = in.indices[3 * t], b = in.indices[3 * t + 1], c = in.indices[3 * t + 2];
+        const uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+        for (uint32_t i : {a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca}) out.indices.push_back(i);
+    }
+    return out;
+}
+
+const Mesh* mesh(const std::string& name) {
+    static std::map<std::string, std::unique_ptr<Mesh>> cache;
+    auto it = cache.find(name);
+    if (it != cache.end()) return it->second.get();
+    const std::string dir = std::string(VOXFX_DATA_DIR) + "/meshes/";
+    std::unique_ptr<Mesh> m;
+    if (name == "dragon1m") {
+        if (!std::filesystem::exists(dir + "ChineseDragon-10kv.off")) return nullptr;
+        Mesh d = loadMesh(dir + "ChineseDragon-10kv.off");
+        for (int i = 0; i < 3; ++i) d = subdivide(d);
+        m = std::make_unique<Mesh>(std::move(d));
+    } else {
+        const std::string file = dir + (name == "dragon" ? "ChineseDragon-10kv" : name) + ".off";
+        if (!std::filesystem::exists(file)) return nullptr;
+        m = std::make_unique<Mesh>(loadMesh(file));
+    }
+    return cache.emplace(name, std::move(m)).first->second.get();
+}
+
+void voxelizeBench(benchmark::State& state, const std::string& name, VoxelizeMode mode, Fill fill) {
+    const Mesh* m = mesh(name);
+    if (!m) {
+        state.SkipWithError("missing data: run scripts/fetch-data.sh");
+        return;
+    }
+    FitOptions fo;
+    fo.resolution = state.range(0);
+    const Frame frame = fitFrame(computeBounds(m->view()), fo);
+    VoxelizeOptions vo;
+    vo.mode = mode;
+    vo.fill = fill;
+    // Parity needs a closed mesh; the dragon is open, so its solid modes use the flood fill.
+    int64_t cells = frame.width() * frame.height() * frame.depth();
+    for (auto _ : state) {
+        VoxelGrid g = voxelize(m->view(), frame, vo);
+        benchmark::DoNotOptimize(g.bits.words());
+    }
+    state.counters["tri/s"] =
+        benchmark::Counter(double(m->triangleCount()), benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["voxels/s"] =
+        benchmark::Counter(double(cells), benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["grid_MiB"] =
+        double(BitGrid::requiredBytes(frame.width(), frame.height(), frame.depth())) / (1 << 20);
+    state.SetLabel(name + " " + std::to_string(m->triangleCount()) + " tris, " +
+                   std::to_string(frame.width()) + "x" + std::to_string(frame.height()) + "x" +
+                   std::to_string(frame.depth()));
+}
+
+// The floor for large grids: allocating and writing the output grid's bytes twice.
+void writeGridBytesTwice(benchmark::State& state, const std::string& name) {
+    const Mesh* m = mesh(name);
+    if (!m) {
+        state.SkipWithError("missing data");
+        return;
+    }
+    FitOptions fo;
+    fo.resolution = state.range(0);
+    const Frame f = fitFrame(computeBounds(m->view()), fo);
+    const uint64_t bytes = BitGrid::requiredBytes(f.width(), f.height(), f.depth());
+    for (auto _ : state) {
+        auto* p = static_cast<unsigned char*>(std::aligned_alloc(64, (bytes + 63) / 64 * 64));
+        std::memset(p, 0, bytes);
+        benchmark::ClobberMemory();
+        std::memset(p, 0xff, bytes);
+        benchmark::DoNotOptimize(p);
+        benchmark::ClobberMemory();
+        std::free(p);
+    }
+    state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(bytes) * 2);
+}
+
+struct Register {
+    Register() {
+        const std::pair<const char*, VoxelizeMode> modes[] = {
+            {"Surface", VoxelizeMode::Surface},
+            {"Conservative", VoxelizeMode::Conservative},
+            {"Solid", VoxelizeMode::Solid},
+            {"SolidConservative", VoxelizeMode::SolidConservative},
+            {"Interior", VoxelizeMode::Interior}};
+        for (const char* name : {"bunny00", "armadillo", "dragon", "dragon1m"}) {
+            const Fill fill = std::string(name).rfind("dragon", 0) == 0 ? Fill::Flood : Fill::Parity;
+            for (const auto& [label, mode] : modes) {
+                benchmark::RegisterBenchmark((std::string(label) + "/" + name).c_str(),
+                                             [=](benchmark::State& s) { voxelizeBench(s, name, mode, fill); })
+                    ->Arg(128)
+                    ->Arg(256)
+                    ->Arg(512)
+                    ->Arg(1024)
+                    ->Unit(benchmark::kMillisecond)
+                    ->UseRealTime();
+            }
+            benchmark::RegisterBenchmark((std::string("WriteGridBytesTwice/") + name).c_str(),
+                                         [=](benchmark::State& s) { writeGridBytesTwice(s, name); })
+                ->Arg(128)
+                ->Arg(256)
+                ->Arg(512)
+                ->Arg(1024)
+                ->Unit(benchmark::kMillisecond)
+                ->UseRealTime();
+        }
+    }
+} registerAll;
+
+} // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs what voxfx needs to build, test and benchmark on Debian 12 (apt). Idempotent and quick
+# when everything is there already.
+set -euo pipefail
+packages=(
+  cmake ninja-build g++ pkg-config
+  libtbb-dev libassimp-dev libopenvdb-dev libboost-iostreams-dev
+  libcli11-dev nlohmann-json3-dev libpng-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libcgal-dev libgmp-dev libmpfr-dev libeigen3-dev
+  clang-format
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  echo "installing: ${missing[*]}"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
