@@ -1,0 +1,35 @@
+// voxfx — images: a linear float RGB image and writers (PNG with sRGB encoding; PFM for HDR).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "voxfx/math.hpp"
+
+namespace voxfx {
+
+/// Linear-light RGB pixels, row-major with row 0 at the top (image convention).
+struct Image {
+    int64_t width = 0, height = 0;
+    std::vector<Vec3f> pixels;
+
+    Image() = default;
+    Image(int64_t w, int64_t h, Vec3f fill = {0, 0, 0}) : width(w), height(h), pixels(size_t(w * h), fill) {}
+    Vec3f& at(int64_t x, int64_t y) { return pixels[size_t(y * width + x)]; }
+    const Vec3f& at(int64_t x, int64_t y) const { return pixels[size_t(y * width + x)]; }
+};
+
+/// The sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1] (clamped).
+float linearToSrgb(float v);
+float srgbToLinear(float v);
+
+/// Writes an 8-bit sRGB PNG (gamma-correct: linear values are encoded with the sRGB curve and
+/// the file carries an sRGB chunk). Atomic: temporary file, then rename. Throws voxfx::Error.
+void writePng(const Image& image, const std::string& path);
+/// Reads an 8/16-bit PNG (gray, RGB, RGBA; alpha ignored) into linear RGB.
+Image readPng(const std::string& path);
+/// Writes a little-endian PFM (portable float map): linear HDR values, opens in most HDR tools.
+void writePfm(const Image& image, const std::string& path);
+
+} // namespace voxfx
