@@ -88,10 +88,12 @@ struct CanonicalEdge {
 template <class Sink>
 void rasterizeCenter(const RasterTriangle& t, bool perspective, int64_t width, int64_t rowBegin,
                      int64_t rowEnd, Sink& sink) {
-    // Columns whose centre can lie in the bounding box, one extra each side against rounding.
+    // Columns whose centre lies in the bounding box. The box corners are vertex coordinates and
+    // x - 0.5 is exact for grid-sized values, so the range is exact: no margin needed.
     const double bxlo = std::min({t.x[0], t.x[1], t.x[2]}), bxhi = std::max({t.x[0], t.x[1], t.x[2]});
-    const int64_t bx0 = std::max<int64_t>(0, int64_t(std::floor(bxlo - 0.5)));
-    const int64_t bx1 = std::min<int64_t>(width - 1, int64_t(std::ceil(bxhi - 0.5)));
+    if (!(bxhi >= 0.5 && bxlo <= double(width) - 0.5)) return;
+    const int64_t bx0 = std::max<int64_t>(0, int64_t(std::ceil(bxlo - 0.5)));
+    const int64_t bx1 = std::min<int64_t>(width - 1, int64_t(std::floor(bxhi - 0.5)));
     if (bx0 > bx1) return;
 
     CanonicalEdge edges[3];
@@ -107,6 +109,14 @@ void rasterizeCenter(const RasterTriangle& t, bool perspective, int64_t width, i
     if (det == 0) return;
     const double uw = t.w[1] - t.w[0], vw = t.w[2] - t.w[0];
     const double gx = (uw * vy - vw * uy) / det, gy = (ux * vw - vx * uw) / det;
+    // Per edge: the factor that turns the canonical edge function into "positive = inside" (an
+    // exact sign flip), and whether a sample exactly on the edge counts as inside (tie rule).
+    double inward[3];
+    bool tieInside[3];
+    for (int k = 0; k < 3; ++k) {
+        inward[k] = double(edges[k].flip * orient);
+        tieInside[k] = edges[k].tie * edges[k].flip * orient > 0;
+    }
     // Narrow triangles (the common case on real meshes) test every column of the box; wide ones
     // first narrow each row to the span between its edge crossings.
     const bool narrow = bx1 - bx0 < 8;
@@ -129,12 +139,20 @@ void rasterizeCenter(const RasterTriangle& t, bool perspective, int64_t width, i
             xb = std::max<int64_t>(xb, int64_t(std::floor(xmin - 0.5)));
             xe = std::min<int64_t>(xe, int64_t(std::ceil(xmax - 0.5)));
         }
+        // The row term of each edge function, dx * (sy - ay): evaluated exactly as in
+        // CanonicalEdge::side, so shared edges still agree bit for bit.
+        const double rowTerm[3] = {edges[0].dx * (sy - edges[0].ay), edges[1].dx * (sy - edges[1].ay),
+                                   edges[2].dx * (sy - edges[2].ay)};
+        const double wRow = t.w[0] + gy * (sy - t.y[0]);
         for (int64_t x = xb; x <= xe; ++x) {
             const double sx = double(x) + 0.5;
-            if (edges[0].side(sx, sy) != orient || edges[1].side(sx, sy) != orient ||
-                edges[2].side(sx, sy) != orient)
-                continue;
-            const double w = t.w[0] + gx * (sx - t.x[0]) + gy * (sy - t.y[0]);
+            bool inside = true;
+            for (int k = 0; k < 3; ++k) {
+                const double e = (rowTerm[k] - edges[k].dy * (sx - edges[k].ax)) * inward[k];
+                inside &= (e > 0) | ((e == 0) & tieInside[k]);
+            }
+            if (!inside) continue;
+            const double w = wRow + gx * (sx - t.x[0]);
             sink.fragment(x, y, perspective ? 1.0 / w : w, t.index, t.front);
         }
     }
@@ -173,6 +191,13 @@ inline void clipAxis(const ClipPolygon& in, ClipPolygon& out, int axis, double c
     }
 }
 
+/// Conservative coverage slack, in cells: clipping interpolates new vertices, and a triangle
+/// that touches a cell boundary exactly (a face through cell corners) can land 1e-13 short of
+/// it. Every boundary is moved out by this much, far above rounding and far below any distance
+/// real geometry resolves, so touching cells are kept; only cells missed by less than 1e-9 of a
+/// cell are added.
+inline constexpr double kConservativeSlack = 1e-9;
+
 template <class Sink>
 void rasterizeConservative(const RasterTriangle& t, bool perspective, int64_t width, int64_t rowBegin,
                            int64_t rowEnd, Sink& sink) {
@@ -185,21 +210,21 @@ void rasterizeConservative(const RasterTriangle& t, bool perspective, int64_t wi
     tri.n = 3;
     ClipPolygon tmp, row, cell;
     for (int64_t y = rowBegin; y < rowEnd; ++y) {
-        clipAxis(tri, tmp, 1, double(y), true);
+        clipAxis(tri, tmp, 1, double(y) - kConservativeSlack, true);
         if (tmp.n == 0) continue;
-        clipAxis(tmp, row, 1, double(y + 1), false);
+        clipAxis(tmp, row, 1, double(y + 1) + kConservativeSlack, false);
         if (row.n == 0) continue;
         double xmin = row.x[0], xmax = row.x[0];
         for (int k = 1; k < row.n; ++k) {
             xmin = std::min(xmin, row.x[k]);
             xmax = std::max(xmax, row.x[k]);
         }
-        const int64_t xb = std::max<int64_t>(0, int64_t(std::ceil(xmin)) - 1);
-        const int64_t xe = std::min<int64_t>(width - 1, int64_t(std::floor(xmax)));
+        const int64_t xb = std::max<int64_t>(0, int64_t(std::ceil(xmin - kConservativeSlack)) - 1);
+        const int64_t xe = std::min<int64_t>(width - 1, int64_t(std::floor(xmax + kConservativeSlack)));
         for (int64_t x = xb; x <= xe; ++x) {
-            clipAxis(row, tmp, 0, double(x), true);
+            clipAxis(row, tmp, 0, double(x) - kConservativeSlack, true);
             if (tmp.n == 0) continue;
-            clipAxis(tmp, cell, 0, double(x + 1), false);
+            clipAxis(tmp, cell, 0, double(x + 1) + kConservativeSlack, false);
             if (cell.n == 0) continue;
             double wmin = cell.w[0], wmax = cell.w[0];
             for (int k = 1; k < cell.n; ++k) {

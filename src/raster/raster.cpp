@@ -36,13 +36,14 @@ void coveredRows(const RasterTriangle& t, Coverage coverage, int64_t height, int
     // Clamp in floating point first so that far-away triangles cannot overflow the conversion.
     const double h = double(height);
     if (coverage == Coverage::Center) {
-        // Rows whose centre y + 0.5 lies in [lo, hi]; one extra row each side absorbs rounding.
-        first = int64_t(std::clamp(std::floor(lo - 0.5), -1.0, h));
-        last = int64_t(std::clamp(std::ceil(hi - 0.5), -1.0, h));
+        // Rows whose centre y + 0.5 lies in [lo, hi] (lo, hi are vertex coordinates; the
+        // subtraction is exact for grid-sized values, so no margin is needed).
+        first = int64_t(std::clamp(std::ceil(lo - 0.5), -1.0, h));
+        last = int64_t(std::clamp(std::floor(hi - 0.5), -1.0, h));
     } else {
         // Rows whose closed extent [y, y + 1] meets [lo, hi].
-        first = int64_t(std::clamp(std::ceil(lo) - 1.0, -1.0, h));
-        last = int64_t(std::clamp(std::floor(hi), -1.0, h));
+        first = int64_t(std::clamp(std::ceil(lo - kConservativeSlack) - 1.0, -1.0, h));
+        last = int64_t(std::clamp(std::floor(hi + kConservativeSlack), -1.0, h));
     }
     first = std::max<int64_t>(first, 0);
     last = std::min<int64_t>(last, height - 1);

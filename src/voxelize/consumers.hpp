@@ -18,6 +18,7 @@
 #include "core/bitops.hpp"
 #include "voxfx/bitgrid.hpp"
 #include "voxfx/frame.hpp"
+#include "voxfx/raster.hpp"
 
 namespace voxfx::detail {
 
@@ -71,7 +72,8 @@ struct ConservativeConsumer {
         void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t) {
             const int64_t c = y * grid.width() + x;
             const DepthToSlice m = frame.depthToSlice(c);
-            const double t0 = m(depthMin), t1 = m(depthMax);
+            // Slack as in the rasterizer: a depth exactly on a slice boundary keeps both cells.
+            const double t0 = m(depthMin) - kConservativeSlack, t1 = m(depthMax) + kConservativeSlack;
             const int64_t D = grid.depth();
             if (!(t1 >= 0 && t0 <= double(D))) return;
             // Cells [s, s+1] meeting [t0, t1]: s from ceil(t0) - 1 to floor(t1).
