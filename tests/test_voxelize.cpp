@@ -302,7 +302,9 @@ TEST(VoxelizeTest, BadInputRaisesClearErrors) {
         EXPECT_NE(std::string(e.what()).find("needs"), std::string::npos) << e.what();
     }
     EXPECT_THROW(parseVoxelizeMode("solidd"), Error);
-    EXPECT_THROW(fitFrame(Box3d{}, FitOptions{.resolution = 8}), Error);
+    FitOptions eight;
+    eight.resolution = 8;
+    EXPECT_THROW(fitFrame(Box3d{}, eight), Error);
 }
 
 TEST(VoxelizeTest, WideGridsUse64BitIndices) {

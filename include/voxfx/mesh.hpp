@@ -44,7 +44,8 @@ struct Mesh {
     }
 };
 
-/// Bounds of the vertices referenced by triangles (unreferenced vertices are ignored).
+/// Bounds of the vertices referenced by triangles (unreferenced vertices and triangles with
+/// out-of-range indices are ignored).
 /// Empty box for a mesh without triangles.
 Box3d computeBounds(const MeshView& mesh);
 
@@ -56,7 +57,8 @@ void validateMesh(const MeshView& mesh, const std::string& source);
 /// tested exactly on the float coordinates). Returns the number removed.
 std::size_t removeDegenerateTriangles(Mesh& mesh);
 
-/// Edge topology of a mesh, after merging vertices with bit-identical positions.
+/// Edge topology of a mesh, after merging vertices with equal positions (-0 equals +0).
+/// Triangles with out-of-range indices are skipped (validateMesh reports them).
 struct MeshTopology {
     std::size_t edges = 0;            ///< distinct undirected edges
     std::size_t boundaryEdges = 0;    ///< used by exactly one triangle
@@ -68,7 +70,7 @@ struct MeshTopology {
     }
 };
 
-/// Counts boundary, non-manifold and misoriented edges. O(T log T).
+/// Counts boundary, non-manifold and misoriented edges. O(V + T) with hashing.
 MeshTopology analyzeTopology(const MeshView& mesh);
 
 } // namespace voxfx

@@ -1,0 +1,200 @@
+// voxfx tests — the one shared helper header: temporary folders, file writing, fetched data.
+#pragma once
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <string_view>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+namespace voxfx::test {
+
+/// A fresh folder under the system temp directory, removed with everything in it on destruction.
+class TempDir {
+public:
+    TempDir() {
+        static std::atomic<int> counter{0};
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        std::string name = "voxfx-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+        if (info) name += std::string("-") + info->test_suite_name() + "-" + info->name();
+        path_ = std::filesystem::temp_directory_path() / name;
+        std::filesystem::remove_all(path_);
+        std::filesystem::create_directories(path_);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        std::filesystem::remove_all(path_, ec);
+    }
+    TempDir(const TempDir&) = delete;
+    TempDir& operator=(const TempDir&) = delete;
+
+    const std::filesystem::path& path() const { return path_; }
+    /// Path of `name` inside the folder, as a string.
+    std::string file(std::string_view name) const { return (path_ / name).string(); }
+
+private:
+    std::filesystem::path path_;
+};
+
+/// Writes `bytes` to `path` exactly (binary mode) and returns the path.
+inline std::string writeFile(const std::string& path, std::string_view bytes) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    EXPECT_TRUE(out.good()) << "cannot write " << path;
+    return path;
+}
+
+/// Path of a fetched data file (scripts/fetch-data.sh), e.g. dataPath("meshes/bunny00.off").
+inline std::string dataPath(std::string_view relative) {
+    return (std::filesystem::path(VOXFX_DATA_DIR) / relative).string();
+}
+
+} // namespace voxfx::test
+
+/// Skips the current test when a fetched data file is missing (run scripts/fetch-data.sh).
+#define VOXFX_REQUIRE_DATA(path)                                                                             \
+    do {                                                                                                     \
+        if (!std::filesystem::exists(path)) GTEST_SKIP() << "missing test data " << (path);                  \
+    } while (false)
+
+// ---- Small synthetic meshes (closed, outward counter-clockwise) for edge cases ----------------
+#include <cmath>
+#include <vector>
+
+#include "voxfx/mesh.hpp"
+
+namespace voxfx::test {
+
+/// Appends the closed box [lo, hi] (12 triangles, outward CCW) to `mesh`.
+inline void appendBox(Mesh& mesh, const Vec3d& lo, const Vec3d& hi) {
+    const auto base = uint32_t(mesh.positions.size());
+    for (int k = 0; k < 8; ++k)
+        mesh.positions.push_back(
+            Vec3f(Vec3d{(k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z}));
+    // Corner k has x from bit 0, y from bit 1, z from bit 2.
+    static const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                         {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : quads)
+        for (const uint32_t t : {q[0], q[1], q[2], q[0], q[2], q[3]}) mesh.indices.push_back(base + t);
+}
+
+inline Mesh makeBox(const Vec3d& lo, const Vec3d& hi) {
+    Mesh m;
+    appendBox(m, lo, hi);
+    return m;
+}
+
+/// A closed torus around the z axis through `center`: major radius R, minor r, n x m quads.
+inline Mesh makeTorus(const Vec3d& center, double R, double r, int n, int m) {
+    Mesh mesh;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < m; ++j) {
+            const double u = 2 * M_PI * i / n, v = 2 * M_PI * j / m;
+            mesh.positions.push_back(
+                Vec3f(center + Vec3d{(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u),
+                                     r * std::sin(v)}));
+        }
+    auto id = [&](int i, int j) { return uint32_t(((i + n) % n) * m + (j + m) % m); };
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < m; ++j)
+            for (const uint32_t t :
+                 {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j), id(i + 1, j + 1), id(i, j + 1)})
+                mesh.indices.push_back(t);
+    return mesh;
+}
+
+/// Brute-force inside test for closed meshes: parity of crossings of a ray in a fixed generic
+/// direction (no axis alignment, so degenerate hits on edges are practically impossible).
+/// Shares nothing with the rasterizer; O(triangles) per query.
+inline bool insideByRay(const MeshView& mesh, const Vec3d& p) {
+    const Vec3d dir = normalize(Vec3d{0.5773502691896258, 0.6123724356957945, 0.5400617248673217});
+    int crossings = 0;
+    for (size_t t = 0; t < mesh.triangleCount; ++t) {
+        const Vec3d a = mesh.vertex(mesh.index(t, 0)), b = mesh.vertex(mesh.index(t, 1)),
+                    c = mesh.vertex(mesh.index(t, 2));
+        // Moller-Trumbore.
+        const Vec3d e1 = b - a, e2 = c - a, h = cross(dir, e2);
+        const double det = dot(e1, h);
+        if (det == 0) continue;
+        const double inv = 1.0 / det;
+        const Vec3d s = p - a;
+        const double u = dot(s, h) * inv;
+        if (u < 0 || u > 1) continue;
+        const Vec3d q = cross(s, e1);
+        const double v = dot(dir, q) * inv;
+        if (v < 0 || u + v > 1) continue;
+        if (dot(e2, q) * inv > 0) ++crossings;
+    }
+    return crossings % 2 == 1;
+}
+
+} // namespace voxfx::test
+
+// ---- Random voxel grids (grid I/O and re-slicing tests) ----------------------------------------
+#include <random>
+
+#include "voxfx/voxel_grid.hpp"
+
+namespace voxfx::test {
+
+/// An orthographic grid over `box`, sliced along `axis`, with world dimensions `dims` (cells along
+/// x, y, z); each voxel is on with probability `density`, from a fixed-seed generator.
+inline VoxelGrid randomVoxelGrid(const Box3d& box, Axis axis, const Vec3i& dims, double density,
+                                 uint64_t seed) {
+    const int64_t w = dims[columnXAxis(axis)], h = dims[columnYAxis(axis)], d = dims[sliceAxis(axis)];
+    VoxelGrid g{Frame::orthographic(box, axis, w, h, d), BitGrid(w, h, d)};
+    std::mt19937_64 rng(seed);
+    std::bernoulli_distribution on(density);
+    for (int64_t y = 0; y < h; ++y)
+        for (int64_t x = 0; x < w; ++x)
+            for (int64_t s = 0; s < d; ++s)
+                if (on(rng)) g.bits.set(x, y, s);
+    return g;
+}
+
+} // namespace voxfx::test
+
+// ---- Spheres and exact mesh volumes (grid query, particle and surface tests) -------------------
+namespace voxfx::test {
+
+/// A closed UV sphere (outward CCW): `rings` latitude bands, `segments` longitudes, poles shared.
+inline Mesh makeUvSphere(const Vec3d& center, double radius, int rings, int segments) {
+    Mesh mesh;
+    mesh.positions.push_back(Vec3f(center + Vec3d{0, 0, -radius}));
+    for (int i = 1; i < rings; ++i)
+        for (int j = 0; j < segments; ++j) {
+            const double theta = M_PI * i / rings, phi = 2 * M_PI * j / segments;
+            mesh.positions.push_back(Vec3f(center + Vec3d{radius * std::sin(theta) * std::cos(phi),
+                                                          radius * std::sin(theta) * std::sin(phi),
+                                                          -radius * std::cos(theta)}));
+        }
+    mesh.positions.push_back(Vec3f(center + Vec3d{0, 0, radius}));
+    const auto top = uint32_t(mesh.positions.size() - 1);
+    auto ring = [&](int i, int j) { return uint32_t(1 + (i - 1) * segments + (j + segments) % segments); };
+    for (int j = 0; j < segments; ++j) {
+        for (const uint32_t t : {uint32_t(0), ring(1, j + 1), ring(1, j)}) mesh.indices.push_back(t);
+        for (const uint32_t t : {top, ring(rings - 1, j), ring(rings - 1, j + 1)}) mesh.indices.push_back(t);
+        for (int i = 1; i + 1 < rings; ++i)
+            for (const uint32_t t : {ring(i, j), ring(i, j + 1), ring(i + 1, j + 1), ring(i, j), ring(i + 1, j + 1),
+                                     ring(i + 1, j)})
+                mesh.indices.push_back(t);
+    }
+    return mesh;
+}
+
+/// Exact enclosed volume of a closed, consistently oriented mesh (divergence theorem: the sum of
+/// signed tetrahedra from the origin), in double. Positive for outward orientation.
+inline double meshVolume(const MeshView& mesh) {
+    double v = 0;
+    for (std::size_t t = 0; t < mesh.triangleCount; ++t) {
+        const Vec3d a = mesh.vertex(mesh.index(t, 0)), b = mesh.vertex(mesh.index(t, 1)),
+                    c = mesh.vertex(mesh.index(t, 2));
+        v += dot(a, cross(b, c)) / 6.0;
+    }
+    return v;
+}
+
+} // namespace voxfx::test
