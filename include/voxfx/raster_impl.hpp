@@ -198,6 +198,26 @@ inline void clipAxis(const ClipPolygon& in, ClipPolygon& out, int axis, double c
 /// cell are added.
 inline constexpr double kConservativeSlack = 1e-9;
 
+/// Depth range [lo, hi] where the convex polygon's boundary meets the line X = c (empty:
+/// lo > hi). Edges are interpolated at c; an edge lying on the line contributes both ends.
+inline void lineDepthRange(const ClipPolygon& p, double c, double& lo, double& hi) {
+    lo = INFINITY;
+    hi = -INFINITY;
+    for (int k = 0; k < p.n; ++k) {
+        const int j = k + 1 == p.n ? 0 : k + 1;
+        const double ax = p.x[k], bx = p.x[j];
+        if ((ax < c && bx < c) || (ax > c && bx > c)) continue;
+        if (ax == bx) {
+            lo = std::min({lo, p.w[k], p.w[j]});
+            hi = std::max({hi, p.w[k], p.w[j]});
+            continue;
+        }
+        const double w = p.w[k] + (p.w[j] - p.w[k]) * ((c - ax) / (bx - ax));
+        lo = std::min(lo, w);
+        hi = std::max(hi, w);
+    }
+}
+
 template <class Sink>
 void rasterizeConservative(const RasterTriangle& t, bool perspective, int64_t width, int64_t rowBegin,
                            int64_t rowEnd, Sink& sink) {
@@ -208,8 +228,9 @@ void rasterizeConservative(const RasterTriangle& t, bool perspective, int64_t wi
         tri.w[k] = t.w[k];
     }
     tri.n = 3;
-    ClipPolygon tmp, row, cell;
+    ClipPolygon tmp, row;
     for (int64_t y = rowBegin; y < rowEnd; ++y) {
+        // The triangle's part in the row's strip (closed, widened by the slack).
         clipAxis(tri, tmp, 1, double(y) - kConservativeSlack, true);
         if (tmp.n == 0) continue;
         clipAxis(tmp, row, 1, double(y + 1) + kConservativeSlack, false);
@@ -221,21 +242,29 @@ void rasterizeConservative(const RasterTriangle& t, bool perspective, int64_t wi
         }
         const int64_t xb = std::max<int64_t>(0, int64_t(std::ceil(xmin - kConservativeSlack)) - 1);
         const int64_t xe = std::min<int64_t>(width - 1, int64_t(std::floor(xmax + kConservativeSlack)));
+        // Sweep the columns: the polygon's depth range inside column x is attained where its
+        // boundary crosses the lines X = x and X = x + 1, or at its vertices in between (vertices
+        // within the slack of a line count on both sides).
+        double leftLo, leftHi;
+        lineDepthRange(row, double(xb), leftLo, leftHi);
         for (int64_t x = xb; x <= xe; ++x) {
-            clipAxis(row, tmp, 0, double(x) - kConservativeSlack, true);
-            if (tmp.n == 0) continue;
-            clipAxis(tmp, cell, 0, double(x + 1) + kConservativeSlack, false);
-            if (cell.n == 0) continue;
-            double wmin = cell.w[0], wmax = cell.w[0];
-            for (int k = 1; k < cell.n; ++k) {
-                wmin = std::min(wmin, cell.w[k]);
-                wmax = std::max(wmax, cell.w[k]);
-            }
+            double rightLo, rightHi;
+            lineDepthRange(row, double(x + 1), rightLo, rightHi);
+            double lo = std::min(leftLo, rightLo), hi = std::max(leftHi, rightHi);
+            const double cellLo = double(x) - kConservativeSlack, cellHi = double(x + 1) + kConservativeSlack;
+            for (int k = 0; k < row.n; ++k)
+                if (row.x[k] >= cellLo && row.x[k] <= cellHi) {
+                    lo = std::min(lo, row.w[k]);
+                    hi = std::max(hi, row.w[k]);
+                }
+            leftLo = rightLo;
+            leftHi = rightHi;
+            if (!(lo <= hi)) continue;
             // Perspective w is 1 / depth: the order of the bounds flips.
             if (perspective)
-                sink.span(x, y, 1.0 / wmax, 1.0 / wmin, t.index);
+                sink.span(x, y, 1.0 / hi, 1.0 / lo, t.index);
             else
-                sink.span(x, y, wmin, wmax, t.index);
+                sink.span(x, y, lo, hi, t.index);
         }
     }
 }
