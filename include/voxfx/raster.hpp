@@ -12,10 +12,12 @@
 //                           what makes parity exact. Fragment depth: the triangle's depth at the
 //                           centre.
 //   Coverage::Conservative  a column gets a span when the triangle touches its closed footprint
-//                           [x, x+1] x [y, y+1]; the span is the exact depth interval of the
-//                           triangle clipped to the column's prism, so a cell [s, s+1] of the column
-//                           overlaps the triangle iff it overlaps the span. Triangles parallel to the
-//                           view direction are handled (they clip to segments).
+//                           [x, x+1] x [y, y+1]; the span is the depth interval of the triangle
+//                           clipped to the column's prism, so a cell [s, s+1] of the column overlaps
+//                           the triangle iff it overlaps the span. Boundaries are widened by
+//                           kConservativeSlack (1e-9 cell) so that touching contacts survive the
+//                           rounding of clipping. Triangles parallel to the view direction are
+//                           handled (they clip to segments).
 //
 // Work is split into tiles of whole rows; every triangle is binned to the tiles its rows touch
 // (count, allocate, fill — in triangle order), and each tile is rasterized by one thread that owns

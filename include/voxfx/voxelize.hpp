@@ -4,8 +4,11 @@
 //   Surface             ED06: every centre-sampled fragment sets the bit of the slice its depth
 //                       falls in. Faithful to the paper, holes included: a steep triangle yields
 //                       one fragment per column, one parallel to the slicing axis none.
-//   Conservative        every cell whose closed box the triangle overlaps (26-separating), exactly:
-//                       the triangle clipped to each touched column prism gives the depth interval.
+//   Conservative        every cell whose closed box the triangle overlaps (26-separating): the
+//                       triangle clipped to each touched column prism gives the depth interval.
+//                       Exact up to a slack of 1e-9 cell (raster.hpp kConservativeSlack): cells
+//                       the triangle touches are never lost to rounding, and cells it misses by
+//                       less than 1e-9 of a cell are included (CGAL tests count those).
 //   Solid               GI08 parity at cell centres: a cell is inside when an odd number of
 //                       surfaces lie in front of its centre along the column. Fragments flip one
 //                       bit at their crossing; one prefix-XOR per column finishes.

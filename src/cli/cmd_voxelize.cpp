@@ -108,7 +108,7 @@ Grid placement (the half-voxel rule other tools trip over):
 
 Modes:
   surface             ED06: one voxel per column and triangle (holes on steep triangles)
-  conservative        every voxel the surface touches (26-separating, exact)
+  conservative        every voxel the surface touches (26-separating; exact to 1e-9 voxel)
   solid               voxels whose centre is inside (parity of crossings, exact; GI08)
   solid-conservative  solid + conservative surface
   interior            solid minus conservative surface: strictly inside
