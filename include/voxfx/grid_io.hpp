@@ -5,13 +5,20 @@
 // source mesh. Voxel (i, j, k) (indices along world x, y, z) covers
 // [lo + (i, j, k) * cell, lo + (i+1, j+1, k+1) * cell] and its centre is lo + (i + 0.5) * cell.
 //   binvox: translate = lo, scale = longest world extent of the grid (binvox's convention),
-//           data order x-major, then z, then y fastest (as binvox writes it).
+//           data order x-major, then z, then y fastest (as binvox writes it). "dim" lists the
+//           counts in data order, slowest first: nx nz ny (how read_binvox.cc and binvox-rw-py
+//           decode it; classic readers want cubic grids, d d d). binvox has one scale, so
+//           reading gives cubic cells of scale / max(dims): non-cubic cells do not survive.
 //   vdb:    a BoolGrid (or FloatGrid 0/1) named "voxels" (default), class fog volume for float,
 //           index-to-world transform = scale(cell) then translate(lo + cell/2), so index (i,j,k)
-//           maps to the voxel centre (OpenVDB's cell-centred convention).
+//           maps to the voxel centre (OpenVDB's cell-centred convention). Filled 8^3 blocks are
+//           stored as tiles; the dimensions go in Vec3i metadata "voxfx_dims".
 //   nrrd:   uint8 0/1, x fastest, "space origin" = centre of voxel (0,0,0), "space directions"
-//           = cell sizes; raw encoding.
-//   ply/obj: the exposed faces of filled voxels as quads (ply binary little endian).
+//           = cell sizes; raw encoding; "space: right-anterior-superior".
+//   ply/obj: the exposed faces of filled voxels (between a filled voxel and an empty one or the
+//           grid border) as quads, counter-clockwise seen from outside, in world coordinates
+//           (ply binary little endian, float x y z, list uchar int). Corners are shared: each
+//           lattice point is one vertex. Cost ~ a few passes over the grid plus the output.
 // All writers are atomic: they write a temporary file beside the target and rename it, so a
 // failure leaves no partial output and an existing file untouched.
 #pragma once
@@ -33,11 +40,16 @@ struct GridWriteOptions {
     std::string gridName = "voxels";
 };
 
-/// Writes an orthographic grid (locally sliced grids are resampled to uniform first).
+/// Writes an orthographic grid (locally sliced grids are resampled to uniform first); throws
+/// voxfx::Error naming the path for perspective grids and failed writes.
 void writeGrid(const VoxelGrid& grid, const std::string& path, const GridWriteOptions& options = {});
 /// Reads binvox, vdb (first bool/float/double grid, active or > 0 voxels) or nrrd (nonzero voxels)
 /// into an orthographic grid sliced along Z. Throws voxfx::Error on unreadable, malformed or
-/// truncated files.
+/// truncated files, naming the path. Limits: vdb needs an axis-aligned scale + translate
+/// transform and no level sets (its grid spans "voxfx_dims" when present, else the active
+/// voxels' box); nrrd needs uchar/signed char samples, raw encoding (gzip is rejected) and
+/// diagonal space directions, read as world coordinates whatever the named space.
+/// .ply/.obj are write-only.
 VoxelGrid readGrid(const std::string& path);
 
 } // namespace voxfx

@@ -1,0 +1,200 @@
+// voxfx — binvox reader and writer.
+//
+// Format: Patrick Min's binvox (https://www.patrickmin.com/binvox/binvox.html, layout by Michael
+// Kazhdan). ASCII header "#binvox 1", "dim", "translate", "scale", "data\n", then (value, count)
+// byte pairs, count 1..255, run-length encoding the voxels in the order
+//     index = x * (ny * nz) + z * ny + y        (x slowest, then z, y fastest)
+// which is read_binvox.cc's "x * wxh + z * width + y". Voxel (i, j, k) has its centre at
+// translate + scale * ((i, j, k) + 0.5) / d for a d^3 grid, so translate is the box corner and
+// scale its edge length.
+//
+// Non-cubic grids (classic readers require dim d d d): "dim" lists the counts in data order,
+// slowest first (nx nz ny), which is what read_binvox.cc ("depth height width" with
+// y < width, z < height) and binvox-rw-py (reshape(dims) in x, z, y order) decode. The single
+// scale is the longest box extent and cells are taken as cubes of scale / max(nx, ny, nz), so
+// a grid with non-cubic cells reads back with cubic cells (the voxels survive, the box does not).
+#include <algorithm>
+#include <bit>
+#include <charconv>
+#include <cmath>
+#include <string_view>
+#include <vector>
+
+#include "core/bitops.hpp"
+#include "io/grid_formats.hpp"
+
+namespace voxfx::detail {
+
+void writeBinvox(const VoxelGrid& grid, std::ostream& out) {
+    const Vec3i n = grid.worldDims();
+    const Box3d& box = grid.frame.box();
+    const Vec3d ext = box.extent();
+    const double scale = std::max({ext.x, ext.y, ext.z});
+    out << "#binvox 1\n"
+        << "dim " << n.x << ' ' << n.z << ' ' << n.y << '\n'
+        << "translate " << formatDouble(box.lo.x) << ' ' << formatDouble(box.lo.y) << ' '
+        << formatDouble(box.lo.z) << '\n'
+        << "scale " << formatDouble(scale) << '\n'
+        << "data\n";
+
+    // Sliced along y, columns run along (z, x): column c = x * nz + z holds the bits of y, so
+    // walking the columns in memory order walks binvox's order and runs come straight from words.
+    const VoxelGrid g = reslice(grid, Axis::Y);
+    const int64_t columns = g.bits.columnCount(), wpc = g.bits.wordsPerColumn(), ny = g.bits.depth();
+    std::vector<uint8_t> buf;
+    buf.reserve(size_t(1) << 20);
+    auto emit = [&](uint8_t value, int64_t count) {
+        for (; count > 0; count -= 255) {
+            buf.push_back(value);
+            buf.push_back(uint8_t(std::min<int64_t>(count, 255)));
+            if (buf.size() == buf.capacity()) {
+                out.write(reinterpret_cast<const char*>(buf.data()), std::streamsize(buf.size()));
+                buf.clear();
+            }
+        }
+    };
+    uint8_t value = 0;
+    int64_t run = 0;
+    for (int64_t c = 0; c < columns; ++c) {
+        const uint64_t* col = g.bits.column(c);
+        for (int64_t w = 0; w < wpc; ++w) {
+            const int bits = int(std::min<int64_t>(64, ny - 64 * w));
+            const uint64_t word = col[w];
+            int pos = 0;
+            while (pos < bits) {
+                // Length of the run of `value` starting at bit pos (capped at the valid bits).
+                const uint64_t rest = word >> pos;
+                const int len = std::min(value ? std::countr_one(rest) : std::countr_zero(rest), bits - pos);
+                run += len;
+                pos += len;
+                if (pos < bits) {
+                    emit(value, run);
+                    value ^= 1;
+                    run = 0;
+                }
+            }
+        }
+    }
+    emit(value, run);
+    out.write(reinterpret_cast<const char*>(buf.data()), std::streamsize(buf.size()));
+}
+
+namespace {
+// Whitespace-separated header tokens, bounded by the header size limit.
+class HeaderReader {
+public:
+    HeaderReader(std::span<const uint8_t> bytes, size_t limit)
+        : bytes_(bytes), end_(std::min(limit, bytes.size())) {}
+
+    std::string_view token() {
+        while (pos_ < end_ && isSpace(bytes_[pos_])) ++pos_;
+        const size_t b = pos_;
+        while (pos_ < end_ && !isSpace(bytes_[pos_])) ++pos_;
+        if (pos_ == end_ && end_ < bytes_.size()) fail("binvox header is longer than ", end_, " bytes");
+        return {reinterpret_cast<const char*>(bytes_.data()) + b, pos_ - b};
+    }
+    template <class T> T number(const char* what) {
+        const std::string_view t = token();
+        T v{};
+        const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+        if (t.empty() || r.ec != std::errc() || r.ptr != t.data() + t.size())
+            fail("binvox header: bad ", what, " '", t, "'");
+        return v;
+    }
+    void skipLine() {
+        while (pos_ < end_ && bytes_[pos_] != '\n') ++pos_;
+    }
+    size_t position() const { return pos_; }
+    bool atEnd() const { return pos_ >= bytes_.size(); }
+
+private:
+    static bool isSpace(uint8_t c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+    std::span<const uint8_t> bytes_;
+    size_t end_;
+    size_t pos_ = 0;
+};
+
+constexpr size_t kMaxHeaderBytes = 4096;
+constexpr int64_t kMaxDim = int64_t(1) << 20;
+} // namespace
+
+VoxelGrid readBinvox(std::span<const uint8_t> bytes) {
+    HeaderReader h(bytes, kMaxHeaderBytes);
+    if (h.token() != "#binvox") fail("not a binvox file (it does not start with '#binvox')");
+    const int version = h.number<int>("version");
+    if (version != 1 && version != 2) fail("unsupported binvox version ", version, " (supported: 1, 2)");
+    int64_t dim[3] = {0, 0, 0};
+    Vec3d translate{0, 0, 0};
+    double scale = 1;
+    bool haveDim = false;
+    for (;;) {
+        const std::string_view key = h.token();
+        if (key.empty()) fail("binvox header ends without a 'data' line");
+        if (key == "data") break;
+        if (key == "dim") {
+            for (int64_t& d : dim) {
+                d = h.number<int64_t>("dim");
+                if (d <= 0 || d > kMaxDim) fail("binvox dim ", d, " out of range [1, ", kMaxDim, "]");
+            }
+            haveDim = true;
+        } else if (key == "translate") {
+            translate.x = h.number<double>("translate");
+            translate.y = h.number<double>("translate");
+            translate.z = h.number<double>("translate");
+            if (!isFinite(translate)) fail("binvox translate is not finite");
+        } else if (key == "scale") {
+            scale = h.number<double>("scale");
+            if (!(std::isfinite(scale) && scale > 0))
+                fail("binvox scale ", scale, " is not positive and finite");
+        } else {
+            h.skipLine(); // unknown keywords are skipped, as read_binvox.cc does
+        }
+    }
+    if (!haveDim) fail("binvox header has no 'dim' line");
+    // Exactly one linefeed separates "data" from the voxel bytes.
+    size_t p = h.position();
+    if (p >= bytes.size() || bytes[p] != '\n') fail("binvox 'data' is not followed by a linefeed");
+    ++p;
+
+    const int64_t nx = dim[0], nz = dim[1], ny = dim[2];
+    // Each pair encodes at most 255 voxels: reject short data before allocating the grid.
+    const int64_t total = nx * ny * nz;
+    if (uint64_t(bytes.size() - p) < 2 * uint64_t((total + 254) / 255))
+        fail("binvox data is truncated: ", bytes.size() - p, " bytes cannot encode ", total, " voxels");
+    const double cell = scale / double(std::max({nx, ny, nz}));
+    const Box3d box{translate, translate + Vec3d(double(nx), double(ny), double(nz)) * cell};
+    // Sliced along y: column (x' = z, y' = x) = x * nz + z holds y, as binvox orders the data.
+    VoxelGrid g{Frame::orthographic(box, Axis::Y, nz, nx, ny), BitGrid(nz, nx, ny)};
+    const int64_t wpc = g.bits.wordsPerColumn();
+    uint64_t* words = g.bits.words();
+    int64_t index = 0;
+    for (; index < total && p + 1 < bytes.size(); p += 2) {
+        const uint8_t value = bytes[p];
+        int64_t count = bytes[p + 1];
+        if (count > total - index)
+            fail("binvox run-length data overruns the ", total, " voxels (run of ", count, " at voxel ",
+                 index, ")");
+        if (value) {
+            // Set the run, splitting it where it crosses columns.
+            for (int64_t i = index, left = count; left > 0;) {
+                const int64_t c = i / ny, y = i % ny, n = std::min(left, ny - y);
+                uint64_t* col = words + c * wpc;
+                for (int64_t b = y; b < y + n;) {
+                    const int64_t w = b >> 6, lo = b & 63, hi = std::min<int64_t>(64, lo + (y + n - b));
+                    col[w] |= bitRange(int(lo), int(hi));
+                    b += hi - lo;
+                }
+                i += n;
+                left -= n;
+            }
+        }
+        index += count;
+    }
+    if (index < total) fail("binvox data is truncated: it ends after ", index, " of ", total, " voxels");
+    if (p < bytes.size())
+        fail("binvox data overruns the ", total, " voxels (", bytes.size() - p,
+             " bytes after the last voxel)");
+    return reslice(g, Axis::Z);
+}
+
+} // namespace voxfx::detail

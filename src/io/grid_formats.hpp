@@ -1,0 +1,37 @@
+// voxfx — the grid file formats behind grid_io.hpp (internal). Writers take an orthographic,
+// uniformly sliced grid (writeGrid prepares it); readers take the file's bytes (or path) and
+// throw voxfx::Error with the cause only: readGrid prefixes the path.
+#pragma once
+
+#include <bit>
+#include <cstdint>
+#include <ostream>
+#include <span>
+#include <string>
+
+#include "io/atomic_file.hpp"
+#include "voxfx/grid_io.hpp"
+
+namespace voxfx::detail {
+
+// Binary formats (binvox bytes, NRRD raw uint8, PLY binary_little_endian, the byte-expansion
+// tables) are written straight from memory.
+static_assert(std::endian::native == std::endian::little, "voxfx io assumes a little-endian host");
+
+void writeBinvox(const VoxelGrid& grid, std::ostream& out);
+VoxelGrid readBinvox(std::span<const uint8_t> bytes);
+
+/// Writes through the temporary file's path (OpenVDB opens files by name).
+void writeVdb(const VoxelGrid& grid, AtomicFile& file, const GridWriteOptions& options);
+VoxelGrid readVdb(const std::string& path);
+
+void writeNrrd(const VoxelGrid& grid, std::ostream& out);
+VoxelGrid readNrrd(std::span<const uint8_t> bytes);
+
+/// format: GridFormat::Ply or GridFormat::Obj.
+void writeVoxelMesh(const VoxelGrid& grid, std::ostream& out, GridFormat format);
+
+/// Shortest decimal text that reads back as the same double (std::to_chars).
+std::string formatDouble(double v);
+
+} // namespace voxfx::detail

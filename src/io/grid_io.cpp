@@ -1,0 +1,132 @@
+#include "voxfx/grid_io.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <vector>
+
+#include "io/atomic_file.hpp"
+#include "io/grid_formats.hpp"
+
+namespace voxfx {
+
+namespace {
+constexpr const char* kAllowedExtensions = ".binvox, .vdb, .nrrd, .ply, .obj";
+
+std::vector<uint8_t> readFileBytes(const std::string& path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) fail("cannot read '", path, "': it is a directory");
+    errno = 0;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail("cannot read '", path, "': ", errno ? std::strerror(errno) : "cannot open the file");
+    in.seekg(0, std::ios::end);
+    const std::streamoff size = in.tellg();
+    if (size < 0) fail("cannot read '", path, "': cannot determine the file size");
+    in.seekg(0, std::ios::beg);
+    std::vector<uint8_t> bytes(static_cast<size_t>(size));
+    in.read(reinterpret_cast<char*>(bytes.data()), size);
+    if (in.gcount() != size) fail("cannot read '", path, "': ", errno ? std::strerror(errno) : "short read");
+    return bytes;
+}
+} // namespace
+
+namespace detail {
+std::string formatDouble(double v) {
+    char buf[64];
+    const auto r = std::to_chars(buf, buf + sizeof(buf), v);
+    return std::string(buf, r.ptr);
+}
+} // namespace detail
+
+GridFormat gridFormatFromPath(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext == ".binvox") return GridFormat::Binvox;
+    if (ext == ".vdb") return GridFormat::Vdb;
+    if (ext == ".nrrd") return GridFormat::Nrrd;
+    if (ext == ".ply") return GridFormat::Ply;
+    if (ext == ".obj") return GridFormat::Obj;
+    fail("'", path, "': unknown voxel grid extension '", ext, "' (allowed: ", kAllowedExtensions, ")");
+}
+
+const char* toString(GridFormat f) {
+    switch (f) {
+    case GridFormat::Binvox:
+        return "binvox";
+    case GridFormat::Vdb:
+        return "vdb";
+    case GridFormat::Nrrd:
+        return "nrrd";
+    case GridFormat::Ply:
+        return "ply";
+    case GridFormat::Obj:
+        return "obj";
+    }
+    return "unknown";
+}
+
+void writeGrid(const VoxelGrid& grid, const std::string& path, const GridWriteOptions& options) {
+    const GridFormat format = gridFormatFromPath(path);
+    const Frame& f = grid.frame;
+    if (f.isPerspective())
+        fail("cannot write '", path, "': ", toString(format),
+             " needs an orthographic grid, this one is perspective (re-voxelize with an orthographic frame)");
+    if (f.columnCount() == 0 || grid.bits.width() != f.width() || grid.bits.height() != f.height() ||
+        grid.bits.depth() != f.depth())
+        fail("cannot write '", path, "': the grid's bits (", grid.bits.width(), " x ", grid.bits.height(),
+             " x ", grid.bits.depth(), ") do not match its frame (", f.width(), " x ", f.height(), " x ",
+             f.depth(), ")");
+    const VoxelGrid resampled = f.slicing() == Slicing::Local ? resampleToUniform(grid) : VoxelGrid{};
+    const VoxelGrid& uniform = f.slicing() == Slicing::Local ? resampled : grid;
+
+    detail::AtomicFile file(path);
+    switch (format) {
+    case GridFormat::Binvox:
+        detail::writeBinvox(uniform, file.stream());
+        break;
+    case GridFormat::Vdb:
+        detail::writeVdb(uniform, file, options);
+        break;
+    case GridFormat::Nrrd:
+        detail::writeNrrd(uniform, file.stream());
+        break;
+    case GridFormat::Ply:
+    case GridFormat::Obj:
+        detail::writeVoxelMesh(uniform, file.stream(), format);
+        break;
+    }
+    file.commit();
+}
+
+VoxelGrid readGrid(const std::string& path) {
+    const GridFormat format = gridFormatFromPath(path);
+    if (format == GridFormat::Ply || format == GridFormat::Obj)
+        fail("cannot read '", path, "': ", toString(format),
+             " voxel meshes are write-only (readable: .binvox, .vdb, .nrrd)");
+    try {
+        switch (format) {
+        case GridFormat::Binvox:
+            return detail::readBinvox(readFileBytes(path));
+        case GridFormat::Nrrd:
+            return detail::readNrrd(readFileBytes(path));
+        default: {
+            // OpenVDB reports a missing file with its own wording; give ours.
+            std::error_code ec;
+            if (!std::filesystem::exists(path, ec)) fail("cannot read '", path, "': ", std::strerror(ENOENT));
+            if (std::filesystem::is_directory(path, ec)) fail("cannot read '", path, "': it is a directory");
+            return detail::readVdb(path);
+        }
+        }
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        if (what.find(path) != std::string::npos) throw;
+        fail("cannot read '", path, "': ", what);
+    } catch (const std::bad_alloc&) { fail("cannot read '", path, "': out of memory"); }
+}
+
+} // namespace voxfx
