@@ -29,10 +29,11 @@ int main(int argc, char** argv) {
         // The bits are a slicemap: one 64-bit word holds 64 slices of a column.
         const voxfx::Vec3i dims = grid.worldDims();
         const voxfx::Vec3d cell = frame.cellSize();
-        std::printf("%lld x %lld x %lld cells, %lld filled, volume %.6g\n", (long long)dims.x, (long long)dims.y,
-                    (long long)dims.z, (long long)grid.bits.count(),
+        std::printf("%lld x %lld x %lld cells, %lld filled, volume %.6g\n", (long long)dims.x,
+                    (long long)dims.y, (long long)dims.z, (long long)grid.bits.count(),
                     double(grid.bits.count()) * cell.x * cell.y * cell.z);
-        std::printf("centre voxel filled: %s\n", grid.atWorldIndex(dims.x / 2, dims.y / 2, dims.z / 2) ? "yes" : "no");
+        std::printf("centre voxel filled: %s\n",
+                    grid.atWorldIndex(dims.x / 2, dims.y / 2, dims.z / 2) ? "yes" : "no");
 
         // Written atomically: a temporary file beside the target, renamed when complete.
         voxfx::writeGrid(grid, argv[2]);
