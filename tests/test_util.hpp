@@ -167,9 +167,9 @@ inline Mesh makeUvSphere(const Vec3d& center, double radius, int rings, int segm
     for (int i = 1; i < rings; ++i)
         for (int j = 0; j < segments; ++j) {
             const double theta = M_PI * i / rings, phi = 2 * M_PI * j / segments;
-            mesh.positions.push_back(Vec3f(center + Vec3d{radius * std::sin(theta) * std::cos(phi),
-                                                          radius * std::sin(theta) * std::sin(phi),
-                                                          -radius * std::cos(theta)}));
+            mesh.positions.push_back(
+                Vec3f(center + Vec3d{radius * std::sin(theta) * std::cos(phi),
+                                     radius * std::sin(theta) * std::sin(phi), -radius * std::cos(theta)}));
         }
     mesh.positions.push_back(Vec3f(center + Vec3d{0, 0, radius}));
     const auto top = uint32_t(mesh.positions.size() - 1);
@@ -178,8 +178,8 @@ inline Mesh makeUvSphere(const Vec3d& center, double radius, int rings, int segm
         for (const uint32_t t : {uint32_t(0), ring(1, j + 1), ring(1, j)}) mesh.indices.push_back(t);
         for (const uint32_t t : {top, ring(rings - 1, j), ring(rings - 1, j + 1)}) mesh.indices.push_back(t);
         for (int i = 1; i + 1 < rings; ++i)
-            for (const uint32_t t : {ring(i, j), ring(i, j + 1), ring(i + 1, j + 1), ring(i, j), ring(i + 1, j + 1),
-                                     ring(i + 1, j)})
+            for (const uint32_t t : {ring(i, j), ring(i, j + 1), ring(i + 1, j + 1), ring(i, j),
+                                     ring(i + 1, j + 1), ring(i + 1, j)})
                 mesh.indices.push_back(t);
     }
     return mesh;
@@ -195,6 +195,40 @@ inline double meshVolume(const MeshView& mesh) {
         v += dot(a, cross(b, c)) / 6.0;
     }
     return v;
+}
+
+} // namespace voxfx::test
+
+// ---- Running the voxfx command (end-to-end tests of the CLI subcommands) ----------------------
+#include <cstdlib>
+#include <sstream>
+
+#include <sys/wait.h>
+
+namespace voxfx::test {
+
+struct CommandRun {
+    int exitCode = -1;
+    std::string out, err;
+};
+
+/// Runs `voxfx ARGS` (no stdin), capturing stdout and stderr through files in `dir`.
+inline CommandRun runVoxfx(const TempDir& dir, const std::string& args) {
+    const std::string out = dir.file("voxfx-stdout.txt"), err = dir.file("voxfx-stderr.txt");
+    const std::string cmd =
+        std::string(VOXFX_CLI_PATH) + " " + args + " >" + out + " 2>" + err + " </dev/null";
+    const int status = std::system(cmd.c_str());
+    CommandRun r;
+    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+    auto slurp = [](const std::string& path) {
+        std::ifstream in(path, std::ios::binary);
+        std::stringstream s;
+        s << in.rdbuf();
+        return s.str();
+    };
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
 }
 
 } // namespace voxfx::test
