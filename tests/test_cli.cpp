@@ -6,17 +6,13 @@
 #include <sstream>
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include "test_util.hpp"
 
 namespace voxfx {
 namespace {
 
-struct CliRun {
-    int exitCode = -1;
-    std::string out, err;
-};
+using CliRun = test::CommandRun;
 
 std::string slurp(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
@@ -25,17 +21,7 @@ std::string slurp(const std::string& path) {
     return s.str();
 }
 
-CliRun runCli(const test::TempDir& dir, const std::string& args) {
-    const std::string out = dir.file("stdout.txt"), err = dir.file("stderr.txt");
-    const std::string cmd =
-        std::string(VOXFX_CLI_PATH) + " " + args + " >" + out + " 2>" + err + " </dev/null";
-    const int status = std::system(cmd.c_str());
-    CliRun r;
-    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    return r;
-}
+CliRun runCli(const test::TempDir& dir, const std::string& args) { return test::runVoxfx(dir, args); }
 
 const char* kCubeOff = "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
                        "3 0 2 3\n3 0 3 1\n3 4 5 7\n3 4 7 6\n3 0 1 5\n3 0 5 4\n"
