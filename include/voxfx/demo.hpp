@@ -1,0 +1,47 @@
+// voxfx — procedural demo scenes for shadows through foliage (built in memory; writeGltf saves them).
+//
+//   tree    a procedural tree: an opaque trunk with branches, thousands of leaf quads in colour
+//           groups (partial occluders), a ground plane that only receives, a sun (directional).
+//   bunny   the Stanford bunny (bunny00.off) under a canopy of leaves, lit by a spot light.
+//   cgal    meshes from the CGAL data set (elephant, armadillo, cactus) under a leafy pergola lit by
+//           a point light and a directional one.
+// Every scene has one camera. Generation is deterministic (fixed seeds).
+//
+// EXPERIMENTAL until the renderer issue closes.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "voxfx/scene.hpp"
+
+namespace voxfx {
+
+struct TreeOptions {
+    int leaves = 3000;        ///< leaf quads (2 triangles each)
+    int colourGroups = 3;     ///< leaf colour groups (1..4): different shadow channels
+    double leafSize = 0.15;   ///< leaf edge length (the tree is about 4 units tall)
+    float leafOpacity = 0.6f; ///< Material::opacity of the leaves
+    float leafTransmission = 0.6f;
+    int trunkSides = 16;
+    bool ground = true;
+    uint64_t seed = 1;
+};
+
+Scene makeTreeScene(const TreeOptions& options = {});
+
+/// The bunny (meshesDir/bunny00.off, scaled to about 1.2 units) under a leaf canopy. Throws
+/// voxfx::Error when the mesh cannot be loaded.
+Scene makeBunnyScene(const std::string& meshesDir, int leaves = 4000, uint64_t seed = 2);
+
+/// Elephant, armadillo and cactus from meshesDir under a pergola of leaves. Meshes that are
+/// missing are skipped (at least one must load, else voxfx::Error).
+Scene makeCgalScene(const std::string& meshesDir, int leaves = 5000, uint64_t seed = 3);
+
+/// "tree", "bunny", "cgal".
+std::vector<std::string> demoSceneNames();
+/// makeTreeScene / makeBunnyScene / makeCgalScene by name; voxfx::Error for an unknown name.
+Scene makeDemoScene(const std::string& name, const std::string& meshesDir);
+
+} // namespace voxfx

@@ -1,0 +1,91 @@
+// voxfx — the rasterizing renderer: G-buffer, light loop with shadows, Blinn–Phong shading.
+//
+// Passes (each separable, so later effects — glass, deep shadow maps — slot in as new passes):
+//   1. flattenScene   every SceneMesh into one indexed mesh with per-triangle material and vertex
+//                     normals (once per scene).
+//   2. renderGBuffer  the camera is a perspective Frame whose columns are pixels (y up; images are
+//                     y down, flipped on output); a consumer of the one rasterizer keeps the
+//                     nearest centre-sampled fragment per pixel (depth, triangle). Ties go to the
+//                     lower triangle index, so the result does not depend on the thread count.
+//   3. shadows        one LightShadow per light (shadow.hpp): standard map, ED06 transmittance or
+//                     CHANG absorption.
+//   4. shade          deferred, tile rows in parallel: ambient + per light Blinn–Phong times the
+//                     light's RGB visibility. Surfaces are lit on both sides; the side facing away
+//                     from a light receives the light that crosses the surface
+//                     (crossingTransmittance: back-lit leaves glow).
+//   5. resolve        box filter of supersample x supersample pixels.
+// Output is linear RGB (writePng encodes sRGB; writePfm keeps HDR). Deterministic for any thread
+// count.
+//
+// EXPERIMENTAL until the renderer issue closes.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "voxfx/image.hpp"
+#include "voxfx/parallel.hpp"
+#include "voxfx/scene.hpp"
+#include "voxfx/shadow.hpp"
+
+namespace voxfx {
+
+struct RenderOptions {
+    int64_t width = 1280, height = 720; ///< output pixels
+    int supersample = 1;                ///< k: render k*width x k*height, box-filter down (1..8)
+    ShadowOptions shadow;               ///< shadow kind and its resolutions
+    Vec3f ambient{0.05f, 0.06f, 0.08f}; ///< ambient irradiance (times albedo)
+    Vec3f background{0.60f, 0.72f, 0.90f};
+    float exposure = 1;           ///< multiplies the linear result
+    int threads = 0;              ///< 0 = all; output is identical for every value
+    Progress* progress = nullptr; ///< polled between tiles of every pass; may cancel
+};
+
+/// Wall-clock time of each pass, milliseconds.
+struct RenderTimings {
+    double flattenMs = 0, gbufferMs = 0, shadowMapMs = 0, lightVoxelizeMs = 0, shadingMs = 0, resolveMs = 0,
+           totalMs = 0;
+};
+
+struct RenderResult {
+    Image image;
+    RenderTimings timings;
+    int64_t coveredPixels = 0; ///< pixels (at the supersampled resolution) showing geometry
+};
+
+/// All meshes of a scene as one mesh, with per-triangle material and source mesh and per-vertex
+/// unit normals (given ones, or area-weighted face normals).
+struct SceneGeometry {
+    Mesh mesh;
+    std::vector<uint32_t> triangleMaterial, triangleMesh;
+    std::vector<Vec3f> normals;
+};
+SceneGeometry flattenScene(const Scene& scene);
+
+/// Nearest fragment per pixel. Pixel (x, y) with y up; triangle == kNone where nothing was hit.
+struct GBuffer {
+    static constexpr uint32_t kNone = 0xffffffffu;
+    Frame frame;              ///< the camera's perspective frame (columns = pixels)
+    std::vector<float> depth; ///< view distance along the camera axis
+    std::vector<uint32_t> triangle;
+};
+/// The camera's frame for a width x height image.
+Frame cameraFrame(const Camera& camera, int64_t width, int64_t height);
+GBuffer renderGBuffer(const SceneGeometry& geometry, const Frame& camera, Progress* progress = nullptr);
+
+/// What the shading pass knows about the surface seen through pixel (x, y) (y up).
+struct SurfacePoint {
+    Vec3d position;        ///< world
+    Vec3d normal;          ///< interpolated vertex normal, turned towards the viewer
+    Vec3d geometricNormal; ///< face normal, turned towards the viewer
+    uint32_t material = 0;
+};
+/// False for background pixels.
+bool surfaceAt(const GBuffer& gbuffer, const SceneGeometry& geometry, int64_t x, int64_t y,
+               SurfacePoint& out);
+
+/// Renders the scene as seen by `camera`. Throws voxfx::Error for invalid options (size, supersample)
+/// or a scene without triangles; Scene::validate is called first.
+RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options);
+
+} // namespace voxfx

@@ -1,0 +1,159 @@
+// voxfx render SCENE -o IMAGE — rasterizing renderer with shadow maps, ED06 transmittance shadows or
+// CHANG absorption shadows; prints a progress line and per-pass timings.
+#include <cctype>
+#include <iostream>
+
+#include "cli_common.hpp"
+#include "voxfx/image.hpp"
+#include "voxfx/render.hpp"
+
+namespace voxfx::cli {
+namespace {
+
+struct RenderArgs {
+    std::string input, output, shadows, slicing, voxelMode;
+    int64_t width = 0, height = 0, grid = 0, gridDepth = 0, mapResolution = 0;
+    int supersample = 0, pcf = 1, camera = 0, threads = 0;
+    double exposure = 1;
+    bool quiet = false, bilinear = false;
+};
+
+void printTimings(const RenderResult& r, const std::string& output) {
+    const RenderTimings& t = r.timings;
+    std::cout << "time: G-buffer " << fmtMs(t.gbufferMs) << ", shadow map " << fmtMs(t.shadowMapMs)
+              << ", voxelization from light " << fmtMs(t.lightVoxelizeMs) << ", shading "
+              << fmtMs(t.shadingMs) << ", resolve " << fmtMs(t.resolveMs) << " (flatten "
+              << fmtMs(t.flattenMs) << "), total " << fmtMs(t.totalMs) << " -> " << output << "\n";
+}
+
+/// Writes .png (sRGB) or .pfm (linear HDR); anything else is refused before rendering.
+void checkImageExtension(const std::string& path) {
+    const auto dot = path.find_last_of('.');
+    std::string ext = dot == std::string::npos ? "" : path.substr(dot + 1);
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (ext == "png" || ext == "pfm") return;
+    if (ext == "exr") fail(path, ": EXR output needs OpenEXR linked (libopenexr-dev); use .pfm for HDR");
+    fail(path, ": unknown image extension (allowed: .png, .pfm)");
+}
+
+void writeImage(const Image& image, const std::string& path) {
+    std::string ext = path.substr(path.find_last_of('.') + 1);
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (ext == "pfm")
+        writePfm(image, path);
+    else
+        writePng(image, path);
+}
+
+int runRender(const RenderArgs& a) {
+    checkImageExtension(a.output);
+    const auto t0 = Clock::now();
+    const Scene scene = loadScene(a.input);
+    const double loadMs = msSince(t0);
+    const SceneSettings& s = scene.settings;
+
+    RenderOptions o;
+    o.width = a.width ? a.width : (s.width ? s.width : 1280);
+    o.height = a.height ? a.height : (s.height ? s.height : 720);
+    o.supersample = a.supersample ? a.supersample : (s.supersample ? s.supersample : 1);
+    o.shadow.kind =
+        parseShadowKind(!a.shadows.empty() ? a.shadows : (!s.shadows.empty() ? s.shadows : "map"));
+    o.shadow.gridResolution = a.grid ? a.grid : (s.gridResolution ? s.gridResolution : 256);
+    o.shadow.gridDepth = a.gridDepth ? a.gridDepth : (s.gridDepth ? s.gridDepth : 256);
+    o.shadow.mapResolution =
+        a.mapResolution ? a.mapResolution : (s.shadowMapResolution ? s.shadowMapResolution : 2048);
+    o.shadow.slicing =
+        parseSlicing(!a.slicing.empty() ? a.slicing : (!s.slicing.empty() ? s.slicing : "uniform"));
+    o.shadow.voxelMode = parseVoxelizeMode(
+        !a.voxelMode.empty() ? a.voxelMode : (!s.voxelMode.empty() ? s.voxelMode : "surface"));
+    if (o.shadow.voxelMode != VoxelizeMode::Surface && o.shadow.voxelMode != VoxelizeMode::Conservative)
+        fail("--voxel-mode must be surface or conservative for shadows");
+    o.shadow.pcfRadius = a.pcf;
+    o.shadow.bilinear = a.bilinear;
+    if (s.ambient.x >= 0) o.ambient = s.ambient;
+    if (s.background.x >= 0) o.background = s.background;
+    o.exposure = float(a.exposure);
+    o.threads = a.threads;
+
+    Camera camera;
+    if (scene.cameras.empty()) {
+        if (a.camera != 0) fail(a.input, ": the scene has no cameras (--camera ", a.camera, ")");
+        camera = defaultCamera(scene, double(o.width) / double(o.height));
+    } else {
+        if (a.camera < 0 || std::size_t(a.camera) >= scene.cameras.size())
+            fail("--camera ", a.camera, ": the scene has ", scene.cameras.size(), " cameras (0 .. ",
+                 scene.cameras.size() - 1, ")");
+        camera = scene.cameras[std::size_t(a.camera)];
+    }
+
+    ProgressLine progress("rendering", !a.quiet);
+    o.progress = &progress;
+    const RenderResult r = render(scene, camera, o);
+    progress.done();
+    writeImage(r.image, a.output);
+    if (!a.quiet) {
+        std::cout << a.input << ": " << withCommas(int64_t(scene.triangleCount())) << " triangles, "
+                  << scene.lights.size() << " light(s), camera '" << camera.name << "' -> " << o.width
+                  << " x " << o.height;
+        if (o.supersample > 1) std::cout << " (" << o.supersample << "x" << o.supersample << " supersampled)";
+        std::cout << ", shadows " << toString(o.shadow.kind);
+        if (o.shadow.kind == ShadowKind::Transmittance || o.shadow.kind == ShadowKind::Absorption)
+            std::cout << " (grid " << o.shadow.gridResolution << " x " << o.shadow.gridDepth << ", "
+                      << toString(o.shadow.slicing) << " slicing)";
+        else if (o.shadow.kind == ShadowKind::Map)
+            std::cout << " (" << o.shadow.mapResolution << " texels, PCF " << 2 * o.shadow.pcfRadius + 1
+                      << "x" << 2 * o.shadow.pcfRadius + 1 << ")";
+        std::cout << "\nload " << fmtMs(loadMs) << "; ";
+        printTimings(r, a.output);
+    }
+    return 0;
+}
+
+const char* kRenderHelp = R"(
+Shadow kinds:
+  none           no shadows
+  map            standard shadow map with PCF (binary: leaves are opaque)
+  transmittance  ED06: partial occluders (leaves, glass) voxelized from the light; light
+                 is attenuated per filled cell, one channel per leaf colour group; opaque
+                 objects keep a standard shadow map
+  absorption     CHANG: attribute voxelization from the light, absorption = write count x
+                 material constant, summed along the light path
+
+Settings a JSON scene file gives under "render" are used unless a flag overrides them.
+Output: .png (8-bit sRGB) or .pfm (linear float, HDR). EXR is not available (OpenEXR is
+not linked): use .pfm for HDR.)";
+
+const Command kRender{
+    "render", "Render a scene (glTF, JSON wrapper, mesh) with shadows through foliage", [](CLI::App& app) {
+        app.footer(kRenderHelp);
+        auto a = std::make_shared<RenderArgs>();
+        app.add_option("SCENE", a->input, "Scene: .gltf .glb .json, or a mesh file")->required();
+        app.add_option("-o,--output", a->output, "Image: .png or .pfm (HDR)")->required();
+        app.add_option("--width", a->width, "Image width (default 1280)")
+            ->check(CLI::Range(int64_t(1), int64_t(65536)));
+        app.add_option("--height", a->height, "Image height (default 720)")
+            ->check(CLI::Range(int64_t(1), int64_t(65536)));
+        app.add_option("--shadows", a->shadows, "none | map | transmittance | absorption (default map)");
+        app.add_option("--supersample", a->supersample, "Render k x k samples per pixel (1..8)")
+            ->check(CLI::Range(1, 8));
+        app.add_option("--grid", a->grid, "Light grid columns, longer side (default 256)")
+            ->check(CLI::Range(int64_t(1), int64_t(16384)));
+        app.add_option("--grid-depth", a->gridDepth, "Light grid slices (default 256)")
+            ->check(CLI::Range(int64_t(1), int64_t(16384)));
+        app.add_option("--map-resolution", a->mapResolution, "Shadow map texels (default 2048)")
+            ->check(CLI::Range(int64_t(1), int64_t(32768)));
+        app.add_option("--slicing", a->slicing, "uniform | local (ED06 per-column range)");
+        app.add_option("--voxel-mode", a->voxelMode, "surface (ED06) | conservative");
+        app.add_option("--pcf", a->pcf, "PCF radius r: (2r+1)^2 taps (default 1)")->check(CLI::Range(0, 8));
+        app.add_option("--camera", a->camera, "Index of the scene camera (default 0)");
+        app.add_option("--exposure", a->exposure, "Multiplies the linear image (default 1)")
+            ->check(CLI::PositiveNumber);
+        app.add_option("-j,--threads", a->threads, "Worker threads, 0 = all (identical output)")
+            ->check(CLI::NonNegativeNumber);
+        app.add_flag("--bilinear", a->bilinear, "Interpolate light-grid lookups between 4 columns (softer)");
+        app.add_flag("-q,--quiet", a->quiet, "No summary or progress");
+        return std::function<int()>([a] { return runRender(*a); });
+    }};
+
+} // namespace
+} // namespace voxfx::cli

@@ -1,0 +1,344 @@
+// voxfx — procedural demo scenes for shadows through foliage (the scenes of ED06 §3.1 fig. 7 and
+// CHANG fig. 2: a tree with thousands of leaves over an opaque trunk; an object under a canopy).
+//
+// World is y-up (as glTF). Leaves are double-sided quads (two triangles) whose material lets part of
+// the light through (opacity < 1, transmission > 0), in colour groups: one shadow channel each.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <random>
+
+#include "voxfx/demo.hpp"
+#include "voxfx/mesh_io.hpp"
+
+namespace voxfx {
+
+namespace {
+
+using Rng = std::mt19937_64;
+
+double uniform(Rng& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
+
+Vec3d randomUnit(Rng& rng) {
+    for (;;) {
+        const Vec3d v{uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)};
+        const double l = length(v);
+        if (l > 1e-3 && l <= 1) return v / l;
+    }
+}
+
+void appendQuad(Mesh& m, const Vec3d& c, const Vec3d& u, const Vec3d& v) {
+    const auto base = uint32_t(m.positions.size());
+    m.positions.push_back(Vec3f(c - u - v));
+    m.positions.push_back(Vec3f(c + u - v));
+    m.positions.push_back(Vec3f(c + u + v));
+    m.positions.push_back(Vec3f(c - u + v));
+    m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+}
+
+/// A closed tapered cylinder from a (radius ra) to b (radius rb), outward counter-clockwise.
+void appendCylinder(Mesh& m, const Vec3d& a, const Vec3d& b, double ra, double rb, int sides) {
+    const Vec3d axis = normalize(b - a);
+    const Vec3d hint = std::abs(axis.y) < 0.9 ? Vec3d{0, 1, 0} : Vec3d{1, 0, 0};
+    const Vec3d e1 = normalize(cross(axis, hint)), e2 = cross(axis, e1);
+    const auto base = uint32_t(m.positions.size());
+    for (int i = 0; i < sides; ++i) {
+        const double t = 2 * M_PI * i / sides;
+        const Vec3d dir = e1 * std::cos(t) + e2 * std::sin(t);
+        m.positions.push_back(Vec3f(a + dir * ra));
+        m.positions.push_back(Vec3f(b + dir * rb));
+    }
+    const auto ca = uint32_t(m.positions.size()), cb = ca + 1;
+    m.positions.push_back(Vec3f(a));
+    m.positions.push_back(Vec3f(b));
+    for (int i = 0; i < sides; ++i) {
+        const uint32_t j = uint32_t((i + 1) % sides);
+        const uint32_t a0 = base + 2 * uint32_t(i), b0 = a0 + 1, a1 = base + 2 * j, b1 = a1 + 1;
+        // e1 x e2 = axis: increasing angle runs counter-clockwise seen from b.
+        m.indices.insert(m.indices.end(), {a0, a1, b1, a0, b1, b0, ca, a1, a0, cb, b0, b1});
+    }
+}
+
+void appendBox(Mesh& m, const Vec3d& lo, const Vec3d& hi) {
+    const auto base = uint32_t(m.positions.size());
+    for (int k = 0; k < 8; ++k)
+        m.positions.push_back(
+            Vec3f(Vec3d{(k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z}));
+    static const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                         {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : quads)
+        for (const uint32_t t : {q[0], q[1], q[2], q[0], q[2], q[3]}) m.indices.push_back(base + t);
+}
+
+SceneMesh groundPlane(double halfSize, uint32_t material) {
+    SceneMesh g;
+    g.name = "Ground";
+    // Counter-clockwise seen from above (+y): the normal points up.
+    appendQuad(g.mesh, {0, 0, 0}, {0, 0, halfSize}, {halfSize, 0, 0});
+    g.material = material;
+    g.castsShadow = false;
+    return g;
+}
+
+Material leafMaterial(const char* name, Vec3f colour, float opacity, float transmission) {
+    Material m;
+    m.name = name;
+    m.baseColor = colour;
+    m.opacity = opacity;
+    m.transmission = transmission;
+    m.specular = 0.15f;
+    m.shininess = 24;
+    m.doubleSided = true;
+    return m;
+}
+
+const Vec3f kLeafColours[4] = {
+    {0.10f, 0.32f, 0.05f}, {0.33f, 0.42f, 0.04f}, {0.62f, 0.16f, 0.03f}, {0.55f, 0.40f, 0.05f}};
+const char* kLeafNames[4] = {"leaves-green", "leaves-lime", "leaves-red", "leaves-gold"};
+
+/// Leaves scattered in the given spheres (centre, radius), split over `groups` colour meshes.
+void addLeaves(Scene& scene, const std::vector<std::pair<Vec3d, double>>& clusters, int count, int groups,
+               double size, float opacity, float transmission, Rng& rng, double flatten = 1.0) {
+    groups = std::clamp(groups, 1, 4);
+    std::vector<SceneMesh> meshes(static_cast<std::size_t>(groups));
+    for (int g = 0; g < groups; ++g) {
+        meshes[size_t(g)].name = kLeafNames[g];
+        meshes[size_t(g)].material =
+            scene.addMaterial(leafMaterial(kLeafNames[g], kLeafColours[g], opacity, transmission));
+    }
+    for (int i = 0; i < count; ++i) {
+        const auto& [centre, radius] = clusters[size_t(i) % clusters.size()];
+        Vec3d offset;
+        do offset = {uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)};
+        while (dot(offset, offset) > 1);
+        offset.y *= flatten;
+        // Leaves face mostly up, tilted at random.
+        Vec3d n = normalize(Vec3d{0, 1.2, 0} + randomUnit(rng));
+        if (!(length(n) > 0)) n = {0, 1, 0};
+        const Vec3d t = normalize(cross(n, randomUnit(rng)));
+        const Vec3d b = cross(n, t);
+        const double s = size * uniform(rng, 0.7, 1.3);
+        // Mostly the first colour: 55 % / 25 % / 12 % / 8 % for four groups (renormalized for fewer).
+        static const double weights[4] = {0.55, 0.25, 0.12, 0.08};
+        double total = 0;
+        for (int k = 0; k < groups; ++k) total += weights[k];
+        double pick = uniform(rng, 0, total);
+        int g = 0;
+        while (g + 1 < groups && pick >= weights[g]) pick -= weights[g++];
+        appendQuad(meshes[size_t(g)].mesh, centre + offset * radius, t * (0.5 * s), b * (0.32 * s));
+    }
+    for (SceneMesh& m : meshes)
+        if (!m.mesh.indices.empty()) scene.meshes.push_back(std::move(m));
+}
+
+/// Loads a mesh, rotates it by `rotateX` degrees about x, scales it to `height` and stands it on the
+/// ground at (x, z).
+SceneMesh placedMesh(const std::string& path, const std::string& name, double height, double x, double z,
+                     double rotateX, double rotateY, uint32_t material) {
+    SceneMesh m;
+    m.name = name;
+    m.mesh = loadMesh(path);
+    const double ax = rotateX * M_PI / 180, ay = rotateY * M_PI / 180;
+    for (Vec3f& p : m.mesh.positions) {
+        Vec3d q(p);
+        q = {q.x, q.y * std::cos(ax) - q.z * std::sin(ax), q.y * std::sin(ax) + q.z * std::cos(ax)};
+        q = {q.x * std::cos(ay) + q.z * std::sin(ay), q.y, -q.x * std::sin(ay) + q.z * std::cos(ay)};
+        p = Vec3f(q);
+    }
+    const Box3d b = computeBounds(m.mesh.view());
+    const double s = height / std::max(b.extent().y, 1e-12);
+    const Vec3d c = b.center();
+    for (Vec3f& p : m.mesh.positions)
+        p = Vec3f(
+            Vec3d{(double(p.x) - c.x) * s + x, (double(p.y) - b.lo.y) * s, (double(p.z) - c.z) * s + z});
+    m.material = material;
+    return m;
+}
+
+Material solid(const char* name, Vec3f colour, float specular = 0.2f, float shininess = 32) {
+    Material m;
+    m.name = name;
+    m.baseColor = colour;
+    m.specular = specular;
+    m.shininess = shininess;
+    return m;
+}
+
+} // namespace
+
+Scene makeTreeScene(const TreeOptions& o) {
+    Scene scene;
+    scene.source = "demo:tree";
+    Rng rng(o.seed);
+    const uint32_t bark = scene.addMaterial(solid("bark", {0.20f, 0.12f, 0.06f}, 0.05f, 8));
+    if (o.ground)
+        scene.meshes.push_back(
+            groundPlane(60.0, scene.addMaterial(solid("grass", {0.30f, 0.36f, 0.16f}, 0.05f, 8))));
+
+    // Trunk and branches; leaf clusters sit at the branch tips and around the crown.
+    SceneMesh wood;
+    wood.name = "Trunk";
+    wood.material = bark;
+    const Vec3d top{0, 2.3, 0};
+    appendCylinder(wood.mesh, {0, -0.05, 0}, top, 0.16, 0.09, o.trunkSides);
+    std::vector<std::pair<Vec3d, double>> clusters{{{0, 3.0, 0}, 0.9}};
+    const int branches = 7;
+    for (int i = 0; i < branches; ++i) {
+        const double angle = 2 * M_PI * (i + uniform(rng, -0.2, 0.2)) / branches;
+        const double start = uniform(rng, 1.5, 2.2);
+        const Vec3d a{0, start, 0};
+        const Vec3d dir = normalize(Vec3d{std::cos(angle), uniform(rng, 0.5, 0.9), std::sin(angle)});
+        const double len = uniform(rng, 1.0, 1.5);
+        const Vec3d b = a + dir * len;
+        appendCylinder(wood.mesh, a, b, 0.06, 0.025, std::max(6, o.trunkSides / 2));
+        clusters.push_back({b, uniform(rng, 0.55, 0.75)});
+    }
+    scene.meshes.push_back(std::move(wood));
+    addLeaves(scene, clusters, o.leaves, o.colourGroups, o.leafSize, o.leafOpacity, o.leafTransmission, rng);
+
+    Light sun;
+    sun.name = "Sun";
+    sun.type = LightType::Directional;
+    sun.direction = normalize(Vec3d{0.55, -1.0, 0.35});
+    sun.color = {1.0f, 0.95f, 0.85f};
+    sun.intensity = 3.2f;
+    scene.lights.push_back(sun);
+
+    Camera cam;
+    cam.name = "View";
+    cam.position = {-2.2, 1.9, 6.2};
+    cam.target = {0.8, 1.55, 0.2};
+    cam.fovY = 50 * M_PI / 180;
+    cam.nearDepth = 0.05;
+    cam.farDepth = 100;
+    scene.cameras.push_back(cam);
+    scene.validate();
+    return scene;
+}
+
+Scene makeBunnyScene(const std::string& meshesDir, int leaves, uint64_t seed) {
+    Scene scene;
+    scene.source = "demo:bunny";
+    Rng rng(seed);
+    scene.meshes.push_back(
+        groundPlane(30.0, scene.addMaterial(solid("ground", {0.45f, 0.42f, 0.36f}, 0.05f, 8))));
+    const uint32_t fur = scene.addMaterial(solid("bunny", {0.75f, 0.72f, 0.66f}, 0.25f, 40));
+    scene.meshes.push_back(placedMesh((std::filesystem::path(meshesDir) / "bunny00.off").string(), "Bunny",
+                                      1.2, 0, 0, 0, 0, fur));
+    // A canopy: four posts and a flat, dense layer of leaves above the bunny.
+    SceneMesh posts;
+    posts.name = "Posts";
+    posts.material = scene.addMaterial(solid("wood", {0.30f, 0.20f, 0.11f}, 0.05f, 8));
+    for (const double x : {-1.6, 1.6})
+        for (const double z : {-1.6, 1.6})
+            appendBox(posts.mesh, {x - 0.06, 0, z - 0.06}, {x + 0.06, 2.3, z + 0.06});
+    scene.meshes.push_back(std::move(posts));
+    std::vector<std::pair<Vec3d, double>> clusters;
+    for (int i = -2; i <= 2; ++i)
+        for (int j = -2; j <= 2; ++j) clusters.push_back({{0.65 * i, 2.45, 0.65 * j}, 0.6});
+    addLeaves(scene, clusters, leaves, 2, 0.15, 0.65f, 0.6f, rng, 0.35);
+
+    Light spot;
+    spot.name = "Spot";
+    spot.type = LightType::Spot;
+    spot.position = {1.8, 5.2, 1.4};
+    spot.direction = normalize(Vec3d{0, 0.3, 0} - spot.position);
+    spot.color = {1.0f, 0.96f, 0.9f};
+    spot.intensity = 90;
+    spot.innerConeAngle = 25 * M_PI / 180;
+    spot.outerConeAngle = 38 * M_PI / 180;
+    scene.lights.push_back(spot);
+
+    Camera cam;
+    cam.name = "View";
+    cam.position = {-1.0, 1.3, 6.4};
+    cam.target = {0.2, 1.15, 0};
+    cam.fovY = 46 * M_PI / 180;
+    cam.nearDepth = 0.05;
+    cam.farDepth = 100;
+    scene.cameras.push_back(cam);
+    scene.validate();
+    return scene;
+}
+
+Scene makeCgalScene(const std::string& meshesDir, int leaves, uint64_t seed) {
+    Scene scene;
+    scene.source = "demo:cgal";
+    Rng rng(seed);
+    scene.meshes.push_back(
+        groundPlane(30.0, scene.addMaterial(solid("ground", {0.42f, 0.40f, 0.34f}, 0.05f, 8))));
+    struct Item {
+        const char* file;
+        const char* name;
+        double height, x, z, rotateX, rotateY;
+        Vec3f colour;
+    };
+    const Item items[] = {{"elephant.off", "Elephant", 1.3, -1.3, 0.2, 0, 30, {0.50f, 0.48f, 0.46f}},
+                          {"armadillo.off", "Armadillo", 1.4, 0.6, -0.4, 0, 180, {0.62f, 0.45f, 0.30f}},
+                          {"camel.off", "Camel", 1.2, 1.7, 0.9, 0, -70, {0.70f, 0.58f, 0.38f}}};
+    int loaded = 0;
+    std::string lastError;
+    for (const Item& it : items) {
+        const std::string path = (std::filesystem::path(meshesDir) / it.file).string();
+        if (!std::filesystem::exists(path)) {
+            scene.warnings.push_back(std::string("missing ") + path);
+            continue;
+        }
+        const uint32_t mat = scene.addMaterial(solid(it.name, it.colour, 0.2f, 30));
+        scene.meshes.push_back(placedMesh(path, it.name, it.height, it.x, it.z, it.rotateX, it.rotateY, mat));
+        ++loaded;
+    }
+    if (loaded == 0) fail("demo 'cgal': none of elephant.off, armadillo.off, camel.off found in ", meshesDir);
+    // A pergola: posts, beams and a roof of leaves.
+    SceneMesh wood;
+    wood.name = "Pergola";
+    wood.material = scene.addMaterial(solid("wood", {0.32f, 0.21f, 0.12f}, 0.05f, 8));
+    for (const double x : {-2.6, 2.6})
+        for (const double z : {-1.7, 1.7})
+            appendBox(wood.mesh, {x - 0.08, 0, z - 0.08}, {x + 0.08, 2.6, z + 0.08});
+    for (const double z : {-1.7, 1.7}) appendBox(wood.mesh, {-2.8, 2.6, z - 0.07}, {2.8, 2.75, z + 0.07});
+    for (int i = -4; i <= 4; ++i)
+        appendBox(wood.mesh, {0.6 * i - 0.04, 2.75, -2.0}, {0.6 * i + 0.04, 2.83, 2.0});
+    scene.meshes.push_back(std::move(wood));
+    std::vector<std::pair<Vec3d, double>> clusters;
+    for (int i = -4; i <= 4; ++i)
+        for (int j = -3; j <= 3; ++j) clusters.push_back({{0.6 * i, 2.95, 0.55 * j}, 0.45});
+    addLeaves(scene, clusters, leaves, 3, 0.16, 0.7f, 0.6f, rng, 0.4);
+
+    Light sun;
+    sun.name = "Sun";
+    sun.type = LightType::Directional;
+    sun.direction = normalize(Vec3d{-0.35, -1.0, -0.3});
+    sun.color = {1.0f, 0.95f, 0.86f};
+    sun.intensity = 2.6f;
+    scene.lights.push_back(sun);
+    Light lamp;
+    lamp.name = "Lamp";
+    lamp.type = LightType::Point;
+    lamp.position = {2.2, 1.6, 2.6};
+    lamp.color = {1.0f, 0.7f, 0.4f};
+    lamp.intensity = 6;
+    scene.lights.push_back(lamp);
+
+    Camera cam;
+    cam.name = "View";
+    cam.position = {0.4, 2.2, 7.6};
+    cam.target = {0.1, 1.0, 0};
+    cam.fovY = 50 * M_PI / 180;
+    cam.nearDepth = 0.05;
+    cam.farDepth = 100;
+    scene.cameras.push_back(cam);
+    scene.validate();
+    return scene;
+}
+
+std::vector<std::string> demoSceneNames() { return {"tree", "bunny", "cgal"}; }
+
+Scene makeDemoScene(const std::string& name, const std::string& meshesDir) {
+    if (name == "tree") return makeTreeScene();
+    if (name == "bunny") return makeBunnyScene(meshesDir);
+    if (name == "cgal") return makeCgalScene(meshesDir);
+    fail("unknown demo scene '", name, "' (allowed: tree, bunny, cgal)");
+}
+
+} // namespace voxfx

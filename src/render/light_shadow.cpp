@@ -1,0 +1,179 @@
+// voxfx — LightShadow: the shadow data of one light for one ShadowKind, built from a scene's casters
+// (standard map; ED06 §3.1 transmittance = map for opaque casters + slicemap channels for partial
+// occluders; CHANG §3 absorption = attribute grid of every caster), and the per-point lookup.
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <map>
+
+#include "voxfx/shadow.hpp"
+
+namespace voxfx {
+
+namespace {
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Casters of a scene split by how they shadow.
+struct CasterSets {
+    Mesh all, opaque;
+    std::vector<uint32_t> allMaterialIndex;       // per triangle of `all`
+    std::map<std::array<float, 3>, Mesh> partial; // by crossing transmittance: one channel each
+};
+
+void append(Mesh& to, const Mesh& from) {
+    const auto base = uint32_t(to.positions.size());
+    to.positions.insert(to.positions.end(), from.positions.begin(), from.positions.end());
+    for (const uint32_t i : from.indices) to.indices.push_back(base + i);
+}
+
+CasterSets collectCasters(const Scene& scene) {
+    CasterSets s;
+    for (const SceneMesh& m : scene.meshes) {
+        if (!m.castsShadow) continue;
+        const Material& mat = scene.materials[m.material];
+        append(s.all, m.mesh);
+        s.allMaterialIndex.insert(s.allMaterialIndex.end(), m.mesh.triangleCount(), m.material);
+        if (mat.isOpaque()) {
+            append(s.opaque, m.mesh);
+        } else {
+            const Vec3f t = mat.crossingTransmittance();
+            append(s.partial[{t.x, t.y, t.z}], m.mesh);
+        }
+    }
+    return s;
+}
+
+Box3d boundsOf(const Mesh& m) { return computeBounds(m.view()); }
+
+} // namespace
+
+const char* toString(ShadowKind k) {
+    switch (k) {
+    case ShadowKind::None:
+        return "none";
+    case ShadowKind::Map:
+        return "map";
+    case ShadowKind::Transmittance:
+        return "transmittance";
+    case ShadowKind::Absorption:
+        return "absorption";
+    }
+    return "?";
+}
+
+ShadowKind parseShadowKind(const std::string& name) {
+    if (name == "none") return ShadowKind::None;
+    if (name == "map") return ShadowKind::Map;
+    if (name == "transmittance") return ShadowKind::Transmittance;
+    if (name == "absorption") return ShadowKind::Absorption;
+    fail("unknown shadow kind '", name, "' (allowed: none, map, transmittance, absorption)");
+}
+
+float absorptionPerCrossing(const Material& m, float opaqueAbsorption) {
+    if (m.isOpaque()) return opaqueAbsorption;
+    const Vec3f t = m.crossingTransmittance();
+    const float luminance = 0.2126f * t.x + 0.7152f * t.y + 0.0722f * t.z;
+    return std::min(opaqueAbsorption, -std::log(std::max(luminance, 1e-30f)));
+}
+
+LightShadow LightShadow::build(const Scene& scene, const Light& light, const ShadowOptions& options,
+                               ShadowBuildTimings* timings, Progress* progress) {
+    LightShadow out;
+    out.options_ = options;
+    if (options.kind == ShadowKind::None) return out;
+    if (options.mapResolution <= 0 || options.gridResolution <= 0 || options.gridDepth <= 0 ||
+        options.pcfRadius < 0 || options.skipCells < 0)
+        fail("shadow options: resolutions must be positive, PCF radius and skipped cells >= 0");
+    ShadowBuildTimings local;
+    ShadowBuildTimings& t = timings ? *timings : local;
+    const CasterSets casters = collectCasters(scene);
+    if (casters.all.indices.empty()) return out; // nothing casts: visibility 1
+
+    auto buildMaps = [&](const Mesh& mesh) {
+        const auto t0 = std::chrono::steady_clock::now();
+        out.mapViews_ = makeLightViews(light, boundsOf(mesh), options.mapResolution, 1);
+        for (const LightView& v : out.mapViews_)
+            out.maps_.push_back(ShadowMap::build(mesh.view(), v, progress));
+        t.mapMs += msSince(t0);
+    };
+
+    switch (options.kind) {
+    case ShadowKind::None:
+        break;
+    case ShadowKind::Map:
+        buildMaps(casters.all);
+        break;
+    case ShadowKind::Transmittance: {
+        if (!casters.opaque.indices.empty()) buildMaps(casters.opaque);
+        if (casters.partial.empty()) break;
+        const auto t0 = std::chrono::steady_clock::now();
+        Box3d bounds;
+        std::vector<MeshView> groups;
+        std::vector<Vec3f> transmittances;
+        for (const auto& [key, mesh] : casters.partial) {
+            bounds.extend(boundsOf(mesh));
+            groups.push_back(mesh.view());
+            transmittances.push_back({key[0], key[1], key[2]});
+        }
+        out.gridViews_ = makeLightViews(light, bounds, options.gridResolution, options.gridDepth);
+        for (const LightView& v : out.gridViews_)
+            out.transmittance_.push_back(TransmittanceShadowMap::build(
+                v, groups, transmittances, options.voxelMode, options.slicing, progress));
+        t.voxelizeMs += msSince(t0);
+        break;
+    }
+    case ShadowKind::Absorption: {
+        const auto t0 = std::chrono::steady_clock::now();
+        std::vector<float> perTriangle(casters.allMaterialIndex.size());
+        std::vector<float> perMaterial(scene.materials.size());
+        for (std::size_t i = 0; i < scene.materials.size(); ++i)
+            perMaterial[i] = absorptionPerCrossing(scene.materials[i], options.opaqueAbsorption);
+        for (std::size_t i = 0; i < perTriangle.size(); ++i)
+            perTriangle[i] = perMaterial[casters.allMaterialIndex[i]];
+        out.gridViews_ =
+            makeLightViews(light, boundsOf(casters.all), options.gridResolution, options.gridDepth);
+        for (const LightView& v : out.gridViews_)
+            out.absorption_.push_back(AbsorptionShadowMap::build(
+                v, casters.all.view(), perTriangle, options.absorptionCoverage, options.slicing, progress));
+        t.voxelizeMs += msSince(t0);
+        break;
+    }
+    }
+    return out;
+}
+
+Vec3f LightShadow::visibility(const Vec3d& p, const Vec3d& n) const {
+    Vec3f v{1, 1, 1};
+    if (options_.kind == ShadowKind::None) return v;
+    if (!maps_.empty()) {
+        const int i = viewIndexFor(mapViews_, p);
+        if (i >= 0) {
+            const LightView& view = mapViews_[size_t(i)];
+            const double texel = view.columnWorldSize(p);
+            const Vec3d q = p + n * (options_.normalOffset * texel);
+            const float lit = maps_[size_t(i)].visibility(q, options_.pcfRadius, options_.depthBias * texel);
+            v = v * lit;
+        }
+    }
+    if (!transmittance_.empty() || !absorption_.empty()) {
+        const int i = viewIndexFor(gridViews_, p);
+        if (i >= 0) {
+            const LightView& view = gridViews_[size_t(i)];
+            const Vec3d q = p + n * (options_.normalOffset * view.columnWorldSize(p));
+            const int64_t skip = options_.skipCells;
+            if (!transmittance_.empty()) {
+                const TransmittanceShadowMap& m = transmittance_[size_t(i)];
+                v = v * (options_.bilinear ? m.transmittanceBilinear(q, skip) : m.transmittance(q, skip));
+            } else {
+                const AbsorptionShadowMap& m = absorption_[size_t(i)];
+                v = v * (options_.bilinear ? m.transmittanceBilinear(q, skip) : m.transmittance(q, skip));
+            }
+        }
+    }
+    return v;
+}
+
+} // namespace voxfx

@@ -1,0 +1,169 @@
+// voxfx — light views: the frames shadow maps and light grids live in (ED06 §3.1 voxelizes "from the
+// light": a perspective frame for spot and point lights, an orthographic one for directional lights).
+//
+// Frame::orthographic only takes axis-aligned boxes, so a directional light's frame is axis-aligned
+// in a rotated frame space (right, up, light direction); geometry and lookups are rotated into it.
+#include <algorithm>
+#include <cmath>
+
+#include "voxfx/shadow.hpp"
+
+namespace voxfx {
+
+namespace {
+
+constexpr double kMaxSpotFov = 160.0 * M_PI / 180.0;
+
+// An up vector not parallel to `forward`.
+Vec3d upHint(const Vec3d& forward) { return std::abs(forward.y) < 0.99 ? Vec3d{0, 1, 0} : Vec3d{1, 0, 0}; }
+
+void corners(const Box3d& b, Vec3d out[8]) {
+    for (int k = 0; k < 8; ++k)
+        out[k] = {(k & 1) ? b.hi.x : b.lo.x, (k & 2) ? b.hi.y : b.lo.y, (k & 4) ? b.hi.z : b.lo.z};
+}
+
+double distanceToBox(const Vec3d& p, const Box3d& b) {
+    const Vec3d d = max(max(b.lo - p, p - b.hi), Vec3d{0, 0, 0});
+    return length(d);
+}
+
+LightView perspectiveView(const Vec3d& eye, const Vec3d& forward, double fovY, const Box3d& bounds,
+                          int64_t columns, int64_t d) {
+    Vec3d c[8];
+    corners(bounds, c);
+    double far = 0;
+    for (const Vec3d& q : c) far = std::max(far, length(q - eye));
+    far = std::max(far * 1.01, 1e-6);
+    // Inside the frustum, view depth >= distance * cos(half diagonal angle), tan(half diagonal) =
+    // sqrt(2) tan(fov / 2) for square frames.
+    const double cosDiagonal = std::cos(std::atan(std::sqrt(2.0) * std::tan(0.5 * fovY)));
+    const double near = std::max(far * 1e-4, 0.99 * distanceToBox(eye, bounds) * cosDiagonal);
+    LightView v;
+    v.frame = Frame::perspective(eye, eye + forward, upHint(forward), fovY, columns, columns,
+                                 std::min(near, far * 0.5), far, d);
+    return v;
+}
+
+} // namespace
+
+bool LightView::covers(const Vec3d& world) const {
+    const Vec3d q = frameSpace(world);
+    if (frame.isPerspective() && !(frame.viewDepth(q) > 0)) return false;
+    const Vec3d g = frame.gridFromWorld(q);
+    // A relative tolerance of 1e-9 columns: cube faces meet exactly at their borders, and a point on
+    // a face diagonal must not fall between two faces by a rounding error.
+    const double ex = 1e-9 * double(frame.width()), ey = 1e-9 * double(frame.height());
+    return g.x >= -ex && g.x <= double(frame.width()) + ex && g.y >= -ey &&
+           g.y <= double(frame.height()) + ey;
+}
+
+double LightView::columnWorldSize(const Vec3d& world) const {
+    if (!frame.isPerspective()) return frame.cellSize().x;
+    const double depth = std::max(frame.viewDepth(world), frame.nearDepth());
+    return depth * 2.0 * frame.tanHalfFovY() / double(frame.height());
+}
+
+double LightView::worldPerDepthUnit() const { return frame.isPerspective() ? 1.0 : frame.cellSize().z; }
+
+std::vector<LightView> makeLightViews(const Light& light, const Box3d& bounds, int64_t columns, int64_t d) {
+    if (bounds.empty() || !isFinite(bounds.lo) || !isFinite(bounds.hi))
+        fail("light '", light.name, "': nothing to fit a light view to (no shadow casters)");
+    if (columns <= 0 || d <= 0) fail("light views need positive resolutions, got ", columns, " x ", d);
+    std::vector<LightView> views;
+    switch (light.type) {
+    case LightType::Directional: {
+        // Frame space: rows (right, up, direction), a right-handed rotation (right x up = direction).
+        const Vec3d dir = normalize(light.direction);
+        const Vec3d hint = upHint(dir);
+        const Vec3d up = normalize(hint - dir * dot(hint, dir));
+        const Vec3d right = cross(up, dir);
+        LightView v;
+        v.rotated = true;
+        for (int k = 0; k < 3; ++k) {
+            v.frameSpaceFromWorld.m[0][k] = right[k];
+            v.frameSpaceFromWorld.m[1][k] = up[k];
+            v.frameSpaceFromWorld.m[2][k] = dir[k];
+        }
+        Vec3d c[8];
+        corners(bounds, c);
+        Box3d box;
+        for (const Vec3d& q : c) box.extend(v.frameSpaceFromWorld.point(q));
+        // Pad by 1 % of the largest extent (and never flat), so that geometry on the bounds lies inside.
+        const Vec3d ext = box.extent();
+        const double pad = 0.01 * std::max({ext.x, ext.y, ext.z, 1e-9});
+        box.lo -= Vec3d{pad, pad, pad};
+        box.hi += Vec3d{pad, pad, pad};
+        // Square columns: the longer side gets `columns`.
+        const Vec3d e = box.extent();
+        const double cell = std::max(e.x, e.y) / double(columns);
+        const int64_t w = std::max<int64_t>(1, int64_t(std::ceil(e.x / cell - 1e-9)));
+        const int64_t h = std::max<int64_t>(1, int64_t(std::ceil(e.y / cell - 1e-9)));
+        const Vec3d mid = box.center();
+        box.lo.x = mid.x - 0.5 * double(w) * cell;
+        box.hi.x = mid.x + 0.5 * double(w) * cell;
+        box.lo.y = mid.y - 0.5 * double(h) * cell;
+        box.hi.y = mid.y + 0.5 * double(h) * cell;
+        v.frame = Frame::orthographic(box, Axis::Z, w, h, d);
+        views.push_back(v);
+        break;
+    }
+    case LightType::Spot: {
+        const Vec3d fwd = normalize(light.direction);
+        double fov = std::min(2 * light.outerConeAngle, kMaxSpotFov);
+        // Narrow the frustum to the casters when they all lie in front of the light.
+        const Vec3d up0 = normalize(upHint(fwd) - fwd * dot(upHint(fwd), fwd));
+        const Vec3d right0 = cross(fwd, up0);
+        Vec3d c[8];
+        corners(bounds, c);
+        double maxTan = 0;
+        bool inFront = true;
+        for (const Vec3d& q : c) {
+            const double z = dot(q - light.position, fwd);
+            if (!(z > 1e-9)) {
+                inFront = false;
+                break;
+            }
+            maxTan = std::max({maxTan, std::abs(dot(q - light.position, right0)) / z,
+                               std::abs(dot(q - light.position, up0)) / z});
+        }
+        if (inFront) fov = std::min(fov, 2 * std::atan(maxTan * 1.02));
+        views.push_back(perspectiveView(light.position, fwd, fov, bounds, columns, d));
+        break;
+    }
+    case LightType::Point: {
+        // Six 90-degree cube faces; viewIndexFor picks the face of the dominant axis.
+        const Vec3d axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+        for (const Vec3d& a : axes)
+            views.push_back(perspectiveView(light.position, a, M_PI / 2, bounds, columns, d));
+        break;
+    }
+    }
+    return views;
+}
+
+int viewIndexFor(const std::vector<LightView>& views, const Vec3d& world) {
+    if (views.empty()) return -1;
+    if (views.size() == 1) return views[0].covers(world) ? 0 : -1;
+    // Cube faces share the eye: the face whose axis is closest to the direction owns the point.
+    int best = -1;
+    double bestDot = 0;
+    for (std::size_t i = 0; i < views.size(); ++i) {
+        const double dd = dot(world - views[i].frame.eye(), views[i].frame.forward());
+        if (dd > bestDot) {
+            bestDot = dd;
+            best = int(i);
+        }
+    }
+    return best;
+}
+
+Mesh toFrameSpace(const MeshView& mesh, const LightView& view) {
+    Mesh out;
+    out.positions.resize(mesh.vertexCount);
+    for (std::size_t i = 0; i < mesh.vertexCount; ++i)
+        out.positions[i] = Vec3f(view.frameSpace(mesh.vertex(i)));
+    out.indices.assign(mesh.indices, mesh.indices + 3 * mesh.triangleCount);
+    return out;
+}
+
+} // namespace voxfx

@@ -1,0 +1,100 @@
+// voxfx — deferred shading: normalized Blinn–Phong (Blinn 1977; the (s + 8) / 8pi normalization of
+// Akenine-Möller et al., Real-Time Rendering) per light, times the light's RGB shadow visibility.
+//
+// Surfaces are lit on both sides. The side facing away from a light receives what crosses the
+// surface (Material::crossingTransmittance): back-lit leaves glow, opaque surfaces stay dark.
+#include "render/shading.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+
+namespace voxfx::detail {
+
+Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight) {
+    const Vec3f e = light.color * light.intensity;
+    if (light.type == LightType::Directional) {
+        toLight = -normalize(light.direction);
+        return e;
+    }
+    const Vec3d d = light.position - p;
+    const double dist2 = std::max(dot(d, d), 1e-12);
+    toLight = d / std::sqrt(dist2);
+    double falloff = 1.0 / dist2;
+    if (light.type == LightType::Spot) {
+        // Smooth step between the outer and inner cone (glTF KHR_lights_punctual's reference).
+        const double cosAngle = dot(-toLight, normalize(light.direction));
+        const double cosOuter = std::cos(light.outerConeAngle), cosInner = std::cos(light.innerConeAngle);
+        double s =
+            cosInner > cosOuter ? (cosAngle - cosOuter) / (cosInner - cosOuter) : (cosAngle >= cosOuter);
+        s = std::clamp(s, 0.0, 1.0);
+        falloff *= s * s;
+    }
+    return e * float(falloff);
+}
+
+Vec3f shadePoint(const SurfacePoint& s, const Scene& scene, const std::vector<LightShadow>& shadows,
+                 const RenderOptions& options, const Vec3d& eye) {
+    const Material& m = scene.materials[s.material];
+    Vec3f out = options.ambient * m.baseColor;
+    const Vec3d toEye = normalize(eye - s.position);
+    for (std::size_t k = 0; k < scene.lights.size(); ++k) {
+        Vec3d l;
+        const Vec3f e = lightIrradiance(scene.lights[k], s.position, l);
+        if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
+        // Which side of the surface the light is on decides lit front vs. transmitted back light.
+        const bool front = dot(s.geometricNormal, l) > 0;
+        Vec3f radiance;
+        if (front) {
+            const double ndl = std::max(0.0, dot(s.normal, l));
+            if (ndl <= 0) continue;
+            const Vec3d h = normalize(l + toEye);
+            const double spec = m.specular * (m.shininess + 8) / (8 * M_PI) *
+                                std::pow(std::max(0.0, dot(s.normal, h)), double(m.shininess));
+            radiance = (m.baseColor * float(1.0 / M_PI) + Vec3f{1, 1, 1} * float(spec)) * float(ndl);
+        } else {
+            if (m.isOpaque()) continue;
+            const double ndl = std::max(0.0, -dot(s.normal, l));
+            if (ndl <= 0) continue;
+            radiance = m.baseColor * m.crossingTransmittance() * float(ndl / M_PI);
+        }
+        // The shadow lookup's normal offset goes towards the light's side of the surface.
+        const Vec3d n = front ? s.geometricNormal : -s.geometricNormal;
+        const Vec3f vis = k < shadows.size() ? shadows[k].visibility(s.position, n) : Vec3f{1, 1, 1};
+        out += radiance * e * vis;
+    }
+    return out * options.exposure;
+}
+
+std::vector<Vec3f> shadeGBuffer(const GBuffer& gbuffer, const SceneGeometry& geometry, const Scene& scene,
+                                const std::vector<LightShadow>& shadows, const RenderOptions& options,
+                                Progress* progress) {
+    const int64_t W = gbuffer.frame.width(), H = gbuffer.frame.height();
+    std::vector<Vec3f> out(size_t(W * H), options.background);
+    constexpr int64_t kRows = 8;
+    const int64_t blocks = (H + kRows - 1) / kRows;
+    std::atomic<int64_t> done{0};
+    std::atomic<bool> cancelled{false};
+    std::mutex progressMutex;
+    parallelFor(0, blocks, 1, [&](int64_t b0, int64_t b1) {
+        for (int64_t b = b0; b < b1; ++b) {
+            if (cancelled.load(std::memory_order_relaxed)) return;
+            for (int64_t y = b * kRows; y < std::min(H, (b + 1) * kRows); ++y)
+                for (int64_t x = 0; x < W; ++x) {
+                    SurfacePoint s;
+                    if (surfaceAt(gbuffer, geometry, x, y, s))
+                        out[size_t(y * W + x)] = shadePoint(s, scene, shadows, options, gbuffer.frame.eye());
+                }
+            const int64_t n = ++done;
+            if (progress) {
+                std::lock_guard<std::mutex> lock(progressMutex);
+                if (!progress->update(double(n) / double(blocks))) cancelled = true;
+            }
+        }
+    });
+    if (cancelled) fail("cancelled");
+    return out;
+}
+
+} // namespace voxfx::detail

@@ -1,0 +1,405 @@
+// Tests of src/render/ (G-buffer, shading, renderer, demo scenes) and the render/demo commands:
+// the G-buffer against brute-force ray casting, shaded radiance against hand-derived Lambert values
+// (tolerances from float rounding only), shadows in the image (ambient only under an opaque box,
+// ambient + t * direct under a leaf), supersampling as a box filter, determinism across thread
+// counts, image-level properties (more leaves never brighten the ground; shadow kinds order on
+// foliage), and bad input.
+#include <cmath>
+#include <filesystem>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "test_util.hpp"
+#include "voxfx/demo.hpp"
+#include "voxfx/render.hpp"
+
+namespace voxfx {
+namespace {
+
+void appendQuad(Mesh& m, const Vec3d& c, const Vec3d& u, const Vec3d& v) {
+    const auto b = uint32_t(m.positions.size());
+    for (const Vec3d& p : {c - u - v, c + u - v, c + u + v, c - u + v}) m.positions.push_back(Vec3f(p));
+    m.indices.insert(m.indices.end(), {b, b + 1, b + 2, b, b + 2, b + 3});
+}
+
+// A ground quad (albedo 0.5, no specular) lit straight from above with irradiance 2.
+Scene groundScene() {
+    Scene s;
+    Material ground;
+    ground.name = "ground";
+    ground.baseColor = {0.5f, 0.5f, 0.5f};
+    ground.specular = 0;
+    SceneMesh g;
+    g.name = "Ground";
+    appendQuad(g.mesh, {0, 0, 0}, {0, 0, 4}, {4, 0, 0}); // counter-clockwise from above
+    g.material = s.addMaterial(ground);
+    g.castsShadow = false;
+    s.meshes.push_back(g);
+    Light sun;
+    sun.name = "sun";
+    sun.direction = {0, -1, 0};
+    sun.intensity = 2;
+    s.lights.push_back(sun);
+    Camera c;
+    c.position = {0, 5, 5};
+    c.target = {0, 0, 0};
+    c.fovY = 0.7;
+    s.cameras.push_back(c);
+    return s;
+}
+
+RenderOptions smallOptions(ShadowKind kind = ShadowKind::None, int64_t w = 160, int64_t h = 120) {
+    RenderOptions o;
+    o.width = w;
+    o.height = h;
+    o.shadow.kind = kind;
+    o.shadow.gridResolution = 128;
+    o.shadow.gridDepth = 128;
+    o.shadow.mapResolution = 512;
+    o.ambient = {0.1f, 0.1f, 0.1f};
+    o.background = {0, 0, 0};
+    return o;
+}
+
+/// Image pixel (x, y down) that shows world point p, from the camera frame (y up).
+std::pair<int64_t, int64_t> pixelOf(const Camera& c, int64_t w, int64_t h, const Vec3d& p) {
+    const Vec3d g = cameraFrame(c, w, h).gridFromWorld(p);
+    return {int64_t(std::floor(g.x)), h - 1 - int64_t(std::floor(g.y))};
+}
+
+// ---- G-buffer -------------------------------------------------------------------------------------
+
+TEST(RenderTest, GBufferMatchesBruteForceRayCasting) {
+    // Nearest hit of each pixel's centre ray by Moller–Trumbore over every triangle, independent of
+    // the rasterizer. Disagreements are allowed only where a ray passes within rounding of a shared
+    // edge (tie rule vs. inclusive test): well under 0.5 % of the pixels.
+    Scene s;
+    s.addMaterial(Material{});
+    SceneMesh torus, box;
+    torus.name = "torus";
+    torus.mesh = test::makeTorus({0, 0, 0}, 1.2, 0.45, 48, 24);
+    box.name = "box";
+    box.mesh = test::makeBox({-2, -0.3, -2}, {2, -0.1, 2});
+    s.meshes = {torus, box};
+    const SceneGeometry geo = flattenScene(s);
+    Camera cam;
+    cam.position = {0.5, 2.8, 3.7};
+    cam.target = {0, 0, 0};
+    cam.fovY = 0.9;
+    const int64_t W = 120, H = 90;
+    const Frame f = cameraFrame(cam, W, H);
+    const GBuffer g = renderGBuffer(geo, f);
+    const double tx = std::tan(cam.fovY / 2) * double(W) / double(H), ty = std::tan(cam.fovY / 2);
+    int64_t mismatches = 0, hits = 0;
+    for (int64_t y = 0; y < H; ++y)
+        for (int64_t x = 0; x < W; ++x) {
+            const Vec3d d =
+                normalize(f.forward() + f.right() * ((2 * (double(x) + 0.5) / double(W) - 1) * tx) +
+                          f.up() * ((2 * (double(y) + 0.5) / double(H) - 1) * ty));
+            double best = 1e30;
+            uint32_t bestTri = GBuffer::kNone;
+            for (size_t t = 0; t < geo.mesh.triangleCount(); ++t) {
+                const Vec3d a(geo.mesh.positions[geo.mesh.indices[3 * t]]),
+                    b(geo.mesh.positions[geo.mesh.indices[3 * t + 1]]),
+                    c(geo.mesh.positions[geo.mesh.indices[3 * t + 2]]);
+                const Vec3d e1 = b - a, e2 = c - a, h = cross(d, e2);
+                const double det = dot(e1, h);
+                if (std::abs(det) < 1e-14) continue;
+                const Vec3d sv = cam.position - a;
+                const double u = dot(sv, h) / det;
+                const Vec3d q = cross(sv, e1);
+                const double v = dot(d, q) / det, dist = dot(e2, q) / det;
+                if (u >= 0 && v >= 0 && u + v <= 1 && dist > 0 && dist < best) {
+                    best = dist;
+                    bestTri = uint32_t(t);
+                }
+            }
+            const size_t i = size_t(y * W + x);
+            if (bestTri != GBuffer::kNone) ++hits;
+            if (bestTri != g.triangle[i]) {
+                ++mismatches;
+                continue;
+            }
+            if (bestTri != GBuffer::kNone) { // view depth = distance * cos(angle to the axis)
+                EXPECT_NEAR(g.depth[i], best * dot(d, f.forward()), 1e-5 * best);
+            }
+        }
+    EXPECT_GT(hits, W * H / 3);
+    EXPECT_LE(mismatches, W * H / 200) << mismatches << " of " << W * H;
+}
+
+// ---- Shading ----------------------------------------------------------------------------------------
+
+TEST(RenderTest, LambertGroundMatchesHandDerivedRadiance) {
+    // Normal up, light straight down: L = albedo / pi * E * 1 + ambient * albedo
+    //   = 0.5 / pi * 2 + 0.1 * 0.5 = 0.36831; float rounding only (1e-5).
+    const Scene s = groundScene();
+    const RenderResult r = render(s, s.cameras[0], smallOptions());
+    const float expected = float(0.5 / M_PI * 2 + 0.05);
+    int64_t ground = 0;
+    for (const Vec3f& p : r.image.pixels) {
+        if (p.x == 0) continue; // background
+        ++ground;
+        EXPECT_NEAR(p.x, expected, 1e-5f);
+        EXPECT_NEAR(p.z, expected, 1e-5f);
+    }
+    EXPECT_GT(ground, 160 * 120 / 2);
+    EXPECT_EQ(ground, r.coveredPixels);
+}
+
+TEST(RenderTest, ShadowsInTheImageAreAmbientOrTransmittedLight) {
+    // An opaque box and a leaf (t = 0.5) over the ground: the ground under the box gets ambient only;
+    // under the leaf ambient + 0.5 * direct, in every shadow kind that models it.
+    Scene s = groundScene();
+    SceneMesh box, leaf;
+    box.name = "box";
+    box.mesh = test::makeBox({-2.5, 1, -0.5}, {-1.5, 2, 0.5});
+    box.material = s.addMaterial(Material{});
+    appendQuad(leaf.mesh, {1.5, 1.5, 0}, {0, 0, 0.8}, {0.8, 0, 0});
+    Material leafMat;
+    leafMat.opacity = 0.5f;
+    leafMat.transmission = 0;
+    leaf.name = "leaf";
+    leaf.material = s.addMaterial(leafMat);
+    s.meshes.push_back(box);
+    s.meshes.push_back(leaf);
+    const float direct = float(0.5 / M_PI * 2), ambient = 0.05f;
+    const auto [bx, by] = pixelOf(s.cameras[0], 160, 120, {-2, 0, 0});
+    const auto [lx, ly] = pixelOf(s.cameras[0], 160, 120, {1.5, 0, 0});
+    const auto [ox, oy] = pixelOf(s.cameras[0], 160, 120, {0, 0, 1.5});
+    struct Case {
+        ShadowKind kind;
+        float underLeaf;
+    };
+    for (const Case c :
+         {Case{ShadowKind::Map, ambient}, Case{ShadowKind::Transmittance, ambient + 0.5f * direct},
+          Case{ShadowKind::None, ambient + direct}}) {
+        const RenderResult r = render(s, s.cameras[0], smallOptions(c.kind));
+        EXPECT_NEAR(r.image.at(bx, by).y, c.kind == ShadowKind::None ? ambient + direct : ambient, 1e-4f)
+            << toString(c.kind);
+        EXPECT_NEAR(r.image.at(lx, ly).y, c.underLeaf, 1e-4f) << toString(c.kind);
+        EXPECT_NEAR(r.image.at(ox, oy).y, ambient + direct, 1e-4f) << toString(c.kind);
+    }
+    // Absorption: the opaque box absorbs 8 per crossing (two crossings: e^-16), the leaf -ln 0.5.
+    const RenderResult a = render(s, s.cameras[0], smallOptions(ShadowKind::Absorption));
+    EXPECT_NEAR(a.image.at(bx, by).y, ambient, 1e-4f);
+    EXPECT_NEAR(a.image.at(lx, ly).y, ambient + 0.5f * direct, 1e-4f);
+}
+
+TEST(RenderTest, SupersamplingIsABoxFilterOfTheFineImage) {
+    TreeOptions t;
+    t.leaves = 300;
+    const Scene s = makeTreeScene(t);
+    RenderOptions fine = smallOptions(ShadowKind::Transmittance, 96, 54), coarse = fine;
+    fine.width = 192;
+    fine.height = 108;
+    coarse.supersample = 2;
+    const Image a = render(s, s.cameras[0], fine).image, b = render(s, s.cameras[0], coarse).image;
+    for (int64_t y = 0; y < 54; ++y)
+        for (int64_t x = 0; x < 96; ++x) {
+            Vec3f sum;
+            for (int dy = 0; dy < 2; ++dy)
+                for (int dx = 0; dx < 2; ++dx) sum += a.at(2 * x + dx, 2 * y + dy);
+            for (int c = 0; c < 3; ++c) ASSERT_NEAR(b.at(x, y)[c], sum[c] * 0.25f, 1e-6f) << x << " " << y;
+        }
+}
+
+TEST(RenderTest, OutputDoesNotDependOnThreadCount) {
+    TreeOptions t;
+    t.leaves = 400;
+    const Scene s = makeTreeScene(t);
+    for (const ShadowKind kind : {ShadowKind::Map, ShadowKind::Transmittance, ShadowKind::Absorption}) {
+        RenderOptions o = smallOptions(kind, 120, 68);
+        o.threads = 1;
+        const Image a = render(s, s.cameras[0], o).image;
+        o.threads = 2;
+        const Image b = render(s, s.cameras[0], o).image;
+        EXPECT_TRUE(a.pixels == b.pixels) << toString(kind);
+    }
+}
+
+// ---- Image properties on foliage ------------------------------------------------------------------
+
+// Mean of the ground pixels (G-buffer shows the ground) of an image.
+double groundMean(const Scene& s, const Image& img, const RenderOptions& o, uint32_t groundMesh) {
+    const SceneGeometry geo = flattenScene(s);
+    const GBuffer g = renderGBuffer(geo, cameraFrame(s.cameras[0], o.width, o.height));
+    double sum = 0;
+    int64_t n = 0;
+    for (int64_t y = 0; y < o.height; ++y)
+        for (int64_t x = 0; x < o.width; ++x) {
+            const uint32_t t = g.triangle[size_t(y * o.width + x)];
+            if (t == GBuffer::kNone || geo.triangleMesh[t] != groundMesh) continue;
+            sum += img.at(x, o.height - 1 - y).y;
+            ++n;
+        }
+    return sum / double(n);
+}
+
+TEST(RenderTest, ShadowKindsOrderOnFoliage) {
+    // Leaves let light through: the transmittance and absorption shadows are brighter than the binary
+    // map and darker than no shadow at all.
+    TreeOptions t;
+    t.leaves = 1500;
+    const Scene s = makeTreeScene(t);
+    const RenderOptions o = smallOptions(ShadowKind::None, 160, 90);
+    double mean[4];
+    for (const ShadowKind kind :
+         {ShadowKind::None, ShadowKind::Map, ShadowKind::Transmittance, ShadowKind::Absorption}) {
+        RenderOptions k = o;
+        k.shadow.kind = kind;
+        mean[int(kind)] = groundMean(s, render(s, s.cameras[0], k).image, k, 0);
+    }
+    EXPECT_LT(mean[int(ShadowKind::Map)], mean[int(ShadowKind::Transmittance)]);
+    EXPECT_LT(mean[int(ShadowKind::Map)], mean[int(ShadowKind::Absorption)]);
+    EXPECT_LT(mean[int(ShadowKind::Transmittance)], mean[int(ShadowKind::None)]);
+    EXPECT_LT(mean[int(ShadowKind::Absorption)], mean[int(ShadowKind::None)]);
+}
+
+TEST(RenderTest, MoreLeavesNeverBrightenTheGround) {
+    // Pixels showing the ground in both renders: the scene with extra leaves (inside the same bounds,
+    // so the light frames stay put) is never brighter.
+    TreeOptions t;
+    t.leaves = 800;
+    const Scene base = makeTreeScene(t);
+    Scene more = base;
+    t.leaves = 1600;
+    t.seed = 9;
+    const Scene extra = makeTreeScene(t);
+    // The leaf grids are fitted to the leaves: keep the extra leaves inside the base leaves' bounds.
+    Box3d bounds;
+    for (const SceneMesh& m : base.meshes)
+        if (m.name.rfind("leaves", 0) == 0) bounds.extend(computeBounds(m.mesh.view()));
+    for (size_t k = 0; k < extra.meshes.size(); ++k) {
+        if (extra.meshes[k].name.rfind("leaves", 0) != 0) continue;
+        Mesh& to = more.meshes[k].mesh;
+        const auto b = uint32_t(to.positions.size());
+        for (const Vec3f& p : extra.meshes[k].mesh.positions)
+            to.positions.push_back(Vec3f(std::clamp(double(p.x), bounds.lo.x, bounds.hi.x),
+                                         std::clamp(double(p.y), bounds.lo.y, bounds.hi.y),
+                                         std::clamp(double(p.z), bounds.lo.z, bounds.hi.z)));
+        for (const uint32_t i : extra.meshes[k].mesh.indices) to.indices.push_back(b + i);
+    }
+    ASSERT_TRUE(base.bounds(true) == more.bounds(true));
+    const SceneGeometry ga = flattenScene(base), gb = flattenScene(more);
+    for (const ShadowKind kind : {ShadowKind::Transmittance, ShadowKind::Absorption, ShadowKind::Map}) {
+        const RenderOptions o = smallOptions(kind, 160, 90);
+        const Image a = render(base, base.cameras[0], o).image, b = render(more, more.cameras[0], o).image;
+        const GBuffer gba = renderGBuffer(ga, cameraFrame(base.cameras[0], 160, 90));
+        const GBuffer gbb = renderGBuffer(gb, cameraFrame(more.cameras[0], 160, 90));
+        int64_t compared = 0;
+        for (int64_t y = 0; y < 90; ++y)
+            for (int64_t x = 0; x < 160; ++x) {
+                const size_t i = size_t(y * 160 + x);
+                if (gba.triangle[i] == GBuffer::kNone || gbb.triangle[i] == GBuffer::kNone) continue;
+                if (ga.triangleMesh[gba.triangle[i]] != 0 || gb.triangleMesh[gbb.triangle[i]] != 0) continue;
+                ++compared;
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_LE(b.at(x, 89 - y)[c], a.at(x, 89 - y)[c] + 1e-6f)
+                        << toString(kind) << " " << x << " " << y;
+            }
+        EXPECT_GT(compared, 3000);
+    }
+}
+
+// ---- Demo scenes ---------------------------------------------------------------------------------------
+
+TEST(RenderTest, DemoTreeHasThousandsOfLeavesAndAnOpaqueTrunk) {
+    const Scene s = makeTreeScene();
+    size_t leafQuads = 0, opaque = 0;
+    for (const SceneMesh& m : s.meshes) {
+        if (s.materials[m.material].isOpaque())
+            opaque += m.castsShadow;
+        else
+            leafQuads += m.mesh.triangleCount() / 2;
+    }
+    EXPECT_GE(leafQuads, 2000u);
+    EXPECT_EQ(opaque, 1u); // the trunk; the ground only receives
+    EXPECT_EQ(s.lights.size(), 1u);
+    EXPECT_EQ(s.cameras.size(), 1u);
+}
+
+TEST(RenderTest, DemoScenesFromTheMeshData) {
+    VOXFX_REQUIRE_DATA(test::dataPath("meshes/bunny00.off"));
+    const std::string dir = test::dataPath("meshes");
+    for (const std::string& name : demoSceneNames()) {
+        const Scene s = makeDemoScene(name, dir);
+        EXPECT_GT(s.triangleCount(), 1000u) << name;
+        EXPECT_FALSE(s.lights.empty()) << name;
+    }
+    EXPECT_THROW(makeDemoScene("forest", dir), Error);
+    EXPECT_THROW(makeBunnyScene("/nonexistent"), Error);
+}
+
+// ---- Bad input and the command line -----------------------------------------------------------------
+
+TEST(RenderTest, RejectsBadOptions) {
+    const Scene s = groundScene();
+    RenderOptions o = smallOptions();
+    o.width = 0;
+    EXPECT_THROW(render(s, s.cameras[0], o), Error);
+    o = smallOptions();
+    o.supersample = 9;
+    EXPECT_THROW(render(s, s.cameras[0], o), Error);
+    EXPECT_THROW(render(Scene{}, s.cameras[0], smallOptions()), Error);
+    Camera bad = s.cameras[0];
+    bad.target = bad.position;
+    EXPECT_THROW(render(s, bad, smallOptions()), Error);
+}
+
+TEST(RenderTest, RenderCommandWritesAnImageAndPrintsPassTimings) {
+    test::TempDir dir;
+    TreeOptions t;
+    t.leaves = 300;
+    writeGltf(makeTreeScene(t), dir.file("tree.glb"));
+    test::writeFile(
+        dir.file("scene.json"),
+        R"({"gltf": "tree.glb", "receiversOnly": ["Ground"], "render": {"shadows": "transmittance", "gridResolution": 64}})");
+    const std::string out = dir.file("tree.png");
+    const test::CommandRun r =
+        test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + out + " --width 96 --height 54");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(std::filesystem::exists(out));
+    EXPECT_NE(r.out.find("shadows transmittance (grid 64"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("voxelization from light"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("shading"), std::string::npos) << r.out;
+    const Image img = readPng(out);
+    EXPECT_EQ(img.width, 96);
+    EXPECT_EQ(img.height, 54);
+
+    const test::CommandRun pfm =
+        test::runVoxfx(dir, "render " + dir.file("tree.glb") + " -o " + dir.file("t.pfm") +
+                                " --width 32 --height 18 --shadows absorption -q");
+    EXPECT_EQ(pfm.exitCode, 0) << pfm.err;
+    EXPECT_TRUE(std::filesystem::exists(dir.file("t.pfm")));
+
+    const test::CommandRun exr =
+        test::runVoxfx(dir, "render " + dir.file("tree.glb") + " -o " + dir.file("t.exr"));
+    EXPECT_EQ(exr.exitCode, 1);
+    EXPECT_NE(exr.err.find("OpenEXR"), std::string::npos) << exr.err;
+    const test::CommandRun kind = test::runVoxfx(dir, "render " + dir.file("tree.glb") + " -o " +
+                                                          dir.file("k.png") + " --shadows soft");
+    EXPECT_EQ(kind.exitCode, 1);
+    EXPECT_NE(kind.err.find("unknown shadow kind 'soft'"), std::string::npos) << kind.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("k.png")));
+    const test::CommandRun missing = test::runVoxfx(dir, "render " + dir.file("nope.gltf") + " -o " + out);
+    EXPECT_EQ(missing.exitCode, 1);
+    EXPECT_NE(missing.err.find("no such file"), std::string::npos) << missing.err;
+}
+
+TEST(RenderTest, DemoCommandRendersTheTree) {
+    test::TempDir dir;
+    const test::CommandRun r =
+        test::runVoxfx(dir, "demo --scenes tree --shadows map,transmittance --width 64 --height 36 "
+                            "--supersample 1 --grid 64 -o " +
+                                dir.path().string() + " --write-scenes " + dir.path().string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(std::filesystem::exists(dir.file("tree-map.png")));
+    EXPECT_TRUE(std::filesystem::exists(dir.file("tree-transmittance.png")));
+    EXPECT_TRUE(std::filesystem::exists(dir.file("tree.glb")));
+    EXPECT_NE(r.out.find("voxelization from light"), std::string::npos) << r.out;
+}
+
+} // namespace
+} // namespace voxfx

@@ -1,0 +1,533 @@
+// Tests of src/render/ shadows (light views, shadow map, ED06 transmittance, CHANG absorption)
+// against exact light transport: an independent brute-force counter of the surface crossings
+// between the light and a point (Moller–Trumbore on every caster triangle; it shares no code with
+// the voxel path) with the same per-crossing attenuation. Also hand-derived cases (one leaf layer
+// gives exactly t, stacked layers t^n), properties (more leaves never brighten; opaque leaves in the
+// voxel path give the standard map texel for texel), error that shrinks with resolution, and bad
+// input. The full error-versus-resolution table is the Slow case.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "test_util.hpp"
+#include "voxfx/shadow.hpp"
+
+namespace voxfx {
+namespace {
+
+// ---- Scene building (independent of the demo generator) ---------------------------------------
+
+void appendQuad(Mesh& m, const Vec3d& c, const Vec3d& u, const Vec3d& v) {
+    const auto b = uint32_t(m.positions.size());
+    for (const Vec3d& p : {c - u - v, c + u - v, c + u + v, c - u + v}) m.positions.push_back(Vec3f(p));
+    m.indices.insert(m.indices.end(), {b, b + 1, b + 2, b, b + 2, b + 3});
+}
+
+Material leafMaterial(Vec3f colour, float opacity = 0.7f, float transmission = 0.6f) {
+    Material m;
+    m.name = "leaf";
+    m.baseColor = colour;
+    m.opacity = opacity;
+    m.transmission = transmission;
+    return m;
+}
+
+/// Random leaf quads (size ~0.25) in the slab [-2, 2] x [1.5, 3] x [-2, 2], `groups` colours, over a
+/// ground plane that only receives.
+Scene leafScene(int leaves, int groups, uint64_t seed, float opacity = 0.7f) {
+    static const Vec3f colours[3] = {{0.1f, 0.35f, 0.05f}, {0.6f, 0.15f, 0.03f}, {0.35f, 0.4f, 0.05f}};
+    Scene s;
+    SceneMesh ground;
+    ground.name = "Ground";
+    appendQuad(ground.mesh, {0, 0, 0}, {0, 0, 6}, {6, 0, 0});
+    ground.material = s.addMaterial(Material{});
+    ground.castsShadow = false;
+    s.meshes.push_back(ground);
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> ux(-2, 2), uy(1.5, 3), ud(-1, 1);
+    for (int g = 0; g < groups; ++g) {
+        SceneMesh m;
+        m.name = "leaves" + std::to_string(g);
+        // Opacity 1 means opaque leaves: no transmission through the tissue either.
+        m.material = s.addMaterial(leafMaterial(colours[g % 3], opacity, opacity < 1 ? 0.6f : 0.0f));
+        s.meshes.push_back(m);
+    }
+    for (int i = 0; i < leaves; ++i) {
+        const Vec3d c{ux(rng), uy(rng), ux(rng)};
+        const Vec3d n = normalize(Vec3d{ud(rng), 1.5, ud(rng)});
+        const Vec3d t = normalize(cross(n, Vec3d{ud(rng), ud(rng), ud(rng)} + Vec3d{0.01, 0, 0}));
+        appendQuad(s.meshes[1 + size_t(i % groups)].mesh, c, t * 0.14, cross(n, t) * 0.1);
+    }
+    return s;
+}
+
+Light sun(Vec3d dir = {0.3, -1, 0.2}) {
+    Light l;
+    l.name = "sun";
+    l.type = LightType::Directional;
+    l.direction = normalize(dir);
+    return l;
+}
+
+// ---- The exact reference -----------------------------------------------------------------------
+
+/// Ray parameter of the hit of o + t d with triangle abc (Moller–Trumbore), or -1.
+double rayTriangle(const Vec3d& o, const Vec3d& d, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    const Vec3d e1 = b - a, e2 = c - a, h = cross(d, e2);
+    const double det = dot(e1, h);
+    if (std::abs(det) < 1e-14) return -1;
+    const double inv = 1.0 / det;
+    const Vec3d s = o - a;
+    const double u = dot(s, h) * inv;
+    if (u < 0 || u > 1) return -1;
+    const Vec3d q = cross(s, e1);
+    const double v = dot(d, q) * inv;
+    if (v < 0 || u + v > 1) return -1;
+    return dot(e2, q) * inv;
+}
+
+/// Calls hit(material) for every caster surface crossed between p and the light (p's own surface,
+/// within 1e-6, excluded).
+template <class Hit> void forEachCrossing(const Scene& s, const Light& light, const Vec3d& p, Hit&& hit) {
+    Vec3d dir;
+    double tMax;
+    if (light.type == LightType::Directional) {
+        dir = -normalize(light.direction);
+        tMax = 1e30;
+    } else {
+        dir = light.position - p;
+        tMax = length(dir);
+        dir = dir / tMax;
+    }
+    for (const SceneMesh& m : s.meshes) {
+        if (!m.castsShadow) continue;
+        for (size_t t = 0; t < m.mesh.triangleCount(); ++t) {
+            const Vec3d a(m.mesh.positions[m.mesh.indices[3 * t]]),
+                b(m.mesh.positions[m.mesh.indices[3 * t + 1]]),
+                c(m.mesh.positions[m.mesh.indices[3 * t + 2]]);
+            const double h = rayTriangle(p, dir, a, b, c);
+            if (h > 1e-6 && h < tMax) hit(s.materials[m.material]);
+        }
+    }
+}
+
+Vec3f exactTransmittance(const Scene& s, const Light& light, const Vec3d& p) {
+    Vec3f t{1, 1, 1};
+    forEachCrossing(s, light, p, [&](const Material& m) { t = t * m.crossingTransmittance(); });
+    return t;
+}
+
+float exactAbsorption(const Scene& s, const Light& light, const Vec3d& p, float opaque) {
+    double depth = 0;
+    forEachCrossing(s, light, p, [&](const Material& m) { depth += absorptionPerCrossing(m, opaque); });
+    return float(std::exp(-depth));
+}
+
+int exactCrossings(const Scene& s, const Light& light, const Vec3d& p) {
+    int n = 0;
+    forEachCrossing(s, light, p, [&](const Material&) { ++n; });
+    return n;
+}
+
+/// Ground points (y = 0) in [-3, 3]^2 that at least one leaf shadows (the region where the shadow
+/// kinds differ; unshadowed points are exact for every kind).
+std::vector<Vec3d> shadowedGroundPoints(const Scene& s, const Light& light, int count, uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(-3, 3);
+    std::vector<Vec3d> pts;
+    while (int(pts.size()) < count) {
+        const Vec3d p{u(rng), 0, u(rng)};
+        if (exactCrossings(s, light, p) > 0) pts.push_back(p);
+    }
+    return pts;
+}
+
+float channelMean(const Vec3f& v) { return (v.x + v.y + v.z) / 3; }
+
+struct ErrorStats {
+    double mean = 0, p95 = 0;
+};
+
+ErrorStats stats(std::vector<double> e) {
+    ErrorStats s;
+    for (const double x : e) s.mean += x;
+    s.mean /= double(e.size());
+    std::sort(e.begin(), e.end());
+    s.p95 = e[size_t(0.95 * double(e.size() - 1))];
+    return s;
+}
+
+/// Sample points with their exact transmittance (per-crossing colour factors) and absorption.
+struct Reference {
+    std::vector<Vec3d> points;
+    std::vector<Vec3f> transmittance;
+    std::vector<float> absorption;
+};
+
+Reference exactReference(const Scene& s, const Light& light, int count, uint64_t seed, float opaque = 8) {
+    Reference r;
+    r.points = shadowedGroundPoints(s, light, count, seed);
+    for (const Vec3d& p : r.points) {
+        r.transmittance.push_back(exactTransmittance(s, light, p));
+        r.absorption.push_back(exactAbsorption(s, light, p, opaque));
+    }
+    return r;
+}
+
+/// |visibility - exact| averaged over the RGB channels, per point: mean and 95th percentile.
+ErrorStats shadowError(const Scene& s, const Light& light, const Reference& ref, const ShadowOptions& o) {
+    const LightShadow shadow = LightShadow::build(s, light, o);
+    std::vector<double> err;
+    for (size_t i = 0; i < ref.points.size(); ++i) {
+        const Vec3f v = shadow.visibility(ref.points[i], {0, 0, 0});
+        const Vec3f e =
+            o.kind == ShadowKind::Absorption ? Vec3f{1, 1, 1} * ref.absorption[i] : ref.transmittance[i];
+        err.push_back(channelMean({std::abs(v.x - e.x), std::abs(v.y - e.y), std::abs(v.z - e.z)}));
+    }
+    return stats(err);
+}
+
+ShadowOptions gridOptions(ShadowKind kind, int64_t n, Slicing slicing = Slicing::Uniform,
+                          VoxelizeMode mode = VoxelizeMode::Surface) {
+    ShadowOptions o;
+    o.kind = kind;
+    o.gridResolution = n;
+    o.gridDepth = n;
+    o.mapResolution = n;
+    o.slicing = slicing;
+    o.voxelMode = mode;
+    return o;
+}
+
+// ---- Hand-derived cases ------------------------------------------------------------------------
+
+TEST(ShadowTest, OneLeafLayerTransmitsExactlyItsFactor) {
+    // A horizontal leaf over [-1, 1]^2 at y = 2, the sun straight down: every ground point under
+    // it receives t = (1 - a) + a * tr * colour, points outside receive 1.
+    Scene s;
+    SceneMesh leaf;
+    leaf.name = "leaf";
+    appendQuad(leaf.mesh, {0, 2, 0}, {0, 0, 1}, {1, 0, 0});
+    leaf.material = s.addMaterial(leafMaterial({0.2f, 0.5f, 0.1f}, 0.5f, 0.5f));
+    s.meshes.push_back(leaf);
+    const Vec3f t = s.materials[0].crossingTransmittance();
+    EXPECT_NEAR(t.y, 0.5f + 0.5f * 0.5f * 0.5f, 1e-6f); // hand: 0.625
+    // Surface (ED06): one cell per leaf and column, exactly t. Conservative: every cell the leaf
+    // touches, t or t^2 for a flat leaf (t^2 when it lies on a slice boundary).
+    for (const VoxelizeMode mode : {VoxelizeMode::Surface, VoxelizeMode::Conservative})
+        for (const Slicing slicing : {Slicing::Uniform, Slicing::Local}) {
+            const LightShadow sh = LightShadow::build(
+                s, sun({0, -1, 0}), gridOptions(ShadowKind::Transmittance, 64, slicing, mode));
+            const std::string what = std::string(toString(mode)) + " " + toString(slicing);
+            for (const double x : {-0.8, -0.3, 0.0, 0.5, 0.9}) {
+                const Vec3f v = sh.visibility({x, 0, 0.1 * x}, {0, 0, 0});
+                const int cells = mode == VoxelizeMode::Surface || std::abs(v.y - t.y) < 1e-5f ? 1 : 2;
+                for (int c = 0; c < 3; ++c) EXPECT_NEAR(v[c], std::pow(t[c], float(cells)), 1e-5f) << what;
+            }
+            EXPECT_EQ(sh.visibility({1.5, 0, 0}, {0, 0, 0}).y, 1.0f) << what;
+            EXPECT_EQ(sh.visibility({0, 2.5, 0}, {0, 0, 0}).y, 1.0f) << what; // above the leaf
+        }
+}
+
+TEST(ShadowTest, StackedLayersMultiplyAndAbsorptionAddsPerCrossing) {
+    // Three horizontal layers 0.5 apart: transmittance t^3; absorption exp(-3 sigma).
+    Scene s;
+    SceneMesh leaves;
+    leaves.name = "layers";
+    for (const double y : {1.0, 1.5, 2.0}) appendQuad(leaves.mesh, {0, y, 0}, {0, 0, 1}, {1, 0, 0});
+    leaves.material = s.addMaterial(leafMaterial({0.3f, 0.3f, 0.3f}, 0.6f, 0.0f)); // grey: t = 0.4
+    s.meshes.push_back(leaves);
+    const LightShadow tr = LightShadow::build(s, sun({0, -1, 0}), gridOptions(ShadowKind::Transmittance, 32));
+    const LightShadow ab = LightShadow::build(s, sun({0, -1, 0}), gridOptions(ShadowKind::Absorption, 32));
+    const float sigma = -std::log(0.4f);
+    EXPECT_NEAR(absorptionPerCrossing(s.materials[0], 8), sigma, 1e-5f);
+    for (const double y : {0.0, 1.25, 1.75, 2.5}) {
+        const int layers = (y < 1.0) + (y < 1.5) + (y < 2.0);
+        EXPECT_NEAR(tr.visibility({0.2, y, -0.3}, {0, 0, 0}).x, std::pow(0.4f, float(layers)), 1e-5f) << y;
+        EXPECT_NEAR(ab.visibility({0.2, y, -0.3}, {0, 0, 0}).x, std::exp(-sigma * float(layers)), 1e-5f) << y;
+    }
+}
+
+TEST(ShadowTest, StandardShadowMapIsBinaryUnderABox) {
+    Scene s;
+    SceneMesh box;
+    box.name = "box";
+    box.mesh = test::makeBox({-0.5, 1, -0.5}, {0.5, 2, 0.5});
+    box.material = s.addMaterial(Material{});
+    s.meshes.push_back(box);
+    ShadowOptions o = gridOptions(ShadowKind::Map, 256);
+    const LightShadow sh = LightShadow::build(s, sun({0, -1, 0}), o);
+    EXPECT_EQ(sh.visibility({0, 0, 0}, {0, 1, 0}).x, 0.0f);
+    EXPECT_EQ(sh.visibility({0.4, 0, -0.4}, {0, 1, 0}).x, 0.0f);
+    EXPECT_EQ(sh.visibility({0.8, 0, 0}, {0, 1, 0}).x, 1.0f);
+    EXPECT_EQ(sh.visibility({0, 2.2, 0}, {0, 1, 0}).x, 1.0f); // above the box
+    EXPECT_EQ(sh.visibility({0, 2.0, 0}, {0, 1, 0}).x, 1.0f); // on its lit top face: no acne
+    EXPECT_EQ(sh.visibility({0, 0, 0}, {0, 1, 0}).y, 0.0f);
+}
+
+TEST(ShadowTest, SpotLightShadowsThroughALeaf) {
+    Scene s;
+    SceneMesh leaf;
+    leaf.name = "leaf";
+    appendQuad(leaf.mesh, {0, 2, 0}, {0, 0, 1}, {1, 0, 0});
+    leaf.material = s.addMaterial(leafMaterial({0.3f, 0.3f, 0.3f}, 0.5f, 0.0f)); // t = 0.5
+    s.meshes.push_back(leaf);
+    Light spot;
+    spot.type = LightType::Spot;
+    spot.position = {0, 4, 0};
+    spot.direction = {0, -1, 0};
+    spot.outerConeAngle = 1.0;
+    for (const ShadowKind kind : {ShadowKind::Transmittance, ShadowKind::Absorption}) {
+        const LightShadow sh = LightShadow::build(s, spot, gridOptions(kind, 128));
+        // Ground points whose ray to the light crosses the leaf: |x| < 2 at y = 0 (similar triangles).
+        EXPECT_NEAR(sh.visibility({1.5, 0, 0.3}, {0, 0, 0}).x, 0.5f, 1e-5f) << toString(kind);
+        EXPECT_NEAR(sh.visibility({-1.0, 0, -1.7}, {0, 0, 0}).x, 0.5f, 1e-5f) << toString(kind);
+        EXPECT_EQ(sh.visibility({2.5, 0, 0}, {0, 0, 0}).x, 1.0f) << toString(kind);
+        EXPECT_EQ(sh.visibility({0, 3, 0}, {0, 0, 0}).x, 1.0f) << toString(kind);
+    }
+}
+
+TEST(ShadowTest, PointLightInsideALeafBoxDimsEveryDirectionOnce) {
+    // A box of six leaf faces around a point light: every point outside is behind exactly one face
+    // (cube-face views, each one perspective frame). Points near a box edge may fall on a column the
+    // neighbouring face's leaf covers; the exact reference decides, and >= 97 % must agree.
+    Scene s;
+    SceneMesh box;
+    box.name = "leafbox";
+    box.mesh = test::makeBox({-1, -1, -1}, {1, 1, 1});
+    box.material = s.addMaterial(leafMaterial({0.3f, 0.3f, 0.3f}, 0.5f, 0.0f));
+    s.meshes.push_back(box);
+    Light lamp;
+    lamp.type = LightType::Point;
+    lamp.position = {0.1, -0.05, 0.07};
+    for (const ShadowKind kind : {ShadowKind::Transmittance, ShadowKind::Absorption}) {
+        const LightShadow sh = LightShadow::build(s, lamp, gridOptions(kind, 128));
+        ASSERT_EQ(sh.kind(), kind);
+        std::mt19937_64 rng(5);
+        int agree = 0, total = 0;
+        for (int i = 0; i < 600; ++i) {
+            Vec3d d{std::normal_distribution<double>()(rng), std::normal_distribution<double>()(rng),
+                    std::normal_distribution<double>()(rng)};
+            const Vec3d p = lamp.position + normalize(d) * 3.0;
+            const float ref = exactTransmittance(s, lamp, p).x;
+            EXPECT_EQ(exactCrossings(s, lamp, p), 1);
+            agree += std::abs(sh.visibility(p, {0, 0, 0}).x - ref) < 1e-4f;
+            ++total;
+        }
+        EXPECT_GE(agree, total * 97 / 100) << toString(kind);
+    }
+}
+
+// ---- Properties ------------------------------------------------------------------------------------
+
+TEST(ShadowTest, MoreLeafLayersNeverMakeAPointBrighter) {
+    // Extra leaves inside the same bounds (so the light frames do not move) can only add filled cells
+    // (transmittance, map) or writes (absorption). Uniform slicing: local slicing moves cell boundaries
+    // when a column's range changes.
+    const Scene base = leafScene(300, 2, 11);
+    Scene more = base;
+    const Scene extra = leafScene(300, 2, 12);
+    for (size_t k = 1; k < extra.meshes.size(); ++k) {
+        Mesh& to = more.meshes[k].mesh;
+        const auto b = uint32_t(to.positions.size());
+        for (const Vec3f& p : extra.meshes[k].mesh.positions)
+            to.positions.push_back(Vec3f(std::clamp(p.x, -1.8f, 1.8f), std::clamp(p.y, 1.7f, 2.8f),
+                                         std::clamp(p.z, -1.8f, 1.8f)));
+        for (const uint32_t i : extra.meshes[k].mesh.indices) to.indices.push_back(b + i);
+    }
+    ASSERT_TRUE(base.bounds(true) == more.bounds(true));
+    const Light light = sun();
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> u(-3, 3), uy(0, 3.2);
+    for (const ShadowKind kind : {ShadowKind::Map, ShadowKind::Transmittance, ShadowKind::Absorption}) {
+        const LightShadow a = LightShadow::build(base, light, gridOptions(kind, 96));
+        const LightShadow b = LightShadow::build(more, light, gridOptions(kind, 96));
+        int darker = 0;
+        for (int i = 0; i < 3000; ++i) {
+            const Vec3d p{u(rng), uy(rng), u(rng)};
+            const Vec3f va = a.visibility(p, {0, 0, 0}), vb = b.visibility(p, {0, 0, 0});
+            for (int c = 0; c < 3; ++c) ASSERT_LE(vb[c], va[c] + 1e-6f) << toString(kind) << " at " << i;
+            darker += vb.y < va.y;
+        }
+        EXPECT_GT(darker, 100) << toString(kind); // the extra leaves do shadow something
+    }
+}
+
+TEST(ShadowTest, AllLeavesOpaqueGiveTheStandardShadow) {
+    // Opaque leaves go to the standard map in transmittance mode: identical to ShadowKind::Map.
+    const Scene s = leafScene(300, 2, 21, 1.0f);
+    for (const Material& m : s.materials) EXPECT_TRUE(m.isOpaque());
+    const LightShadow tr = LightShadow::build(s, sun(), gridOptions(ShadowKind::Transmittance, 256));
+    const LightShadow map = LightShadow::build(s, sun(), gridOptions(ShadowKind::Map, 256));
+    EXPECT_TRUE(tr.transmittanceMaps().empty());
+    std::mt19937_64 rng(4);
+    std::uniform_real_distribution<double> u(-3, 3), uy(0, 3.2);
+    for (int i = 0; i < 2000; ++i) {
+        const Vec3d p{u(rng), uy(rng), u(rng)};
+        const Vec3d n = normalize(Vec3d{u(rng), 3.0, u(rng)});
+        ASSERT_TRUE(tr.visibility(p, n) == map.visibility(p, n)) << i;
+    }
+}
+
+TEST(ShadowTest, OpaqueCellsInTheVoxelPathMatchTheShadowMapTexelForTexel) {
+    // With a crossing transmittance of 0, the ED06 grid and the shadow map see the same centre-sampled
+    // fragments in the same columns: below every leaf both say "dark" exactly where the other does.
+    const Scene s = leafScene(400, 1, 31);
+    Mesh leaves = s.meshes[1].mesh;
+    const Light light = sun();
+    const Box3d bounds = computeBounds(leaves.view());
+    const LightView mapView = makeLightViews(light, bounds, 200, 1)[0];
+    const LightView gridView = makeLightViews(light, bounds, 200, 64)[0];
+    const ShadowMap map = ShadowMap::build(leaves.view(), mapView);
+    const MeshView groups[1] = {leaves.view()};
+    const Vec3f zero[1] = {{0, 0, 0}};
+    const TransmittanceShadowMap grid =
+        TransmittanceShadowMap::build(gridView, groups, zero, VoxelizeMode::Surface, Slicing::Uniform);
+    std::mt19937_64 rng(8);
+    std::uniform_real_distribution<double> u(-3.5, 3.5);
+    int dark = 0;
+    for (int i = 0; i < 5000; ++i) {
+        const Vec3d p{u(rng), 0, u(rng)};
+        const float m = map.visibility(p, 0, 0.0);
+        const float t = grid.transmittance(p, 1).x;
+        ASSERT_EQ(m, t) << "at " << p.x << " " << p.z;
+        dark += m == 0;
+    }
+    EXPECT_GT(dark, 500);
+}
+
+TEST(ShadowTest, PointsOnALeafAreNotShadowedByTheirOwnLeaf) {
+    // Self-shadowing bias: normal offset towards the light plus the skipped own cell.
+    Scene s;
+    SceneMesh leaf;
+    leaf.name = "leaf";
+    const Vec3d c{0, 2, 0}, u = normalize(Vec3d{1, 0.4, 0}), v = normalize(Vec3d{0, 0.3, 1});
+    appendQuad(leaf.mesh, c, u, v);
+    leaf.material = s.addMaterial(leafMaterial({0.3f, 0.3f, 0.3f}, 0.5f, 0.0f));
+    s.meshes.push_back(leaf);
+    Vec3d n = normalize(cross(u, v));
+    const Light light = sun({0.2, -1, 0.1});
+    if (dot(n, -light.direction) < 0) n = -n;
+    for (const ShadowKind kind : {ShadowKind::Transmittance, ShadowKind::Absorption}) {
+        const LightShadow sh = LightShadow::build(s, light, gridOptions(kind, 128));
+        std::mt19937_64 rng(2);
+        std::uniform_real_distribution<double> w(-0.9, 0.9);
+        int lit = 0;
+        for (int i = 0; i < 500; ++i) lit += sh.visibility(c + u * w(rng) + v * w(rng), n).x == 1.0f;
+        EXPECT_GE(lit, 495) << toString(kind);
+    }
+}
+
+TEST(ShadowTest, ResultDoesNotDependOnThreadCount) {
+    const Scene s = leafScene(500, 3, 41);
+    for (const ShadowKind kind : {ShadowKind::Map, ShadowKind::Transmittance, ShadowKind::Absorption}) {
+        LightShadow one, two;
+        withThreads(1, [&] { one = LightShadow::build(s, sun(), gridOptions(kind, 128)); });
+        withThreads(2, [&] { two = LightShadow::build(s, sun(), gridOptions(kind, 128)); });
+        std::mt19937_64 rng(4);
+        std::uniform_real_distribution<double> u(-3, 3), uy(0, 3.2);
+        for (int i = 0; i < 1000; ++i) {
+            const Vec3d p{u(rng), uy(rng), u(rng)};
+            ASSERT_TRUE(one.visibility(p, {0, 1, 0}) == two.visibility(p, {0, 1, 0}));
+        }
+    }
+}
+
+// ---- Against exact light transport ----------------------------------------------------------------
+
+TEST(ShadowTest, ErrorAgainstExactTransportShrinksWithResolution) {
+    const Scene s = leafScene(500, 2, 51);
+    const Light light = sun();
+    const Reference pts = exactReference(s, light, 1500, 6);
+    const ErrorStats t64 = shadowError(s, light, pts, gridOptions(ShadowKind::Transmittance, 64));
+    const ErrorStats t256 = shadowError(s, light, pts, gridOptions(ShadowKind::Transmittance, 256));
+    const ErrorStats a64 = shadowError(s, light, pts, gridOptions(ShadowKind::Absorption, 64));
+    const ErrorStats a256 = shadowError(s, light, pts, gridOptions(ShadowKind::Absorption, 256));
+    const ErrorStats m256 = shadowError(s, light, pts, gridOptions(ShadowKind::Map, 256));
+    EXPECT_LT(t256.mean, 0.75 * t64.mean);
+    EXPECT_LT(a256.mean, 0.75 * a64.mean);
+    EXPECT_LT(t256.mean, 0.05);
+    EXPECT_LT(a256.mean, 0.05);
+    // The binary map cannot represent partial light: several times worse on foliage.
+    EXPECT_GT(m256.mean, 3 * t256.mean);
+    EXPECT_GT(m256.mean, 3 * a256.mean);
+}
+
+void errorTable(int leaves);
+
+TEST(ShadowTest, ErrorTableAgainstExactTransportSlow) {
+    // The table reported in BENCHMARKS.md: mean and 95th percentile of |visibility - exact| over
+    // ground points that at least one leaf shadows.
+    // Two canopies: dense (1,500 leaves, most shadowed points behind several) and sparse (300).
+    for (const int leaves : {1500, 300}) errorTable(leaves);
+}
+
+void errorTable(int leaves) {
+    const Scene s = leafScene(leaves, 3, 61);
+    const Light light = sun();
+    const Reference pts = exactReference(s, light, 4000, 7);
+    double crossings = 0;
+    for (const Vec3d& p : pts.points) crossings += exactCrossings(s, light, p);
+    std::printf("%d leaves, %zu shadowed ground points, %.2f crossings on average\n", leaves,
+                pts.points.size(), crossings / double(pts.points.size()));
+    std::printf("%-40s %6s %9s %9s\n", "kind", "N", "mean", "p95");
+    struct Row {
+        const char* name;
+        ShadowKind kind;
+        Slicing slicing;
+        VoxelizeMode mode;
+    };
+    const Row rows[] = {
+        {"transmittance surface uniform", ShadowKind::Transmittance, Slicing::Uniform, VoxelizeMode::Surface},
+        {"transmittance surface local", ShadowKind::Transmittance, Slicing::Local, VoxelizeMode::Surface},
+        {"transmittance conservative uniform", ShadowKind::Transmittance, Slicing::Uniform,
+         VoxelizeMode::Conservative},
+        {"absorption uniform", ShadowKind::Absorption, Slicing::Uniform, VoxelizeMode::Surface},
+        {"absorption local", ShadowKind::Absorption, Slicing::Local, VoxelizeMode::Surface},
+        {"shadow map (PCF 3x3)", ShadowKind::Map, Slicing::Uniform, VoxelizeMode::Surface},
+        {"transmittance surface uniform bilinear", ShadowKind::Transmittance, Slicing::Uniform,
+         VoxelizeMode::Surface},
+        {"absorption uniform bilinear", ShadowKind::Absorption, Slicing::Uniform, VoxelizeMode::Surface}};
+    for (const Row& row : rows) {
+        double previous = 1e9;
+        for (const int64_t n : {32, 64, 128, 256, 512}) {
+            ShadowOptions o = gridOptions(row.kind, n, row.slicing, row.mode);
+            o.bilinear = std::string(row.name).find("bilinear") != std::string::npos;
+            const ErrorStats e = shadowError(s, light, pts, o);
+            std::printf("%-40s %6lld %9.4f %9.4f\n", row.name, (long long)n, e.mean, e.p95);
+            if (row.kind != ShadowKind::Map && n >= 64 && row.mode == VoxelizeMode::Surface) {
+                EXPECT_LT(e.mean, previous) << row.name << " " << n;
+            }
+            previous = e.mean;
+        }
+    }
+}
+
+// ---- Bad input ---------------------------------------------------------------------------------------
+
+TEST(ShadowTest, RejectsBadInput) {
+    EXPECT_THROW(parseShadowKind("soft"), Error);
+    try {
+        parseShadowKind("soft");
+    } catch (const Error& e) { EXPECT_NE(std::string(e.what()).find("transmittance"), std::string::npos); }
+    EXPECT_THROW(makeLightViews(sun(), Box3d{}, 64, 64), Error);
+    const Scene s = leafScene(10, 1, 1);
+    ShadowOptions o = gridOptions(ShadowKind::Transmittance, 0);
+    EXPECT_THROW(LightShadow::build(s, sun(), o), Error);
+    o = gridOptions(ShadowKind::Transmittance, 32);
+    o.voxelMode = VoxelizeMode::Solid;
+    EXPECT_THROW(LightShadow::build(s, sun(), o), Error);
+}
+
+TEST(ShadowTest, NoCastersMeansFullLight) {
+    Scene s = leafScene(10, 1, 1);
+    for (SceneMesh& m : s.meshes) m.castsShadow = false;
+    const LightShadow sh = LightShadow::build(s, sun(), gridOptions(ShadowKind::Transmittance, 32));
+    EXPECT_TRUE(sh.visibility({0, 0, 0}, {0, 1, 0}) == (Vec3f{1, 1, 1}));
+}
+
+} // namespace
+} // namespace voxfx
