@@ -20,8 +20,9 @@ namespace {
 
 using namespace voxfx;
 
-// Loop subdivision without smoothing: every triangle into four. Used to build a mesh of about
-// a million triangles from the Chinese dragon (20k triangles -> 1.28M after three rounds).
+// Midpoint subdivision without smoothing: every triangle into four. Used to build meshes of
+// about a million triangles: the Chinese dragon (20k triangles -> 1.28M after three rounds; open,
+// so its solid modes use the flood fill) and bunny00 (75k -> 1.21M after two; closed, parity).
 Mesh subdivide(const Mesh& in) {
     Mesh out;
     out.positions = in.positions;
@@ -49,10 +50,12 @@ const Mesh* mesh(const std::string& name) {
     if (it != cache.end()) return it->second.get();
     const std::string dir = std::string(VOXFX_DATA_DIR) + "/meshes/";
     std::unique_ptr<Mesh> m;
-    if (name == "dragon1m") {
-        if (!std::filesystem::exists(dir + "ChineseDragon-10kv.off")) return nullptr;
-        Mesh d = loadMesh(dir + "ChineseDragon-10kv.off");
-        for (int i = 0; i < 3; ++i) d = subdivide(d);
+    if (name == "dragon1m" || name == "bunny1m") {
+        const bool dragon = name == "dragon1m";
+        const std::string file = dir + (dragon ? "ChineseDragon-10kv.off" : "bunny00.off");
+        if (!std::filesystem::exists(file)) return nullptr;
+        Mesh d = loadMesh(file);
+        for (int i = 0; i < (dragon ? 3 : 2); ++i) d = subdivide(d);
         m = std::make_unique<Mesh>(std::move(d));
     } else {
         const std::string file = dir + (name == "dragon" ? "ChineseDragon-10kv" : name) + ".off";
@@ -62,7 +65,8 @@ const Mesh* mesh(const std::string& name) {
     return cache.emplace(name, std::move(m)).first->second.get();
 }
 
-void voxelizeBench(benchmark::State& state, const std::string& name, VoxelizeMode mode, Fill fill) {
+void voxelizeBench(benchmark::State& state, const std::string& name, VoxelizeMode mode, Fill fill,
+                   RasterPath path = RasterPath::Auto) {
     const Mesh* m = mesh(name);
     if (!m) {
         state.SkipWithError("missing data: run scripts/fetch-data.sh");
@@ -74,6 +78,7 @@ void voxelizeBench(benchmark::State& state, const std::string& name, VoxelizeMod
     VoxelizeOptions vo;
     vo.mode = mode;
     vo.fill = fill;
+    vo.rasterPath = path;
     // Parity needs a closed mesh; the dragon is open, so its solid modes use the flood fill.
     int64_t cells = frame.width() * frame.height() * frame.depth();
     for (auto _ : state) {
@@ -91,7 +96,10 @@ void voxelizeBench(benchmark::State& state, const std::string& name, VoxelizeMod
                    std::to_string(frame.depth()));
 }
 
-// The floor for large grids: allocating and writing the output grid's bytes twice.
+// The floor for large grids: allocating the output grid the way voxelize() does (BitGrid: fresh
+// pages, huge pages from 2 MiB) and writing all of its bytes twice. Allocating through BitGrid
+// rather than malloc keeps the floor honest: malloc would hand back the warm pages of the previous
+// iteration for grids under glibc's mmap threshold, which voxelize() never gets.
 void writeGridBytesTwice(benchmark::State& state, const std::string& name) {
     const Mesh* m = mesh(name);
     if (!m) {
@@ -103,13 +111,13 @@ void writeGridBytesTwice(benchmark::State& state, const std::string& name) {
     const Frame f = fitFrame(computeBounds(m->view()), fo);
     const uint64_t bytes = BitGrid::requiredBytes(f.width(), f.height(), f.depth());
     for (auto _ : state) {
-        auto* p = static_cast<unsigned char*>(std::aligned_alloc(64, (bytes + 63) / 64 * 64));
+        BitGrid g(f.width(), f.height(), f.depth());
+        auto* p = reinterpret_cast<unsigned char*>(g.words());
         std::memset(p, 0, bytes);
         benchmark::ClobberMemory();
         std::memset(p, 0xff, bytes);
         benchmark::DoNotOptimize(p);
         benchmark::ClobberMemory();
-        std::free(p);
     }
     state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(bytes) * 2);
 }
@@ -122,7 +130,7 @@ struct Register {
             {"Solid", VoxelizeMode::Solid},
             {"SolidConservative", VoxelizeMode::SolidConservative},
             {"Interior", VoxelizeMode::Interior}};
-        for (const char* name : {"bunny00", "armadillo", "dragon", "dragon1m"}) {
+        for (const char* name : {"bunny00", "armadillo", "dragon", "dragon1m", "bunny1m"}) {
             const Fill fill = std::string(name).rfind("dragon", 0) == 0 ? Fill::Flood : Fill::Parity;
             for (const auto& [label, mode] : modes) {
                 benchmark::RegisterBenchmark((std::string(label) + "/" + name).c_str(),
@@ -134,15 +142,36 @@ struct Register {
                     ->Unit(benchmark::kMillisecond)
                     ->UseRealTime();
             }
+            // The rasterizer's two parallel schemes side by side (Auto picks one of them).
+            for (const auto& [pathLabel, path] :
+                 {std::pair{"Binned", RasterPath::Binned}, std::pair{"Direct", RasterPath::Direct}})
+                for (const auto& [label, mode] : {modes[1], modes[2]})
+                    benchmark::RegisterBenchmark(
+                        (std::string(label) + pathLabel + "/" + name).c_str(),
+                        [=](benchmark::State& s) { voxelizeBench(s, name, mode, fill, path); })
+                        ->Arg(512)
+                        ->Arg(1024)
+                        ->Unit(benchmark::kMillisecond)
+                        ->UseRealTime();
             benchmark::RegisterBenchmark((std::string("WriteGridBytesTwice/") + name).c_str(),
                                          [=](benchmark::State& s) { writeGridBytesTwice(s, name); })
                 ->Arg(128)
                 ->Arg(256)
                 ->Arg(512)
                 ->Arg(1024)
+                ->Arg(2048)
                 ->Unit(benchmark::kMillisecond)
                 ->UseRealTime();
         }
+        // Large grids (a 2048^3 slicemap of the bunny is 780 MiB): solid and conservative only.
+        for (const auto& [label, mode] :
+             {std::pair{"Solid", VoxelizeMode::Solid}, std::pair{"Conservative", VoxelizeMode::Conservative}})
+            benchmark::RegisterBenchmark(
+                (std::string(label) + "/bunny00").c_str(),
+                [=](benchmark::State& s) { voxelizeBench(s, "bunny00", mode, Fill::Parity); })
+                ->Arg(2048)
+                ->Unit(benchmark::kMillisecond)
+                ->UseRealTime();
     }
 } registerAll;
 

@@ -5,9 +5,9 @@ set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
   libtbb-dev libassimp-dev libopenvdb-dev libboost-iostreams-dev
-  libcli11-dev nlohmann-json3-dev libpng-dev
+  libcli11-dev nlohmann-json3-dev libpng-dev libopenexr-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcgal-dev libgmp-dev libmpfr-dev libeigen3-dev
-  clang-format
+  clang-format time
 )
 missing=()
 for p in "${packages[@]}"; do

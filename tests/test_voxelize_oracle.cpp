@@ -58,13 +58,18 @@ Frame fitted(const Mesh& mesh, int64_t resolution, Axis axis = Axis::Z) {
 }
 
 VoxelGrid run(const Mesh& mesh, const Frame& frame, VoxelizeMode mode, Fill fill = Fill::Parity,
-              int threads = 0) {
+              int threads = 0, RasterPath path = RasterPath::Auto) {
     VoxelizeOptions o;
     o.mode = mode;
     o.fill = fill;
     o.threads = threads;
+    o.rasterPath = path;
     return voxelize(mesh.view(), frame, o);
 }
+
+// Both parallel schemes of the rasterizer (binned tiles, direct atomic writes) face the oracle.
+constexpr RasterPath kPaths[] = {RasterPath::Binned, RasterPath::Direct};
+const char* pathName(RasterPath p) { return p == RasterPath::Binned ? "binned" : "direct"; }
 
 const SolidOracle& solidOracle(const std::string& name, int64_t resolution) {
     static std::map<std::pair<std::string, int64_t>, SolidOracle> cache;
@@ -131,23 +136,30 @@ void expectSolidMatchesOracle(const std::string& name, int64_t resolution, Axis 
     const Mesh& mesh = loadCached(name);
     const SolidOracle& oracle = solidOracle(name, resolution);
     ASSERT_TRUE(oracle.closed);
-    const VoxelGrid solid = run(mesh, fitted(mesh, resolution, axis), VoxelizeMode::Solid);
     EXPECT_GT(oracle.inside.count(), 0);
-    EXPECT_TRUE(sameCells(toWorldGrid(solid), oracle.inside, &oracle.leftOut))
-        << "solid differs from the CGAL inside test";
+    for (RasterPath path : kPaths) {
+        const VoxelGrid solid =
+            run(mesh, fitted(mesh, resolution, axis), VoxelizeMode::Solid, Fill::Parity, 0, path);
+        EXPECT_TRUE(sameCells(toWorldGrid(solid), oracle.inside, &oracle.leftOut))
+            << "solid (" << pathName(path) << " rasterizer) differs from the CGAL inside test";
+    }
     reportOnSurface(name + "." + std::to_string(resolution), oracle);
 }
 
 void expectConservativeMatchesOracle(const std::string& name, int64_t resolution, Axis axis = Axis::Z) {
     SCOPED_TRACE(name + " at " + std::to_string(resolution) + " sliced along " + toString(axis));
     const Mesh& mesh = loadCached(name);
-    const VoxelGrid cons = run(mesh, fitted(mesh, resolution, axis), VoxelizeMode::Conservative);
     const ConservativeOracle& oracle = conservativeOracle(name, resolution);
     EXPECT_GT(oracle.cells.count(), 0);
-    const ::testing::AssertionResult same = sameConservative(toWorldGrid(cons), oracle);
-    EXPECT_TRUE(same) << "conservative differs from CGAL's triangle/box overlap";
-    std::cout << "[ oracle   ] " << name << "." << resolution << " conservative: " << oracle.cells.count()
-              << " cells, " << same.message() << "\n";
+    for (RasterPath path : kPaths) {
+        const VoxelGrid cons =
+            run(mesh, fitted(mesh, resolution, axis), VoxelizeMode::Conservative, Fill::Parity, 0, path);
+        const ::testing::AssertionResult same = sameConservative(toWorldGrid(cons), oracle);
+        EXPECT_TRUE(same) << "conservative (" << pathName(path)
+                          << " rasterizer) differs from CGAL's triangle/box overlap";
+        std::cout << "[ oracle   ] " << name << "." << resolution << " conservative, " << pathName(path)
+                  << ": " << oracle.cells.count() << " cells, " << same.message() << "\n";
+    }
 }
 
 // --- Solid against CGAL's exact inside test -------------------------------------------------

@@ -28,6 +28,12 @@
 //   void TileConsumer::fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool front);
 //   void TileConsumer::span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t triangle);
 //   void TileConsumer::finish();                               // after the tile's last triangle
+// A consumer whose writes commute (bit OR, bit XOR) may also offer the direct path:
+//   DirectSink consumer.direct();        // fragment/span as above, callable from any thread
+//   void consumer.finishRows(y0, y1);    // after every triangle, per tile of rows, in parallel
+// rasterize() then skips binning when triangles are small against the columns (a dense mesh):
+// fixed chunks of triangles go to any thread and write with atomic word operations. The bits
+// are the same on both paths and for any thread count.
 // Depths are frame depths (orthographic: slice units; perspective: view distance); map them to
 // slices with Frame::depthToSlice(column). `front` is true when the triangle's counter-clockwise
 // side faces the frame's viewer (its outward normal points against the view direction).
@@ -45,8 +51,13 @@ namespace voxfx {
 
 enum class Coverage : uint8_t { Center, Conservative };
 
+/// The parallel scheme, for consumers that offer the direct path (see above); the bits are the
+/// same either way. Auto picks direct for dense meshes. For tests and benchmarks.
+enum class RasterPath : uint8_t { Auto, Binned, Direct };
+
 struct RasterOptions {
     Coverage coverage = Coverage::Center;
+    RasterPath path = RasterPath::Auto;
     /// Rows per tile; 0 picks about 64 tiles (at least one row each).
     int64_t rowsPerTile = 0;
     /// Polled between tiles; returning false cancels with voxfx::Error. Not owned.

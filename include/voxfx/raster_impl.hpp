@@ -107,8 +107,10 @@ void rasterizeCenter(const RasterTriangle& t, bool perspective, int64_t width, i
     const double ux = t.x[1] - t.x[0], uy = t.y[1] - t.y[0], vx = t.x[2] - t.x[0], vy = t.y[2] - t.y[0];
     const double det = ux * vy - vx * uy;
     if (det == 0) return;
-    const double uw = t.w[1] - t.w[0], vw = t.w[2] - t.w[0];
-    const double gx = (uw * vy - vw * uy) / det, gy = (ux * vw - vx * uw) / det;
+    // The gradient (two divisions) is computed at the first covered sample: most triangles of a
+    // dense mesh cover none.
+    double gx = 0, gy = 0;
+    bool havePlane = false;
     // Per edge: the factor that turns the canonical edge function into "positive = inside" (an
     // exact sign flip), and whether a sample exactly on the edge counts as inside (tie rule).
     double inward[3];
@@ -143,7 +145,6 @@ void rasterizeCenter(const RasterTriangle& t, bool perspective, int64_t width, i
         // CanonicalEdge::side, so shared edges still agree bit for bit.
         const double rowTerm[3] = {edges[0].dx * (sy - edges[0].ay), edges[1].dx * (sy - edges[1].ay),
                                    edges[2].dx * (sy - edges[2].ay)};
-        const double wRow = t.w[0] + gy * (sy - t.y[0]);
         for (int64_t x = xb; x <= xe; ++x) {
             const double sx = double(x) + 0.5;
             bool inside = true;
@@ -152,7 +153,13 @@ void rasterizeCenter(const RasterTriangle& t, bool perspective, int64_t width, i
                 inside &= (e > 0) | ((e == 0) & tieInside[k]);
             }
             if (!inside) continue;
-            const double w = wRow + gx * (sx - t.x[0]);
+            if (!havePlane) {
+                const double uw = t.w[1] - t.w[0], vw = t.w[2] - t.w[0];
+                gx = (uw * vy - vw * uy) / det;
+                gy = (ux * vw - vx * uw) / det;
+                havePlane = true;
+            }
+            const double w = t.w[0] + gy * (sy - t.y[0]) + gx * (sx - t.x[0]);
             sink.fragment(x, y, perspective ? 1.0 / w : w, t.index, t.front);
         }
     }
@@ -273,47 +280,102 @@ void rasterizeConservative(const RasterTriangle& t, bool perspective, int64_t wi
 
 namespace voxfx {
 
+namespace detail {
+
+/// Rasterizes one piece over rows [y0, y1) of the frame with the options' coverage rule.
+template <class Sink>
+void rasterizePiece(const RasterTriangle& rt, Coverage coverage, bool perspective, int64_t width,
+                    int64_t height, int64_t y0, int64_t y1, Sink& sink) {
+    int64_t first, last;
+    coveredRows(rt, coverage, height, first, last);
+    first = std::max(first, y0);
+    last = std::min(last, y1 - 1);
+    if (first > last) return;
+    if (coverage == Coverage::Center) {
+        if constexpr (requires { sink.fragment(int64_t(), int64_t(), 0.0, uint32_t(), true); })
+            rasterizeCenter(rt, perspective, width, first, last + 1, sink);
+    } else {
+        if constexpr (requires { sink.span(int64_t(), int64_t(), 0.0, 0.0, uint32_t()); })
+            rasterizeConservative(rt, perspective, width, first, last + 1, sink);
+    }
+}
+
+/// Whether rasterize() takes the direct path for a consumer that offers it: when triangles are
+/// small against the columns (more than one triangle per four columns), binning costs more than
+/// the atomic word writes it saves. Depends on the mesh and frame only, never on threads.
+inline bool preferDirect(std::size_t triangles, int64_t width, int64_t height) {
+    return int64_t(triangles) * 4 >= width * height;
+}
+
+} // namespace detail
+
 template <class Consumer>
 void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& options, Consumer& consumer) {
     const int64_t H = frame.height(), W = frame.width();
     const int64_t rowsPerTile =
         options.rowsPerTile > 0 ? options.rowsPerTile : std::max<int64_t>(1, (H + 63) / 64);
+    const int64_t tileCount = (H + rowsPerTile - 1) / rowsPerTile;
     const detail::RasterSetup setup = detail::prepareVertices(frame, mesh);
-    const detail::TileBins bins = detail::binTriangles(setup, options.coverage, rowsPerTile);
     const bool perspective = frame.isPerspective();
 
     std::atomic<bool> cancelled{false};
-    std::atomic<int64_t> tilesDone{0};
+    std::atomic<int64_t> done{0};
     std::mutex progressMutex;
+    auto report = [&](int64_t total) {
+        const int64_t d = ++done;
+        if (!options.progress) return;
+        std::lock_guard<std::mutex> lock(progressMutex);
+        if (!options.progress->update(double(d) / double(total))) cancelled = true;
+    };
+
+    if constexpr (requires {
+                      consumer.direct();
+                      consumer.finishRows(int64_t(), int64_t());
+                  }) {
+        if (options.path == RasterPath::Direct ||
+            (options.path == RasterPath::Auto && detail::preferDirect(mesh.triangleCount, W, H))) {
+            // Direct path: triangles in fixed chunks on any thread, writing through the
+            // consumer's atomic sink (commutative writes, so the bits do not depend on the order),
+            // then the per-row finishing pass. No binning, each triangle set up once.
+            constexpr int64_t kChunk = 4096;
+            const int64_t T = int64_t(mesh.triangleCount), chunks = (T + kChunk - 1) / kChunk;
+            const int64_t steps = chunks + tileCount;
+            parallelFor(0, chunks, 1, [&](int64_t cb, int64_t ce) {
+                auto sink = consumer.direct();
+                for (int64_t c = cb; c < ce; ++c) {
+                    if (cancelled.load(std::memory_order_relaxed)) return;
+                    for (int64_t t = c * kChunk, e = std::min(T, t + kChunk); t < e; ++t)
+                        setup.triangle(size_t(t), [&](const detail::RasterTriangle& rt) {
+                            detail::rasterizePiece(rt, options.coverage, perspective, W, H, 0, H, sink);
+                        });
+                    report(steps);
+                }
+            });
+            if (cancelled) fail("cancelled");
+            parallelFor(0, tileCount, 1, [&](int64_t tb, int64_t te) {
+                for (int64_t tile = tb; tile < te; ++tile) {
+                    if (cancelled.load(std::memory_order_relaxed)) return;
+                    consumer.finishRows(tile * rowsPerTile, std::min(H, (tile + 1) * rowsPerTile));
+                    report(steps);
+                }
+            });
+            if (cancelled) fail("cancelled");
+            return;
+        }
+    }
+
+    const detail::TileBins bins = detail::binTriangles(setup, options.coverage, rowsPerTile);
     parallelFor(0, bins.tileCount, 1, [&](int64_t tb, int64_t te) {
         for (int64_t tile = tb; tile < te; ++tile) {
             if (cancelled.load(std::memory_order_relaxed)) return;
             const int64_t y0 = tile * rowsPerTile, y1 = std::min(H, y0 + rowsPerTile);
             auto sink = consumer.tile(y0, y1);
-            for (int64_t i = bins.offsets[size_t(tile)]; i < bins.offsets[size_t(tile) + 1]; ++i) {
+            for (int64_t i = bins.offsets[size_t(tile)]; i < bins.offsets[size_t(tile) + 1]; ++i)
                 setup.triangle(bins.entries[size_t(i)], [&](const detail::RasterTriangle& rt) {
-                    int64_t first, last;
-                    detail::coveredRows(rt, options.coverage, H, first, last);
-                    first = std::max(first, y0);
-                    last = std::min(last, y1 - 1);
-                    if (first > last) return;
-                    if (options.coverage == Coverage::Center) {
-                        if constexpr (requires {
-                                          sink.fragment(int64_t(), int64_t(), 0.0, uint32_t(), true);
-                                      })
-                            detail::rasterizeCenter(rt, perspective, W, first, last + 1, sink);
-                    } else {
-                        if constexpr (requires { sink.span(int64_t(), int64_t(), 0.0, 0.0, uint32_t()); })
-                            detail::rasterizeConservative(rt, perspective, W, first, last + 1, sink);
-                    }
+                    detail::rasterizePiece(rt, options.coverage, perspective, W, H, y0, y1, sink);
                 });
-            }
             sink.finish();
-            const int64_t done = ++tilesDone;
-            if (options.progress) {
-                std::lock_guard<std::mutex> lock(progressMutex);
-                if (!options.progress->update(double(done) / double(bins.tileCount))) cancelled = true;
-            }
+            report(bins.tileCount);
         }
     });
     if (cancelled) fail("cancelled");

@@ -33,6 +33,7 @@
 
 #include "voxfx/mesh.hpp"
 #include "voxfx/parallel.hpp"
+#include "voxfx/raster.hpp"
 #include "voxfx/voxel_grid.hpp"
 
 namespace voxfx {
@@ -60,6 +61,8 @@ struct VoxelizeOptions {
     int threads = 0;
     /// Polled between tiles; may cancel. Not owned.
     Progress* progress = nullptr;
+    /// The rasterizer's parallel scheme (binned tiles or direct atomic writes); same result.
+    RasterPath rasterPath = RasterPath::Auto;
 };
 
 /// How to fit an orthographic frame to a mesh. Cells are cubes unless `dims` is given.
@@ -89,5 +92,15 @@ Frame fitFrame(const Box3d& meshBounds, const FitOptions& options);
 /// Triangles outside the frame are ignored; for parity, geometry in front of the near plane
 /// still counts (depth clamping, GI08 §4). Cost: O(triangles + fragments + cells / 64).
 VoxelGrid voxelize(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options = {});
+
+/// True for the extensions readGrid reads (.binvox .vdb .nrrd, any case).
+bool isGridFile(const std::string& path);
+
+/// For tools that accept "a grid or a mesh": a grid file (isGridFile) is read with readGrid;
+/// any other file is loaded as a mesh, fitted with `fit` and voxelized with `options`. For the
+/// inside modes, Fill::Parity is replaced by Fill::Flood when the mesh is not closed, and `note`,
+/// if given, then receives a one-line explanation (else it is cleared). Throws voxfx::Error.
+VoxelGrid loadOrVoxelize(const std::string& path, const FitOptions& fit, const VoxelizeOptions& options = {},
+                         std::string* note = nullptr);
 
 } // namespace voxfx

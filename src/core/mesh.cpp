@@ -189,6 +189,20 @@ void validateMesh(const MeshView& mesh, const std::string& source) {
         fail(source, ": mesh has ", mesh.vertexCount, " vertices but no position array");
     if (mesh.positionStride < 3 * sizeof(float))
         fail(source, ": position stride ", mesh.positionStride, " bytes is smaller than 3 floats");
+    // Fast path: one linear pass over the indices (a max reduction) and one over the vertices;
+    // the per-triangle loop below only runs to name the first offender.
+    uint32_t maxIndex = 0;
+    for (std::size_t i = 0; i < 3 * mesh.triangleCount; ++i) maxIndex = std::max(maxIndex, mesh.indices[i]);
+    bool finite = true;
+    for (std::size_t v = 0; v < mesh.vertexCount; ++v) {
+        const float* p = vertexPtr(mesh, v);
+        for (int c = 0; c < 3; ++c) {
+            uint32_t bits;
+            std::memcpy(&bits, p + c, sizeof bits);
+            finite &= (bits & 0x7f800000u) != 0x7f800000u;
+        }
+    }
+    if (finite && (mesh.triangleCount == 0 || maxIndex < mesh.vertexCount)) return;
     for (std::size_t t = 0; t < mesh.triangleCount; ++t) {
         for (int c = 0; c < 3; ++c) {
             const uint32_t v = mesh.indices[3 * t + c];

@@ -7,10 +7,14 @@
 //   WindingConsumer       nonzero winding from signed (front +1 / back -1) crossings, sorted per
 //                         column: the union of overlapping closed parts.
 //   DepthRangeConsumer    ED06 fig. 2 first pass: nearest and farthest fragment per column.
-// Each tile consumer writes only the columns of its own rows, so tiles run in parallel.
+// Each tile consumer writes only the columns of its own rows, so tiles run in parallel. The
+// surface, conservative and parity consumers also offer the rasterizer's direct path (see
+// raster.hpp): their writes are ORs and XORs, which commute, so the same bits result when any
+// thread writes any column with atomic word operations in any order.
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -32,59 +36,31 @@ inline int64_t firstSliceBehind(double t, int64_t D) {
     return std::min<int64_t>(D, int64_t(std::floor(u)) + 1);
 }
 
-/// Sets slices [s0, s1] (inclusive, within [0, D)) of a column.
-inline void setSliceRange(uint64_t* column, int64_t s0, int64_t s1) {
-    const int64_t w0 = s0 >> 6, w1 = s1 >> 6;
-    if (w0 == w1) {
-        column[w0] |= bitRange(int(s0 & 63), int(s1 & 63) + 1);
-        return;
-    }
-    column[w0] |= bitRange(int(s0 & 63), 64);
-    for (int64_t w = w0 + 1; w < w1; ++w) column[w] = ~uint64_t(0);
-    column[w1] |= bitRange(0, int(s1 & 63) + 1);
+/// One word write: plain when the calling tile owns the column, atomic on the direct path.
+template <bool Atomic> inline void orWord(uint64_t& word, uint64_t bits) {
+    if constexpr (Atomic)
+        std::atomic_ref<uint64_t>(word).fetch_or(bits, std::memory_order_relaxed);
+    else
+        word |= bits;
+}
+template <bool Atomic> inline void xorWord(uint64_t& word, uint64_t bits) {
+    if constexpr (Atomic)
+        std::atomic_ref<uint64_t>(word).fetch_xor(bits, std::memory_order_relaxed);
+    else
+        word ^= bits;
 }
 
-struct SurfaceConsumer {
-    const Frame& frame;
-    BitGrid& grid;
-    struct Tile {
-        const Frame& frame;
-        BitGrid& grid;
-        void fragment(int64_t x, int64_t y, double depth, uint32_t, bool) {
-            const int64_t c = y * grid.width() + x;
-            const double t = frame.depthToSlice(c)(depth);
-            const int64_t D = grid.depth();
-            if (!(t >= 0 && t <= double(D))) return; // outside near/far: clipped, as on the GPU
-            const int64_t s = std::min<int64_t>(int64_t(t), D - 1);
-            grid.column(c)[s >> 6] |= uint64_t(1) << (s & 63);
-        }
-        void finish() {}
-    };
-    Tile tile(int64_t, int64_t) { return {frame, grid}; }
-};
-
-struct ConservativeConsumer {
-    const Frame& frame;
-    BitGrid& grid;
-    struct Tile {
-        const Frame& frame;
-        BitGrid& grid;
-        void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t) {
-            const int64_t c = y * grid.width() + x;
-            const DepthToSlice m = frame.depthToSlice(c);
-            // Slack as in the rasterizer: a depth exactly on a slice boundary keeps both cells.
-            const double t0 = m(depthMin) - kConservativeSlack, t1 = m(depthMax) + kConservativeSlack;
-            const int64_t D = grid.depth();
-            if (!(t1 >= 0 && t0 <= double(D))) return;
-            // Cells [s, s+1] meeting [t0, t1]: s from ceil(t0) - 1 to floor(t1).
-            const int64_t s0 = std::max<int64_t>(0, int64_t(std::ceil(std::max(t0, -1.0))) - 1);
-            const int64_t s1 = std::min<int64_t>(D - 1, int64_t(std::floor(std::min(t1, double(D)))));
-            if (s0 <= s1) setSliceRange(grid.column(c), s0, s1);
-        }
-        void finish() {}
-    };
-    Tile tile(int64_t, int64_t) { return {frame, grid}; }
-};
+/// Sets slices [s0, s1] (inclusive, within [0, D)) of a column.
+template <bool Atomic = false> inline void setSliceRange(uint64_t* column, int64_t s0, int64_t s1) {
+    const int64_t w0 = s0 >> 6, w1 = s1 >> 6;
+    if (w0 == w1) {
+        orWord<Atomic>(column[w0], bitRange(int(s0 & 63), int(s1 & 63) + 1));
+        return;
+    }
+    orWord<Atomic>(column[w0], bitRange(int(s0 & 63), 64));
+    for (int64_t w = w0 + 1; w < w1; ++w) orWord<Atomic>(column[w], ~uint64_t(0));
+    orWord<Atomic>(column[w1], bitRange(0, int(s1 & 63) + 1));
+}
 
 /// Prefix-XOR every column of rows [y0, y1): bit s becomes the XOR of bits 0..s of the column.
 inline void prefixXorRows(BitGrid& grid, int64_t y0, int64_t y1) {
@@ -102,21 +78,71 @@ inline void prefixXorRows(BitGrid& grid, int64_t y0, int64_t y1) {
     }
 }
 
+struct SurfaceConsumer {
+    const Frame& frame;
+    BitGrid& grid;
+    template <bool Atomic> struct Sink {
+        const Frame& frame;
+        BitGrid& grid;
+        void fragment(int64_t x, int64_t y, double depth, uint32_t, bool) {
+            const int64_t c = y * grid.width() + x;
+            const double t = frame.depthToSlice(c)(depth);
+            const int64_t D = grid.depth();
+            if (!(t >= 0 && t <= double(D))) return; // outside near/far: clipped, as on the GPU
+            const int64_t s = std::min<int64_t>(int64_t(t), D - 1);
+            orWord<Atomic>(grid.column(c)[s >> 6], uint64_t(1) << (s & 63));
+        }
+        void finish() {}
+    };
+    Sink<false> tile(int64_t, int64_t) { return {frame, grid}; }
+    Sink<true> direct() { return {frame, grid}; }
+    void finishRows(int64_t, int64_t) {}
+};
+
+struct ConservativeConsumer {
+    const Frame& frame;
+    BitGrid& grid;
+    template <bool Atomic> struct Sink {
+        const Frame& frame;
+        BitGrid& grid;
+        void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t) {
+            const int64_t c = y * grid.width() + x;
+            const DepthToSlice m = frame.depthToSlice(c);
+            // Slack as in the rasterizer: a depth exactly on a slice boundary keeps both cells.
+            const double t0 = m(depthMin) - kConservativeSlack, t1 = m(depthMax) + kConservativeSlack;
+            const int64_t D = grid.depth();
+            if (!(t1 >= 0 && t0 <= double(D))) return;
+            // Cells [s, s+1] meeting [t0, t1]: s from ceil(t0) - 1 to floor(t1).
+            const int64_t s0 = std::max<int64_t>(0, int64_t(std::ceil(std::max(t0, -1.0))) - 1);
+            const int64_t s1 = std::min<int64_t>(D - 1, int64_t(std::floor(std::min(t1, double(D)))));
+            if (s0 <= s1) setSliceRange<Atomic>(grid.column(c), s0, s1);
+        }
+        void finish() {}
+    };
+    Sink<false> tile(int64_t, int64_t) { return {frame, grid}; }
+    Sink<true> direct() { return {frame, grid}; }
+    void finishRows(int64_t, int64_t) {}
+};
+
 struct ParityConsumer {
     const Frame& frame;
     BitGrid& grid;
-    struct Tile {
+    template <bool Atomic> struct Sink {
         const Frame& frame;
         BitGrid& grid;
         int64_t y0, y1;
         void fragment(int64_t x, int64_t y, double depth, uint32_t, bool) {
             const int64_t c = y * grid.width() + x;
             const int64_t s = firstSliceBehind(frame.depthToSlice(c)(depth), grid.depth());
-            if (s < grid.depth()) grid.column(c)[s >> 6] ^= uint64_t(1) << (s & 63);
+            if (s < grid.depth()) xorWord<Atomic>(grid.column(c)[s >> 6], uint64_t(1) << (s & 63));
         }
-        void finish() { prefixXorRows(grid, y0, y1); }
+        void finish() {
+            if constexpr (!Atomic) prefixXorRows(grid, y0, y1);
+        }
     };
-    Tile tile(int64_t y0, int64_t y1) { return {frame, grid, y0, y1}; }
+    Sink<false> tile(int64_t y0, int64_t y1) { return {frame, grid, y0, y1}; }
+    Sink<true> direct() { return {frame, grid, 0, 0}; }
+    void finishRows(int64_t y0, int64_t y1) { prefixXorRows(grid, y0, y1); }
 };
 
 struct WindingConsumer {

@@ -2,11 +2,16 @@
 // interior variants (GI08 §5), robust fills for open meshes, and frame fitting.
 #include "voxfx/voxelize.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 
 #include "voxelize/consumers.hpp"
 #include "voxelize/fill.hpp"
+#include "voxfx/grid_io.hpp"
+#include "voxfx/mesh_io.hpp"
 #include "voxfx/raster.hpp"
 
 namespace voxfx {
@@ -29,6 +34,7 @@ BitGrid rasterizeInto(const Frame& frame, const MeshView& mesh, VoxelizeMode kin
     BitGrid grid(frame.width(), frame.height(), frame.depth());
     RasterOptions ro;
     ro.progress = o.progress;
+    ro.path = o.rasterPath;
     switch (kind) {
     case VoxelizeMode::Surface: {
         detail::SurfaceConsumer c{frame, grid};
@@ -57,6 +63,7 @@ BitGrid fillInside(const Frame& frame, const MeshView& mesh, const VoxelizeOptio
                    const BitGrid* surface) {
     RasterOptions ro;
     ro.progress = o.progress;
+    ro.path = o.rasterPath;
     switch (o.fill) {
     case Fill::Parity: {
         BitGrid grid(frame.width(), frame.height(), frame.depth());
@@ -261,6 +268,33 @@ VoxelGrid voxelize(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
     VoxelGrid result;
     withThreads(options.threads, [&] { result = voxelizeImpl(mesh, frame, options); });
     return result;
+}
+
+bool isGridFile(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    return ext == ".binvox" || ext == ".vdb" || ext == ".nrrd";
+}
+
+VoxelGrid loadOrVoxelize(const std::string& path, const FitOptions& fit, const VoxelizeOptions& options,
+                         std::string* note) {
+    if (note) note->clear();
+    if (isGridFile(path)) return readGrid(path);
+    const Mesh mesh = loadMesh(path);
+    VoxelizeOptions vo = options;
+    const bool needsInside = vo.mode == VoxelizeMode::Solid || vo.mode == VoxelizeMode::SolidConservative ||
+                             vo.mode == VoxelizeMode::Interior;
+    if (needsInside && vo.fill == Fill::Parity) {
+        const MeshTopology topo = analyzeTopology(mesh.view());
+        if (!topo.closed()) {
+            vo.fill = Fill::Flood;
+            if (note)
+                *note = detail::concat(path, " is not closed (", topo.boundaryEdges, " boundary, ",
+                                       topo.nonManifoldEdges, " non-manifold edges): filled by flood");
+        }
+    }
+    return voxelize(mesh.view(), fitFrame(computeBounds(mesh.view()), fit), vo);
 }
 
 } // namespace voxfx
