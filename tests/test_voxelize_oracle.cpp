@@ -15,6 +15,7 @@
 
 #include "cgal_oracle.hpp"
 #include "test_util.hpp"
+#include "voxelize/fill.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/voxelize.hpp"
 
@@ -399,6 +400,26 @@ TEST(VoxelizeOracleTest, SolidIsTheSameForEverySlicingAxisOfAClosedMesh) {
 }
 
 // --- Fills -----------------------------------------------------------------------------------
+
+TEST(VoxelizeOracleTest, FloodFillOfRandomWallsEqualsBorderSearch) {
+    // Random walls near the percolation threshold make mazes of pockets and winding channels;
+    // depths of 1, 63, 64, 65 and 130 cells cover one and several column words. Oracle: a
+    // voxel-by-voxel breadth-first search from the border.
+    int64_t seed = 1;
+    for (const Vec3i dims : {Vec3i{37, 29, 130}, Vec3i{5, 3, 64}, Vec3i{16, 17, 65}, Vec3i{9, 40, 63},
+                             Vec3i{12, 12, 1}, Vec3i{1, 7, 9}})
+        for (double density : {0.2, 0.3, 0.45}) {
+            SCOPED_TRACE(std::to_string(dims.x) + "x" + std::to_string(dims.y) + "x" +
+                         std::to_string(dims.z) + " density " + std::to_string(density));
+            const VoxelGrid walls =
+                test::randomVoxelGrid({{0, 0, 0}, {double(dims.x), double(dims.y), double(dims.z)}}, Axis::Z,
+                                      dims, density, uint64_t(seed++));
+            const VoxelGrid filled{walls.frame, detail::floodFillInside(walls.bits)};
+            const WorldGrid expected = test::floodFromBorder(toWorldGrid(walls));
+            EXPECT_TRUE(sameCells(toWorldGrid(filled), expected));
+            EXPECT_GE(expected.count(), toWorldGrid(walls).count());
+        }
+}
 
 TEST(VoxelizeOracleTest, FloodEqualsBorderSearchAndSolidConservativeOnClosedMeshes) {
     // Flood = its walls (the conservative surface, checked against CGAL) plus what a

@@ -1,6 +1,7 @@
 // voxfx — flood fill of the outside (robust fill for open meshes) and three-axis parity vote.
 #include "voxelize/fill.hpp"
 
+#include <algorithm>
 #include <deque>
 #include <vector>
 
@@ -10,15 +11,6 @@
 namespace voxfx::detail {
 
 namespace {
-
-uint64_t reverseBits(uint64_t x) {
-    x = ((x >> 1) & 0x5555555555555555ull) | ((x & 0x5555555555555555ull) << 1);
-    x = ((x >> 2) & 0x3333333333333333ull) | ((x & 0x3333333333333333ull) << 2);
-    x = ((x >> 4) & 0x0F0F0F0F0F0F0F0Full) | ((x & 0x0F0F0F0F0F0F0F0Full) << 4);
-    x = ((x >> 8) & 0x00FF00FF00FF00FFull) | ((x & 0x00FF00FF00FF00FFull) << 8);
-    x = ((x >> 16) & 0x0000FFFF0000FFFFull) | ((x & 0x0000FFFF0000FFFFull) << 16);
-    return (x >> 32) | (x << 32);
-}
 
 // Grows seeds upward (towards higher slices) to the end of their runs of free bits, across words:
 //   free  = 0 1 1 1 0 1 1   (bit 6 ... bit 0)
@@ -36,16 +28,28 @@ void fillUp(const uint64_t* freeBits, uint64_t* seeds, int64_t words) {
     }
 }
 
-// Grows seeds both ways along the column.
-void fillRuns(const uint64_t* freeBits, uint64_t* seeds, int64_t words, uint64_t* scratchFree,
-              uint64_t* scratchSeeds) {
-    fillUp(freeBits, seeds, words);
-    for (int64_t w = 0; w < words; ++w) {
-        scratchFree[w] = reverseBits(freeBits[words - 1 - w]);
-        scratchSeeds[w] = reverseBits(seeds[words - 1 - w]);
+// Grows seeds downward (towards lower slices) through runs of free bits: a Kogge–Stone smear
+// inside each word (six shift steps, p = "free for the next 2^k bits"), words from the top down,
+// the lowest bit of a word seeding the top bit of the word below.
+void fillDown(const uint64_t* freeBits, uint64_t* seeds, int64_t words) {
+    uint64_t carry = 0;
+    for (int64_t w = words - 1; w >= 0; --w) {
+        uint64_t p = freeBits[w];
+        uint64_t g = (seeds[w] | (carry << 63)) & p;
+        g |= p & (g >> 1);
+        p &= p >> 1;
+        g |= p & (g >> 2);
+        p &= p >> 2;
+        g |= p & (g >> 4);
+        p &= p >> 4;
+        g |= p & (g >> 8);
+        p &= p >> 8;
+        g |= p & (g >> 16);
+        p &= p >> 16;
+        g |= p & (g >> 32);
+        seeds[w] = g;
+        carry = g & 1;
     }
-    fillUp(scratchFree, scratchSeeds, words);
-    for (int64_t w = 0; w < words; ++w) seeds[w] = reverseBits(scratchSeeds[words - 1 - w]);
 }
 
 } // namespace
@@ -55,8 +59,10 @@ BitGrid floodFillInside(const BitGrid& walls) {
     const uint64_t last = walls.lastWordMask();
     BitGrid outside(W, H, D);
     const auto words = static_cast<size_t>(P);
-    std::vector<uint64_t> freeCol(words), seed(words), sf(words), ss(words);
-    std::vector<uint8_t> queued(size_t(W * H), 1);
+    std::vector<uint64_t> freeCol(words), seed(words);
+    // A column is saturated once every free cell of it is outside: nothing can grow it again,
+    // so it is neither processed nor queued any more (most columns of a grid are empty).
+    std::vector<uint8_t> queued(size_t(W * H), 1), saturated(size_t(W * H), 0);
     std::deque<int64_t> work;
     for (int64_t c = 0; c < W * H; ++c) work.push_back(c);
 
@@ -64,36 +70,46 @@ BitGrid floodFillInside(const BitGrid& walls) {
         const int64_t c = work.front();
         work.pop_front();
         queued[size_t(c)] = 0;
+        if (saturated[size_t(c)]) continue;
         const int64_t x = c % W, y = c / W;
         const bool border = x == 0 || y == 0 || x == W - 1 || y == H - 1;
         const uint64_t* wall = walls.column(c);
         uint64_t* out = outside.column(c);
-        const uint64_t* nb[4] = {
-            x > 0 ? outside.column(c - 1) : nullptr, x + 1 < W ? outside.column(c + 1) : nullptr,
-            y > 0 ? outside.column(c - W) : nullptr, y + 1 < H ? outside.column(c + W) : nullptr};
+        uint64_t anyWall = 0;
         for (int64_t w = 0; w < P; ++w) {
-            freeCol[size_t(w)] = ~wall[w] & (w == P - 1 ? last : ~uint64_t(0));
-            uint64_t s = out[w];
-            if (border) s |= ~uint64_t(0);
-            for (const uint64_t* n : nb)
-                if (n) s |= n[w];
-            seed[size_t(w)] = s & freeCol[size_t(w)];
+            freeCol[size_t(w)] = ~wall[w];
+            anyWall |= wall[w];
         }
-        // Cells at the near and far ends of the column touch the grid border too.
-        seed[0] |= freeCol[0] & 1u;
-        seed[size_t(P - 1)] |= freeCol[size_t(P - 1)] & (uint64_t(1) << ((D - 1) & 63));
-        fillRuns(freeCol.data(), seed.data(), P, sf.data(), ss.data());
-        bool grew = false;
-        for (int64_t w = 0; w < P; ++w)
+        freeCol[size_t(P - 1)] &= last;
+        if (border || anyWall == 0) {
+            // Every cell of a border column touches the grid border, and so do both ends of every
+            // column: a column on the border or without walls is outside wherever it is free.
+            std::copy(freeCol.begin(), freeCol.end(), seed.begin());
+        } else {
+            const uint64_t *n0 = outside.column(c - 1), *n1 = outside.column(c + 1),
+                           *n2 = outside.column(c - W), *n3 = outside.column(c + W);
+            for (int64_t w = 0; w < P; ++w)
+                seed[size_t(w)] = (out[w] | n0[w] | n1[w] | n2[w] | n3[w]) & freeCol[size_t(w)];
+            // Cells at the near and far ends of the column touch the grid border too.
+            seed[0] |= freeCol[0] & 1u;
+            seed[size_t(P - 1)] |= freeCol[size_t(P - 1)] & (uint64_t(1) << ((D - 1) & 63));
+            fillUp(freeCol.data(), seed.data(), P);
+            fillDown(freeCol.data(), seed.data(), P);
+        }
+        bool grew = false, full = true;
+        for (int64_t w = 0; w < P; ++w) {
             if (seed[size_t(w)] != out[w]) {
                 grew = true;
                 out[w] = seed[size_t(w)];
             }
+            full &= seed[size_t(w)] == freeCol[size_t(w)];
+        }
+        saturated[size_t(c)] = full;
         if (!grew) continue;
         const int64_t neighbours[4] = {x > 0 ? c - 1 : -1, x + 1 < W ? c + 1 : -1, y > 0 ? c - W : -1,
                                        y + 1 < H ? c + W : -1};
         for (int64_t n : neighbours)
-            if (n >= 0 && !queued[size_t(n)]) {
+            if (n >= 0 && !queued[size_t(n)] && !saturated[size_t(n)]) {
                 queued[size_t(n)] = 1;
                 work.push_back(n);
             }
