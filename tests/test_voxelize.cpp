@@ -138,6 +138,15 @@ TEST(VoxelizeTest, ResultsAreIdenticalForAnyThreadCountAndRasterPath) {
                     << toString(mode) << " threads " << threads << " path " << int(path);
             }
     }
+    // The flood fill works on bands of rows in parallel and settles the seams between them.
+    VoxelizeOptions o;
+    o.fill = Fill::Flood;
+    o.threads = 1;
+    const VoxelGrid one = voxelize(torus.view(), f, o);
+    for (int threads : {2, 3, 8}) {
+        o.threads = threads;
+        EXPECT_EQ(voxelize(torus.view(), f, o).bits, one.bits) << "flood, threads " << threads;
+    }
 }
 
 TEST(VoxelizeTest, SurfaceIsFaithfulToEd06AndLeavesHolesOnSteepTriangles) {

@@ -54,66 +54,164 @@ void fillDown(const uint64_t* freeBits, uint64_t* seeds, int64_t words) {
 
 } // namespace
 
-BitGrid floodFillInside(const BitGrid& walls) {
-    const int64_t W = walls.width(), H = walls.height(), D = walls.depth(), P = walls.wordsPerColumn();
-    const uint64_t last = walls.lastWordMask();
-    BitGrid outside(W, H, D);
-    const auto words = static_cast<size_t>(P);
-    std::vector<uint64_t> freeCol(words), seed(words);
-    // A column is saturated once every free cell of it is outside: nothing can grow it again,
-    // so it is neither processed nor queued any more (most columns of a grid are empty).
-    std::vector<uint8_t> queued(size_t(W * H), 1), saturated(size_t(W * H), 0);
-    std::deque<int64_t> work;
-    for (int64_t c = 0; c < W * H; ++c) work.push_back(c);
+namespace {
 
-    while (!work.empty()) {
-        const int64_t c = work.front();
-        work.pop_front();
-        queued[size_t(c)] = 0;
-        if (saturated[size_t(c)]) continue;
-        const int64_t x = c % W, y = c / W;
-        const bool border = x == 0 || y == 0 || x == W - 1 || y == H - 1;
-        const uint64_t* wall = walls.column(c);
-        uint64_t* out = outside.column(c);
-        uint64_t anyWall = 0;
-        for (int64_t w = 0; w < P; ++w) {
-            freeCol[size_t(w)] = ~wall[w];
+// The outside flood: a column worklist per band of rows. Bands run in parallel and only read
+// columns of their own rows; between rounds a serial pass over the seams between bands lets the
+// outside cross them. The outside is the unique fixpoint, so the result does not depend on the
+// order of work or the number of threads.
+class Flood {
+public:
+    explicit Flood(const BitGrid& walls)
+        : walls_(walls), outside_(walls.width(), walls.height(), walls.depth()), W_(walls.width()),
+          H_(walls.height()), D_(walls.depth()), P_(walls.wordsPerColumn()), last_(walls.lastWordMask()),
+          zero_(size_t(P_), 0), queued_(size_t(W_ * H_), 1), saturated_(size_t(W_ * H_), 0) {
+        // Fixed bands (never from the thread count): at least 8 rows, at most 32 bands.
+        bandRows_ = std::max<int64_t>(8, (H_ + 31) / 32);
+        bands_ = (H_ + bandRows_ - 1) / bandRows_;
+        queues_.resize(size_t(bands_));
+        for (int64_t c = 0; c < W_ * H_; ++c) queues_[size_t(band(c / W_))].push_back(c);
+    }
+
+    BitGrid run() {
+        for (;;) {
+            parallelFor(0, bands_, 1, [&](int64_t b0, int64_t b1) {
+                Scratch s(P_);
+                for (int64_t b = b0; b < b1; ++b) drain(b, s);
+            });
+            if (!crossSeams()) break;
+        }
+        return std::move(outside_);
+    }
+
+private:
+    struct Scratch {
+        explicit Scratch(int64_t words) : freeCol(size_t(words)), seed(size_t(words)) {}
+        std::vector<uint64_t> freeCol, seed;
+    };
+
+    int64_t band(int64_t y) const { return y / bandRows_; }
+
+    void freeCells(int64_t c, Scratch& s, uint64_t& anyWall) const {
+        const uint64_t* wall = walls_.column(c);
+        anyWall = 0;
+        for (int64_t w = 0; w < P_; ++w) {
+            s.freeCol[size_t(w)] = ~wall[w];
             anyWall |= wall[w];
         }
-        freeCol[size_t(P - 1)] &= last;
-        if (border || anyWall == 0) {
-            // Every cell of a border column touches the grid border, and so do both ends of every
-            // column: a column on the border or without walls is outside wherever it is free.
-            std::copy(freeCol.begin(), freeCol.end(), seed.begin());
-        } else {
-            const uint64_t *n0 = outside.column(c - 1), *n1 = outside.column(c + 1),
-                           *n2 = outside.column(c - W), *n3 = outside.column(c + W);
-            for (int64_t w = 0; w < P; ++w)
-                seed[size_t(w)] = (out[w] | n0[w] | n1[w] | n2[w] | n3[w]) & freeCol[size_t(w)];
+        s.freeCol[size_t(P_ - 1)] &= last_;
+    }
+
+    // Runs the seeds in s.seed through the free runs of the column, stores them, and says whether
+    // the column grew (and whether it is now saturated: every free cell outside).
+    bool store(int64_t c, Scratch& s, bool spread) {
+        if (spread) {
             // Cells at the near and far ends of the column touch the grid border too.
-            seed[0] |= freeCol[0] & 1u;
-            seed[size_t(P - 1)] |= freeCol[size_t(P - 1)] & (uint64_t(1) << ((D - 1) & 63));
-            fillUp(freeCol.data(), seed.data(), P);
-            fillDown(freeCol.data(), seed.data(), P);
+            s.seed[0] |= s.freeCol[0] & 1u;
+            s.seed[size_t(P_ - 1)] |= s.freeCol[size_t(P_ - 1)] & (uint64_t(1) << ((D_ - 1) & 63));
+            fillUp(s.freeCol.data(), s.seed.data(), P_);
+            fillDown(s.freeCol.data(), s.seed.data(), P_);
         }
+        uint64_t* out = outside_.column(c);
         bool grew = false, full = true;
-        for (int64_t w = 0; w < P; ++w) {
-            if (seed[size_t(w)] != out[w]) {
+        for (int64_t w = 0; w < P_; ++w) {
+            if (s.seed[size_t(w)] != out[w]) {
                 grew = true;
-                out[w] = seed[size_t(w)];
+                out[w] = s.seed[size_t(w)];
             }
-            full &= seed[size_t(w)] == freeCol[size_t(w)];
+            full &= s.seed[size_t(w)] == s.freeCol[size_t(w)];
         }
-        saturated[size_t(c)] = full;
-        if (!grew) continue;
-        const int64_t neighbours[4] = {x > 0 ? c - 1 : -1, x + 1 < W ? c + 1 : -1, y > 0 ? c - W : -1,
-                                       y + 1 < H ? c + W : -1};
-        for (int64_t n : neighbours)
-            if (n >= 0 && !queued[size_t(n)] && !saturated[size_t(n)]) {
-                queued[size_t(n)] = 1;
-                work.push_back(n);
+        saturated_[size_t(c)] = full;
+        return grew;
+    }
+
+    // Queues the neighbours of c inside rows [yLo, yHi) that can still grow.
+    void queueNeighbours(int64_t c, int64_t yLo, int64_t yHi, std::deque<int64_t>& q) {
+        const int64_t x = c % W_, y = c / W_;
+        const int64_t n[4] = {x > 0 ? c - 1 : -1, x + 1 < W_ ? c + 1 : -1, y > yLo ? c - W_ : -1,
+                              y + 1 < yHi ? c + W_ : -1};
+        for (int64_t k : n)
+            if (k >= 0 && !queued_[size_t(k)] && !saturated_[size_t(k)]) {
+                queued_[size_t(k)] = 1;
+                q.push_back(k);
             }
     }
+
+    void drain(int64_t b, Scratch& s) {
+        const int64_t yLo = b * bandRows_, yHi = std::min(H_, yLo + bandRows_);
+        std::deque<int64_t>& q = queues_[size_t(b)];
+        while (!q.empty()) {
+            const int64_t c = q.front();
+            q.pop_front();
+            queued_[size_t(c)] = 0;
+            if (saturated_[size_t(c)]) continue;
+            const int64_t x = c % W_, y = c / W_;
+            uint64_t anyWall;
+            freeCells(c, s, anyWall);
+            const bool spread = !(x == 0 || y == 0 || x == W_ - 1 || y == H_ - 1 || anyWall == 0);
+            if (!spread) {
+                // Every cell of a border column touches the grid border, and so do both ends of
+                // every column: a column on the border or without walls is outside where free.
+                std::copy(s.freeCol.begin(), s.freeCol.end(), s.seed.begin());
+            } else {
+                const uint64_t* out = outside_.column(c);
+                const uint64_t *n0 = outside_.column(c - 1), *n1 = outside_.column(c + 1);
+                const uint64_t* n2 = y > yLo ? outside_.column(c - W_) : zero_.data();
+                const uint64_t* n3 = y + 1 < yHi ? outside_.column(c + W_) : zero_.data();
+                for (int64_t w = 0; w < P_; ++w)
+                    s.seed[size_t(w)] = (out[w] | n0[w] | n1[w] | n2[w] | n3[w]) & s.freeCol[size_t(w)];
+            }
+            if (store(c, s, spread)) queueNeighbours(c, yLo, yHi, q);
+        }
+    }
+
+    // Lets the outside cross every seam between bands, both ways; queues what grew. Serial.
+    bool crossSeams() {
+        bool changed = false;
+        Scratch s(P_);
+        for (int64_t b = 1; b < bands_; ++b) {
+            const int64_t yBelow = b * bandRows_; // first row of band b; row yBelow - 1 is band b - 1
+            for (int64_t x = 0; x < W_; ++x) {
+                const int64_t pairs[2][2] = {{yBelow * W_ + x, (yBelow - 1) * W_ + x},
+                                             {(yBelow - 1) * W_ + x, yBelow * W_ + x}};
+                for (const auto& [c, other] : pairs) {
+                    if (saturated_[size_t(c)]) continue;
+                    uint64_t anyWall;
+                    freeCells(c, s, anyWall);
+                    const uint64_t *out = outside_.column(c), *o = outside_.column(other);
+                    uint64_t news = 0;
+                    for (int64_t w = 0; w < P_; ++w) {
+                        s.seed[size_t(w)] = (out[w] | o[w]) & s.freeCol[size_t(w)];
+                        news |= s.seed[size_t(w)] & ~out[w];
+                    }
+                    if (news == 0) continue;
+                    store(c, s, true);
+                    changed = true;
+                    const int64_t bc = band(c / W_);
+                    queueNeighbours(c, bc * bandRows_, std::min(H_, (bc + 1) * bandRows_),
+                                    queues_[size_t(bc)]);
+                }
+            }
+        }
+        return changed;
+    }
+
+    const BitGrid& walls_;
+    BitGrid outside_;
+    int64_t W_, H_, D_, P_;
+    uint64_t last_;
+    std::vector<uint64_t> zero_;
+    std::vector<uint8_t> queued_, saturated_;
+    int64_t bandRows_ = 1, bands_ = 1;
+    std::vector<std::deque<int64_t>> queues_;
+};
+
+} // namespace
+
+BitGrid floodFillInside(const BitGrid& walls) {
+    const int64_t W = walls.width(), H = walls.height(), P = walls.wordsPerColumn();
+    const uint64_t last = walls.lastWordMask();
+    BitGrid outside = Flood(walls).run();
     // Inside (with walls) = not outside.
     uint64_t* o = outside.words();
     parallelFor(0, W * H, 4096, [&](int64_t b, int64_t e) {
