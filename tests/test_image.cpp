@@ -1,6 +1,13 @@
-// Tests of src/io/image.cpp: PNG round trips with the sRGB curve, PFM layout, errors.
+// Tests of src/io/image.cpp: PNG round trips with the sRGB curve, PFM layout, EXR read back with
+// plain OpenEXR, errors.
+#include <cmath>
+#include <filesystem>
 #include <fstream>
 
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
 #include <gtest/gtest.h>
 
 #include "test_util.hpp"
@@ -63,6 +70,87 @@ TEST(ImageTest, BadFilesRaiseErrorsNamingThePath) {
         FAIL();
     } catch (const Error& e) { EXPECT_NE(std::string(e.what()).find("fake.png"), std::string::npos); }
     EXPECT_THROW(writePng(Image(2, 2), dir.file("no/such/dir/x.png")), Error);
+}
+
+// Reads R, G, B of an EXR file as 32-bit floats with OpenEXR's general InputFile interface (not
+// the Rgba interface the writer uses), row 0 at the top of the data window.
+Image readExrWithOpenExr(const std::string& path, Imf::PixelType* storedType) {
+    Imf::InputFile in(path.c_str());
+    const Imath::Box2i dw = in.header().dataWindow();
+    const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+    const Imf::ChannelList& channels = in.header().channels();
+    for (const char* name : {"R", "G", "B"}) {
+        const Imf::Channel* c = channels.findChannel(name);
+        EXPECT_NE(c, nullptr) << name;
+        if (c && storedType) *storedType = c->type;
+    }
+    EXPECT_EQ(channels.findChannel("A"), nullptr);
+    Image img(w, h);
+    std::vector<float> plane[3];
+    Imf::FrameBuffer fb;
+    const char* names[3] = {"R", "G", "B"};
+    for (int c = 0; c < 3; ++c) {
+        plane[c].resize(size_t(w) * size_t(h));
+        // Base pointer shifted so that the data window's (min.x, min.y) lands on element 0.
+        char* base = reinterpret_cast<char*>(plane[c].data() - dw.min.x - ptrdiff_t(dw.min.y) * w);
+        fb.insert(names[c], Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * size_t(w)));
+    }
+    in.setFrameBuffer(fb);
+    in.readPixels(dw.min.y, dw.max.y);
+    for (size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = {plane[0][i], plane[1][i], plane[2][i]};
+    return img;
+}
+
+TEST(ImageTest, ExrKeepsHdrValuesWithinHalfPrecision) {
+    test::TempDir dir;
+    Image img(19, 11);
+    // Values well above 1 (what PNG would clip), tiny ones, zero, and distinct per pixel and channel
+    // so that a flipped or transposed image fails.
+    for (int64_t y = 0; y < img.height; ++y)
+        for (int64_t x = 0; x < img.width; ++x)
+            img.at(x, y) = {0.001f * float(x + 1), 3.5f * float(y) + 0.25f, float(x * y) * 17.0f + 1e-3f};
+    img.at(0, 0) = {1000.0f, 0.0f, 42.125f};
+    img.at(18, 10) = {1e6f, -2.0f, 0.5f}; // beyond the half range: clamped to 65504
+    writeExr(img, dir.file("hdr.exr"));
+    Imf::PixelType stored = Imf::FLOAT;
+    const Image back = readExrWithOpenExr(dir.file("hdr.exr"), &stored);
+    EXPECT_EQ(stored, Imf::HALF);
+    ASSERT_EQ(back.width, img.width);
+    ASSERT_EQ(back.height, img.height);
+    float maxSeen = 0;
+    for (int64_t y = 0; y < img.height; ++y)
+        for (int64_t x = 0; x < img.width; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const float want = std::min(img.at(x, y)[c], 65504.0f), got = back.at(x, y)[c];
+                maxSeen = std::max(maxSeen, got);
+                // Half floats: 11 significant bits (relative error <= 2^-11), subnormals below 2^-14.
+                EXPECT_NEAR(got, want, std::abs(want) * std::ldexp(1.0f, -11) + std::ldexp(1.0f, -24))
+                    << x << ", " << y << " channel " << c;
+            }
+    EXPECT_GT(maxSeen, 1.0f); // the file really holds HDR values
+    EXPECT_EQ(back.at(18, 10).x, 65504.0f);
+}
+
+TEST(ImageTest, ExrToABadPathThrowsNamingItAndLeavesNoFile) {
+    test::TempDir dir;
+    const std::string bad = dir.file("no/such/dir/x.exr");
+    try {
+        writeExr(Image(2, 2, {2, 2, 2}), bad);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("x.exr"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(bad));
+    EXPECT_THROW(writeExr(Image(), dir.file("empty.exr")), Error);
+    // A directory in the way: error, and nothing (not even a temporary) left behind.
+    std::filesystem::create_directory(dir.file("taken.exr"));
+    EXPECT_THROW(writeExr(Image(2, 2), dir.file("taken.exr")), Error);
+    int entries = 0;
+    for (const auto& e : std::filesystem::directory_iterator(dir.file(""))) {
+        ++entries;
+        EXPECT_EQ(e.path().filename(), "taken.exr");
+    }
+    EXPECT_EQ(entries, 1);
 }
 
 } // namespace

@@ -6,8 +6,10 @@
 // foliage), and bad input.
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <random>
 
+#include <OpenEXR/ImfRgbaFile.h>
 #include <gtest/gtest.h>
 
 #include "test_util.hpp"
@@ -148,6 +150,24 @@ TEST(RenderTest, LambertGroundMatchesHandDerivedRadiance) {
     EXPECT_EQ(ground, r.coveredPixels);
 }
 
+TEST(RenderTest, ExposureScalesTheWholeLinearImageBackgroundIncluded) {
+    // --exposure multiplies the linear image: ground and background pixels alike (an HDR file
+    // written with exposure k is k times the exposure-1 one everywhere).
+    const Scene s = groundScene();
+    RenderOptions o = smallOptions();
+    o.background = {0.2f, 0.3f, 0.4f};
+    const RenderResult one = render(s, s.cameras[0], o);
+    o.exposure = 4;
+    const RenderResult four = render(s, s.cameras[0], o);
+    int64_t background = 0;
+    for (size_t i = 0; i < one.image.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c) {
+            background += c == 0 && one.image.pixels[i] == o.background;
+            ASSERT_NEAR(four.image.pixels[i][c], 4 * one.image.pixels[i][c], 1e-5f) << i;
+        }
+    EXPECT_GT(background, 100); // the camera sees sky above the ground's far edge
+}
+
 TEST(RenderTest, ShadowsInTheImageAreAmbientOrTransmittedLight) {
     // An opaque box and a leaf (t = 0.5) over the ground: the ground under the box gets ambient only;
     // under the leaf ambient + 0.5 * direct, in every shadow kind that models it.
@@ -206,11 +226,28 @@ TEST(RenderTest, SupersamplingIsABoxFilterOfTheFineImage) {
 }
 
 TEST(RenderTest, OutputDoesNotDependOnThreadCount) {
+    // The tree's sun plus a point light (six cube-face views) and a spot light (one perspective
+    // view): every light frame kind, rendered with 1 and 2 threads, supersampled.
     TreeOptions t;
     t.leaves = 400;
-    const Scene s = makeTreeScene(t);
+    Scene s = makeTreeScene(t);
+    Light lamp;
+    lamp.name = "lamp";
+    lamp.type = LightType::Point;
+    lamp.position = {1.5, 1.2, 1.0};
+    lamp.intensity = 4;
+    Light spot;
+    spot.name = "spot";
+    spot.type = LightType::Spot;
+    spot.position = {-1.0, 5.0, 1.0};
+    spot.direction = normalize(Vec3d{0.2, -1, -0.1});
+    spot.outerConeAngle = 0.6;
+    spot.intensity = 30;
+    s.lights.push_back(lamp);
+    s.lights.push_back(spot);
     for (const ShadowKind kind : {ShadowKind::Map, ShadowKind::Transmittance, ShadowKind::Absorption}) {
         RenderOptions o = smallOptions(kind, 120, 68);
+        o.supersample = 2;
         o.threads = 1;
         const Image a = render(s, s.cameras[0], o).image;
         o.threads = 2;
@@ -374,10 +411,51 @@ TEST(RenderTest, RenderCommandWritesAnImageAndPrintsPassTimings) {
     EXPECT_EQ(pfm.exitCode, 0) << pfm.err;
     EXPECT_TRUE(std::filesystem::exists(dir.file("t.pfm")));
 
+    // EXR: the same render as a PFM (32-bit floats, read by hand here) and as an EXR read back with
+    // OpenEXR's own reader; HDR values (exposure 8) must agree within half-float precision.
+    const std::string args = " --width 32 --height 18 --shadows map --exposure 8 -q";
+    ASSERT_EQ(
+        test::runVoxfx(dir, "render " + dir.file("tree.glb") + " -o " + dir.file("h.pfm") + args).exitCode,
+        0);
     const test::CommandRun exr =
-        test::runVoxfx(dir, "render " + dir.file("tree.glb") + " -o " + dir.file("t.exr"));
-    EXPECT_EQ(exr.exitCode, 1);
-    EXPECT_NE(exr.err.find("OpenEXR"), std::string::npos) << exr.err;
+        test::runVoxfx(dir, "render " + dir.file("tree.glb") + " -o " + dir.file("h.EXR") + args);
+    ASSERT_EQ(exr.exitCode, 0) << exr.err;
+    {
+        std::ifstream in(dir.file("h.pfm"), std::ios::binary);
+        std::string magic, scale;
+        int w = 0, h = 0;
+        in >> magic >> w >> h >> scale;
+        in.get();
+        ASSERT_EQ(w, 32);
+        ASSERT_EQ(h, 18);
+        std::vector<float> pfm(size_t(w * h * 3));
+        in.read(reinterpret_cast<char*>(pfm.data()), std::streamsize(pfm.size() * sizeof(float)));
+        Imf::RgbaInputFile file(dir.file("h.EXR").c_str());
+        const Imath::Box2i dw = file.dataWindow();
+        ASSERT_EQ(dw.max.x - dw.min.x + 1, w);
+        ASSERT_EQ(dw.max.y - dw.min.y + 1, h);
+        std::vector<Imf::Rgba> px(size_t(w * h));
+        file.setFrameBuffer(px.data() - dw.min.x - ptrdiff_t(dw.min.y) * w, 1, size_t(w));
+        file.readPixels(dw.min.y, dw.max.y);
+        float maxValue = 0;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const float* ref = &pfm[size_t(((h - 1 - y) * w + x) * 3)]; // PFM rows run bottom up
+                const Imf::Rgba& e = px[size_t(y * w + x)];
+                const float got[3] = {float(e.r), float(e.g), float(e.b)};
+                for (int c = 0; c < 3; ++c) {
+                    maxValue = std::max(maxValue, ref[c]);
+                    EXPECT_NEAR(got[c], ref[c], std::abs(ref[c]) * std::ldexp(1.0f, -11) + 1e-7f)
+                        << x << "," << y;
+                }
+            }
+        EXPECT_GT(maxValue, 1.0f);
+    }
+    const test::CommandRun tif =
+        test::runVoxfx(dir, "render " + dir.file("tree.glb") + " -o " + dir.file("t.tif"));
+    EXPECT_EQ(tif.exitCode, 1);
+    EXPECT_NE(tif.err.find("allowed: .png, .pfm, .exr"), std::string::npos) << tif.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("t.tif")));
     const test::CommandRun kind = test::runVoxfx(dir, "render " + dir.file("tree.glb") + " -o " +
                                                           dir.file("k.png") + " --shadows soft");
     EXPECT_EQ(kind.exitCode, 1);

@@ -225,7 +225,8 @@ TEST(SceneTest, JsonWrapperAddsMeshesLightsCamerasAndSettings) {
     const std::string wrapper = test::writeFile(dir.file("scene.json"), R"({
       "gltf": "hand.gltf",
       "meshes": [{"file": "tet.off", "name": "Tet", "scale": 2, "rotate": [0, 1, 0, 90], "translate": [1, 0, 0],
-                  "material": {"name": "red", "baseColor": [0.8, 0.1, 0.1], "opacity": 0.5}}],
+                  "material": {"name": "red", "baseColor": [0.8, 0.1, 0.1], "opacity": 0.5}},
+                 {"file": "tet.off", "name": "TetPlain"}],
       "lights": [{"type": "spot", "name": "Extra", "position": [0, 5, 0], "target": [0, 0, 0],
                   "outerConeDegrees": 30, "intensity": 7}],
       "cameras": [{"position": [0, 2, 6], "target": [0, 0, 0], "fovYDegrees": 40}],
@@ -240,6 +241,12 @@ TEST(SceneTest, JsonWrapperAddsMeshesLightsCamerasAndSettings) {
     expectVec(Vec3d(tet.mesh.positions[1]), {1, 0, -2});
     EXPECT_EQ(s.materials[tet.material].name, "red");
     EXPECT_FLOAT_EQ(s.materials[tet.material].opacity, 0.5f);
+    // A wrapper mesh without a material gets the default (opaque grey) material, not the glTF's
+    // first one (here the glass, a partial occluder).
+    const Material& plain = s.materials[meshNamed(s, "TetPlain").material];
+    EXPECT_NE(plain.name, "Glass");
+    EXPECT_TRUE(plain.isOpaque());
+    EXPECT_EQ(plain.baseColor, Material{}.baseColor);
     EXPECT_FALSE(meshNamed(s, "Plain").castsShadow);
     EXPECT_TRUE(meshNamed(s, "Tri").castsShadow);
     const Light& extra = lightNamed(s, "Extra");

@@ -35,6 +35,17 @@ Material leafMaterial(Vec3f colour, float opacity = 0.7f, float transmission = 0
     return m;
 }
 
+/// One leaf quad (centre c, half axes u and v) of the given material, nothing else.
+Scene oneLeafScene(const Vec3d& c, const Vec3d& u, const Vec3d& v, const Material& material) {
+    Scene s;
+    SceneMesh leaf;
+    leaf.name = "leaf";
+    appendQuad(leaf.mesh, c, u, v);
+    leaf.material = s.addMaterial(material);
+    s.meshes.push_back(leaf);
+    return s;
+}
+
 /// Random leaf quads (size ~0.25) in the slab [-2, 2] x [1.5, 3] x [-2, 2], `groups` colours, over a
 /// ground plane that only receives.
 Scene leafScene(int leaves, int groups, uint64_t seed, float opacity = 0.7f) {
@@ -207,12 +218,8 @@ ShadowOptions gridOptions(ShadowKind kind, int64_t n, Slicing slicing = Slicing:
 TEST(ShadowTest, OneLeafLayerTransmitsExactlyItsFactor) {
     // A horizontal leaf over [-1, 1]^2 at y = 2, the sun straight down: every ground point under
     // it receives t = (1 - a) + a * tr * colour, points outside receive 1.
-    Scene s;
-    SceneMesh leaf;
-    leaf.name = "leaf";
-    appendQuad(leaf.mesh, {0, 2, 0}, {0, 0, 1}, {1, 0, 0});
-    leaf.material = s.addMaterial(leafMaterial({0.2f, 0.5f, 0.1f}, 0.5f, 0.5f));
-    s.meshes.push_back(leaf);
+    const Scene s =
+        oneLeafScene({0, 2, 0}, {0, 0, 1}, {1, 0, 0}, leafMaterial({0.2f, 0.5f, 0.1f}, 0.5f, 0.5f));
     const Vec3f t = s.materials[0].crossingTransmittance();
     EXPECT_NEAR(t.y, 0.5f + 0.5f * 0.5f * 0.5f, 1e-6f); // hand: 0.625
     // Surface (ED06): one cell per leaf and column, exactly t. Conservative: every cell the leaf
@@ -269,12 +276,8 @@ TEST(ShadowTest, StandardShadowMapIsBinaryUnderABox) {
 }
 
 TEST(ShadowTest, SpotLightShadowsThroughALeaf) {
-    Scene s;
-    SceneMesh leaf;
-    leaf.name = "leaf";
-    appendQuad(leaf.mesh, {0, 2, 0}, {0, 0, 1}, {1, 0, 0});
-    leaf.material = s.addMaterial(leafMaterial({0.3f, 0.3f, 0.3f}, 0.5f, 0.0f)); // t = 0.5
-    s.meshes.push_back(leaf);
+    const Scene s = oneLeafScene({0, 2, 0}, {0, 0, 1}, {1, 0, 0},
+                                 leafMaterial({0.3f, 0.3f, 0.3f}, 0.5f, 0.0f)); // t = 0.5
     Light spot;
     spot.type = LightType::Spot;
     spot.position = {0, 4, 0};
@@ -318,6 +321,31 @@ TEST(ShadowTest, PointLightInsideALeafBoxDimsEveryDirectionOnce) {
             ++total;
         }
         EXPECT_GE(agree, total * 97 / 100) << toString(kind);
+    }
+}
+
+TEST(ShadowTest, PointLightLookupsOffsetAcrossACubeFaceSeamStayShadowed) {
+    // A leaf roof at y = 1 over a point light at the origin; receivers on a wall x = 3 facing the
+    // light, around the seam y = x between the +X and +Y cube faces. The normal offset (towards the
+    // light, -x) moves a lookup from the +X face's frustum into the +Y one for y just below 3: the
+    // lookup must then use the +Y face, not report "outside the view" (full light). Every ray from
+    // these points to the light crosses the roof exactly once (checked by the exact reference).
+    const Scene s = oneLeafScene({0, 1, 0}, {0, 0, 3}, {3, 0, 0},
+                                 leafMaterial({0.3f, 0.3f, 0.3f}, 0.5f, 0.0f)); // t = 0.5
+    Light lamp;
+    lamp.type = LightType::Point;
+    lamp.position = {0, 0, 0};
+    const Vec3d wallNormal{-1, 0, 0};
+    for (const ShadowKind kind : {ShadowKind::Transmittance, ShadowKind::Absorption}) {
+        const LightShadow sh = LightShadow::build(s, lamp, gridOptions(kind, 64));
+        int wrong = 0;
+        for (int i = 0; i < 200; ++i) {
+            const Vec3d p{3.0, 2.0 + 0.998 * double(i) / 200.0, 0.2 - 0.002 * i};
+            ASSERT_EQ(exactCrossings(s, lamp, p), 1);
+            const float ref = exactTransmittance(s, lamp, p).x;
+            wrong += !(std::abs(sh.visibility(p, wallNormal).x - ref) < 1e-4f);
+        }
+        EXPECT_EQ(wrong, 0) << toString(kind);
     }
 }
 
@@ -401,24 +429,25 @@ TEST(ShadowTest, OpaqueCellsInTheVoxelPathMatchTheShadowMapTexelForTexel) {
 
 TEST(ShadowTest, PointsOnALeafAreNotShadowedByTheirOwnLeaf) {
     // Self-shadowing bias: normal offset towards the light plus the skipped own cell.
-    Scene s;
-    SceneMesh leaf;
-    leaf.name = "leaf";
     const Vec3d c{0, 2, 0}, u = normalize(Vec3d{1, 0.4, 0}), v = normalize(Vec3d{0, 0.3, 1});
-    appendQuad(leaf.mesh, c, u, v);
-    leaf.material = s.addMaterial(leafMaterial({0.3f, 0.3f, 0.3f}, 0.5f, 0.0f));
-    s.meshes.push_back(leaf);
+    const Scene s = oneLeafScene(c, u, v, leafMaterial({0.3f, 0.3f, 0.3f}, 0.5f, 0.0f));
     Vec3d n = normalize(cross(u, v));
     const Light light = sun({0.2, -1, 0.1});
     if (dot(n, -light.direction) < 0) n = -n;
-    for (const ShadowKind kind : {ShadowKind::Transmittance, ShadowKind::Absorption}) {
-        const LightShadow sh = LightShadow::build(s, light, gridOptions(kind, 128));
-        std::mt19937_64 rng(2);
-        std::uniform_real_distribution<double> w(-0.9, 0.9);
-        int lit = 0;
-        for (int i = 0; i < 500; ++i) lit += sh.visibility(c + u * w(rng) + v * w(rng), n).x == 1.0f;
-        EXPECT_GE(lit, 495) << toString(kind);
-    }
+    for (const ShadowKind kind : {ShadowKind::Transmittance, ShadowKind::Absorption})
+        for (const bool conservative : {false, true}) {
+            ShadowOptions o = gridOptions(kind, 128);
+            if (conservative) {
+                o.voxelMode = VoxelizeMode::Conservative;
+                o.absorptionCoverage = Coverage::Conservative;
+            }
+            const LightShadow sh = LightShadow::build(s, light, o);
+            std::mt19937_64 rng(2);
+            std::uniform_real_distribution<double> w(-0.9, 0.9);
+            int lit = 0;
+            for (int i = 0; i < 500; ++i) lit += sh.visibility(c + u * w(rng) + v * w(rng), n).x == 1.0f;
+            EXPECT_GE(lit, 495) << toString(kind) << (conservative ? " conservative" : " centre");
+        }
 }
 
 TEST(ShadowTest, ResultDoesNotDependOnThreadCount) {

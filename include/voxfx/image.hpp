@@ -1,4 +1,5 @@
-// voxfx — images: a linear float RGB image and writers (PNG with sRGB encoding; PFM for HDR).
+// voxfx — images: a linear float RGB image and writers (PNG with sRGB encoding; PFM and OpenEXR for
+// HDR).
 #pragma once
 
 #include <cstdint>
@@ -27,9 +28,15 @@ float srgbToLinear(float v);
 /// Writes an 8-bit sRGB PNG (gamma-correct: linear values are encoded with the sRGB curve and
 /// the file carries an sRGB chunk). Atomic: temporary file, then rename. Throws voxfx::Error.
 void writePng(const Image& image, const std::string& path);
-/// Reads an 8/16-bit PNG (gray, RGB, RGBA; alpha ignored) into linear RGB.
+/// Reads an 8/16-bit PNG (gray, RGB, RGBA; alpha ignored) into linear RGB. The stored values are
+/// taken as sRGB-encoded (what writePng writes); gAMA and iCCP chunks are not applied.
 Image readPng(const std::string& path);
 /// Writes a little-endian PFM (portable float map): linear HDR values, opens in most HDR tools.
 void writePfm(const Image& image, const std::string& path);
+/// Writes an OpenEXR file: linear HDR values as half-float R, G, B channels (no alpha), ZIP
+/// compression, no sRGB curve. Finite values beyond the half range (|v| > 65504) are clamped to
+/// it; NaN and infinities are kept. Atomic: temporary file, then rename. Throws voxfx::Error
+/// naming the path.
+void writeExr(const Image& image, const std::string& path);
 
 } // namespace voxfx

@@ -36,7 +36,7 @@ struct RenderOptions {
     ShadowOptions shadow;               ///< shadow kind and its resolutions
     Vec3f ambient{0.05f, 0.06f, 0.08f}; ///< ambient irradiance (times albedo)
     Vec3f background{0.60f, 0.72f, 0.90f};
-    float exposure = 1;           ///< multiplies the linear result
+    float exposure = 1;           ///< multiplies the linear result (background included)
     int threads = 0;              ///< 0 = all; output is identical for every value
     Progress* progress = nullptr; ///< polled between tiles of every pass; may cancel
 };

@@ -153,6 +153,9 @@ private:
     int64_t columnCells(std::size_t k, int64_t x, int64_t y, double depth, int64_t skipCells) const;
     LightView view_;
     std::vector<Channel> channels_;
+    /// Per channel: crossingTransmittance ^ n for n = 0 .. D (std::pow at build time; a lookup is
+    /// then a table read instead of three pow calls per channel).
+    std::vector<std::vector<Vec3f>> powers_;
 };
 
 /// CHANG per-voxel absorption map: an attribute voxelization from the light (its sparse form,

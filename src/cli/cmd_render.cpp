@@ -26,21 +26,29 @@ void printTimings(const RenderResult& r, const std::string& output) {
               << fmtMs(t.flattenMs) << "), total " << fmtMs(t.totalMs) << " -> " << output << "\n";
 }
 
-/// Writes .png (sRGB) or .pfm (linear HDR); anything else is refused before rendering.
-void checkImageExtension(const std::string& path) {
+/// Lower-case extension of an output path ("" without one).
+std::string imageExtension(const std::string& path) {
     const auto dot = path.find_last_of('.');
-    std::string ext = dot == std::string::npos ? "" : path.substr(dot + 1);
+    const auto slash = path.find_last_of('/');
+    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+    std::string ext = path.substr(dot + 1);
     for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (ext == "png" || ext == "pfm") return;
-    if (ext == "exr") fail(path, ": EXR output needs OpenEXR linked (libopenexr-dev); use .pfm for HDR");
-    fail(path, ": unknown image extension (allowed: .png, .pfm)");
+    return ext;
+}
+
+/// Writes .png (sRGB), .pfm or .exr (linear HDR); anything else is refused before rendering.
+void checkImageExtension(const std::string& path) {
+    const std::string ext = imageExtension(path);
+    if (ext == "png" || ext == "pfm" || ext == "exr") return;
+    fail(path, ": unknown image extension (allowed: .png, .pfm, .exr)");
 }
 
 void writeImage(const Image& image, const std::string& path) {
-    std::string ext = path.substr(path.find_last_of('.') + 1);
-    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    const std::string ext = imageExtension(path);
     if (ext == "pfm")
         writePfm(image, path);
+    else if (ext == "exr")
+        writeExr(image, path);
     else
         writePng(image, path);
 }
@@ -120,15 +128,15 @@ Shadow kinds:
                  material constant, summed along the light path
 
 Settings a JSON scene file gives under "render" are used unless a flag overrides them.
-Output: .png (8-bit sRGB) or .pfm (linear float, HDR). EXR is not available (OpenEXR is
-not linked): use .pfm for HDR.)";
+Output by extension: .png (8-bit sRGB), .exr (OpenEXR, linear half-float RGB, HDR) or
+.pfm (linear 32-bit float, HDR).)";
 
 const Command kRender{
     "render", "Render a scene (glTF, JSON wrapper, mesh) with shadows through foliage", [](CLI::App& app) {
         app.footer(kRenderHelp);
         auto a = std::make_shared<RenderArgs>();
         app.add_option("SCENE", a->input, "Scene: .gltf .glb .json, or a mesh file")->required();
-        app.add_option("-o,--output", a->output, "Image: .png or .pfm (HDR)")->required();
+        app.add_option("-o,--output", a->output, "Image: .png (sRGB), .exr or .pfm (linear HDR)")->required();
         app.add_option("--width", a->width, "Image width (default 1280)")
             ->check(CLI::Range(int64_t(1), int64_t(65536)));
         app.add_option("--height", a->height, "Image height (default 720)")

@@ -1,11 +1,14 @@
-// voxfx — PNG (libpng) and PFM image files.
+// voxfx — PNG (libpng), PFM and OpenEXR image files.
 #include "voxfx/image.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <exception>
+#include <limits>
 #include <memory>
 
+#include <OpenEXR/ImfRgbaFile.h>
 #include <png.h>
 
 #include "io/atomic_file.hpp"
@@ -115,6 +118,31 @@ void writePfm(const Image& image, const std::string& path) {
     for (int64_t y = image.height - 1; y >= 0; --y)
         out.write(reinterpret_cast<const char*>(&image.pixels[size_t(y * image.width)]),
                   std::streamsize(image.width * 3 * sizeof(float)));
+    file.commit();
+}
+
+void writeExr(const Image& image, const std::string& path) {
+    if (image.width <= 0 || image.height <= 0) fail("cannot write an empty image to '", path, "'");
+    if (image.width > std::numeric_limits<int>::max() || image.height > std::numeric_limits<int>::max())
+        fail("cannot write '", path, "': ", image.width, " x ", image.height, " is too large for OpenEXR");
+    // Half floats: the largest finite value is 65504; clamp finite values so that they stay finite.
+    auto toHalf = [](float v) { return half(std::isfinite(v) ? std::clamp(v, -65504.0f, 65504.0f) : v); };
+    std::vector<Imf::Rgba> pixels(image.pixels.size());
+    for (size_t i = 0; i < pixels.size(); ++i) {
+        const Vec3f& p = image.pixels[i];
+        pixels[i] = Imf::Rgba(toHalf(p.x), toHalf(p.y), toHalf(p.z), half(1.0f));
+    }
+    // OpenEXR opens files by name and seeks back to write its offset table: write the temporary
+    // file by name, then let AtomicFile rename it.
+    detail::AtomicFile file(path);
+    try {
+        const int w = int(image.width), h = int(image.height);
+        Imf::RgbaOutputFile out(file.tempPath().c_str(), w, h, Imf::WRITE_RGB, 1.0f, Imath::V2f(0, 0), 1.0f,
+                                Imf::INCREASING_Y, Imf::ZIP_COMPRESSION, 1);
+        // Row 0 is the top row in both Image and OpenEXR's default data window.
+        out.setFrameBuffer(pixels.data(), 1, size_t(w));
+        out.writePixels(h);
+    } catch (const std::exception& e) { fail("cannot write '", path, "': ", e.what()); }
     file.commit();
 }
 

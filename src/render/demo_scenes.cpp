@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <initializer_list>
 #include <random>
 
 #include "voxfx/demo.hpp"
@@ -164,6 +165,46 @@ Material solid(const char* name, Vec3f colour, float specular = 0.2f, float shin
     return m;
 }
 
+/// A scene with its source name and a receive-only ground plane of the given size and colour.
+Scene groundedScene(const char* source, double groundHalfSize, const char* groundName, Vec3f groundColour) {
+    Scene scene;
+    scene.source = source;
+    scene.meshes.push_back(
+        groundPlane(groundHalfSize, scene.addMaterial(solid(groundName, groundColour, 0.05f, 8))));
+    return scene;
+}
+
+/// Square posts of half width `half` and height `height` standing on the ground at every (x, z).
+void appendPosts(Mesh& m, std::initializer_list<double> xs, std::initializer_list<double> zs, double half,
+                 double height) {
+    for (const double x : xs)
+        for (const double z : zs) appendBox(m, {x - half, 0, z - half}, {x + half, height, z + half});
+}
+
+Light directionalLight(const char* name, const Vec3d& direction, Vec3f colour, float intensity) {
+    Light l;
+    l.name = name;
+    l.type = LightType::Directional;
+    l.direction = normalize(direction);
+    l.color = colour;
+    l.intensity = intensity;
+    return l;
+}
+
+/// The demo scenes' camera ("View", near 0.05, far 100); adds it, validates and returns the scene.
+Scene withView(Scene scene, const Vec3d& position, const Vec3d& target, double fovYDegrees) {
+    Camera cam;
+    cam.name = "View";
+    cam.position = position;
+    cam.target = target;
+    cam.fovY = fovYDegrees * M_PI / 180;
+    cam.nearDepth = 0.05;
+    cam.farDepth = 100;
+    scene.cameras.push_back(cam);
+    scene.validate();
+    return scene;
+}
+
 } // namespace
 
 Scene makeTreeScene(const TreeOptions& o) {
@@ -196,32 +237,13 @@ Scene makeTreeScene(const TreeOptions& o) {
     scene.meshes.push_back(std::move(wood));
     addLeaves(scene, clusters, o.leaves, o.colourGroups, o.leafSize, o.leafOpacity, o.leafTransmission, rng);
 
-    Light sun;
-    sun.name = "Sun";
-    sun.type = LightType::Directional;
-    sun.direction = normalize(Vec3d{0.55, -1.0, 0.35});
-    sun.color = {1.0f, 0.95f, 0.85f};
-    sun.intensity = 3.2f;
-    scene.lights.push_back(sun);
-
-    Camera cam;
-    cam.name = "View";
-    cam.position = {-2.2, 1.9, 6.2};
-    cam.target = {0.8, 1.55, 0.2};
-    cam.fovY = 50 * M_PI / 180;
-    cam.nearDepth = 0.05;
-    cam.farDepth = 100;
-    scene.cameras.push_back(cam);
-    scene.validate();
-    return scene;
+    scene.lights.push_back(directionalLight("Sun", {0.55, -1.0, 0.35}, {1.0f, 0.95f, 0.85f}, 3.2f));
+    return withView(std::move(scene), {-2.2, 1.9, 6.2}, {0.8, 1.55, 0.2}, 50);
 }
 
 Scene makeBunnyScene(const std::string& meshesDir, int leaves, uint64_t seed) {
-    Scene scene;
-    scene.source = "demo:bunny";
+    Scene scene = groundedScene("demo:bunny", 30.0, "ground", {0.45f, 0.42f, 0.36f});
     Rng rng(seed);
-    scene.meshes.push_back(
-        groundPlane(30.0, scene.addMaterial(solid("ground", {0.45f, 0.42f, 0.36f}, 0.05f, 8))));
     const uint32_t fur = scene.addMaterial(solid("bunny", {0.75f, 0.72f, 0.66f}, 0.25f, 40));
     scene.meshes.push_back(placedMesh((std::filesystem::path(meshesDir) / "bunny00.off").string(), "Bunny",
                                       1.2, 0, 0, 0, 0, fur));
@@ -229,9 +251,7 @@ Scene makeBunnyScene(const std::string& meshesDir, int leaves, uint64_t seed) {
     SceneMesh posts;
     posts.name = "Posts";
     posts.material = scene.addMaterial(solid("wood", {0.30f, 0.20f, 0.11f}, 0.05f, 8));
-    for (const double x : {-1.6, 1.6})
-        for (const double z : {-1.6, 1.6})
-            appendBox(posts.mesh, {x - 0.06, 0, z - 0.06}, {x + 0.06, 2.3, z + 0.06});
+    appendPosts(posts.mesh, {-1.6, 1.6}, {-1.6, 1.6}, 0.06, 2.3);
     scene.meshes.push_back(std::move(posts));
     std::vector<std::pair<Vec3d, double>> clusters;
     for (int i = -2; i <= 2; ++i)
@@ -249,24 +269,12 @@ Scene makeBunnyScene(const std::string& meshesDir, int leaves, uint64_t seed) {
     spot.outerConeAngle = 38 * M_PI / 180;
     scene.lights.push_back(spot);
 
-    Camera cam;
-    cam.name = "View";
-    cam.position = {-1.0, 1.3, 6.4};
-    cam.target = {0.2, 1.15, 0};
-    cam.fovY = 46 * M_PI / 180;
-    cam.nearDepth = 0.05;
-    cam.farDepth = 100;
-    scene.cameras.push_back(cam);
-    scene.validate();
-    return scene;
+    return withView(std::move(scene), {-1.0, 1.3, 6.4}, {0.2, 1.15, 0}, 46);
 }
 
 Scene makeCgalScene(const std::string& meshesDir, int leaves, uint64_t seed) {
-    Scene scene;
-    scene.source = "demo:cgal";
+    Scene scene = groundedScene("demo:cgal", 30.0, "ground", {0.42f, 0.40f, 0.34f});
     Rng rng(seed);
-    scene.meshes.push_back(
-        groundPlane(30.0, scene.addMaterial(solid("ground", {0.42f, 0.40f, 0.34f}, 0.05f, 8))));
     struct Item {
         const char* file;
         const char* name;
@@ -293,9 +301,7 @@ Scene makeCgalScene(const std::string& meshesDir, int leaves, uint64_t seed) {
     SceneMesh wood;
     wood.name = "Pergola";
     wood.material = scene.addMaterial(solid("wood", {0.32f, 0.21f, 0.12f}, 0.05f, 8));
-    for (const double x : {-2.6, 2.6})
-        for (const double z : {-1.7, 1.7})
-            appendBox(wood.mesh, {x - 0.08, 0, z - 0.08}, {x + 0.08, 2.6, z + 0.08});
+    appendPosts(wood.mesh, {-2.6, 2.6}, {-1.7, 1.7}, 0.08, 2.6);
     for (const double z : {-1.7, 1.7}) appendBox(wood.mesh, {-2.8, 2.6, z - 0.07}, {2.8, 2.75, z + 0.07});
     for (int i = -4; i <= 4; ++i)
         appendBox(wood.mesh, {0.6 * i - 0.04, 2.75, -2.0}, {0.6 * i + 0.04, 2.83, 2.0});
@@ -305,13 +311,7 @@ Scene makeCgalScene(const std::string& meshesDir, int leaves, uint64_t seed) {
         for (int j = -3; j <= 3; ++j) clusters.push_back({{0.6 * i, 2.95, 0.55 * j}, 0.45});
     addLeaves(scene, clusters, leaves, 3, 0.16, 0.7f, 0.6f, rng, 0.4);
 
-    Light sun;
-    sun.name = "Sun";
-    sun.type = LightType::Directional;
-    sun.direction = normalize(Vec3d{-0.35, -1.0, -0.3});
-    sun.color = {1.0f, 0.95f, 0.86f};
-    sun.intensity = 2.6f;
-    scene.lights.push_back(sun);
+    scene.lights.push_back(directionalLight("Sun", {-0.35, -1.0, -0.3}, {1.0f, 0.95f, 0.86f}, 2.6f));
     Light lamp;
     lamp.name = "Lamp";
     lamp.type = LightType::Point;
@@ -320,16 +320,7 @@ Scene makeCgalScene(const std::string& meshesDir, int leaves, uint64_t seed) {
     lamp.intensity = 6;
     scene.lights.push_back(lamp);
 
-    Camera cam;
-    cam.name = "View";
-    cam.position = {0.4, 2.2, 7.6};
-    cam.target = {0.1, 1.0, 0};
-    cam.fovY = 50 * M_PI / 180;
-    cam.nearDepth = 0.05;
-    cam.farDepth = 100;
-    scene.cameras.push_back(cam);
-    scene.validate();
-    return scene;
+    return withView(std::move(scene), {0.4, 2.2, 7.6}, {0.1, 1.0, 0}, 50);
 }
 
 std::vector<std::string> demoSceneNames() { return {"tree", "bunny", "cgal"}; }

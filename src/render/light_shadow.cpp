@@ -145,24 +145,38 @@ LightShadow LightShadow::build(const Scene& scene, const Light& light, const Sha
     return out;
 }
 
+namespace {
+
+// The view to look p up in, and the lookup point q = p + n * offset (offset in column footprints
+// of the view at p). For point lights the offset can carry q across a cube-face seam, out of the
+// frustum of p's face (which would then report "outside the view": full light); q picks its own face.
+int lookupView(const std::vector<LightView>& views, const Vec3d& p, const Vec3d& n, double offset, Vec3d& q) {
+    int i = viewIndexFor(views, p);
+    if (i < 0) return i;
+    q = p + n * (offset * views[size_t(i)].columnWorldSize(p));
+    if (views.size() > 1) {
+        const int j = viewIndexFor(views, q);
+        if (j >= 0) i = j;
+    }
+    return i;
+}
+
+} // namespace
+
 Vec3f LightShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     Vec3f v{1, 1, 1};
     if (options_.kind == ShadowKind::None) return v;
+    Vec3d q;
     if (!maps_.empty()) {
-        const int i = viewIndexFor(mapViews_, p);
+        const int i = lookupView(mapViews_, p, n, options_.normalOffset, q);
         if (i >= 0) {
-            const LightView& view = mapViews_[size_t(i)];
-            const double texel = view.columnWorldSize(p);
-            const Vec3d q = p + n * (options_.normalOffset * texel);
-            const float lit = maps_[size_t(i)].visibility(q, options_.pcfRadius, options_.depthBias * texel);
-            v = v * lit;
+            const double texel = mapViews_[size_t(i)].columnWorldSize(p);
+            v = v * maps_[size_t(i)].visibility(q, options_.pcfRadius, options_.depthBias * texel);
         }
     }
     if (!transmittance_.empty() || !absorption_.empty()) {
-        const int i = viewIndexFor(gridViews_, p);
+        const int i = lookupView(gridViews_, p, n, options_.normalOffset, q);
         if (i >= 0) {
-            const LightView& view = gridViews_[size_t(i)];
-            const Vec3d q = p + n * (options_.normalOffset * view.columnWorldSize(p));
             const int64_t skip = options_.skipCells;
             if (!transmittance_.empty()) {
                 const TransmittanceShadowMap& m = transmittance_[size_t(i)];

@@ -225,7 +225,17 @@ Scene loadWrapper(const std::string& path) {
         allowKeys(doc, {"gltf", "meshes", "lights", "cameras", "receiversOnly", "render", "environmentMap"},
                   path);
         if (doc.contains("gltf")) scene = detail::loadGltfScene(resolve(str(doc, "gltf", path)));
-        if (scene.materials.empty()) scene.addMaterial(Material{});
+        // Wrapper meshes without a material get a default one, never the glTF's first material
+        // (which may be a leaf or glass: a partial occluder).
+        int defaultMaterial = scene.materials.empty() ? int(scene.addMaterial(Material{})) : -1;
+        auto defaultIndex = [&] {
+            if (defaultMaterial < 0) {
+                Material d;
+                d.name = "default";
+                defaultMaterial = int(scene.addMaterial(d));
+            }
+            return uint32_t(defaultMaterial);
+        };
         const json meshes = doc.value("meshes", json::array());
         for (std::size_t i = 0; i < meshes.size(); ++i) {
             const json& m = meshes[i];
@@ -246,7 +256,7 @@ Scene loadWrapper(const std::string& path) {
                     std::swap(out.mesh.indices[t + 1], out.mesh.indices[t + 2]);
             out.material = m.contains("material")
                                ? scene.addMaterial(wrapperMaterial(m["material"], where + ".material"))
-                               : 0;
+                               : defaultIndex();
             out.castsShadow = m.value("castsShadow", true);
             scene.meshes.push_back(std::move(out));
         }
@@ -262,14 +272,7 @@ Scene loadWrapper(const std::string& path) {
             out.name = l.contains("name") ? str(l, "name", where) : concat("light", i);
             where += concat(" '", out.name, "'");
             const std::string type = str(l, "type", where);
-            if (type == "directional")
-                out.type = LightType::Directional;
-            else if (type == "spot")
-                out.type = LightType::Spot;
-            else if (type == "point")
-                out.type = LightType::Point;
-            else
-                fail(where, ": unknown light type '", type, "' (allowed: directional, spot, point)");
+            out.type = detail::parseLightType(type, where);
             if (out.type != LightType::Directional) {
                 if (!l.contains("position")) fail(where, ": a ", type, " light needs \"position\"");
                 out.position = vec3(l, "position", where);

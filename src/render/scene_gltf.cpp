@@ -34,6 +34,13 @@ std::string lowerExtension(const std::string& path) {
     return ext;
 }
 
+LightType parseLightType(const std::string& type, const std::string& where) {
+    if (type == "directional") return LightType::Directional;
+    if (type == "spot") return LightType::Spot;
+    if (type == "point") return LightType::Point;
+    fail(where, ": unknown light type '", type, "' (allowed: directional, spot, point)");
+}
+
 std::string readTextFile(const std::string& path, const char* what) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) fail(path, ": cannot open ", what, ": no such file");
@@ -236,14 +243,7 @@ void readLightsAndCameras(const json& doc, const GltfNodes& g, const std::string
             Light out;
             out.name = src.value("name", nodeName);
             const std::string type = src.value("type", "");
-            if (type == "directional")
-                out.type = LightType::Directional;
-            else if (type == "spot")
-                out.type = LightType::Spot;
-            else if (type == "point")
-                out.type = LightType::Point;
-            else
-                fail(where, ": unknown light type '", type, "' (allowed: directional, spot, point)");
+            out.type = parseLightType(type, where);
             out.color = colour(src, "color", {1, 1, 1}, where);
             out.intensity = float(number(src, "intensity", 1.0, where));
             out.range = number(src, "range", 0.0, where);

@@ -71,7 +71,8 @@ std::vector<Vec3f> shadeGBuffer(const GBuffer& gbuffer, const SceneGeometry& geo
                                 const std::vector<LightShadow>& shadows, const RenderOptions& options,
                                 Progress* progress) {
     const int64_t W = gbuffer.frame.width(), H = gbuffer.frame.height();
-    std::vector<Vec3f> out(size_t(W * H), options.background);
+    // Exposure scales the whole linear image, the background included.
+    std::vector<Vec3f> out(size_t(W * H), options.background * options.exposure);
     constexpr int64_t kRows = 8;
     const int64_t blocks = (H + kRows - 1) / kRows;
     std::atomic<int64_t> done{0};

@@ -30,6 +30,11 @@ TransmittanceShadowMap TransmittanceShadowMap::build(const LightView& view, std:
         vo.slicing = slicing;
         vo.progress = progress;
         map.channels_.push_back({voxelize(local.view(), view.frame, vo), transmittances[k]});
+        // A column holds at most D filled cells.
+        const Vec3f& t = transmittances[k];
+        std::vector<Vec3f>& powers = map.powers_.emplace_back(size_t(view.frame.depth() + 1));
+        for (std::size_t n = 0; n < powers.size(); ++n)
+            for (int ch = 0; ch < 3; ++ch) powers[n][ch] = std::pow(t[ch], float(n));
     }
     return map;
 }
@@ -57,8 +62,7 @@ Vec3f TransmittanceShadowMap::columnTransmittance(int64_t x, int64_t y, double d
     for (std::size_t k = 0; k < channels_.size(); ++k) {
         const int64_t n = columnCells(k, x, y, depth, skipCells);
         if (n == 0) continue;
-        const Vec3f& t = channels_[k].crossingTransmittance;
-        for (int ch = 0; ch < 3; ++ch) out[ch] *= std::pow(t[ch], float(n));
+        out = out * powers_[k][size_t(n)];
     }
     return out;
 }
