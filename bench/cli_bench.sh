@@ -13,8 +13,13 @@ trap 'rm -rf "$out"' EXIT
 data="$root/data/meshes"
 dense="$root/data/dense"
 mkdir -p "$dense"
-[ -s "$dense/bunny1m.off" ] || awk -f "$root/bench/subdivide_off.awk" -v rounds=2 "$data/bunny00.off" >"$dense/bunny1m.off"
-[ -s "$dense/dragon1m.off" ] || awk -f "$root/bench/subdivide_off.awk" -v rounds=3 "$data/ChineseDragon-10kv.off" >"$dense/dragon1m.off"
+dense_mesh() { # name rounds source: subdivide once, into a temporary file renamed when complete
+  [ -s "$dense/$1.off" ] && return
+  awk -f "$root/bench/subdivide_off.awk" -v rounds="$2" "$data/$3" >"$dense/$1.off.tmp"
+  mv "$dense/$1.off.tmp" "$dense/$1.off"
+}
+dense_mesh bunny1m 2 bunny00.off
+dense_mesh dragon1m 3 ChineseDragon-10kv.off
 echo "| mesh | file MB | mode | N | load (ms) | voxelize (ms) | write (ms) | whole command (ms) | peak RSS (MiB) |"
 echo "|---|---|---|---|---|---|---|---|---|"
 for file in "$data/bunny00.off" "$data/armadillo.off" "$data/ChineseDragon-10kv.off" "$dense/bunny1m.off" "$dense/dragon1m.off"; do
