@@ -31,7 +31,7 @@
 // A consumer whose writes commute (bit OR, bit XOR) may also offer the direct path:
 //   DirectSink consumer.direct();        // fragment/span as above, callable from any thread
 //   void consumer.finishRows(y0, y1);    // after every triangle, per tile of rows, in parallel
-// rasterize() then skips binning when triangles are small against the columns (a dense mesh):
+// rasterize() then skips binning when triangles are much smaller than a column (a dense mesh):
 // fixed chunks of triangles go to any thread and write with atomic word operations. The bits
 // are the same on both paths and for any thread count.
 // Depths are frame depths (orthographic: slice units; perspective: view distance); map them to

@@ -300,11 +300,13 @@ void rasterizePiece(const RasterTriangle& rt, Coverage coverage, bool perspectiv
     }
 }
 
-/// Whether rasterize() takes the direct path for a consumer that offers it: when triangles are
-/// small against the columns (more than one triangle per four columns), binning costs more than
-/// the atomic word writes it saves. Depends on the mesh and frame only, never on threads.
+/// Whether rasterize() takes the direct path for a consumer that offers it: only when triangles
+/// are much smaller than a column (at least three per column), where setting each triangle up
+/// once beats binning. Otherwise binning wins clearly: a tile's writes stay in its rows (cache)
+/// and need no atomics (bench_voxelize, Binned/Direct rows: bunny00 solid 512^3 14 vs 25 ms,
+/// bunny1m 73 vs 65 ms). Depends on the mesh and frame only, never on threads.
 inline bool preferDirect(std::size_t triangles, int64_t width, int64_t height) {
-    return int64_t(triangles) * 4 >= width * height;
+    return int64_t(triangles) >= 3 * width * height;
 }
 
 } // namespace detail
