@@ -428,8 +428,8 @@ TEST(RenderTest, RenderCommandWritesAnImageAndPrintsPassTimings) {
         in.get();
         ASSERT_EQ(w, 32);
         ASSERT_EQ(h, 18);
-        std::vector<float> pfm(size_t(w * h * 3));
-        in.read(reinterpret_cast<char*>(pfm.data()), std::streamsize(pfm.size() * sizeof(float)));
+        std::vector<float> hdr(size_t(w * h * 3));
+        in.read(reinterpret_cast<char*>(hdr.data()), std::streamsize(hdr.size() * sizeof(float)));
         Imf::RgbaInputFile file(dir.file("h.EXR").c_str());
         const Imath::Box2i dw = file.dataWindow();
         ASSERT_EQ(dw.max.x - dw.min.x + 1, w);
@@ -440,7 +440,7 @@ TEST(RenderTest, RenderCommandWritesAnImageAndPrintsPassTimings) {
         float maxValue = 0;
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {
-                const float* ref = &pfm[size_t(((h - 1 - y) * w + x) * 3)]; // PFM rows run bottom up
+                const float* ref = &hdr[size_t(((h - 1 - y) * w + x) * 3)]; // PFM rows run bottom up
                 const Imf::Rgba& e = px[size_t(y * w + x)];
                 const float got[3] = {float(e.r), float(e.g), float(e.b)};
                 for (int c = 0; c < 3; ++c) {

@@ -155,6 +155,13 @@ inline VoxelGrid randomVoxelGrid(const Box3d& box, Axis axis, const Vec3i& dims,
     return g;
 }
 
+/// A W x H x D bit grid, each cell on with probability `density` (fixed seed): the bits of
+/// randomVoxelGrid sliced along z (grid tool tests: density, morphology, CSG, queries).
+inline BitGrid randomBits(int64_t w, int64_t h, int64_t d, double density, uint64_t seed) {
+    return randomVoxelGrid({{0, 0, 0}, {double(w), double(h), double(d)}}, Axis::Z, {w, h, d}, density, seed)
+        .bits;
+}
+
 } // namespace voxfx::test
 
 // ---- Spheres and exact mesh volumes (grid query, particle and surface tests) -------------------

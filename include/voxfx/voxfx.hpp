@@ -1,6 +1,7 @@
 // voxfx — umbrella header: everything a client of the library (such as the voxfx command) needs.
 #pragma once
 
+// Meshes, frames, the slicemap and voxelization.
 #include "voxfx/bitgrid.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/frame.hpp"
@@ -12,3 +13,19 @@
 #include "voxfx/raster.hpp"
 #include "voxfx/voxel_grid.hpp"
 #include "voxfx/voxelize.hpp"
+
+// The bit-grid toolkit (GI08): density, normals, morphology, CSG, queries, particles, meshing.
+#include "voxfx/csg.hpp"
+#include "voxfx/density.hpp"
+#include "voxfx/grid_query.hpp"
+#include "voxfx/morphology.hpp"
+#include "voxfx/particles.hpp"
+#include "voxfx/surface_mesh.hpp"
+
+// Rendering: scenes, images, shadows (ED06 transmittance, CHANG absorption).
+#include "voxfx/attribute_grid.hpp"
+#include "voxfx/demo.hpp"
+#include "voxfx/image.hpp"
+#include "voxfx/render.hpp"
+#include "voxfx/scene.hpp"
+#include "voxfx/shadow.hpp"
