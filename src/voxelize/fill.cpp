@@ -102,13 +102,17 @@ private:
         s.freeCol[size_t(P_ - 1)] &= last_;
     }
 
+    // Cells at the near and far ends of a column touch the grid border: always seeds.
+    void addEnds(Scratch& s) const {
+        s.seed[0] |= s.freeCol[0] & 1u;
+        s.seed[size_t(P_ - 1)] |= s.freeCol[size_t(P_ - 1)] & (uint64_t(1) << ((D_ - 1) & 63));
+    }
+
     // Runs the seeds in s.seed through the free runs of the column, stores them, and says whether
     // the column grew (and whether it is now saturated: every free cell outside).
     bool store(int64_t c, Scratch& s, bool spread) {
         if (spread) {
-            // Cells at the near and far ends of the column touch the grid border too.
-            s.seed[0] |= s.freeCol[0] & 1u;
-            s.seed[size_t(P_ - 1)] |= s.freeCol[size_t(P_ - 1)] & (uint64_t(1) << ((D_ - 1) & 63));
+            addEnds(s);
             fillUp(s.freeCol.data(), s.seed.data(), P_);
             fillDown(s.freeCol.data(), s.seed.data(), P_);
         }
@@ -160,6 +164,12 @@ private:
                 const uint64_t* n3 = y + 1 < yHi ? outside_.column(c + W_) : zero_.data();
                 for (int64_t w = 0; w < P_; ++w)
                     s.seed[size_t(w)] = (out[w] | n0[w] | n1[w] | n2[w] | n3[w]) & s.freeCol[size_t(w)];
+                addEnds(s);
+                // The column's outside is closed under the run fill already: without a new seed
+                // it cannot grow (the common case when a column is queued again).
+                uint64_t news = 0;
+                for (int64_t w = 0; w < P_; ++w) news |= s.seed[size_t(w)] & ~out[w];
+                if (news == 0) continue;
             }
             if (store(c, s, spread)) queueNeighbours(c, yLo, yHi, q);
         }
