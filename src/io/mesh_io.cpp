@@ -12,6 +12,11 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <string_view>
+#include <utility>
+
+#include <sys/mman.h>
+#include <sys/stat.h>
 
 #include "io/mesh_formats.hpp"
 
@@ -32,11 +37,40 @@ using detail::ParsedMesh;
 
 enum class Reader { kOff, kObj, kPly, kStl, kAssimp };
 
-// The whole file in one read; the buffer is not zero-filled first.
-struct FileBytes {
-    std::unique_ptr<char[]> data;
-    std::size_t size = 0;
-    std::string_view view() const { return {data.get(), size}; }
+// The whole file: mapped read-only when it is a regular file (no copy into a buffer, no fresh
+// pages to fault: the pages are the page cache's), read into memory otherwise (pipes, devices).
+// A file truncated by another process while mapped would fault on access; files being
+// rewritten under a running loader are not supported either way.
+class FileBytes {
+public:
+    FileBytes() = default;
+    FileBytes(const FileBytes&) = delete;
+    FileBytes& operator=(const FileBytes&) = delete;
+    FileBytes(FileBytes&& o) noexcept
+        : map_(std::exchange(o.map_, nullptr)), owned_(std::move(o.owned_)), data_(o.data_),
+          size_(std::exchange(o.size_, 0)) {}
+    ~FileBytes() {
+        if (map_) ::munmap(map_, size_);
+    }
+    std::string_view view() const { return {data_, size_}; }
+    std::size_t size() const { return size_; }
+
+    void map(void* mapping, std::size_t bytes) {
+        map_ = mapping;
+        data_ = static_cast<const char*>(mapping);
+        size_ = bytes;
+    }
+    void own(std::unique_ptr<char[]> buffer, std::size_t bytes) {
+        owned_ = std::move(buffer);
+        data_ = owned_.get();
+        size_ = bytes;
+    }
+
+private:
+    void* map_ = nullptr;
+    std::unique_ptr<char[]> owned_;
+    const char* data_ = "";
+    std::size_t size_ = 0;
 };
 
 using FilePtr = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
@@ -53,15 +87,26 @@ FileBytes readWholeFile(const std::string& path) {
     const FilePtr owner = openFile(path);
     std::FILE* file = owner.get();
     FileBytes bytes;
+    struct stat st {};
+    if (::fstat(::fileno(file), &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
+        void* m = ::mmap(nullptr, std::size_t(st.st_size), PROT_READ, MAP_PRIVATE | MAP_POPULATE,
+                         ::fileno(file), 0);
+        if (m != MAP_FAILED) {
+            ::madvise(m, std::size_t(st.st_size), MADV_SEQUENTIAL);
+            bytes.map(m, std::size_t(st.st_size));
+            return bytes;
+        }
+    }
     if (std::fseek(file, 0, SEEK_END) != 0) fail(path, ": cannot read mesh file: ", std::strerror(errno));
     const long size = std::ftell(file);
     if (size < 0 || std::fseek(file, 0, SEEK_SET) != 0)
         fail(path, ": cannot read mesh file: ", std::strerror(errno));
-    bytes.size = std::size_t(size);
-    bytes.data = std::make_unique_for_overwrite<char[]>(std::max<std::size_t>(bytes.size, 1));
-    if (std::fread(bytes.data.get(), 1, bytes.size, file) != bytes.size)
+    const auto n = std::size_t(size);
+    auto buffer = std::make_unique_for_overwrite<char[]>(std::max<std::size_t>(n, 1));
+    if (std::fread(buffer.get(), 1, n, file) != n)
         fail(path, ": cannot read mesh file: ",
              std::ferror(file) ? std::strerror(errno) : "it got shorter while reading");
+    bytes.own(std::move(buffer), n);
     return bytes;
 }
 
@@ -120,7 +165,7 @@ Mesh loadMesh(const std::string& path, MeshLoadReport* report) {
         mesh = detail::loadWithAssimp(path);
     } else {
         const FileBytes bytes = readWholeFile(path);
-        fileBytes = bytes.size;
+        fileBytes = bytes.size();
         ParsedMesh parsed;
         switch (reader) {
         case Reader::kOff:
