@@ -6,11 +6,13 @@
 #include <algorithm>
 #include <cctype>
 #include <cstring>
+#include <optional>
 
 #ifdef __AVX2__
 #include <immintrin.h>
 #endif
 
+#include "core/enum_names.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
@@ -30,28 +32,26 @@ const char* toString(CsgOp op) {
 }
 
 namespace {
+constexpr detail::EnumName<CsgOp> kOpNames[] = {{"union", CsgOp::Union},
+                                                {"intersection", CsgOp::Intersection},
+                                                {"difference", CsgOp::Difference},
+                                                {"xor", CsgOp::Xor},
+                                                {"or", CsgOp::Union, true},
+                                                {"and", CsgOp::Intersection, true},
+                                                {"minus", CsgOp::Difference, true},
+                                                {"sub", CsgOp::Difference, true},
+                                                {"symmetric-difference", CsgOp::Xor, true}};
+
 bool lookupCsgOp(std::string_view name, CsgOp& op) {
-    std::string n(name);
-    std::transform(n.begin(), n.end(), n.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (n == "union" || n == "or")
-        op = CsgOp::Union;
-    else if (n == "intersection" || n == "and")
-        op = CsgOp::Intersection;
-    else if (n == "difference" || n == "minus" || n == "sub")
-        op = CsgOp::Difference;
-    else if (n == "xor" || n == "symmetric-difference")
-        op = CsgOp::Xor;
-    else
-        return false;
-    return true;
+    const std::optional<CsgOp> found = detail::findEnum<CsgOp>(name, kOpNames);
+    if (found) op = *found;
+    return found.has_value();
 }
-constexpr const char* kAllowedOps = "union, intersection, difference, xor";
+const std::string kAllowedOps = detail::enumNameList<CsgOp>(kOpNames);
 } // namespace
 
 CsgOp parseCsgOp(const std::string& name) {
-    CsgOp op;
-    if (!lookupCsgOp(name, op)) fail("unknown CSG operation '", name, "' (allowed: ", kAllowedOps, ")");
-    return op;
+    return detail::parseEnum<CsgOp>(name, "CSG operation", kOpNames);
 }
 
 namespace {

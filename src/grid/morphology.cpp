@@ -12,6 +12,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "core/enum_names.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
@@ -42,28 +43,19 @@ const char* toString(MorphBorder border) {
     return "unknown";
 }
 
-namespace {
-std::string lower(std::string s) {
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return s;
-}
-} // namespace
-
 MorphOp parseMorphOp(const std::string& name) {
-    const std::string n = lower(name);
-    if (n == "erode" || n == "erosion") return MorphOp::Erode;
-    if (n == "dilate" || n == "dilation") return MorphOp::Dilate;
-    if (n == "open" || n == "opening") return MorphOp::Open;
-    if (n == "close" || n == "closing") return MorphOp::Close;
-    fail("unknown morphology operation '", name, "' (allowed: erode, dilate, open, close)");
+    static constexpr detail::EnumName<MorphOp> kNames[] = {
+        {"erode", MorphOp::Erode},         {"dilate", MorphOp::Dilate},
+        {"open", MorphOp::Open},           {"close", MorphOp::Close},
+        {"erosion", MorphOp::Erode, true}, {"dilation", MorphOp::Dilate, true},
+        {"opening", MorphOp::Open, true},  {"closing", MorphOp::Close, true}};
+    return detail::parseEnum<MorphOp>(name, "morphology operation", kNames);
 }
 
 MorphBorder parseMorphBorder(const std::string& name) {
-    const std::string n = lower(name);
-    if (n == "neutral") return MorphBorder::Neutral;
-    if (n == "empty") return MorphBorder::Empty;
-    if (n == "filled") return MorphBorder::Filled;
-    fail("unknown morphology border '", name, "' (allowed: neutral, empty, filled)");
+    static constexpr detail::EnumName<MorphBorder> kNames[] = {
+        {"neutral", MorphBorder::Neutral}, {"empty", MorphBorder::Empty}, {"filled", MorphBorder::Filled}};
+    return detail::parseEnum<MorphBorder>(name, "morphology border", kNames);
 }
 
 namespace {

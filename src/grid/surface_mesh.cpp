@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <functional>
 
+#include "core/enum_names.hpp"
 #include "io/atomic_file.hpp"
 #include "voxfx/parallel.hpp"
 
@@ -21,9 +22,9 @@ namespace voxfx {
 const char* toString(SurfaceSource s) { return s == SurfaceSource::Density ? "density" : "occupancy"; }
 
 SurfaceSource parseSurfaceSource(const std::string& name) {
-    if (name == "density") return SurfaceSource::Density;
-    if (name == "occupancy") return SurfaceSource::Occupancy;
-    fail("unknown surface source '", name, "' (allowed: density, occupancy)");
+    static constexpr detail::EnumName<SurfaceSource> kNames[] = {{"density", SurfaceSource::Density},
+                                                                 {"occupancy", SurfaceSource::Occupancy}};
+    return detail::parseEnum<SurfaceSource>(name, "surface source", kNames);
 }
 
 namespace {

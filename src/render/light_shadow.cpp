@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 
+#include "core/enum_names.hpp"
 #include "voxfx/shadow.hpp"
 
 namespace voxfx {
@@ -65,11 +66,11 @@ const char* toString(ShadowKind k) {
 }
 
 ShadowKind parseShadowKind(const std::string& name) {
-    if (name == "none") return ShadowKind::None;
-    if (name == "map") return ShadowKind::Map;
-    if (name == "transmittance") return ShadowKind::Transmittance;
-    if (name == "absorption") return ShadowKind::Absorption;
-    fail("unknown shadow kind '", name, "' (allowed: none, map, transmittance, absorption)");
+    static constexpr detail::EnumName<ShadowKind> kNames[] = {{"none", ShadowKind::None},
+                                                              {"map", ShadowKind::Map},
+                                                              {"transmittance", ShadowKind::Transmittance},
+                                                              {"absorption", ShadowKind::Absorption}};
+    return detail::parseEnum<ShadowKind>(name, "shadow kind", kNames);
 }
 
 float absorptionPerCrossing(const Material& m, float opaqueAbsorption) {

@@ -21,6 +21,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include "core/enum_names.hpp"
 #include "voxfx/error.hpp"
 
 namespace voxfx::detail {
@@ -35,10 +36,9 @@ std::string lowerExtension(const std::string& path) {
 }
 
 LightType parseLightType(const std::string& type, const std::string& where) {
-    if (type == "directional") return LightType::Directional;
-    if (type == "spot") return LightType::Spot;
-    if (type == "point") return LightType::Point;
-    fail(where, ": unknown light type '", type, "' (allowed: directional, spot, point)");
+    static constexpr EnumName<LightType> kNames[] = {
+        {"directional", LightType::Directional}, {"spot", LightType::Spot}, {"point", LightType::Point}};
+    return parseEnum<LightType>(type, "light type", kNames, where);
 }
 
 std::string readTextFile(const std::string& path, const char* what) {

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <limits>
 
+#include "core/enum_names.hpp"
 #include "voxelize/consumers.hpp"
 #include "voxelize/fill.hpp"
 #include "voxfx/grid_io.hpp"
@@ -18,17 +19,17 @@ namespace voxfx {
 
 namespace {
 
-template <class T>
-T parseEnum(const std::string& name, const char* what,
-            std::initializer_list<std::pair<const char*, T>> values) {
-    std::string allowed;
-    for (const auto& [n, v] : values) {
-        if (name == n) return v;
-        allowed += allowed.empty() ? "" : ", ";
-        allowed += n;
-    }
-    fail("unknown ", what, " '", name, "' (allowed: ", allowed, ")");
-}
+using detail::EnumName;
+
+constexpr EnumName<VoxelizeMode> kModeNames[] = {{"surface", VoxelizeMode::Surface},
+                                                 {"conservative", VoxelizeMode::Conservative},
+                                                 {"solid", VoxelizeMode::Solid},
+                                                 {"solid-conservative", VoxelizeMode::SolidConservative},
+                                                 {"interior", VoxelizeMode::Interior}};
+constexpr EnumName<Fill> kFillNames[] = {
+    {"parity", Fill::Parity}, {"flood", Fill::Flood}, {"vote", Fill::Vote}, {"winding", Fill::Winding}};
+constexpr EnumName<Axis> kAxisNames[] = {{"x", Axis::X}, {"y", Axis::Y}, {"z", Axis::Z}};
+constexpr EnumName<Slicing> kSlicingNames[] = {{"uniform", Slicing::Uniform}, {"local", Slicing::Local}};
 
 BitGrid rasterizeInto(const Frame& frame, const MeshView& mesh, VoxelizeMode kind, const VoxelizeOptions& o) {
     BitGrid grid(frame.width(), frame.height(), frame.depth());
@@ -181,26 +182,15 @@ const char* toString(Fill f) {
 }
 
 VoxelizeMode parseVoxelizeMode(const std::string& name) {
-    return parseEnum<VoxelizeMode>(name, "voxelization mode",
-                                   {{"surface", VoxelizeMode::Surface},
-                                    {"conservative", VoxelizeMode::Conservative},
-                                    {"solid", VoxelizeMode::Solid},
-                                    {"solid-conservative", VoxelizeMode::SolidConservative},
-                                    {"interior", VoxelizeMode::Interior}});
+    return detail::parseEnum<VoxelizeMode>(name, "voxelization mode", kModeNames);
 }
 
-Fill parseFill(const std::string& name) {
-    return parseEnum<Fill>(
-        name, "fill",
-        {{"parity", Fill::Parity}, {"flood", Fill::Flood}, {"vote", Fill::Vote}, {"winding", Fill::Winding}});
-}
+Fill parseFill(const std::string& name) { return detail::parseEnum<Fill>(name, "fill", kFillNames); }
 
-Axis parseAxis(const std::string& name) {
-    return parseEnum<Axis>(name, "axis", {{"x", Axis::X}, {"y", Axis::Y}, {"z", Axis::Z}});
-}
+Axis parseAxis(const std::string& name) { return detail::parseEnum<Axis>(name, "axis", kAxisNames); }
 
 Slicing parseSlicing(const std::string& name) {
-    return parseEnum<Slicing>(name, "slicing", {{"uniform", Slicing::Uniform}, {"local", Slicing::Local}});
+    return detail::parseEnum<Slicing>(name, "slicing", kSlicingNames);
 }
 
 Frame fitFrame(const Box3d& meshBounds, const FitOptions& o) {
