@@ -32,20 +32,13 @@ struct AttributeConsumer {
         }
         void fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool) {
             const int64_t column = y * c.frame.width() + x;
-            const double t = c.frame.depthToSlice(column)(depth);
-            const int64_t D = c.frame.depth();
-            if (!(t >= 0 && t <= double(D))) return; // outside near/far: clipped
-            write(column, std::min<int64_t>(int64_t(t), D - 1), triangle);
+            const int64_t s = detail::fragmentSlice(c.frame, column, depth);
+            if (s >= 0) write(column, s, triangle);
         }
         void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t triangle) {
             const int64_t column = y * c.frame.width() + x;
-            const DepthToSlice m = c.frame.depthToSlice(column);
-            const double t0 = m(depthMin), t1 = m(depthMax);
-            const int64_t D = c.frame.depth();
-            if (!(t1 >= 0 && t0 <= double(D))) return;
-            // Cells [s, s+1] meeting [t0, t1] (as the conservative slicemap consumer).
-            const int64_t s0 = std::max<int64_t>(0, int64_t(std::ceil(std::max(t0, -1.0))) - 1);
-            const int64_t s1 = std::min<int64_t>(D - 1, int64_t(std::floor(std::min(t1, double(D)))));
+            int64_t s0, s1;
+            if (!detail::spanSlices(c.frame, column, depthMin, depthMax, s0, s1)) return;
             for (int64_t s = s0; s <= s1; ++s) write(column, s, triangle);
         }
         void finish() {}
@@ -78,19 +71,13 @@ struct ColumnWritesConsumer {
         std::vector<Entry> entries;
         void fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool) {
             const int64_t column = y * c.frame.width() + x;
-            const double t = c.frame.depthToSlice(column)(depth);
-            const int64_t D = c.frame.depth();
-            if (!(t >= 0 && t <= double(D))) return;
-            entries.push_back({column, std::min<int64_t>(int64_t(t), D - 1), triangle});
+            const int64_t s = detail::fragmentSlice(c.frame, column, depth);
+            if (s >= 0) entries.push_back({column, s, triangle});
         }
         void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t triangle) {
             const int64_t column = y * c.frame.width() + x;
-            const DepthToSlice m = c.frame.depthToSlice(column);
-            const double t0 = m(depthMin), t1 = m(depthMax);
-            const int64_t D = c.frame.depth();
-            if (!(t1 >= 0 && t0 <= double(D))) return;
-            const int64_t s0 = std::max<int64_t>(0, int64_t(std::ceil(std::max(t0, -1.0))) - 1);
-            const int64_t s1 = std::min<int64_t>(D - 1, int64_t(std::floor(std::min(t1, double(D)))));
+            int64_t s0, s1;
+            if (!detail::spanSlices(c.frame, column, depthMin, depthMax, s0, s1)) return;
             for (int64_t s = s0; s <= s1; ++s) entries.push_back({column, s, triangle});
         }
         void finish() {

@@ -36,6 +36,30 @@ inline int64_t firstSliceBehind(double t, int64_t D) {
     return std::min<int64_t>(D, int64_t(std::floor(u)) + 1);
 }
 
+/// The slice that holds a centre fragment at frame depth `depth` in `column` (ED06: the cell of
+/// the depth), or -1 when the depth lies outside the near/far range (clipped, as on the GPU).
+inline int64_t fragmentSlice(const Frame& frame, int64_t column, double depth) {
+    const double t = frame.depthToSlice(column)(depth);
+    const int64_t D = frame.depth();
+    if (!(t >= 0 && t <= double(D))) return -1;
+    return std::min<int64_t>(int64_t(t), D - 1);
+}
+
+/// The slices [s0, s1] whose closed cells [s, s+1] meet a conservative span's depth range
+/// [depthMin, depthMax] in `column`; false when none does. Widened by kConservativeSlack as in
+/// the rasterizer, so a depth exactly on a slice boundary keeps both cells.
+inline bool spanSlices(const Frame& frame, int64_t column, double depthMin, double depthMax, int64_t& s0,
+                       int64_t& s1) {
+    const DepthToSlice m = frame.depthToSlice(column);
+    const double t0 = m(depthMin) - kConservativeSlack, t1 = m(depthMax) + kConservativeSlack;
+    const int64_t D = frame.depth();
+    if (!(t1 >= 0 && t0 <= double(D))) return false;
+    // Cells [s, s+1] meeting [t0, t1]: s from ceil(t0) - 1 to floor(t1).
+    s0 = std::max<int64_t>(0, int64_t(std::ceil(std::max(t0, -1.0))) - 1);
+    s1 = std::min<int64_t>(D - 1, int64_t(std::floor(std::min(t1, double(D)))));
+    return s0 <= s1;
+}
+
 /// One word write: plain when the calling tile owns the column, atomic on the direct path.
 template <bool Atomic> inline void orWord(uint64_t& word, uint64_t bits) {
     if constexpr (Atomic)
@@ -86,11 +110,8 @@ struct SurfaceConsumer {
         BitGrid& grid;
         void fragment(int64_t x, int64_t y, double depth, uint32_t, bool) {
             const int64_t c = y * grid.width() + x;
-            const double t = frame.depthToSlice(c)(depth);
-            const int64_t D = grid.depth();
-            if (!(t >= 0 && t <= double(D))) return; // outside near/far: clipped, as on the GPU
-            const int64_t s = std::min<int64_t>(int64_t(t), D - 1);
-            orWord<Atomic>(grid.column(c)[s >> 6], uint64_t(1) << (s & 63));
+            const int64_t s = fragmentSlice(frame, c, depth);
+            if (s >= 0) orWord<Atomic>(grid.column(c)[s >> 6], uint64_t(1) << (s & 63));
         }
         void finish() {}
     };
@@ -107,15 +128,9 @@ struct ConservativeConsumer {
         BitGrid& grid;
         void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t) {
             const int64_t c = y * grid.width() + x;
-            const DepthToSlice m = frame.depthToSlice(c);
-            // Slack as in the rasterizer: a depth exactly on a slice boundary keeps both cells.
-            const double t0 = m(depthMin) - kConservativeSlack, t1 = m(depthMax) + kConservativeSlack;
-            const int64_t D = grid.depth();
-            if (!(t1 >= 0 && t0 <= double(D))) return;
-            // Cells [s, s+1] meeting [t0, t1]: s from ceil(t0) - 1 to floor(t1).
-            const int64_t s0 = std::max<int64_t>(0, int64_t(std::ceil(std::max(t0, -1.0))) - 1);
-            const int64_t s1 = std::min<int64_t>(D - 1, int64_t(std::floor(std::min(t1, double(D)))));
-            if (s0 <= s1) setSliceRange<Atomic>(grid.column(c), s0, s1);
+            int64_t s0, s1;
+            if (spanSlices(frame, c, depthMin, depthMax, s0, s1))
+                setSliceRange<Atomic>(grid.column(c), s0, s1);
         }
         void finish() {}
     };
