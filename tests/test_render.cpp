@@ -19,11 +19,7 @@
 namespace voxfx {
 namespace {
 
-void appendQuad(Mesh& m, const Vec3d& c, const Vec3d& u, const Vec3d& v) {
-    const auto b = uint32_t(m.positions.size());
-    for (const Vec3d& p : {c - u - v, c + u - v, c + u + v, c - u + v}) m.positions.push_back(Vec3f(p));
-    m.indices.insert(m.indices.end(), {b, b + 1, b + 2, b, b + 2, b + 3});
-}
+using test::appendQuad;
 
 // A ground quad (albedo 0.5, no specular) lit straight from above with irradiance 2.
 Scene groundScene() {

@@ -18,13 +18,9 @@
 namespace voxfx {
 namespace {
 
-// ---- Scene building (independent of the demo generator) ---------------------------------------
+using test::appendQuad;
 
-void appendQuad(Mesh& m, const Vec3d& c, const Vec3d& u, const Vec3d& v) {
-    const auto b = uint32_t(m.positions.size());
-    for (const Vec3d& p : {c - u - v, c + u - v, c + u + v, c - u + v}) m.positions.push_back(Vec3f(p));
-    m.indices.insert(m.indices.end(), {b, b + 1, b + 2, b, b + 2, b + 3});
-}
+// ---- Scene building (independent of the demo generator) ---------------------------------------
 
 Material leafMaterial(Vec3f colour, float opacity = 0.7f, float transmission = 0.6f) {
     Material m;

@@ -81,6 +81,14 @@ inline void appendBox(Mesh& mesh, const Vec3d& lo, const Vec3d& hi) {
         for (const uint32_t t : {q[0], q[1], q[2], q[0], q[2], q[3]}) mesh.indices.push_back(base + t);
 }
 
+/// Appends the quad with centre c and half-edge vectors u, v (two triangles, counter-clockwise
+/// seen from u x v): leaves, ground planes and walls of the renderer and shadow tests.
+inline void appendQuad(Mesh& m, const Vec3d& c, const Vec3d& u, const Vec3d& v) {
+    const auto b = uint32_t(m.positions.size());
+    for (const Vec3d& p : {c - u - v, c + u - v, c + u + v, c - u + v}) m.positions.push_back(Vec3f(p));
+    m.indices.insert(m.indices.end(), {b, b + 1, b + 2, b, b + 2, b + 3});
+}
+
 inline Mesh makeBox(const Vec3d& lo, const Vec3d& hi) {
     Mesh m;
     appendBox(m, lo, hi);
