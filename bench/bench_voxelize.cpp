@@ -20,30 +20,6 @@ namespace {
 
 using namespace voxfx;
 
-// Midpoint subdivision without smoothing: every triangle into four. Used to build meshes of
-// about a million triangles: the Chinese dragon (20k triangles -> 1.28M after three rounds; open,
-// so its solid modes use the flood fill) and bunny00 (75k -> 1.21M after two; closed, parity).
-Mesh subdivide(const Mesh& in) {
-    Mesh out;
-    out.positions = in.positions;
-    std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
-    auto midpoint = [&](uint32_t a, uint32_t b) {
-        const auto key = std::minmax(a, b);
-        auto [it, inserted] = mid.try_emplace({key.first, key.second}, uint32_t(out.positions.size()));
-        if (inserted) {
-            const Vec3f p = out.positions[a], q = out.positions[b];
-            out.positions.push_back({(p.x + q.x) * 0.5f, (p.y + q.y) * 0.5f, (p.z + q.z) * 0.5f});
-        }
-        return it->second;
-    };
-    for (size_t t = 0; t < in.triangleCount(); ++t) {
-        const uint32_t a = in.indices[3 * t], b = in.indices[3 * t + 1], c = in.indices[3 * t + 2];
-        const uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
-        for (uint32_t i : {a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca}) out.indices.push_back(i);
-    }
-    return out;
-}
-
 const Mesh* mesh(const std::string& name) {
     static std::map<std::string, std::unique_ptr<Mesh>> cache;
     auto it = cache.find(name);
@@ -51,12 +27,11 @@ const Mesh* mesh(const std::string& name) {
     const std::string dir = std::string(VOXFX_DATA_DIR) + "/meshes/";
     std::unique_ptr<Mesh> m;
     if (name == "dragon1m" || name == "bunny1m") {
-        const bool dragon = name == "dragon1m";
-        const std::string file = dir + (dragon ? "ChineseDragon-10kv.off" : "bunny00.off");
+        // About a million triangles, made by bench/dense-meshes.sh (midpoint subdivision of
+        // bunny00, closed: parity; of the Chinese dragon, open: flood).
+        const std::string file = std::string(VOXFX_DATA_DIR) + "/dense/" + name + ".off";
         if (!std::filesystem::exists(file)) return nullptr;
-        Mesh d = loadMesh(file);
-        for (int i = 0; i < (dragon ? 3 : 2); ++i) d = subdivide(d);
-        m = std::make_unique<Mesh>(std::move(d));
+        m = std::make_unique<Mesh>(loadMesh(file));
     } else {
         const std::string file = dir + (name == "dragon" ? "ChineseDragon-10kv" : name) + ".off";
         if (!std::filesystem::exists(file)) return nullptr;
@@ -69,7 +44,7 @@ void voxelizeBench(benchmark::State& state, const std::string& name, VoxelizeMod
                    RasterPath path = RasterPath::Auto) {
     const Mesh* m = mesh(name);
     if (!m) {
-        state.SkipWithError("missing data: run scripts/fetch-data.sh");
+        state.SkipWithError("missing data: run scripts/fetch-data.sh (and bench/dense-meshes.sh for *1m)");
         return;
     }
     FitOptions fo;

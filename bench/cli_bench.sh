@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Whole-command timings and peak memory of `voxfx voxelize` (load + voxelize + write), for each
-# mode and resolution on the CGAL meshes and on two meshes of about a million triangles made by
-# midpoint subdivision (bench/subdivide_off.awk). Needs GNU time (apt-get install time).
+# mode and resolution on the CGAL meshes and on two meshes of about a million triangles
+# (bench/dense-meshes.sh). Needs GNU time (apt-get install time).
 #   bench/cli_bench.sh [build-dir] [resolutions]   -> a markdown table on stdout
 # e.g. bench/cli_bench.sh build "512 1024". The VDB output is written to a temporary folder.
 set -euo pipefail
@@ -12,14 +12,7 @@ out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
 data="$root/data/meshes"
 dense="$root/data/dense"
-mkdir -p "$dense"
-dense_mesh() { # name rounds source: subdivide once, into a temporary file renamed when complete
-  [ -s "$dense/$1.off" ] && return
-  awk -f "$root/bench/subdivide_off.awk" -v rounds="$2" "$data/$3" >"$dense/$1.off.tmp"
-  mv "$dense/$1.off.tmp" "$dense/$1.off"
-}
-dense_mesh bunny1m 2 bunny00.off
-dense_mesh dragon1m 3 ChineseDragon-10kv.off
+"$root/bench/dense-meshes.sh"
 echo "| mesh | file MB | mode | N | load (ms) | voxelize (ms) | write (ms) | whole command (ms) | peak RSS (MiB) |"
 echo "|---|---|---|---|---|---|---|---|---|"
 for file in "$data/bunny00.off" "$data/armadillo.off" "$data/ChineseDragon-10kv.off" "$dense/bunny1m.off" "$dense/dragon1m.off"; do

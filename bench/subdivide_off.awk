@@ -1,5 +1,5 @@
 # Midpoint subdivision of a triangle OFF file (every triangle into four, no smoothing), used by
-# bench/cli_bench.sh to make meshes of about a million triangles from the CGAL data:
+# bench/dense-meshes.sh to make meshes of about a million triangles from the CGAL data:
 #   awk -f bench/subdivide_off.awk -v rounds=2 bunny00.off > bunny1m.off
 # Reads the plain OFF layout of the CGAL files ("OFF", counts, vertices, "3 a b c" faces).
 {
