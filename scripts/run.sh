@@ -5,7 +5,12 @@ set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 scripts/install-deps.sh
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DVOXFX_BUILD_TESTS=OFF -DVOXFX_BUILD_BENCH=OFF >/dev/null
+launcher=()
+command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+# The same compile flags as scripts/test.sh's Release pass, so running the tests afterwards
+# reuses these objects; the tests themselves are not built here.
+cmake -S . -B build -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=Release -DVOXFX_WERROR=ON -DVOXFX_SANITIZE=OFF \
+  -DVOXFX_BUILD_CLI=ON -DVOXFX_BUILD_TESTS=OFF -DVOXFX_BUILD_BENCH=OFF -DVOXFX_BUILD_EXAMPLES=OFF >/dev/null
 cmake --build build --target voxfx_cli
 scripts/fetch-data.sh
 mkdir -p out

@@ -1,27 +1,47 @@
 #!/usr/bin/env bash
 # The test job on a fresh Debian 12 machine: install dependencies, fetch the test data, build
-# and run the fast test suite in Release, then again under AddressSanitizer and
+# and run the fast test suite in Release, check that an installed voxfx can be consumed with
+# find_package, then build and run the suite again under AddressSanitizer and
 # UndefinedBehaviorSanitizer. Set VOXFX_TEST_LABEL=slow (or "") to include the long cases.
+#
+# Every build option the job relies on is set explicitly: build/ may have been configured by
+# scripts/run.sh (no tests, no benchmarks), and the CMake cache would keep that. ctest fails
+# when it finds no test, and a test whose data file is missing fails instead of skipping
+# (VOXFX_REQUIRE_DATA=1), since the data was fetched above.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
+start=$SECONDS
 scripts/install-deps.sh
 scripts/fetch-data.sh
+export VOXFX_REQUIRE_DATA=1
 label="${VOXFX_TEST_LABEL-fast}"
 label_args=()
 [ -n "$label" ] && label_args=(-L "$label")
 jobs="$(nproc)"
+launcher=()
+command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 
 echo "== format check"
 git ls-files '*.cpp' '*.hpp' | xargs clang-format --dry-run -Werror
 
 echo "== Release build and tests"
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DVOXFX_WERROR=ON >/dev/null
+cmake -S . -B build -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=Release -DVOXFX_WERROR=ON -DVOXFX_SANITIZE=OFF \
+  -DVOXFX_BUILD_CLI=ON -DVOXFX_BUILD_TESTS=ON -DVOXFX_BUILD_BENCH=ON -DVOXFX_BUILD_EXAMPLES=ON >/dev/null
 cmake --build build -j "$jobs"
-ctest --test-dir build --output-on-failure -j "$jobs" "${label_args[@]}"
+ctest --test-dir build --no-tests=error --output-on-failure -j "$jobs" "${label_args[@]}"
+
+if [ -x scripts/check-install.sh ]; then
+  echo "== install and build examples/ against it with find_package(voxfx)"
+  scripts/check-install.sh build
+fi
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
-cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVOXFX_SANITIZE=ON -DVOXFX_BUILD_BENCH=OFF >/dev/null
+# No benchmarks or examples here: they add build time and no test.
+cmake -S . -B build-asan -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVOXFX_WERROR=ON \
+  -DVOXFX_SANITIZE=ON -DVOXFX_BUILD_CLI=ON -DVOXFX_BUILD_TESTS=ON -DVOXFX_BUILD_BENCH=OFF \
+  -DVOXFX_BUILD_EXAMPLES=OFF >/dev/null
 cmake --build build-asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-  ctest --test-dir build-asan --output-on-failure -j "$jobs" "${label_args[@]}"
+  ctest --test-dir build-asan --no-tests=error --output-on-failure -j "$jobs" "${label_args[@]}"
+echo "== all tests passed in $((SECONDS - start)) s"
