@@ -79,6 +79,16 @@ TEST(TransferFunction, TableAgreesWithTheFunctionAtItsEntriesAndOnLinearStretche
     EXPECT_THROW(TransferTable(tf, 5, 5, 16), Error);
 }
 
+TEST(TransferFunction, NanValueAndEmptyFunctionGiveTransparentBlack) {
+    const TransferFunction tf({{0, {1, 1, 1}}, {1, {1, 1, 1}}}, {{0, 1}, {1, 1}});
+    EXPECT_EQ(tf.opacity(std::nan("")), 0.0);
+    EXPECT_EQ(tf.color(std::nan("")), Vec3d(0, 0, 0));
+    const TransferFunction none;
+    EXPECT_EQ(none(0.5), (Rgba{0, 0, 0, 0}));
+    EXPECT_EQ(none.opacity(0.5), 0.0);
+    EXPECT_EQ(none.color(0.5), Vec3d(0, 0, 0));
+}
+
 TEST(TransferFunction, BadControlPointsGiveAClearError) {
     const double nan = std::nan("");
     const std::string src = "tf.json";

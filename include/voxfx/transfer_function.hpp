@@ -50,7 +50,8 @@ public:
 
     Vec3d color(double value) const;
     double opacity(double value) const;
-    /// Colour and opacity at `value`; a NaN value gives transparent black.
+    /// Colour and opacity at `value`. A NaN value, or a default-constructed function, gives
+    /// transparent black (colour 0, opacity 0).
     Rgba operator()(double value) const;
 
     /// Range of values spanned by the control points (first to last of both curves).

@@ -52,10 +52,12 @@ TransferFunction::TransferFunction(std::vector<ColorPoint> color, std::vector<Op
 }
 
 Vec3d TransferFunction::color(double value) const {
+    if (color_.empty() || std::isnan(value)) return {}; // default-constructed or NaN: black
     return lookup(color_, value, [](const ColorPoint& p) { return p.color; });
 }
 
 double TransferFunction::opacity(double value) const {
+    if (opacity_.empty() || std::isnan(value)) return 0;
     return lookup(opacity_, value, [](const OpacityPoint& p) { return p.opacity; });
 }
 
