@@ -5,6 +5,7 @@
 
 #include "test_util.hpp"
 #include "voxfx/transfer_function.hpp"
+#include "voxfx/volume_io.hpp"
 
 namespace voxfx {
 namespace {

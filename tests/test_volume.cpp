@@ -8,6 +8,7 @@
 
 #include "test_util.hpp"
 #include "voxfx/parallel.hpp"
+#include "voxfx/smoke.hpp"
 #include "voxfx/volume.hpp"
 
 namespace voxfx {

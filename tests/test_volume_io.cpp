@@ -17,7 +17,7 @@
 #include <zlib.h>
 
 #include "test_util.hpp"
-#include "voxfx/volume.hpp"
+#include "voxfx/volume_io.hpp"
 
 namespace voxfx {
 namespace {
@@ -304,6 +304,20 @@ TEST(VolumeIo, InrHeaderNeedNotFillWholeBlocks) {
     const Volume v = loadVolume(writeFile(dir.file("short.inr"), header + std::string("\x07\x09", 2)));
     EXPECT_EQ(v.at(0, 0, 0), 7.0f);
     EXPECT_EQ(v.at(1, 0, 0), 9.0f);
+}
+
+TEST(VolumeIo, GzipOfSeveralMembersAndWithoutExtensionReads) {
+    // gzip allows concatenated members (what `cat a.gz b.gz` makes); the name need not say .gz.
+    TempDir dir;
+    const Samples s = makeSamples(ScalarType::UInt16, 60, true);
+    const std::string header =
+        inrHeader("XDIM=3\nYDIM=4\nZDIM=5\nTYPE=unsigned fixed\nPIXSIZE=16 bits\nCPU=sun\n");
+    const std::string twoMembers = gzip(header + s.bytes.substr(0, 7)) + gzip(s.bytes.substr(7));
+    expectSamples(loadVolume(writeFile(dir.file("two.inr.gz"), twoMembers)), kDims, s.expected);
+    VolumeLoadReport report;
+    expectSamples(loadVolume(writeFile(dir.file("scan"), twoMembers), &report), kDims, s.expected);
+    EXPECT_EQ(report.format, VolumeFormat::Inr);
+    EXPECT_TRUE(report.gzip);
 }
 
 // ---- NRRD -------------------------------------------------------------------------------------

@@ -5,8 +5,8 @@
 // a curve keeps the first point's value, above the last the last one's. Two points at the same
 // value make a step: the value itself takes the right-hand point.
 //
-// JSON (either form, in a file read by loadTransferFunction or text given to
-// parseTransferFunction):
+// JSON (either form, in a file read by loadTransferFunction (voxfx/volume_io.hpp) or text given
+// to parseTransferFunction):
 //   {"points": [{"value": 0, "color": [0, 0, 0], "opacity": 0},
 //               {"value": 80, "color": [1, 0.9, 0.8], "opacity": 0.6}]}
 //   {"color": [[0, 0, 0, 0], [80, 1, 0.9, 0.8]], "opacity": [[0, 0], [40, 0.1], [80, 0.6]]}
@@ -83,7 +83,5 @@ private:
 /// Parses the JSON text of a transfer function; `source` (a file name) starts every message.
 TransferFunction parseTransferFunction(std::string_view json,
                                        const std::string& source = "transfer function");
-/// Reads a transfer function's JSON file.
-TransferFunction loadTransferFunction(const std::string& path);
 
 } // namespace voxfx

@@ -6,20 +6,7 @@
 // Values are stored as float, x fastest: index = i + nx * (j + ny * k), the order of INR, NRRD
 // and raw files; the scalar type the file stored is kept in sourceType().
 //
-// Readers (loadVolume) pick the format by extension, then by magic bytes:
-//   .inr, .inr.gz   INRIMAGE-4 (CGAL's images); TX/TY/TZ is the centre of voxel (0, 0, 0), as in
-//                   CGAL's ImageIO, and 0 when absent, so meshes CGAL makes from the image line up
-//   .nrrd, .nhdr    NRRD scalar volumes (raw or gzip encoding, either endian, attached or one
-//                   detached data file); "space origin" is the centre of voxel (0, 0, 0); without
-//                   it the box starts at 0, as voxfx's NRRD grid reader does
-//   .json           raw samples described by a JSON header:
-//                   {"file": "ct.raw", "dims": [nx, ny, nz], "type": "uint16",
-//                    "endian": "little", "spacing": [sx, sy, sz], "origin": [x, y, z],
-//                    "offset": 0}
-//                   "origin" is the centre of voxel (0, 0, 0) (box from 0 without it), "file"
-//                   is relative to the JSON file, "offset" skips a header of that many bytes
-// Every header is checked against the bytes the file holds before anything is allocated, and a
-// NaN or infinite sample is an error: voxfx::Error names the file and what is wrong.
+// Files are read by loadVolume (voxfx/volume_io.hpp); makeSmoke (voxfx/smoke.hpp) makes one.
 #pragma once
 
 #include <cstdint>
@@ -93,36 +80,5 @@ private:
     ScalarType type_ = ScalarType::Float32;
     std::vector<float> values_;
 };
-
-/// File format of a volume.
-enum class VolumeFormat : uint8_t { Inr, Nrrd, RawJson };
-const char* toString(VolumeFormat f);
-
-/// What loadVolume found besides the volume.
-struct VolumeLoadReport {
-    VolumeFormat format = VolumeFormat::Inr;
-    bool gzip = false;      ///< the samples were gzip-compressed
-    uint64_t fileBytes = 0; ///< size of the file named (the header for a detached NRRD or JSON)
-};
-
-/// Reads a scalar volume (see the file comment for the formats). Throws voxfx::Error naming the
-/// file and the problem. OpenVDB float grids are not read here yet.
-Volume loadVolume(const std::string& path, VolumeLoadReport* report = nullptr);
-
-/// Parameters of the procedural smoke (makeSmoke).
-struct SmokeParams {
-    Vec3i dims{64, 64, 64};
-    /// World box the volume fills; the plume rises along +z from the bottom centre.
-    Box3d box{{-1, -1, -1}, {1, 1, 1}};
-    uint32_t seed = 1;
-    int octaves = 5;
-    /// Frequency of the first noise octave, in periods across the box.
-    double frequency = 3.0;
-};
-
-/// A deterministic smoke density in [0, 1]: fractal (fBm) value noise inside a soft plume that
-/// widens as it rises and fades at its edges and top. Same parameters, same values, whatever the
-/// thread count. Throws voxfx::Error for bad dimensions, box or octaves (not in [1, 16]).
-Volume makeSmoke(const SmokeParams& params);
 
 } // namespace voxfx

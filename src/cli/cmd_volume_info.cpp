@@ -4,7 +4,7 @@
 
 #include "cli_common.hpp"
 #include "voxfx/transfer_function.hpp"
-#include "voxfx/volume.hpp"
+#include "voxfx/volume_io.hpp"
 
 namespace voxfx::cli {
 namespace {

@@ -60,18 +60,6 @@ ScalarType scalarTypeFromString(const std::string& name) {
          "' (known: uint8, int8, uint16, int16, uint32, int32, float32 or float, float64 or double)");
 }
 
-const char* toString(VolumeFormat f) {
-    switch (f) {
-    case VolumeFormat::Inr:
-        return "inr";
-    case VolumeFormat::Nrrd:
-        return "nrrd";
-    case VolumeFormat::RawJson:
-        return "raw+json";
-    }
-    return "unknown";
-}
-
 Volume::Volume(const Vec3i& dims, const Vec3d& lo, const Vec3d& spacing, ScalarType sourceType)
     : dims_(dims), lo_(lo), spacing_(spacing), type_(sourceType) {
     if (dims.x < 1 || dims.y < 1 || dims.z < 1)

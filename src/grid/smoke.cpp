@@ -4,11 +4,12 @@
 // so nothing depends on call order or threads), summed over octaves as fractional Brownian
 // motion, domain-warped once for wisps, and shaped by a plume: a soft-edged cone that rises along
 // +z from the bottom centre of the box, fading in at the bottom and out towards the top.
+#include "voxfx/smoke.hpp"
+
 #include <algorithm>
 #include <cmath>
 
 #include "voxfx/parallel.hpp"
-#include "voxfx/volume.hpp"
 
 namespace voxfx {
 

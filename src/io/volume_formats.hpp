@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "voxfx/volume.hpp"
+#include "voxfx/volume_io.hpp"
 
 namespace voxfx::detail {
 

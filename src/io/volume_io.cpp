@@ -198,6 +198,18 @@ void flipAxis(Volume& volume, int axis) {
 
 } // namespace detail
 
+const char* toString(VolumeFormat f) {
+    switch (f) {
+    case VolumeFormat::Inr:
+        return "inr";
+    case VolumeFormat::Nrrd:
+        return "nrrd";
+    case VolumeFormat::RawJson:
+        return "raw+json";
+    }
+    return "unknown";
+}
+
 namespace {
 
 std::string lowerName(const std::string& path) {

@@ -2,7 +2,7 @@
 #include <string_view>
 
 #include "io/volume_formats.hpp"
-#include "voxfx/transfer_function.hpp"
+#include "voxfx/volume_io.hpp"
 
 namespace voxfx {
 
