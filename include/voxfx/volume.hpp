@@ -31,6 +31,54 @@ ScalarType scalarTypeFromString(const std::string& name);
 /// Largest voxel count a volume may have (2^40: 4 TiB of floats; guards products against overflow).
 inline constexpr int64_t kMaxVolumeVoxels = int64_t(1) << 40;
 
+/// A volume's samples and placement as plain values, for kernels that may run on the host or a
+/// device: no ownership, no allocation, no exceptions. Volume::view() makes one; it stays valid
+/// while the volume lives and is not resized.
+struct VolumeView {
+    const float* values = nullptr;
+    int64_t nx = 0, ny = 0, nz = 0;
+    Vec3d lo{0, 0, 0};
+    Vec3d spacing{1, 1, 1};
+
+    VOXFX_HOSTDEV float at(int64_t i, int64_t j, int64_t k) const { return values[i + nx * (j + ny * k)]; }
+
+    /// Trilinear interpolation of the voxel-centre samples at world point p: clamped to the nearest
+    /// centres within half a voxel of the box's faces, `outside` beyond the box or for a NaN p.
+    VOXFX_HOSTDEV float sample(const Vec3d& p, float outside = 0.0f) const {
+        if (values == nullptr) return outside;
+        const int64_t n[3] = {nx, ny, nz};
+        int64_t i0[3], i1[3];
+        double t[3];
+        for (int a = 0; a < 3; ++a) {
+            // Continuous index of the sample lattice: voxel centres sit at integers. Written so
+            // that a NaN coordinate fails both comparisons and lands outside.
+            const double u = (p[a] - lo[a]) / spacing[a];
+            if (!(u >= 0 && u <= double(n[a]))) return outside;
+            const double c = u - 0.5;
+            if (c <= 0) {
+                i0[a] = i1[a] = 0;
+                t[a] = 0;
+            } else if (c >= double(n[a] - 1)) {
+                i0[a] = i1[a] = n[a] - 1;
+                t[a] = 0;
+            } else {
+                i0[a] = int64_t(c); // c > 0: truncation is floor
+                i1[a] = i0[a] + 1 < n[a] ? i0[a] + 1 : n[a] - 1;
+                t[a] = c - double(i0[a]);
+            }
+        }
+        const auto v = [&](int dx, int dy, int dz) {
+            return double(at(dx ? i1[0] : i0[0], dy ? i1[1] : i0[1], dz ? i1[2] : i0[2]));
+        };
+        const auto lerp = [](double a, double b, double s) { return a + (b - a) * s; };
+        const double x00 = lerp(v(0, 0, 0), v(1, 0, 0), t[0]);
+        const double x10 = lerp(v(0, 1, 0), v(1, 1, 0), t[0]);
+        const double x01 = lerp(v(0, 0, 1), v(1, 0, 1), t[0]);
+        const double x11 = lerp(v(0, 1, 1), v(1, 1, 1), t[0]);
+        return float(lerp(lerp(x00, x10, t[1]), lerp(x01, x11, t[1]), t[2]));
+    }
+};
+
 class Volume {
 public:
     Volume() = default;
@@ -62,7 +110,11 @@ public:
     /// Trilinear interpolation of the voxel-centre samples at world point p. Inside the box but
     /// within half a voxel of its faces the samples are clamped to the nearest centre (no fade at
     /// the border); outside the box (or for a non-finite p) it returns `outside`.
-    float sample(const Vec3d& p, float outside = 0.0f) const;
+    float sample(const Vec3d& p, float outside = 0.0f) const { return view().sample(p, outside); }
+    /// The plain view kernels sample (see VolumeView).
+    VolumeView view() const {
+        return {values_.empty() ? nullptr : values_.data(), dims_.x, dims_.y, dims_.z, lo_, spacing_};
+    }
 
     /// Smallest and largest value (0 and 0 for an empty volume).
     float minValue() const;

@@ -83,41 +83,6 @@ Vec3d Volume::voxelCenter(int64_t i, int64_t j, int64_t k) const {
     return lo_ + Vec3d(double(i) + 0.5, double(j) + 0.5, double(k) + 0.5) * spacing_;
 }
 
-float Volume::sample(const Vec3d& p, float outside) const {
-    if (values_.empty()) return outside;
-    const Box3d b = box();
-    // Written so that a NaN coordinate fails every comparison and lands outside.
-    if (!(p.x >= b.lo.x && p.x <= b.hi.x && p.y >= b.lo.y && p.y <= b.hi.y && p.z >= b.lo.z && p.z <= b.hi.z))
-        return outside;
-    int64_t i0[3], i1[3];
-    double t[3];
-    for (int a = 0; a < 3; ++a) {
-        // Continuous index of the sample lattice: voxel centres sit at integers.
-        const double u = (p[a] - lo_[a]) / spacing_[a] - 0.5;
-        const int64_t n = dims_[a];
-        if (u <= 0) {
-            i0[a] = i1[a] = 0;
-            t[a] = 0;
-        } else if (u >= double(n - 1)) {
-            i0[a] = i1[a] = n - 1;
-            t[a] = 0;
-        } else {
-            i0[a] = int64_t(std::floor(u));
-            i1[a] = std::min(i0[a] + 1, n - 1);
-            t[a] = u - double(i0[a]);
-        }
-    }
-    const auto v = [&](int dx, int dy, int dz) {
-        return double(at(dx ? i1[0] : i0[0], dy ? i1[1] : i0[1], dz ? i1[2] : i0[2]));
-    };
-    const auto lerp = [](double a, double c, double s) { return a + (c - a) * s; };
-    const double x00 = lerp(v(0, 0, 0), v(1, 0, 0), t[0]);
-    const double x10 = lerp(v(0, 1, 0), v(1, 1, 0), t[0]);
-    const double x01 = lerp(v(0, 0, 1), v(1, 0, 1), t[0]);
-    const double x11 = lerp(v(0, 1, 1), v(1, 1, 1), t[0]);
-    return float(lerp(lerp(x00, x10, t[1]), lerp(x01, x11, t[1]), t[2]));
-}
-
 float Volume::minValue() const {
     return values_.empty() ? 0.0f : *std::min_element(values_.begin(), values_.end());
 }
