@@ -1,0 +1,87 @@
+// voxfx — 1D transfer function: scalar value -> colour (linear RGB) and opacity.
+//
+// Two piecewise-linear curves over the scalar value, each given by control points sorted by
+// value: colour points (value, r, g, b) and opacity points (value, alpha). Below the first point
+// a curve keeps the first point's value, above the last the last one's. Two points at the same
+// value make a step: the value itself takes the right-hand point.
+//
+// JSON (either form, in a file read by loadTransferFunction (voxfx/volume_io.hpp) or text given
+// to parseTransferFunction):
+//   {"points": [{"value": 0, "color": [0, 0, 0], "opacity": 0},
+//               {"value": 80, "color": [1, 0.9, 0.8], "opacity": 0.6}]}
+//   {"color": [[0, 0, 0, 0], [80, 1, 0.9, 0.8]], "opacity": [[0, 0], [40, 0.1], [80, 0.6]]}
+// Control points must be finite, sorted by value, with opacity in [0, 1] and colour >= 0 (linear
+// RGB may exceed 1); anything else throws voxfx::Error naming the source and the point.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "voxfx/math.hpp"
+
+namespace voxfx {
+
+struct Rgba {
+    float r = 0, g = 0, b = 0, a = 0;
+    bool operator==(const Rgba&) const = default;
+};
+
+struct ColorPoint {
+    double value = 0;
+    Vec3d color;
+};
+
+struct OpacityPoint {
+    double value = 0;
+    double opacity = 0;
+};
+
+class TransferFunction {
+public:
+    TransferFunction() = default;
+    /// Throws voxfx::Error (message starting with `source`) for empty, unsorted or non-finite
+    /// points, opacity outside [0, 1] or negative colour.
+    TransferFunction(std::vector<ColorPoint> color, std::vector<OpacityPoint> opacity,
+                     const std::string& source = "transfer function");
+
+    const std::vector<ColorPoint>& colorPoints() const { return color_; }
+    const std::vector<OpacityPoint>& opacityPoints() const { return opacity_; }
+
+    Vec3d color(double value) const;
+    double opacity(double value) const;
+    /// Colour and opacity at `value`. A NaN value, or a default-constructed function, gives
+    /// transparent black (colour 0, opacity 0).
+    Rgba operator()(double value) const;
+
+    /// Range of values spanned by the control points (first to last of both curves).
+    double minValue() const;
+    double maxValue() const;
+
+private:
+    std::vector<ColorPoint> color_;
+    std::vector<OpacityPoint> opacity_;
+};
+
+/// A transfer function sampled at n evenly spaced values over [lo, hi] (entry i at
+/// lo + i * (hi - lo) / (n - 1)), looked up with linear interpolation between entries: what a
+/// renderer indexes per sample instead of searching the control points.
+class TransferTable {
+public:
+    /// Throws voxfx::Error for n < 2 or a range that is not finite with lo < hi.
+    TransferTable(const TransferFunction& tf, double lo, double hi, int n);
+    Rgba operator()(double value) const;
+    const std::vector<Rgba>& entries() const { return table_; }
+    double lo() const { return lo_; }
+    double hi() const { return hi_; }
+
+private:
+    std::vector<Rgba> table_;
+    double lo_ = 0, hi_ = 1, scale_ = 1;
+};
+
+/// Parses the JSON text of a transfer function; `source` (a file name) starts every message.
+TransferFunction parseTransferFunction(std::string_view json,
+                                       const std::string& source = "transfer function");
+
+} // namespace voxfx

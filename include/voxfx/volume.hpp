@@ -1,0 +1,136 @@
+// voxfx — Volume: a scalar field on a regular grid placed in the world (CT scans, smoke).
+//
+// Placement follows VoxelGrid's convention: voxel (i, j, k) covers
+//     [lo + (i, j, k) * spacing, lo + (i + 1, j + 1, k + 1) * spacing]
+// and its value is the sample at the voxel's centre, lo + (i + 0.5, j + 0.5, k + 0.5) * spacing.
+// Values are stored as float, x fastest: index = i + nx * (j + ny * k), the order of INR, NRRD
+// and raw files; the scalar type the file stored is kept in sourceType().
+//
+// Files are read by loadVolume (voxfx/volume_io.hpp); makeSmoke (voxfx/smoke.hpp) makes one.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "voxfx/frame.hpp"
+#include "voxfx/math.hpp"
+
+namespace voxfx {
+
+/// Scalar type of the samples a volume file stored.
+enum class ScalarType : uint8_t { UInt8, Int8, UInt16, Int16, UInt32, Int32, Float32, Float64 };
+
+const char* toString(ScalarType t);
+/// Bytes per sample of the type.
+int scalarBytes(ScalarType t);
+/// Parses "uint8", "int16", "float32" (or "float"), "float64" (or "double")...; throws voxfx::Error
+/// naming the accepted names.
+ScalarType scalarTypeFromString(const std::string& name);
+
+/// Largest voxel count a volume may have (2^40: 4 TiB of floats; guards products against overflow).
+inline constexpr int64_t kMaxVolumeVoxels = int64_t(1) << 40;
+
+/// A volume's samples and placement as plain values, for kernels that may run on the host or a
+/// device: no ownership, no allocation, no exceptions. Volume::view() makes one; it stays valid
+/// while the volume lives and is not resized.
+struct VolumeView {
+    const float* values = nullptr;
+    int64_t nx = 0, ny = 0, nz = 0;
+    Vec3d lo{0, 0, 0};
+    Vec3d spacing{1, 1, 1};
+
+    VOXFX_HOSTDEV float at(int64_t i, int64_t j, int64_t k) const { return values[i + nx * (j + ny * k)]; }
+
+    /// Trilinear interpolation of the voxel-centre samples at world point p: clamped to the nearest
+    /// centres within half a voxel of the box's faces, `outside` beyond the box or for a NaN p.
+    VOXFX_HOSTDEV float sample(const Vec3d& p, float outside = 0.0f) const {
+        if (values == nullptr) return outside;
+        const int64_t n[3] = {nx, ny, nz};
+        int64_t i0[3], i1[3];
+        double t[3];
+        for (int a = 0; a < 3; ++a) {
+            // Continuous index of the sample lattice: voxel centres sit at integers. Written so
+            // that a NaN coordinate fails both comparisons and lands outside.
+            const double u = (p[a] - lo[a]) / spacing[a];
+            if (!(u >= 0 && u <= double(n[a]))) return outside;
+            const double c = u - 0.5;
+            if (c <= 0) {
+                i0[a] = i1[a] = 0;
+                t[a] = 0;
+            } else if (c >= double(n[a] - 1)) {
+                i0[a] = i1[a] = n[a] - 1;
+                t[a] = 0;
+            } else {
+                i0[a] = int64_t(c); // c > 0: truncation is floor
+                i1[a] = i0[a] + 1 < n[a] ? i0[a] + 1 : n[a] - 1;
+                t[a] = c - double(i0[a]);
+            }
+        }
+        const auto v = [&](int dx, int dy, int dz) {
+            return double(at(dx ? i1[0] : i0[0], dy ? i1[1] : i0[1], dz ? i1[2] : i0[2]));
+        };
+        const auto lerp = [](double a, double b, double s) { return a + (b - a) * s; };
+        const double x00 = lerp(v(0, 0, 0), v(1, 0, 0), t[0]);
+        const double x10 = lerp(v(0, 1, 0), v(1, 1, 0), t[0]);
+        const double x01 = lerp(v(0, 0, 1), v(1, 0, 1), t[0]);
+        const double x11 = lerp(v(0, 1, 1), v(1, 1, 1), t[0]);
+        return float(lerp(lerp(x00, x10, t[1]), lerp(x01, x11, t[1]), t[2]));
+    }
+};
+
+class Volume {
+public:
+    Volume() = default;
+    /// A volume of nx x ny x nz voxels, all 0, whose voxel (0, 0, 0) starts at `lo`. Throws
+    /// voxfx::Error for a dimension < 1, more than kMaxVolumeVoxels voxels, a spacing that is
+    /// not positive and finite, or a non-finite `lo`.
+    Volume(const Vec3i& dims, const Vec3d& lo, const Vec3d& spacing,
+           ScalarType sourceType = ScalarType::Float32);
+
+    const Vec3i& dims() const { return dims_; }
+    int64_t voxelCount() const { return dims_.x * dims_.y * dims_.z; }
+    /// World corner of voxel (0, 0, 0) and the size of one voxel.
+    const Vec3d& lo() const { return lo_; }
+    const Vec3d& spacing() const { return spacing_; }
+    /// The world box the voxels tile.
+    Box3d box() const;
+    /// World centre of voxel (i, j, k).
+    Vec3d voxelCenter(int64_t i, int64_t j, int64_t k) const;
+
+    ScalarType sourceType() const { return type_; }
+    void setSourceType(ScalarType t) { type_ = t; }
+
+    int64_t index(int64_t i, int64_t j, int64_t k) const { return i + dims_.x * (j + dims_.y * k); }
+    float at(int64_t i, int64_t j, int64_t k) const { return values_[std::size_t(index(i, j, k))]; }
+    float& at(int64_t i, int64_t j, int64_t k) { return values_[std::size_t(index(i, j, k))]; }
+    const std::vector<float>& values() const { return values_; }
+    std::vector<float>& values() { return values_; }
+
+    /// Trilinear interpolation of the voxel-centre samples at world point p. Inside the box but
+    /// within half a voxel of its faces the samples are clamped to the nearest centre (no fade at
+    /// the border); outside the box (or for a non-finite p) it returns `outside`.
+    float sample(const Vec3d& p, float outside = 0.0f) const { return view().sample(p, outside); }
+    /// The plain view kernels sample (see VolumeView).
+    VolumeView view() const {
+        return {values_.empty() ? nullptr : values_.data(), dims_.x, dims_.y, dims_.z, lo_, spacing_};
+    }
+
+    /// Smallest and largest value (0 and 0 for an empty volume).
+    float minValue() const;
+    float maxValue() const;
+
+    /// The orthographic frame whose cells are this volume's voxels, sliced along `axis`:
+    /// frame.cellCenter(x, y, s) is the centre of the voxel whose index along columnXAxis(axis) is
+    /// x, along columnYAxis(axis) y and along the axis s.
+    Frame frame(Axis axis = Axis::Z) const;
+
+private:
+    Vec3i dims_{0, 0, 0};
+    Vec3d lo_{0, 0, 0};
+    Vec3d spacing_{1, 1, 1};
+    ScalarType type_ = ScalarType::Float32;
+    std::vector<float> values_;
+};
+
+} // namespace voxfx

@@ -1,0 +1,164 @@
+// voxfx — 1D transfer function: validation, piecewise-linear lookup, table, JSON parsing.
+#include "voxfx/transfer_function.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+namespace voxfx {
+
+namespace {
+
+template <class Point, class Get> auto lookup(const std::vector<Point>& pts, double x, Get get) {
+    if (x < pts.front().value) return get(pts.front());
+    if (x >= pts.back().value) return get(pts.back());
+    // First point with value > x: x lies in [prev.value, next.value) (a step takes the right side).
+    const auto next =
+        std::upper_bound(pts.begin(), pts.end(), x, [](double v, const Point& p) { return v < p.value; });
+    const auto prev = next - 1;
+    const double t = (x - prev->value) / (next->value - prev->value);
+    return get(*prev) + (get(*next) - get(*prev)) * t;
+}
+
+} // namespace
+
+TransferFunction::TransferFunction(std::vector<ColorPoint> color, std::vector<OpacityPoint> opacity,
+                                   const std::string& source)
+    : color_(std::move(color)), opacity_(std::move(opacity)) {
+    if (color_.empty()) fail(source, ": the transfer function has no colour control points");
+    if (opacity_.empty()) fail(source, ": the transfer function has no opacity control points");
+    for (std::size_t i = 0; i < color_.size(); ++i) {
+        const ColorPoint& p = color_[i];
+        if (!std::isfinite(p.value)) fail(source, ": colour point ", i, " has a value that is not finite");
+        if (!isFinite(p.color))
+            fail(source, ": colour point ", i, " (value ", p.value, ") has a non-finite colour");
+        if (p.color.x < 0 || p.color.y < 0 || p.color.z < 0)
+            fail(source, ": colour point ", i, " (value ", p.value, ") has a negative colour component");
+        if (i > 0 && p.value < color_[i - 1].value)
+            fail(source, ": colour points are not sorted by value: point ", i, " (", p.value,
+                 ") comes after point ", i - 1, " (", color_[i - 1].value, ")");
+    }
+    for (std::size_t i = 0; i < opacity_.size(); ++i) {
+        const OpacityPoint& p = opacity_[i];
+        if (!std::isfinite(p.value)) fail(source, ": opacity point ", i, " has a value that is not finite");
+        if (!(p.opacity >= 0 && p.opacity <= 1))
+            fail(source, ": opacity point ", i, " (value ", p.value, ") has opacity ", p.opacity,
+                 ", outside [0, 1]");
+        if (i > 0 && p.value < opacity_[i - 1].value)
+            fail(source, ": opacity points are not sorted by value: point ", i, " (", p.value,
+                 ") comes after point ", i - 1, " (", opacity_[i - 1].value, ")");
+    }
+}
+
+Vec3d TransferFunction::color(double value) const {
+    if (color_.empty() || std::isnan(value)) return {}; // default-constructed or NaN: black
+    return lookup(color_, value, [](const ColorPoint& p) { return p.color; });
+}
+
+double TransferFunction::opacity(double value) const {
+    if (opacity_.empty() || std::isnan(value)) return 0;
+    return lookup(opacity_, value, [](const OpacityPoint& p) { return p.opacity; });
+}
+
+Rgba TransferFunction::operator()(double value) const {
+    if (std::isnan(value) || color_.empty()) return {};
+    const Vec3d c = color(value);
+    return {float(c.x), float(c.y), float(c.z), float(opacity(value))};
+}
+
+double TransferFunction::minValue() const {
+    if (color_.empty()) return 0;
+    return std::min(color_.front().value, opacity_.front().value);
+}
+
+double TransferFunction::maxValue() const {
+    if (color_.empty()) return 0;
+    return std::max(color_.back().value, opacity_.back().value);
+}
+
+TransferTable::TransferTable(const TransferFunction& tf, double lo, double hi, int n) : lo_(lo), hi_(hi) {
+    if (n < 2) fail("a transfer table needs at least 2 entries, got ", n);
+    if (!(std::isfinite(lo) && std::isfinite(hi) && lo < hi))
+        fail("a transfer table needs a finite range lo < hi, got [", lo, ", ", hi, "]");
+    scale_ = double(n - 1) / (hi - lo);
+    table_.resize(std::size_t(n));
+    for (int i = 0; i < n; ++i) table_[std::size_t(i)] = tf(lo + double(i) * (hi - lo) / double(n - 1));
+}
+
+Rgba TransferTable::operator()(double value) const {
+    if (std::isnan(value)) return {};
+    const double u = std::clamp((value - lo_) * scale_, 0.0, double(table_.size() - 1));
+    const auto i = std::min(std::size_t(u), table_.size() - 2);
+    const float t = float(u - double(i));
+    const Rgba& a = table_[i];
+    const Rgba& b = table_[i + 1];
+    return {a.r + (b.r - a.r) * t, a.g + (b.g - a.g) * t, a.b + (b.b - a.b) * t, a.a + (b.a - a.a) * t};
+}
+
+namespace {
+
+using nlohmann::json;
+
+double number(const json& j, const std::string& source, const std::string& what) {
+    if (!j.is_number()) fail(source, ": ", what, " must be a number");
+    return j.get<double>();
+}
+
+Vec3d rgb(const json& j, const std::string& source, const std::string& what) {
+    if (!j.is_array() || j.size() != 3) fail(source, ": ", what, " must be an array [r, g, b]");
+    return {number(j[0], source, what), number(j[1], source, what), number(j[2], source, what)};
+}
+
+} // namespace
+
+TransferFunction parseTransferFunction(std::string_view text, const std::string& source) {
+    json j;
+    try {
+        // NaN is not JSON; a file that spells it fails here with the parser's position.
+        j = json::parse(text.begin(), text.end());
+    } catch (const json::exception& e) { fail(source, ": not valid JSON: ", e.what()); }
+    if (!j.is_object()) fail(source, ": a transfer function must be a JSON object");
+    for (const auto& item : j.items())
+        if (item.key() != "points" && item.key() != "color" && item.key() != "opacity")
+            fail(source, ": unknown key \"", item.key(),
+                 "\" in a transfer function (known: points, color, opacity)");
+    std::vector<ColorPoint> color;
+    std::vector<OpacityPoint> opacity;
+    if (j.contains("points")) {
+        if (j.contains("color") || j.contains("opacity"))
+            fail(source, ": give either \"points\" or \"color\" and \"opacity\", not both");
+        const json& pts = j["points"];
+        if (!pts.is_array()) fail(source, ": \"points\" must be an array");
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+            const json& p = pts[i];
+            const std::string what = "point " + std::to_string(i);
+            if (!p.is_object() || !p.contains("value") || !p.contains("color") || !p.contains("opacity"))
+                fail(source, ": ", what, " must be an object with \"value\", \"color\" and \"opacity\"");
+            const double v = number(p["value"], source, what + " \"value\"");
+            color.push_back({v, rgb(p["color"], source, what + " \"color\"")});
+            opacity.push_back({v, number(p["opacity"], source, what + " \"opacity\"")});
+        }
+    } else {
+        if (!j.contains("color") || !j.contains("opacity"))
+            fail(source, ": a transfer function needs \"points\", or both \"color\" and \"opacity\"");
+        const json& c = j["color"];
+        const json& o = j["opacity"];
+        if (!c.is_array() || !o.is_array()) fail(source, ": \"color\" and \"opacity\" must be arrays");
+        for (std::size_t i = 0; i < c.size(); ++i) {
+            const std::string what = "colour point " + std::to_string(i);
+            if (!c[i].is_array() || c[i].size() != 4) fail(source, ": ", what, " must be [value, r, g, b]");
+            color.push_back({number(c[i][0], source, what),
+                             {number(c[i][1], source, what), number(c[i][2], source, what),
+                              number(c[i][3], source, what)}});
+        }
+        for (std::size_t i = 0; i < o.size(); ++i) {
+            const std::string what = "opacity point " + std::to_string(i);
+            if (!o[i].is_array() || o[i].size() != 2) fail(source, ": ", what, " must be [value, opacity]");
+            opacity.push_back({number(o[i][0], source, what), number(o[i][1], source, what)});
+        }
+    }
+    return TransferFunction(std::move(color), std::move(opacity), source);
+}
+
+} // namespace voxfx
