@@ -217,9 +217,8 @@ void expectCsgMatchesOracle(const std::string& expression, const std::map<std::s
 }
 
 TEST(CsgTest, MeshCsgEqualsCgalInsideTestsOfVoxelCentres) {
-    const std::string bunnyPath = test::dataPath("meshes/bunny00.off");
-    VOXFX_REQUIRE_DATA(bunnyPath);
-    const Mesh bunny = loadMesh(bunnyPath);
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    const Mesh bunny = loadMesh(test::dataPath("meshes/bunny00.off"));
     const Box3d bb = computeBounds(bunny.view());
     const Vec3d c = bb.center(), e = bb.extent();
     // A sphere through the bunny's middle and a slab across its lower part.

@@ -114,8 +114,8 @@ TEST(DensityTest, LargerKernelsByRepetitionMatchBlockCounts) {
 }
 
 TEST(DensityTest, VoxelizedMeshDensityMatchesBlockCountsForAnyThreadCount) {
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
     const std::string path = test::dataPath("meshes/bunny00.off");
-    VOXFX_REQUIRE_DATA(path);
     const Mesh bunny = loadMesh(path);
     FitOptions fit;
     fit.resolution = 77; // odd, and not a multiple of 64

@@ -616,8 +616,8 @@ void expectSameTriangles(const Mesh& mesh, const Soup& soup, const std::string& 
 }
 
 TEST(MeshIoRealDataTest, Bunny) {
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
     const std::string path = test::dataPath("meshes/bunny00.off");
-    VOXFX_REQUIRE_DATA(path);
     MeshLoadReport report;
     const Mesh m = loadMesh(path, &report);
     EXPECT_EQ(m.positions.size(), 37706u); // from the file's header
@@ -637,8 +637,8 @@ TEST(MeshIoRealDataTest, Closedness) {
          {Case{"bunny00.off", true}, Case{"armadillo.off", true}, Case{"refined_elephant.off", true},
           Case{"elephant.off", true}, Case{"ChineseDragon-10kv.off", false},
           Case{"elephant-with-holes.off", false}, Case{"sphere.stl", true}, Case{"sphere.ply", true}}) {
+        VOXFX_REQUIRE_DATA(std::string("meshes/") + c.file);
         const std::string path = test::dataPath(std::string("meshes/") + c.file);
-        VOXFX_REQUIRE_DATA(path);
         const MeshTopology topo = analyzeTopology(loadMesh(path).view());
         EXPECT_EQ(topo.closed(), c.closed)
             << c.file << ": " << topo.boundaryEdges << " boundary, " << topo.nonManifoldEdges
@@ -650,8 +650,8 @@ TEST(MeshIoRealDataTest, Closedness) {
 TEST(MeshIoRealDataTest, MatchesCgalOnFetchedFiles) {
     for (const char* file : {"armadillo.off", "ChineseDragon-10kv.off", "cube_quad.off", "pig.stl",
                              "sphere.stl", "sphere.ply", "colored_tetra.ply"}) {
+        VOXFX_REQUIRE_DATA(std::string("meshes/") + file);
         const std::string path = test::dataPath(std::string("meshes/") + file);
-        VOXFX_REQUIRE_DATA(path);
         MeshLoadReport report;
         const Mesh m = loadMesh(path, &report);
         EXPECT_EQ(report.degenerateRemoved, 0u) << file;
@@ -660,15 +660,15 @@ TEST(MeshIoRealDataTest, MatchesCgalOnFetchedFiles) {
 }
 
 TEST(MeshIoRealDataTest, PointCloudPlyHasNoTriangles) {
+    VOXFX_REQUIRE_DATA("meshes/b9.ply");
     const std::string path = test::dataPath("meshes/b9.ply");
-    VOXFX_REQUIRE_DATA(path);
     expectLoadError(path, {"no triangles"});
 }
 
 TEST(MeshIoRealDataTest, EveryFormatMatchesCgalOnArmadillo) {
     // CGAL writes the armadillo in each format; what CGAL reads back is what voxfx must read.
+    VOXFX_REQUIRE_DATA("meshes/armadillo.off");
     const std::string source = test::dataPath("meshes/armadillo.off");
-    VOXFX_REQUIRE_DATA(source);
     const Soup soup = readWithCgal(source);
     TempDir dir;
     for (const char* name : {"a.off", "a.obj", "a-bin.ply", "a-ascii.ply", "a-bin.stl", "a-ascii.stl"}) {

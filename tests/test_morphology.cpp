@@ -91,8 +91,8 @@ TEST(MorphologyTest, ErosionAndDilationMatchTheBoxScanOnRandomGrids) {
 
 TEST(MorphologyTest, ClosingContainsAndOpeningIsContainedInVoxelizedMeshes) {
     for (const char* name : {"bunny00", "knot1"}) {
+        VOXFX_REQUIRE_DATA(std::string("meshes/") + name + ".off");
         const std::string path = test::dataPath(std::string("meshes/") + name + ".off");
-        VOXFX_REQUIRE_DATA(path);
         const Mesh mesh = loadMesh(path);
         FitOptions fit;
         fit.resolution = 70;

@@ -89,8 +89,8 @@ void expectWatertight(const SurfaceMesh& m, const std::string& what) {
 
 TEST(SurfaceMeshTest, SurfacesOfVoxelizedMeshesAreWatertightAndOutward) {
     for (const char* name : {"bunny00", "knot1", "elephant"}) {
+        VOXFX_REQUIRE_DATA(std::string("meshes/") + name + ".off");
         const std::string path = test::dataPath(std::string("meshes/") + name + ".off");
-        VOXFX_REQUIRE_DATA(path);
         const Mesh mesh = loadMesh(path);
         FitOptions fit;
         fit.resolution = 61;

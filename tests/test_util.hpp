@@ -2,6 +2,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -47,17 +48,44 @@ inline std::string writeFile(const std::string& path, std::string_view bytes) {
     return path;
 }
 
-/// Path of a fetched data file (scripts/fetch-data.sh), e.g. dataPath("meshes/bunny00.off").
-inline std::string dataPath(std::string_view relative) {
-    return (std::filesystem::path(VOXFX_DATA_DIR) / relative).string();
+/// Folder of the fetched data (scripts/fetch-data.sh): $VOXFX_DATA_DIR when set (the fetch script
+/// honours the same variable), else the source tree's data/.
+inline std::filesystem::path dataDir() {
+    const char* env = std::getenv("VOXFX_DATA_DIR");
+    return (env && *env) ? std::filesystem::path(env) : std::filesystem::path(VOXFX_DATA_DIR);
+}
+
+/// Path of a fetched data file, e.g. dataPath("meshes/bunny00.off").
+inline std::string dataPath(std::string_view relative) { return (dataDir() / relative).string(); }
+
+/// Whether a missing data file fails the test instead of skipping it: the environment variable
+/// VOXFX_REQUIRE_DATA set to anything but "" or "0" (CI sets it after fetching the data, so a
+/// failed fetch cannot pass as a row of skips).
+inline bool dataRequired() {
+    const char* env = std::getenv("VOXFX_REQUIRE_DATA");
+    return env && *env && std::string_view(env) != "0";
+}
+
+/// Why the data file (or folder) `relative` cannot be used, or "" when it is there.
+inline std::string missingData(std::string_view relative) {
+    const std::string path = dataPath(relative);
+    if (std::filesystem::exists(path)) return {};
+    return "missing test data " + path + " (run scripts/fetch-data.sh" +
+           (dataRequired() ? "; VOXFX_REQUIRE_DATA is set, so this is a failure)" : ")");
 }
 
 } // namespace voxfx::test
 
-/// Skips the current test when a fetched data file is missing (run scripts/fetch-data.sh).
-#define VOXFX_REQUIRE_DATA(path)                                                                             \
+/// Skips the current test, visibly and naming the file and the fetch script, when the fetched
+/// data file `relative` (e.g. "meshes/bunny00.off") is missing; fails it instead when
+/// VOXFX_REQUIRE_DATA=1. Use at the top level of a TEST body (GTEST_SKIP returns from it).
+#define VOXFX_REQUIRE_DATA(relative)                                                                         \
     do {                                                                                                     \
-        if (!std::filesystem::exists(path)) GTEST_SKIP() << "missing test data " << (path);                  \
+        const std::string voxfxMissing_ = ::voxfx::test::missingData(relative);                              \
+        if (!voxfxMissing_.empty()) {                                                                        \
+            if (::voxfx::test::dataRequired()) GTEST_FAIL() << voxfxMissing_;                                \
+            GTEST_SKIP() << voxfxMissing_;                                                                   \
+        }                                                                                                    \
     } while (false)
 
 // ---- Small synthetic meshes (closed, outward counter-clockwise) for edge cases ----------------
