@@ -24,6 +24,8 @@
 //                       Iso_cuboid_3) for the cells around each triangle's bounding box; and,
 //                       optionally, the cells that miss the mesh by less than a tolerance (their
 //                       box grown by it meets a triangle), which a comparison may tolerate.
+//   readWithCgal        a mesh file read by CGAL's own readers (OFF, OBJ, PLY, STL), as a polygon
+//                       soup; meshOfSoup fan-triangulates it into a voxfx::Mesh for the oracles.
 //   floodFromBorder     cells not reachable from the grid border through non-wall cells by
 //                       6-connected steps: a plain voxel-by-voxel breadth-first search.
 #pragma once
@@ -40,10 +42,12 @@
 #include <vector>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/IO/polygon_soup_io.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
+#include <gtest/gtest.h>
 
 #include "voxfx/mesh.hpp"
 #include "voxfx/voxel_grid.hpp"
@@ -192,6 +196,31 @@ inline SurfaceMesh surfaceMesh(const MeshView& mesh, int lineAxis, bool& valid) 
 }
 
 } // namespace oracle
+
+/// A mesh file as CGAL reads it: points and polygons (corner indices), nothing voxfx computed.
+struct CgalSoup {
+    std::vector<oracle::Point3> points;
+    std::vector<std::vector<std::size_t>> polygons;
+};
+
+/// Reads `path` with CGAL::IO::read_polygon_soup (failure is a test failure and an empty soup).
+inline CgalSoup readWithCgal(const std::string& path) {
+    CgalSoup soup;
+    EXPECT_TRUE(CGAL::IO::read_polygon_soup(path, soup.points, soup.polygons)) << path;
+    return soup;
+}
+
+/// The soup as a voxfx::Mesh: positions rounded to float, each polygon fan-triangulated from its
+/// first corner.
+inline Mesh meshOfSoup(const CgalSoup& soup) {
+    Mesh m;
+    for (const oracle::Point3& p : soup.points) m.positions.push_back(Vec3f(Vec3d{p.x(), p.y(), p.z()}));
+    for (const auto& polygon : soup.polygons)
+        for (std::size_t k = 2; k < polygon.size(); ++k)
+            for (const std::size_t c : {polygon[0], polygon[k - 1], polygon[k]})
+                m.indices.push_back(uint32_t(c));
+    return m;
+}
 
 /// Result of oracleSolid, in world-axis index order.
 struct SolidOracle {

@@ -14,9 +14,9 @@
 #include <vector>
 
 #include <CGAL/IO/polygon_soup_io.h>
-#include <CGAL/Simple_cartesian.h>
 #include <gtest/gtest.h>
 
+#include "cgal_oracle.hpp"
 #include "io/mesh_formats.hpp"
 #include "test_util.hpp"
 #include "voxfx/error.hpp"
@@ -577,18 +577,8 @@ TEST(MeshIoTest, EveryTruncationAndCorruptionFailsCleanly) {
 // ---------------------------------------------------------------------------------------------
 // Real meshes (scripts/fetch-data.sh), with CGAL's readers as the oracle.
 
-using Kernel = CGAL::Simple_cartesian<double>;
-
-struct Soup {
-    std::vector<Kernel::Point_3> points;
-    std::vector<std::vector<std::size_t>> polygons;
-};
-
-Soup readWithCgal(const std::string& path) {
-    Soup soup;
-    EXPECT_TRUE(CGAL::IO::read_polygon_soup(path, soup.points, soup.polygons)) << path;
-    return soup;
-}
+using Soup = test::CgalSoup;
+using test::readWithCgal;
 
 // Floats equal or adjacent: a text coordinate parsed straight to float (voxfx) and through
 // double (CGAL, then rounded to float) can differ by one rounding step in rare halfway cases.

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <string_view>
 
@@ -39,6 +40,12 @@ public:
 private:
     std::filesystem::path path_;
 };
+
+/// The whole file at `path`, byte for byte ("" when it cannot be read).
+inline std::string readFileBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
 
 /// Writes `bytes` to `path` exactly (binary mode) and returns the path.
 inline std::string writeFile(const std::string& path, std::string_view bytes) {
@@ -243,9 +250,6 @@ inline double meshVolume(const MeshView& mesh) {
 } // namespace voxfx::test
 
 // ---- Running the voxfx command (end-to-end tests of the CLI subcommands) ----------------------
-#include <cstdlib>
-#include <sstream>
-
 #include <sys/wait.h>
 
 namespace voxfx::test {
@@ -263,15 +267,68 @@ inline CommandRun runVoxfx(const TempDir& dir, const std::string& args) {
     const int status = std::system(cmd.c_str());
     CommandRun r;
     r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-    auto slurp = [](const std::string& path) {
-        std::ifstream in(path, std::ios::binary);
-        std::stringstream s;
-        s << in.rdbuf();
-        return s.str();
-    };
-    r.out = slurp(out);
-    r.err = slurp(err);
+    r.out = readFileBytes(out);
+    r.err = readFileBytes(err);
     return r;
+}
+
+} // namespace voxfx::test
+
+// ---- A .binvox decoder written from the format's description -----------------------------------
+#include <algorithm>
+#include <sstream>
+#include <vector>
+
+namespace voxfx::test {
+
+/// A .binvox file as the format describes it, decoded here without voxfx: header lines "#binvox 1",
+/// "dim", "translate", "scale", "data", then (value, count) byte pairs, count 1..255, voxel order
+/// index = x * (ny * nz) + z * ny + y; "dim" lists the counts slowest first (nx nz ny). Problems
+/// with the file are reported as test failures.
+struct BinvoxFile {
+    Vec3i dims{0, 0, 0}; ///< cells along world x, y, z
+    Vec3d translate;     ///< world position of the grid's lower corner
+    double scale = 0;    ///< world length of the longest side (cells are cubes of scale / max dims)
+    std::vector<uint8_t> voxels;
+
+    bool at(int64_t i, int64_t j, int64_t k) const {
+        return voxels[std::size_t(i * dims.y * dims.z + k * dims.y + j)] != 0;
+    }
+    int64_t count() const { return int64_t(std::count(voxels.begin(), voxels.end(), uint8_t(1))); }
+    double cell() const { return scale / double(std::max({dims.x, dims.y, dims.z})); }
+};
+
+inline BinvoxFile readBinvoxBySpec(const std::string& path) {
+    BinvoxFile f;
+    const std::string bytes = readFileBytes(path);
+    const std::size_t dataPos = bytes.find("\ndata\n");
+    if (dataPos == std::string::npos) {
+        ADD_FAILURE() << path << ": no \"data\" line";
+        return f;
+    }
+    std::istringstream header(bytes.substr(0, dataPos));
+    std::string magic, dimKey, translateKey, scaleKey;
+    int version = 0;
+    header >> magic >> version >> dimKey >> f.dims.x >> f.dims.z >> f.dims.y;
+    header >> translateKey >> f.translate.x >> f.translate.y >> f.translate.z >> scaleKey >> f.scale;
+    EXPECT_EQ(magic, "#binvox") << path;
+    EXPECT_EQ(version, 1) << path;
+    EXPECT_EQ(dimKey, "dim") << path;
+    EXPECT_EQ(translateKey, "translate") << path;
+    EXPECT_EQ(scaleKey, "scale") << path;
+    const std::size_t first = dataPos + 6;
+    EXPECT_EQ((bytes.size() - first) % 2, 0u) << path << ": a run without its count";
+    int64_t badRuns = 0;
+    for (std::size_t p = first; p + 1 < bytes.size(); p += 2) {
+        const auto value = uint8_t(bytes[p]), count = uint8_t(bytes[p + 1]);
+        badRuns += count == 0 || value > 1;
+        f.voxels.insert(f.voxels.end(), count, value);
+    }
+    EXPECT_EQ(badRuns, 0) << path << ": runs must be (0 or 1, 1..255)";
+    const int64_t cells = f.dims.x * f.dims.y * f.dims.z;
+    EXPECT_EQ(int64_t(f.voxels.size()), cells) << path;
+    f.voxels.resize(std::size_t(std::max<int64_t>(cells, 0)), 0);
+    return f;
 }
 
 } // namespace voxfx::test
