@@ -48,13 +48,7 @@ Box3d cubicCellBox(const Vec3i& n, double cell) {
 
 void expectSameVoxels(const VoxelGrid& a, const VoxelGrid& b) {
     ASSERT_EQ(a.worldDims(), b.worldDims());
-    const Vec3i n = a.worldDims();
-    int64_t mismatches = 0;
-    for (int64_t i = 0; i < n.x; ++i)
-        for (int64_t j = 0; j < n.y; ++j)
-            for (int64_t k = 0; k < n.z; ++k)
-                mismatches += a.atWorldIndex(i, j, k) != b.atWorldIndex(i, j, k);
-    EXPECT_EQ(mismatches, 0);
+    EXPECT_EQ(test::worldMismatches(a, b), 0);
 }
 
 // Relative tolerance for world boxes: the formats store doubles in shortest round-trip text or
@@ -261,6 +255,60 @@ TEST(GridIoTest, NrrdBytesDecodeWithSpecReader) {
                 }
         EXPECT_EQ(mismatches, 0) << toString(axis);
         EXPECT_EQ(badValues, 0);
+    }
+}
+
+// A 3 x 2 x 4 pattern with no symmetry to hide a swapped or mirrored axis.
+bool handPattern(int64_t i, int64_t j, int64_t k) {
+    return (i + 2 * j + 3 * k) % 5 == 0 || (i == 2 && k == 3);
+}
+
+TEST(GridIoTest, ReadersDecodeHandWrittenFiles) {
+    // The readers against files built here from the format descriptions, not by voxfx's writers.
+    test::TempDir dir;
+    const Vec3i n{3, 2, 4};
+    // binvox: dim nx nz ny, order x * (ny * nz) + z * ny + y, (value, count) runs; cubic cells of
+    // scale / max(dims) = 1 from the translate.
+    std::vector<uint8_t> voxels(size_t(n.x * n.y * n.z));
+    for (int64_t i = 0; i < n.x; ++i)
+        for (int64_t j = 0; j < n.y; ++j)
+            for (int64_t k = 0; k < n.z; ++k)
+                voxels[size_t(i * n.y * n.z + k * n.y + j)] = handPattern(i, j, k);
+    std::string binvox = "#binvox 1\ndim 3 4 2\ntranslate 1 2 3\nscale 4\ndata\n";
+    for (size_t p = 0; p < voxels.size();) {
+        size_t run = 1;
+        while (p + run < voxels.size() && voxels[p + run] == voxels[p] && run < 255) ++run;
+        binvox += char(voxels[p]);
+        binvox += char(run);
+        p += run;
+    }
+    // NRRD: raw uchar samples, x fastest; space origin is the centre of voxel (0, 0, 0).
+    std::string nrrd =
+        "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 3 2 4\nencoding: raw\nspace dimension: 3\n"
+        "space directions: (0.5,0,0) (0,0.25,0) (0,0,2)\nspace origin: (1.25,2.125,4)\n\n";
+    for (int64_t k = 0; k < n.z; ++k)
+        for (int64_t j = 0; j < n.y; ++j)
+            for (int64_t i = 0; i < n.x; ++i) nrrd += char(handPattern(i, j, k) ? 1 : 0);
+    struct Case {
+        std::string path;
+        Box3d box;
+    };
+    const Case cases[] = {{test::writeFile(dir.file("hand.binvox"), binvox), {{1, 2, 3}, {4, 4, 7}}},
+                          {test::writeFile(dir.file("hand.nrrd"), nrrd), {{1, 2, 3}, {2.5, 2.5, 11}}}};
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.path);
+        const VoxelGrid g = readGrid(c.path);
+        ASSERT_EQ(g.worldDims(), n);
+        int64_t wrong = 0, on = 0;
+        for (int64_t i = 0; i < n.x; ++i)
+            for (int64_t j = 0; j < n.y; ++j)
+                for (int64_t k = 0; k < n.z; ++k) {
+                    wrong += g.atWorldIndex(i, j, k) != handPattern(i, j, k);
+                    on += handPattern(i, j, k);
+                }
+        EXPECT_EQ(wrong, 0);
+        EXPECT_EQ(g.bits.count(), on);
+        expectNearBox(g.frame.box(), c.box);
     }
 }
 

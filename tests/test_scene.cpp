@@ -19,20 +19,7 @@
 namespace voxfx {
 namespace {
 
-std::string base64(const std::string& bytes) {
-    static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    for (size_t i = 0; i < bytes.size(); i += 3) {
-        uint32_t v = uint32_t(uint8_t(bytes[i])) << 16;
-        if (i + 1 < bytes.size()) v |= uint32_t(uint8_t(bytes[i + 1])) << 8;
-        if (i + 2 < bytes.size()) v |= uint32_t(uint8_t(bytes[i + 2]));
-        out += t[(v >> 18) & 63];
-        out += t[(v >> 12) & 63];
-        out += i + 1 < bytes.size() ? t[(v >> 6) & 63] : '=';
-        out += i + 2 < bytes.size() ? t[v & 63] : '=';
-    }
-    return out;
-}
+using test::base64;
 
 // One triangle (0,0,0) (1,0,0) (0,1,0) as float positions + uint16 indices (padded): 44 bytes.
 std::string triangleBuffer() {
@@ -189,62 +176,9 @@ TEST(SceneTest, GltfLightsAndCameraFollowTheirNodes) {
     EXPECT_DOUBLE_EQ(c.nearDepth, 0.1);
 }
 
-TEST(SceneTest, WriteGltfRoundTripsGltfAndGlb) {
-    TreeOptions o;
-    o.leaves = 200;
-    const Scene tree = makeTreeScene(o);
-    test::TempDir dir;
-    for (const char* name : {"tree.gltf", "tree.glb"}) {
-        const std::string path = dir.file(name);
-        writeGltf(tree, path);
-        const Scene back = loadScene(path);
-        ASSERT_EQ(back.meshes.size(), tree.meshes.size()) << name;
-        for (size_t i = 0; i < tree.meshes.size(); ++i) {
-            const SceneMesh& a = tree.meshes[i];
-            const SceneMesh& b = meshNamed(back, a.name);
-            EXPECT_EQ(a.mesh.positions, b.mesh.positions) << name << " " << a.name;
-            EXPECT_EQ(a.mesh.indices, b.mesh.indices) << name << " " << a.name;
-            EXPECT_EQ(a.castsShadow, b.castsShadow) << name << " " << a.name;
-            const Material &ma = tree.materials[a.material], &mb = back.materials[b.material];
-            EXPECT_EQ(ma.name, mb.name);
-            EXPECT_TRUE(ma.crossingTransmittance() == mb.crossingTransmittance()) << ma.name;
-            EXPECT_FLOAT_EQ(ma.shininess, mb.shininess);
-            EXPECT_FLOAT_EQ(ma.specular, mb.specular);
-        }
-        ASSERT_EQ(back.lights.size(), 1u);
-        expectVec(back.lights[0].direction, tree.lights[0].direction, 1e-9);
-        EXPECT_EQ(back.lights[0].intensity, tree.lights[0].intensity);
-        ASSERT_EQ(back.cameras.size(), 1u);
-        expectVec(back.cameras[0].position, tree.cameras[0].position, 1e-9);
-        expectVec(normalize(back.cameras[0].target - back.cameras[0].position),
-                  normalize(tree.cameras[0].target - tree.cameras[0].position), 1e-9);
-        EXPECT_DOUBLE_EQ(back.cameras[0].fovY, tree.cameras[0].fovY);
-    }
-}
-
 // ---- The written glTF read from the specification, without voxfx's or Assimp's loader ----------
 
-std::string unbase64(const std::string& text) {
-    static const std::string t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    uint32_t acc = 0;
-    int bits = 0;
-    for (const char c : text) {
-        if (c == '=') break;
-        const size_t v = t.find(c);
-        if (v == std::string::npos) {
-            ADD_FAILURE() << "not base64: '" << c << "'";
-            return out;
-        }
-        acc = (acc << 6) | uint32_t(v);
-        bits += 6;
-        if (bits >= 8) {
-            bits -= 8;
-            out += char((acc >> bits) & 0xFF);
-        }
-    }
-    return out;
-}
+using test::unbase64;
 
 uint32_t u32At(const std::string& bytes, size_t at) {
     uint32_t v = 0;
@@ -305,45 +239,72 @@ std::vector<T> accessorData(const GltfFile& f, size_t index, int componentType, 
     return out;
 }
 
-TEST(SceneTest, WrittenGltfFollowsTheSpecAndHoldsTheSceneExactly) {
+// The written file, read by the specification, holds `tree`'s meshes, materials and lights exactly.
+void expectGltfHoldsSceneBySpec(const Scene& tree, const std::string& path) {
+    const GltfFile f = readGltfBySpec(path);
+    EXPECT_EQ(f.doc["asset"]["version"], "2.0");
+    ASSERT_EQ(f.doc["meshes"].size(), tree.meshes.size());
+    ASSERT_EQ(f.doc["materials"].size(), tree.materials.size());
+    for (size_t i = 0; i < tree.meshes.size(); ++i) {
+        const SceneMesh& m = tree.meshes[i];
+        const nlohmann::json& gm = f.doc["meshes"][i];
+        EXPECT_EQ(gm["name"], m.name);
+        const nlohmann::json& prim = gm["primitives"][0];
+        EXPECT_EQ(prim.value("mode", 4), 4) << "triangles";
+        EXPECT_EQ(f.doc["materials"][prim["material"].get<size_t>()]["name"],
+                  tree.materials[m.material].name);
+        const size_t pos = prim["attributes"]["POSITION"].get<size_t>();
+        EXPECT_TRUE(f.doc["accessors"][pos].contains("min") && f.doc["accessors"][pos].contains("max"))
+            << "POSITION needs min and max";
+        const std::vector<float> p = accessorData<float>(f, pos, 5126, "VEC3");
+        ASSERT_EQ(p.size(), 3 * m.mesh.positions.size()) << m.name;
+        int64_t wrong = 0;
+        for (size_t v = 0; v < m.mesh.positions.size(); ++v)
+            wrong += !(Vec3f{p[3 * v], p[3 * v + 1], p[3 * v + 2]} == m.mesh.positions[v]);
+        EXPECT_EQ(wrong, 0) << m.name;
+        EXPECT_EQ(accessorData<uint32_t>(f, prim["indices"].get<size_t>(), 5125, "SCALAR"), m.mesh.indices)
+            << m.name;
+    }
+    const nlohmann::json& lights = f.doc["extensions"]["KHR_lights_punctual"]["lights"];
+    ASSERT_EQ(lights.size(), tree.lights.size());
+    EXPECT_EQ(lights[0]["type"], "directional");
+    EXPECT_NE(
+        std::find(f.doc["extensionsUsed"].begin(), f.doc["extensionsUsed"].end(), "KHR_lights_punctual"),
+        f.doc["extensionsUsed"].end());
+}
+
+TEST(SceneTest, WriteGltfRoundTripsGltfAndGlbAndFollowsTheSpec) {
     TreeOptions o;
     o.leaves = 200;
     const Scene tree = makeTreeScene(o);
     test::TempDir dir;
     for (const char* name : {"tree.gltf", "tree.glb"}) {
+        const std::string path = dir.file(name);
+        writeGltf(tree, path);
         SCOPED_TRACE(name);
-        writeGltf(tree, dir.file(name));
-        const GltfFile f = readGltfBySpec(dir.file(name));
-        EXPECT_EQ(f.doc["asset"]["version"], "2.0");
-        ASSERT_EQ(f.doc["meshes"].size(), tree.meshes.size());
-        ASSERT_EQ(f.doc["materials"].size(), tree.materials.size());
+        expectGltfHoldsSceneBySpec(tree, path); // without voxfx's or Assimp's loader
+        const Scene back = loadScene(path);
+        ASSERT_EQ(back.meshes.size(), tree.meshes.size()) << name;
         for (size_t i = 0; i < tree.meshes.size(); ++i) {
-            const SceneMesh& m = tree.meshes[i];
-            const nlohmann::json& gm = f.doc["meshes"][i];
-            EXPECT_EQ(gm["name"], m.name);
-            const nlohmann::json& prim = gm["primitives"][0];
-            EXPECT_EQ(prim.value("mode", 4), 4) << "triangles";
-            EXPECT_EQ(f.doc["materials"][prim["material"].get<size_t>()]["name"],
-                      tree.materials[m.material].name);
-            const size_t pos = prim["attributes"]["POSITION"].get<size_t>();
-            EXPECT_TRUE(f.doc["accessors"][pos].contains("min") && f.doc["accessors"][pos].contains("max"))
-                << "POSITION needs min and max";
-            const std::vector<float> p = accessorData<float>(f, pos, 5126, "VEC3");
-            ASSERT_EQ(p.size(), 3 * m.mesh.positions.size()) << m.name;
-            int64_t wrong = 0;
-            for (size_t v = 0; v < m.mesh.positions.size(); ++v)
-                wrong += !(Vec3f{p[3 * v], p[3 * v + 1], p[3 * v + 2]} == m.mesh.positions[v]);
-            EXPECT_EQ(wrong, 0) << m.name;
-            EXPECT_EQ(accessorData<uint32_t>(f, prim["indices"].get<size_t>(), 5125, "SCALAR"),
-                      m.mesh.indices)
-                << m.name;
+            const SceneMesh& a = tree.meshes[i];
+            const SceneMesh& b = meshNamed(back, a.name);
+            EXPECT_EQ(a.mesh.positions, b.mesh.positions) << name << " " << a.name;
+            EXPECT_EQ(a.mesh.indices, b.mesh.indices) << name << " " << a.name;
+            EXPECT_EQ(a.castsShadow, b.castsShadow) << name << " " << a.name;
+            const Material &ma = tree.materials[a.material], &mb = back.materials[b.material];
+            EXPECT_EQ(ma.name, mb.name);
+            EXPECT_TRUE(ma.crossingTransmittance() == mb.crossingTransmittance()) << ma.name;
+            EXPECT_FLOAT_EQ(ma.shininess, mb.shininess);
+            EXPECT_FLOAT_EQ(ma.specular, mb.specular);
         }
-        const nlohmann::json& lights = f.doc["extensions"]["KHR_lights_punctual"]["lights"];
-        ASSERT_EQ(lights.size(), tree.lights.size());
-        EXPECT_EQ(lights[0]["type"], "directional");
-        EXPECT_NE(
-            std::find(f.doc["extensionsUsed"].begin(), f.doc["extensionsUsed"].end(), "KHR_lights_punctual"),
-            f.doc["extensionsUsed"].end());
+        ASSERT_EQ(back.lights.size(), 1u);
+        expectVec(back.lights[0].direction, tree.lights[0].direction, 1e-9);
+        EXPECT_EQ(back.lights[0].intensity, tree.lights[0].intensity);
+        ASSERT_EQ(back.cameras.size(), 1u);
+        expectVec(back.cameras[0].position, tree.cameras[0].position, 1e-9);
+        expectVec(normalize(back.cameras[0].target - back.cameras[0].position),
+                  normalize(tree.cameras[0].target - tree.cameras[0].position), 1e-9);
+        EXPECT_DOUBLE_EQ(back.cameras[0].fovY, tree.cameras[0].fovY);
     }
 }
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -45,6 +46,47 @@ private:
 inline std::string readFileBytes(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+/// Base64 (RFC 4648, with padding) of `bytes`, for data URIs in hand-written glTF files.
+inline std::string base64(std::string_view bytes) {
+    static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    for (std::size_t i = 0; i < bytes.size(); i += 3) {
+        uint32_t n = uint32_t(uint8_t(bytes[i])) << 16;
+        if (i + 1 < bytes.size()) n |= uint32_t(uint8_t(bytes[i + 1])) << 8;
+        if (i + 2 < bytes.size()) n |= uint32_t(uint8_t(bytes[i + 2]));
+        out += kAlphabet[(n >> 18) & 63];
+        out += kAlphabet[(n >> 12) & 63];
+        out += i + 1 < bytes.size() ? kAlphabet[(n >> 6) & 63] : '=';
+        out += i + 2 < bytes.size() ? kAlphabet[n & 63] : '=';
+    }
+    return out;
+}
+
+/// The bytes of base64 `text` (up to its padding); a character outside the alphabet is a test
+/// failure.
+inline std::string unbase64(std::string_view text) {
+    static const std::string_view kAlphabet =
+        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    uint32_t acc = 0;
+    int bits = 0;
+    for (const char c : text) {
+        if (c == '=') break;
+        const std::size_t v = kAlphabet.find(c);
+        if (v == std::string_view::npos) {
+            ADD_FAILURE() << "not base64: '" << c << "'";
+            return out;
+        }
+        acc = (acc << 6) | uint32_t(v);
+        bits += 6;
+        if (bits >= 8) {
+            bits -= 8;
+            out += char((acc >> bits) & 0xFF);
+        }
+    }
+    return out;
 }
 
 /// Writes `bytes` to `path` exactly (binary mode) and returns the path.
@@ -196,6 +238,18 @@ inline VoxelGrid randomVoxelGrid(const Box3d& box, Axis axis, const Vec3i& dims,
             for (int64_t s = 0; s < d; ++s)
                 if (on(rng)) g.bits.set(x, y, s);
     return g;
+}
+
+/// Cells whose occupancy differs between two grids of the same world dimensions, compared by
+/// world index (i, j, k) whatever each grid's slicing axis.
+inline int64_t worldMismatches(const VoxelGrid& a, const VoxelGrid& b) {
+    const Vec3i n = a.worldDims();
+    int64_t mismatches = 0;
+    for (int64_t i = 0; i < n.x; ++i)
+        for (int64_t j = 0; j < n.y; ++j)
+            for (int64_t k = 0; k < n.z; ++k)
+                mismatches += a.atWorldIndex(i, j, k) != b.atWorldIndex(i, j, k);
+    return mismatches;
 }
 
 /// A W x H x D bit grid, each cell on with probability `density` (fixed seed): the bits of
