@@ -2,10 +2,12 @@
 #include "cgal_oracle.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/IO/polygon_soup_io.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
+#include <gtest/gtest.h>
 
 namespace voxfx::test {
 
@@ -270,6 +272,21 @@ ConservativeOracle oracleConservative(const MeshView& mesh, const CellGeometry& 
     }
     r.nearCount = r.near.count();
     return r;
+}
+
+CgalSoup readWithCgal(const std::string& path) {
+    std::vector<oracle::Point3> points;
+    CgalSoup soup;
+    EXPECT_TRUE(CGAL::IO::read_polygon_soup(path, points, soup.polygons)) << path;
+    for (const oracle::Point3& p : points) soup.points.push_back({p.x(), p.y(), p.z()});
+    return soup;
+}
+
+bool writeWithCgal(const std::string& path, const CgalSoup& soup, bool binary) {
+    std::vector<oracle::Point3> points;
+    for (const Vec3d& p : soup.points) points.emplace_back(p.x, p.y, p.z);
+    return CGAL::IO::write_polygon_soup(path, points, soup.polygons,
+                                        CGAL::parameters::stream_precision(9).use_binary_mode(binary));
 }
 
 } // namespace voxfx::test

@@ -24,6 +24,8 @@
 //                       Iso_cuboid_3) for the cells around each triangle's bounding box; and,
 //                       optionally, the cells that miss the mesh by less than a tolerance (their
 //                       box grown by it meets a triangle), which a comparison may tolerate.
+//   readWithCgal        a mesh file read by CGAL's own readers (OFF, OBJ, PLY, STL), as a polygon
+//                       soup; meshOfSoup fan-triangulates it into a voxfx::Mesh for the oracles.
 //   floodFromBorder     cells not reachable from the grid border through non-wall cells by
 //                       6-connected steps: a plain voxel-by-voxel breadth-first search.
 // The CGAL work is compiled once, in cgal_oracle.cpp (CGAL headers cost a minute per translation unit).
@@ -124,6 +126,30 @@ inline GridDiff compareGrids(const WorldGrid& actual, const WorldGrid& expected,
 inline std::ostream& operator<<(std::ostream& os, const GridDiff& d) {
     return os << d.missing << " missing, " << d.extra << " extra (" << d.ignored
               << " ignored):" << d.examples;
+}
+
+/// A mesh file as CGAL reads it: points and polygons (corner indices), nothing voxfx computed.
+struct CgalSoup {
+    std::vector<Vec3d> points;
+    std::vector<std::vector<std::size_t>> polygons;
+};
+
+/// Reads `path` with CGAL::IO::read_polygon_soup (failure is a test failure and an empty soup).
+CgalSoup readWithCgal(const std::string& path);
+/// Writes `soup` with CGAL::IO::write_polygon_soup (format from the extension, 9 digits);
+/// false when CGAL fails.
+bool writeWithCgal(const std::string& path, const CgalSoup& soup, bool binary);
+
+/// The soup as a voxfx::Mesh: positions rounded to float, each polygon fan-triangulated from its
+/// first corner.
+inline Mesh meshOfSoup(const CgalSoup& soup) {
+    Mesh m;
+    for (const Vec3d& p : soup.points) m.positions.push_back(Vec3f(p));
+    for (const auto& polygon : soup.polygons)
+        for (std::size_t k = 2; k < polygon.size(); ++k)
+            for (const std::size_t c : {polygon[0], polygon[k - 1], polygon[k]})
+                m.indices.push_back(uint32_t(c));
+    return m;
 }
 
 /// Result of oracleSolid, in world-axis index order.

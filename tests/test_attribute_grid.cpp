@@ -1,14 +1,15 @@
 // Tests of src/voxelize/attribute.cpp (CHANG §2 attribute voxelization): hand-counted writes on
-// axis-aligned quads, a brute-force point-in-triangle count per column, agreement of occupancy with
-// the slicemap voxelizer, determinism across thread counts, local slicing and bad input.
+// axis-aligned quads, a brute-force point-in-triangle count per column, occupancy against a
+// brute-force centre coverage and CGAL's exact triangle/box overlap, determinism across thread
+// counts, local slicing and bad input.
 #include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
 
+#include "cgal_oracle.hpp"
 #include "test_util.hpp"
 #include "voxfx/attribute_grid.hpp"
-#include "voxfx/voxelize.hpp"
 
 namespace voxfx {
 namespace {
@@ -128,19 +129,79 @@ TEST(AttributeGridTest, WritesPerColumnEqualTrianglesCoveringItsCentre) {
     EXPECT_EQ(mismatches, 0);
 }
 
-TEST(AttributeGridTest, OccupancyMatchesSlicemapVoxelization) {
-    const Mesh torus = test::makeTorus({8, 8, 8}, 5, 2, 40, 20);
+// Brute-force centre coverage on a unit frame along z: for every column centre strictly inside a
+// triangle's xy projection, the slice floor(z) of the triangle's plane there. Cells whose depth
+// lies within 1e-9 of a slice boundary go to `ambiguous` instead (rounding may put them on either
+// side).
+void bruteForceCentreCells(const Mesh& m, int64_t n, std::vector<uint8_t>& cells,
+                           std::vector<uint8_t>& ambiguous) {
+    cells.assign(size_t(n * n * n), 0);
+    ambiguous.assign(cells.size(), 0);
+    for (int64_t y = 0; y < n; ++y)
+        for (int64_t x = 0; x < n; ++x) {
+            const double px = double(x) + 0.5, py = double(y) + 0.5;
+            for (size_t t = 0; t < m.triangleCount(); ++t) {
+                Vec3d v[3];
+                for (int k = 0; k < 3; ++k) v[k] = Vec3d(m.positions[m.indices[3 * t + size_t(k)]]);
+                // Barycentric weights of (px, py) in the projected triangle.
+                const double det =
+                    (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[2].x - v[0].x) * (v[1].y - v[0].y);
+                if (det == 0) continue;
+                const double b1 =
+                    ((px - v[0].x) * (v[2].y - v[0].y) - (v[2].x - v[0].x) * (py - v[0].y)) / det;
+                const double b2 =
+                    ((v[1].x - v[0].x) * (py - v[0].y) - (px - v[0].x) * (v[1].y - v[0].y)) / det;
+                const double b0 = 1 - b1 - b2;
+                if (!(b0 > 0 && b1 > 0 && b2 > 0)) continue;
+                const double z = b0 * v[0].z + b1 * v[1].z + b2 * v[2].z;
+                const auto s = int64_t(std::floor(z));
+                if (s < 0 || s >= n) continue;
+                const size_t c = size_t((y * n + x) * n + s);
+                if (z - double(s) < 1e-9 || double(s + 1) - z < 1e-9) {
+                    ambiguous[c] = 1;
+                    if (s + 1 < n) ambiguous[c + 1] = 1;
+                    if (s > 0) ambiguous[c - 1] = 1;
+                } else {
+                    cells[c] = 1;
+                }
+            }
+        }
+}
+
+TEST(AttributeGridTest, OccupancyMatchesIndependentCoverage) {
+    // Centre coverage: the cell of every crossing of a column's centre line (brute force above).
+    // Conservative coverage: every cell whose closed box meets a triangle (CGAL's exact
+    // triangle/box test, cells within 2e-9 cells of the mesh tolerated: the rasterizer's slack).
+    const Mesh torus = test::makeTorus({8.1, 7.9, 8.05}, 5, 2, 40, 20);
     const Frame f = unitFrame();
-    for (const auto& [coverage, mode] : {std::pair{Coverage::Center, VoxelizeMode::Surface},
-                                         std::pair{Coverage::Conservative, VoxelizeMode::Conservative}}) {
-        AttributeOptions o;
-        o.coverage = coverage;
-        VoxelizeOptions vo;
-        vo.mode = mode;
-        EXPECT_TRUE(voxelizeAttributes(torus.view(), f, {}, o).occupancy() ==
-                    voxelize(torus.view(), f, vo).bits)
-            << toString(mode);
-    }
+    AttributeOptions o;
+    o.coverage = Coverage::Center;
+    const BitGrid centre = voxelizeAttributes(torus.view(), f, {}, o).occupancy();
+    std::vector<uint8_t> want, ambiguous;
+    bruteForceCentreCells(torus, 16, want, ambiguous);
+    int64_t wrong = 0, set = 0, skipped = 0;
+    for (int64_t y = 0; y < 16; ++y)
+        for (int64_t x = 0; x < 16; ++x)
+            for (int64_t s = 0; s < 16; ++s) {
+                const size_t c = size_t((y * 16 + x) * 16 + s);
+                if (ambiguous[c] && !want[c]) {
+                    ++skipped;
+                    continue;
+                }
+                wrong += centre.get(x, y, s) != bool(want[c]);
+                set += want[c];
+            }
+    EXPECT_EQ(wrong, 0) << skipped << " ambiguous cells left out";
+    EXPECT_GT(set, 200);
+    EXPECT_LT(skipped, 20);
+
+    o.coverage = Coverage::Conservative;
+    const VoxelGrid cons{f, voxelizeAttributes(torus.view(), f, {}, o).occupancy()};
+    const test::ConservativeOracle oracle =
+        test::oracleConservative(torus.view(), test::CellGeometry::of(cons), 2e-9);
+    const test::GridDiff d = test::compareGrids(test::toWorldGrid(cons), oracle.cells, &oracle.near);
+    EXPECT_TRUE(d.equal()) << d;
+    EXPECT_GT(oracle.cells.count(), set);
 }
 
 TEST(AttributeGridTest, ResultDoesNotDependOnThreadCount) {

@@ -14,13 +14,6 @@ namespace {
 
 using CliRun = test::CommandRun;
 
-std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
 CliRun runCli(const test::TempDir& dir, const std::string& args) { return test::runVoxfx(dir, args); }
 
 const char* kCubeOff = "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
@@ -44,8 +37,13 @@ TEST(CliTest, VoxelizesACubeAndPrintsASummary) {
     const std::string mesh = test::writeFile(dir.file("cube.off"), kCubeOff);
     const CliRun r = runCli(dir, "voxelize " + mesh + " -o " + dir.file("cube.binvox") + " -r 8");
     ASSERT_EQ(r.exitCode, 0) << r.err;
-    EXPECT_TRUE(std::filesystem::exists(dir.file("cube.binvox")));
-    // The unit cube fills its 8^3 bounding grid completely.
+    // The unit cube fills its 8^3 bounding grid completely: in the file (decoded from the format's
+    // description, not by voxfx) and in the summary.
+    const test::BinvoxFile f = test::readBinvoxBySpec(dir.file("cube.binvox"));
+    EXPECT_EQ(f.dims, Vec3i(8, 8, 8));
+    EXPECT_EQ(f.count(), 512);
+    EXPECT_EQ(f.translate, Vec3d(0, 0, 0));
+    EXPECT_EQ(f.scale, 1.0);
     EXPECT_NE(r.out.find("512 filled voxels"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("8 x 8 x 8 grid"), std::string::npos) << r.out;
 }
@@ -102,7 +100,7 @@ TEST(CliTest, FailedRunLeavesAnExistingOutputUntouched) {
     const std::string out = test::writeFile(dir.file("keep.vdb"), "precious");
     const CliRun r = runCli(dir, "voxelize " + dir.file("missing.off") + " -o " + out);
     EXPECT_NE(r.exitCode, 0);
-    EXPECT_EQ(slurp(out), "precious");
+    EXPECT_EQ(test::readFileBytes(out), "precious");
 }
 
 TEST(CliTest, InfoReportsClosedAndOpenMeshes) {

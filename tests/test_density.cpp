@@ -7,6 +7,7 @@
 #include <random>
 
 #include <gtest/gtest.h>
+#include <openvdb/openvdb.h>
 
 #include "test_util.hpp"
 #include "voxfx/density.hpp"
@@ -99,9 +100,11 @@ TEST(DensityTest, LargerKernelsByRepetitionMatchBlockCounts) {
         EXPECT_EQ(d.level(), level);
         EXPECT_EQ(d.laneBits(), 2 << level);
         EXPECT_TRUE(sameCounts(d, naiveDensity(g, level))) << "level " << level;
-        // coarsenDensity is the same step, one level at a time.
+        // coarsenDensity goes one level up from the level below: the same block counts.
         o.level = level - 1;
-        EXPECT_EQ(coarsenDensity(computeDensity(g, o)), d) << "level " << level;
+        const DensityGrid coarsened = coarsenDensity(computeDensity(g, o));
+        EXPECT_EQ(coarsened.level(), level);
+        EXPECT_TRUE(sameCounts(coarsened, naiveDensity(g, level))) << "coarsened to level " << level;
     }
     // A full 32^3 block reaches the largest count of level 5.
     BitGrid full(32, 32, 32);
@@ -114,8 +117,8 @@ TEST(DensityTest, LargerKernelsByRepetitionMatchBlockCounts) {
 }
 
 TEST(DensityTest, VoxelizedMeshDensityMatchesBlockCountsForAnyThreadCount) {
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
     const std::string path = test::dataPath("meshes/bunny00.off");
-    VOXFX_REQUIRE_DATA(path);
     const Mesh bunny = loadMesh(path);
     FitOptions fit;
     fit.resolution = 77; // odd, and not a multiple of 64
@@ -210,22 +213,28 @@ TEST(DensityTest, NormalsOfAVoxelizedSpherePointRadiallyOutwards) {
 }
 
 TEST(DensityTest, TrilinearSamplesInterpolateBetweenCellCentres) {
+    // Expected values from the naive block counts: occupancy count / 8, the normal against the
+    // central difference.
     const BitGrid g = randomBits(9, 8, 40, 0.5, 11);
     const DensityGrid d = computeDensity(g);
+    const NaiveDensity n = naiveDensity(g, 1);
     std::mt19937_64 rng(5);
     for (int i = 0; i < 200; ++i) {
         const int64_t x = int64_t(rng() % 4), y = int64_t(rng() % 3), s = int64_t(rng() % 19);
         // At a centre: the cell's own values.
         const Vec3d c{double(x) + 0.5, double(y) + 0.5, double(s) + 0.5};
-        EXPECT_FLOAT_EQ(sampleOccupancy(d, c), d.occupancy(x, y, s));
-        const Vec3f want = densityNormal(d, x, y, s), got = sampleNormal(d, c);
-        EXPECT_NEAR(length(got - want), 0.0f, 1e-6f);
+        EXPECT_FLOAT_EQ(sampleOccupancy(d, c), float(n.at(x, y, s)) / 8.0f);
+        const Vec3d grad{double(n.at(x + 1, y, s)) - double(n.at(x - 1, y, s)),
+                         double(n.at(x, y + 1, s)) - double(n.at(x, y - 1, s)),
+                         double(n.at(x, y, s + 1)) - double(n.at(x, y, s - 1))};
+        const Vec3d want = dot(grad, grad) == 0 ? Vec3d{} : normalize(-grad);
+        EXPECT_NEAR(length(Vec3d(sampleNormal(d, c)) - want), 0.0, 1e-6);
         // A quarter of the way to the next centre along each axis: hand-written trilinear weights.
         const Vec3d p = c + Vec3d{0.25, 0.5, 0.75};
         double want3 = 0;
         for (int k = 0; k < 8; ++k) {
             const double w = ((k & 1) ? 0.25 : 0.75) * ((k & 2) ? 0.5 : 0.5) * ((k & 4) ? 0.75 : 0.25);
-            want3 += w * double(d.countOrZero(x + (k & 1), y + ((k >> 1) & 1), s + ((k >> 2) & 1))) / 8.0;
+            want3 += w * double(n.at(x + (k & 1), y + ((k >> 1) & 1), s + ((k >> 2) & 1))) / 8.0;
         }
         EXPECT_NEAR(sampleOccupancy(d, p), want3, 1e-6);
     }
@@ -265,11 +274,13 @@ TEST(DensityTest, OctahedralNormalCodeIsWithinOneDegree) {
 TEST(DensityTest, OccupancyFieldAndWorldFrame) {
     const BitGrid g = randomBits(5, 6, 9, 0.5, 4);
     const DensityGrid d = computeDensity(g);
+    const NaiveDensity want = naiveDensity(g, 1);
     const std::vector<float> occ = occupancyField(d);
-    for (int64_t y = 0; y < d.height(); ++y)
-        for (int64_t x = 0; x < d.width(); ++x)
-            for (int64_t s = 0; s < d.depth(); ++s)
-                EXPECT_EQ(occ[size_t((y * d.width() + x) * d.depth() + s)], float(d.count(x, y, s)) / 8.0f);
+    ASSERT_EQ(int64_t(occ.size()), want.w * want.h * want.d);
+    for (int64_t y = 0; y < want.h; ++y)
+        for (int64_t x = 0; x < want.w; ++x)
+            for (int64_t s = 0; s < want.d; ++s)
+                EXPECT_EQ(occ[size_t((y * want.w + x) * want.d + s)], float(want.at(x, y, s)) / 8.0f);
     std::vector<float> small(3);
     EXPECT_THROW(occupancyField(d, small), Error);
     // A density cell's centre is the centre of its 2 x 2 x 2 fine block.
@@ -281,9 +292,12 @@ TEST(DensityTest, OccupancyFieldAndWorldFrame) {
 
 // The raw samples of a NRRD written by writeDensity (header up to the blank line).
 std::vector<uint8_t> nrrdSamples(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    const std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string all = test::readFileBytes(path);
     const size_t end = all.find("\n\n");
+    if (end == std::string::npos) {
+        ADD_FAILURE() << path << ": no blank line ends the header";
+        return {};
+    }
     return std::vector<uint8_t>(all.begin() + std::ptrdiff_t(end + 2), all.end());
 }
 
@@ -307,6 +321,33 @@ TEST(DensityTest, FilesHoldTheCountsInWorldOrder) {
                 EXPECT_EQ(samples[size_t((k * n.y + j) * n.x + i)], want.at(k, i, j))
                     << i << "," << j << "," << k;
             }
+    // The .vdb with plain OpenVDB: a float fog volume of count / 8 at world indices, its index
+    // space centred on the density cells (2 x 2 x 2 fine cells of 1).
+    {
+        openvdb::initialize();
+        openvdb::io::File file(vdb);
+        file.open(/*delayLoad=*/false);
+        const openvdb::GridBase::Ptr base = file.readGrid("density");
+        file.close();
+        const auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
+        ASSERT_TRUE(grid);
+        auto acc = grid->getConstAccessor();
+        int64_t wrong = 0, active = 0, misplaced = 0;
+        for (int64_t k = 0; k < n.z; ++k)
+            for (int64_t j = 0; j < n.y; ++j)
+                for (int64_t i = 0; i < n.x; ++i) {
+                    const openvdb::Coord ijk{int(i), int(j), int(k)};
+                    wrong += acc.getValue(ijk) != float(want.at(k, i, j)) / 8.0f;
+                    active += acc.isValueOn(ijk);
+                    const openvdb::Vec3d w = grid->transform().indexToWorld(ijk);
+                    misplaced += std::abs(w.x() - (2.0 * double(i) + 1)) > 1e-12 ||
+                                 std::abs(w.y() - (2.0 * double(j) + 1)) > 1e-12 ||
+                                 std::abs(w.z() - (2.0 * double(k) + 1)) > 1e-12;
+                }
+        EXPECT_EQ(wrong, 0);
+        EXPECT_EQ(misplaced, 0);
+        EXPECT_EQ(active, int64_t(grid->activeVoxelCount())) << "active voxels outside the grid";
+    }
     // Both files read back as grids of the nonzero cells, placed on the density cells.
     for (const std::string& p : {nrrd, vdb}) {
         const VoxelGrid back = readGrid(p);
@@ -331,13 +372,15 @@ TEST(DensityTest, CommandLineWritesTheLibraryCounts) {
     const test::CommandRun run =
         test::runVoxfx(dir, "density " + dir.file("g.binvox") + " -q -o " + dir.file("d.nrrd"));
     ASSERT_EQ(run.exitCode, 0) << run.err;
-    const DensityGrid d = computeDensity(readGrid(dir.file("g.binvox")).bits);
+    // Sliced along z: world order is column order. Expected: the block counts, cell by cell.
+    const NaiveDensity want = naiveDensity(g.bits, 1);
     const std::vector<uint8_t> samples = nrrdSamples(dir.file("d.nrrd"));
-    ASSERT_EQ(int64_t(samples.size()), d.cellCount());
-    for (int64_t k = 0; k < d.depth(); ++k)
-        for (int64_t j = 0; j < d.height(); ++j)
-            for (int64_t i = 0; i < d.width(); ++i)
-                ASSERT_EQ(samples[size_t((k * d.height() + j) * d.width() + i)], d.count(i, j, k));
+    ASSERT_EQ(int64_t(samples.size()), want.w * want.h * want.d);
+    for (int64_t k = 0; k < want.d; ++k)
+        for (int64_t j = 0; j < want.h; ++j)
+            for (int64_t i = 0; i < want.w; ++i)
+                ASSERT_EQ(samples[size_t((k * want.h + j) * want.w + i)], want.at(i, j, k))
+                    << i << "," << j << "," << k;
     EXPECT_NE(
         test::runVoxfx(dir, "density " + dir.file("g.binvox") + " -l 9 -o " + dir.file("d.nrrd")).exitCode,
         0);

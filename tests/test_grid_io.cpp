@@ -31,13 +31,6 @@ namespace {
 
 constexpr Axis kAxes[3] = {Axis::X, Axis::Y, Axis::Z};
 
-std::string readBytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
 // Files in `dir` other than the ones named (temporaries left behind show up here).
 std::vector<std::string> listDir(const std::filesystem::path& dir) {
     std::vector<std::string> names;
@@ -55,13 +48,7 @@ Box3d cubicCellBox(const Vec3i& n, double cell) {
 
 void expectSameVoxels(const VoxelGrid& a, const VoxelGrid& b) {
     ASSERT_EQ(a.worldDims(), b.worldDims());
-    const Vec3i n = a.worldDims();
-    int64_t mismatches = 0;
-    for (int64_t i = 0; i < n.x; ++i)
-        for (int64_t j = 0; j < n.y; ++j)
-            for (int64_t k = 0; k < n.z; ++k)
-                mismatches += a.atWorldIndex(i, j, k) != b.atWorldIndex(i, j, k);
-    EXPECT_EQ(mismatches, 0);
+    EXPECT_EQ(test::worldMismatches(a, b), 0);
 }
 
 // Relative tolerance for world boxes: the formats store doubles in shortest round-trip text or
@@ -209,52 +196,22 @@ TEST(GridIoTest, LocallySlicedGridIsResampledBeforeWriting) {
 // ---- Written bytes against independent decoders ------------------------------------------------
 
 TEST(GridIoTest, BinvoxBytesDecodeWithSpecReader) {
-    // From the binvox spec: header lines, then (value, count) pairs, count 1..255, voxel order
-    // index = x * (ny * nz) + z * ny + y; dim lists the counts slowest first (nx nz ny).
+    // test::readBinvoxBySpec decodes from the format's description: header lines, then (value,
+    // count) pairs, count 1..255, voxel order x * (ny * nz) + z * ny + y, dims nx nz ny.
     test::TempDir dir;
     const Vec3i n{13, 70, 300}; // 300 > 255: runs must split
     for (Axis axis : kAxes) {
         const VoxelGrid g = test::randomVoxelGrid(cubicCellBox(n, 0.5), axis, n, 0.9, 41 + int(axis));
         const std::string path = dir.file("g.binvox");
         writeGrid(g, path);
-        const std::string bytes = readBytes(path);
-        const size_t dataPos = bytes.find("\ndata\n");
-        ASSERT_NE(dataPos, std::string::npos);
-        std::istringstream header(bytes.substr(0, dataPos));
-        std::string magic, key;
-        int version = 0;
-        int64_t d0 = 0, d1 = 0, d2 = 0;
-        double tx, ty, tz, scale;
-        header >> magic >> version >> key >> d0 >> d1 >> d2;
-        EXPECT_EQ(magic, "#binvox");
-        EXPECT_EQ(version, 1);
-        EXPECT_EQ(key, "dim");
-        EXPECT_EQ(d0, n.x);
-        EXPECT_EQ(d1, n.z);
-        EXPECT_EQ(d2, n.y);
-        header >> key >> tx >> ty >> tz;
-        EXPECT_EQ(key, "translate");
-        EXPECT_EQ(Vec3d(tx, ty, tz), g.frame.box().lo);
-        header >> key >> scale;
-        EXPECT_EQ(key, "scale");
-        EXPECT_DOUBLE_EQ(scale, 300 * 0.5);
-
-        std::vector<uint8_t> voxels;
-        bool countsValid = true;
-        for (size_t p = dataPos + 6; p + 1 < bytes.size(); p += 2) {
-            const auto value = uint8_t(bytes[p]), count = uint8_t(bytes[p + 1]);
-            countsValid &= count >= 1 && (value == 0 || value == 1);
-            voxels.insert(voxels.end(), count, value);
-        }
-        EXPECT_TRUE(countsValid);
-        EXPECT_EQ((bytes.size() - dataPos - 6) % 2, 0u);
-        ASSERT_EQ(int64_t(voxels.size()), n.x * n.y * n.z);
+        const test::BinvoxFile f = test::readBinvoxBySpec(path);
+        ASSERT_EQ(f.dims, n);
+        EXPECT_EQ(f.translate, g.frame.box().lo);
+        EXPECT_DOUBLE_EQ(f.scale, 300 * 0.5);
         int64_t mismatches = 0;
         for (int64_t x = 0; x < n.x; ++x)
             for (int64_t y = 0; y < n.y; ++y)
-                for (int64_t z = 0; z < n.z; ++z)
-                    mismatches +=
-                        (voxels[size_t(x * n.y * n.z + z * n.y + y)] != 0) != g.atWorldIndex(x, y, z);
+                for (int64_t z = 0; z < n.z; ++z) mismatches += f.at(x, y, z) != g.atWorldIndex(x, y, z);
         EXPECT_EQ(mismatches, 0) << toString(axis);
     }
 }
@@ -269,7 +226,7 @@ TEST(GridIoTest, NrrdBytesDecodeWithSpecReader) {
         const VoxelGrid g = test::randomVoxelGrid(box, axis, n, 0.5, 51 + int(axis));
         const std::string path = dir.file("g.nrrd");
         writeGrid(g, path);
-        const std::string bytes = readBytes(path);
+        const std::string bytes = test::readFileBytes(path);
         const size_t end = bytes.find("\n\n");
         ASSERT_NE(end, std::string::npos);
         EXPECT_EQ(bytes.substr(0, 9), "NRRD0004\n");
@@ -298,6 +255,60 @@ TEST(GridIoTest, NrrdBytesDecodeWithSpecReader) {
                 }
         EXPECT_EQ(mismatches, 0) << toString(axis);
         EXPECT_EQ(badValues, 0);
+    }
+}
+
+// A 3 x 2 x 4 pattern with no symmetry to hide a swapped or mirrored axis.
+bool handPattern(int64_t i, int64_t j, int64_t k) {
+    return (i + 2 * j + 3 * k) % 5 == 0 || (i == 2 && k == 3);
+}
+
+TEST(GridIoTest, ReadersDecodeHandWrittenFiles) {
+    // The readers against files built here from the format descriptions, not by voxfx's writers.
+    test::TempDir dir;
+    const Vec3i n{3, 2, 4};
+    // binvox: dim nx nz ny, order x * (ny * nz) + z * ny + y, (value, count) runs; cubic cells of
+    // scale / max(dims) = 1 from the translate.
+    std::vector<uint8_t> voxels(size_t(n.x * n.y * n.z));
+    for (int64_t i = 0; i < n.x; ++i)
+        for (int64_t j = 0; j < n.y; ++j)
+            for (int64_t k = 0; k < n.z; ++k)
+                voxels[size_t(i * n.y * n.z + k * n.y + j)] = handPattern(i, j, k);
+    std::string binvox = "#binvox 1\ndim 3 4 2\ntranslate 1 2 3\nscale 4\ndata\n";
+    for (size_t p = 0; p < voxels.size();) {
+        size_t run = 1;
+        while (p + run < voxels.size() && voxels[p + run] == voxels[p] && run < 255) ++run;
+        binvox += char(voxels[p]);
+        binvox += char(run);
+        p += run;
+    }
+    // NRRD: raw uchar samples, x fastest; space origin is the centre of voxel (0, 0, 0).
+    std::string nrrd =
+        "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 3 2 4\nencoding: raw\nspace dimension: 3\n"
+        "space directions: (0.5,0,0) (0,0.25,0) (0,0,2)\nspace origin: (1.25,2.125,4)\n\n";
+    for (int64_t k = 0; k < n.z; ++k)
+        for (int64_t j = 0; j < n.y; ++j)
+            for (int64_t i = 0; i < n.x; ++i) nrrd += char(handPattern(i, j, k) ? 1 : 0);
+    struct Case {
+        std::string path;
+        Box3d box;
+    };
+    const Case cases[] = {{test::writeFile(dir.file("hand.binvox"), binvox), {{1, 2, 3}, {4, 4, 7}}},
+                          {test::writeFile(dir.file("hand.nrrd"), nrrd), {{1, 2, 3}, {2.5, 2.5, 11}}}};
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.path);
+        const VoxelGrid g = readGrid(c.path);
+        ASSERT_EQ(g.worldDims(), n);
+        int64_t wrong = 0, on = 0;
+        for (int64_t i = 0; i < n.x; ++i)
+            for (int64_t j = 0; j < n.y; ++j)
+                for (int64_t k = 0; k < n.z; ++k) {
+                    wrong += g.atWorldIndex(i, j, k) != handPattern(i, j, k);
+                    on += handPattern(i, j, k);
+                }
+        EXPECT_EQ(wrong, 0);
+        EXPECT_EQ(g.bits.count(), on);
+        expectNearBox(g.frame.box(), c.box);
     }
 }
 
@@ -386,7 +397,7 @@ struct PlyMesh {
 
 // Reads the binary PLY this library writes, from the PLY spec (header, then packed records).
 PlyMesh readPly(const std::string& path) {
-    const std::string bytes = readBytes(path);
+    const std::string bytes = test::readFileBytes(path);
     const size_t end = bytes.find("end_header\n");
     EXPECT_NE(end, std::string::npos);
     std::istringstream header(bytes.substr(0, end));
@@ -512,7 +523,7 @@ TEST(GridIoTest, VoxelObjHasTheSameMeshAsPly) {
     writeGrid(g, dir.file("m.ply"));
     writeGrid(g, dir.file("m.obj"));
     const PlyMesh ply = readPly(dir.file("m.ply"));
-    std::istringstream obj(readBytes(dir.file("m.obj")));
+    std::istringstream obj(test::readFileBytes(dir.file("m.obj")));
     std::vector<std::array<float, 3>> vertices;
     std::vector<std::array<int32_t, 4>> quads;
     for (std::string line; std::getline(obj, line);) {
@@ -586,7 +597,7 @@ TEST(GridIoTest, EveryTruncationOfAFileIsAnError) {
         const std::string full = dir.file(std::string("full.") + ext),
                           cut = dir.file(std::string("cut.") + ext);
         writeGrid(g, full);
-        const std::string bytes = readBytes(full);
+        const std::string bytes = test::readFileBytes(full);
         // Every length through the headers and the last bytes, every 31st in between (a .vdb of
         // this grid is ~10 KB, mostly internal-node masks); shortened in place, longest first.
         test::writeFile(cut, bytes);
@@ -627,7 +638,7 @@ TEST(GridIoTest, FailedWritesLeaveNoTemporaryAndKeepTheTarget) {
         expectErrorMentioning([&] { writeGrid(g, dir.file(name)); }, dir.file(name), "directory");
     }
     EXPECT_EQ(listDir(dir.path()), std::vector<std::string>{"target.nrrd"});
-    EXPECT_EQ(readBytes(dir.file("target.nrrd/keep")), "x");
+    EXPECT_EQ(test::readFileBytes(dir.file("target.nrrd/keep")), "x");
 }
 
 TEST(GridIoTest, WriteFailingMidwayKeepsTheOldFile) {
@@ -653,7 +664,7 @@ TEST(GridIoTest, WriteFailingMidwayKeepsTheOldFile) {
     std::signal(SIGXFSZ, oldHandler);
     EXPECT_TRUE(threw);
     EXPECT_NE(what.find(target), std::string::npos) << what;
-    EXPECT_EQ(readBytes(target), "old contents");
+    EXPECT_EQ(test::readFileBytes(target), "old contents");
     EXPECT_EQ(listDir(dir.path()), std::vector<std::string>{"g.nrrd"});
 }
 
@@ -665,14 +676,14 @@ TEST(GridIoTest, AtomicFileReplacesOnlyOnCommit) {
         f.stream() << "new";
         EXPECT_EQ(listDir(dir.path()).size(), 2u); // target + temporary
     }
-    EXPECT_EQ(readBytes(target), "old");
+    EXPECT_EQ(test::readFileBytes(target), "old");
     EXPECT_EQ(listDir(dir.path()), std::vector<std::string>{"t.bin"});
     {
         detail::AtomicFile f(target);
         f.stream() << "new";
         f.commit();
     }
-    EXPECT_EQ(readBytes(target), "new");
+    EXPECT_EQ(test::readFileBytes(target), "new");
     EXPECT_EQ(listDir(dir.path()), std::vector<std::string>{"t.bin"});
 }
 

@@ -113,8 +113,8 @@ TEST(GridQueryTest, SegmentTraversalMatchesPerCellClipOnRandomGrids) {
 }
 
 TEST(GridQueryTest, QueriesMatchTheReferencesOnAVoxelizedMesh) {
+    VOXFX_REQUIRE_DATA("meshes/knot1.off");
     const std::string path = test::dataPath("meshes/knot1.off");
-    VOXFX_REQUIRE_DATA(path);
     const Mesh knot = loadMesh(path);
     FitOptions fit;
     fit.resolution = 37;

@@ -1,5 +1,6 @@
-// Tests of src/io/image.cpp: PNG round trips with the sRGB curve, PFM layout, EXR read back with
-// plain OpenEXR, errors.
+// Tests of src/io/image.cpp: PNG written and read against plain libpng with the sRGB curve, PFM
+// layout, EXR read back with plain OpenEXR, errors.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -9,6 +10,7 @@
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <gtest/gtest.h>
+#include <png.h>
 
 #include "test_util.hpp"
 #include "voxfx/image.hpp"
@@ -24,20 +26,63 @@ TEST(ImageTest, SrgbCurveMatchesTheStandardAtKnownPoints) {
     for (float v = 0; v <= 1.0f; v += 0.01f) EXPECT_NEAR(srgbToLinear(linearToSrgb(v)), v, 1e-5f);
 }
 
-TEST(ImageTest, PngRoundTripKeepsEveryPixelWithinOneCodeValue) {
+// The sRGB curve of IEC 61966-2-1, written out here (not voxfx's linearToSrgb / srgbToLinear).
+double srgbEncode(double v) {
+    v = std::clamp(v, 0.0, 1.0);
+    return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+}
+double srgbDecode(double e) { return e <= 0.04045 ? e / 12.92 : std::pow((e + 0.055) / 1.055, 2.4); }
+
+TEST(ImageTest, PngReadsBackWithPlainLibpngAsSrgbCodeValues) {
     test::TempDir dir;
     Image img(37, 23);
     for (int64_t y = 0; y < img.height; ++y)
         for (int64_t x = 0; x < img.width; ++x) img.at(x, y) = {float(x) / 36.0f, float(y) / 22.0f, 0.25f};
+    img.at(0, 0) = {-1.0f, 2.0f, 0.001f}; // clamped, clamped, on the linear segment
     writePng(img, dir.file("a.png"));
-    const Image back = readPng(dir.file("a.png"));
-    ASSERT_EQ(back.width, 37);
-    ASSERT_EQ(back.height, 23);
+    png_image png{};
+    png.version = PNG_IMAGE_VERSION;
+    ASSERT_NE(png_image_begin_read_from_file(&png, dir.file("a.png").c_str()), 0) << png.message;
+    EXPECT_EQ(png.width, 37u);
+    EXPECT_EQ(png.height, 23u);
+    EXPECT_EQ(png.flags & PNG_IMAGE_FLAG_COLORSPACE_NOT_sRGB, 0u) << "the file must say it is sRGB";
+    png.format = PNG_FORMAT_RGB;
+    std::vector<uint8_t> codes(PNG_IMAGE_SIZE(png));
+    ASSERT_NE(png_image_finish_read(&png, nullptr, codes.data(), 0, nullptr), 0) << png.message;
+    ASSERT_EQ(codes.size(), size_t(37 * 23 * 3));
+    int64_t wrong = 0;
     for (int64_t y = 0; y < img.height; ++y)
         for (int64_t x = 0; x < img.width; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const double want = 255 * srgbEncode(img.at(x, y)[c]);
+                const double got = codes[size_t((y * 37 + x) * 3 + c)];
+                wrong += std::abs(got - want) > 0.5 + 1e-3; // rounded to the nearest code value
+            }
+    EXPECT_EQ(wrong, 0);
+}
+
+TEST(ImageTest, ReadPngDecodesAPlainLibpngFileToLinearValues) {
+    test::TempDir dir;
+    const int w = 16, h = 9;
+    std::vector<uint8_t> codes(size_t(w * h * 3));
+    for (size_t i = 0; i < codes.size(); ++i) codes[i] = uint8_t((i * 37) % 256);
+    png_image png{};
+    png.version = PNG_IMAGE_VERSION;
+    png.width = w;
+    png.height = h;
+    png.format = PNG_FORMAT_RGB;
+    const std::string path = dir.file("libpng.png");
+    ASSERT_NE(png_image_write_to_file(&png, path.c_str(), 0, codes.data(), 0, nullptr), 0) << png.message;
+    const Image back = readPng(path);
+    ASSERT_EQ(back.width, w);
+    ASSERT_EQ(back.height, h);
+    int64_t wrong = 0;
+    for (int64_t y = 0; y < h; ++y)
+        for (int64_t x = 0; x < w; ++x)
             for (int c = 0; c < 3; ++c)
-                EXPECT_NEAR(linearToSrgb(back.at(x, y)[c]), linearToSrgb(img.at(x, y)[c]),
-                            0.5f / 255.0f + 1e-6f);
+                wrong += std::abs(back.at(x, y)[c] - srgbDecode(codes[size_t((y * w + x) * 3 + c)] / 255.0)) >
+                         1e-6;
+    EXPECT_EQ(wrong, 0);
 }
 
 TEST(ImageTest, PfmStoresRowsBottomUpAsLittleEndianFloats) {

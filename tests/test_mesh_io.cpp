@@ -13,10 +13,9 @@
 #include <string>
 #include <vector>
 
-#include <CGAL/IO/polygon_soup_io.h>
-#include <CGAL/Simple_cartesian.h>
 #include <gtest/gtest.h>
 
+#include "cgal_oracle.hpp"
 #include "io/mesh_formats.hpp"
 #include "test_util.hpp"
 #include "voxfx/error.hpp"
@@ -163,20 +162,7 @@ std::string cubeStlBinary() {
     return s;
 }
 
-std::string base64(const std::string& bytes) {
-    static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    for (std::size_t i = 0; i < bytes.size(); i += 3) {
-        uint32_t n = uint32_t(uint8_t(bytes[i])) << 16;
-        if (i + 1 < bytes.size()) n |= uint32_t(uint8_t(bytes[i + 1])) << 8;
-        if (i + 2 < bytes.size()) n |= uint32_t(uint8_t(bytes[i + 2]));
-        out += kAlphabet[(n >> 18) & 63];
-        out += kAlphabet[(n >> 12) & 63];
-        out += i + 1 < bytes.size() ? kAlphabet[(n >> 6) & 63] : '=';
-        out += i + 2 < bytes.size() ? kAlphabet[n & 63] : '=';
-    }
-    return out;
-}
+using test::base64;
 
 // glTF 2.0 scene: node 0 (translation 10 20 30) has child node 1 (scale 2 3 4) with the cube;
 // node 2 (translation 100 0 0) instances the cube again. World bounds: x [8, 12] u [99, 101],
@@ -577,18 +563,8 @@ TEST(MeshIoTest, EveryTruncationAndCorruptionFailsCleanly) {
 // ---------------------------------------------------------------------------------------------
 // Real meshes (scripts/fetch-data.sh), with CGAL's readers as the oracle.
 
-using Kernel = CGAL::Simple_cartesian<double>;
-
-struct Soup {
-    std::vector<Kernel::Point_3> points;
-    std::vector<std::vector<std::size_t>> polygons;
-};
-
-Soup readWithCgal(const std::string& path) {
-    Soup soup;
-    EXPECT_TRUE(CGAL::IO::read_polygon_soup(path, soup.points, soup.polygons)) << path;
-    return soup;
-}
+using Soup = test::CgalSoup;
+using test::readWithCgal;
 
 // Floats equal or adjacent: a text coordinate parsed straight to float (voxfx) and through
 // double (CGAL, then rounded to float) can differ by one rounding step in rare halfway cases.
@@ -605,8 +581,8 @@ void expectSameTriangles(const Mesh& mesh, const Soup& soup, const std::string& 
             for (int c = 0; c < 3; ++c) {
                 const Vec3f& got = mesh.positions[mesh.indices[3 * t + c]];
                 const auto& want = soup.points[corners[c]];
-                if (!withinOneUlp(got.x, float(want.x())) || !withinOneUlp(got.y, float(want.y())) ||
-                    !withinOneUlp(got.z, float(want.z())))
+                if (!withinOneUlp(got.x, float(want.x)) || !withinOneUlp(got.y, float(want.y)) ||
+                    !withinOneUlp(got.z, float(want.z)))
                     ++mismatches;
             }
         }
@@ -616,8 +592,8 @@ void expectSameTriangles(const Mesh& mesh, const Soup& soup, const std::string& 
 }
 
 TEST(MeshIoRealDataTest, Bunny) {
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
     const std::string path = test::dataPath("meshes/bunny00.off");
-    VOXFX_REQUIRE_DATA(path);
     MeshLoadReport report;
     const Mesh m = loadMesh(path, &report);
     EXPECT_EQ(m.positions.size(), 37706u); // from the file's header
@@ -637,8 +613,8 @@ TEST(MeshIoRealDataTest, Closedness) {
          {Case{"bunny00.off", true}, Case{"armadillo.off", true}, Case{"refined_elephant.off", true},
           Case{"elephant.off", true}, Case{"ChineseDragon-10kv.off", false},
           Case{"elephant-with-holes.off", false}, Case{"sphere.stl", true}, Case{"sphere.ply", true}}) {
+        VOXFX_REQUIRE_DATA(std::string("meshes/") + c.file);
         const std::string path = test::dataPath(std::string("meshes/") + c.file);
-        VOXFX_REQUIRE_DATA(path);
         const MeshTopology topo = analyzeTopology(loadMesh(path).view());
         EXPECT_EQ(topo.closed(), c.closed)
             << c.file << ": " << topo.boundaryEdges << " boundary, " << topo.nonManifoldEdges
@@ -650,8 +626,8 @@ TEST(MeshIoRealDataTest, Closedness) {
 TEST(MeshIoRealDataTest, MatchesCgalOnFetchedFiles) {
     for (const char* file : {"armadillo.off", "ChineseDragon-10kv.off", "cube_quad.off", "pig.stl",
                              "sphere.stl", "sphere.ply", "colored_tetra.ply"}) {
+        VOXFX_REQUIRE_DATA(std::string("meshes/") + file);
         const std::string path = test::dataPath(std::string("meshes/") + file);
-        VOXFX_REQUIRE_DATA(path);
         MeshLoadReport report;
         const Mesh m = loadMesh(path, &report);
         EXPECT_EQ(report.degenerateRemoved, 0u) << file;
@@ -660,22 +636,21 @@ TEST(MeshIoRealDataTest, MatchesCgalOnFetchedFiles) {
 }
 
 TEST(MeshIoRealDataTest, PointCloudPlyHasNoTriangles) {
+    VOXFX_REQUIRE_DATA("meshes/b9.ply");
     const std::string path = test::dataPath("meshes/b9.ply");
-    VOXFX_REQUIRE_DATA(path);
     expectLoadError(path, {"no triangles"});
 }
 
 TEST(MeshIoRealDataTest, EveryFormatMatchesCgalOnArmadillo) {
     // CGAL writes the armadillo in each format; what CGAL reads back is what voxfx must read.
+    VOXFX_REQUIRE_DATA("meshes/armadillo.off");
     const std::string source = test::dataPath("meshes/armadillo.off");
-    VOXFX_REQUIRE_DATA(source);
     const Soup soup = readWithCgal(source);
     TempDir dir;
     for (const char* name : {"a.off", "a.obj", "a-bin.ply", "a-ascii.ply", "a-bin.stl", "a-ascii.stl"}) {
         const std::string path = dir.file(name);
         const bool binary = std::string(name).find("-bin") != std::string::npos;
-        ASSERT_TRUE(CGAL::IO::write_polygon_soup(
-            path, soup.points, soup.polygons, CGAL::parameters::stream_precision(9).use_binary_mode(binary)));
+        ASSERT_TRUE(test::writeWithCgal(path, soup, binary));
         MeshLoadReport report;
         const Mesh m = loadMesh(path, &report);
         EXPECT_EQ(report.inputTriangles, 52000u) << name;

@@ -50,6 +50,24 @@ bool paddingIsZero(const BitGrid& g) {
     return true;
 }
 
+// Every cell flipped, cell by cell (padding stays zero).
+BitGrid complement(const BitGrid& g) {
+    BitGrid out(g.width(), g.height(), g.depth());
+    for (int64_t y = 0; y < g.height(); ++y)
+        for (int64_t x = 0; x < g.width(); ++x)
+            for (int64_t s = 0; s < g.depth(); ++s)
+                if (!g.get(x, y, s)) out.set(x, y, s);
+    return out;
+}
+
+// The options whose dilation of the complement is the complement of the erosion: the outside is
+// complemented too (neutral stays neutral).
+MorphologyOptions dualOf(MorphologyOptions o) {
+    if (o.border != MorphBorder::Neutral)
+        o.border = o.border == MorphBorder::Empty ? MorphBorder::Filled : MorphBorder::Empty;
+    return o;
+}
+
 bool contains(const BitGrid& big, const BitGrid& small) {
     for (int64_t i = 0; i < big.wordCount(); ++i)
         if (small.words()[i] & ~big.words()[i]) return false;
@@ -81,6 +99,7 @@ TEST(MorphologyTest, ErosionAndDilationMatchTheBoxScanOnRandomGrids) {
                 ASSERT_EQ(e, naiveMorph(g, true, o)) << "erode " << what;
                 ASSERT_EQ(d, naiveMorph(g, false, o)) << "dilate " << what;
                 EXPECT_TRUE(paddingIsZero(e) && paddingIsZero(d)) << what;
+                EXPECT_EQ(e, complement(dilate(complement(g), dualOf(o)))) << "duality " << what;
                 // Opening and closing are compositions of the two.
                 EXPECT_EQ(opening(g, o), naiveMorph(naiveMorph(g, true, o), false, o)) << what;
                 EXPECT_EQ(closing(g, o), naiveMorph(naiveMorph(g, false, o), true, o)) << what;
@@ -91,8 +110,8 @@ TEST(MorphologyTest, ErosionAndDilationMatchTheBoxScanOnRandomGrids) {
 
 TEST(MorphologyTest, ClosingContainsAndOpeningIsContainedInVoxelizedMeshes) {
     for (const char* name : {"bunny00", "knot1"}) {
+        VOXFX_REQUIRE_DATA(std::string("meshes/") + name + ".off");
         const std::string path = test::dataPath(std::string("meshes/") + name + ".off");
-        VOXFX_REQUIRE_DATA(path);
         const Mesh mesh = loadMesh(path);
         FitOptions fit;
         fit.resolution = 70;
@@ -108,9 +127,12 @@ TEST(MorphologyTest, ClosingContainsAndOpeningIsContainedInVoxelizedMeshes) {
             // Idempotence: opening and closing are projections.
             EXPECT_EQ(closing(c, o), c) << name << " r " << r;
             EXPECT_EQ(opening(op, o), op) << name << " r " << r;
-            // Erosion shrinks, dilation grows, and they are duals under complement.
-            EXPECT_TRUE(contains(g.bits, erode(g.bits, o)));
+            // Erosion shrinks, dilation grows, and they are duals under complement (the border
+            // rule turns into its complement: empty outside <-> filled outside).
+            const BitGrid e = erode(g.bits, o);
+            EXPECT_TRUE(contains(g.bits, e));
             EXPECT_TRUE(contains(dilate(g.bits, o), g.bits));
+            EXPECT_EQ(e, complement(dilate(complement(g.bits), dualOf(o)))) << name << " r " << r;
         }
         MorphologyOptions small;
         small.rx = 1;
@@ -141,9 +163,15 @@ TEST(MorphologyTest, CallerOwnedOutputsAreReusedAndOverwritten) {
     const MorphologyOptions o{1, 2, 3};
     // Outputs holding stale bits of the right size, and of a wrong size.
     BitGrid out = randomBits(21, 13, 90, 0.5, 1), scratch(3, 3, 3);
-    for (const MorphOp op : {MorphOp::Erode, MorphOp::Dilate, MorphOp::Open, MorphOp::Close}) {
+    // Expected: the cell-by-cell definition (opening and closing as its compositions).
+    const BitGrid e = naiveMorph(g, true, o), d = naiveMorph(g, false, o);
+    const std::pair<MorphOp, BitGrid> cases[] = {{MorphOp::Erode, e},
+                                                 {MorphOp::Dilate, d},
+                                                 {MorphOp::Open, naiveMorph(e, false, o)},
+                                                 {MorphOp::Close, naiveMorph(d, true, o)}};
+    for (const auto& [op, want] : cases) {
         morphology(g, op, o, out, scratch);
-        EXPECT_EQ(out, morphology(g, op, o)) << toString(op);
+        EXPECT_EQ(out, want) << toString(op);
     }
     const uint64_t* reused = out.words();
     morphology(g, MorphOp::Close, o, out, scratch);
@@ -171,10 +199,22 @@ TEST(MorphologyTest, CommandLineMatchesTheLibrary) {
         test::runVoxfx(dir, "morph " + dir.file("g.binvox") +
                                 " --op open --radii 1 0 2 --border empty -q -o " + dir.file("o.binvox"));
     ASSERT_EQ(run.exitCode, 0) << run.err;
+    // The written file (decoded from the format's description) against the definition: sliced
+    // along z, world radii (1, 0, 2) are the column x, column y and slice radii.
     MorphologyOptions o;
+    o.rx = 1;
+    o.ry = 0;
+    o.rz = 2;
     o.border = MorphBorder::Empty;
-    const VoxelGrid in = readGrid(dir.file("g.binvox"));
-    EXPECT_EQ(readGrid(dir.file("o.binvox")).bits, morphology(in, MorphOp::Open, {1, 0, 2}, o).bits);
+    const BitGrid want = naiveMorph(naiveMorph(g.bits, true, o), false, o);
+    const test::BinvoxFile f = test::readBinvoxBySpec(dir.file("o.binvox"));
+    ASSERT_EQ(f.dims, Vec3i(12, 10, 70));
+    int64_t wrong = 0;
+    for (int64_t k = 0; k < 70; ++k)
+        for (int64_t j = 0; j < 10; ++j)
+            for (int64_t i = 0; i < 12; ++i) wrong += f.at(i, j, k) != want.get(i, j, k);
+    EXPECT_EQ(wrong, 0);
+    EXPECT_GT(want.count(), 0);
     EXPECT_NE(test::runVoxfx(dir, "morph " + dir.file("g.binvox") + " --op grow -o " + dir.file("o.binvox"))
                   .exitCode,
               0);

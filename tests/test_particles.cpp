@@ -194,7 +194,8 @@ TEST(ParticlesTest, FilesAndPicture) {
 
 TEST(ParticlesTest, CommandLineWritesFramesAndAPicture) {
     test::TempDir dir;
-    writeGrid(torusScene(), dir.file("scene.binvox"));
+    const VoxelGrid scene = torusScene();
+    writeGrid(scene, dir.file("scene.binvox"));
     const test::CommandRun run = test::runVoxfx(
         dir, "particles " + dir.file("scene.binvox") + " -n 2000 --steps 20 --every 10 --walls -q -o " +
                  dir.file("p_%02d.csv") + " --png " + dir.file("final.png"));
@@ -206,7 +207,7 @@ TEST(ParticlesTest, CommandLineWritesFramesAndAPicture) {
     std::string line;
     std::getline(in, line);
     EXPECT_EQ(line, "x,y,z,vx,vy,vz");
-    const VoxelGrid scene = readGrid(dir.file("scene.binvox"));
+    // Checked against the grid in memory (the file's bytes are grid_io's tests' business).
     int rows = 0, inside = 0;
     while (std::getline(in, line)) {
         float x, y, z;

@@ -354,7 +354,7 @@ TEST(RenderTest, DemoTreeHasThousandsOfLeavesAndAnOpaqueTrunk) {
 }
 
 TEST(RenderTest, DemoScenesFromTheMeshData) {
-    VOXFX_REQUIRE_DATA(test::dataPath("meshes/bunny00.off"));
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
     const std::string dir = test::dataPath("meshes");
     for (const std::string& name : demoSceneNames()) {
         const Scene s = makeDemoScene(name, dir);

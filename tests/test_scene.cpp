@@ -1,11 +1,16 @@
 // Tests of src/render/scene*.cpp: a hand-written glTF 2.0 file (node hierarchy with TRS, instancing,
 // KHR_lights_punctual, a perspective camera, KHR_materials_transmission / _ior / _volume, a primitive
 // without material) whose expected world-space values are derived by hand; writeGltf round trips
-// (.gltf and .glb); the JSON wrapper; material rules; bad input with clear messages; scene-info.
+// (.gltf and .glb), and the written files read from the glTF 2.0 specification (the JSON with
+// nlohmann-json, the buffer by hand, no Assimp); the JSON wrapper; material rules; bad input with clear
+// messages; scene-info.
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "test_util.hpp"
 #include "voxfx/demo.hpp"
@@ -14,20 +19,7 @@
 namespace voxfx {
 namespace {
 
-std::string base64(const std::string& bytes) {
-    static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    for (size_t i = 0; i < bytes.size(); i += 3) {
-        uint32_t v = uint32_t(uint8_t(bytes[i])) << 16;
-        if (i + 1 < bytes.size()) v |= uint32_t(uint8_t(bytes[i + 1])) << 8;
-        if (i + 2 < bytes.size()) v |= uint32_t(uint8_t(bytes[i + 2]));
-        out += t[(v >> 18) & 63];
-        out += t[(v >> 12) & 63];
-        out += i + 1 < bytes.size() ? t[(v >> 6) & 63] : '=';
-        out += i + 2 < bytes.size() ? t[v & 63] : '=';
-    }
-    return out;
-}
+using test::base64;
 
 // One triangle (0,0,0) (1,0,0) (0,1,0) as float positions + uint16 indices (padded): 44 bytes.
 std::string triangleBuffer() {
@@ -184,7 +176,104 @@ TEST(SceneTest, GltfLightsAndCameraFollowTheirNodes) {
     EXPECT_DOUBLE_EQ(c.nearDepth, 0.1);
 }
 
-TEST(SceneTest, WriteGltfRoundTripsGltfAndGlb) {
+// ---- The written glTF read from the specification, without voxfx's or Assimp's loader ----------
+
+using test::unbase64;
+
+uint32_t u32At(const std::string& bytes, size_t at) {
+    uint32_t v = 0;
+    for (int i = 3; i >= 0; --i) v = (v << 8) | uint8_t(bytes.at(at + size_t(i)));
+    return v;
+}
+
+// glTF 2.0 JSON and its one binary buffer: a .gltf with a base64 data URI, or a .glb container
+// (12-byte header "glTF", version 2, total length; a JSON chunk, then a BIN chunk).
+struct GltfFile {
+    nlohmann::json doc;
+    std::string bin;
+};
+
+GltfFile readGltfBySpec(const std::string& path) {
+    const std::string bytes = test::readFileBytes(path);
+    GltfFile f;
+    if (path.ends_with(".glb")) {
+        EXPECT_EQ(u32At(bytes, 0), 0x46546C67u) << "magic";
+        EXPECT_EQ(u32At(bytes, 4), 2u) << "version";
+        EXPECT_EQ(u32At(bytes, 8), bytes.size()) << "length";
+        const uint32_t jsonLength = u32At(bytes, 12);
+        EXPECT_EQ(u32At(bytes, 16), 0x4E4F534Au) << "the first chunk is JSON";
+        EXPECT_EQ(jsonLength % 4, 0u) << "chunks are 4-byte aligned";
+        f.doc = nlohmann::json::parse(bytes.substr(20, jsonLength));
+        const size_t binAt = 20 + jsonLength;
+        EXPECT_EQ(u32At(bytes, binAt + 4), 0x004E4942u) << "the second chunk is BIN";
+        f.bin = bytes.substr(binAt + 8, u32At(bytes, binAt));
+        EXPECT_FALSE(f.doc["buffers"][0].contains("uri")) << "a GLB buffer lives in the BIN chunk";
+    } else {
+        f.doc = nlohmann::json::parse(bytes);
+        const std::string uri = f.doc["buffers"][0]["uri"];
+        const std::string prefix = "data:application/octet-stream;base64,";
+        EXPECT_EQ(uri.substr(0, prefix.size()), prefix);
+        f.bin = unbase64(uri.substr(prefix.size()));
+    }
+    EXPECT_GE(f.bin.size(), f.doc["buffers"][0]["byteLength"].get<size_t>());
+    return f;
+}
+
+// The elements of accessor `index` (floats or unsigned ints), through its buffer view.
+template <class T>
+std::vector<T> accessorData(const GltfFile& f, size_t index, int componentType, const std::string& type) {
+    const nlohmann::json& a = f.doc["accessors"][index];
+    EXPECT_EQ(a["componentType"].get<int>(), componentType);
+    EXPECT_EQ(a["type"].get<std::string>(), type);
+    const nlohmann::json& view = f.doc["bufferViews"][a["bufferView"].get<size_t>()];
+    const size_t offset = view.value("byteOffset", size_t(0)) + a.value("byteOffset", size_t(0));
+    const size_t n = a["count"].get<size_t>() * (type == "VEC3" ? 3 : 1);
+    EXPECT_EQ(offset % 4, 0u) << "accessor data must be aligned to its component size";
+    EXPECT_LE(n * sizeof(T), view["byteLength"].get<size_t>());
+    std::vector<T> out(n);
+    if (offset + n * sizeof(T) > f.bin.size()) {
+        ADD_FAILURE() << "accessor " << index << " runs past the buffer";
+        return {};
+    }
+    std::memcpy(out.data(), f.bin.data() + offset, n * sizeof(T));
+    return out;
+}
+
+// The written file, read by the specification, holds `tree`'s meshes, materials and lights exactly.
+void expectGltfHoldsSceneBySpec(const Scene& tree, const std::string& path) {
+    const GltfFile f = readGltfBySpec(path);
+    EXPECT_EQ(f.doc["asset"]["version"], "2.0");
+    ASSERT_EQ(f.doc["meshes"].size(), tree.meshes.size());
+    ASSERT_EQ(f.doc["materials"].size(), tree.materials.size());
+    for (size_t i = 0; i < tree.meshes.size(); ++i) {
+        const SceneMesh& m = tree.meshes[i];
+        const nlohmann::json& gm = f.doc["meshes"][i];
+        EXPECT_EQ(gm["name"], m.name);
+        const nlohmann::json& prim = gm["primitives"][0];
+        EXPECT_EQ(prim.value("mode", 4), 4) << "triangles";
+        EXPECT_EQ(f.doc["materials"][prim["material"].get<size_t>()]["name"],
+                  tree.materials[m.material].name);
+        const size_t pos = prim["attributes"]["POSITION"].get<size_t>();
+        EXPECT_TRUE(f.doc["accessors"][pos].contains("min") && f.doc["accessors"][pos].contains("max"))
+            << "POSITION needs min and max";
+        const std::vector<float> p = accessorData<float>(f, pos, 5126, "VEC3");
+        ASSERT_EQ(p.size(), 3 * m.mesh.positions.size()) << m.name;
+        int64_t wrong = 0;
+        for (size_t v = 0; v < m.mesh.positions.size(); ++v)
+            wrong += !(Vec3f{p[3 * v], p[3 * v + 1], p[3 * v + 2]} == m.mesh.positions[v]);
+        EXPECT_EQ(wrong, 0) << m.name;
+        EXPECT_EQ(accessorData<uint32_t>(f, prim["indices"].get<size_t>(), 5125, "SCALAR"), m.mesh.indices)
+            << m.name;
+    }
+    const nlohmann::json& lights = f.doc["extensions"]["KHR_lights_punctual"]["lights"];
+    ASSERT_EQ(lights.size(), tree.lights.size());
+    EXPECT_EQ(lights[0]["type"], "directional");
+    EXPECT_NE(
+        std::find(f.doc["extensionsUsed"].begin(), f.doc["extensionsUsed"].end(), "KHR_lights_punctual"),
+        f.doc["extensionsUsed"].end());
+}
+
+TEST(SceneTest, WriteGltfRoundTripsGltfAndGlbAndFollowsTheSpec) {
     TreeOptions o;
     o.leaves = 200;
     const Scene tree = makeTreeScene(o);
@@ -192,6 +281,8 @@ TEST(SceneTest, WriteGltfRoundTripsGltfAndGlb) {
     for (const char* name : {"tree.gltf", "tree.glb"}) {
         const std::string path = dir.file(name);
         writeGltf(tree, path);
+        SCOPED_TRACE(name);
+        expectGltfHoldsSceneBySpec(tree, path); // without voxfx's or Assimp's loader
         const Scene back = loadScene(path);
         ASSERT_EQ(back.meshes.size(), tree.meshes.size()) << name;
         for (size_t i = 0; i < tree.meshes.size(); ++i) {

@@ -2,8 +2,11 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <string_view>
 
@@ -39,6 +42,53 @@ private:
     std::filesystem::path path_;
 };
 
+/// The whole file at `path`, byte for byte ("" when it cannot be read).
+inline std::string readFileBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+/// Base64 (RFC 4648, with padding) of `bytes`, for data URIs in hand-written glTF files.
+inline std::string base64(std::string_view bytes) {
+    static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    for (std::size_t i = 0; i < bytes.size(); i += 3) {
+        uint32_t n = uint32_t(uint8_t(bytes[i])) << 16;
+        if (i + 1 < bytes.size()) n |= uint32_t(uint8_t(bytes[i + 1])) << 8;
+        if (i + 2 < bytes.size()) n |= uint32_t(uint8_t(bytes[i + 2]));
+        out += kAlphabet[(n >> 18) & 63];
+        out += kAlphabet[(n >> 12) & 63];
+        out += i + 1 < bytes.size() ? kAlphabet[(n >> 6) & 63] : '=';
+        out += i + 2 < bytes.size() ? kAlphabet[n & 63] : '=';
+    }
+    return out;
+}
+
+/// The bytes of base64 `text` (up to its padding); a character outside the alphabet is a test
+/// failure.
+inline std::string unbase64(std::string_view text) {
+    static const std::string_view kAlphabet =
+        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    uint32_t acc = 0;
+    int bits = 0;
+    for (const char c : text) {
+        if (c == '=') break;
+        const std::size_t v = kAlphabet.find(c);
+        if (v == std::string_view::npos) {
+            ADD_FAILURE() << "not base64: '" << c << "'";
+            return out;
+        }
+        acc = (acc << 6) | uint32_t(v);
+        bits += 6;
+        if (bits >= 8) {
+            bits -= 8;
+            out += char((acc >> bits) & 0xFF);
+        }
+    }
+    return out;
+}
+
 /// Writes `bytes` to `path` exactly (binary mode) and returns the path.
 inline std::string writeFile(const std::string& path, std::string_view bytes) {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
@@ -47,17 +97,44 @@ inline std::string writeFile(const std::string& path, std::string_view bytes) {
     return path;
 }
 
-/// Path of a fetched data file (scripts/fetch-data.sh), e.g. dataPath("meshes/bunny00.off").
-inline std::string dataPath(std::string_view relative) {
-    return (std::filesystem::path(VOXFX_DATA_DIR) / relative).string();
+/// Folder of the fetched data (scripts/fetch-data.sh): $VOXFX_DATA_DIR when set (the fetch script
+/// honours the same variable), else the source tree's data/.
+inline std::filesystem::path dataDir() {
+    const char* env = std::getenv("VOXFX_DATA_DIR");
+    return (env && *env) ? std::filesystem::path(env) : std::filesystem::path(VOXFX_DATA_DIR);
+}
+
+/// Path of a fetched data file, e.g. dataPath("meshes/bunny00.off").
+inline std::string dataPath(std::string_view relative) { return (dataDir() / relative).string(); }
+
+/// Whether a missing data file fails the test instead of skipping it: the environment variable
+/// VOXFX_REQUIRE_DATA set to anything but "" or "0" (CI sets it after fetching the data, so a
+/// failed fetch cannot pass as a row of skips).
+inline bool dataRequired() {
+    const char* env = std::getenv("VOXFX_REQUIRE_DATA");
+    return env && *env && std::string_view(env) != "0";
+}
+
+/// Why the data file (or folder) `relative` cannot be used, or "" when it is there.
+inline std::string missingData(std::string_view relative) {
+    const std::string path = dataPath(relative);
+    if (std::filesystem::exists(path)) return {};
+    return "missing test data " + path + " (run scripts/fetch-data.sh" +
+           (dataRequired() ? "; VOXFX_REQUIRE_DATA is set, so this is a failure)" : ")");
 }
 
 } // namespace voxfx::test
 
-/// Skips the current test when a fetched data file is missing (run scripts/fetch-data.sh).
-#define VOXFX_REQUIRE_DATA(path)                                                                             \
+/// Skips the current test, visibly and naming the file and the fetch script, when the fetched
+/// data file `relative` (e.g. "meshes/bunny00.off") is missing; fails it instead when
+/// VOXFX_REQUIRE_DATA=1. Use at the top level of a TEST body (GTEST_SKIP returns from it).
+#define VOXFX_REQUIRE_DATA(relative)                                                                         \
     do {                                                                                                     \
-        if (!std::filesystem::exists(path)) GTEST_SKIP() << "missing test data " << (path);                  \
+        const std::string voxfxMissing_ = ::voxfx::test::missingData(relative);                              \
+        if (!voxfxMissing_.empty()) {                                                                        \
+            if (::voxfx::test::dataRequired()) GTEST_FAIL() << voxfxMissing_;                                \
+            GTEST_SKIP() << voxfxMissing_;                                                                   \
+        }                                                                                                    \
     } while (false)
 
 // ---- Small synthetic meshes (closed, outward counter-clockwise) for edge cases ----------------
@@ -163,6 +240,18 @@ inline VoxelGrid randomVoxelGrid(const Box3d& box, Axis axis, const Vec3i& dims,
     return g;
 }
 
+/// Cells whose occupancy differs between two grids of the same world dimensions, compared by
+/// world index (i, j, k) whatever each grid's slicing axis.
+inline int64_t worldMismatches(const VoxelGrid& a, const VoxelGrid& b) {
+    const Vec3i n = a.worldDims();
+    int64_t mismatches = 0;
+    for (int64_t i = 0; i < n.x; ++i)
+        for (int64_t j = 0; j < n.y; ++j)
+            for (int64_t k = 0; k < n.z; ++k)
+                mismatches += a.atWorldIndex(i, j, k) != b.atWorldIndex(i, j, k);
+    return mismatches;
+}
+
 /// A W x H x D bit grid, each cell on with probability `density` (fixed seed): the bits of
 /// randomVoxelGrid sliced along z (grid tool tests: density, morphology, CSG, queries).
 inline BitGrid randomBits(int64_t w, int64_t h, int64_t d, double density, uint64_t seed) {
@@ -215,9 +304,6 @@ inline double meshVolume(const MeshView& mesh) {
 } // namespace voxfx::test
 
 // ---- Running the voxfx command (end-to-end tests of the CLI subcommands) ----------------------
-#include <cstdlib>
-#include <sstream>
-
 #include <sys/wait.h>
 
 namespace voxfx::test {
@@ -235,15 +321,68 @@ inline CommandRun runVoxfx(const TempDir& dir, const std::string& args) {
     const int status = std::system(cmd.c_str());
     CommandRun r;
     r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-    auto slurp = [](const std::string& path) {
-        std::ifstream in(path, std::ios::binary);
-        std::stringstream s;
-        s << in.rdbuf();
-        return s.str();
-    };
-    r.out = slurp(out);
-    r.err = slurp(err);
+    r.out = readFileBytes(out);
+    r.err = readFileBytes(err);
     return r;
+}
+
+} // namespace voxfx::test
+
+// ---- A .binvox decoder written from the format's description -----------------------------------
+#include <algorithm>
+#include <sstream>
+#include <vector>
+
+namespace voxfx::test {
+
+/// A .binvox file as the format describes it, decoded here without voxfx: header lines "#binvox 1",
+/// "dim", "translate", "scale", "data", then (value, count) byte pairs, count 1..255, voxel order
+/// index = x * (ny * nz) + z * ny + y; "dim" lists the counts slowest first (nx nz ny). Problems
+/// with the file are reported as test failures.
+struct BinvoxFile {
+    Vec3i dims{0, 0, 0}; ///< cells along world x, y, z
+    Vec3d translate;     ///< world position of the grid's lower corner
+    double scale = 0;    ///< world length of the longest side (cells are cubes of scale / max dims)
+    std::vector<uint8_t> voxels;
+
+    bool at(int64_t i, int64_t j, int64_t k) const {
+        return voxels[std::size_t(i * dims.y * dims.z + k * dims.y + j)] != 0;
+    }
+    int64_t count() const { return int64_t(std::count(voxels.begin(), voxels.end(), uint8_t(1))); }
+    double cell() const { return scale / double(std::max({dims.x, dims.y, dims.z})); }
+};
+
+inline BinvoxFile readBinvoxBySpec(const std::string& path) {
+    BinvoxFile f;
+    const std::string bytes = readFileBytes(path);
+    const std::size_t dataPos = bytes.find("\ndata\n");
+    if (dataPos == std::string::npos) {
+        ADD_FAILURE() << path << ": no \"data\" line";
+        return f;
+    }
+    std::istringstream header(bytes.substr(0, dataPos));
+    std::string magic, dimKey, translateKey, scaleKey;
+    int version = 0;
+    header >> magic >> version >> dimKey >> f.dims.x >> f.dims.z >> f.dims.y;
+    header >> translateKey >> f.translate.x >> f.translate.y >> f.translate.z >> scaleKey >> f.scale;
+    EXPECT_EQ(magic, "#binvox") << path;
+    EXPECT_EQ(version, 1) << path;
+    EXPECT_EQ(dimKey, "dim") << path;
+    EXPECT_EQ(translateKey, "translate") << path;
+    EXPECT_EQ(scaleKey, "scale") << path;
+    const std::size_t first = dataPos + 6;
+    EXPECT_EQ((bytes.size() - first) % 2, 0u) << path << ": a run without its count";
+    int64_t badRuns = 0;
+    for (std::size_t p = first; p + 1 < bytes.size(); p += 2) {
+        const auto value = uint8_t(bytes[p]), count = uint8_t(bytes[p + 1]);
+        badRuns += count == 0 || value > 1;
+        f.voxels.insert(f.voxels.end(), count, value);
+    }
+    EXPECT_EQ(badRuns, 0) << path << ": runs must be (0 or 1, 1..255)";
+    const int64_t cells = f.dims.x * f.dims.y * f.dims.z;
+    EXPECT_EQ(int64_t(f.voxels.size()), cells) << path;
+    f.voxels.resize(std::size_t(std::max<int64_t>(cells, 0)), 0);
+    return f;
 }
 
 } // namespace voxfx::test

@@ -246,8 +246,8 @@ TEST(VolumeIo, EveryCgalImageLoadsWithItsDimsSpacingTypeAndSamples) {
     };
     for (const CgalImage& img : images) {
         SCOPED_TRACE(img.name);
+        VOXFX_REQUIRE_DATA(std::string("images/") + img.name);
         const std::string path = test::dataPath(std::string("images/") + img.name);
-        VOXFX_REQUIRE_DATA(path);
         VolumeLoadReport report;
         const Volume v = loadVolume(path, &report);
         EXPECT_EQ(report.format, VolumeFormat::Inr);

@@ -55,12 +55,7 @@ TEST(VoxelGridTest, ResliceKeepsEveryVoxelForEveryAxisPair) {
                 ASSERT_EQ(dst.bits.height(), dst.frame.height());
                 ASSERT_EQ(dst.bits.depth(), dst.frame.depth());
                 EXPECT_EQ(dst.frame.box(), box);
-                int64_t mismatches = 0;
-                for (int64_t i = 0; i < n.x; ++i)
-                    for (int64_t j = 0; j < n.y; ++j)
-                        for (int64_t k = 0; k < n.z; ++k)
-                            mismatches += dst.atWorldIndex(i, j, k) != src.atWorldIndex(i, j, k);
-                EXPECT_EQ(mismatches, 0);
+                EXPECT_EQ(test::worldMismatches(dst, src), 0);
                 EXPECT_EQ(dst.bits.count(), src.bits.count());
                 // Padding bits (slices >= depth in each column's last word) stay zero.
                 const uint64_t padding = ~dst.bits.lastWordMask();
