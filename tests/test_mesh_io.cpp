@@ -83,7 +83,12 @@ std::string cubeObj() {
     const char* suffixes[] = {"", "/1", "//1", "/1/1", "", ""};
     for (int f = 0; f < 6; ++f) {
         s += "f";
-        for (int v : kCubeQuads[f]) s += " " + std::to_string(f == 4 ? v - 8 : v + 1) + suffixes[f];
+        for (int v : kCubeQuads[f]) {
+            // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on " " + std::string.
+            s += ' ';
+            s += std::to_string(f == 4 ? v - 8 : v + 1);
+            s += suffixes[f];
+        }
         s += "\n";
     }
     return s;
