@@ -1,7 +1,7 @@
 // voxfx — particles colliding with solid grids (Eisemann & Décoret, "Single-Pass GPU Solid
 // Voxelization for Real-Time Applications", GI 2008, §7 "Particle collisions": particles query the
 // solid grid, bounce with the density-gradient normal on entering a filled cell, and the grid can
-// be re-voxelized every frame). Paths are walked with the DDA of Amanatides & Woo (1987).
+// be re-voxelized every frame). Paths are walked with the one 3D DDA (voxfx/dda.hpp).
 #include "voxfx/particles.hpp"
 
 #include <algorithm>
@@ -14,6 +14,7 @@
 #include <random>
 
 #include "io/atomic_file.hpp"
+#include "voxfx/dda.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
@@ -107,65 +108,42 @@ Hit firstHit(const BitGrid& bits, const GridMap& m, const Vec3d& a, const Vec3d&
         std::floor(a.z) == std::floor(b.z))
         return h;
     const Vec3d d = b - a;
-    const double n[3] = {double(m.dims[0]), double(m.dims[1]), double(m.dims[2])};
-    double t0 = 0, t1 = 1;
-    int entryAxis = -1;
-    for (int i = 0; i < 3; ++i) {
-        if (d[i] == 0) {
-            if (!(a[i] >= 0 && a[i] < n[i])) return h;
-            continue;
-        }
-        double ta = (0.0 - a[i]) / d[i], tb = (n[i] - a[i]) / d[i];
-        if (ta > tb) std::swap(ta, tb);
-        if (ta > t0) {
-            t0 = ta;
-            entryAxis = i;
-        }
-        t1 = std::min(t1, tb);
-    }
+    const DdaClip clip = clipToGrid(a, d, m.dims);
     const bool startsInside = m.inside(a);
-    if (!(t0 < t1) && !(startsInside && walls)) return h;
+    if (clip.empty() && !(startsInside && walls)) return h;
 
-    int64_t idx[3], step[3];
-    double tMax[3];
-    for (int i = 0; i < 3; ++i) {
-        step[i] = d[i] > 0 ? 1 : (d[i] < 0 ? -1 : 0);
-        const double p = startsInside ? a[i] : a[i] + t0 * d[i];
-        int64_t k = startsInside || d[i] >= 0 ? int64_t(std::floor(p)) : int64_t(std::ceil(p)) - 1;
-        k = std::clamp<int64_t>(k, 0, m.dims[i] - 1);
-        idx[i] = k;
-        tMax[i] = d[i] > 0 ? (double(k + 1) - a[i]) / d[i]
-                           : (d[i] < 0 ? (double(k) - a[i]) / d[i] : std::numeric_limits<double>::infinity());
-    }
-    if (!startsInside && filledCell(bits, idx[0], idx[1], idx[2])) {
+    // Inside, the walk starts in the (free) cell that holds the particle; from outside, in the
+    // cell it enters first.
+    Dda walk = Dda::start(a, d, m.dims, startsInside ? 0.0 : clip.t0,
+                          startsInside ? DdaStart::Containing : DdaStart::AlongSegment);
+    if (!startsInside && filledCell(bits, walk.cell[0], walk.cell[1], walk.cell[2])) {
         h.hit = true;
         h.fromOutside = true;
-        h.t = t0;
-        h.axis = entryAxis < 0 ? 0 : entryAxis;
-        h.dir = int(step[h.axis]);
+        h.t = clip.t0;
+        h.axis = clip.entryAxis < 0 ? 0 : clip.entryAxis;
+        h.dir = int(walk.step[h.axis]);
         return h;
     }
     for (;;) {
-        const int axis = tMax[0] < tMax[1] ? (tMax[0] < tMax[2] ? 0 : 2) : (tMax[1] < tMax[2] ? 1 : 2);
-        const double tNext = tMax[axis];
+        const int axis = walk.nextAxis();
+        const double tNext = walk.tMax[axis];
         if (tNext >= 1.0) return h; // the segment ends in this (free) cell
-        const int64_t nextIdx = idx[axis] + step[axis];
-        if (nextIdx < 0 || nextIdx >= m.dims[axis]) {
+        const int64_t nextIdx = walk.neighbour(axis);
+        if (!walk.inside(axis, nextIdx)) {
             if (!walls) return h; // leaves the grid: free flight
         } else {
-            int64_t probe[3] = {idx[0], idx[1], idx[2]};
+            int64_t probe[3] = {walk.cell[0], walk.cell[1], walk.cell[2]};
             probe[axis] = nextIdx;
             if (!filledCell(bits, probe[0], probe[1], probe[2])) {
-                idx[axis] = nextIdx;
-                tMax[axis] = (double(step[axis] > 0 ? nextIdx + 1 : nextIdx) - a[axis]) / d[axis];
+                walk.advance(axis);
                 continue;
             }
         }
         h.hit = true;
         h.t = std::max(0.0, tNext);
         h.axis = axis;
-        h.dir = int(step[axis]);
-        std::copy(idx, idx + 3, h.cell);
+        h.dir = int(walk.step[axis]);
+        std::copy(walk.cell, walk.cell + 3, h.cell);
         return h;
     }
 }
