@@ -4,6 +4,7 @@
 // Meshes, frames, the slicemap and voxelization.
 #include "voxfx/bitgrid.hpp"
 #include "voxfx/error.hpp"
+#include "voxfx/file_name.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/math.hpp"
