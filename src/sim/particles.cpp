@@ -6,14 +6,11 @@
 
 #include <algorithm>
 #include <bit>
-#include <cctype>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
 #include <limits>
 #include <random>
 
-#include "io/atomic_file.hpp"
 #include "voxfx/dda.hpp"
 #include "voxfx/parallel.hpp"
 
@@ -443,34 +440,6 @@ double particleEnergy(const Particles& ps, const Vec3d& gravity) {
     return e;
 }
 
-void writeParticles(const Particles& ps, const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    if (ext != ".ply" && ext != ".csv") fail("'", path, "': particles are written as .ply or .csv");
-    detail::AtomicFile file(path);
-    std::ostream& out = file.stream();
-    if (ext == ".ply") {
-        out << "ply\nformat binary_little_endian 1.0\ncomment voxfx particles\nelement vertex " << ps.size()
-            << "\nproperty float x\nproperty float y\nproperty float z\n"
-            << "property float vx\nproperty float vy\nproperty float vz\nend_header\n";
-        // Little-endian hosts only (x86-64, aarch64).
-        for (std::size_t i = 0; i < ps.size(); ++i) {
-            const float rec[6] = {ps.px[i], ps.py[i], ps.pz[i], ps.vx[i], ps.vy[i], ps.vz[i]};
-            out.write(reinterpret_cast<const char*>(rec), sizeof(rec));
-        }
-    } else {
-        out << "x,y,z,vx,vy,vz\n";
-        char line[192];
-        for (std::size_t i = 0; i < ps.size(); ++i) {
-            const int len = std::snprintf(line, sizeof(line), "%.9g,%.9g,%.9g,%.7g,%.7g,%.7g\n", ps.px[i],
-                                          ps.py[i], ps.pz[i], ps.vx[i], ps.vy[i], ps.vz[i]);
-            out.write(line, len);
-        }
-    }
-    file.commit();
-}
-
 Image renderParticles(const Particles& ps, const ParticleCollider& collider, const ParticleImageOptions& o) {
     const VoxelGrid& grid = collider.grid();
     const Box3d& box = grid.frame.box();
@@ -480,8 +449,12 @@ Image renderParticles(const Particles& ps, const ParticleCollider& collider, con
     Image img(W, H, o.background);
     std::vector<double> depth(size_t(W * H), std::numeric_limits<double>::infinity());
 
-    // Sliced along world y, columns run along (z, x): the first set bit of a column is the
-    // front-most filled cell seen by an orthographic camera looking along +y.
+    // The camera is a Frame like every other view: orthographic over the grid's box, looking along
+    // +y. Its columns run along (z, x) (columnXAxis(Y) = z), one per pixel: pixel (px, py), y
+    // down, is column (H - 1 - py, px); the one slice spans the box's depth.
+    const Frame camera = Frame::orthographic(box, Axis::Y, H, W, 1);
+    // Sliced along world y, columns run along (z, x) too: the first set bit of a column is the
+    // front-most filled cell the camera sees.
     const VoxelGrid front = reslice(grid, Axis::Y);
     const Vec3i dims = grid.worldDims();
     const Vec3d cell = grid.frame.cellSize();
@@ -490,8 +463,8 @@ Image renderParticles(const Particles& ps, const ParticleCollider& collider, con
     parallelFor(0, H, 8, [&](int64_t b, int64_t e) {
         for (int64_t py = b; py < e; ++py)
             for (int64_t px = 0; px < W; ++px) {
-                const double wx = box.lo.x + (double(px) + 0.5) / double(W) * ext.x;
-                const double wz = box.hi.z - (double(py) + 0.5) / double(H) * ext.z;
+                const Vec3d centre = camera.worldFromGrid({double(H - 1 - py) + 0.5, double(px) + 0.5, 0.0});
+                const double wx = centre.x, wz = centre.z;
                 const int64_t ix = std::clamp<int64_t>(int64_t((wx - box.lo.x) / cell.x), 0, dims.x - 1);
                 const int64_t iz = std::clamp<int64_t>(int64_t((wz - box.lo.z) / cell.z), 0, dims.z - 1);
                 const uint64_t* col = front.bits.column(iz, ix);
@@ -507,11 +480,11 @@ Image renderParticles(const Particles& ps, const ParticleCollider& collider, con
                 }
             }
     });
-    // Particles as discs, hidden where the solid is in front of them.
+    // Particles as discs where the camera projects them, hidden where the solid is in front.
     const double r = std::max(0.5, double(o.particleRadius));
     for (std::size_t i = 0; i < ps.size(); ++i) {
-        const double sx = (double(ps.px[i]) - box.lo.x) / ext.x * double(W);
-        const double sy = (box.hi.z - double(ps.pz[i])) / ext.z * double(H);
+        const Vec3d g = camera.gridFromWorld(Vec3d(ps.position(i)));
+        const double sx = g.y, sy = double(H) - g.x;
         if (!(sx > -r && sy > -r && sx < double(W) + r && sy < double(H) + r)) continue;
         const int64_t x0 = std::max<int64_t>(0, int64_t(std::floor(sx - r))),
                       x1 = std::min<int64_t>(W - 1, int64_t(std::ceil(sx + r)));
