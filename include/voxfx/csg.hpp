@@ -17,6 +17,9 @@
 // n-ary operations fold left: difference(a, b, c) = (a - b) - c; union/intersection/xor of one
 // argument is that argument. The expression API (CsgNode and below) is experimental: it may
 // change until the issue closes; the grid operations are stable.
+// Thread-safety: calls may run concurrently (no global state) as long as no call writes a grid
+// another uses; the grid operations and voxelizeCsg use worker threads internally, the
+// expression functions run on the calling thread.
 #pragma once
 
 #include <cstdint>

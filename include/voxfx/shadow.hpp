@@ -30,6 +30,8 @@
 // constructor; then the rotation disappears.
 //
 // EXPERIMENTAL until the renderer issue closes.
+// Thread-safety: built maps are read-only: visibility and the lookups may run concurrently from
+// any number of threads (the renderer does). build() voxelizes or rasterizes with worker threads.
 #pragma once
 
 #include <cstdint>

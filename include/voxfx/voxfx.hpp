@@ -1,4 +1,6 @@
 // voxfx — umbrella header: everything a client of the library (such as the voxfx command) needs.
+// Thread-safety: see each header; as a rule, const objects may be shared between threads and
+// nothing in the library keeps global mutable state.
 #pragma once
 
 // Meshes, frames, the slicemap and voxelization.
