@@ -21,7 +21,8 @@
 // call).
 // Thread-safety: a ParticleCollider is read-only during stepParticles, so several particle sets
 // may step against one collider concurrently; update() needs exclusive access. stepParticles
-// uses worker threads (`threads`); the other functions run on the calling thread.
+// (`threads`), the collider's construction and update (density) and renderParticles use worker
+// threads; emitting, sorting and writing run on the calling thread.
 #pragma once
 
 #include <cstddef>
