@@ -156,12 +156,63 @@ TEST(CsgTest, ParseErrorsNameTheColumn) {
     EXPECT_NE(parseError("").find("column 1"), std::string::npos);
     EXPECT_NE(parseError(R"({"op":"union","args":["a.off" "b.off"]})").find("column 31"), std::string::npos)
         << parseError(R"({"op":"union","args":["a.off" "b.off"]})");
-    EXPECT_NE(parseError(R"({"op":"unite","args":["a"]})").find("column 7"), std::string::npos)
+    EXPECT_NE(parseError(R"({"op":"unite","args":["a"]})").find("at /op: unknown operation 'unite'"),
+              std::string::npos)
         << parseError(R"({"op":"unite","args":["a"]})");
     EXPECT_NE(parseError(R"({"args":["a"]})").find("without \"op\""), std::string::npos);
     EXPECT_NE(parseError(R"({"op":"union","args":["a"], "extra": 1})").find("unknown member"),
               std::string::npos);
-    EXPECT_NE(parseError(R"({"op":"union","args":["a)").find("unterminated string"), std::string::npos);
+    EXPECT_NE(parseError("union(\"a.off, b.off)").find("unterminated string"), std::string::npos);
+}
+
+// The column a message must name: where `token` first stands in `text` (1-based), found by
+// searching the text, not by the parser.
+std::string columnOf(const std::string& text, const std::string& token) {
+    return "column " + std::to_string(text.find(token) + 1) + ":";
+}
+
+TEST(CsgTest, MalformedJsonSaysWhatAndWhere) {
+    // Syntax errors: the column of the character where the JSON reader stopped.
+    const std::string missingComma = R"({"op":"union","args":["a.off" "b.off"]})";
+    EXPECT_NE(parseError(missingComma).find(columnOf(missingComma, "\"b.off")), std::string::npos)
+        << parseError(missingComma);
+    const std::string trailing = R"({"op":"union","args":["a"]} x)";
+    EXPECT_NE(parseError(trailing).find(columnOf(trailing, "x")), std::string::npos) << parseError(trailing);
+    const std::string unclosed = R"({"op":"union","args":["a")";
+    EXPECT_NE(parseError(unclosed).find("column " + std::to_string(unclosed.size() + 1)), std::string::npos)
+        << parseError(unclosed);
+    const std::string badLiteral = R"({"op":"union","args":[nul]})";
+    EXPECT_NE(parseError(badLiteral).find("column"), std::string::npos) << parseError(badLiteral);
+    EXPECT_NE(parseError(R"({"op":"union","args":["a)").find("missing closing quote"), std::string::npos)
+        << parseError(R"({"op":"union","args":["a)");
+    // Well-formed JSON that is no CSG tree: the JSON pointer of the node and what is wrong there.
+    const auto says = [](const std::string& text, const std::string& where, const std::string& what) {
+        const std::string m = parseError(text);
+        EXPECT_NE(m.find("at " + where + ":"), std::string::npos) << text << " -> " << m;
+        EXPECT_NE(m.find(what), std::string::npos) << text << " -> " << m;
+    };
+    says(R"({"op":"union","args":["a",{"op":"xor","args":["b",{"op":"nand","args":["c"]}]}]})",
+         "/args/1/args/1/op", "unknown operation 'nand'");
+    says(R"({"op":1,"args":["a"]})", "/op", "must be a string");
+    says(R"({"op":"union","args":"a"})", "/args", "must be an array");
+    says(R"({"op":"union","args":[]})", "/args", "at least one argument");
+    says(R"({"op":"union","args":["a", 3]})", "/args/1", "found number");
+    says(R"({"op":"union","args":["a", ""]})", "/args/1", "empty mesh path");
+    says(R"({"op":"union","args":["a", {}]})", "/args/1", "empty object");
+    says(R"({"op":"union"})", "the top level", "without \"args\"");
+    says(R"({"op":"union","args":["a"],"extra":1})", "the top level", "unknown member \"extra\"");
+}
+
+TEST(CsgTest, JsonAcceptsBlanksNewlinesAndEscapesLikeTheFunctionalForm) {
+    const CsgNode j =
+        parseCsgExpression("\n  {\n \"args\" : [ \"a\\/b.off\", \"\\u0063.stl\" ],\n \"op\" : \"minus\" }\n");
+    EXPECT_EQ(toString(j), "difference(a/b.off, c.stl)");
+    // The functional form decodes the same JSON escapes inside quotes.
+    EXPECT_EQ(toString(parseCsgExpression("minus(\"a\\/b.off\", \"\\u0063.stl\")")), toString(j));
+    // nlohmann stops at the character that cannot follow the backslash.
+    const std::string badEscape = "union(a, \"b\\q\")";
+    EXPECT_NE(parseError(badEscape).find(columnOf(badEscape, "q\"")), std::string::npos)
+        << parseError(badEscape);
 }
 
 TEST(CsgTest, NaryOperationsFoldLeft) {

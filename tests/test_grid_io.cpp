@@ -15,7 +15,7 @@
 #include <openvdb/openvdb.h>
 #include <sys/resource.h>
 
-#include "io/atomic_file.hpp"
+#include "core/atomic_file.hpp"
 #include "test_util.hpp"
 #include "voxfx/grid_io.hpp"
 

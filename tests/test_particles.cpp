@@ -3,6 +3,7 @@
 // <= 1, hand-derived bounces on a flat floor, moving obstacles, determinism across thread
 // counts. The allocation-free step loop is tested in tests/alloc/ (its own program: it replaces
 // the global operator new).
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -190,6 +191,30 @@ TEST(ParticlesTest, FilesAndPicture) {
     EXPECT_GT(particlePixels, 100);
     EXPECT_GT(solidPixels, 1000);
     writePng(img, dir.file("p.png"));
+}
+
+TEST(ParticlesTest, PictureDrawsEachParticleWhereAnOrthographicViewAlongYPutsIt) {
+    // Three particles in front of the torus scene (world y < 1, before any filled cell), each
+    // alone in the picture: its disc centre must be the pixel that x and z map to by the box's
+    // proportions (image x = world x, image rows = world z from the top), 2 pixels per unit.
+    const ParticleCollider collider(torusScene());
+    ParticleImageOptions io;
+    io.width = 128;
+    io.particleRadius = 1.0f;
+    for (const Vec3f p : {Vec3f{10.3f, 0.5f, 40.6f}, Vec3f{50.9f, 0.2f, 7.1f}, Vec3f{31.2f, 0.7f, 24.4f}}) {
+        Particles ps;
+        ps.push(p);
+        const Image img = renderParticles(ps, collider, io);
+        const int64_t px = int64_t(std::floor(p.x / 64.0 * 128.0)),
+                      py = int64_t(std::floor((48.0 - p.z) / 48.0 * 96.0));
+        EXPECT_EQ(img.at(px, py), io.particleColor) << "particle at " << p.x << ", " << p.z;
+        // Nothing of the colour far from it.
+        for (int64_t y = 0; y < img.height; ++y)
+            for (int64_t x = 0; x < img.width; ++x)
+                if (std::abs(x - px) > 2 || std::abs(y - py) > 2) {
+                    ASSERT_FALSE(img.at(x, y) == io.particleColor) << x << ", " << y;
+                }
+    }
 }
 
 TEST(ParticlesTest, CommandLineWritesFramesAndAPicture) {

@@ -4,6 +4,7 @@
 // ambient + t * direct under a leaf), supersampling as a box filter, determinism across thread
 // counts, image-level properties (more leaves never brighten the ground; shadow kinds order on
 // foliage), and bad input.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -363,6 +364,24 @@ TEST(RenderTest, DemoScenesFromTheMeshData) {
     }
     EXPECT_THROW(makeDemoScene("forest", dir), Error);
     EXPECT_THROW(makeBunnyScene("/nonexistent"), Error);
+}
+
+TEST(RenderTest, CgalDemoSkipsMissingMeshesWithAWarningAndNeedsOne) {
+    // One of the three meshes present (a tetrahedron written here): the scene holds it, and a
+    // warning names each missing file by its path in the folder.
+    test::TempDir dir;
+    test::writeFile(dir.file("camel.off"),
+                    "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+    const Scene s = makeCgalScene(dir.path().string());
+    EXPECT_EQ(
+        std::count_if(s.meshes.begin(), s.meshes.end(), [](const SceneMesh& m) { return m.name == "Camel"; }),
+        1);
+    for (const char* missing : {"elephant.off", "armadillo.off"}) {
+        const std::string w = "missing " + dir.file(missing);
+        EXPECT_NE(std::find(s.warnings.begin(), s.warnings.end(), w), s.warnings.end()) << w;
+    }
+    std::filesystem::remove(dir.file("camel.off"));
+    EXPECT_THROW(makeCgalScene(dir.path().string()), Error);
 }
 
 // ---- Bad input and the command line -----------------------------------------------------------------

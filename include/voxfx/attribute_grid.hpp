@@ -14,6 +14,8 @@
 // triangles of a tile are visited in index order).
 //
 // EXPERIMENTAL until the renderer issue closes.
+// Thread-safety: calls may run concurrently (no global state) as long as no call writes what
+// another reads; voxelizeAttribute* spread one call over worker threads (`threads`) themselves.
 #pragma once
 
 #include <cstdint>

@@ -17,6 +17,9 @@
 // n-ary operations fold left: difference(a, b, c) = (a - b) - c; union/intersection/xor of one
 // argument is that argument. The expression API (CsgNode and below) is experimental: it may
 // change until the issue closes; the grid operations are stable.
+// Thread-safety: calls may run concurrently (no global state) as long as no call writes a grid
+// another uses; the grid operations and voxelizeCsg use worker threads internally, the
+// expression functions run on the calling thread.
 #pragma once
 
 #include <cstdint>
@@ -57,11 +60,12 @@ struct CsgNode {
     std::string mesh;          ///< leaf: the mesh path, as written
     CsgOp op = CsgOp::Union;   ///< operation node: the operation
     std::vector<CsgNode> args; ///< operation node: its arguments (at least one)
-    int column = 1;            ///< 1-based column in the source text where the node starts
 };
 
-/// Parses either syntax (see the file comment). Throws voxfx::Error on malformed text; the
-/// message gives the 1-based column where parsing failed and what was expected there.
+/// Parses either syntax (see the file comment; JSON is read by nlohmann-json). Throws
+/// voxfx::Error on malformed text: the message gives the 1-based column where parsing failed
+/// and what was expected there, or for a well-formed JSON document that is no CSG tree, the
+/// JSON pointer of the offending node ("at /args/1/op: unknown operation ...").
 CsgNode parseCsgExpression(std::string_view text);
 /// The canonical functional form, e.g. "difference(a.off, union(b.stl, c.stl))" (paths with
 /// special characters are quoted).

@@ -8,6 +8,8 @@
 // Every scene has one camera. Generation is deterministic (fixed seeds).
 //
 // EXPERIMENTAL until the renderer issue closes.
+// Thread-safety: makeDemoScene may run concurrently (it only reads mesh files and builds a new
+// Scene); it runs on the calling thread.
 #pragma once
 
 #include <cstdint>

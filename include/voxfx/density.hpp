@@ -25,6 +25,9 @@
 // is (X + 0.5, Y + 0.5, S + 0.5); a point g in the fine grid's coordinates is g / 2^L here.
 // Axes are the grid's (column x, column y, slice); worldFromGridNormal turns normals into world
 // directions for orthographic frames.
+// Thread-safety: calls may run concurrently on shared const inputs (no global state); each
+// computing function spreads its work over worker threads (`threads`), the samplers are
+// single-threaded and read-only.
 #pragma once
 
 #include <cstdint>

@@ -4,6 +4,7 @@
 // where (file, line, triangle, vertex...). Programmer errors are checks: VOXFX_CHECK is always on,
 // VOXFX_DCHECK only in debug builds. Kernels neither throw nor allocate; validation happens at the
 // boundary (io/, public functions) and the CLI is the only place that catches.
+// Thread-safety: fail/Error and the checks hold no state; use from any thread.
 #pragma once
 
 #include <sstream>

@@ -21,6 +21,9 @@
 //           lattice point is one vertex. Cost ~ a few passes over the grid plus the output.
 // All writers are atomic: they write a temporary file beside the target and rename it, so a
 // failure leaves no partial output and an existing file untouched.
+// Thread-safety: reads and writes of different paths may run concurrently (OpenVDB's one-time
+// initialization is guarded); writing one path from two calls at once is undefined. NRRD and
+// voxel-mesh writing use worker threads internally.
 #pragma once
 
 #include <string>

@@ -6,6 +6,8 @@
 // sliced grid: cell (x, y, s) is the box [x, x+1) x [y, y+1) x [s, s+1), so the whole grid is
 // [0, W] x [0, H] x [0, D]. World coordinates go through Frame::gridFromWorld. For perspective
 // frames a column already is a ray from the light or eye, so countColumnRange is the lookup.
+// Thread-safety: every query is read-only and may run concurrently on one grid; filledVolume
+// uses worker threads, the per-column and per-segment lookups run on the calling thread.
 #pragma once
 
 #include <cstdint>

@@ -1,5 +1,7 @@
 // voxfx — images: a linear float RGB image and writers (PNG with sRGB encoding; PFM and OpenEXR for
 // HDR).
+// Thread-safety: an Image is a value: concurrent reads are fine, a write needs exclusive
+// access. Image file functions of different paths may run concurrently; none uses threads.
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,5 @@
 // voxfx — small vector math: 3-vectors, boxes, 4x4 matrices. Plain structs, no SIMD.
+// Thread-safety: plain values and pure functions; use from any thread.
 #pragma once
 
 #include <algorithm>

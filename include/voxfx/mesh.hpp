@@ -1,4 +1,6 @@
 // voxfx — triangle meshes: a non-owning view for input, an owning Mesh for loaders, and checks.
+// Thread-safety: Mesh is a value and MeshView a read-only view: concurrent reads are fine; the
+// analysis functions are pure and run on the calling thread.
 #pragma once
 
 #include <cstddef>

@@ -1,4 +1,6 @@
 // voxfx — loading triangle meshes: OFF, OBJ, PLY, STL, glTF 2.0 (.gltf/.glb) and what Assimp reads.
+// Thread-safety: loads of different (or the same) files may run concurrently and writes of
+// different paths too; readers run on the calling thread.
 #pragma once
 
 #include <cstddef>

@@ -16,6 +16,8 @@
 //   Empty              outside is empty: erosion removes cells within r of a face.
 //   Filled             outside is filled: dilation fills cells within r of a face.
 // Results are identical for any thread count and keep the padding bits zero.
+// Thread-safety: calls may run concurrently on shared const inputs (no global state); each
+// operation spreads its work over worker threads (`threads`).
 #pragma once
 
 #include <cstdint>

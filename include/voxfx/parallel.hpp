@@ -2,6 +2,8 @@
 //
 // Results never depend on the thread count: bodies own disjoint output ranges, and reductions
 // combine per-chunk values in a fixed order.
+// Thread-safety: parallelFor and withThreads may be called from several threads and nest; the
+// body must only write ranges it owns.
 #pragma once
 
 #include <cstdint>

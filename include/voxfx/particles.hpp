@@ -19,6 +19,10 @@
 // Each particle is independent, so results are identical for any thread count; the step
 // allocates nothing per particle (the parallel loop's bookkeeping allocates a few objects per
 // call).
+// Thread-safety: a ParticleCollider is read-only during stepParticles, so several particle sets
+// may step against one collider concurrently; update() needs exclusive access. stepParticles
+// (`threads`), the collider's construction and update (density) and renderParticles use worker
+// threads; emitting, sorting and writing run on the calling thread.
 #pragma once
 
 #include <cstddef>

@@ -18,6 +18,8 @@
 // count.
 //
 // EXPERIMENTAL until the renderer issue closes.
+// Thread-safety: render calls may run concurrently on one const Scene; each uses worker threads
+// (RenderOptions::threads) itself.
 #pragma once
 
 #include <cstdint>

@@ -17,6 +17,8 @@
 //   other mesh formats      one mesh with a default material, no lights or cameras.
 //
 // EXPERIMENTAL: the scene model will grow (textures, volumes for DSM) until the renderer issue closes.
+// Thread-safety: a Scene is a value: concurrent reads are fine. loadScene/writeGltf of different
+// paths may run concurrently; they run on the calling thread.
 #pragma once
 
 #include <cstdint>

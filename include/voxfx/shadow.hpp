@@ -30,6 +30,8 @@
 // constructor; then the rotation disappears.
 //
 // EXPERIMENTAL until the renderer issue closes.
+// Thread-safety: built maps are read-only: visibility and the lookups may run concurrently from
+// any number of threads (the renderer does). build() voxelizes or rasterizes with worker threads.
 #pragma once
 
 #include <cstdint>
@@ -149,8 +151,9 @@ public:
     const std::vector<Channel>& channels() const { return channels_; }
 
 private:
-    Vec3f columnTransmittance(int64_t x, int64_t y, double depth, int64_t skipCells) const;
-    int64_t columnCells(std::size_t k, int64_t x, int64_t y, double depth, int64_t skipCells) const;
+    // One column of the grids (index y * W + x), at frame depth `depth`.
+    Vec3f columnTransmittance(int64_t column, double depth, int64_t skipCells) const;
+    int64_t columnCells(std::size_t k, int64_t column, double depth, int64_t skipCells) const;
     LightView view_;
     std::vector<Channel> channels_;
     /// Per channel: crossingTransmittance ^ n for n = 0 .. D (std::pow at build time; a lookup is
@@ -179,7 +182,7 @@ public:
     int64_t writeCount() const { return writes_; }
 
 private:
-    float columnDepth(int64_t x, int64_t y, double depth, int64_t skipCells) const;
+    float columnDepth(int64_t column, double depth, int64_t skipCells) const;
     LightView view_;
     Frame frame_;                  ///< the grid's frame (with local slicing when requested)
     std::vector<int64_t> offsets_; ///< per column, into slice_ and prefix_

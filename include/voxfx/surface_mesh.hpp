@@ -16,6 +16,8 @@
 // Vertices sit on cube edges by linear interpolation, kept at least 1% of an edge away from its
 // ends so no two vertices coincide; normals are the negated, interpolated central-difference
 // gradient of the field.
+// Thread-safety: calls may run concurrently on shared const inputs (no global state);
+// extraction uses worker threads (`threads`), writing runs on the calling thread.
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,6 @@
 // voxfx — VoxelGrid: a BitGrid together with the Frame that places it in the world.
+// Thread-safety: VoxelGrid is a value: concurrent reads are fine, writes need exclusive access.
+// reslice and resampleToUniform use worker threads.
 #pragma once
 
 #include "voxfx/bitgrid.hpp"

@@ -26,6 +26,8 @@
 //                       holes and bad triangles (an error must fool two of three axes), costs 3×.
 //   Fill::Winding       nonzero winding number from per-column sorted front/back fragments: the
 //                       union of overlapping closed parts (needs consistent orientation).
+// Thread-safety: calls may run concurrently on shared const meshes (no global state); each call
+// spreads its tiles over worker threads (`threads`); results do not depend on their number.
 #pragma once
 
 #include <cstdint>

@@ -1,9 +1,12 @@
 // voxfx — umbrella header: everything a client of the library (such as the voxfx command) needs.
+// Thread-safety: see each header; as a rule, const objects may be shared between threads and
+// nothing in the library keeps global mutable state.
 #pragma once
 
 // Meshes, frames, the slicemap and voxelization.
 #include "voxfx/bitgrid.hpp"
 #include "voxfx/error.hpp"
+#include "voxfx/file_name.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/math.hpp"
@@ -16,6 +19,7 @@
 
 // The bit-grid toolkit (GI08): density, normals, morphology, CSG, queries, particles, meshing.
 #include "voxfx/csg.hpp"
+#include "voxfx/dda.hpp"
 #include "voxfx/density.hpp"
 #include "voxfx/grid_query.hpp"
 #include "voxfx/morphology.hpp"

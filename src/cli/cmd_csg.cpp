@@ -12,12 +12,16 @@ namespace {
 
 struct CsgArgs {
     std::string expression, output, fill = "auto";
-    int64_t resolution = 0;
-    double voxelSize = 0;
-    int64_t margin = 0;
+    FitArgs fit;
     int threads = 0;
     bool vdbFloat = false, quiet = false;
 };
+
+const FitChoices kCsgFit = [] {
+    FitChoices c;
+    c.voxelSize = true;
+    return c;
+}();
 
 int runCsg(const CsgArgs& a) {
     const auto t0 = Clock::now();
@@ -60,11 +64,7 @@ int runCsg(const CsgArgs& a) {
     }
     const double loadMs = msSince(t0);
 
-    FitOptions fit;
-    fit.resolution = a.resolution;
-    fit.voxelSize = a.voxelSize;
-    fit.marginCells = a.margin;
-    if (fit.resolution == 0 && fit.voxelSize == 0) fit.resolution = 256;
+    const FitOptions fit = toFitOptions(a.fit, kCsgFit);
     VoxelizeOptions vo;
     vo.threads = a.threads;
     const auto tv = Clock::now();
@@ -118,14 +118,7 @@ const Command kCsg{
                        "CSG expression over mesh or grid paths (functional or JSON)")
             ->required();
         app.add_option("-o,--output", a->output, "Output grid: .binvox .vdb .nrrd .ply .obj")->required();
-        auto* res =
-            app.add_option("-r,--resolution", a->resolution, "Cells along the longest side (default 256)")
-                ->check(CLI::Range(int64_t(1), int64_t(1) << 20));
-        auto* vs = app.add_option("--voxel-size", a->voxelSize, "Edge length of a cubic cell, in mesh units")
-                       ->check(CLI::PositiveNumber);
-        res->excludes(vs);
-        app.add_option("--margin", a->margin, "Empty cells added on every side (default 0)")
-            ->check(CLI::NonNegativeNumber);
+        addFitOptions(app, a->fit, kCsgFit);
         app.add_option("--fill", a->fill,
                        "auto | parity | flood | vote | winding (auto: parity for closed meshes)")
             ->default_val("auto");

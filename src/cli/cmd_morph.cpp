@@ -29,8 +29,9 @@ int runMorph(const MorphArgs& a) {
         a.radii.empty() ? Vec3i{a.radius, a.radius, a.radius} : Vec3i{a.radii[0], a.radii[1], a.radii[2]};
 
     // Mesh input: room for the dilation by default.
-    const VoxelGrid grid = loadGridInput(
-        a.in, /*uniform=*/false, a.in.margin >= 0 ? a.in.margin : std::max({radii.x, radii.y, radii.z}));
+    const VoxelGrid grid =
+        loadGridInput(a.in, /*uniform=*/false,
+                      a.in.fit.margin >= 0 ? a.in.fit.margin : std::max({radii.x, radii.y, radii.z}));
     const double loadMs = msSince(t0);
 
     const auto tm = Clock::now();

@@ -79,9 +79,7 @@ int runParticles(const ParticleArgs& a) {
         for (const Vec3f& p : moving.positions)
             r = std::max(r, std::hypot(double(p.x) - centre.x, double(p.y) - centre.y));
         Box3d cyl{{centre.x - r, centre.y - r, b.lo.z}, {centre.x + r, centre.y + r, b.hi.z}};
-        FitOptions fit;
-        fit.resolution = a.in.resolution;
-        fit.marginCells = a.in.margin;
+        const FitOptions fit = toFitOptions(a.in.fit, a.in.choices);
         movingFrame = fitFrame(cyl, fit);
         rotated = moving;
         const MeshTopology topo = analyzeTopology(moving.view());

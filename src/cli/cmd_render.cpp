@@ -1,6 +1,5 @@
 // voxfx render SCENE -o IMAGE — rasterizing renderer with shadow maps, ED06 transmittance shadows or
 // CHANG absorption shadows; prints a progress line and per-pass timings.
-#include <cctype>
 #include <iostream>
 
 #include "cli_common.hpp"
@@ -26,28 +25,18 @@ void printTimings(const RenderResult& r, const std::string& output) {
               << fmtMs(t.flattenMs) << "), total " << fmtMs(t.totalMs) << " -> " << output << "\n";
 }
 
-/// Lower-case extension of an output path ("" without one).
-std::string imageExtension(const std::string& path) {
-    const auto dot = path.find_last_of('.');
-    const auto slash = path.find_last_of('/');
-    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-    std::string ext = path.substr(dot + 1);
-    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return ext;
-}
-
 /// Writes .png (sRGB), .pfm or .exr (linear HDR); anything else is refused before rendering.
 void checkImageExtension(const std::string& path) {
-    const std::string ext = imageExtension(path);
-    if (ext == "png" || ext == "pfm" || ext == "exr") return;
+    const std::string ext = fileExtension(path);
+    if (ext == ".png" || ext == ".pfm" || ext == ".exr") return;
     fail(path, ": unknown image extension (allowed: .png, .pfm, .exr)");
 }
 
 void writeImage(const Image& image, const std::string& path) {
-    const std::string ext = imageExtension(path);
-    if (ext == "pfm")
+    const std::string ext = fileExtension(path);
+    if (ext == ".pfm")
         writePfm(image, path);
-    else if (ext == "exr")
+    else if (ext == ".exr")
         writeExr(image, path);
     else
         writePng(image, path);

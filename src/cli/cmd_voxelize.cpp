@@ -2,21 +2,24 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "grid_input.hpp"
 
 namespace voxfx::cli {
 namespace {
 
 struct VoxelizeArgs {
     std::string input, output;
-    int64_t resolution = 0;
-    double voxelSize = 0;
-    std::vector<int64_t> dims;
-    std::vector<double> bounds;
-    int64_t margin = 0;
+    FitArgs fit;
     std::string mode = "solid", fill = "auto", axis = "z", slicing = "uniform";
     int threads = 0;
     bool vdbFloat = false, quiet = false;
 };
+
+const FitChoices kVoxelizeFit = [] {
+    FitChoices c;
+    c.voxelSize = c.dims = c.bounds = true;
+    return c;
+}();
 
 int runVoxelize(const VoxelizeArgs& a) {
     const auto t0 = Clock::now();
@@ -27,18 +30,8 @@ int runVoxelize(const VoxelizeArgs& a) {
     vo.mode = parseVoxelizeMode(a.mode);
     vo.slicing = parseSlicing(a.slicing);
     vo.threads = a.threads;
-    FitOptions fo;
+    FitOptions fo = toFitOptions(a.fit, kVoxelizeFit);
     fo.axis = parseAxis(a.axis);
-    fo.resolution = a.resolution;
-    fo.voxelSize = a.voxelSize;
-    fo.marginCells = a.margin;
-    if (!a.dims.empty()) fo.dims = {a.dims[0], a.dims[1], a.dims[2]};
-    if (!a.bounds.empty()) {
-        fo.bounds.lo = {a.bounds[0], a.bounds[1], a.bounds[2]};
-        fo.bounds.hi = {a.bounds[3], a.bounds[4], a.bounds[5]};
-        if (fo.bounds.empty()) fail("--bounds needs min <= max on every axis");
-    }
-    if (fo.resolution == 0 && fo.voxelSize == 0 && a.dims.empty()) fo.resolution = 256;
 
     MeshLoadReport report;
     const Mesh mesh = loadMesh(a.input, &report);
@@ -130,21 +123,7 @@ const Command kVoxelize{
         auto a = std::make_shared<VoxelizeArgs>();
         app.add_option("MESH", a->input, "Mesh file (off, obj, ply, stl, gltf, glb, ...)")->required();
         app.add_option("-o,--output", a->output, "Output grid: .binvox .vdb .nrrd .ply .obj")->required();
-        auto* res =
-            app.add_option("-r,--resolution", a->resolution, "Cells along the longest side (default 256)")
-                ->check(CLI::Range(int64_t(1), int64_t(1) << 20));
-        auto* vs = app.add_option("--voxel-size", a->voxelSize, "Edge length of a cubic cell, in mesh units")
-                       ->check(CLI::PositiveNumber);
-        auto* dims = app.add_option("--dims", a->dims, "Exact cell counts along x y z (non-cubic cells)")
-                         ->expected(3)
-                         ->check(CLI::Range(int64_t(1), int64_t(1) << 20));
-        res->excludes(vs)->excludes(dims);
-        vs->excludes(dims);
-        app.add_option("--bounds", a->bounds,
-                       "Box to voxelize instead of the mesh bounds: xmin ymin zmin xmax ymax zmax")
-            ->expected(6);
-        app.add_option("--margin", a->margin, "Empty cells added on every side (default 0)")
-            ->check(CLI::NonNegativeNumber);
+        addFitOptions(app, a->fit, kVoxelizeFit);
         app.add_option("-m,--mode", a->mode, "surface | conservative | solid | solid-conservative | interior")
             ->default_val("solid");
         app.add_option("--fill", a->fill, "auto | parity | flood | vote | winding")->default_val("auto");

@@ -2,28 +2,72 @@
 
 #include <algorithm>
 #include <cctype>
-#include <filesystem>
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "voxfx/file_name.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/voxelize.hpp"
 
 namespace voxfx::cli {
 
+void addFitOptions(CLI::App& app, FitArgs& args, const FitChoices& choices) {
+    // "Cells along ..." alone, "Mesh input: cells along ..." after a prefix.
+    const auto help = [&](std::string text) {
+        if (!choices.prefix.empty()) text[0] = char(std::tolower(static_cast<unsigned char>(text[0])));
+        return choices.prefix + text;
+    };
+    auto* res = app.add_option("-r,--resolution", args.resolution,
+                               help("Cells along the longest side (default " +
+                                    std::to_string(choices.defaultResolution) + ")"))
+                    ->check(CLI::Range(int64_t(1), int64_t(1) << 20));
+    if (choices.voxelSize) {
+        auto* vs =
+            app.add_option("--voxel-size", args.voxelSize, help("Edge length of a cubic cell, in mesh units"))
+                ->check(CLI::PositiveNumber);
+        res->excludes(vs);
+    }
+    if (choices.dims) {
+        auto* dims =
+            app.add_option("--dims", args.dims, help("Exact cell counts along x y z (non-cubic cells)"))
+                ->expected(3)
+                ->check(CLI::Range(int64_t(1), int64_t(1) << 20));
+        res->excludes(dims);
+        if (CLI::Option* vs = app.get_option_no_throw("--voxel-size")) vs->excludes(dims);
+    }
+    if (choices.bounds)
+        app.add_option("--bounds", args.bounds,
+                       help("Box to voxelize instead of the mesh bounds: xmin ymin zmin xmax ymax zmax"))
+            ->expected(6);
+    app.add_option("--margin", args.margin,
+                   choices.defaultMargin >= 0 ? help("Empty cells added on every side (default " +
+                                                     std::to_string(choices.defaultMargin) + ")")
+                                              : choices.marginHelp)
+        ->check(CLI::NonNegativeNumber);
+}
+
+FitOptions toFitOptions(const FitArgs& args, const FitChoices& choices, int64_t margin) {
+    FitOptions fo;
+    fo.resolution = args.resolution;
+    fo.voxelSize = args.voxelSize;
+    fo.marginCells = margin >= 0        ? margin
+                     : args.margin >= 0 ? args.margin
+                                        : std::max<int64_t>(choices.defaultMargin, 0);
+    if (!args.dims.empty()) fo.dims = {args.dims[0], args.dims[1], args.dims[2]};
+    if (!args.bounds.empty()) {
+        fo.bounds.lo = {args.bounds[0], args.bounds[1], args.bounds[2]};
+        fo.bounds.hi = {args.bounds[3], args.bounds[4], args.bounds[5]};
+        if (fo.bounds.empty()) fail("--bounds needs min <= max on every axis");
+    }
+    if (fo.resolution == 0 && fo.voxelSize == 0 && args.dims.empty())
+        fo.resolution = choices.defaultResolution;
+    return fo;
+}
+
 void addGridInputOptions(CLI::App& app, GridInput& in, const std::string& marginHelp) {
     app.add_option("INPUT", in.path, "Grid (.binvox .vdb .nrrd) or mesh file")->required();
-    app.add_option("-r,--resolution", in.resolution,
-                   "Mesh input: cells along the longest side (default " + std::to_string(in.resolution) + ")")
-        ->check(CLI::Range(int64_t(1), int64_t(1) << 20))
-        ->default_val(in.resolution);
-    if (in.margin >= 0)
-        app.add_option("--margin", in.margin,
-                       "Mesh input: empty cells on every side (default " + std::to_string(in.margin) + ")")
-            ->check(CLI::NonNegativeNumber)
-            ->default_val(in.margin);
-    else
-        app.add_option("--margin", in.margin, marginHelp)->check(CLI::NonNegativeNumber);
+    in.choices.marginHelp = marginHelp;
+    addFitOptions(app, in.fit, in.choices);
     app.add_option("-j,--threads", in.threads, "Worker threads, 0 = all (results are identical)")
         ->check(CLI::NonNegativeNumber)
         ->default_val(0);
@@ -31,9 +75,7 @@ void addGridInputOptions(CLI::App& app, GridInput& in, const std::string& margin
 }
 
 VoxelGrid loadGridInput(const GridInput& in, bool uniform, int64_t margin) {
-    FitOptions fit;
-    fit.resolution = in.resolution;
-    fit.marginCells = margin >= 0 ? margin : std::max<int64_t>(in.margin, 0);
+    const FitOptions fit = toFitOptions(in.fit, in.choices, margin);
     VoxelizeOptions vo;
     vo.threads = in.threads;
     std::string note;
@@ -53,9 +95,7 @@ double writeGridOutput(const VoxelGrid& grid, const std::string& path, bool vdbF
 
 void requireExtension(const std::string& path, std::initializer_list<const char*> extensions,
                       const char* what) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
+    const std::string ext = fileExtension(path);
     std::string allowed;
     for (const char* e : extensions) {
         if (ext == e) return;

@@ -1,35 +1,67 @@
-// voxfx command line — the "grid or mesh" input shared by density, mesh, morph and particles:
-// its options (-r, --margin, -j, -q) and loading it (a grid file is read, a mesh is voxelized as
-// a solid with voxfx::loadOrVoxelize).
+// voxfx command line — the grid-fitting options of every command that voxelizes (-r, --voxel-size,
+// --dims, --bounds, --margin), and the "grid or mesh" input shared by density, mesh, morph and
+// particles: its options and loading it (a grid file is read, a mesh is voxelized as a solid
+// with voxfx::loadOrVoxelize).
 #pragma once
 
 #include <cstdint>
 #include <initializer_list>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
 #include "voxfx/voxel_grid.hpp"
+#include "voxfx/voxelize.hpp"
 
 namespace voxfx::cli {
 
+/// Which of the grid-fitting options a command offers, and their defaults.
+struct FitChoices {
+    int64_t defaultResolution = 256; ///< -r when neither --voxel-size nor --dims is given
+    int64_t defaultMargin = 0;       ///< < 0: --margin has no default; `marginHelp` says what happens
+    bool voxelSize = false, dims = false, bounds = false;
+    std::string prefix;     ///< help prefix, e.g. "Mesh input: "
+    std::string marginHelp; ///< help of --margin when defaultMargin < 0
+};
+
+/// The fitting options as given on the command line (0, empty or negative: not given).
+struct FitArgs {
+    int64_t resolution = 0;
+    double voxelSize = 0;
+    std::vector<int64_t> dims;
+    std::vector<double> bounds;
+    int64_t margin = -1;
+};
+
+/// Adds -r/--resolution, --margin and, as `choices` says, --voxel-size, --dims and --bounds
+/// (the first three exclude each other). The one place these options are declared.
+void addFitOptions(CLI::App& app, FitArgs& args, const FitChoices& choices);
+
+/// voxfx::FitOptions from what was given: the default resolution unless --voxel-size or --dims
+/// is; the margin `margin` when >= 0, else the given one, else the default (0 when none).
+/// Throws voxfx::Error for --bounds with min > max on an axis.
+FitOptions toFitOptions(const FitArgs& args, const FitChoices& choices, int64_t margin = -1);
+
 struct GridInput {
-    /// The defaults of -r and --margin for this command.
-    explicit GridInput(int64_t defaultResolution = 256, int64_t defaultMargin = 1)
-        : resolution(defaultResolution), margin(defaultMargin) {}
+    /// The defaults of -r and --margin for this command (margin < 0: the command decides).
+    explicit GridInput(int64_t defaultResolution = 256, int64_t defaultMargin = 1) {
+        choices.defaultResolution = defaultResolution;
+        choices.defaultMargin = defaultMargin;
+        choices.prefix = "Mesh input: ";
+    }
     std::string path;
-    int64_t resolution; ///< mesh input: cells along the longest side
-    int64_t margin;     ///< mesh input: empty cells on every side (< 0: the command decides)
+    FitArgs fit;
+    FitChoices choices;
     int threads = 0;
     bool quiet = false;
 };
 
-/// Adds INPUT, -r/--resolution, --margin, -j/--threads and -q/--quiet. The defaults shown are
-/// `in`'s current values; a negative in.margin adds --margin without a default, described by
-/// `marginHelp`.
+/// Adds INPUT, -r/--resolution, --margin, -j/--threads and -q/--quiet. A negative default margin
+/// adds --margin without a default, described by `marginHelp`.
 void addGridInputOptions(CLI::App& app, GridInput& in, const std::string& marginHelp = "");
 
-/// Reads the grid, or voxelizes the mesh (margin `margin`, or in.margin when `margin` < 0),
+/// Reads the grid, or voxelizes the mesh (margin `margin`, or the given one when `margin` < 0),
 /// printing the fill note on stderr unless quiet. With `uniform`, a locally sliced grid is
 /// resampled to uniform slicing. Throws voxfx::Error.
 VoxelGrid loadGridInput(const GridInput& in, bool uniform, int64_t margin = -1);

@@ -12,6 +12,8 @@
 #include <immintrin.h>
 #endif
 
+#include <nlohmann/json.hpp>
+
 #include "core/enum_names.hpp"
 #include "voxfx/parallel.hpp"
 
@@ -159,6 +161,89 @@ VoxelGrid csg(const VoxelGrid& a, const VoxelGrid& b, CsgOp op) {
 
 namespace {
 
+[[noreturn]] void parseFail(size_t column, const std::string& what) {
+    fail("CSG expression, column ", column, ": ", what);
+}
+
+// nlohmann's message without its "[json.exception.parse_error.101] parse error at line 1,
+// column 7: " prefix: the caller names the position in its own terms.
+std::string jsonReason(const nlohmann::json::parse_error& e) {
+    const std::string what = e.what();
+    const size_t colon = what.find(": ");
+    return colon == std::string::npos ? what : what.substr(colon + 2);
+}
+
+// ---- JSON syntax: node := string | {"op": string, "args": [node, ...]}, read by nlohmann-json.
+// Syntax errors carry nlohmann's byte position (the column of the one-line text); errors in a
+// well-formed document name the node by its JSON pointer ("/args/1/op").
+
+[[noreturn]] void jsonFail(const std::string& pointer, const std::string& what) {
+    fail("CSG expression, at ", pointer.empty() ? std::string("the top level") : pointer, ": ", what);
+}
+
+CsgNode nodeFromJson(const nlohmann::json& j, const std::string& pointer) {
+    CsgNode node;
+    if (j.is_string()) {
+        node.mesh = j.get<std::string>();
+        if (node.mesh.empty()) jsonFail(pointer, "empty mesh path");
+        return node;
+    }
+    if (!j.is_object())
+        jsonFail(pointer,
+                 detail::concat("expected a string (mesh path) or an object, found ", j.type_name()));
+    if (j.empty()) jsonFail(pointer, "empty object: a CSG node needs \"op\" and \"args\"");
+    for (const auto& [key, value] : j.items())
+        if (key != "op" && key != "args")
+            jsonFail(pointer,
+                     detail::concat("unknown member \"", key, "\" (a CSG node has \"op\" and \"args\")"));
+    if (!j.contains("op")) jsonFail(pointer, "object without \"op\"");
+    if (!j.contains("args")) jsonFail(pointer, "object without \"args\"");
+    const nlohmann::json& op = j["op"];
+    if (!op.is_string())
+        jsonFail(pointer + "/op", detail::concat("\"op\" must be a string, found ", op.type_name()));
+    const std::string name = op.get<std::string>();
+    if (!lookupCsgOp(name, node.op))
+        jsonFail(pointer + "/op",
+                 detail::concat("unknown operation '", name, "' (allowed: ", kAllowedOps, ")"));
+    const nlohmann::json& args = j["args"];
+    if (!args.is_array())
+        jsonFail(pointer + "/args", detail::concat("\"args\" must be an array, found ", args.type_name()));
+    if (args.empty()) jsonFail(pointer + "/args", "\"args\" needs at least one argument");
+    node.isMesh = false;
+    for (size_t i = 0; i < args.size(); ++i)
+        node.args.push_back(nodeFromJson(args[i], detail::concat(pointer, "/args/", i)));
+    return node;
+}
+
+// nlohmann's parse_error.byte is the 1-based position of the last character it read: the end of
+// the offending token. The column names the token's first character, where a reader looks.
+size_t tokenColumn(std::string_view text, size_t byte) {
+    if (byte == 0 || byte > text.size()) return byte; // the text ended
+    size_t i = byte - 1;
+    if (text[i] == '"' && i > 0) { // a complete string: back to its opening quote
+        for (size_t j = i; j-- > 0;) {
+            size_t backslashes = 0;
+            while (backslashes < j && text[j - 1 - backslashes] == '\\') ++backslashes;
+            if (text[j] == '"' && backslashes % 2 == 0) return j + 1;
+        }
+        return byte;
+    }
+    const auto inWord = [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '+' || c == '-' || c == '.';
+    };
+    while (i > 0 && inWord(text[i]) && inWord(text[i - 1])) --i; // a number or a literal
+    return i + 1;
+}
+
+CsgNode parseJsonExpression(std::string_view text) {
+    nlohmann::json doc;
+    try {
+        doc = nlohmann::json::parse(text.begin(), text.end());
+    } catch (const nlohmann::json::parse_error& e) { parseFail(tokenColumn(text, e.byte), jsonReason(e)); }
+    return nodeFromJson(doc, "");
+}
+
+// ---- functional syntax, by hand (it is the project's own notation).
 class Parser {
 public:
     explicit Parser(std::string_view text) : text_(text) {}
@@ -166,7 +251,7 @@ public:
     CsgNode parse() {
         skipBlanks();
         if (pos_ >= text_.size()) error("expected a CSG expression, the text is empty");
-        CsgNode root = text_[pos_] == '{' ? parseJsonNode() : parseFunctional();
+        CsgNode root = parseFunctional();
         skipBlanks();
         if (pos_ < text_.size())
             error(detail::concat("unexpected '", text_[pos_], "' after the end of the expression"));
@@ -174,9 +259,7 @@ public:
     }
 
 private:
-    [[noreturn]] void error(const std::string& what) const {
-        fail("CSG expression, column ", pos_ + 1, ": ", what);
-    }
+    [[noreturn]] void error(const std::string& what) const { parseFail(pos_ + 1, what); }
     void skipBlanks() {
         while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_;
     }
@@ -192,11 +275,10 @@ private:
         ++pos_;
     }
 
-    // ---- functional syntax
     CsgNode parseFunctional() {
         skipBlanks();
         CsgNode node;
-        node.column = int(pos_) + 1;
+        const size_t column = pos_ + 1;
         if (pos_ >= text_.size()) error("expected a mesh path or an operation, the text ended");
         if (text_[pos_] == '"') {
             node.mesh = parseQuoted();
@@ -229,144 +311,24 @@ private:
                 ++pos_;
                 node.args.push_back(parseFunctional());
             }
-            expect(
-                ')',
-                detail::concat("to close ", toString(op), " (opened at column ", node.column, ")").c_str());
+            expect(')',
+                   detail::concat("to close ", toString(op), " (opened at column ", column, ")").c_str());
             return node;
         }
         node.mesh = std::string(word);
         return node;
     }
 
-    // A double-quoted string with JSON escapes (\" \\ \/ \b \f \n \r \t \uXXXX for ASCII).
+    // A double-quoted string with JSON escapes: find its end here, decode it with nlohmann.
     std::string parseQuoted() {
         const size_t open = pos_;
-        ++pos_;
-        std::string out;
-        while (true) {
-            if (pos_ >= text_.size()) {
-                pos_ = open;
-                error("unterminated string");
-            }
-            const char c = text_[pos_++];
-            if (c == '"') break;
-            if (c != '\\') {
-                out += c;
-                continue;
-            }
-            if (pos_ >= text_.size()) error("unterminated escape in string");
-            const char e = text_[pos_++];
-            switch (e) {
-            case '"':
-                out += '"';
-                break;
-            case '\\':
-                out += '\\';
-                break;
-            case '/':
-                out += '/';
-                break;
-            case 'b':
-                out += '\b';
-                break;
-            case 'f':
-                out += '\f';
-                break;
-            case 'n':
-                out += '\n';
-                break;
-            case 'r':
-                out += '\r';
-                break;
-            case 't':
-                out += '\t';
-                break;
-            case 'u': {
-                unsigned v = 0;
-                for (int i = 0; i < 4; ++i) {
-                    if (pos_ >= text_.size() || !std::isxdigit(static_cast<unsigned char>(text_[pos_])))
-                        error("expected four hex digits after \\u");
-                    const char h = text_[pos_++];
-                    v = v * 16 + unsigned(std::isdigit(static_cast<unsigned char>(h))
-                                              ? h - '0'
-                                              : (std::tolower(h) - 'a' + 10));
-                }
-                if (v >= 0x80) error("only ASCII \\u escapes are supported in paths");
-                out += char(v);
-                break;
-            }
-            default:
-                --pos_;
-                error(detail::concat("unknown escape '\\", e, "'"));
-            }
-        }
-        return out;
-    }
-
-    // ---- JSON syntax: node := string | {"op": string, "args": [node, ...]}
-    CsgNode parseJsonNode() {
-        skipBlanks();
-        CsgNode node;
-        node.column = int(pos_) + 1;
-        if (pos_ >= text_.size()) error("expected a string or an object, the text ended");
-        if (text_[pos_] == '"') {
-            node.mesh = parseQuoted();
-            if (node.mesh.empty()) {
-                pos_ = size_t(node.column - 1);
-                error("empty mesh path");
-            }
-            return node;
-        }
-        if (text_[pos_] != '{')
-            error(detail::concat("expected a string (mesh path) or an object, found '", text_[pos_], "'"));
-        ++pos_;
-        node.isMesh = false;
-        bool haveOp = false, haveArgs = false;
-        bool first = true;
-        while (true) {
-            skipBlanks();
-            if (peek('}')) {
-                if (first) error("empty object: a CSG node needs \"op\" and \"args\"");
-                ++pos_;
-                break;
-            }
-            if (!first) expect(',', "between object members");
-            first = false;
-            skipBlanks();
-            if (pos_ >= text_.size() || text_[pos_] != '"') error("expected a member name in double quotes");
-            const size_t keyPos = pos_;
-            const std::string key = parseQuoted();
-            expect(':', "after a member name");
-            skipBlanks();
-            if (key == "op") {
-                if (pos_ >= text_.size() || text_[pos_] != '"') error("\"op\" must be a string");
-                const size_t opPos = pos_;
-                const std::string name = parseQuoted();
-                if (!lookupCsgOp(name, node.op)) {
-                    pos_ = opPos;
-                    error(detail::concat("unknown operation '", name, "' (allowed: ", kAllowedOps, ")"));
-                }
-                haveOp = true;
-            } else if (key == "args") {
-                expect('[', "to open \"args\"");
-                if (peek(']')) error("\"args\" needs at least one argument");
-                node.args.push_back(parseJsonNode());
-                while (peek(',')) {
-                    ++pos_;
-                    node.args.push_back(parseJsonNode());
-                }
-                expect(']', "to close \"args\"");
-                haveArgs = true;
-            } else {
-                pos_ = keyPos;
-                error(detail::concat("unknown member \"", key, "\" (a CSG node has \"op\" and \"args\")"));
-            }
-        }
-        if (!haveOp || !haveArgs) {
-            pos_ = size_t(node.column - 1);
-            error(haveOp ? "object without \"args\"" : "object without \"op\"");
-        }
-        return node;
+        size_t end = pos_ + 1;
+        while (end < text_.size() && text_[end] != '"') end += text_[end] == '\\' ? 2 : 1;
+        if (end >= text_.size()) error("unterminated string");
+        pos_ = end + 1;
+        try {
+            return nlohmann::json::parse(text_.substr(open, pos_ - open)).get<std::string>();
+        } catch (const nlohmann::json::parse_error& e) { parseFail(open + e.byte, jsonReason(e)); }
     }
 
     std::string_view text_;
@@ -415,7 +377,11 @@ void collectMeshes(const CsgNode& node, std::vector<std::string>& out) {
 
 } // namespace
 
-CsgNode parseCsgExpression(std::string_view text) { return Parser(text).parse(); }
+CsgNode parseCsgExpression(std::string_view text) {
+    const size_t first = text.find_first_not_of(" \t\n\r\f\v");
+    if (first != std::string_view::npos && text[first] == '{') return parseJsonExpression(text);
+    return Parser(text).parse();
+}
 
 std::string toString(const CsgNode& node) {
     std::string out;

@@ -10,7 +10,7 @@
 
 #include <openvdb/openvdb.h>
 
-#include "io/atomic_file.hpp"
+#include "core/atomic_file.hpp"
 #include "voxfx/density.hpp"
 #include "voxfx/parallel.hpp"
 

@@ -1,6 +1,5 @@
-// voxfx — counting and traversal: column popcounts (GI08 §6, "counting"), filled volume, and the
-// 3D DDA of J. Amanatides and A. Woo, "A Fast Voxel Traversal Algorithm for Ray Tracing",
-// Eurographics 1987, §3 (incremental traversal; here with exact per-step parameters).
+// voxfx — counting and traversal: column popcounts (GI08 §6, "counting"), filled volume, and
+// segment queries walked with the one 3D DDA (voxfx/dda.hpp, Amanatides & Woo 1987).
 #include "voxfx/grid_query.hpp"
 
 #include <algorithm>
@@ -10,6 +9,7 @@
 #include <vector>
 
 #include "core/bitops.hpp"
+#include "voxfx/dda.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
@@ -119,23 +119,13 @@ SegmentHits traceSegmentGrid(const BitGrid& grid, const Vec3d& a, const Vec3d& b
     const Vec3d d = b - a;
     r.length = length(d);
     if (!(r.length > 0) || grid.empty()) return r;
-    const double n[3] = {double(grid.width()), double(grid.height()), double(grid.depth())};
     const int64_t dims[3] = {grid.width(), grid.height(), grid.depth()};
 
-    // Clip the parameter range [0, 1] to the grid box (slab method). A segment inside a plane
-    // parallel to an axis belongs to the half-open cell range [0, n).
-    double t0 = 0, t1 = 1;
-    for (int i = 0; i < 3; ++i) {
-        if (d[i] == 0) {
-            if (!(a[i] >= 0 && a[i] < n[i])) return r;
-            continue;
-        }
-        double ta = (0.0 - a[i]) / d[i], tb = (n[i] - a[i]) / d[i];
-        if (ta > tb) std::swap(ta, tb);
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-    }
-    if (!(t0 < t1)) return r;
+    // Clip the parameter range [0, 1] to the grid box. A segment inside a plane parallel to an
+    // axis belongs to the half-open cell range [0, n).
+    const DdaClip clip = clipToGrid(a, d, dims);
+    if (clip.empty()) return r;
+    const double t0 = clip.t0, t1 = clip.t1;
 
     if (d.x == 0 && d.y == 0) {
         const int64_t x = std::clamp<int64_t>(int64_t(std::floor(a.x)), 0, dims[0] - 1);
@@ -146,42 +136,27 @@ SegmentHits traceSegmentGrid(const BitGrid& grid, const Vec3d& a, const Vec3d& b
         return r;
     }
 
-    // Starting cell: the one the segment occupies just after t0 (round towards the direction of
-    // travel on a boundary); clamped, since t0 * d may round across the grid's faces.
-    int64_t idx[3], step[3];
-    double tMax[3];
-    for (int i = 0; i < 3; ++i) {
-        const double p = a[i] + t0 * d[i];
-        int64_t k = d[i] < 0 ? int64_t(std::ceil(p)) - 1 : int64_t(std::floor(p));
-        k = std::clamp<int64_t>(k, 0, dims[i] - 1);
-        idx[i] = k;
-        step[i] = d[i] > 0 ? 1 : (d[i] < 0 ? -1 : 0);
-        tMax[i] = d[i] > 0 ? (double(k + 1) - a[i]) / d[i]
-                           : (d[i] < 0 ? (double(k) - a[i]) / d[i] : std::numeric_limits<double>::infinity());
-    }
-
+    Dda walk = Dda::start(a, d, dims, t0);
     const int64_t W = grid.width(), P = grid.wordsPerColumn();
     const uint64_t* words = grid.words();
-    const uint64_t* col = words + (idx[1] * W + idx[0]) * P;
+    const uint64_t* col = words + (walk.cell[1] * W + walk.cell[0]) * P;
     double t = t0, filledT = 0;
     int64_t visited = 0, filledCells = 0;
     for (;;) {
-        const int axis = tMax[0] < tMax[1] ? (tMax[0] < tMax[2] ? 0 : 2) : (tMax[1] < tMax[2] ? 1 : 2);
-        const double tNext = tMax[axis];
+        const int axis = walk.nextAxis();
+        const double tNext = walk.tMax[axis];
         const double len = std::min(tNext, t1) - t;
         if (len > 0) {
             ++visited;
-            if ((col[idx[2] >> 6] >> (idx[2] & 63)) & 1u) {
+            const int64_t s = walk.cell[2];
+            if ((col[s >> 6] >> (s & 63)) & 1u) {
                 ++filledCells;
                 filledT += len;
             }
         }
         if (tNext >= t1) break;
-        idx[axis] += step[axis];
-        if (idx[axis] < 0 || idx[axis] >= dims[axis]) break; // rounding at the exit face
-        // Exact boundary parameter of the next crossing along this axis (no accumulated error).
-        tMax[axis] = (double(step[axis] > 0 ? idx[axis] + 1 : idx[axis]) - a[axis]) / d[axis];
-        if (axis != 2) col = words + (idx[1] * W + idx[0]) * P;
+        if (!walk.advance(axis)) break; // rounding at the exit face
+        if (axis != 2) col = words + (walk.cell[1] * W + walk.cell[0]) * P;
         t = std::max(t, tNext);
     }
     r.cellsVisited = visited;

@@ -14,7 +14,6 @@
 #include <functional>
 
 #include "core/enum_names.hpp"
-#include "io/atomic_file.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
@@ -277,71 +276,6 @@ SurfaceMesh extractSurface(const VoxelGrid& grid, const SurfaceOptions& options)
     SurfaceMesh out;
     withThreads(options.threads, [&] { out = marchingCubes(f, grid.frame, options.iso); });
     return out;
-}
-
-void writeSurfaceMesh(const SurfaceMesh& mesh, const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    if (ext != ".ply" && ext != ".obj") fail("'", path, "': surface meshes are written as .ply or .obj");
-    if (mesh.normals.size() != mesh.positions.size())
-        fail("cannot write '", path, "': the mesh has ", mesh.positions.size(), " positions but ",
-             mesh.normals.size(), " normals");
-    detail::AtomicFile file(path);
-    std::ostream& out = file.stream();
-    if (ext == ".ply") {
-        out << "ply\nformat binary_little_endian 1.0\ncomment voxfx marching cubes\n"
-            << "element vertex " << mesh.positions.size() << "\n"
-            << "property float x\nproperty float y\nproperty float z\n"
-            << "property float nx\nproperty float ny\nproperty float nz\n"
-            << "element face " << mesh.triangleCount() << "\n"
-            << "property list uchar int vertex_indices\nend_header\n";
-        std::vector<char> buf;
-        buf.reserve(1 << 20);
-        auto flush = [&] {
-            out.write(buf.data(), std::streamsize(buf.size()));
-            buf.clear();
-        };
-        auto put = [&](const void* p, size_t n) {
-            const char* c = static_cast<const char*>(p);
-            buf.insert(buf.end(), c, c + n);
-            if (buf.size() >= (1 << 20)) flush();
-        };
-        // Little-endian hosts only (x86-64, aarch64): floats and ints are written as in memory.
-        for (size_t i = 0; i < mesh.positions.size(); ++i) {
-            const float v[6] = {mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z,
-                                mesh.normals[i].x,   mesh.normals[i].y,   mesh.normals[i].z};
-            put(v, sizeof(v));
-        }
-        for (size_t t = 0; t < mesh.triangleCount(); ++t) {
-            char rec[13];
-            rec[0] = 3;
-            const int32_t idx[3] = {int32_t(mesh.indices[3 * t]), int32_t(mesh.indices[3 * t + 1]),
-                                    int32_t(mesh.indices[3 * t + 2])};
-            std::memcpy(rec + 1, idx, sizeof(idx));
-            put(rec, sizeof(rec));
-        }
-        flush();
-    } else {
-        out << "# voxfx marching cubes: " << mesh.positions.size() << " vertices, " << mesh.triangleCount()
-            << " triangles\n";
-        char line[160];
-        for (const Vec3f& p : mesh.positions) {
-            const int n = std::snprintf(line, sizeof(line), "v %.9g %.9g %.9g\n", p.x, p.y, p.z);
-            out.write(line, n);
-        }
-        for (const Vec3f& p : mesh.normals) {
-            const int n = std::snprintf(line, sizeof(line), "vn %.6g %.6g %.6g\n", p.x, p.y, p.z);
-            out.write(line, n);
-        }
-        for (size_t t = 0; t < mesh.triangleCount(); ++t) {
-            const uint32_t a = mesh.indices[3 * t] + 1, b = mesh.indices[3 * t + 1] + 1,
-                           c = mesh.indices[3 * t + 2] + 1;
-            const int n = std::snprintf(line, sizeof(line), "f %u//%u %u//%u %u//%u\n", a, a, b, b, c, c);
-            out.write(line, n);
-        }
-    }
-    file.commit();
 }
 
 } // namespace voxfx

@@ -9,7 +9,7 @@
 #include <span>
 #include <string>
 
-#include "io/atomic_file.hpp"
+#include "core/atomic_file.hpp"
 #include "voxfx/grid_io.hpp"
 
 namespace voxfx::detail {

@@ -9,7 +9,7 @@
 #include <fstream>
 #include <vector>
 
-#include "io/atomic_file.hpp"
+#include "core/atomic_file.hpp"
 #include "io/grid_formats.hpp"
 
 namespace voxfx {

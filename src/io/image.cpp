@@ -11,7 +11,7 @@
 #include <OpenEXR/ImfRgbaFile.h>
 #include <png.h>
 
-#include "io/atomic_file.hpp"
+#include "core/atomic_file.hpp"
 #include "voxfx/error.hpp"
 
 namespace voxfx {

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "io/grid_formats.hpp"
+#include "io/ply_header.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx::detail {
@@ -234,10 +235,9 @@ void writeVoxelMesh(const VoxelGrid& grid, std::ostream& out, GridFormat format)
     auto index = [&](const Vec3i& p) { return vertices.index(p.x, p.y, p.z); };
 
     if (ply) {
-        out << "ply\nformat binary_little_endian 1.0\n"
-            << "comment voxfx voxel mesh: exposed faces of filled voxels, world coordinates\n"
-            << "element vertex " << vertexCount << "\nproperty float x\nproperty float y\nproperty float z\n"
-            << "element face " << faceCount << "\nproperty list uchar int vertex_indices\nend_header\n";
+        writePlyHeader(out, "voxfx voxel mesh: exposed faces of filled voxels, world coordinates",
+                       {{"vertex", vertexCount, {"float x", "float y", "float z"}},
+                        {"face", faceCount, {"list uchar int vertex_indices"}}});
     } else {
         out << "# voxfx voxel mesh: exposed faces of filled voxels, world coordinates\n"
             << "# " << vertexCount << " vertices, " << faceCount << " quads\n";

@@ -5,9 +5,9 @@
 // more). The occlusion at p is the sum of the absorption of the occupied voxels between the light
 // and p (CHANG §3 step 4); the light is attenuated by exp(-sum). Columns are reduced to exclusive
 // prefix sums once, so a lookup is one read.
-#include <algorithm>
 #include <cmath>
 
+#include "render/light_grid_lookup.hpp"
 #include "voxfx/shadow.hpp"
 
 namespace voxfx {
@@ -43,15 +43,10 @@ AbsorptionShadowMap AbsorptionShadowMap::build(const LightView& view, const Mesh
     return map;
 }
 
-float AbsorptionShadowMap::columnDepth(int64_t x, int64_t y, double depth, int64_t skipCells) const {
-    const int64_t D = frame_.depth();
-    const int64_t c = y * frame_.width() + x;
-    const double t = frame_.depthToSlice(c)(depth);
-    if (!(t >= 0)) return 0.0f;
-    const int64_t s = t >= double(D) ? D : int64_t(t);
-    const int64_t end = std::clamp<int64_t>(s - skipCells + 1, 0, D); // slices [0, end) count
+float AbsorptionShadowMap::columnDepth(int64_t column, double depth, int64_t skipCells) const {
+    const int64_t end = detail::slicesInFront(frame_, column, depth, skipCells);
     // Written voxels of the column with slice < end (few per column: a linear scan).
-    const int64_t b = offsets_[size_t(c)], e = offsets_[size_t(c) + 1];
+    const int64_t b = offsets_[size_t(column)], e = offsets_[size_t(column) + 1];
     int64_t i = b;
     while (i < e && int64_t(slice_[size_t(i)]) < end) ++i;
     return i == b ? 0.0f : prefix_[size_t(i - 1)];
@@ -59,11 +54,8 @@ float AbsorptionShadowMap::columnDepth(int64_t x, int64_t y, double depth, int64
 
 float AbsorptionShadowMap::opticalDepth(const Vec3d& world, int64_t skipCells) const {
     if (offsets_.empty() || !view_.covers(world)) return 0.0f;
-    const Vec3d p = view_.gridFromWorld(world);
-    // Clamp: covers() admits the closed border of the columns.
-    const int64_t x = std::clamp<int64_t>(int64_t(std::floor(p.x)), 0, frame_.width() - 1);
-    const int64_t y = std::clamp<int64_t>(int64_t(std::floor(p.y)), 0, frame_.height() - 1);
-    return columnDepth(x, y, p.z, skipCells);
+    const detail::ColumnAt c = detail::nearestColumn(view_, world);
+    return columnDepth(c.column, c.depth, skipCells);
 }
 
 float AbsorptionShadowMap::transmittance(const Vec3d& world, int64_t skipCells) const {
@@ -72,19 +64,9 @@ float AbsorptionShadowMap::transmittance(const Vec3d& world, int64_t skipCells) 
 
 float AbsorptionShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells) const {
     if (offsets_.empty() || !view_.covers(world)) return 1.0f;
-    const Vec3d p = view_.gridFromWorld(world);
-    const double fx = p.x - 0.5, fy = p.y - 0.5;
-    const int64_t x0 = int64_t(std::floor(fx)), y0 = int64_t(std::floor(fy));
-    const double wx = fx - double(x0), wy = fy - double(y0);
-    double out = 0;
-    for (int dy = 0; dy < 2; ++dy)
-        for (int dx = 0; dx < 2; ++dx) {
-            const int64_t x = x0 + dx, y = y0 + dy;
-            const double w = (dx ? wx : 1 - wx) * (dy ? wy : 1 - wy);
-            const bool inside = x >= 0 && y >= 0 && x < frame_.width() && y < frame_.height();
-            out += w * (inside ? std::exp(-double(columnDepth(x, y, p.z, skipCells))) : 1.0);
-        }
-    return float(out);
+    return float(detail::bilinearColumns<double, double>(view_, world, 1.0, [&](const detail::ColumnAt& c) {
+        return std::exp(-double(columnDepth(c.column, c.depth, skipCells)));
+    }));
 }
 
 } // namespace voxfx

@@ -3,6 +3,8 @@
 //
 // World is y-up (as glTF). Leaves are double-sided quads (two triangles) whose material lets part of
 // the light through (opacity < 1, transmission > 0), in colour groups: one shadow channel each.
+#include "render/demo_scenes.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -10,7 +12,6 @@
 #include <random>
 
 #include "voxfx/demo.hpp"
-#include "voxfx/mesh_io.hpp"
 
 namespace voxfx {
 
@@ -132,13 +133,13 @@ void addLeaves(Scene& scene, const std::vector<std::pair<Vec3d, double>>& cluste
         if (!m.mesh.indices.empty()) scene.meshes.push_back(std::move(m));
 }
 
-/// Loads a mesh, rotates it by `rotateX` degrees about x, scales it to `height` and stands it on the
+/// Rotates a mesh by `rotateX` degrees about x, scales it to `height` and stands it on the
 /// ground at (x, z).
-SceneMesh placedMesh(const std::string& path, const std::string& name, double height, double x, double z,
-                     double rotateX, double rotateY, uint32_t material) {
+SceneMesh placedMesh(Mesh mesh, const std::string& name, double height, double x, double z, double rotateX,
+                     double rotateY, uint32_t material) {
     SceneMesh m;
     m.name = name;
-    m.mesh = loadMesh(path);
+    m.mesh = std::move(mesh);
     const double ax = rotateX * M_PI / 180, ay = rotateY * M_PI / 180;
     for (Vec3f& p : m.mesh.positions) {
         Vec3d q(p);
@@ -241,12 +242,16 @@ Scene makeTreeScene(const TreeOptions& o) {
     return withView(std::move(scene), {-2.2, 1.9, 6.2}, {0.8, 1.55, 0.2}, 50);
 }
 
-Scene makeBunnyScene(const std::string& meshesDir, int leaves, uint64_t seed) {
+namespace detail {
+
+Scene makeBunnyScene(const DemoMeshes& meshes, int leaves, uint64_t seed) {
+    std::optional<Mesh> bunny = meshes.mesh("bunny00.off");
+    if (!bunny)
+        fail("demo 'bunny': ", (std::filesystem::path(meshes.folder) / "bunny00.off").string(), " not found");
     Scene scene = groundedScene("demo:bunny", 30.0, "ground", {0.45f, 0.42f, 0.36f});
     Rng rng(seed);
     const uint32_t fur = scene.addMaterial(solid("bunny", {0.75f, 0.72f, 0.66f}, 0.25f, 40));
-    scene.meshes.push_back(placedMesh((std::filesystem::path(meshesDir) / "bunny00.off").string(), "Bunny",
-                                      1.2, 0, 0, 0, 0, fur));
+    scene.meshes.push_back(placedMesh(std::move(*bunny), "Bunny", 1.2, 0, 0, 0, 0, fur));
     // A canopy: four posts and a flat, dense layer of leaves above the bunny.
     SceneMesh posts;
     posts.name = "Posts";
@@ -272,7 +277,7 @@ Scene makeBunnyScene(const std::string& meshesDir, int leaves, uint64_t seed) {
     return withView(std::move(scene), {-1.0, 1.3, 6.4}, {0.2, 1.15, 0}, 46);
 }
 
-Scene makeCgalScene(const std::string& meshesDir, int leaves, uint64_t seed) {
+Scene makeCgalScene(const DemoMeshes& meshes, int leaves, uint64_t seed) {
     Scene scene = groundedScene("demo:cgal", 30.0, "ground", {0.42f, 0.40f, 0.34f});
     Rng rng(seed);
     struct Item {
@@ -287,16 +292,18 @@ Scene makeCgalScene(const std::string& meshesDir, int leaves, uint64_t seed) {
     int loaded = 0;
     std::string lastError;
     for (const Item& it : items) {
-        const std::string path = (std::filesystem::path(meshesDir) / it.file).string();
-        if (!std::filesystem::exists(path)) {
-            scene.warnings.push_back(std::string("missing ") + path);
+        std::optional<Mesh> mesh = meshes.mesh(it.file);
+        if (!mesh) {
+            scene.warnings.push_back("missing " + (std::filesystem::path(meshes.folder) / it.file).string());
             continue;
         }
         const uint32_t mat = scene.addMaterial(solid(it.name, it.colour, 0.2f, 30));
-        scene.meshes.push_back(placedMesh(path, it.name, it.height, it.x, it.z, it.rotateX, it.rotateY, mat));
+        scene.meshes.push_back(
+            placedMesh(std::move(*mesh), it.name, it.height, it.x, it.z, it.rotateX, it.rotateY, mat));
         ++loaded;
     }
-    if (loaded == 0) fail("demo 'cgal': none of elephant.off, armadillo.off, camel.off found in ", meshesDir);
+    if (loaded == 0)
+        fail("demo 'cgal': none of elephant.off, armadillo.off, camel.off found in ", meshes.folder);
     // A pergola: posts, beams and a roof of leaves.
     SceneMesh wood;
     wood.name = "Pergola";
@@ -323,13 +330,8 @@ Scene makeCgalScene(const std::string& meshesDir, int leaves, uint64_t seed) {
     return withView(std::move(scene), {0.4, 2.2, 7.6}, {0.1, 1.0, 0}, 50);
 }
 
-std::vector<std::string> demoSceneNames() { return {"tree", "bunny", "cgal"}; }
+} // namespace detail
 
-Scene makeDemoScene(const std::string& name, const std::string& meshesDir) {
-    if (name == "tree") return makeTreeScene();
-    if (name == "bunny") return makeBunnyScene(meshesDir);
-    if (name == "cgal") return makeCgalScene(meshesDir);
-    fail("unknown demo scene '", name, "' (allowed: tree, bunny, cgal)");
-}
+std::vector<std::string> demoSceneNames() { return {"tree", "bunny", "cgal"}; }
 
 } // namespace voxfx

@@ -1,19 +1,17 @@
 // voxfx — particles colliding with solid grids (Eisemann & Décoret, "Single-Pass GPU Solid
 // Voxelization for Real-Time Applications", GI 2008, §7 "Particle collisions": particles query the
 // solid grid, bounce with the density-gradient normal on entering a filled cell, and the grid can
-// be re-voxelized every frame). Paths are walked with the DDA of Amanatides & Woo (1987).
+// be re-voxelized every frame). Paths are walked with the one 3D DDA (voxfx/dda.hpp).
 #include "voxfx/particles.hpp"
 
 #include <algorithm>
 #include <bit>
-#include <cctype>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
 #include <limits>
 #include <random>
 
-#include "io/atomic_file.hpp"
+#include "voxfx/dda.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
@@ -107,65 +105,42 @@ Hit firstHit(const BitGrid& bits, const GridMap& m, const Vec3d& a, const Vec3d&
         std::floor(a.z) == std::floor(b.z))
         return h;
     const Vec3d d = b - a;
-    const double n[3] = {double(m.dims[0]), double(m.dims[1]), double(m.dims[2])};
-    double t0 = 0, t1 = 1;
-    int entryAxis = -1;
-    for (int i = 0; i < 3; ++i) {
-        if (d[i] == 0) {
-            if (!(a[i] >= 0 && a[i] < n[i])) return h;
-            continue;
-        }
-        double ta = (0.0 - a[i]) / d[i], tb = (n[i] - a[i]) / d[i];
-        if (ta > tb) std::swap(ta, tb);
-        if (ta > t0) {
-            t0 = ta;
-            entryAxis = i;
-        }
-        t1 = std::min(t1, tb);
-    }
+    const DdaClip clip = clipToGrid(a, d, m.dims);
     const bool startsInside = m.inside(a);
-    if (!(t0 < t1) && !(startsInside && walls)) return h;
+    if (clip.empty() && !(startsInside && walls)) return h;
 
-    int64_t idx[3], step[3];
-    double tMax[3];
-    for (int i = 0; i < 3; ++i) {
-        step[i] = d[i] > 0 ? 1 : (d[i] < 0 ? -1 : 0);
-        const double p = startsInside ? a[i] : a[i] + t0 * d[i];
-        int64_t k = startsInside || d[i] >= 0 ? int64_t(std::floor(p)) : int64_t(std::ceil(p)) - 1;
-        k = std::clamp<int64_t>(k, 0, m.dims[i] - 1);
-        idx[i] = k;
-        tMax[i] = d[i] > 0 ? (double(k + 1) - a[i]) / d[i]
-                           : (d[i] < 0 ? (double(k) - a[i]) / d[i] : std::numeric_limits<double>::infinity());
-    }
-    if (!startsInside && filledCell(bits, idx[0], idx[1], idx[2])) {
+    // Inside, the walk starts in the (free) cell that holds the particle; from outside, in the
+    // cell it enters first.
+    Dda walk = Dda::start(a, d, m.dims, startsInside ? 0.0 : clip.t0,
+                          startsInside ? DdaStart::Containing : DdaStart::AlongSegment);
+    if (!startsInside && filledCell(bits, walk.cell[0], walk.cell[1], walk.cell[2])) {
         h.hit = true;
         h.fromOutside = true;
-        h.t = t0;
-        h.axis = entryAxis < 0 ? 0 : entryAxis;
-        h.dir = int(step[h.axis]);
+        h.t = clip.t0;
+        h.axis = clip.entryAxis < 0 ? 0 : clip.entryAxis;
+        h.dir = int(walk.step[h.axis]);
         return h;
     }
     for (;;) {
-        const int axis = tMax[0] < tMax[1] ? (tMax[0] < tMax[2] ? 0 : 2) : (tMax[1] < tMax[2] ? 1 : 2);
-        const double tNext = tMax[axis];
+        const int axis = walk.nextAxis();
+        const double tNext = walk.tMax[axis];
         if (tNext >= 1.0) return h; // the segment ends in this (free) cell
-        const int64_t nextIdx = idx[axis] + step[axis];
-        if (nextIdx < 0 || nextIdx >= m.dims[axis]) {
+        const int64_t nextIdx = walk.neighbour(axis);
+        if (!walk.inside(axis, nextIdx)) {
             if (!walls) return h; // leaves the grid: free flight
         } else {
-            int64_t probe[3] = {idx[0], idx[1], idx[2]};
+            int64_t probe[3] = {walk.cell[0], walk.cell[1], walk.cell[2]};
             probe[axis] = nextIdx;
             if (!filledCell(bits, probe[0], probe[1], probe[2])) {
-                idx[axis] = nextIdx;
-                tMax[axis] = (double(step[axis] > 0 ? nextIdx + 1 : nextIdx) - a[axis]) / d[axis];
+                walk.advance(axis);
                 continue;
             }
         }
         h.hit = true;
         h.t = std::max(0.0, tNext);
         h.axis = axis;
-        h.dir = int(step[axis]);
-        std::copy(idx, idx + 3, h.cell);
+        h.dir = int(walk.step[axis]);
+        std::copy(walk.cell, walk.cell + 3, h.cell);
         return h;
     }
 }
@@ -465,34 +440,6 @@ double particleEnergy(const Particles& ps, const Vec3d& gravity) {
     return e;
 }
 
-void writeParticles(const Particles& ps, const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    if (ext != ".ply" && ext != ".csv") fail("'", path, "': particles are written as .ply or .csv");
-    detail::AtomicFile file(path);
-    std::ostream& out = file.stream();
-    if (ext == ".ply") {
-        out << "ply\nformat binary_little_endian 1.0\ncomment voxfx particles\nelement vertex " << ps.size()
-            << "\nproperty float x\nproperty float y\nproperty float z\n"
-            << "property float vx\nproperty float vy\nproperty float vz\nend_header\n";
-        // Little-endian hosts only (x86-64, aarch64).
-        for (std::size_t i = 0; i < ps.size(); ++i) {
-            const float rec[6] = {ps.px[i], ps.py[i], ps.pz[i], ps.vx[i], ps.vy[i], ps.vz[i]};
-            out.write(reinterpret_cast<const char*>(rec), sizeof(rec));
-        }
-    } else {
-        out << "x,y,z,vx,vy,vz\n";
-        char line[192];
-        for (std::size_t i = 0; i < ps.size(); ++i) {
-            const int len = std::snprintf(line, sizeof(line), "%.9g,%.9g,%.9g,%.7g,%.7g,%.7g\n", ps.px[i],
-                                          ps.py[i], ps.pz[i], ps.vx[i], ps.vy[i], ps.vz[i]);
-            out.write(line, len);
-        }
-    }
-    file.commit();
-}
-
 Image renderParticles(const Particles& ps, const ParticleCollider& collider, const ParticleImageOptions& o) {
     const VoxelGrid& grid = collider.grid();
     const Box3d& box = grid.frame.box();
@@ -502,8 +449,12 @@ Image renderParticles(const Particles& ps, const ParticleCollider& collider, con
     Image img(W, H, o.background);
     std::vector<double> depth(size_t(W * H), std::numeric_limits<double>::infinity());
 
-    // Sliced along world y, columns run along (z, x): the first set bit of a column is the
-    // front-most filled cell seen by an orthographic camera looking along +y.
+    // The camera is a Frame like every other view: orthographic over the grid's box, looking along
+    // +y. Its columns run along (z, x) (columnXAxis(Y) = z), one per pixel: pixel (px, py), y
+    // down, is column (H - 1 - py, px); the one slice spans the box's depth.
+    const Frame camera = Frame::orthographic(box, Axis::Y, H, W, 1);
+    // Sliced along world y, columns run along (z, x) too: the first set bit of a column is the
+    // front-most filled cell the camera sees.
     const VoxelGrid front = reslice(grid, Axis::Y);
     const Vec3i dims = grid.worldDims();
     const Vec3d cell = grid.frame.cellSize();
@@ -512,8 +463,8 @@ Image renderParticles(const Particles& ps, const ParticleCollider& collider, con
     parallelFor(0, H, 8, [&](int64_t b, int64_t e) {
         for (int64_t py = b; py < e; ++py)
             for (int64_t px = 0; px < W; ++px) {
-                const double wx = box.lo.x + (double(px) + 0.5) / double(W) * ext.x;
-                const double wz = box.hi.z - (double(py) + 0.5) / double(H) * ext.z;
+                const Vec3d centre = camera.worldFromGrid({double(H - 1 - py) + 0.5, double(px) + 0.5, 0.0});
+                const double wx = centre.x, wz = centre.z;
                 const int64_t ix = std::clamp<int64_t>(int64_t((wx - box.lo.x) / cell.x), 0, dims.x - 1);
                 const int64_t iz = std::clamp<int64_t>(int64_t((wz - box.lo.z) / cell.z), 0, dims.z - 1);
                 const uint64_t* col = front.bits.column(iz, ix);
@@ -529,11 +480,11 @@ Image renderParticles(const Particles& ps, const ParticleCollider& collider, con
                 }
             }
     });
-    // Particles as discs, hidden where the solid is in front of them.
+    // Particles as discs where the camera projects them, hidden where the solid is in front.
     const double r = std::max(0.5, double(o.particleRadius));
     for (std::size_t i = 0; i < ps.size(); ++i) {
-        const double sx = (double(ps.px[i]) - box.lo.x) / ext.x * double(W);
-        const double sy = (box.hi.z - double(ps.pz[i])) / ext.z * double(H);
+        const Vec3d g = camera.gridFromWorld(Vec3d(ps.position(i)));
+        const double sx = g.y, sy = double(H) - g.x;
         if (!(sx > -r && sy > -r && sx < double(W) + r && sy < double(H) + r)) continue;
         const int64_t x0 = std::max<int64_t>(0, int64_t(std::floor(sx - r))),
                       x1 = std::min<int64_t>(W - 1, int64_t(std::ceil(sx + r)));

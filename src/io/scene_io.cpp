@@ -1,0 +1,453 @@
+// voxfx — scene files: loadScene (glTF through render/scene_gltf, the JSON scene wrapper, or a
+// single mesh) and the glTF writer. The scene model itself lives in render/scene.cpp.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <set>
+
+#include "core/atomic_file.hpp"
+#include "render/scene_gltf.hpp"
+#include "voxfx/file_name.hpp"
+#include "voxfx/mesh_io.hpp"
+#include "voxfx/scene.hpp"
+
+namespace voxfx {
+
+using detail::concat;
+using nlohmann::json;
+
+namespace {
+
+// ---- JSON wrapper --------------------------------------------------------------------------------
+
+void allowKeys(const json& j, std::initializer_list<const char*> keys, const std::string& where) {
+    if (!j.is_object()) fail(where, ": expected a JSON object");
+    for (const auto& [key, value] : j.items()) {
+        bool ok = false;
+        for (const char* k : keys) ok = ok || key == k;
+        if (!ok) {
+            std::string list;
+            for (const char* k : keys) list += (list.empty() ? "" : ", ") + std::string(k);
+            fail(where, ": unknown key \"", key, "\" (allowed: ", list, ")");
+        }
+    }
+}
+
+Vec3d vec3(const json& j, const char* key, const std::string& where) {
+    const json& v = j.at(key);
+    if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
+        fail(where, ": \"", key, "\" must be an array of 3 numbers");
+    return {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+}
+
+Vec3d vec3Or(const json& j, const char* key, Vec3d fallback, const std::string& where) {
+    return j.contains(key) ? vec3(j, key, where) : fallback;
+}
+
+double num(const json& j, const char* key, double fallback, const std::string& where) {
+    if (!j.contains(key)) return fallback;
+    if (!j[key].is_number()) fail(where, ": \"", key, "\" must be a number");
+    return j[key].get<double>();
+}
+
+std::string str(const json& j, const char* key, const std::string& where) {
+    if (!j.contains(key)) return {};
+    if (!j[key].is_string()) fail(where, ": \"", key, "\" must be a string");
+    return j[key].get<std::string>();
+}
+
+Material wrapperMaterial(const json& j, const std::string& where) {
+    allowKeys(j,
+              {"name", "baseColor", "opacity", "transmission", "ior", "specular", "shininess", "doubleSided"},
+              where);
+    Material m;
+    m.name = j.contains("name") ? str(j, "name", where) : "material";
+    m.baseColor = Vec3f(vec3Or(j, "baseColor", Vec3d(m.baseColor), where));
+    m.opacity = float(num(j, "opacity", m.opacity, where));
+    m.transmission = float(num(j, "transmission", m.transmission, where));
+    m.ior = float(num(j, "ior", m.ior, where));
+    m.specular = float(num(j, "specular", m.specular, where));
+    m.shininess = float(num(j, "shininess", m.shininess, where));
+    m.doubleSided = j.value("doubleSided", false);
+    return m;
+}
+
+// S, then R (axis, degrees), then T.
+Mat4d wrapperTransform(const json& j, const std::string& where) {
+    Mat4d s, r, t;
+    if (j.contains("scale")) {
+        const json& v = j["scale"];
+        const Vec3d sc = v.is_number() ? Vec3d{v.get<double>(), v.get<double>(), v.get<double>()}
+                                       : vec3(j, "scale", where);
+        for (int i = 0; i < 3; ++i) s.m[i][i] = sc[i];
+    }
+    if (j.contains("rotate")) {
+        const json& v = j["rotate"];
+        if (!v.is_array() || v.size() != 4) fail(where, ": \"rotate\" must be [axis x, y, z, degrees]");
+        const Vec3d axis = normalize(Vec3d{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()});
+        if (!(length(axis) > 0)) fail(where, ": \"rotate\" has a zero axis");
+        const double a = v[3].get<double>() * M_PI / 180, c = std::cos(a), sn = std::sin(a);
+        const double x = axis.x, y = axis.y, z = axis.z;
+        const double rm[3][3] = {{c + x * x * (1 - c), x * y * (1 - c) - z * sn, x * z * (1 - c) + y * sn},
+                                 {y * x * (1 - c) + z * sn, c + y * y * (1 - c), y * z * (1 - c) - x * sn},
+                                 {z * x * (1 - c) - y * sn, z * y * (1 - c) + x * sn, c + z * z * (1 - c)}};
+        for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 3; ++k) r.m[i][k] = rm[i][k];
+    }
+    const Vec3d tr = vec3Or(j, "translate", {0, 0, 0}, where);
+    for (int i = 0; i < 3; ++i) t.m[i][3] = tr[i];
+    return t * r * s;
+}
+
+Scene loadWrapper(const std::string& path) {
+    const std::string text = detail::readTextFile(path, "scene file");
+    json doc;
+    try {
+        doc = json::parse(text);
+    } catch (const json::parse_error& e) { fail(path, ": malformed JSON: ", e.what()); }
+    const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+    auto resolve = [&](const std::string& p) {
+        return std::filesystem::path(p).is_absolute() ? p : (dir / p).string();
+    };
+    Scene scene;
+    try {
+        allowKeys(doc, {"gltf", "meshes", "lights", "cameras", "receiversOnly", "render", "environmentMap"},
+                  path);
+        if (doc.contains("gltf")) scene = detail::loadGltfScene(resolve(str(doc, "gltf", path)));
+        // Wrapper meshes without a material get a default one, never the glTF's first material
+        // (which may be a leaf or glass: a partial occluder).
+        int defaultMaterial = scene.materials.empty() ? int(scene.addMaterial(Material{})) : -1;
+        auto defaultIndex = [&] {
+            if (defaultMaterial < 0) {
+                Material d;
+                d.name = "default";
+                defaultMaterial = int(scene.addMaterial(d));
+            }
+            return uint32_t(defaultMaterial);
+        };
+        const json meshes = doc.value("meshes", json::array());
+        for (std::size_t i = 0; i < meshes.size(); ++i) {
+            const json& m = meshes[i];
+            const std::string where = concat(path, ": meshes[", i, "]");
+            allowKeys(m, {"file", "name", "translate", "scale", "rotate", "material", "castsShadow"}, where);
+            if (!m.contains("file")) fail(where, ": needs \"file\"");
+            SceneMesh out;
+            out.mesh = loadMesh(resolve(str(m, "file", where)));
+            out.name = m.contains("name") ? str(m, "name", where)
+                                          : std::filesystem::path(str(m, "file", where)).stem().string();
+            const Mat4d xf = wrapperTransform(m, where);
+            for (Vec3f& p : out.mesh.positions) p = Vec3f(xf.point(Vec3d(p)));
+            const double det = xf.m[0][0] * (xf.m[1][1] * xf.m[2][2] - xf.m[1][2] * xf.m[2][1]) -
+                               xf.m[0][1] * (xf.m[1][0] * xf.m[2][2] - xf.m[1][2] * xf.m[2][0]) +
+                               xf.m[0][2] * (xf.m[1][0] * xf.m[2][1] - xf.m[1][1] * xf.m[2][0]);
+            if (det < 0)
+                for (std::size_t t = 0; t < out.mesh.indices.size(); t += 3)
+                    std::swap(out.mesh.indices[t + 1], out.mesh.indices[t + 2]);
+            out.material = m.contains("material")
+                               ? scene.addMaterial(wrapperMaterial(m["material"], where + ".material"))
+                               : defaultIndex();
+            out.castsShadow = m.value("castsShadow", true);
+            scene.meshes.push_back(std::move(out));
+        }
+        const json lights = doc.value("lights", json::array());
+        for (std::size_t i = 0; i < lights.size(); ++i) {
+            const json& l = lights[i];
+            std::string where = concat(path, ": lights[", i, "]");
+            allowKeys(l,
+                      {"type", "name", "position", "direction", "target", "color", "intensity",
+                       "innerConeDegrees", "outerConeDegrees"},
+                      where);
+            Light out;
+            out.name = l.contains("name") ? str(l, "name", where) : concat("light", i);
+            where += concat(" '", out.name, "'");
+            const std::string type = str(l, "type", where);
+            out.type = detail::parseLightType(type, where);
+            if (out.type != LightType::Directional) {
+                if (!l.contains("position")) fail(where, ": a ", type, " light needs \"position\"");
+                out.position = vec3(l, "position", where);
+            }
+            if (out.type != LightType::Point) {
+                if (l.contains("direction"))
+                    out.direction = vec3(l, "direction", where);
+                else if (l.contains("target"))
+                    out.direction = vec3(l, "target", where) - out.position;
+                else
+                    fail(where, ": a ", type, " light has no direction: give \"direction\" or \"target\"");
+                if (!(length(out.direction) > 0)) fail(where, ": the light's direction is zero");
+                out.direction = normalize(out.direction);
+            }
+            out.color = Vec3f(vec3Or(l, "color", {1, 1, 1}, where));
+            out.intensity = float(num(l, "intensity", 1, where));
+            out.innerConeAngle = num(l, "innerConeDegrees", 0, where) * M_PI / 180;
+            out.outerConeAngle = num(l, "outerConeDegrees", 45, where) * M_PI / 180;
+            scene.lights.push_back(out);
+        }
+        const json cameras = doc.value("cameras", json::array());
+        for (std::size_t i = 0; i < cameras.size(); ++i) {
+            const json& c = cameras[i];
+            const std::string where = concat(path, ": cameras[", i, "]");
+            allowKeys(c, {"name", "position", "target", "up", "fovYDegrees", "near", "far"}, where);
+            if (!c.contains("position") || !c.contains("target"))
+                fail(where, ": needs \"position\" and \"target\"");
+            Camera out;
+            out.name = c.contains("name") ? str(c, "name", where) : concat("camera", i);
+            out.position = vec3(c, "position", where);
+            out.target = vec3(c, "target", where);
+            out.up = vec3Or(c, "up", {0, 1, 0}, where);
+            out.fovY = num(c, "fovYDegrees", 45, where) * M_PI / 180;
+            out.nearDepth = num(c, "near", 0.01, where);
+            out.farDepth = num(c, "far", 1.0e4, where);
+            // Cameras given in the wrapper come first: they are the ones the author meant.
+            scene.cameras.insert(scene.cameras.begin() + std::ptrdiff_t(i), out);
+        }
+        for (const json& name : doc.value("receiversOnly", json::array())) {
+            bool found = false;
+            for (SceneMesh& m : scene.meshes)
+                if (m.name == name.get<std::string>()) {
+                    m.castsShadow = false;
+                    found = true;
+                }
+            if (!found)
+                fail(path, ": receiversOnly names mesh '", name.get<std::string>(),
+                     "', which does not exist");
+        }
+        if (doc.contains("render")) {
+            const json& r = doc["render"];
+            const std::string where = path + ": render";
+            allowKeys(r,
+                      {"shadows", "width", "height", "supersample", "gridResolution", "gridDepth",
+                       "shadowMapResolution", "slicing", "voxelMode", "ambient", "background"},
+                      where);
+            SceneSettings& s = scene.settings;
+            s.shadows = str(r, "shadows", where);
+            s.width = int64_t(num(r, "width", 0, where));
+            s.height = int64_t(num(r, "height", 0, where));
+            s.supersample = int(num(r, "supersample", 0, where));
+            s.gridResolution = int64_t(num(r, "gridResolution", 0, where));
+            s.gridDepth = int64_t(num(r, "gridDepth", 0, where));
+            s.shadowMapResolution = int64_t(num(r, "shadowMapResolution", 0, where));
+            s.slicing = str(r, "slicing", where);
+            s.voxelMode = str(r, "voxelMode", where);
+            s.ambient = Vec3f(vec3Or(r, "ambient", {-1, -1, -1}, where));
+            s.background = Vec3f(vec3Or(r, "background", {-1, -1, -1}, where));
+        }
+        if (doc.contains("environmentMap"))
+            scene.settings.environmentMap = resolve(str(doc, "environmentMap", path));
+    } catch (const json::exception& e) { fail(path, ": unexpected content: ", e.what()); }
+    scene.source = path;
+    return scene;
+}
+
+// ---- glTF writer ---------------------------------------------------------------------------------
+
+std::string base64(const std::string& bytes) {
+    static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    out.reserve((bytes.size() + 2) / 3 * 4);
+    for (std::size_t i = 0; i < bytes.size(); i += 3) {
+        const uint32_t b0 = uint8_t(bytes[i]), b1 = i + 1 < bytes.size() ? uint8_t(bytes[i + 1]) : 0,
+                       b2 = i + 2 < bytes.size() ? uint8_t(bytes[i + 2]) : 0;
+        const uint32_t v = (b0 << 16) | (b1 << 8) | b2;
+        out += table[(v >> 18) & 63];
+        out += table[(v >> 12) & 63];
+        out += i + 1 < bytes.size() ? table[(v >> 6) & 63] : '=';
+        out += i + 2 < bytes.size() ? table[v & 63] : '=';
+    }
+    return out;
+}
+
+// Column-major matrix of a node whose -Z axis points along `forward` (lights, cameras).
+json orientedNodeMatrix(const Vec3d& position, const Vec3d& forward, const Vec3d& upHint) {
+    const Vec3d z = -normalize(forward);
+    Vec3d x = cross(upHint, z);
+    if (!(length(x) > 1e-9)) x = cross(Vec3d{1, 0, 0}, z);
+    if (!(length(x) > 1e-9)) x = cross(Vec3d{0, 1, 0}, z);
+    x = normalize(x);
+    const Vec3d y = cross(z, x);
+    return json::array(
+        {x.x, x.y, x.z, 0, y.x, y.y, y.z, 0, z.x, z.y, z.z, 0, position.x, position.y, position.z, 1});
+}
+
+} // namespace
+
+Scene loadScene(const std::string& path) {
+    const std::string ext = fileExtension(path);
+    Scene scene;
+    if (ext == ".gltf" || ext == ".glb") {
+        scene = detail::loadGltfScene(path);
+    } else if (ext == ".json") {
+        scene = loadWrapper(path);
+    } else if (ext == ".off" || ext == ".obj" || ext == ".ply" || ext == ".stl" || ext == ".fbx" ||
+               ext == ".dae" || ext == ".3ds") {
+        SceneMesh m;
+        m.mesh = loadMesh(path);
+        m.name = std::filesystem::path(path).stem().string();
+        scene.addMaterial(Material{});
+        scene.meshes.push_back(std::move(m));
+        scene.source = path;
+    } else {
+        fail(path, ": unknown scene extension '", ext.empty() ? std::string("(none)") : ext,
+             "' (allowed: .gltf .glb .json, or a mesh: .off .obj .ply .stl .fbx .dae .3ds)");
+    }
+    scene.source = path;
+    scene.validate();
+    return scene;
+}
+
+void writeGltf(const Scene& scene, const std::string& path) {
+    const std::string ext = fileExtension(path);
+    if (ext != ".gltf" && ext != ".glb") fail(path, ": a glTF file needs the extension .gltf or .glb");
+    scene.validate();
+    std::string bin;
+    json doc;
+    doc["asset"] = {{"version", "2.0"}, {"generator", "voxfx"}};
+    json bufferViews = json::array(), accessors = json::array(), meshes = json::array(),
+         nodes = json::array(), materials = json::array();
+    auto addView = [&](const void* data, std::size_t bytes, int target) {
+        while (bin.size() % 4) bin.push_back('\0');
+        bufferViews.push_back(
+            {{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes}, {"target", target}});
+        bin.append(static_cast<const char*>(data), bytes);
+        return bufferViews.size() - 1;
+    };
+    for (const SceneMesh& m : scene.meshes) {
+        const std::size_t nv = m.mesh.positions.size();
+        Box3d all; // accessor min/max cover every vertex (glTF requires them for POSITION)
+        for (const Vec3f& p : m.mesh.positions) all.extend(Vec3d(p));
+        const std::size_t pv = addView(m.mesh.positions.data(), nv * sizeof(Vec3f), 34962);
+        accessors.push_back({{"bufferView", pv},
+                             {"componentType", 5126},
+                             {"count", nv},
+                             {"type", "VEC3"},
+                             {"min", {float(all.lo.x), float(all.lo.y), float(all.lo.z)}},
+                             {"max", {float(all.hi.x), float(all.hi.y), float(all.hi.z)}}});
+        json attributes = {{"POSITION", accessors.size() - 1}};
+        if (!m.normals.empty()) {
+            const std::size_t nvw = addView(m.normals.data(), nv * sizeof(Vec3f), 34962);
+            accessors.push_back(
+                {{"bufferView", nvw}, {"componentType", 5126}, {"count", nv}, {"type", "VEC3"}});
+            attributes["NORMAL"] = accessors.size() - 1;
+        }
+        const std::size_t iv = addView(m.mesh.indices.data(), m.mesh.indices.size() * 4, 34963);
+        accessors.push_back({{"bufferView", iv},
+                             {"componentType", 5125},
+                             {"count", m.mesh.indices.size()},
+                             {"type", "SCALAR"}});
+        meshes.push_back({{"name", m.name},
+                          {"primitives",
+                           {{{"attributes", attributes},
+                             {"indices", accessors.size() - 1},
+                             {"material", m.material},
+                             {"mode", 4}}}}});
+        json node = {{"name", m.name}, {"mesh", meshes.size() - 1}};
+        if (!m.castsShadow) node["extras"] = {{"voxfx", {{"castsShadow", false}}}};
+        nodes.push_back(node);
+    }
+    std::set<std::string> used;
+    for (const Material& m : scene.materials) {
+        // roughness from the Blinn–Phong exponent (inverse of the loader's mapping).
+        const double a = std::sqrt(2.0 / (double(m.shininess) + 2.0));
+        json mat = {{"name", m.name},
+                    {"pbrMetallicRoughness",
+                     {{"baseColorFactor", {m.baseColor.x, m.baseColor.y, m.baseColor.z, m.opacity}},
+                      {"metallicFactor", 0.0},
+                      {"roughnessFactor", std::clamp(std::sqrt(a), 0.0, 1.0)}}},
+                    {"alphaMode", m.opacity < 1 ? "BLEND" : "OPAQUE"},
+                    {"doubleSided", m.doubleSided},
+                    {"extras", {{"voxfx", {{"specular", m.specular}, {"shininess", m.shininess}}}}}};
+        json matExt = json::object();
+        if (m.transmission > 0) {
+            matExt["KHR_materials_transmission"] = {{"transmissionFactor", m.transmission}};
+            used.insert("KHR_materials_transmission");
+        }
+        if (m.ior != 1.5f) {
+            matExt["KHR_materials_ior"] = {{"ior", m.ior}};
+            used.insert("KHR_materials_ior");
+        }
+        if (m.thickness > 0 || std::isfinite(m.attenuationDistance)) {
+            json v = {
+                {"thicknessFactor", m.thickness},
+                {"attenuationColor", {m.attenuationColor.x, m.attenuationColor.y, m.attenuationColor.z}}};
+            if (std::isfinite(m.attenuationDistance)) v["attenuationDistance"] = m.attenuationDistance;
+            matExt["KHR_materials_volume"] = v;
+            used.insert("KHR_materials_volume");
+        }
+        if (!matExt.empty()) mat["extensions"] = matExt;
+        materials.push_back(mat);
+    }
+    json lights = json::array();
+    for (const Light& l : scene.lights) {
+        json out = {{"name", l.name},
+                    {"type", toString(l.type)},
+                    {"color", {l.color.x, l.color.y, l.color.z}},
+                    {"intensity", l.intensity}};
+        if (l.range > 0) out["range"] = l.range;
+        if (l.type == LightType::Spot)
+            out["spot"] = {{"innerConeAngle", l.innerConeAngle}, {"outerConeAngle", l.outerConeAngle}};
+        lights.push_back(out);
+        const Vec3d dir = l.type == LightType::Point ? Vec3d{0, 0, -1} : l.direction;
+        nodes.push_back(
+            {{"name", l.name},
+             {"matrix",
+              orientedNodeMatrix(l.type == LightType::Directional ? Vec3d{} : l.position, dir, {0, 1, 0})},
+             {"extensions", {{"KHR_lights_punctual", {{"light", lights.size() - 1}}}}}});
+    }
+    if (!lights.empty()) {
+        used.insert("KHR_lights_punctual");
+        doc["extensions"] = {{"KHR_lights_punctual", {{"lights", lights}}}};
+    }
+    json cameras = json::array();
+    for (const Camera& c : scene.cameras) {
+        cameras.push_back(
+            {{"name", c.name},
+             {"type", "perspective"},
+             {"perspective", {{"yfov", c.fovY}, {"znear", c.nearDepth}, {"zfar", c.farDepth}}}});
+        nodes.push_back({{"name", c.name.empty() ? std::string("camera") : c.name},
+                         {"camera", cameras.size() - 1},
+                         {"matrix", orientedNodeMatrix(c.position, c.target - c.position, c.up)}});
+    }
+    json roots = json::array();
+    for (std::size_t i = 0; i < nodes.size(); ++i) roots.push_back(i);
+    doc["scene"] = 0;
+    doc["scenes"] = {{{"nodes", roots}}};
+    doc["nodes"] = nodes;
+    if (!meshes.empty()) doc["meshes"] = meshes;
+    if (!materials.empty()) doc["materials"] = materials;
+    if (!cameras.empty()) doc["cameras"] = cameras;
+    if (!used.empty()) doc["extensionsUsed"] = json(used);
+    while (bin.size() % 4) bin.push_back('\0');
+    const bool glb = ext == ".glb";
+    if (!bin.empty()) {
+        doc["accessors"] = accessors;
+        doc["bufferViews"] = bufferViews;
+        json buffer = {{"byteLength", bin.size()}};
+        if (!glb) buffer["uri"] = "data:application/octet-stream;base64," + base64(bin);
+        doc["buffers"] = json::array({buffer});
+    }
+    std::string text = doc.dump();
+    detail::AtomicFile file(path);
+    std::ostream& out = file.stream();
+    if (!glb) {
+        out << text;
+    } else {
+        while (text.size() % 4) text.push_back(' ');
+        auto u32 = [&](uint32_t v) { out.write(reinterpret_cast<const char*>(&v), 4); };
+        const std::size_t total = 12 + 8 + text.size() + (bin.empty() ? 0 : 8 + bin.size());
+        if (total > 0xffffffffu) fail(path, ": the scene is too large for a GLB file (4 GiB)");
+        u32(0x46546C67u);
+        u32(2);
+        u32(uint32_t(total));
+        u32(uint32_t(text.size()));
+        u32(0x4E4F534Au);
+        out << text;
+        if (!bin.empty()) {
+            u32(uint32_t(bin.size()));
+            u32(0x004E4942u);
+            out.write(bin.data(), std::streamsize(bin.size()));
+        }
+    }
+    file.commit();
+}
+
+} // namespace voxfx
