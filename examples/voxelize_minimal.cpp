@@ -1,7 +1,7 @@
 // The smallest useful voxfx program: load a mesh, voxelize it solid at 128 cells along its longest
-// side, ask a few questions of the grid, and write it as an OpenVDB file.
+// side, ask a few questions of the grid, write it (here as an OpenVDB file) and read it back.
 //
-//   build/examples/voxelize_minimal data/meshes/bunny00.off bunny.vdb
+//   build/voxelize_minimal data/meshes/bunny00.off bunny.vdb
 #include <cstdio>
 
 #include "voxfx/voxfx.hpp"
@@ -37,6 +37,14 @@ int main(int argc, char** argv) {
 
         // Written atomically: a temporary file beside the target, renamed when complete.
         voxfx::writeGrid(grid, argv[2]);
+
+        // Read back (binvox, vdb and nrrd are readable): the same cells.
+        const voxfx::GridFormat format = voxfx::gridFormatFromPath(argv[2]);
+        if (format != voxfx::GridFormat::Ply && format != voxfx::GridFormat::Obj) {
+            const voxfx::VoxelGrid back = voxfx::readGrid(argv[2]);
+            std::printf("read back %s: %lld filled\n", argv[2], (long long)back.bits.count());
+            if (back.bits.count() != grid.bits.count()) return 1;
+        }
     } catch (const voxfx::Error& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 1;

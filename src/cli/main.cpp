@@ -2,17 +2,28 @@
 // Subcommands live in cmd_*.cpp and register themselves; this file parses, dispatches, and is
 // the one place that catches errors, prints them on one line and exits non-zero.
 #include <algorithm>
+#include <cstdio>
 #include <iostream>
 #include <string>
+#include <string_view>
 
 #include "cli_registry.hpp"
 
+#ifndef VOXFX_VERSION_STRING
+#define VOXFX_VERSION_STRING "unknown"
+#endif
+
 int main(int argc, char** argv) {
     using namespace voxfx::cli;
+    // Answered before the command tree is built: scripts call it to probe for voxfx.
+    if (argc == 2 && std::string_view(argv[1]) == "--version") {
+        std::puts("voxfx " VOXFX_VERSION_STRING);
+        return 0;
+    }
     CLI::App app{"voxfx: fast, exact voxelization of triangle meshes into bit grids (slicemaps),\n"
                  "and the grid tools and renderers built on them. 'voxfx COMMAND --help' for details."};
     app.require_subcommand(1);
-    app.set_version_flag("--version", "voxfx 0.1.0");
+    app.set_version_flag("--version", "voxfx " VOXFX_VERSION_STRING);
     auto commands = commandRegistry();
     std::sort(commands.begin(), commands.end(),
               [](const CommandEntry& a, const CommandEntry& b) { return std::string(a.name) < b.name; });

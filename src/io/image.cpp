@@ -1,4 +1,4 @@
-// voxfx — PNG (libpng), PFM and OpenEXR image files.
+// voxfx — PNG (libpng), PFM and OpenEXR image files (OpenEXR through the voxfx_exr module).
 #include "voxfx/image.hpp"
 
 #include <algorithm>
@@ -8,10 +8,10 @@
 #include <limits>
 #include <memory>
 
-#include <OpenEXR/ImfRgbaFile.h>
 #include <png.h>
 
 #include "core/atomic_file.hpp"
+#include "io/module_api.hpp"
 #include "voxfx/error.hpp"
 
 namespace voxfx {
@@ -125,24 +125,16 @@ void writeExr(const Image& image, const std::string& path) {
     if (image.width <= 0 || image.height <= 0) fail("cannot write an empty image to '", path, "'");
     if (image.width > std::numeric_limits<int>::max() || image.height > std::numeric_limits<int>::max())
         fail("cannot write '", path, "': ", image.width, " x ", image.height, " is too large for OpenEXR");
-    // Half floats: the largest finite value is 65504; clamp finite values so that they stay finite.
-    auto toHalf = [](float v) { return half(std::isfinite(v) ? std::clamp(v, -65504.0f, 65504.0f) : v); };
-    std::vector<Imf::Rgba> pixels(image.pixels.size());
-    for (size_t i = 0; i < pixels.size(); ++i) {
-        const Vec3f& p = image.pixels[i];
-        pixels[i] = Imf::Rgba(toHalf(p.x), toHalf(p.y), toHalf(p.z), half(1.0f));
-    }
+    const detail::ExrModule& exr = detail::exrModule();
+    std::vector<float> rgb(3 * image.pixels.size());
+    for (size_t i = 0; i < image.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c) rgb[3 * i + size_t(c)] = image.pixels[i][c];
     // OpenEXR opens files by name and seeks back to write its offset table: write the temporary
     // file by name, then let AtomicFile rename it.
     detail::AtomicFile file(path);
-    try {
-        const int w = int(image.width), h = int(image.height);
-        Imf::RgbaOutputFile out(file.tempPath().c_str(), w, h, Imf::WRITE_RGB, 1.0f, Imath::V2f(0, 0), 1.0f,
-                                Imf::INCREASING_Y, Imf::ZIP_COMPRESSION, 1);
-        // Row 0 is the top row in both Image and OpenEXR's default data window.
-        out.setFrameBuffer(pixels.data(), 1, size_t(w));
-        out.writePixels(h);
-    } catch (const std::exception& e) { fail("cannot write '", path, "': ", e.what()); }
+    std::string error;
+    if (!exr.writeRgb(file.tempPath().c_str(), int(image.width), int(image.height), rgb.data(), &error))
+        fail("cannot write '", path, "': ", error);
     file.commit();
 }
 

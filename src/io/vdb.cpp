@@ -1,290 +1,50 @@
-// voxfx — OpenVDB (.vdb) reader and writer.
-//
-// Written grids: a BoolGrid (or a FloatGrid fog volume with 1 in filled voxels) whose index
-// (i, j, k) is voxel (i, j, k) of the grid and whose transform maps it to the voxel centre:
-// scale by the cell size, then translate by lo + cell / 2 (OpenVDB's cell-centred convention).
-// The grid's dimensions travel as Vec3i metadata "voxfx_dims", so empty borders survive a round
-// trip; grids without it get the bounding box of their active voxels.
-//
-// The writer fills leaf nodes straight from the bit columns: with the grid sliced along z, the
-// 8 x 8 x 8 leaf at (x0, y0, z0) has value-mask word x & 7 = eight bytes, byte y & 7 being bits
-// z0 .. z0+7 of column (x, y) (offset = (x & 7) << 6 | (y & 7) << 3 | (z & 7)).
-#include <algorithm>
-#include <bit>
-#include <fstream>
-#include <memory>
-#include <mutex>
-#include <vector>
+// voxfx — OpenVDB (.vdb) reading and writing through the voxfx_vdb module (io/modules/vdb_module.cpp
+// holds the format's conventions); the library itself does not link OpenVDB.
+#include <cstring>
 
-#include <openvdb/io/Stream.h>
-#include <openvdb/openvdb.h>
-#include <openvdb/tree/LeafNode.h>
-
-#include "core/bitops.hpp"
 #include "io/grid_formats.hpp"
+#include "io/module_api.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx::detail {
 
 namespace {
-constexpr const char* kDimsMeta = "voxfx_dims";
-
-void initializeOpenVdb() {
-    static std::once_flag once;
-    std::call_once(once, [] { openvdb::initialize(); });
+void hostParallelFor(int64_t begin, int64_t end, int64_t grain, void* body,
+                     void (*call)(void* body, int64_t b, int64_t e)) {
+    parallelFor(begin, end, grain, [&](int64_t b, int64_t e) { call(body, b, e); });
 }
 
-using BoolLeaf = openvdb::BoolGrid::TreeType::LeafNodeType;
-static_assert(BoolLeaf::LOG2DIM == 3 && BoolLeaf::NodeMaskType::WORD_COUNT == 8);
-
-// Builds the leaves of a z-sliced grid, 8 x 8 leaf columns per task, and hands them to the tree
-// in a fixed order (deterministic tree, single-threaded insertion).
-template <class GridT> void fillLeaves(const VoxelGrid& g, GridT& grid) {
-    using LeafT = typename GridT::TreeType::LeafNodeType;
-    using ValueT = typename LeafT::ValueType;
-    const int64_t nx = g.bits.width(), ny = g.bits.height(), nz = g.bits.depth(),
-                  wpc = g.bits.wordsPerColumn();
-    const int64_t lx = (nx + 7) / 8, ly = (ny + 7) / 8, lz = (nz + 7) / 8;
-    std::vector<std::vector<std::unique_ptr<LeafT>>> leaves(size_t(lx * ly));
-    std::vector<std::vector<openvdb::Coord>> fullLeaves(size_t(lx * ly));
-    parallelFor(0, lx * ly, 4, [&](int64_t b, int64_t e) {
-        std::vector<uint64_t> masks(size_t(lz * 8));
-        for (int64_t t = b; t < e; ++t) {
-            const int64_t bx = t % lx, by = t / lx;
-            std::fill(masks.begin(), masks.end(), 0);
-            // Column (x, y) word w holds bits z = 64w .. 64w+63: byte k goes to leaf bz = 8w + k.
-            for (int64_t ix = 0; ix < 8 && bx * 8 + ix < nx; ++ix)
-                for (int64_t jy = 0; jy < 8 && by * 8 + jy < ny; ++jy) {
-                    const uint64_t* col = g.bits.column(bx * 8 + ix, by * 8 + jy);
-                    for (int64_t w = 0; w < wpc; ++w) {
-                        const uint64_t word = col[w];
-                        if (!word) continue;
-                        for (int64_t k = 0; k < 8 && w * 8 + k < lz; ++k)
-                            masks[size_t((w * 8 + k) * 8 + ix)] |= ((word >> (8 * k)) & 0xFF) << (8 * jy);
-                    }
-                }
-            for (int64_t bz = 0; bz < lz; ++bz) {
-                const uint64_t* m = &masks[size_t(bz * 8)];
-                if (!(m[0] | m[1] | m[2] | m[3] | m[4] | m[5] | m[6] | m[7])) continue;
-                const openvdb::Coord origin(int(bx * 8), int(by * 8), int(bz * 8));
-                // Full blocks become leaf-sized tiles: no 2 KiB float buffer to allocate and prune.
-                if (!~(m[0] & m[1] & m[2] & m[3] & m[4] & m[5] & m[6] & m[7])) {
-                    fullLeaves[size_t(t)].push_back(origin);
-                    continue;
-                }
-                typename LeafT::NodeMaskType mask;
-                for (int i = 0; i < 8; ++i) mask.template getWord<uint64_t>(openvdb::Index(i)) = m[i];
-                auto leaf = std::make_unique<LeafT>(origin, ValueT(0), false);
-                leaf->setValueMask(mask);
-                if constexpr (std::is_same_v<ValueT, bool>) {
-                    std::copy(m, m + 8, leaf->buffer().data()); // value true exactly where active
-                } else {
-                    auto* values = leaf->buffer().data();
-                    for (int i = 0; i < 512; ++i) values[i] = float((m[i >> 6] >> (i & 63)) & 1u);
-                }
-                leaves[size_t(t)].push_back(std::move(leaf));
-            }
-        }
-    });
-    auto& tree = grid.tree();
-    for (size_t t = 0; t < leaves.size(); ++t) {
-        for (auto& leaf : leaves[t]) tree.addLeaf(leaf.release());
-        for (const openvdb::Coord& origin : fullLeaves[t]) tree.addTile(1, origin, ValueT(1), true);
-    }
-    // Blocks of full tiles merge into larger tiles: smaller files, same voxels.
-    tree.prune();
+VdbPlacement placementOf(const Frame& frame) {
+    const Vec3d cell = frame.cellSize();
+    const Vec3d centre0 = frame.box().lo + cell * 0.5;
+    return {{cell.x, cell.y, cell.z}, {centre0.x, centre0.y, centre0.z}};
 }
 } // namespace
 
 void writeVdb(const VoxelGrid& grid, AtomicFile& file, const GridWriteOptions& options) {
-    initializeOpenVdb();
+    const VdbModule& vdb = vdbModule();
     const VoxelGrid g = reslice(grid, Axis::Z); // columns (x, y), bits along z
-    const Vec3d cell = grid.frame.cellSize();
-    const Vec3d centre0 = grid.frame.box().lo + cell * 0.5;
-
-    openvdb::math::Transform::Ptr xform;
-    if (cell.x == cell.y && cell.y == cell.z) {
-        xform = openvdb::math::Transform::createLinearTransform(cell.x);
-    } else {
-        xform = openvdb::math::Transform::createLinearTransform(1.0);
-        xform->preScale(openvdb::Vec3d(cell.x, cell.y, cell.z));
-    }
-    xform->postTranslate(openvdb::Vec3d(centre0.x, centre0.y, centre0.z));
-
-    openvdb::GridBase::Ptr out;
-    if (options.vdbFloat) {
-        auto fg = openvdb::FloatGrid::create(0.0f);
-        fillLeaves(g, *fg);
-        fg->setGridClass(openvdb::GRID_FOG_VOLUME);
-        out = fg;
-    } else {
-        auto bg = openvdb::BoolGrid::create(false);
-        fillLeaves(g, *bg);
-        out = bg;
-    }
-    out->setTransform(xform);
-    out->setName(options.gridName);
-    out->insertMeta(kDimsMeta, openvdb::Vec3IMetadata(openvdb::Vec3i(
-                                   int(g.bits.width()), int(g.bits.height()), int(g.bits.depth()))));
-    try {
-        openvdb::io::File f(file.tempPath().string());
-        f.write({out});
-        f.close();
-    } catch (const openvdb::Exception& e) {
-        fail("cannot write '", file.targetPath().string(), "': OpenVDB: ", e.what());
-    }
+    const VdbBits bits{g.bits.width(), g.bits.height(), g.bits.depth(), g.bits.wordsPerColumn(),
+                       g.bits.column(0)};
+    std::string error;
+    if (!vdb.writeBits(file.tempPath().c_str(), bits, placementOf(grid.frame), options.gridName.c_str(),
+                       options.vdbFloat, hostParallelFor, &error))
+        fail("cannot write '", file.targetPath().string(), "': ", error);
 }
-
-namespace {
-// Cell size and centre of voxel (0,0,0) of an axis-aligned scale + translate transform.
-void boxTransform(const openvdb::GridBase& grid, Vec3d& cell, Vec3d& centre0) {
-    const openvdb::math::MapBase::ConstPtr map = grid.transform().baseMap();
-    if (!map->isLinear())
-        fail("grid '", grid.getName(), "' has a non-linear (", map->type(), ") transform; only axis-aligned ",
-             "scale + translate transforms describe a voxel box");
-    const openvdb::Mat4d m = map->getAffineMap()->getMat4(); // row vectors: p' = p * m
-    for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c)
-            if (r != c && std::abs(m(r, c)) > 1e-12 * (std::abs(m(r, r)) + std::abs(m(c, c))))
-                fail("grid '", grid.getName(), "' has a rotated or sheared transform; only axis-aligned ",
-                     "scale + translate transforms describe a voxel box");
-        cell[r] = m(r, r);
-        centre0[r] = m(3, r);
-    }
-    if (!(cell.x > 0 && cell.y > 0 && cell.z > 0 && isFinite(cell) && isFinite(centre0)))
-        fail("grid '", grid.getName(), "' has a mirrored or degenerate transform (scale ", cell.x, ", ",
-             cell.y, ", ", cell.z, ")");
-}
-
-// Sets the bits of a z-sliced grid whose index box starts at `o` from a tree's leaves and tiles:
-// active voxels (and, for scalars, value > 0).
-template <class GridT> void readTree(const GridT& grid, const openvdb::Coord& o, VoxelGrid& g) {
-    using TreeT = typename GridT::TreeType;
-    using ValueT = typename GridT::ValueType;
-    const TreeT& tree = grid.tree();
-    const int64_t nx = g.bits.width(), ny = g.bits.height(), nz = g.bits.depth();
-    auto filled = [](const ValueT& v) {
-        if constexpr (std::is_same_v<ValueT, bool>) {
-            (void)v; // bool grids: activity alone marks a filled voxel
-            return true;
-        } else {
-            return v > ValueT(0);
-        }
-    };
-    // Leaves: eight z bits per (x, y) row, shifted to the column's bit position.
-    for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
-        const openvdb::Coord l = leaf->origin();
-        const auto& mask = leaf->getValueMask();
-        for (int ix = 0; ix < 8; ++ix) {
-            uint64_t word = mask.template getWord<uint64_t>(openvdb::Index(ix));
-            if constexpr (!std::is_same_v<ValueT, bool>) {
-                for (uint64_t bits = word; bits; bits &= bits - 1) {
-                    const int b = std::countr_zero(bits);
-                    if (!filled(leaf->getValue(openvdb::Index(ix * 64 + b)))) word &= ~(uint64_t(1) << b);
-                }
-            }
-            const int64_t x = int64_t(l.x()) + ix - o.x();
-            if (!word || x < 0 || x >= nx) continue;
-            for (int jy = 0; jy < 8; ++jy) {
-                uint64_t byte = (word >> (8 * jy)) & 0xFF;
-                const int64_t y = int64_t(l.y()) + jy - o.y();
-                int64_t z = int64_t(l.z()) - o.z();
-                if (!byte || y < 0 || y >= ny) continue;
-                // The index box holds every active voxel, so bits shifted out below 0 or past nz
-                // are empty; clamp anyway so a bad box cannot write outside the column.
-                if (z < 0) {
-                    byte >>= std::min<int64_t>(8, -z);
-                    z = 0;
-                }
-                if (z >= nz) continue;
-                if (nz - z < 8) byte &= (uint64_t(1) << (nz - z)) - 1;
-                uint64_t* col = g.bits.column(x, y);
-                col[z >> 6] |= byte << (z & 63);
-                if ((z & 63) > 56) col[(z >> 6) + 1] |= byte >> (64 - (z & 63));
-            }
-        }
-    }
-    // Active tiles (internal and root levels): fill their boxes, clipped to the index box.
-    auto it = tree.cbeginValueOn();
-    it.setMaxDepth(TreeT::ValueOnCIter::LEAF_DEPTH - 1);
-    for (; it; ++it) {
-        if (!filled(*it)) continue;
-        const openvdb::CoordBBox bb = it.getBoundingBox();
-        const int64_t x0 = std::max<int64_t>(0, bb.min().x() - o.x()),
-                      x1 = std::min<int64_t>(nx, bb.max().x() - o.x() + 1);
-        const int64_t y0 = std::max<int64_t>(0, bb.min().y() - o.y()),
-                      y1 = std::min<int64_t>(ny, bb.max().y() - o.y() + 1);
-        const int64_t z0 = std::max<int64_t>(0, bb.min().z() - o.z()),
-                      z1 = std::min<int64_t>(nz, bb.max().z() - o.z() + 1);
-        for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = x0; x < x1; ++x) {
-                uint64_t* col = g.bits.column(x, y);
-                for (int64_t z = z0; z < z1;) {
-                    const int lo = int(z & 63), hi = int(std::min<int64_t>(64, lo + (z1 - z)));
-                    col[z >> 6] |= bitRange(lo, hi);
-                    z += hi - lo;
-                }
-            }
-    }
-}
-} // namespace
 
 VoxelGrid readVdb(const std::string& path) {
-    initializeOpenVdb();
-    openvdb::GridPtrVecPtr grids;
-    try {
-        // Read through our own stream with exceptions on: OpenVDB trusts the sizes and counts in
-        // the file, and a truncated file read on past its end feeds it zeros or stale bytes
-        // (huge allocations, runaway node counts). Failing on the first short read avoids that.
-        std::ifstream in(path, std::ios::binary);
-        if (!in) fail("cannot open the file");
-        in.exceptions(std::ios::failbit | std::ios::badbit);
-        openvdb::io::Stream stream(in, /*delayLoad=*/false);
-        grids = stream.getGrids();
-    } catch (const Error&) { throw; } catch (const std::ios_base::failure&) {
-        fail("the file is truncated or unreadable (OpenVDB read past its end)");
-    } catch (const std::exception& e) {
-        // OpenVDB reports malformed files with its own exceptions (and the odd std one).
-        fail("OpenVDB: ", e.what());
-    }
-    openvdb::GridBase::Ptr base;
-    for (const auto& gp : *grids)
-        if (gp && (gp->isType<openvdb::BoolGrid>() || gp->isType<openvdb::FloatGrid>() ||
-                   gp->isType<openvdb::DoubleGrid>())) {
-            base = gp;
-            break;
-        }
-    if (!base) fail("the file holds no bool, float or double grid");
-    if (base->getGridClass() == openvdb::GRID_LEVEL_SET)
-        fail("grid '", base->getName(), "' is a level set; convert it to a fog volume or a mask first");
-
-    Vec3d cell, centre0;
-    boxTransform(*base, cell, centre0);
-
-    // Index box: the stored dimensions when they cover every active voxel, else the active box.
-    openvdb::CoordBBox active;
-    const bool any = base->baseTree().evalActiveVoxelBoundingBox(active);
-    openvdb::CoordBBox box;
-    const auto dims = base->getMetadata<openvdb::Vec3IMetadata>(kDimsMeta);
-    if (dims && dims->value().x() > 0 && dims->value().y() > 0 && dims->value().z() > 0) {
-        box = openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(dims->value()) - openvdb::Coord(1));
-        if (any && !box.isInside(active)) box = active;
-    } else if (any) {
-        box = active;
-    } else {
-        fail("grid '", base->getName(), "' has no active voxels and no stored dimensions");
-    }
-    const openvdb::Coord o = box.min(), n = box.dim();
-    const Vec3d lo =
-        centre0 + (Vec3d(double(o.x()), double(o.y()), double(o.z())) - Vec3d(0.5, 0.5, 0.5)) * cell;
-    const Box3d worldBox{lo, lo + Vec3d(double(n.x()), double(n.y()), double(n.z())) * cell};
-    VoxelGrid g{Frame::orthographic(worldBox, Axis::Z, n.x(), n.y(), n.z()), BitGrid(n.x(), n.y(), n.z())};
-    if (auto b = openvdb::GridBase::grid<openvdb::BoolGrid>(base))
-        readTree(*b, o, g);
-    else if (auto f = openvdb::GridBase::grid<openvdb::FloatGrid>(base))
-        readTree(*f, o, g);
-    else
-        readTree(*openvdb::GridBase::grid<openvdb::DoubleGrid>(base), o, g);
+    const VdbModule& vdb = vdbModule();
+    VoxelGrid g;
+    auto allocate = [](void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn) -> uint64_t* {
+        VoxelGrid& out = *static_cast<VoxelGrid*>(ctx);
+        const Box3d world{{box.lo[0], box.lo[1], box.lo[2]}, {box.hi[0], box.hi[1], box.hi[2]}};
+        out = VoxelGrid{Frame::orthographic(world, Axis::Z, box.dims[0], box.dims[1], box.dims[2]),
+                        BitGrid(box.dims[0], box.dims[1], box.dims[2])};
+        *wordsPerColumn = out.bits.wordsPerColumn();
+        return out.bits.column(0);
+    };
+    std::string error;
+    if (!vdb.readBits(path.c_str(), &g, allocate, &error)) fail(error);
     return g;
 }
 

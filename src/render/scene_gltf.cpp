@@ -1,13 +1,13 @@
 // voxfx — glTF 2.0 scene loading (Khronos glTF 2.0 specification; KHR_lights_punctual,
 // KHR_materials_transmission, KHR_materials_ior, KHR_materials_volume).
 //
-// Geometry comes through Assimp (accessors, buffers, data URIs, GLB, sparse data, node tree); the
-// node tree is walked here so that every mesh instance gets its node's world transform and keeps
-// its material. Materials, cameras and lights are read from the file's JSON: Assimp 5.2 folds the
-// light intensity into the colour, reports the camera's field of view horizontally, and exposes
-// neither KHR_materials_ior nor the volume attenuation. Assimp imports glTF materials in the order
-// meshes first use them (not in file order) and adds a default one, so its materials are matched
-// back to the file's by name, then base colour (materialMapping).
+// Geometry comes through Assimp (accessors, buffers, data URIs, GLB, sparse data, node tree) in
+// the voxfx_assimp module, whose one conversion (shared with loadMesh) gives every mesh instance
+// its node's world transform and keeps its material. Materials, cameras and lights are read from the file's
+// JSON: Assimp 5.2 folds the light intensity into the colour, reports the camera's field of view
+// horizontally, and exposes neither KHR_materials_ior nor the volume attenuation. Assimp imports glTF
+// materials in the order meshes first use them (not in file order) and adds a default one, so its materials
+// are matched back to the file's by name, then base colour (materialMapping).
 #include "render/scene_gltf.hpp"
 
 #include <cmath>
@@ -17,11 +17,8 @@
 #include <map>
 #include <sstream>
 
-#include <assimp/Importer.hpp>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
-
 #include "core/enum_names.hpp"
+#include "io/module_api.hpp"
 #include "voxfx/error.hpp"
 
 namespace voxfx::detail {
@@ -262,31 +259,21 @@ void readLightsAndCameras(const json& doc, const GltfNodes& g, const std::string
     }
 }
 
-Mat4d fromAssimp(const aiMatrix4x4& a) {
-    Mat4d m;
-    const float* p = &a.a1; // row-major a1..a4, b1..b4, ...
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) m.m[r][c] = p[r * 4 + c];
-    return m;
-}
-
 /// For each Assimp material, the index of the glTF material it came from, or -1 (Assimp's default).
-std::vector<int> materialMapping(const aiScene* ai, const json& materials) {
-    std::vector<int> map(ai->mNumMaterials, -1);
+std::vector<int> materialMapping(const std::vector<AssimpMaterial>& aiMaterials, const json& materials) {
+    std::vector<int> map(aiMaterials.size(), -1);
     std::vector<bool> used(materials.size(), false);
-    for (unsigned i = 0; i < ai->mNumMaterials; ++i) {
-        aiString name;
-        ai->mMaterials[i]->Get(AI_MATKEY_NAME, name);
-        aiColor4D base(1, 1, 1, 1);
-        ai->mMaterials[i]->Get(AI_MATKEY_BASE_COLOR, base);
+    for (std::size_t i = 0; i < aiMaterials.size(); ++i) {
+        const AssimpMaterial& a = aiMaterials[i];
         int best = -1, bestScore = 0;
         for (std::size_t k = 0; k < materials.size(); ++k) {
-            if (used[k] || materials[k].value("name", std::string()) != name.C_Str()) continue;
+            if (used[k] || materials[k].value("name", std::string()) != a.name) continue;
             json pbr = materials[k].value("pbrMetallicRoughness", json::object());
             json c = pbr.value("baseColorFactor", json::array({1, 1, 1, 1}));
             int score = 1;
-            if (c.is_array() && c.size() == 4 && std::abs(c[0].get<double>() - base.r) < 1e-6 &&
-                std::abs(c[1].get<double>() - base.g) < 1e-6 && std::abs(c[2].get<double>() - base.b) < 1e-6)
+            if (c.is_array() && c.size() == 4 && std::abs(c[0].get<double>() - a.baseColor[0]) < 1e-6 &&
+                std::abs(c[1].get<double>() - a.baseColor[1]) < 1e-6 &&
+                std::abs(c[2].get<double>() - a.baseColor[2]) < 1e-6)
                 score = 2;
             if (score > bestScore) {
                 best = int(k);
@@ -299,79 +286,40 @@ std::vector<int> materialMapping(const aiScene* ai, const json& materials) {
     return map;
 }
 
-void readMeshes(const aiScene* ai, const GltfNodes& g, const json& materials, const std::string& path,
-                Scene& scene) {
-    const std::vector<int> materialOf = materialMapping(ai, materials);
+// The meshes come from the Assimp module's one conversion (node transforms applied, mirrored
+// nodes re-wound); this attaches the glTF materials and the voxfx extras.
+void readMeshes(AssimpScene& ai, const GltfNodes& g, const json& materials, Scene& scene) {
+    const std::vector<int> materialOf = materialMapping(ai.materials, materials);
     int defaultMaterial = -1; // appended on first use
-    std::size_t skippedFaces = 0;
-    std::vector<std::pair<const aiNode*, Mat4d>> stack{{ai->mRootNode, Mat4d{}}};
-    while (!stack.empty()) {
-        const auto [node, parent] = stack.back();
-        stack.pop_back();
-        const Mat4d m = parent * fromAssimp(node->mTransformation);
-        for (unsigned k = node->mNumChildren; k-- > 0;) stack.push_back({node->mChildren[k], m});
-        // Normals transform with the inverse transpose; a mirroring transform flips the winding.
-        const double det = m.m[0][0] * (m.m[1][1] * m.m[2][2] - m.m[1][2] * m.m[2][1]) -
-                           m.m[0][1] * (m.m[1][0] * m.m[2][2] - m.m[1][2] * m.m[2][0]) +
-                           m.m[0][2] * (m.m[1][0] * m.m[2][1] - m.m[1][1] * m.m[2][0]);
-        Mat4d normalMatrix; // cofactor matrix = det * inverse transpose
-        for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 3; ++c) {
-                const int r1 = (r + 1) % 3, r2 = (r + 2) % 3, c1 = (c + 1) % 3, c2 = (c + 2) % 3;
-                normalMatrix.m[r][c] = m.m[r1][c1] * m.m[r2][c2] - m.m[r1][c2] * m.m[r2][c1];
+    for (AssimpPart& part : ai.parts) {
+        if (part.indices.empty()) continue;
+        SceneMesh out;
+        out.name = std::move(part.name);
+        const auto it = g.castsShadow.find(part.nodeName);
+        if (it != g.castsShadow.end()) out.castsShadow = it->second;
+        const int gltfMaterial = part.material < materialOf.size() ? materialOf[part.material] : -1;
+        if (gltfMaterial >= 0) {
+            out.material = uint32_t(gltfMaterial);
+        } else {
+            if (defaultMaterial < 0) {
+                Material d;
+                d.name = "default";
+                d.baseColor = {1, 1, 1}; // glTF's default material
+                defaultMaterial = int(scene.addMaterial(d));
             }
-        for (unsigned k = 0; k < node->mNumMeshes; ++k) {
-            const aiMesh* src = ai->mMeshes[node->mMeshes[k]];
-            SceneMesh out;
-            out.name = node->mName.length ? node->mName.C_Str() : src->mName.C_Str();
-            if (node->mNumMeshes > 1) out.name += concat("#", k);
-            const auto it = g.castsShadow.find(node->mName.C_Str());
-            if (it != g.castsShadow.end()) out.castsShadow = it->second;
-            const int gltfMaterial =
-                src->mMaterialIndex < materialOf.size() ? materialOf[src->mMaterialIndex] : -1;
-            if (gltfMaterial >= 0) {
-                out.material = uint32_t(gltfMaterial);
-            } else {
-                if (defaultMaterial < 0) {
-                    Material d;
-                    d.name = "default";
-                    d.baseColor = {1, 1, 1}; // glTF's default material
-                    defaultMaterial = int(scene.addMaterial(d));
-                }
-                out.material = uint32_t(defaultMaterial);
-            }
-            out.mesh.positions.reserve(src->mNumVertices);
-            for (unsigned v = 0; v < src->mNumVertices; ++v) {
-                const aiVector3D& p = src->mVertices[v];
-                out.mesh.positions.push_back(Vec3f(m.point({p.x, p.y, p.z})));
-            }
-            if (src->mNormals) {
-                out.normals.reserve(src->mNumVertices);
-                for (unsigned v = 0; v < src->mNumVertices; ++v) {
-                    const aiVector3D& n = src->mNormals[v];
-                    Vec3d w = normalMatrix.vector({n.x, n.y, n.z});
-                    out.normals.push_back(Vec3f(normalize(det < 0 ? -w : w)));
-                }
-            }
-            for (unsigned f = 0; f < src->mNumFaces; ++f) {
-                const aiFace& face = src->mFaces[f];
-                if (face.mNumIndices != 3) {
-                    ++skippedFaces;
-                    continue;
-                }
-                const unsigned i0 = face.mIndices[0], i1 = det < 0 ? face.mIndices[2] : face.mIndices[1],
-                               i2 = det < 0 ? face.mIndices[1] : face.mIndices[2];
-                if (i0 >= src->mNumVertices || i1 >= src->mNumVertices || i2 >= src->mNumVertices)
-                    fail(path, ": mesh '", src->mName.C_Str(), "' face ", f,
-                         " has a vertex index out of range");
-                out.mesh.indices.insert(out.mesh.indices.end(), {i0, i1, i2});
-            }
-            if (out.mesh.indices.empty()) continue;
-            scene.meshes.push_back(std::move(out));
+            out.material = uint32_t(defaultMaterial);
         }
+        out.mesh.positions.reserve(part.positions.size() / 3);
+        for (std::size_t v = 0; v + 2 < part.positions.size(); v += 3)
+            out.mesh.positions.push_back({part.positions[v], part.positions[v + 1], part.positions[v + 2]});
+        out.normals.reserve(part.normals.size() / 3);
+        for (std::size_t v = 0; v + 2 < part.normals.size(); v += 3)
+            out.normals.push_back({part.normals[v], part.normals[v + 1], part.normals[v + 2]});
+        out.mesh.indices = std::move(part.indices);
+        scene.meshes.push_back(std::move(out));
     }
-    if (skippedFaces)
-        scene.warnings.push_back(concat(skippedFaces, " point or line primitives ignored (not surfaces)"));
+    if (ai.skippedFaces)
+        scene.warnings.push_back(concat(ai.skippedFaces, " point or line primitives ignored (not surfaces)"));
 }
 
 } // namespace
@@ -414,11 +362,10 @@ Scene loadGltfScene(const std::string& path) {
         const GltfNodes nodes = resolveNodes(doc, path);
         readLightsAndCameras(doc, nodes, path, scene);
 
-        Assimp::Importer importer;
-        const aiScene* ai = importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate);
-        if (!ai || !ai->mRootNode)
-            fail(path, ": Assimp could not read the file: ", importer.GetErrorString());
-        readMeshes(ai, nodes, materials, path, scene);
+        AssimpScene ai;
+        std::string error;
+        if (!assimpModule().load(path.c_str(), &ai, &error)) fail(path, ": ", error);
+        readMeshes(ai, nodes, materials, scene);
     } catch (const json::exception& e) { fail(path, ": unexpected glTF content: ", e.what()); }
     if (scene.materials.empty()) scene.addMaterial(Material{});
     return scene;

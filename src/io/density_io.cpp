@@ -5,12 +5,10 @@
 #include <charconv>
 #include <cstring>
 #include <filesystem>
-#include <mutex>
 #include <vector>
 
-#include <openvdb/openvdb.h>
-
 #include "core/atomic_file.hpp"
+#include "io/module_api.hpp"
 #include "voxfx/density.hpp"
 #include "voxfx/parallel.hpp"
 
@@ -127,23 +125,9 @@ void writeDensity(const DensityGrid& density, const Frame& fineFrame, const std:
                 *dst = char(uint8_t(density.count(x, y, s)));
             });
     } else {
-        static std::once_flag once;
-        std::call_once(once, [] { openvdb::initialize(); });
-        const Vec3d cell = coarse.cellSize();
-        const Vec3d centre0 = coarse.box().lo + cell * 0.5;
-        auto xform = openvdb::math::Transform::createLinearTransform(1.0);
-        xform->preScale(openvdb::Vec3d(cell.x, cell.y, cell.z));
-        xform->postTranslate(openvdb::Vec3d(centre0.x, centre0.y, centre0.z));
-        auto grid = openvdb::FloatGrid::create(0.0f);
-        grid->setTransform(xform);
-        grid->setName("density");
-        grid->setGridClass(openvdb::GRID_FOG_VOLUME);
-        // The grid's size travels as metadata (grid_io's convention), so empty borders survive.
-        grid->insertMeta("voxfx_dims", openvdb::Vec3IMetadata(
-                                           openvdb::Vec3i(int(ix.dims.x), int(ix.dims.y), int(ix.dims.z))));
-        auto acc = grid->getAccessor();
+        // Dense values in world index order (x fastest); the module keeps zeros inactive.
         const float scale = 1.0f / float(density.maxCount());
-        // Serial insertion in a fixed order keeps the tree (and the file) deterministic.
+        std::vector<float> values(size_t(ix.dims.x * ix.dims.y * ix.dims.z), 0.0f);
         for (int64_t y = 0; y < density.height(); ++y)
             for (int64_t x = 0; x < density.width(); ++x)
                 for (int64_t s = 0; s < density.depth(); ++s) {
@@ -153,13 +137,16 @@ void writeDensity(const DensityGrid& density, const Frame& fineFrame, const std:
                     g[columnXAxis(ix.axis)] = x;
                     g[columnYAxis(ix.axis)] = y;
                     g[sliceAxis(ix.axis)] = s;
-                    acc.setValue(openvdb::Coord(int(g.x), int(g.y), int(g.z)), float(c) * scale);
+                    values[size_t((g.z * ix.dims.y + g.y) * ix.dims.x + g.x)] = float(c) * scale;
                 }
-        try {
-            openvdb::io::File f(file.tempPath().string());
-            f.write({grid});
-            f.close();
-        } catch (const openvdb::Exception& e) { fail("cannot write '", path, "': OpenVDB: ", e.what()); }
+        const Vec3d cell = coarse.cellSize();
+        const Vec3d centre0 = coarse.box().lo + cell * 0.5;
+        const detail::VdbPlacement placement{{cell.x, cell.y, cell.z}, {centre0.x, centre0.y, centre0.z}};
+        const int64_t dims[3] = {ix.dims.x, ix.dims.y, ix.dims.z};
+        std::string error;
+        if (!detail::vdbModule().writeFloats(file.tempPath().c_str(), dims, values.data(), placement,
+                                             "density", &error))
+            fail("cannot write '", path, "': ", error);
     }
     file.commit();
 }

@@ -1,0 +1,116 @@
+// voxfx — the interfaces of the loadable I/O modules (internal to io/).
+//
+// OpenVDB, Assimp and OpenEXR are heavy to load and initialize (tens of milliseconds per process),
+// so the library does not link them: each sits behind a small module (voxfx_vdb.so,
+// voxfx_assimp.so, voxfx_exr.so) that core/module_loader dlopen()s the first time a format needs
+// it. A module exports one extern "C" function, voxfx_module_<name>(abi), returning a table of
+// plain function pointers (or null for another ABI). The tables pass views (pointers and sizes)
+// and standard containers; a module uses no voxfx symbol (it is linked with --no-undefined), so it
+// works the same under a static library, a shared one, or a consumer's executable.
+//
+// Functions return false and set *error to the message's cause (without the file name, which the
+// caller adds as before) instead of throwing across the module boundary.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace voxfx::detail {
+
+/// Bump when a table below changes.
+inline constexpr uint32_t kModuleAbi = 1;
+
+/// The library's parallel-for handed to a module (so that modules follow withThreads and name no
+/// thread library): calls call(body, b, e) over chunks of `grain` items covering [begin, end).
+using ParallelFor = void (*)(int64_t begin, int64_t end, int64_t grain, void* body,
+                             void (*call)(void* body, int64_t b, int64_t e));
+
+// ---- voxfx_vdb: OpenVDB (.vdb) ----------------------------------------------------------------
+
+/// A z-sliced bit grid: column (x, y) is words[(y * nx + x) * wordsPerColumn ...], bit z of it.
+struct VdbBits {
+    int64_t nx = 0, ny = 0, nz = 0, wordsPerColumn = 0;
+    const uint64_t* words = nullptr;
+};
+
+/// Index (i, j, k) sits at centre0 + (i, j, k) * cell.
+struct VdbPlacement {
+    double cell[3] = {1, 1, 1};
+    double centre0[3] = {0, 0, 0};
+};
+
+/// What the reader found, for the caller to allocate the grid: the index box's size and world box.
+struct VdbReadBox {
+    int64_t dims[3] = {0, 0, 0};
+    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+};
+
+struct VdbModule {
+    uint32_t abi;
+    uint32_t size; ///< sizeof(VdbModule) as the module was built
+    /// A BoolGrid (or, with asFloat, a FloatGrid fog volume with 1 in filled voxels).
+    bool (*writeBits)(const char* path, const VdbBits& bits, const VdbPlacement& placement,
+                      const char* gridName, bool asFloat, ParallelFor parallelFor, std::string* error);
+    /// A FloatGrid fog volume from dense values, x fastest, then y, then z; zeros stay inactive.
+    bool (*writeFloats)(const char* path, const int64_t dims[3], const float* values,
+                        const VdbPlacement& placement, const char* gridName, std::string* error);
+    /// Reads the first bool, float or double grid: `allocate` receives its box and returns the
+    /// z-sliced words to set (zeroed, wordsPerColumn per column).
+    bool (*readBits)(const char* path, void* ctx,
+                     uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn),
+                     std::string* error);
+};
+
+// ---- voxfx_assimp: Assimp (glTF 2.0 and the long tail) ----------------------------------------
+
+/// One mesh instance of the node tree, in world coordinates. A node whose transform mirrors
+/// (negative determinant) gets its triangles' corner order reversed, so closed meshes stay
+/// outward-oriented, and its normals negated after the inverse-transpose.
+struct AssimpPart {
+    std::string name;              ///< node name (or the mesh's), "#k" when the node has several meshes
+    std::string nodeName;          ///< the node's own name
+    unsigned material = 0;         ///< Assimp's material index
+    std::vector<float> positions;  ///< x, y, z per vertex
+    std::vector<float> normals;    ///< unit x, y, z per vertex, or empty
+    std::vector<uint32_t> indices; ///< three per triangle, into this part's vertices
+};
+
+struct AssimpMaterial {
+    std::string name;
+    float baseColor[4] = {1, 1, 1, 1};
+};
+
+struct AssimpScene {
+    std::vector<AssimpPart> parts; ///< depth-first node order, meshes in node order
+    std::vector<AssimpMaterial> materials;
+    std::size_t skippedFaces = 0; ///< points and lines (not surfaces)
+};
+
+struct AssimpModule {
+    uint32_t abi;
+    uint32_t size;
+    bool (*load)(const char* path, AssimpScene* out, std::string* error);
+    /// Extension in lower case, without the dot.
+    bool (*readsExtension)(const char* extension);
+    /// Assimp's extensions as ".a .b .c".
+    void (*extensions)(std::string* out);
+};
+
+// ---- voxfx_exr: OpenEXR -----------------------------------------------------------------------
+
+struct ExrModule {
+    uint32_t abi;
+    uint32_t size;
+    /// Half-float R, G, B from `rgb` (3 floats per pixel, row 0 on top), ZIP compression.
+    bool (*writeRgb)(const char* path, int width, int height, const float* rgb, std::string* error);
+};
+
+/// The loaded modules (loaded on first call; voxfx::Error naming where they were searched when
+/// missing). Thread-safe.
+const VdbModule& vdbModule();
+const AssimpModule& assimpModule();
+const ExrModule& exrModule();
+
+} // namespace voxfx::detail

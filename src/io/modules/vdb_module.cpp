@@ -1,0 +1,363 @@
+// voxfx_vdb — the OpenVDB module: .vdb reading and writing (see io/module_api.hpp, io/vdb.cpp).
+//
+// Written grids: a BoolGrid (or a FloatGrid fog volume with 1 in filled voxels) whose index
+// (i, j, k) is voxel (i, j, k) of the grid and whose transform maps it to the voxel centre:
+// scale by the cell size, then translate by lo + cell / 2 (OpenVDB's cell-centred convention).
+// The grid's dimensions travel as Vec3i metadata "voxfx_dims", so empty borders survive a round
+// trip; grids without it get the bounding box of their active voxels.
+//
+// The writer fills leaf nodes straight from the bit columns: with the grid sliced along z, the
+// 8 x 8 x 8 leaf at (x0, y0, z0) has value-mask word x & 7 = eight bytes, byte y & 7 being bits
+// z0 .. z0+7 of column (x, y) (offset = (x & 7) << 6 | (y & 7) << 3 | (z & 7)).
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include <openvdb/io/Stream.h>
+#include <openvdb/openvdb.h>
+#include <openvdb/tree/LeafNode.h>
+
+#include "core/bitops.hpp"
+#include "io/module_api.hpp"
+#include "voxfx/error.hpp"
+
+namespace voxfx::detail {
+
+namespace {
+constexpr const char* kDimsMeta = "voxfx_dims";
+
+void initializeOpenVdb() {
+    static std::once_flag once;
+    std::call_once(once, [] { openvdb::initialize(); });
+}
+
+template <class F>
+void forChunks(ParallelFor parallelFor, int64_t begin, int64_t end, int64_t grain, F& body) {
+    parallelFor(begin, end, grain, &body, [](void* f, int64_t b, int64_t e) { (*static_cast<F*>(f))(b, e); });
+}
+
+using BoolLeaf = openvdb::BoolGrid::TreeType::LeafNodeType;
+static_assert(BoolLeaf::LOG2DIM == 3 && BoolLeaf::NodeMaskType::WORD_COUNT == 8);
+
+// Builds the leaves of a z-sliced grid, 8 x 8 leaf columns per task, and hands them to the tree
+// in a fixed order (deterministic tree, single-threaded insertion).
+template <class GridT> void fillLeaves(const VdbBits& g, ParallelFor parallelFor, GridT& grid) {
+    using LeafT = typename GridT::TreeType::LeafNodeType;
+    using ValueT = typename LeafT::ValueType;
+    const int64_t nx = g.nx, ny = g.ny, nz = g.nz, wpc = g.wordsPerColumn;
+    const int64_t lx = (nx + 7) / 8, ly = (ny + 7) / 8, lz = (nz + 7) / 8;
+    std::vector<std::vector<std::unique_ptr<LeafT>>> leaves(size_t(lx * ly));
+    std::vector<std::vector<openvdb::Coord>> fullLeaves(size_t(lx * ly));
+    auto body = [&](int64_t b, int64_t e) {
+        std::vector<uint64_t> masks(size_t(lz * 8));
+        for (int64_t t = b; t < e; ++t) {
+            const int64_t bx = t % lx, by = t / lx;
+            std::fill(masks.begin(), masks.end(), 0);
+            // Column (x, y) word w holds bits z = 64w .. 64w+63: byte k goes to leaf bz = 8w + k.
+            for (int64_t ix = 0; ix < 8 && bx * 8 + ix < nx; ++ix)
+                for (int64_t jy = 0; jy < 8 && by * 8 + jy < ny; ++jy) {
+                    const uint64_t* col = g.words + ((by * 8 + jy) * nx + bx * 8 + ix) * wpc;
+                    for (int64_t w = 0; w < wpc; ++w) {
+                        const uint64_t word = col[w];
+                        if (!word) continue;
+                        for (int64_t k = 0; k < 8 && w * 8 + k < lz; ++k)
+                            masks[size_t((w * 8 + k) * 8 + ix)] |= ((word >> (8 * k)) & 0xFF) << (8 * jy);
+                    }
+                }
+            for (int64_t bz = 0; bz < lz; ++bz) {
+                const uint64_t* m = &masks[size_t(bz * 8)];
+                if (!(m[0] | m[1] | m[2] | m[3] | m[4] | m[5] | m[6] | m[7])) continue;
+                const openvdb::Coord origin(int(bx * 8), int(by * 8), int(bz * 8));
+                // Full blocks become leaf-sized tiles: no 2 KiB float buffer to allocate and prune.
+                if (!~(m[0] & m[1] & m[2] & m[3] & m[4] & m[5] & m[6] & m[7])) {
+                    fullLeaves[size_t(t)].push_back(origin);
+                    continue;
+                }
+                typename LeafT::NodeMaskType mask;
+                for (int i = 0; i < 8; ++i) mask.template getWord<uint64_t>(openvdb::Index(i)) = m[i];
+                auto leaf = std::make_unique<LeafT>(origin, ValueT(0), false);
+                leaf->setValueMask(mask);
+                if constexpr (std::is_same_v<ValueT, bool>) {
+                    std::copy(m, m + 8, leaf->buffer().data()); // value true exactly where active
+                } else {
+                    auto* values = leaf->buffer().data();
+                    for (int i = 0; i < 512; ++i) values[i] = float((m[i >> 6] >> (i & 63)) & 1u);
+                }
+                leaves[size_t(t)].push_back(std::move(leaf));
+            }
+        }
+    };
+    forChunks(parallelFor, 0, lx * ly, 4, body);
+    auto& tree = grid.tree();
+    for (size_t t = 0; t < leaves.size(); ++t) {
+        for (auto& leaf : leaves[t]) tree.addLeaf(leaf.release());
+        for (const openvdb::Coord& origin : fullLeaves[t]) tree.addTile(1, origin, ValueT(1), true);
+    }
+    // Blocks of full tiles merge into larger tiles: smaller files, same voxels.
+    tree.prune();
+}
+
+openvdb::math::Transform::Ptr transformFor(const VdbPlacement& p) {
+    openvdb::math::Transform::Ptr xform;
+    if (p.cell[0] == p.cell[1] && p.cell[1] == p.cell[2]) {
+        xform = openvdb::math::Transform::createLinearTransform(p.cell[0]);
+    } else {
+        xform = openvdb::math::Transform::createLinearTransform(1.0);
+        xform->preScale(openvdb::Vec3d(p.cell[0], p.cell[1], p.cell[2]));
+    }
+    xform->postTranslate(openvdb::Vec3d(p.centre0[0], p.centre0[1], p.centre0[2]));
+    return xform;
+}
+
+void writeFile(const char* path, const openvdb::GridBase::Ptr& grid) {
+    try {
+        openvdb::io::File f(path);
+        f.write({grid});
+        f.close();
+    } catch (const openvdb::Exception& e) { fail("OpenVDB: ", e.what()); }
+}
+
+// Cell size and centre of voxel (0,0,0) of an axis-aligned scale + translate transform.
+void boxTransform(const openvdb::GridBase& grid, double cell[3], double centre0[3]) {
+    const openvdb::math::MapBase::ConstPtr map = grid.transform().baseMap();
+    if (!map->isLinear())
+        fail("grid '", grid.getName(), "' has a non-linear (", map->type(), ") transform; only axis-aligned ",
+             "scale + translate transforms describe a voxel box");
+    const openvdb::Mat4d m = map->getAffineMap()->getMat4(); // row vectors: p' = p * m
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c)
+            if (r != c && std::abs(m(r, c)) > 1e-12 * (std::abs(m(r, r)) + std::abs(m(c, c))))
+                fail("grid '", grid.getName(), "' has a rotated or sheared transform; only axis-aligned ",
+                     "scale + translate transforms describe a voxel box");
+        cell[r] = m(r, r);
+        centre0[r] = m(3, r);
+    }
+    bool finite = true;
+    for (int i = 0; i < 3; ++i) finite = finite && std::isfinite(cell[i]) && std::isfinite(centre0[i]);
+    if (!(cell[0] > 0 && cell[1] > 0 && cell[2] > 0 && finite))
+        fail("grid '", grid.getName(), "' has a mirrored or degenerate transform (scale ", cell[0], ", ",
+             cell[1], ", ", cell[2], ")");
+}
+
+// A z-sliced target: n = index box size, words wpc per column (x, y).
+struct Target {
+    int64_t nx, ny, nz, wpc;
+    uint64_t* words;
+    uint64_t* column(int64_t x, int64_t y) const { return words + (y * nx + x) * wpc; }
+};
+
+// Sets the bits of a z-sliced grid whose index box starts at `o` from a tree's leaves and tiles:
+// active voxels (and, for scalars, value > 0).
+template <class GridT> void readTree(const GridT& grid, const openvdb::Coord& o, const Target& g) {
+    using TreeT = typename GridT::TreeType;
+    using ValueT = typename GridT::ValueType;
+    const TreeT& tree = grid.tree();
+    const int64_t nx = g.nx, ny = g.ny, nz = g.nz;
+    auto filled = [](const ValueT& v) {
+        if constexpr (std::is_same_v<ValueT, bool>) {
+            (void)v; // bool grids: activity alone marks a filled voxel
+            return true;
+        } else {
+            return v > ValueT(0);
+        }
+    };
+    // Leaves: eight z bits per (x, y) row, shifted to the column's bit position.
+    for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
+        const openvdb::Coord l = leaf->origin();
+        const auto& mask = leaf->getValueMask();
+        for (int ix = 0; ix < 8; ++ix) {
+            uint64_t word = mask.template getWord<uint64_t>(openvdb::Index(ix));
+            if constexpr (!std::is_same_v<ValueT, bool>) {
+                for (uint64_t bits = word; bits; bits &= bits - 1) {
+                    const int b = std::countr_zero(bits);
+                    if (!filled(leaf->getValue(openvdb::Index(ix * 64 + b)))) word &= ~(uint64_t(1) << b);
+                }
+            }
+            const int64_t x = int64_t(l.x()) + ix - o.x();
+            if (!word || x < 0 || x >= nx) continue;
+            for (int jy = 0; jy < 8; ++jy) {
+                uint64_t byte = (word >> (8 * jy)) & 0xFF;
+                const int64_t y = int64_t(l.y()) + jy - o.y();
+                int64_t z = int64_t(l.z()) - o.z();
+                if (!byte || y < 0 || y >= ny) continue;
+                // The index box holds every active voxel, so bits shifted out below 0 or past nz
+                // are empty; clamp anyway so a bad box cannot write outside the column.
+                if (z < 0) {
+                    byte >>= std::min<int64_t>(8, -z);
+                    z = 0;
+                }
+                if (z >= nz) continue;
+                if (nz - z < 8) byte &= (uint64_t(1) << (nz - z)) - 1;
+                uint64_t* col = g.column(x, y);
+                col[z >> 6] |= byte << (z & 63);
+                if ((z & 63) > 56) col[(z >> 6) + 1] |= byte >> (64 - (z & 63));
+            }
+        }
+    }
+    // Active tiles (internal and root levels): fill their boxes, clipped to the index box.
+    auto it = tree.cbeginValueOn();
+    it.setMaxDepth(TreeT::ValueOnCIter::LEAF_DEPTH - 1);
+    for (; it; ++it) {
+        if (!filled(*it)) continue;
+        const openvdb::CoordBBox bb = it.getBoundingBox();
+        const int64_t x0 = std::max<int64_t>(0, bb.min().x() - o.x()),
+                      x1 = std::min<int64_t>(nx, bb.max().x() - o.x() + 1);
+        const int64_t y0 = std::max<int64_t>(0, bb.min().y() - o.y()),
+                      y1 = std::min<int64_t>(ny, bb.max().y() - o.y() + 1);
+        const int64_t z0 = std::max<int64_t>(0, bb.min().z() - o.z()),
+                      z1 = std::min<int64_t>(nz, bb.max().z() - o.z() + 1);
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = x0; x < x1; ++x) {
+                uint64_t* col = g.column(x, y);
+                for (int64_t z = z0; z < z1;) {
+                    const int lo = int(z & 63), hi = int(std::min<int64_t>(64, lo + (z1 - z)));
+                    col[z >> 6] |= bitRange(lo, hi);
+                    z += hi - lo;
+                }
+            }
+    }
+}
+
+void readBitsImpl(const char* path, void* ctx,
+                  uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn)) {
+    initializeOpenVdb();
+    openvdb::GridPtrVecPtr grids;
+    try {
+        // Read through our own stream with exceptions on: OpenVDB trusts the sizes and counts in
+        // the file, and a truncated file read on past its end feeds it zeros or stale bytes
+        // (huge allocations, runaway node counts). Failing on the first short read avoids that.
+        std::ifstream in(path, std::ios::binary);
+        if (!in) fail("cannot open the file");
+        in.exceptions(std::ios::failbit | std::ios::badbit);
+        openvdb::io::Stream stream(in, /*delayLoad=*/false);
+        grids = stream.getGrids();
+    } catch (const Error&) { throw; } catch (const std::ios_base::failure&) {
+        fail("the file is truncated or unreadable (OpenVDB read past its end)");
+    } catch (const std::exception& e) {
+        // OpenVDB reports malformed files with its own exceptions (and the odd std one).
+        fail("OpenVDB: ", e.what());
+    }
+    openvdb::GridBase::Ptr base;
+    for (const auto& gp : *grids)
+        if (gp && (gp->isType<openvdb::BoolGrid>() || gp->isType<openvdb::FloatGrid>() ||
+                   gp->isType<openvdb::DoubleGrid>())) {
+            base = gp;
+            break;
+        }
+    if (!base) fail("the file holds no bool, float or double grid");
+    if (base->getGridClass() == openvdb::GRID_LEVEL_SET)
+        fail("grid '", base->getName(), "' is a level set; convert it to a fog volume or a mask first");
+
+    double cell[3], centre0[3];
+    boxTransform(*base, cell, centre0);
+
+    // Index box: the stored dimensions when they cover every active voxel, else the active box.
+    openvdb::CoordBBox active;
+    const bool any = base->baseTree().evalActiveVoxelBoundingBox(active);
+    openvdb::CoordBBox box;
+    const auto dims = base->getMetadata<openvdb::Vec3IMetadata>(kDimsMeta);
+    if (dims && dims->value().x() > 0 && dims->value().y() > 0 && dims->value().z() > 0) {
+        box = openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(dims->value()) - openvdb::Coord(1));
+        if (any && !box.isInside(active)) box = active;
+    } else if (any) {
+        box = active;
+    } else {
+        fail("grid '", base->getName(), "' has no active voxels and no stored dimensions");
+    }
+    const openvdb::Coord o = box.min(), n = box.dim();
+    VdbReadBox out;
+    for (int a = 0; a < 3; ++a) {
+        out.dims[a] = n[a];
+        out.lo[a] = centre0[a] + (double(o[a]) - 0.5) * cell[a];
+        out.hi[a] = out.lo[a] + double(n[a]) * cell[a];
+    }
+    int64_t wpc = 0;
+    uint64_t* words = allocate(ctx, out, &wpc);
+    const Target g{n.x(), n.y(), n.z(), wpc, words};
+    if (auto b = openvdb::GridBase::grid<openvdb::BoolGrid>(base))
+        readTree(*b, o, g);
+    else if (auto f = openvdb::GridBase::grid<openvdb::FloatGrid>(base))
+        readTree(*f, o, g);
+    else
+        readTree(*openvdb::GridBase::grid<openvdb::DoubleGrid>(base), o, g);
+}
+
+// Runs f, turning any exception into a message for the caller (nothing crosses the boundary).
+template <class F> bool guarded(std::string* error, const F& f) {
+    try {
+        f();
+        return true;
+    } catch (const std::bad_alloc&) { *error = "out of memory"; } catch (const std::exception& e) {
+        *error = e.what();
+    } catch (...) { *error = "unknown error in the OpenVDB module"; }
+    return false;
+}
+
+bool writeBits(const char* path, const VdbBits& bits, const VdbPlacement& placement, const char* gridName,
+               bool asFloat, ParallelFor parallelFor, std::string* error) {
+    return guarded(error, [&] {
+        initializeOpenVdb();
+        openvdb::GridBase::Ptr out;
+        if (asFloat) {
+            auto fg = openvdb::FloatGrid::create(0.0f);
+            fillLeaves(bits, parallelFor, *fg);
+            fg->setGridClass(openvdb::GRID_FOG_VOLUME);
+            out = fg;
+        } else {
+            auto bg = openvdb::BoolGrid::create(false);
+            fillLeaves(bits, parallelFor, *bg);
+            out = bg;
+        }
+        out->setTransform(transformFor(placement));
+        out->setName(gridName);
+        out->insertMeta(kDimsMeta,
+                        openvdb::Vec3IMetadata(openvdb::Vec3i(int(bits.nx), int(bits.ny), int(bits.nz))));
+        writeFile(path, out);
+    });
+}
+
+bool writeFloats(const char* path, const int64_t dims[3], const float* values, const VdbPlacement& placement,
+                 const char* gridName, std::string* error) {
+    return guarded(error, [&] {
+        initializeOpenVdb();
+        auto grid = openvdb::FloatGrid::create(0.0f);
+        // Non-uniform scale as a pre-scale of the unit transform (the density writer's placement).
+        auto xform = openvdb::math::Transform::createLinearTransform(1.0);
+        xform->preScale(openvdb::Vec3d(placement.cell[0], placement.cell[1], placement.cell[2]));
+        xform->postTranslate(
+            openvdb::Vec3d(placement.centre0[0], placement.centre0[1], placement.centre0[2]));
+        grid->setTransform(xform);
+        grid->setName(gridName);
+        grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+        // The grid's size travels as metadata (as for bit grids), so empty borders survive.
+        grid->insertMeta(kDimsMeta,
+                         openvdb::Vec3IMetadata(openvdb::Vec3i(int(dims[0]), int(dims[1]), int(dims[2]))));
+        auto acc = grid->getAccessor();
+        // Serial insertion in a fixed order keeps the tree (and the file) deterministic.
+        const float* v = values;
+        for (int64_t k = 0; k < dims[2]; ++k)
+            for (int64_t j = 0; j < dims[1]; ++j)
+                for (int64_t i = 0; i < dims[0]; ++i, ++v)
+                    if (*v != 0.0f) acc.setValue(openvdb::Coord(int(i), int(j), int(k)), *v);
+        writeFile(path, grid);
+    });
+}
+
+bool readBits(const char* path, void* ctx,
+              uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn),
+              std::string* error) {
+    return guarded(error, [&] { readBitsImpl(path, ctx, allocate); });
+}
+
+constexpr VdbModule kTable{kModuleAbi, sizeof(VdbModule), writeBits, writeFloats, readBits};
+
+} // namespace
+} // namespace voxfx::detail
+
+extern "C" const void* voxfx_module_vdb(uint32_t abi) {
+    return abi == voxfx::detail::kModuleAbi ? &voxfx::detail::kTable : nullptr;
+}
