@@ -66,7 +66,14 @@ struct Collector {
             if (!f.empty() || !s.empty()) finish();
         }
     };
-    Sink tile(int64_t, int64_t) { return {*this, {}, {}}; }
+    std::vector<Tile> tiles; // every tile handed out, as the rasterizer gave it
+    Sink tile(const Tile& t) {
+        {
+            std::lock_guard<std::mutex> lock(mutex);
+            tiles.push_back(t);
+        }
+        return {*this, {}, {}};
+    }
     void sort() {
         std::sort(fragments.begin(), fragments.end());
         std::sort(spans.begin(), spans.end());
@@ -76,9 +83,9 @@ struct Collector {
 // The same, offering the direct path too.
 struct DirectCollector : Collector {
     Sink direct() { return {*this, {}, {}}; }
-    void finishRows(int64_t y0, int64_t y1) {
+    void finishRows(const Tile& t) {
         std::lock_guard<std::mutex> lock(mutex);
-        rowsFinished += y1 - y0;
+        rowsFinished += t.y1 - t.y0;
     }
 };
 
@@ -455,6 +462,96 @@ TEST(RasterTest, CancellingThroughProgressFailsWithAnError) {
     o.progress = &stop;
     DirectCollector c;
     EXPECT_THROW(rasterize(frame, mesh.view(), o, c), Error);
+}
+
+// --- The consumer contract -----------------------------------------------------------------------
+
+struct OnlyFragments {
+    struct Sink {
+        int64_t* n;
+        void fragment(int64_t, int64_t, double, uint32_t, bool) { ++*n; }
+        void finish() {}
+    };
+    int64_t n = 0;
+    Sink tile(const Tile&) { return {&n}; }
+};
+struct OnlySpans {
+    struct Sink {
+        void span(int64_t, int64_t, double, double, uint32_t) {}
+        void finish() {}
+    };
+    Sink tile(const Tile&) { return {}; }
+};
+struct NoMembers {
+    struct Sink {
+        void finish() {}
+    };
+    Sink tile(const Tile&) { return {}; }
+};
+struct NoFinish {
+    struct Sink {
+        void fragment(int64_t, int64_t, double, uint32_t, bool) {}
+    };
+    Sink tile(const Tile&) { return {}; }
+};
+struct OldTileSignature {
+    struct Sink {
+        void fragment(int64_t, int64_t, double, uint32_t, bool) {}
+        void finish() {}
+    };
+    Sink tile(int64_t, int64_t) { return {}; }
+};
+
+// What compiles: checked here at compile time (a consumer that breaks the contract is refused by
+// rasterize's constraints instead of silently emitting nothing).
+static_assert(TileConsumer<OnlyFragments> && TileConsumer<OnlySpans> && TileConsumer<Collector>);
+static_assert(!TileConsumer<NoMembers>, "a sink with neither fragment nor span");
+static_assert(!TileConsumer<NoFinish>, "a sink without finish");
+static_assert(!TileConsumer<OldTileSignature>, "tile must take the Tile it is handed");
+static_assert(DirectConsumer<DirectCollector> && !DirectConsumer<Collector>);
+static_assert(sinkSupports<OnlyFragments::Sink>(Coverage::Center));
+static_assert(!sinkSupports<OnlyFragments::Sink>(Coverage::Conservative));
+static_assert(!sinkSupports<OnlySpans::Sink>(Coverage::Center));
+
+TEST(RasterTest, AConsumerWithoutTheMemberTheCoverageNeedsFailsLoudly) {
+    const Mesh mesh = octahedron({8, 8, 8}, 6);
+    const Frame frame = Frame::orthographic({{0, 0, 0}, {16, 16, 16}}, Axis::Z, 16, 16, 16);
+    RasterOptions o;
+    o.coverage = Coverage::Conservative;
+    OnlyFragments fragments;
+    EXPECT_THROW(rasterize(frame, mesh.view(), o, fragments), Error);
+    o.coverage = Coverage::Center;
+    OnlySpans spans;
+    EXPECT_THROW(rasterize(frame, mesh.view(), o, spans), Error);
+    // The supported coverage runs, also with the coverage fixed at compile time.
+    EXPECT_NO_THROW(rasterize(frame, mesh.view(), o, fragments));
+    EXPECT_GT(fragments.n, 0);
+    const int64_t n = fragments.n;
+    o.coverage = Coverage::Conservative; // ignored by rasterize<C>
+    rasterize<Coverage::Center>(frame, mesh.view(), o, fragments);
+    EXPECT_EQ(fragments.n, 2 * n);
+}
+
+TEST(RasterTest, ConsumersAreHandedEachTileOnceWithItsIndexAndRows) {
+    const Mesh mesh = octahedron({8, 8, 8}, 6);
+    const Frame frame = Frame::orthographic({{0, 0, 0}, {16, 16, 16}}, Axis::Z, 16, 13, 16);
+    for (int64_t rows : {1, 4, 5, 13, 0}) {
+        SCOPED_TRACE(rows);
+        DirectCollector c;
+        rasterizeInto(c, frame, mesh, Coverage::Center, RasterPath::Binned, rows);
+        std::sort(c.tiles.begin(), c.tiles.end(),
+                  [](const Tile& a, const Tile& b) { return a.index < b.index; });
+        ASSERT_FALSE(c.tiles.empty());
+        int64_t next = 0;
+        for (std::size_t k = 0; k < c.tiles.size(); ++k) {
+            EXPECT_EQ(c.tiles[k].index, int64_t(k));
+            EXPECT_EQ(c.tiles[k].y0, next);
+            EXPECT_GT(c.tiles[k].y1, c.tiles[k].y0);
+            if (rows > 0) { EXPECT_LE(c.tiles[k].y1 - c.tiles[k].y0, rows); }
+            next = c.tiles[k].y1;
+        }
+        EXPECT_EQ(next, 13) << "the tiles cover every row once";
+    }
 }
 
 } // namespace
