@@ -1,6 +1,7 @@
 // voxfx — BitGrid (the slicemap) against a brute-force model: one bool per cell.
 #include <cstdint>
 #include <random>
+#include <type_traits>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -148,6 +149,29 @@ TEST(BitGridTest, BadDimensionsAndImpossibleSizesFailWithAnError) {
     EXPECT_THROW(checkMemory(~uint64_t(0), "everything"), Error);
     EXPECT_NO_THROW(checkMemory(1, "one byte"));
     EXPECT_GT(availableMemoryBytes(), 0u);
+}
+
+TEST(BitGridTest, AViewReadsAndWritesTheGridsWords) {
+    static_assert(std::is_trivially_copyable_v<BitGridView>);
+    for (int64_t d : kDepths) {
+        SCOPED_TRACE(d);
+        BitGrid g(3, 5, d);
+        const BitGridView v = g.view();
+        EXPECT_EQ(v.words, g.words());
+        EXPECT_EQ(v.wordsPerColumn, g.wordsPerColumn());
+        EXPECT_EQ(v.lastWordMask(), g.lastWordMask());
+        EXPECT_EQ(v.column(2, 4), g.column(2, 4));
+        v.set(2, 4, d - 1);
+        v.set(0, 1, 0);
+        EXPECT_TRUE(g.get(2, 4, d - 1));
+        EXPECT_TRUE(g.get(0, 1, 0));
+        EXPECT_EQ(g.count(), 2);
+        g.set(1, 1, d / 2);
+        EXPECT_TRUE(v.get(1, 1, d / 2));
+        v.set(2, 4, d - 1, false);
+        EXPECT_EQ(g.count(), 2);
+        EXPECT_TRUE(paddingIsZero(g));
+    }
 }
 
 } // namespace

@@ -2,6 +2,7 @@
 // against formulas written out here from the definitions in frame.hpp (not the code's own).
 #include <cmath>
 #include <random>
+#include <type_traits>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -169,6 +170,41 @@ TEST(FrameTest, InvalidFramesFailWithAnError) {
     EXPECT_THROW(Frame::perspective({0, 0, 0}, {0, 0, 1}, up, 1.0, 4, 4, 2, 1, 4), Error);
     EXPECT_THROW(Frame::perspective({0, 0, 0}, {0, 1, 0}, up, 1.0, 4, 4, 1, 2, 4), Error); // up || view
     EXPECT_THROW(Frame::perspective({0, 0, 0}, {0, 0, 1}, up, 1.0, 4, 0, 1, 2, 4), Error);
+}
+
+TEST(FrameTest, ViewsCarryTheProjectionAndTheSlicingOfTheirFrame) {
+    static_assert(std::is_trivially_copyable_v<FrameView>);
+    std::mt19937_64 rng(8);
+    std::uniform_real_distribution<double> u(-0.5, 1.5);
+    const Frame frames[] = {Frame::orthographic(kBox, Axis::Y, 6, 4, 9),
+                            Frame::perspective({1, 2, 3}, {0, 0, 0}, {0, 0, 1}, 0.7, 6, 4, 0.5, 9, 9)};
+    for (const Frame& f : frames) {
+        SCOPED_TRACE(f.isPerspective() ? "perspective" : "orthographic");
+        const FrameView v = f.view();
+        EXPECT_EQ(v.isPerspective(), f.isPerspective());
+        EXPECT_EQ(v.width, 6);
+        EXPECT_EQ(v.height, 4);
+        EXPECT_EQ(v.depth, 9);
+        EXPECT_EQ(v.local, nullptr);
+        for (int k = 0; k < 50; ++k) {
+            const Vec3d p = kBox.lo + Vec3d{u(rng), u(rng), u(rng)} * kBox.extent();
+            EXPECT_TRUE(v.projection.gridFromWorld(p) == f.gridFromWorld(p)) << "bit-identical";
+        }
+    }
+    Frame local = frames[0];
+    std::vector<double> nearD(24), farD(24);
+    for (int c = 0; c < 24; ++c) {
+        nearD[size_t(c)] = 0.1 * c;
+        farD[size_t(c)] = 3 + 0.2 * c;
+    }
+    local.setLocalSlicing(nearD, farD);
+    const FrameView v = local.view();
+    ASSERT_NE(v.local, nullptr);
+    EXPECT_EQ(v.localCount, 24);
+    for (int64_t c = 0; c < 24; ++c) {
+        EXPECT_EQ(v.depthToSlice(c).near, local.depthToSlice(c).near);
+        EXPECT_EQ(v.depthToSlice(c).scale, local.depthToSlice(c).scale);
+    }
 }
 
 } // namespace
