@@ -13,6 +13,16 @@
 // Padding bits (slices >= D in the last word) are always zero: every operation keeps them so,
 // which lets whole-word popcounts and comparisons ignore D. The buffer is 64-byte aligned and
 // holds no pointers, so it can be uploaded to a GPU unchanged. All index arithmetic is 64-bit.
+//
+// Kernels see a grid through BitGridView (words pointer and dimensions, no ownership, no
+// allocation or exceptions), obtained with grid.view().
+//
+// Thread-safety: const members may be called concurrently. Writes (set, clear, assignment,
+// writes through words()/column()/view()) must not race with other accesses to the same words;
+// different columns are different words, so threads that own disjoint columns may write at
+// once (the rasterizer's tiles do), and concurrent writes to one word need atomic operations
+// (std::atomic_ref, as the rasterizer's direct path does). count() and clear() run in parallel
+// internally and must not overlap writes.
 #pragma once
 
 #include <bit>
@@ -23,6 +33,29 @@
 #include "voxfx/error.hpp"
 
 namespace voxfx {
+
+/// A BitGrid as kernels see it: the words and the dimensions, trivially copyable, not owning.
+/// Valid while the grid lives and is not reassigned.
+struct BitGridView {
+    uint64_t* words = nullptr;
+    int64_t width = 0, height = 0, depth = 0, wordsPerColumn = 0;
+
+    VOXFX_HOSTDEV uint64_t* column(int64_t c) const { return words + c * wordsPerColumn; }
+    VOXFX_HOSTDEV uint64_t* column(int64_t x, int64_t y) const { return column(y * width + x); }
+    VOXFX_HOSTDEV int64_t columnCount() const { return width * height; }
+    /// Mask of the valid bits of the last word of a column (all ones when D % 64 == 0).
+    VOXFX_HOSTDEV uint64_t lastWordMask() const {
+        return (depth & 63) ? (~uint64_t(0) >> (64 - (depth & 63))) : ~uint64_t(0);
+    }
+    VOXFX_HOSTDEV bool get(int64_t x, int64_t y, int64_t s) const {
+        return (column(x, y)[s >> 6] >> (s & 63)) & 1u;
+    }
+    VOXFX_HOSTDEV void set(int64_t x, int64_t y, int64_t s, bool on = true) const {
+        uint64_t& word = column(x, y)[s >> 6];
+        const uint64_t bit = uint64_t(1) << (s & 63);
+        word = on ? (word | bit) : (word & ~bit);
+    }
+};
 
 class BitGrid {
 public:
@@ -56,6 +89,8 @@ public:
 
     /// Mask of the valid bits of the last word of a column (all ones when D % 64 == 0).
     uint64_t lastWordMask() const { return (d_ & 63) ? (~uint64_t(0) >> (64 - (d_ & 63))) : ~uint64_t(0); }
+    /// The grid as kernels see it.
+    BitGridView view() { return {words_.get(), w_, h_, d_, wpc_}; }
 
     bool get(int64_t x, int64_t y, int64_t s) const {
         VOXFX_DCHECK(x >= 0 && x < w_ && y >= 0 && y < h_ && s >= 0 && s < d_);

@@ -15,9 +15,19 @@
 // Orthographic axis convention: slices run along `axis`; columns run along the next two axes in
 // cyclic order, so the grid is right-handed: axis Z -> columns (x, y); axis X -> columns (y, z);
 // axis Y -> columns (z, x).
+//
+// Kernels (the rasterizer, its consumers, a future CUDA back end) see a frame through FrameView:
+// a trivially copyable value (projection, W, H, D, the uniform slicing and a pointer to the
+// local slicing table) with no allocation, exceptions or I/O in its member functions.
+//
+// Thread-safety: a Frame is a value. Its const members (including view()) may be called from any
+// number of threads at once; setLocalSlicing / setUniformSlicing / assignment must not run
+// concurrently with any other use of the same Frame, and they invalidate the table pointer of
+// earlier views. FrameView is read-only and may be shared freely while its Frame lives unchanged.
 #pragma once
 
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "voxfx/math.hpp"
@@ -42,6 +52,54 @@ struct DepthToSlice {
     double scale = 1;
     VOXFX_HOSTDEV double operator()(double depth) const { return (depth - near) * scale; }
 };
+
+/// World -> grid coordinates of a frame (see the file comment), as plain data for kernels.
+///   orthographic: grid = ((p[axisX] - origin[axisX]) * scale.x, (p[axisY] - origin[axisY]) * scale.y,
+///                         (p[axisS] - origin[axisS]) * scale.z)
+///   perspective:  camera coordinates c = ((p - eye) . right, (p - eye) . up, (p - eye) . forward),
+///                 grid = (imageX(c.x, c.z), imageY(c.y, c.z), c.z)
+/// The rasterizer uses exactly these functions, so its coordinates and Frame::gridFromWorld agree
+/// bit for bit.
+struct Projection {
+    bool perspective = false;
+    int axisX = 0, axisY = 1, axisS = 2;
+    Vec3d origin;
+    Vec3d scale{1, 1, 1};
+    Vec3d eye, right{1, 0, 0}, up{0, 1, 0}, forward{0, 0, 1};
+    double tanX = 0, tanY = 0; ///< tangents of the half field of view across and up
+    double halfW = 0, halfH = 0;
+
+    VOXFX_HOSTDEV Vec3d cameraFromWorld(const Vec3d& p) const {
+        const Vec3d q = p - eye;
+        return {dot(q, right), dot(q, up), dot(q, forward)};
+    }
+    VOXFX_HOSTDEV double imageX(double cx, double cz) const { return (cx / (cz * tanX) + 1.0) * halfW; }
+    VOXFX_HOSTDEV double imageY(double cy, double cz) const { return (cy / (cz * tanY) + 1.0) * halfH; }
+    VOXFX_HOSTDEV Vec3d gridFromWorld(const Vec3d& p) const {
+        if (!perspective)
+            return {(p[axisX] - origin[axisX]) * scale.x, (p[axisY] - origin[axisY]) * scale.y,
+                    (p[axisS] - origin[axisS]) * scale.z};
+        const Vec3d c = cameraFromWorld(p);
+        return {imageX(c.x, c.z), imageY(c.y, c.z), c.z};
+    }
+};
+
+/// A frame as kernels see it: trivially copyable, no std::vector. `local` points into the
+/// Frame's local slicing table (columnCount entries) or is null for uniform slicing; the view is
+/// valid while the Frame lives and its slicing is unchanged.
+struct FrameView {
+    Projection projection;
+    int64_t width = 0, height = 0, depth = 0;
+    DepthToSlice uniform;
+    const DepthToSlice* local = nullptr;
+    int64_t localCount = 0;
+
+    VOXFX_HOSTDEV bool isPerspective() const { return projection.perspective; }
+    VOXFX_HOSTDEV int64_t columnCount() const { return width * height; }
+    /// The depth-to-slice map of column c = y * width + x.
+    VOXFX_HOSTDEV DepthToSlice depthToSlice(int64_t column) const { return local ? local[column] : uniform; }
+};
+static_assert(std::is_trivially_copyable_v<FrameView>);
 
 class Frame {
 public:
@@ -103,6 +161,14 @@ public:
     /// True when both frames describe the same grid (same camera, dimensions and slicing).
     bool sameGrid(const Frame& o) const;
 
+    /// The world -> grid projection (what gridFromWorld applies).
+    const Projection& projection() const { return projection_; }
+    /// The frame as kernels see it (see FrameView for how long it stays valid).
+    FrameView view() const {
+        return {projection_,           w_, h_, d_, uniform_, local_.empty() ? nullptr : local_.data(),
+                int64_t(local_.size())};
+    }
+
 private:
     bool perspective_ = false;
     Axis axis_ = Axis::Z;
@@ -113,6 +179,7 @@ private:
     double near_ = 0, far_ = 0;
     DepthToSlice uniform_;
     std::vector<DepthToSlice> local_;
+    Projection projection_;
 };
 
 } // namespace voxfx

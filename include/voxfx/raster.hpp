@@ -23,24 +23,38 @@
 // (count, allocate, fill — in triangle order), and each tile is rasterized by one thread that owns
 // its rows, so consumers write without atomics and results do not depend on the thread count.
 //
-// Consumer interface (duck-typed, see voxelize/*.cpp for examples):
-//   TileConsumer consumer.tile(int64_t y0, int64_t y1);        // one per tile, rows [y0, y1)
-//   void TileConsumer::fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool front);
-//   void TileConsumer::span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t triangle);
-//   void TileConsumer::finish();                               // after the tile's last triangle
+// Consumer contract (C++20 concepts below, checked at compile time):
+//   TileConsumer    sink = consumer.tile(const Tile&)    one sink per tile (index, rows [y0, y1))
+//                   sink.finish()                         after the tile's last triangle
+//   CenterSink      sink.fragment(x, y, depth, triangle, front)          for Coverage::Center
+//   ConservativeSink sink.span(x, y, depthMin, depthMax, triangle)       for Coverage::Conservative
+// A sink needs at least one of fragment/span. rasterize<Coverage::X>(...) checks the one it needs
+// at compile time (static_assert); plain rasterize(...) with a run-time coverage throws
+// voxfx::Error when the sink lacks the member for it (never silently emits nothing).
 // A consumer whose writes commute (bit OR, bit XOR) may also offer the direct path:
-//   DirectSink consumer.direct();        // fragment/span as above, callable from any thread
-//   void consumer.finishRows(y0, y1);    // after every triangle, per tile of rows, in parallel
+//   DirectConsumer  sink = consumer.direct()    fragment/span as above, callable from any thread
+//                   consumer.finishRows(tile)   after every triangle, per tile of rows, in parallel
 // rasterize() then skips binning when triangles are much smaller than a column (a dense mesh):
 // fixed chunks of triangles go to any thread and write with atomic word operations. The bits
 // are the same on both paths and for any thread count.
 // Depths are frame depths (orthographic: slice units; perspective: view distance); map them to
-// slices with Frame::depthToSlice(column). `front` is true when the triangle's counter-clockwise
-// side faces the frame's viewer (its outward normal points against the view direction).
+// slices with FrameView::depthToSlice(column). `front` is true when the triangle's
+// counter-clockwise side faces the frame's viewer (its outward normal points against the view
+// direction).
+//
+// Kernels: the per-triangle functions (edge functions, rasterizeCenter, rasterizeConservative,
+// clipping) take plain values and a FrameView, allocate nothing, throw nothing and are marked
+// VOXFX_HOSTDEV, so a CUDA back end can include this header and reuse them.
+//
+// Thread-safety: rasterize() may run concurrently with other rasterize() calls on different
+// consumers (the frame and mesh are only read). Within one call, tile sinks run on several
+// threads at once, each owning the rows of its tile; direct sinks run on any thread and must
+// write atomically; finishRows runs in parallel over disjoint tiles. The consumer itself is
+// shared by all of them: tile(), direct() and finishRows() must be safe to call concurrently.
 #pragma once
 
+#include <concepts>
 #include <cstdint>
-#include <functional>
 #include <vector>
 
 #include "voxfx/frame.hpp"
@@ -64,6 +78,39 @@ struct RasterOptions {
     Progress* progress = nullptr;
 };
 
+/// The rows a tile covers: tile `index` of the frame's tiling holds rows [y0, y1).
+struct Tile {
+    int64_t index = 0;
+    int64_t y0 = 0, y1 = 0;
+};
+
+template <class S>
+concept CenterSink = requires(S& s, int64_t x, int64_t y, double depth, uint32_t triangle, bool front) {
+    s.fragment(x, y, depth, triangle, front);
+};
+template <class S>
+concept ConservativeSink = requires(S& s, int64_t x, int64_t y, double depth, uint32_t triangle) {
+    s.span(x, y, depth, depth, triangle);
+};
+template <class S>
+concept RasterSink = CenterSink<S> || ConservativeSink<S>;
+
+template <class C>
+concept TileConsumer = requires(C& c, const Tile& t) {
+    requires RasterSink<decltype(c.tile(t))>;
+    c.tile(t).finish();
+};
+template <class C>
+concept DirectConsumer = requires(C& c, const Tile& t) {
+    requires RasterSink<decltype(c.direct())>;
+    c.finishRows(t);
+};
+
+/// Whether the sink type S has the member that `coverage` needs.
+template <class S> constexpr bool sinkSupports(Coverage coverage) {
+    return coverage == Coverage::Center ? CenterSink<S> : ConservativeSink<S>;
+}
+
 namespace detail {
 
 /// A triangle set up for rasterization in grid space: (gx, gy, w) per corner, where w is the
@@ -74,11 +121,11 @@ struct RasterTriangle {
     bool front;
 };
 
-/// Calls emit(rasterTriangle) for the pieces of mesh triangle t in `frame`'s grid space (one for
+/// Calls emit(rasterTriangle) for the pieces of mesh triangle t in the frame's grid space (one for
 /// orthographic frames; perspective frames clip at a plane just in front of the eye, giving 0–2).
-/// `gridVertices` holds Frame-space vertex positions from prepareVertices.
+/// `vertices` holds the vertices projected by the frame's Projection (prepareVertices).
 struct RasterSetup {
-    const Frame* frame;
+    FrameView frame;
     const MeshView* mesh;
     std::vector<Vec3d> vertices; // orthographic: grid coordinates; perspective: camera (right, up, forward)
     double clipDepth = 0;
@@ -87,16 +134,17 @@ struct RasterSetup {
 RasterSetup prepareVertices(const Frame& frame, const MeshView& mesh);
 
 /// Row range [first, last] of the triangle's coverage, clamped to [0, H); empty when last < first.
-void coveredRows(const RasterTriangle& tri, Coverage coverage, int64_t height, int64_t& first, int64_t& last);
+VOXFX_HOSTDEV inline void coveredRows(const RasterTriangle& tri, Coverage coverage, int64_t height,
+                                      int64_t& first, int64_t& last);
 
-/// Emits the centre-sampled fragments of `tri` in rows [rowBegin, rowEnd).
+/// Emits the centre-sampled fragments of `tri` in rows [rowBegin, rowEnd) of `frame`.
 template <class Sink>
-void rasterizeCenter(const RasterTriangle& tri, bool perspective, int64_t width, int64_t rowBegin,
-                     int64_t rowEnd, Sink& sink);
-/// Emits the conservative spans of `tri` in rows [rowBegin, rowEnd).
+VOXFX_HOSTDEV void rasterizeCenter(const RasterTriangle& tri, const FrameView& frame, int64_t rowBegin,
+                                   int64_t rowEnd, Sink& sink);
+/// Emits the conservative spans of `tri` in rows [rowBegin, rowEnd) of `frame`.
 template <class Sink>
-void rasterizeConservative(const RasterTriangle& tri, bool perspective, int64_t width, int64_t rowBegin,
-                           int64_t rowEnd, Sink& sink);
+VOXFX_HOSTDEV void rasterizeConservative(const RasterTriangle& tri, const FrameView& frame, int64_t rowBegin,
+                                         int64_t rowEnd, Sink& sink);
 
 /// Tiling and binning: triangles (in index order) per tile of `rowsPerTile` rows.
 struct TileBins {
@@ -111,9 +159,15 @@ TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsP
 } // namespace detail
 
 /// Rasterizes `mesh` over `frame`'s columns and hands fragments or spans to `consumer`, tile by
-/// tile in parallel. See the file comment for the consumer interface. Mesh must be valid
-/// (validateMesh); triangles outside the frame's columns are skipped.
-template <class Consumer>
+/// tile in parallel. See the file comment for the consumer contract. Mesh must be valid
+/// (validateMesh); triangles outside the frame's columns are skipped. Throws voxfx::Error when the
+/// consumer's sinks lack the member options.coverage needs, or when progress cancels.
+template <TileConsumer Consumer>
+void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& options, Consumer& consumer);
+
+/// The same with the coverage fixed at compile time: a consumer without the member it needs
+/// does not compile. options.coverage is ignored.
+template <Coverage C, TileConsumer Consumer>
 void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& options, Consumer& consumer);
 
 } // namespace voxfx

@@ -13,7 +13,7 @@ namespace voxfx::detail {
 template <class Emit> void RasterSetup::triangle(std::size_t t, Emit&& emit) const {
     const uint32_t i0 = mesh->index(t, 0), i1 = mesh->index(t, 1), i2 = mesh->index(t, 2);
     const Vec3d a = vertices[i0], b = vertices[i1], c = vertices[i2];
-    if (!frame->isPerspective()) {
+    if (!frame.isPerspective()) {
         RasterTriangle r{{a.x, b.x, c.x}, {a.y, b.y, c.y}, {a.z, b.z, c.z}, uint32_t(t), false};
         const double det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
         r.front = det < 0; // outward normal points against +depth, towards the viewer
@@ -38,13 +38,11 @@ template <class Emit> void RasterSetup::triangle(std::size_t t, Emit&& emit) con
         }
     }
     if (n < 3) return;
-    const double tx = frame->tanHalfFovY() * double(frame->width()) / double(frame->height());
-    const double ty = frame->tanHalfFovY();
-    const double hw = 0.5 * double(frame->width()), hh = 0.5 * double(frame->height());
+    const Projection& pr = frame.projection;
     double gx[4], gy[4], gw[4];
     for (int k = 0; k < n; ++k) {
-        gx[k] = (poly[k].x / (poly[k].z * tx) + 1.0) * hw;
-        gy[k] = (poly[k].y / (poly[k].z * ty) + 1.0) * hh;
+        gx[k] = pr.imageX(poly[k].x, poly[k].z);
+        gy[k] = pr.imageY(poly[k].y, poly[k].z);
         gw[k] = 1.0 / poly[k].z;
     }
     for (int k = 1; k + 1 < n; ++k) {
@@ -67,7 +65,7 @@ struct CanonicalEdge {
     int flip; // +1 when the triangle traverses the edge a -> b, -1 when b -> a
     int tie;  // sign of the edge function at a sample on the edge, perturbed by (+eps, +eps^2)
 
-    void set(double px, double py, double qx, double qy) {
+    VOXFX_HOSTDEV void set(double px, double py, double qx, double qy) {
         const bool swap = qx < px || (qx == px && qy < py);
         ax = swap ? qx : px;
         ay = swap ? qy : py;
@@ -78,7 +76,7 @@ struct CanonicalEdge {
         tie = dy != 0 ? (dy < 0 ? 1 : -1) : (dx > 0 ? 1 : -1);
     }
     /// Sign (+1 / -1, never 0) of the oriented edge function at sample (sx, sy).
-    int side(double sx, double sy) const {
+    VOXFX_HOSTDEV int side(double sx, double sy) const {
         const double e = dx * (sy - ay) - dy * (sx - ax);
         const int s = e > 0 ? 1 : (e < 0 ? -1 : tie);
         return s * flip;
@@ -86,8 +84,10 @@ struct CanonicalEdge {
 };
 
 template <class Sink>
-void rasterizeCenter(const RasterTriangle& t, bool perspective, int64_t width, int64_t rowBegin,
-                     int64_t rowEnd, Sink& sink) {
+VOXFX_HOSTDEV void rasterizeCenter(const RasterTriangle& t, const FrameView& frame, int64_t rowBegin,
+                                   int64_t rowEnd, Sink& sink) {
+    const bool perspective = frame.isPerspective();
+    const int64_t width = frame.width;
     // Columns whose centre lies in the bounding box. The box corners are vertex coordinates and
     // x - 0.5 is exact for grid-sized values, so the range is exact: no margin needed.
     const double bxlo = std::min({t.x[0], t.x[1], t.x[2]}), bxhi = std::max({t.x[0], t.x[1], t.x[2]});
@@ -174,7 +174,8 @@ struct ClipPolygon {
 
 /// Sutherland–Hodgman against one closed half-plane: keeps coord(axis) >= c (keepAbove) or <= c.
 /// Points on the line are kept, so polygons touching a boundary survive as points or segments.
-inline void clipAxis(const ClipPolygon& in, ClipPolygon& out, int axis, double c, bool keepAbove) {
+VOXFX_HOSTDEV inline void clipAxis(const ClipPolygon& in, ClipPolygon& out, int axis, double c,
+                                   bool keepAbove) {
     out.n = 0;
     const double* coord = axis == 0 ? in.x : in.y;
     for (int k = 0; k < in.n; ++k) {
@@ -207,7 +208,7 @@ inline constexpr double kConservativeSlack = 1e-9;
 
 /// Depth range [lo, hi] where the convex polygon's boundary meets the line X = c (empty:
 /// lo > hi). Edges are interpolated at c; an edge lying on the line contributes both ends.
-inline void lineDepthRange(const ClipPolygon& p, double c, double& lo, double& hi) {
+VOXFX_HOSTDEV inline void lineDepthRange(const ClipPolygon& p, double c, double& lo, double& hi) {
     lo = INFINITY;
     hi = -INFINITY;
     for (int k = 0; k < p.n; ++k) {
@@ -225,9 +226,30 @@ inline void lineDepthRange(const ClipPolygon& p, double c, double& lo, double& h
     }
 }
 
+VOXFX_HOSTDEV inline void coveredRows(const RasterTriangle& t, Coverage coverage, int64_t height,
+                                      int64_t& first, int64_t& last) {
+    const double lo = std::min({t.y[0], t.y[1], t.y[2]}), hi = std::max({t.y[0], t.y[1], t.y[2]});
+    // Clamp in floating point first so that far-away triangles cannot overflow the conversion.
+    const double h = double(height);
+    if (coverage == Coverage::Center) {
+        // Rows whose centre y + 0.5 lies in [lo, hi] (lo, hi are vertex coordinates; the
+        // subtraction is exact for grid-sized values, so no margin is needed).
+        first = int64_t(std::clamp(std::ceil(lo - 0.5), -1.0, h));
+        last = int64_t(std::clamp(std::floor(hi - 0.5), -1.0, h));
+    } else {
+        // Rows whose closed extent [y, y + 1] meets [lo, hi].
+        first = int64_t(std::clamp(std::ceil(lo - kConservativeSlack) - 1.0, -1.0, h));
+        last = int64_t(std::clamp(std::floor(hi + kConservativeSlack), -1.0, h));
+    }
+    first = std::max<int64_t>(first, 0);
+    last = std::min<int64_t>(last, height - 1);
+}
+
 template <class Sink>
-void rasterizeConservative(const RasterTriangle& t, bool perspective, int64_t width, int64_t rowBegin,
-                           int64_t rowEnd, Sink& sink) {
+VOXFX_HOSTDEV void rasterizeConservative(const RasterTriangle& t, const FrameView& frame, int64_t rowBegin,
+                                         int64_t rowEnd, Sink& sink) {
+    const bool perspective = frame.isPerspective();
+    const int64_t width = frame.width;
     ClipPolygon tri;
     for (int k = 0; k < 3; ++k) {
         tri.x[k] = t.x[k];
@@ -282,22 +304,29 @@ namespace voxfx {
 
 namespace detail {
 
-/// Rasterizes one piece over rows [y0, y1) of the frame with the options' coverage rule.
+/// Rasterizes one piece over rows [y0, y1) of the frame with the options' coverage rule (the
+/// caller has checked that the sink supports it).
 template <class Sink>
-void rasterizePiece(const RasterTriangle& rt, Coverage coverage, bool perspective, int64_t width,
-                    int64_t height, int64_t y0, int64_t y1, Sink& sink) {
+VOXFX_HOSTDEV void rasterizePiece(const RasterTriangle& rt, Coverage coverage, const FrameView& frame,
+                                  int64_t y0, int64_t y1, Sink& sink) {
     int64_t first, last;
-    coveredRows(rt, coverage, height, first, last);
+    coveredRows(rt, coverage, frame.height, first, last);
     first = std::max(first, y0);
     last = std::min(last, y1 - 1);
     if (first > last) return;
     if (coverage == Coverage::Center) {
-        if constexpr (requires { sink.fragment(int64_t(), int64_t(), 0.0, uint32_t(), true); })
-            rasterizeCenter(rt, perspective, width, first, last + 1, sink);
+        if constexpr (CenterSink<Sink>) rasterizeCenter(rt, frame, first, last + 1, sink);
     } else {
-        if constexpr (requires { sink.span(int64_t(), int64_t(), 0.0, 0.0, uint32_t()); })
-            rasterizeConservative(rt, perspective, width, first, last + 1, sink);
+        if constexpr (ConservativeSink<Sink>) rasterizeConservative(rt, frame, first, last + 1, sink);
     }
+}
+
+/// Throws voxfx::Error when sink type S lacks the member `coverage` needs.
+template <class S> void requireSinkSupports(Coverage coverage, const char* which) {
+    if (!sinkSupports<S>(coverage))
+        fail("rasterize: the consumer's ", which, " sink has no ",
+             coverage == Coverage::Center ? "fragment() member, which Coverage::Center needs"
+                                          : "span() member, which Coverage::Conservative needs");
 }
 
 /// Whether rasterize() takes the direct path for a consumer that offers it: only when triangles
@@ -311,14 +340,20 @@ inline bool preferDirect(std::size_t triangles, int64_t width, int64_t height) {
 
 } // namespace detail
 
-template <class Consumer>
+template <TileConsumer Consumer>
 void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& options, Consumer& consumer) {
+    detail::requireSinkSupports<decltype(consumer.tile(Tile{}))>(options.coverage, "tile");
+    if constexpr (DirectConsumer<Consumer>)
+        detail::requireSinkSupports<decltype(consumer.direct())>(options.coverage, "direct");
     const int64_t H = frame.height(), W = frame.width();
     const int64_t rowsPerTile =
         options.rowsPerTile > 0 ? options.rowsPerTile : std::max<int64_t>(1, (H + 63) / 64);
     const int64_t tileCount = (H + rowsPerTile - 1) / rowsPerTile;
+    auto tileAt = [&](int64_t index) {
+        return Tile{index, index * rowsPerTile, std::min(H, (index + 1) * rowsPerTile)};
+    };
     const detail::RasterSetup setup = detail::prepareVertices(frame, mesh);
-    const bool perspective = frame.isPerspective();
+    const FrameView& view = setup.frame;
 
     std::atomic<bool> cancelled{false};
     std::atomic<int64_t> done{0};
@@ -330,10 +365,7 @@ void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& op
         if (!options.progress->update(double(d) / double(total))) cancelled = true;
     };
 
-    if constexpr (requires {
-                      consumer.direct();
-                      consumer.finishRows(int64_t(), int64_t());
-                  }) {
+    if constexpr (DirectConsumer<Consumer>) {
         if (options.path == RasterPath::Direct ||
             (options.path == RasterPath::Auto && detail::preferDirect(mesh.triangleCount, W, H))) {
             // Direct path: triangles in fixed chunks on any thread, writing through the
@@ -348,7 +380,7 @@ void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& op
                     if (cancelled.load(std::memory_order_relaxed)) return;
                     for (int64_t t = c * kChunk, e = std::min(T, t + kChunk); t < e; ++t)
                         setup.triangle(size_t(t), [&](const detail::RasterTriangle& rt) {
-                            detail::rasterizePiece(rt, options.coverage, perspective, W, H, 0, H, sink);
+                            detail::rasterizePiece(rt, options.coverage, view, 0, H, sink);
                         });
                     report(steps);
                 }
@@ -357,7 +389,7 @@ void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& op
             parallelFor(0, tileCount, 1, [&](int64_t tb, int64_t te) {
                 for (int64_t tile = tb; tile < te; ++tile) {
                     if (cancelled.load(std::memory_order_relaxed)) return;
-                    consumer.finishRows(tile * rowsPerTile, std::min(H, (tile + 1) * rowsPerTile));
+                    consumer.finishRows(tileAt(tile));
                     report(steps);
                 }
             });
@@ -370,17 +402,32 @@ void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& op
     parallelFor(0, bins.tileCount, 1, [&](int64_t tb, int64_t te) {
         for (int64_t tile = tb; tile < te; ++tile) {
             if (cancelled.load(std::memory_order_relaxed)) return;
-            const int64_t y0 = tile * rowsPerTile, y1 = std::min(H, y0 + rowsPerTile);
-            auto sink = consumer.tile(y0, y1);
+            const Tile rows = tileAt(tile);
+            auto sink = consumer.tile(rows);
             for (int64_t i = bins.offsets[size_t(tile)]; i < bins.offsets[size_t(tile) + 1]; ++i)
                 setup.triangle(bins.entries[size_t(i)], [&](const detail::RasterTriangle& rt) {
-                    detail::rasterizePiece(rt, options.coverage, perspective, W, H, y0, y1, sink);
+                    detail::rasterizePiece(rt, options.coverage, view, rows.y0, rows.y1, sink);
                 });
             sink.finish();
             report(bins.tileCount);
         }
     });
     if (cancelled) fail("cancelled");
+}
+
+template <Coverage C, TileConsumer Consumer>
+void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& options, Consumer& consumer) {
+    using TileSink = decltype(consumer.tile(Tile{}));
+    static_assert(sinkSupports<TileSink>(C),
+                  "rasterize<C>: the consumer's tile sink lacks the member this coverage needs "
+                  "(fragment(x, y, depth, triangle, front) for Coverage::Center, "
+                  "span(x, y, depthMin, depthMax, triangle) for Coverage::Conservative)");
+    if constexpr (DirectConsumer<Consumer>)
+        static_assert(sinkSupports<decltype(consumer.direct())>(C),
+                      "rasterize<C>: the consumer's direct sink lacks the member this coverage needs");
+    RasterOptions o = options;
+    o.coverage = C;
+    rasterize(frame, mesh, o, consumer);
 }
 
 } // namespace voxfx

@@ -33,6 +33,17 @@ Frame Frame::orthographic(const Box3d& box, Axis axis, int64_t w, int64_t h, int
     f.near_ = 0;
     f.far_ = double(d);
     f.uniform_ = {0.0, 1.0};
+    Projection& pr = f.projection_;
+    pr.perspective = false;
+    pr.axisX = cx;
+    pr.axisY = cy;
+    pr.axisS = cs;
+    pr.origin = box.lo;
+    pr.scale = {double(w) / ext[cx], double(h) / ext[cy], double(d) / ext[cs]};
+    pr.right = r;
+    pr.up = u;
+    pr.forward = fw;
+    pr.eye = box.lo;
     return f;
 }
 
@@ -61,6 +72,16 @@ Frame Frame::perspective(const Vec3d& eye, const Vec3d& target, const Vec3d& up,
     f.near_ = nearDepth;
     f.far_ = farDepth;
     f.uniform_ = {nearDepth, double(d) / (farDepth - nearDepth)};
+    Projection& pr = f.projection_;
+    pr.perspective = true;
+    pr.eye = eye;
+    pr.right = f.right_;
+    pr.up = f.up_;
+    pr.forward = f.forward_;
+    pr.tanX = f.tanHalfX_;
+    pr.tanY = f.tanHalfY_;
+    pr.halfW = 0.5 * double(w);
+    pr.halfH = 0.5 * double(h);
     return f;
 }
 
@@ -75,19 +96,7 @@ Vec3d Frame::cellSize() const {
 
 double Frame::viewDepth(const Vec3d& p) const { return dot(p - eye_, forward_); }
 
-Vec3d Frame::gridFromWorld(const Vec3d& p) const {
-    if (!perspective_) {
-        const int cx = columnXAxis(axis_), cy = columnYAxis(axis_), cs = sliceAxis(axis_);
-        const Vec3d ext = box_.extent();
-        return {(p[cx] - box_.lo[cx]) * (double(w_) / ext[cx]),
-                (p[cy] - box_.lo[cy]) * (double(h_) / ext[cy]),
-                (p[cs] - box_.lo[cs]) * (double(d_) / ext[cs])};
-    }
-    const Vec3d q = p - eye_;
-    const double z = dot(q, forward_);
-    return {(dot(q, right_) / (z * tanHalfX_) + 1.0) * 0.5 * double(w_),
-            (dot(q, up_) / (z * tanHalfY_) + 1.0) * 0.5 * double(h_), z};
-}
+Vec3d Frame::gridFromWorld(const Vec3d& p) const { return projection_.gridFromWorld(p); }
 
 Vec3d Frame::worldFromGrid(const Vec3d& g) const {
     if (!perspective_) {

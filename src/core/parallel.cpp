@@ -9,28 +9,18 @@
 
 namespace voxfx {
 
-void parallelFor(int64_t begin, int64_t end, int64_t grain,
-                 const std::function<void(int64_t, int64_t)>& body) {
-    if (end <= begin) return;
-    grain = std::max<int64_t>(grain, 1);
-    const int64_t chunks = (end - begin + grain - 1) / grain;
-    // Small inputs run serially: a task spawn costs more than the work.
-    if (chunks == 1) {
-        body(begin, end);
-        return;
-    }
-    // Chunks are fixed by `grain` (simple_partitioner over chunk indices), so which items share a
-    // body call does not depend on the number of threads.
+namespace detail {
+
+void parallelChunks(int64_t chunks, void* context, void (*run)(void*, int64_t, int64_t)) {
+    // Chunks are fixed by the caller's grain (simple_partitioner over chunk indices), so which
+    // items share a body call does not depend on the number of threads.
     tbb::parallel_for(
         tbb::blocked_range<int64_t>(0, chunks, 1),
-        [&](const tbb::blocked_range<int64_t>& r) {
-            for (int64_t c = r.begin(); c != r.end(); ++c) {
-                const int64_t b = begin + c * grain;
-                body(b, std::min(end, b + grain));
-            }
-        },
+        [&](const tbb::blocked_range<int64_t>& r) { run(context, r.begin(), r.end()); },
         tbb::simple_partitioner());
 }
+
+} // namespace detail
 
 void withThreads(int threads, const std::function<void()>& f) {
     if (threads <= 0) {

@@ -13,45 +13,25 @@ constexpr int64_t kBinChunk = 16384;
 
 RasterSetup prepareVertices(const Frame& frame, const MeshView& mesh) {
     RasterSetup s;
-    s.frame = &frame;
+    s.frame = frame.view();
     s.mesh = &mesh;
     s.vertices.resize(mesh.vertexCount);
     if (frame.isPerspective()) s.clipDepth = frame.nearDepth() * 1e-3;
     Vec3d* out = s.vertices.data();
+    const Projection pr = frame.projection();
     parallelFor(0, int64_t(mesh.vertexCount), 65536, [&](int64_t b, int64_t e) {
-        if (!frame.isPerspective()) {
-            for (int64_t i = b; i < e; ++i) out[i] = frame.gridFromWorld(mesh.vertex(size_t(i)));
+        if (!pr.perspective) {
+            for (int64_t i = b; i < e; ++i) out[i] = pr.gridFromWorld(mesh.vertex(size_t(i)));
         } else {
-            for (int64_t i = b; i < e; ++i) {
-                const Vec3d q = mesh.vertex(size_t(i)) - frame.eye();
-                out[i] = {dot(q, frame.right()), dot(q, frame.up()), dot(q, frame.forward())};
-            }
+            for (int64_t i = b; i < e; ++i) out[i] = pr.cameraFromWorld(mesh.vertex(size_t(i)));
         }
     });
     return s;
 }
 
-void coveredRows(const RasterTriangle& t, Coverage coverage, int64_t height, int64_t& first, int64_t& last) {
-    const double lo = std::min({t.y[0], t.y[1], t.y[2]}), hi = std::max({t.y[0], t.y[1], t.y[2]});
-    // Clamp in floating point first so that far-away triangles cannot overflow the conversion.
-    const double h = double(height);
-    if (coverage == Coverage::Center) {
-        // Rows whose centre y + 0.5 lies in [lo, hi] (lo, hi are vertex coordinates; the
-        // subtraction is exact for grid-sized values, so no margin is needed).
-        first = int64_t(std::clamp(std::ceil(lo - 0.5), -1.0, h));
-        last = int64_t(std::clamp(std::floor(hi - 0.5), -1.0, h));
-    } else {
-        // Rows whose closed extent [y, y + 1] meets [lo, hi].
-        first = int64_t(std::clamp(std::ceil(lo - kConservativeSlack) - 1.0, -1.0, h));
-        last = int64_t(std::clamp(std::floor(hi + kConservativeSlack), -1.0, h));
-    }
-    first = std::max<int64_t>(first, 0);
-    last = std::min<int64_t>(last, height - 1);
-}
-
 TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsPerTile) {
-    const int64_t H = setup.frame->height();
-    const double W = double(setup.frame->width());
+    const int64_t H = setup.frame.height;
+    const double W = double(setup.frame.width);
     TileBins bins;
     bins.rowsPerTile = rowsPerTile;
     bins.tileCount = (H + rowsPerTile - 1) / rowsPerTile;

@@ -17,7 +17,7 @@ struct NearestFragmentConsumer {
     int64_t width;
     double nearDepth;
     GBuffer& g;
-    struct Tile {
+    struct Sink {
         int64_t width;
         double nearDepth;
         GBuffer& g;
@@ -33,7 +33,7 @@ struct NearestFragmentConsumer {
         }
         void finish() {}
     };
-    Tile tile(int64_t, int64_t) { return {width, nearDepth, g}; }
+    Sink tile(const Tile&) const { return {width, nearDepth, g}; }
 };
 
 } // namespace

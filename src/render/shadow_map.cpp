@@ -17,7 +17,7 @@ namespace {
 struct NearestDepthConsumer {
     int64_t width;
     std::vector<float>& depth;
-    struct Tile {
+    struct Sink {
         int64_t width;
         std::vector<float>& depth;
         void fragment(int64_t x, int64_t y, double d, uint32_t, bool) {
@@ -26,7 +26,7 @@ struct NearestDepthConsumer {
         }
         void finish() {}
     };
-    Tile tile(int64_t, int64_t) { return {width, depth}; }
+    Sink tile(const Tile&) const { return {width, depth}; }
 };
 
 } // namespace

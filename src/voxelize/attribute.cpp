@@ -21,8 +21,9 @@ struct AttributeConsumer {
     std::span<const float> absorption;
     const std::vector<Vec3f>& faceNormals; // empty when normals are off
 
-    struct Tile {
+    struct Sink {
         AttributeConsumer& c;
+        FrameView frame;
         void write(int64_t column, int64_t s, uint32_t triangle) {
             const auto i = size_t(column * c.frame.depth() + s);
             uint16_t& n = c.grid.count[i];
@@ -32,18 +33,18 @@ struct AttributeConsumer {
         }
         void fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool) {
             const int64_t column = y * c.frame.width() + x;
-            const int64_t s = detail::fragmentSlice(c.frame, column, depth);
+            const int64_t s = detail::fragmentSlice(frame, column, depth);
             if (s >= 0) write(column, s, triangle);
         }
         void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t triangle) {
             const int64_t column = y * c.frame.width() + x;
             int64_t s0, s1;
-            if (!detail::spanSlices(c.frame, column, depthMin, depthMax, s0, s1)) return;
+            if (!detail::spanSlices(frame, column, depthMin, depthMax, s0, s1)) return;
             for (int64_t s = s0; s <= s1; ++s) write(column, s, triangle);
         }
         void finish() {}
     };
-    Tile tile(int64_t, int64_t) { return {*this}; }
+    Sink tile(const Tile&) { return {*this, frame.view()}; }
 };
 
 // Sparse writes: each tile collects (column, slice, triangle) entries in visiting order, then sorts
@@ -52,7 +53,6 @@ struct AttributeConsumer {
 struct ColumnWritesConsumer {
     const Frame& frame;
     std::span<const float> absorption;
-    int64_t rowsPerTile;
     struct Entry {
         int64_t column;
         int64_t slice;
@@ -65,19 +65,20 @@ struct ColumnWritesConsumer {
     };
     std::vector<TileOut>& out;
 
-    struct Tile {
+    struct Sink {
         ColumnWritesConsumer& c;
+        FrameView frame;
         TileOut& out;
         std::vector<Entry> entries;
         void fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool) {
             const int64_t column = y * c.frame.width() + x;
-            const int64_t s = detail::fragmentSlice(c.frame, column, depth);
+            const int64_t s = detail::fragmentSlice(frame, column, depth);
             if (s >= 0) entries.push_back({column, s, triangle});
         }
         void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t triangle) {
             const int64_t column = y * c.frame.width() + x;
             int64_t s0, s1;
-            if (!detail::spanSlices(c.frame, column, depthMin, depthMax, s0, s1)) return;
+            if (!detail::spanSlices(frame, column, depthMin, depthMax, s0, s1)) return;
             for (int64_t s = s0; s <= s1; ++s) entries.push_back({column, s, triangle});
         }
         void finish() {
@@ -101,7 +102,7 @@ struct ColumnWritesConsumer {
             entries = {};
         }
     };
-    Tile tile(int64_t y0, int64_t) { return {*this, out[size_t(y0 / rowsPerTile)], {}}; }
+    Sink tile(const Tile& t) { return {*this, frame.view(), out[size_t(t.index)], {}}; }
 };
 
 void checkAbsorption(const MeshView& mesh, std::span<const float> triangleAbsorption) {
@@ -201,7 +202,7 @@ AttributeColumns voxelizeAttributeColumns(const MeshView& mesh, const Frame& inF
         ro.progress = options.progress;
         ro.rowsPerTile = std::max<int64_t>(1, (H + 63) / 64);
         std::vector<ColumnWritesConsumer::TileOut> tiles(size_t((H + ro.rowsPerTile - 1) / ro.rowsPerTile));
-        ColumnWritesConsumer consumer{out.frame, triangleAbsorption, ro.rowsPerTile, tiles};
+        ColumnWritesConsumer consumer{out.frame, triangleAbsorption, tiles};
         rasterize(out.frame, mesh, ro, consumer);
         // Tiles own consecutive row ranges, so their column-sorted entries concatenate in order.
         std::size_t total = 0;

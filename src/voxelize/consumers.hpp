@@ -10,7 +10,8 @@
 // Each tile consumer writes only the columns of its own rows, so tiles run in parallel. The
 // surface, conservative and parity consumers also offer the rasterizer's direct path (see
 // raster.hpp): their writes are ORs and XORs, which commute, so the same bits result when any
-// thread writes any column with atomic word operations in any order.
+// thread writes any column with atomic word operations in any order. The slicemap consumers hold
+// plain views (FrameView, BitGridView) and their fragment/span kernels are VOXFX_HOSTDEV.
 #pragma once
 
 #include <algorithm>
@@ -29,7 +30,7 @@ namespace voxfx::detail {
 /// Index of the first slice whose centre (s + 0.5) lies strictly behind slice coordinate t,
 /// clamped to [0, D]; D means "no slice behind". Geometry in front of the near plane gives 0
 /// (GI08's depth clamping: it still flips every cell of the column).
-inline int64_t firstSliceBehind(double t, int64_t D) {
+VOXFX_HOSTDEV inline int64_t firstSliceBehind(double t, int64_t D) {
     const double u = t - 0.5;
     if (!(u >= 0)) return 0; // also catches -inf
     if (u >= double(D)) return D;
@@ -38,9 +39,9 @@ inline int64_t firstSliceBehind(double t, int64_t D) {
 
 /// The slice that holds a centre fragment at frame depth `depth` in `column` (ED06: the cell of
 /// the depth), or -1 when the depth lies outside the near/far range (clipped, as on the GPU).
-inline int64_t fragmentSlice(const Frame& frame, int64_t column, double depth) {
+VOXFX_HOSTDEV inline int64_t fragmentSlice(const FrameView& frame, int64_t column, double depth) {
     const double t = frame.depthToSlice(column)(depth);
-    const int64_t D = frame.depth();
+    const int64_t D = frame.depth;
     if (!(t >= 0 && t <= double(D))) return -1;
     return std::min<int64_t>(int64_t(t), D - 1);
 }
@@ -48,11 +49,11 @@ inline int64_t fragmentSlice(const Frame& frame, int64_t column, double depth) {
 /// The slices [s0, s1] whose closed cells [s, s+1] meet a conservative span's depth range
 /// [depthMin, depthMax] in `column`; false when none does. Widened by kConservativeSlack as in
 /// the rasterizer, so a depth exactly on a slice boundary keeps both cells.
-inline bool spanSlices(const Frame& frame, int64_t column, double depthMin, double depthMax, int64_t& s0,
-                       int64_t& s1) {
+VOXFX_HOSTDEV inline bool spanSlices(const FrameView& frame, int64_t column, double depthMin, double depthMax,
+                                     int64_t& s0, int64_t& s1) {
     const DepthToSlice m = frame.depthToSlice(column);
     const double t0 = m(depthMin) - kConservativeSlack, t1 = m(depthMax) + kConservativeSlack;
-    const int64_t D = frame.depth();
+    const int64_t D = frame.depth;
     if (!(t1 >= 0 && t0 <= double(D))) return false;
     // Cells [s, s+1] meeting [t0, t1]: s from ceil(t0) - 1 to floor(t1).
     s0 = std::max<int64_t>(0, int64_t(std::ceil(std::max(t0, -1.0))) - 1);
@@ -61,21 +62,32 @@ inline bool spanSlices(const Frame& frame, int64_t column, double depthMin, doub
 }
 
 /// One word write: plain when the calling tile owns the column, atomic on the direct path.
-template <bool Atomic> inline void orWord(uint64_t& word, uint64_t bits) {
-    if constexpr (Atomic)
+template <bool Atomic> VOXFX_HOSTDEV inline void orWord(uint64_t& word, uint64_t bits) {
+    if constexpr (Atomic) {
+#ifdef __CUDA_ARCH__
+        atomicOr(reinterpret_cast<unsigned long long*>(&word), static_cast<unsigned long long>(bits));
+#else
         std::atomic_ref<uint64_t>(word).fetch_or(bits, std::memory_order_relaxed);
-    else
+#endif
+    } else {
         word |= bits;
+    }
 }
-template <bool Atomic> inline void xorWord(uint64_t& word, uint64_t bits) {
-    if constexpr (Atomic)
+template <bool Atomic> VOXFX_HOSTDEV inline void xorWord(uint64_t& word, uint64_t bits) {
+    if constexpr (Atomic) {
+#ifdef __CUDA_ARCH__
+        atomicXor(reinterpret_cast<unsigned long long*>(&word), static_cast<unsigned long long>(bits));
+#else
         std::atomic_ref<uint64_t>(word).fetch_xor(bits, std::memory_order_relaxed);
-    else
+#endif
+    } else {
         word ^= bits;
+    }
 }
 
 /// Sets slices [s0, s1] (inclusive, within [0, D)) of a column.
-template <bool Atomic = false> inline void setSliceRange(uint64_t* column, int64_t s0, int64_t s1) {
+template <bool Atomic = false>
+VOXFX_HOSTDEV inline void setSliceRange(uint64_t* column, int64_t s0, int64_t s1) {
     const int64_t w0 = s0 >> 6, w1 = s1 >> 6;
     if (w0 == w1) {
         orWord<Atomic>(column[w0], bitRange(int(s0 & 63), int(s1 & 63) + 1));
@@ -87,10 +99,10 @@ template <bool Atomic = false> inline void setSliceRange(uint64_t* column, int64
 }
 
 /// Prefix-XOR every column of rows [y0, y1): bit s becomes the XOR of bits 0..s of the column.
-inline void prefixXorRows(BitGrid& grid, int64_t y0, int64_t y1) {
-    const int64_t wpc = grid.wordsPerColumn();
+VOXFX_HOSTDEV inline void prefixXorRows(const BitGridView& grid, int64_t y0, int64_t y1) {
+    const int64_t wpc = grid.wordsPerColumn;
     const uint64_t lastMask = grid.lastWordMask();
-    for (int64_t c = y0 * grid.width(), e = y1 * grid.width(); c < e; ++c) {
+    for (int64_t c = y0 * grid.width, e = y1 * grid.width; c < e; ++c) {
         uint64_t* col = grid.column(c);
         uint64_t carry = 0; // all ones when the parity so far is odd
         for (int64_t w = 0; w < wpc; ++w) {
@@ -103,66 +115,66 @@ inline void prefixXorRows(BitGrid& grid, int64_t y0, int64_t y1) {
 }
 
 struct SurfaceConsumer {
-    const Frame& frame;
-    BitGrid& grid;
+    FrameView frame;
+    BitGridView grid;
     template <bool Atomic> struct Sink {
-        const Frame& frame;
-        BitGrid& grid;
-        void fragment(int64_t x, int64_t y, double depth, uint32_t, bool) {
-            const int64_t c = y * grid.width() + x;
+        FrameView frame;
+        BitGridView grid;
+        VOXFX_HOSTDEV void fragment(int64_t x, int64_t y, double depth, uint32_t, bool) {
+            const int64_t c = y * grid.width + x;
             const int64_t s = fragmentSlice(frame, c, depth);
             if (s >= 0) orWord<Atomic>(grid.column(c)[s >> 6], uint64_t(1) << (s & 63));
         }
         void finish() {}
     };
-    Sink<false> tile(int64_t, int64_t) { return {frame, grid}; }
-    Sink<true> direct() { return {frame, grid}; }
-    void finishRows(int64_t, int64_t) {}
+    Sink<false> tile(const Tile&) const { return {frame, grid}; }
+    Sink<true> direct() const { return {frame, grid}; }
+    void finishRows(const Tile&) const {}
 };
 
 struct ConservativeConsumer {
-    const Frame& frame;
-    BitGrid& grid;
+    FrameView frame;
+    BitGridView grid;
     template <bool Atomic> struct Sink {
-        const Frame& frame;
-        BitGrid& grid;
-        void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t) {
-            const int64_t c = y * grid.width() + x;
+        FrameView frame;
+        BitGridView grid;
+        VOXFX_HOSTDEV void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t) {
+            const int64_t c = y * grid.width + x;
             int64_t s0, s1;
             if (spanSlices(frame, c, depthMin, depthMax, s0, s1))
                 setSliceRange<Atomic>(grid.column(c), s0, s1);
         }
         void finish() {}
     };
-    Sink<false> tile(int64_t, int64_t) { return {frame, grid}; }
-    Sink<true> direct() { return {frame, grid}; }
-    void finishRows(int64_t, int64_t) {}
+    Sink<false> tile(const Tile&) const { return {frame, grid}; }
+    Sink<true> direct() const { return {frame, grid}; }
+    void finishRows(const Tile&) const {}
 };
 
 struct ParityConsumer {
-    const Frame& frame;
-    BitGrid& grid;
+    FrameView frame;
+    BitGridView grid;
     template <bool Atomic> struct Sink {
-        const Frame& frame;
-        BitGrid& grid;
-        int64_t y0, y1;
-        void fragment(int64_t x, int64_t y, double depth, uint32_t, bool) {
-            const int64_t c = y * grid.width() + x;
-            const int64_t s = firstSliceBehind(frame.depthToSlice(c)(depth), grid.depth());
-            if (s < grid.depth()) xorWord<Atomic>(grid.column(c)[s >> 6], uint64_t(1) << (s & 63));
+        FrameView frame;
+        BitGridView grid;
+        Tile rows;
+        VOXFX_HOSTDEV void fragment(int64_t x, int64_t y, double depth, uint32_t, bool) {
+            const int64_t c = y * grid.width + x;
+            const int64_t s = firstSliceBehind(frame.depthToSlice(c)(depth), grid.depth);
+            if (s < grid.depth) xorWord<Atomic>(grid.column(c)[s >> 6], uint64_t(1) << (s & 63));
         }
         void finish() {
-            if constexpr (!Atomic) prefixXorRows(grid, y0, y1);
+            if constexpr (!Atomic) prefixXorRows(grid, rows.y0, rows.y1);
         }
     };
-    Sink<false> tile(int64_t y0, int64_t y1) { return {frame, grid, y0, y1}; }
-    Sink<true> direct() { return {frame, grid, 0, 0}; }
-    void finishRows(int64_t y0, int64_t y1) { prefixXorRows(grid, y0, y1); }
+    Sink<false> tile(const Tile& t) const { return {frame, grid, t}; }
+    Sink<true> direct() const { return {frame, grid, {}}; }
+    void finishRows(const Tile& t) const { prefixXorRows(grid, t.y0, t.y1); }
 };
 
 struct WindingConsumer {
-    const Frame& frame;
-    BitGrid& grid;
+    FrameView frame;
+    BitGridView grid;
     struct Crossing {
         int64_t column;
         int64_t slice; // first slice behind the crossing
@@ -171,14 +183,14 @@ struct WindingConsumer {
             return column != o.column ? column < o.column : slice < o.slice;
         }
     };
-    struct Tile {
-        const Frame& frame;
-        BitGrid& grid;
+    struct Sink {
+        FrameView frame;
+        BitGridView grid;
         std::vector<Crossing> crossings;
         void fragment(int64_t x, int64_t y, double depth, uint32_t, bool front) {
-            const int64_t c = y * grid.width() + x;
-            const int64_t s = firstSliceBehind(frame.depthToSlice(c)(depth), grid.depth());
-            if (s < grid.depth()) crossings.push_back({c, s, front ? 1 : -1});
+            const int64_t c = y * grid.width + x;
+            const int64_t s = firstSliceBehind(frame.depthToSlice(c)(depth), grid.depth);
+            if (s < grid.depth) crossings.push_back({c, s, front ? 1 : -1});
         }
         void finish() {
             // Sort once per tile (deterministic: equal keys carry equal effects, order is irrelevant).
@@ -191,20 +203,20 @@ struct WindingConsumer {
                     while (i < crossings.size() && crossings[i].column == c && crossings[i].slice == s)
                         winding += crossings[i++].sign;
                     const int64_t next =
-                        i < crossings.size() && crossings[i].column == c ? crossings[i].slice : grid.depth();
+                        i < crossings.size() && crossings[i].column == c ? crossings[i].slice : grid.depth;
                     if (winding != 0 && next > s) setSliceRange(grid.column(c), s, next - 1);
                 }
             }
         }
     };
-    Tile tile(int64_t, int64_t) { return {frame, grid, {}}; }
+    Sink tile(const Tile&) const { return {frame, grid, {}}; }
 };
 
 struct DepthRangeConsumer {
     int64_t width;
     std::vector<double>& nearDepth;
     std::vector<double>& farDepth;
-    struct Tile {
+    struct Sink {
         int64_t width;
         std::vector<double>& nearDepth;
         std::vector<double>& farDepth;
@@ -216,7 +228,7 @@ struct DepthRangeConsumer {
         }
         void finish() {}
     };
-    Tile tile(int64_t, int64_t) { return {width, nearDepth, farDepth}; }
+    Sink tile(const Tile&) const { return {width, nearDepth, farDepth}; }
 };
 
 } // namespace voxfx::detail

@@ -38,14 +38,13 @@ BitGrid rasterizeInto(const Frame& frame, const MeshView& mesh, VoxelizeMode kin
     ro.path = o.rasterPath;
     switch (kind) {
     case VoxelizeMode::Surface: {
-        detail::SurfaceConsumer c{frame, grid};
-        rasterize(frame, mesh, ro, c);
+        detail::SurfaceConsumer c{frame.view(), grid.view()};
+        rasterize<Coverage::Center>(frame, mesh, ro, c);
         break;
     }
     case VoxelizeMode::Conservative: {
-        ro.coverage = Coverage::Conservative;
-        detail::ConservativeConsumer c{frame, grid};
-        rasterize(frame, mesh, ro, c);
+        detail::ConservativeConsumer c{frame.view(), grid.view()};
+        rasterize<Coverage::Conservative>(frame, mesh, ro, c);
         break;
     }
     default:
@@ -68,14 +67,14 @@ BitGrid fillInside(const Frame& frame, const MeshView& mesh, const VoxelizeOptio
     switch (o.fill) {
     case Fill::Parity: {
         BitGrid grid(frame.width(), frame.height(), frame.depth());
-        detail::ParityConsumer c{frame, grid};
-        rasterize(frame, mesh, ro, c);
+        detail::ParityConsumer c{frame.view(), grid.view()};
+        rasterize<Coverage::Center>(frame, mesh, ro, c);
         return grid;
     }
     case Fill::Winding: {
         BitGrid grid(frame.width(), frame.height(), frame.depth());
-        detail::WindingConsumer c{frame, grid};
-        rasterize(frame, mesh, ro, c);
+        detail::WindingConsumer c{frame.view(), grid.view()};
+        rasterize<Coverage::Center>(frame, mesh, ro, c);
         return grid;
     }
     case Fill::Flood: {
