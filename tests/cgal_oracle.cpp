@@ -1,23 +1,16 @@
 // voxfx tests — the CGAL side of the exactness oracle (see cgal_oracle.hpp).
 #include "cgal_oracle.hpp"
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/IO/polygon_soup_io.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
-#include <CGAL/Side_of_triangle_mesh.h>
-#include <CGAL/Surface_mesh.h>
 #include <gtest/gtest.h>
+
+#include "cgal_oracle_kernel.hpp"
 
 namespace voxfx::test {
 
 namespace oracle {
-
-using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Point2 = K::Point_2;
-using Point3 = K::Point_3;
-using Triangle3 = K::Triangle_3;
-using SurfaceMesh = CGAL::Surface_mesh<Point3>;
 
 /// The mesh's triangles in world space (float coordinates widen to double exactly).
 std::vector<Triangle3> triangles(const MeshView& mesh) {

@@ -18,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include "cgal_oracle.hpp"
+#include "cgal_oracle_kernel.hpp"
 #include "voxfx/voxelize.hpp"
 
 namespace voxfx {
