@@ -196,6 +196,49 @@ TEST(Dsm, CompressedStaysWithinEpsilonEverywhereAndNonIncreasing) {
     EXPECT_EQ(checked, 3000 * 6);
 }
 
+TEST(Dsm, CompressorKeepsRandomStaircasesWithPlateausInTheBand) {
+    // Node lists straight into the compressor: random non-increasing values with plateaus, steps
+    // (equal depths) and ramps of random length, the shapes where a segment may end below the
+    // function and a later line could otherwise rise.
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (int f = 0; f < 3000; ++f) {
+        std::vector<DsmNode> exact;
+        double z = unit(rng), v = 1;
+        for (int i = 0, n = 2 + int(unit(rng) * 40); i < n; ++i) {
+            exact.push_back({float(z), float(v)});
+            const double r = unit(rng);
+            if (r < 0.3) { // plateau
+            } else if (r < 0.5) {
+                v *= unit(rng); // step at the same depth
+                exact.push_back({float(z), float(v)});
+            } else {
+                v *= 1 - 0.3 * unit(rng); // ramp
+            }
+            z += unit(rng) < 0.1 ? 1e-4 : unit(rng) * 5;
+        }
+        for (double eps : {0.0, 0.02, 0.1, 0.3}) {
+            std::vector<DsmNode> comp;
+            DsmCompressor c(eps, comp);
+            for (const auto& n : exact) c.push(n.z, n.v);
+            c.finish();
+            expectNonIncreasing(comp);
+            ASSERT_LE(maxDeviation(exact, comp), eps + kTol) << "function " << f << " eps " << eps;
+        }
+    }
+    // A segment that must end below a plateau (exact binary values, ε = 1/8): the first segment
+    // ends at z = 2 about 0.1 under V = 0.25, and the next line may not rise back towards it.
+    std::vector<DsmNode> comp;
+    DsmCompressor c(0.125, comp);
+    for (const auto& n :
+         std::vector<DsmNode>{{0, 1}, {1, 0.5f}, {1.5f, 0.25f}, {2, 0.25f}, {3, 0.25f}, {4, 0.25f}})
+        c.push(n.z, n.v);
+    c.finish();
+    ASSERT_GE(comp.size(), 3u);
+    EXPECT_LT(comp[1].v, 0.25f - 0.05f) << "the case needs a segment ending below the plateau";
+    expectNonIncreasing(comp);
+}
+
 TEST(Dsm, LibraryLookupAgreesWithIndependentEvaluator) {
     std::mt19937 rng(2);
     std::uniform_real_distribution<float> depth(-1.0f, 101.0f);
