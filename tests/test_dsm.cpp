@@ -455,6 +455,59 @@ TEST(Dsm, FixedStorageRebuildsOverfullTexelsWithLargerEpsilon) {
     EXPECT_LE(fixed.stats().maxEpsilon, 1.0);
 }
 
+TEST(Dsm, FixedStorageSizedByTheWorstTexelHoldsEveryTexelUnchanged) {
+    const int64_t w = 30, h = 22;
+    const auto fn = randomMap();
+    DsmBuildOptions o;
+    o.epsilon = 0.05;
+    o.fixedNodes = 0;
+    const DsmFixed fixed = DsmFixed::build(w, h, fn, o);
+    const DsmChunked chunked = DsmChunked::build(w, h, fn, o.epsilon);
+    int64_t worst = 0;
+    for (int64_t y = 0; y < h; ++y)
+        for (int64_t x = 0; x < w; ++x) {
+            ASSERT_TRUE(sameNodes(fixedTexel(fixed, x, y), chunked.texel(x, y))) << x << "," << y;
+            worst = std::max(worst, int64_t(chunked.texel(x, y).size()));
+        }
+    EXPECT_EQ(fixed.view().n, std::max<int64_t>(2, worst));
+    EXPECT_EQ(fixed.stats().overflowTexels, 0);
+    EXPECT_EQ(fixed.stats().bytes,
+              w * h * fixed.view().n * int64_t(sizeof(DsmNode)) + w * h * int64_t(sizeof(uint16_t)));
+}
+
+TEST(Dsm, DeepShadowMapLooksUpThroughTheChosenStorage) {
+    const int64_t w = 19, h = 11;
+    const auto fn = randomMap();
+    DsmBuildOptions o;
+    o.epsilon = 0.02;
+    o.fixedNodes = 0;
+    const DeepShadowMap f = DeepShadowMap::build(w, h, fn, parseDsmStorage("fixed"), o);
+    const DeepShadowMap c = DeepShadowMap::build(w, h, fn, parseDsmStorage("Chunked"), o);
+    EXPECT_EQ(f.storage(), DsmStorage::Fixed);
+    EXPECT_EQ(c.storage(), DsmStorage::Chunked);
+    EXPECT_EQ(f.view().storage, DsmStorage::Fixed);
+    EXPECT_EQ(c.view().storage, DsmStorage::Chunked);
+    EXPECT_EQ(parseDsmStorage(toString(DsmStorage::Fixed)), DsmStorage::Fixed);
+    EXPECT_EQ(parseDsmStorage(toString(DsmStorage::Chunked)), DsmStorage::Chunked);
+    EXPECT_THROW(parseDsmStorage("linked"), Error);
+    EXPECT_EQ(f.stats().nodes, c.stats().nodes);
+    EXPECT_GT(f.stats().bytes, c.stats().bytes);
+    const DsmChunked direct = DsmChunked::build(w, h, fn, o.epsilon);
+    std::mt19937 rng(10);
+    std::uniform_real_distribution<float> depth(-1.0f, 101.0f), u(-1.0f, float(w) + 1),
+        v(-1.0f, float(h) + 1);
+    for (int i = 0; i < 5000; ++i) {
+        const int64_t x = int64_t(rng() % uint32_t(w)), y = int64_t(rng() % uint32_t(h));
+        const float z = depth(rng), uu = u(rng), vv = v(rng);
+        ASSERT_EQ(f.view().visibility(x, y, z), direct.view().visibility(x, y, z));
+        ASSERT_EQ(c.view().visibility(x, y, z), direct.view().visibility(x, y, z));
+        ASSERT_EQ(f.view().visibilityBilinear(uu, vv, z), direct.view().visibilityBilinear(uu, vv, z));
+        ASSERT_EQ(c.view().visibilityBilinear(uu, vv, z), direct.view().visibilityBilinear(uu, vv, z));
+        ASSERT_TRUE(sameNodes(f.texel(x, y), direct.texel(x, y)));
+        ASSERT_TRUE(sameNodes(c.texel(x, y), direct.texel(x, y)));
+    }
+}
+
 TEST(Dsm, MemoryAccountingCountsWhatIsHeld) {
     const int64_t w = 45, h = 19;
     const auto fn = randomMap();

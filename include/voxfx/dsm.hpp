@@ -31,6 +31,8 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <string>
+#include <variant>
 #include <vector>
 
 #include "voxfx/math.hpp"
@@ -256,8 +258,12 @@ VOXFX_HOSTDEV inline float DsmChunkedView::visibilityBilinear(float u, float v, 
 /// Options for building a map.
 struct DsmBuildOptions {
     double epsilon = 0.05;
-    int32_t fixedNodes = 32; ///< DsmFixed: nodes per texel (at least 2)
+    /// DsmFixed: nodes per texel (at least 2), or 0: sized by the worst texel (the paper's fixed
+    /// layout: every texel is compressed once, then copied; none is rebuilt).
+    int32_t fixedNodes = 32;
 };
+
+class DsmChunked;
 
 /// Fixed storage: N nodes per texel.
 class DsmFixed {
@@ -268,6 +274,8 @@ public:
     const DsmStats& stats() const { return stats_; }
     /// The nodes of texel (x, y).
     std::span<const DsmNode> texel(int64_t x, int64_t y) const;
+    /// The fixed layout of a chunked map, N = its largest texel (at least 2).
+    static DsmFixed fromChunked(const DsmChunked& chunked);
 
 private:
     int64_t width_ = 0, height_ = 0;
@@ -287,12 +295,51 @@ public:
     /// The nodes of texel (x, y), gathered across chunks.
     std::vector<DsmNode> texel(int64_t x, int64_t y) const;
     int64_t chunkCount() const { return int64_t(chunks_.size()); }
+    int64_t width() const { return width_; }
+    int64_t height() const { return height_; }
 
 private:
     int64_t width_ = 0, height_ = 0;
     std::vector<DsmChunk> chunks_;
     std::vector<DsmTexelHead> heads_;
     DsmStats stats_;
+};
+
+enum class DsmStorage : uint8_t { Fixed, Chunked };
+const char* toString(DsmStorage s);
+/// Parses fixed | chunked (any case); throws voxfx::Error listing them otherwise.
+DsmStorage parseDsmStorage(const std::string& name);
+
+/// A plain view of either storage, for lookups that choose at run time (`--dsm-storage`).
+struct DsmView {
+    DsmStorage storage = DsmStorage::Chunked;
+    DsmFixedView fixed;
+    DsmChunkedView chunked;
+
+    VOXFX_HOSTDEV float visibility(int64_t x, int64_t y, float z) const {
+        return storage == DsmStorage::Fixed ? fixed.visibility(x, y, z) : chunked.visibility(x, y, z);
+    }
+    VOXFX_HOSTDEV float visibilityBilinear(float u, float v, float z) const {
+        return storage == DsmStorage::Fixed ? fixed.visibilityBilinear(u, v, z)
+                                            : chunked.visibilityBilinear(u, v, z);
+    }
+};
+
+/// One deep shadow map in the storage chosen at build time.
+class DeepShadowMap {
+public:
+    static DeepShadowMap build(int64_t width, int64_t height, const DsmTexelFunction& texel,
+                               DsmStorage storage, const DsmBuildOptions& options);
+    DsmStorage storage() const {
+        return std::holds_alternative<DsmFixed>(map_) ? DsmStorage::Fixed : DsmStorage::Chunked;
+    }
+    DsmView view() const;
+    const DsmStats& stats() const;
+    /// The nodes of texel (x, y).
+    std::vector<DsmNode> texel(int64_t x, int64_t y) const;
+
+private:
+    std::variant<DsmChunked, DsmFixed> map_;
 };
 
 } // namespace voxfx

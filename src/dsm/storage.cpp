@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/enum_names.hpp"
 #include "voxfx/dsm.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/parallel.hpp"
@@ -67,8 +68,11 @@ DsmStats combine(const std::vector<TileStats>& tiles, int64_t texels, double eps
 DsmFixed DsmFixed::build(int64_t width, int64_t height, const DsmTexelFunction& texel,
                          const DsmBuildOptions& options) {
     checkMap(width, height, options.epsilon);
+    if (options.fixedNodes == 0) return fromChunked(DsmChunked::build(width, height, texel, options.epsilon));
     if (options.fixedNodes < 2 || options.fixedNodes > std::numeric_limits<uint16_t>::max())
-        fail("deep shadow map: fixed storage needs 2..65535 nodes per texel, not ", options.fixedNodes);
+        fail("deep shadow map: fixed storage needs 2..65535 nodes per texel (or 0: sized by the worst "
+             "texel), not ",
+             options.fixedNodes);
     DsmFixed m;
     m.width_ = width;
     m.height_ = height;
@@ -105,6 +109,30 @@ DsmFixed DsmFixed::build(int64_t width, int64_t height, const DsmTexelFunction& 
         }
     });
     m.stats_ = combine(stats, width * height, options.epsilon);
+    m.stats_.bytes = int64_t(m.nodes_.size() * sizeof(DsmNode) + m.counts_.size() * sizeof(uint16_t));
+    return m;
+}
+
+DsmFixed DsmFixed::fromChunked(const DsmChunked& chunked) {
+    const DsmStats& cs = chunked.stats();
+    if (cs.maxNodes > std::numeric_limits<uint16_t>::max())
+        fail("deep shadow map: a texel has ", cs.maxNodes, " nodes, more than fixed storage holds (65535)");
+    DsmFixed m;
+    m.width_ = chunked.width();
+    m.height_ = chunked.height();
+    m.n_ = int32_t(std::max<int64_t>(2, cs.maxNodes));
+    const int64_t n = m.n_, width = m.width_;
+    m.nodes_.assign(size_t(m.width_ * m.height_ * n), DsmNode{});
+    m.counts_.assign(size_t(m.width_ * m.height_), 0);
+    parallelFor(0, m.height_, 8, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < width; ++x) {
+                const std::vector<DsmNode> nodes = chunked.texel(x, y);
+                std::copy(nodes.begin(), nodes.end(), m.nodes_.begin() + (y * width + x) * n);
+                m.counts_[size_t(y * width + x)] = uint16_t(nodes.size());
+            }
+    });
+    m.stats_ = cs;
     m.stats_.bytes = int64_t(m.nodes_.size() * sizeof(DsmNode) + m.counts_.size() * sizeof(uint16_t));
     return m;
 }
@@ -198,6 +226,56 @@ std::vector<DsmNode> DsmChunked::texel(int64_t x, int64_t y) const {
         out.push_back(chunks_[size_t(c)].nodes[e++]);
     }
     return out;
+}
+
+const char* toString(DsmStorage s) {
+    switch (s) {
+    case DsmStorage::Fixed:
+        return "fixed";
+    case DsmStorage::Chunked:
+        return "chunked";
+    }
+    return "?";
+}
+
+DsmStorage parseDsmStorage(const std::string& name) {
+    static constexpr detail::EnumName<DsmStorage> kNames[] = {{"fixed", DsmStorage::Fixed},
+                                                              {"chunked", DsmStorage::Chunked}};
+    return detail::parseEnum<DsmStorage>(name, "deep shadow map storage", kNames);
+}
+
+DeepShadowMap DeepShadowMap::build(int64_t width, int64_t height, const DsmTexelFunction& texel,
+                                   DsmStorage storage, const DsmBuildOptions& options) {
+    DeepShadowMap m;
+    if (storage == DsmStorage::Fixed)
+        m.map_ = DsmFixed::build(width, height, texel, options);
+    else
+        m.map_ = DsmChunked::build(width, height, texel, options.epsilon);
+    return m;
+}
+
+DsmView DeepShadowMap::view() const {
+    DsmView v;
+    if (const auto* f = std::get_if<DsmFixed>(&map_)) {
+        v.storage = DsmStorage::Fixed;
+        v.fixed = f->view();
+    } else {
+        v.storage = DsmStorage::Chunked;
+        v.chunked = std::get<DsmChunked>(map_).view();
+    }
+    return v;
+}
+
+const DsmStats& DeepShadowMap::stats() const {
+    return std::visit([](const auto& m) -> const DsmStats& { return m.stats(); }, map_);
+}
+
+std::vector<DsmNode> DeepShadowMap::texel(int64_t x, int64_t y) const {
+    if (const auto* f = std::get_if<DsmFixed>(&map_)) {
+        const auto s = f->texel(x, y);
+        return {s.begin(), s.end()};
+    }
+    return std::get<DsmChunked>(map_).texel(x, y);
 }
 
 } // namespace voxfx
