@@ -78,6 +78,7 @@ void report(benchmark::State& state, const DsmStats& s) {
     state.counters["nodes_max"] = double(s.maxNodes);
     state.counters["bytes"] = double(s.bytes);
     state.counters["overflow"] = double(s.overflowTexels);
+    state.counters["max_eps"] = s.maxEpsilon;
     state.SetItemsProcessed(state.iterations() * kSize * kSize);
 }
 
@@ -139,6 +140,21 @@ void BM_DsmFixed(benchmark::State& state) {
     report(state, stats);
 }
 
+// Fixed storage capped at 8 nodes per texel: texels that need more are rebuilt with a larger ε
+// (overflow counts them, max_eps is the largest ε used).
+void BM_DsmFixedCapped(benchmark::State& state) {
+    DsmBuildOptions o;
+    o.epsilon = double(state.range(0)) / 100.0;
+    o.fixedNodes = 8;
+    DsmStats stats;
+    for (auto _ : state) {
+        const DsmFixed m = DsmFixed::build(kSize, kSize, randomRay, o);
+        stats = m.stats();
+        benchmark::DoNotOptimize(m.view().nodes);
+    }
+    report(state, stats);
+}
+
 // The uncompressed function's node count for reference (ε < 0: exact).
 void BM_DsmUncompressedNodes(benchmark::State& state) {
     int64_t nodes = 0, maxNodes = 0;
@@ -169,6 +185,7 @@ BENCHMARK(BM_DsmChunkedOneThread)
     ->UseRealTime();
 BENCHMARK(BM_DsmRaysOnly)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DsmFixed)->Arg(1)->Arg(5)->Arg(10)->Arg(20)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DsmFixedCapped)->Arg(1)->Arg(5)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DsmUncompressedNodes)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 } // namespace
