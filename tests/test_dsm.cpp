@@ -85,7 +85,7 @@ std::vector<double> probeDepths(const std::vector<DsmNode>& a, const std::vector
     const size_t k = d.size();
     for (size_t i = 0; i + 1 < k; ++i)
         for (double t : {0.25, 0.5, 0.75}) d.push_back(d[i] + t * (d[i + 1] - d[i]));
-    for (int i = 0; i <= 1000; ++i) d.push_back(-1.0 + 102.0 * i / 1000.0);
+    for (int i = 0; i <= 400; ++i) d.push_back(-1.0 + 102.0 * i / 400.0);
     return d;
 }
 
