@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "render/scene_gltf.hpp"
+#include "io/scene_gltf.hpp"
 #include "voxfx/voxfx.hpp"
 
 namespace voxfx {

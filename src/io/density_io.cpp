@@ -10,6 +10,7 @@
 #include "core/atomic_file.hpp"
 #include "io/module_api.hpp"
 #include "voxfx/density.hpp"
+#include "voxfx/file_name.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
@@ -93,11 +94,7 @@ void writeWorldOrdered(std::ostream& out, const WorldIndexer& ix, size_t bytes, 
     }
 }
 
-bool hasExtension(const std::string& path, const char* ext) {
-    std::string e = std::filesystem::path(path).extension().string();
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return e == ext;
-}
+bool hasExtension(const std::string& path, const char* ext) { return fileExtension(path) == ext; }
 
 } // namespace
 

@@ -11,6 +11,7 @@
 
 #include "core/atomic_file.hpp"
 #include "io/grid_formats.hpp"
+#include "voxfx/file_name.hpp"
 
 namespace voxfx {
 
@@ -43,9 +44,7 @@ std::string formatDouble(double v) {
 } // namespace detail
 
 GridFormat gridFormatFromPath(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
+    const std::string ext = fileExtension(path);
     if (ext == ".binvox") return GridFormat::Binvox;
     if (ext == ".vdb") return GridFormat::Vdb;
     if (ext == ".nrrd") return GridFormat::Nrrd;

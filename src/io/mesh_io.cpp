@@ -19,6 +19,7 @@
 #include <sys/stat.h>
 
 #include "io/mesh_formats.hpp"
+#include "voxfx/file_name.hpp"
 
 namespace voxfx {
 
@@ -110,13 +111,6 @@ FileBytes readWholeFile(const std::string& path) {
     return bytes;
 }
 
-std::string lowerExtension(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    if (!ext.empty()) ext.erase(0, 1);
-    for (char& c : ext) c = char(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
-    return ext;
-}
-
 Reader readerFor(const std::string& path, const std::string& ext) {
     if (ext == "off") return Reader::kOff;
     if (ext == "obj") return Reader::kObj;
@@ -151,7 +145,8 @@ void checkNonFiniteVertices(const ParsedMesh& parsed, const std::string& path) {
 } // namespace
 
 Mesh loadMesh(const std::string& path, MeshLoadReport* report) {
-    const std::string ext = lowerExtension(path);
+    std::string ext = fileExtension(path);
+    if (!ext.empty()) ext.erase(0, 1);
     const Reader reader = readerFor(path, ext);
 
     Mesh mesh;

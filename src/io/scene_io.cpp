@@ -7,7 +7,7 @@
 #include <set>
 
 #include "core/atomic_file.hpp"
-#include "render/scene_gltf.hpp"
+#include "io/scene_gltf.hpp"
 #include "voxfx/file_name.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/scene.hpp"

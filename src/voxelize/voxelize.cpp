@@ -11,8 +11,6 @@
 #include "core/enum_names.hpp"
 #include "voxelize/consumers.hpp"
 #include "voxelize/fill.hpp"
-#include "voxfx/grid_io.hpp"
-#include "voxfx/mesh_io.hpp"
 #include "voxfx/raster.hpp"
 
 namespace voxfx {
@@ -257,33 +255,6 @@ VoxelGrid voxelize(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
     VoxelGrid result;
     withThreads(options.threads, [&] { result = voxelizeImpl(mesh, frame, options); });
     return result;
-}
-
-bool isGridFile(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    return ext == ".binvox" || ext == ".vdb" || ext == ".nrrd";
-}
-
-VoxelGrid loadOrVoxelize(const std::string& path, const FitOptions& fit, const VoxelizeOptions& options,
-                         std::string* note) {
-    if (note) note->clear();
-    if (isGridFile(path)) return readGrid(path);
-    const Mesh mesh = loadMesh(path);
-    VoxelizeOptions vo = options;
-    const bool needsInside = vo.mode == VoxelizeMode::Solid || vo.mode == VoxelizeMode::SolidConservative ||
-                             vo.mode == VoxelizeMode::Interior;
-    if (needsInside && vo.fill == Fill::Parity) {
-        const MeshTopology topo = analyzeTopology(mesh.view());
-        if (!topo.closed()) {
-            vo.fill = Fill::Flood;
-            if (note)
-                *note = detail::concat(path, " is not closed (", topo.boundaryEdges, " boundary, ",
-                                       topo.nonManifoldEdges, " non-manifold edges): filled by flood");
-        }
-    }
-    return voxelize(mesh.view(), fitFrame(computeBounds(mesh.view()), fit), vo);
 }
 
 } // namespace voxfx

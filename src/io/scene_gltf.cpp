@@ -8,7 +8,7 @@
 // horizontally, and exposes neither KHR_materials_ior nor the volume attenuation. Assimp imports glTF
 // materials in the order meshes first use them (not in file order) and adds a default one, so its materials
 // are matched back to the file's by name, then base colour (materialMapping).
-#include "render/scene_gltf.hpp"
+#include "io/scene_gltf.hpp"
 
 #include <cmath>
 #include <cstring>
@@ -20,17 +20,11 @@
 #include "core/enum_names.hpp"
 #include "io/module_api.hpp"
 #include "voxfx/error.hpp"
+#include "voxfx/file_name.hpp"
 
 namespace voxfx::detail {
 
 using nlohmann::json;
-
-std::string lowerExtension(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    if (!ext.empty()) ext.erase(0, 1);
-    for (char& c : ext) c = char(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
-    return ext;
-}
 
 LightType parseLightType(const std::string& type, const std::string& where) {
     static constexpr EnumName<LightType> kNames[] = {
@@ -347,7 +341,7 @@ json readGltfJson(const std::string& path, bool binary) {
 }
 
 Scene loadGltfScene(const std::string& path) {
-    const bool binary = lowerExtension(path) == "glb";
+    const bool binary = fileExtension(path) == ".glb";
     const json doc = readGltfJson(path, binary);
     if (!doc.is_object() || !doc.contains("asset")) fail(path, ": not a glTF 2.0 file (no \"asset\")");
     const std::string version = doc["asset"].value("version", "");

@@ -19,9 +19,6 @@ Scene loadGltfScene(const std::string& path);
 /// Whole file as a string; voxfx::Error naming the file (and `what` it is) when it cannot be read.
 std::string readTextFile(const std::string& path, const char* what);
 
-/// Lower-case extension without the dot ("" when none).
-std::string lowerExtension(const std::string& path);
-
 /// directional | spot | point (glTF KHR_lights_punctual and the JSON wrapper spell them alike);
 /// voxfx::Error starting with `where` and listing the allowed names otherwise.
 LightType parseLightType(const std::string& type, const std::string& where);
