@@ -13,6 +13,7 @@
 #include <CGAL/convex_hull_2.h>
 #include <gtest/gtest.h>
 
+#include "test_util.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/raster.hpp"
 
@@ -126,25 +127,6 @@ Mesh bipyramid(double cx, double cy, double z0, double zm, double z1, double r, 
     return m;
 }
 
-// The octahedron |x - c.x| + |y - c.y| + |z - c.z| <= r (outward CCW).
-Mesh octahedron(const Vec3d& c, double r) {
-    Mesh m;
-    for (int a = 0; a < 3; ++a)
-        for (double s : {r, -r}) {
-            Vec3d p = c;
-            p[a] += s;
-            m.positions.push_back(Vec3f(p));
-        }
-    for (uint32_t sx : {0u, 1u})
-        for (uint32_t sy : {0u, 1u})
-            for (uint32_t sz : {0u, 1u}) {
-                const bool mirrored = (sx + sy + sz) % 2 == 1;
-                const uint32_t x = sx, y = 2 + sy, z = 4 + sz;
-                for (uint32_t v : {x, mirrored ? z : y, mirrored ? y : z}) m.indices.push_back(v);
-            }
-    return m;
-}
-
 // Where the grid point (px, py) lies relative to the convex hull of the projected vertices
 // (grid x, y): +1 strictly inside, 0 on the boundary, -1 outside (exact, CGAL).
 int hullSide(const std::vector<K::Point_2>& hull, double px, double py) {
@@ -187,7 +169,7 @@ TEST(RasterTest, CentreCoverageOfConvexMeshesCrossesEachInsideCentreExactlyTwice
     // surface twice (once front, once back) where the centre lies strictly inside the projected
     // outline, and never outside it; on the outline both or neither.
     const Frame frame = Frame::orthographic({{0, 0, 0}, {16, 16, 16}}, Axis::Z, 16, 16, 16);
-    const Mesh meshes[] = {octahedron({8.5, 8.5, 8}, 5), octahedron({8, 8, 8}, 6),
+    const Mesh meshes[] = {test::makeOctahedron({8.5, 8.5, 8}, 5), test::makeOctahedron({8, 8, 8}, 6),
                            bipyramid(6.5, 6.5, 2, 7, 13, 4, 7, 0.3), bipyramid(8.5, 7.5, 3, 8, 12, 5, 6, 0),
                            bipyramid(8, 8, 3, 8.5, 12, 4, 12, 0)};
     int index = 0;
@@ -456,7 +438,7 @@ TEST(RasterTest, CancellingThroughProgressFailsWithAnError) {
     struct Stop : Progress {
         bool update(double) override { return false; }
     } stop;
-    Mesh mesh = octahedron({8, 8, 8}, 6);
+    Mesh mesh = test::makeOctahedron({8, 8, 8}, 6);
     const Frame frame = Frame::orthographic({{0, 0, 0}, {16, 16, 16}}, Axis::Z, 16, 16, 16);
     RasterOptions o;
     o.progress = &stop;
@@ -514,7 +496,7 @@ static_assert(!sinkSupports<OnlyFragments::Sink>(Coverage::Conservative));
 static_assert(!sinkSupports<OnlySpans::Sink>(Coverage::Center));
 
 TEST(RasterTest, AConsumerWithoutTheMemberTheCoverageNeedsFailsLoudly) {
-    const Mesh mesh = octahedron({8, 8, 8}, 6);
+    const Mesh mesh = test::makeOctahedron({8, 8, 8}, 6);
     const Frame frame = Frame::orthographic({{0, 0, 0}, {16, 16, 16}}, Axis::Z, 16, 16, 16);
     RasterOptions o;
     o.coverage = Coverage::Conservative;
@@ -533,7 +515,7 @@ TEST(RasterTest, AConsumerWithoutTheMemberTheCoverageNeedsFailsLoudly) {
 }
 
 TEST(RasterTest, ConsumersAreHandedEachTileOnceWithItsIndexAndRows) {
-    const Mesh mesh = octahedron({8, 8, 8}, 6);
+    const Mesh mesh = test::makeOctahedron({8, 8, 8}, 6);
     const Frame frame = Frame::orthographic({{0, 0, 0}, {16, 16, 16}}, Axis::Z, 16, 13, 16);
     for (int64_t rows : {1, 4, 5, 13, 0}) {
         SCOPED_TRACE(rows);

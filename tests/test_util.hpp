@@ -166,6 +166,27 @@ inline void appendQuad(Mesh& m, const Vec3d& c, const Vec3d& u, const Vec3d& v) 
     m.indices.insert(m.indices.end(), {b, b + 1, b + 2, b, b + 2, b + 3});
 }
 
+// The octahedron |x - c.x| + |y - c.y| + |z - c.z| <= r: 6 vertices, 8 faces, outward CCW.
+inline Mesh makeOctahedron(const Vec3d& c, double r) {
+    Mesh m;
+    for (int a = 0; a < 3; ++a)
+        for (double s : {r, -r}) {
+            Vec3d p = c;
+            p[a] += s;
+            m.positions.push_back(Vec3f(p));
+        }
+    for (uint32_t sx : {0u, 1u})
+        for (uint32_t sy : {0u, 1u})
+            for (uint32_t sz : {0u, 1u}) {
+                // Vertex 2a + s is the tip along axis a on side s (0: +, 1: -); an odd number of
+                // minus signs mirrors the face, which flips its corner order.
+                const uint32_t x = sx, y = 2 + sy, z = 4 + sz;
+                const bool mirrored = (sx + sy + sz) % 2 == 1;
+                for (uint32_t v : {x, mirrored ? z : y, mirrored ? y : z}) m.indices.push_back(v);
+            }
+    return m;
+}
+
 inline Mesh makeBox(const Vec3d& lo, const Vec3d& hi) {
     Mesh m;
     appendBox(m, lo, hi);

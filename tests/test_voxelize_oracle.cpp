@@ -209,27 +209,6 @@ TEST(VoxelizeOracleTest, CgalOracleAgreesAlongEveryLineAxisAndWithSideOfTriangle
     EXPECT_EQ(test::sideOfMeshDisagreements(mesh.view(), g, z, 1), 0);
 }
 
-// The octahedron |x - c.x| + |y - c.y| + |z - c.z| <= r: 6 vertices, 8 faces, outward CCW.
-Mesh makeOctahedron(const Vec3d& c, double r) {
-    Mesh m;
-    for (int a = 0; a < 3; ++a)
-        for (double s : {r, -r}) {
-            Vec3d p = c;
-            p[a] += s;
-            m.positions.push_back(Vec3f(p));
-        }
-    for (uint32_t sx : {0u, 1u})
-        for (uint32_t sy : {0u, 1u})
-            for (uint32_t sz : {0u, 1u}) {
-                // Vertex 2a + s is the tip along axis a on side s (0: +, 1: -); an odd number of
-                // minus signs mirrors the face, which flips its corner order.
-                const uint32_t x = sx, y = 2 + sy, z = 4 + sz;
-                const bool mirrored = (sx + sy + sz) % 2 == 1;
-                for (uint32_t v : {x, mirrored ? z : y, mirrored ? y : z}) m.indices.push_back(v);
-            }
-    return m;
-}
-
 // Half-integer world coordinates on a grid whose cells are the unit cubes of [0, 32]^3, so that
 // world and grid coordinates coincide exactly: vertices on cell centres or corners, lines of
 // centres through edges and vertices, centres on faces, faces through box corners. The oracle
@@ -242,7 +221,7 @@ TEST(VoxelizeOracleTest, LatticeAlignedOctahedraMatchCgalDespiteDegenerateColumn
     };
     for (const Case& c :
          {Case{{16.5, 15.5, 16.5}, 9}, Case{{16, 16, 16}, 9}, Case{{15.5, 16, 16.25}, 11.5}}) {
-        const Mesh mesh = makeOctahedron(c.centre, c.radius);
+        const Mesh mesh = test::makeOctahedron(c.centre, c.radius);
         ASSERT_TRUE(analyzeTopology(mesh.view()).closed());
         for (Axis axis : {Axis::X, Axis::Y, Axis::Z}) {
             SCOPED_TRACE(::testing::Message()

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "io/grid_formats.hpp"
+#include "io/nrrd_header.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx::detail {
@@ -91,36 +92,9 @@ void writeNrrd(const VoxelGrid& grid, std::ostream& out) {
 namespace {
 constexpr size_t kMaxHeaderBytes = size_t(1) << 16;
 
-std::string_view trim(std::string_view s) {
-    while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-    while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-    return s;
-}
-
-template <class T> bool parseNumber(std::string_view& s, T& v) {
-    s = trim(s);
-    const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
-    if (r.ec != std::errc() || r.ptr == s.data()) return false;
-    s.remove_prefix(size_t(r.ptr - s.data()));
-    return true;
-}
-
-// "(a,b,c)" with optional spaces; advances s past the closing parenthesis.
-bool parseVector(std::string_view& s, Vec3d& v) {
-    s = trim(s);
-    if (s.empty() || s.front() != '(') return false;
-    s.remove_prefix(1);
-    for (int i = 0; i < 3; ++i) {
-        double d;
-        if (!parseNumber(s, d)) return false;
-        v[i] = d;
-        s = trim(s);
-        const char expected = i < 2 ? ',' : ')';
-        if (s.empty() || s.front() != expected) return false;
-        s.remove_prefix(1);
-    }
-    return true;
-}
+using nrrd::parseNumber;
+using nrrd::parseVector;
+using nrrd::trim;
 } // namespace
 
 VoxelGrid readNrrd(std::span<const uint8_t> bytes) {

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <string_view>
 
+#include "io/nrrd_header.hpp"
 #include "io/volume_formats.hpp"
 
 namespace voxfx::detail {
@@ -21,37 +22,9 @@ namespace {
 
 constexpr std::size_t kMaxHeaderBytes = std::size_t(1) << 16;
 
-std::string_view trim(std::string_view s) {
-    while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-    while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-    return s;
-}
-
-template <class T> bool parseNumber(std::string_view& s, T& v) {
-    s = trim(s);
-    if (!s.empty() && s.front() == '+') s.remove_prefix(1);
-    const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
-    if (r.ec != std::errc() || r.ptr == s.data()) return false;
-    s.remove_prefix(std::size_t(r.ptr - s.data()));
-    return true;
-}
-
-// "(a,b,c)" with optional spaces; advances s past the closing parenthesis.
-bool parseVector(std::string_view& s, Vec3d& v) {
-    s = trim(s);
-    if (s.empty() || s.front() != '(') return false;
-    s.remove_prefix(1);
-    for (int i = 0; i < 3; ++i) {
-        double d;
-        if (!parseNumber(s, d)) return false;
-        v[i] = d;
-        s = trim(s);
-        const char expected = i < 2 ? ',' : ')';
-        if (s.empty() || s.front() != expected) return false;
-        s.remove_prefix(1);
-    }
-    return true;
-}
+using nrrd::parseNumber;
+using nrrd::parseVector;
+using nrrd::trim;
 
 bool typeFromNrrd(std::string_view t, ScalarType& out) {
     static const struct {
