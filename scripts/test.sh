@@ -39,8 +39,10 @@ fi
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
 # No benchmarks or examples here: they add build time and no test. -O1 with line tables (-g1)
 # compiles in less than half the time of -O2 -g and still gives sanitizer reports file:line.
+# Warnings are errors in the Release pass; at -O1 GCC 12 warns falsely on the allocation test's
+# replaced operator delete (-Wmismatched-new-delete), so not here.
 cmake -S . -B build-asan -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DVOXFX_WERROR=ON \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DVOXFX_WERROR=OFF \
   -DVOXFX_SANITIZE=ON -DVOXFX_BUILD_CLI=ON -DVOXFX_BUILD_TESTS=ON -DVOXFX_BUILD_BENCH=OFF \
   -DVOXFX_BUILD_EXAMPLES=OFF >/dev/null
 cmake --build build-asan -j "$jobs"
