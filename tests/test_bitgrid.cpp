@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "test_util.hpp"
 #include "voxfx/bitgrid.hpp"
 #include "voxfx/error.hpp"
 
@@ -24,14 +25,6 @@ struct Model {
         return n;
     }
 };
-
-// Every bit of the grid's words beyond slice D - 1 of each column is zero.
-bool paddingIsZero(const BitGrid& g) {
-    for (int64_t c = 0; c < g.columnCount(); ++c)
-        for (int64_t s = g.depth(); s < 64 * g.wordsPerColumn(); ++s)
-            if ((g.column(c)[s >> 6] >> (s & 63)) & 1u) return false;
-    return true;
-}
 
 const int64_t kDepths[] = {1, 5, 63, 64, 65, 127, 128, 130};
 
@@ -79,13 +72,13 @@ TEST(BitGridTest, SetGetAndCountAgreeWithABruteForceModelAndPaddingStaysZero) {
             for (int64_t y = 0; y < h; ++y)
                 for (int64_t s = 0; s < d; ++s) ASSERT_EQ(g.get(x, y, s), bool(m.at(x, y, s)));
         EXPECT_EQ(g.count(), m.count());
-        EXPECT_TRUE(paddingIsZero(g));
+        EXPECT_TRUE(test::paddingIsZero(g));
         // Every cell on: count is W * H * D, padding still zero.
         for (int64_t x = 0; x < w; ++x)
             for (int64_t y = 0; y < h; ++y)
                 for (int64_t s = 0; s < d; ++s) g.set(x, y, s);
         EXPECT_EQ(g.count(), w * h * d);
-        EXPECT_TRUE(paddingIsZero(g));
+        EXPECT_TRUE(test::paddingIsZero(g));
         g.clear();
         EXPECT_EQ(g.count(), 0);
     }
@@ -170,7 +163,7 @@ TEST(BitGridTest, AViewReadsAndWritesTheGridsWords) {
         EXPECT_TRUE(v.get(1, 1, d / 2));
         v.set(2, 4, d - 1, false);
         EXPECT_EQ(g.count(), 2);
-        EXPECT_TRUE(paddingIsZero(g));
+        EXPECT_TRUE(test::paddingIsZero(g));
     }
 }
 

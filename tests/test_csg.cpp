@@ -33,12 +33,6 @@ bool apply(CsgOp op, bool a, bool b) {
     return false;
 }
 
-bool paddingIsZero(const BitGrid& g) {
-    for (int64_t c = 0; c < g.columnCount(); ++c)
-        if (g.column(c)[g.wordsPerColumn() - 1] & ~g.lastWordMask()) return false;
-    return true;
-}
-
 TEST(CsgTest, GridOperationsMatchCellwiseBooleansOnRandomGrids) {
     for (const int64_t D : {1, 63, 64, 65, 100, 129}) {
         const BitGrid a = randomBits(5, 3, D, 0.5, uint64_t(D)),
@@ -59,7 +53,7 @@ TEST(CsgTest, GridOperationsMatchCellwiseBooleansOnRandomGrids) {
                     for (int64_t s = 0; s < D; ++s)
                         wrong += r.get(x, y, s) != apply(op, a.get(x, y, s), b.get(x, y, s));
             EXPECT_EQ(wrong, 0) << toString(op) << " D " << D;
-            EXPECT_TRUE(paddingIsZero(r)) << toString(op) << " D " << D;
+            EXPECT_TRUE(test::paddingIsZero(r)) << toString(op) << " D " << D;
         }
     }
 }
@@ -98,7 +92,7 @@ TEST(CsgTest, LargeGridsTakeTheStreamingPathAndStayExact) {
             wrongCells += r.get(x, y, s) != apply(op, a.get(x, y, s), b.get(x, y, s));
         }
         EXPECT_EQ(wrongCells, 0) << toString(op);
-        EXPECT_TRUE(paddingIsZero(r)) << toString(op);
+        EXPECT_TRUE(test::paddingIsZero(r)) << toString(op);
     }
 }
 
@@ -248,7 +242,7 @@ TEST(CsgTest, NaryOperationsFoldLeft) {
                 }
         EXPECT_EQ(wrong, 0) << k.expression;
         EXPECT_GT(set, 0) << k.expression;
-        EXPECT_TRUE(paddingIsZero(r)) << k.expression;
+        EXPECT_TRUE(test::paddingIsZero(r)) << k.expression;
     }
 }
 

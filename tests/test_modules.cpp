@@ -123,7 +123,7 @@ std::string base64(const std::string& bytes) {
     return out;
 }
 
-template <class T> void append(std::string& s, T v) {
+template <class T> void appendBytes(std::string& s, T v) {
     s.append(reinterpret_cast<const char*>(&v), sizeof(T));
 }
 
@@ -131,12 +131,12 @@ template <class T> void append(std::string& s, T v) {
 std::string outwardCubeBuffer() {
     std::string b;
     for (int v = 0; v < 8; ++v)
-        for (int a = 0; a < 3; ++a) append<float>(b, (v >> a) & 1 ? 1.0f : -1.0f);
+        for (int a = 0; a < 3; ++a) appendBytes<float>(b, (v >> a) & 1 ? 1.0f : -1.0f);
     // Vertex v has x = bit 0, y = bit 1, z = bit 2.
     const uint16_t faces[12][3] = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
                                    {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
     for (const auto& f : faces)
-        for (uint16_t i : f) append<uint16_t>(b, i);
+        for (uint16_t i : f) appendBytes<uint16_t>(b, i);
     return b;
 }
 

@@ -44,12 +44,6 @@ BitGrid naiveMorph(const BitGrid& g, bool erode, const MorphologyOptions& o) {
     return out;
 }
 
-bool paddingIsZero(const BitGrid& g) {
-    for (int64_t c = 0; c < g.columnCount(); ++c)
-        if (g.column(c)[g.wordsPerColumn() - 1] & ~g.lastWordMask()) return false;
-    return true;
-}
-
 // Every cell flipped, cell by cell (padding stays zero).
 BitGrid complement(const BitGrid& g) {
     BitGrid out(g.width(), g.height(), g.depth());
@@ -98,7 +92,7 @@ TEST(MorphologyTest, ErosionAndDilationMatchTheBoxScanOnRandomGrids) {
                 const BitGrid e = erode(g, o), d = dilate(g, o);
                 ASSERT_EQ(e, naiveMorph(g, true, o)) << "erode " << what;
                 ASSERT_EQ(d, naiveMorph(g, false, o)) << "dilate " << what;
-                EXPECT_TRUE(paddingIsZero(e) && paddingIsZero(d)) << what;
+                EXPECT_TRUE(test::paddingIsZero(e) && test::paddingIsZero(d)) << what;
                 EXPECT_EQ(e, complement(dilate(complement(g), dualOf(o)))) << "duality " << what;
                 // Opening and closing are compositions of the two.
                 EXPECT_EQ(opening(g, o), naiveMorph(naiveMorph(g, true, o), false, o)) << what;

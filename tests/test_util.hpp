@@ -141,6 +141,7 @@ inline std::string missingData(std::string_view relative) {
 #include <cmath>
 #include <vector>
 
+#include "voxfx/bitgrid.hpp"
 #include "voxfx/mesh.hpp"
 
 namespace voxfx::test {
@@ -164,6 +165,15 @@ inline void appendQuad(Mesh& m, const Vec3d& c, const Vec3d& u, const Vec3d& v) 
     const auto b = uint32_t(m.positions.size());
     for (const Vec3d& p : {c - u - v, c + u - v, c + u + v, c - u + v}) m.positions.push_back(Vec3f(p));
     m.indices.insert(m.indices.end(), {b, b + 1, b + 2, b, b + 2, b + 3});
+}
+
+// Every bit of the grid's words beyond slice D - 1 of each column is zero (checked bit by bit,
+// not through BitGrid::lastWordMask).
+inline bool paddingIsZero(const BitGrid& g) {
+    for (int64_t c = 0; c < g.columnCount(); ++c)
+        for (int64_t s = g.depth(); s < 64 * g.wordsPerColumn(); ++s)
+            if ((g.column(c)[s >> 6] >> (s & 63)) & 1u) return false;
+    return true;
 }
 
 // The octahedron |x - c.x| + |y - c.y| + |z - c.z| <= r: 6 vertices, 8 faces, outward CCW.

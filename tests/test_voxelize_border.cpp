@@ -31,7 +31,7 @@ using test::WorldGrid;
 
 // Round-off allowance of the rasterizer (raster_impl.hpp kConservativeSlack = 1e-9 cell, and
 // the rounded world cell bounds): cells missing the mesh by less than this may be set.
-constexpr double kNearCells = 2e-9;
+constexpr double kLeaveOutCells = 2e-9;
 
 // --- Meshes ------------------------------------------------------------------------------------
 
@@ -205,14 +205,14 @@ Mesh gear(int teeth, double r, double h) {
 // --- Oracles -----------------------------------------------------------------------------------
 
 struct Expected {
-    WorldGrid conservative, conservativeNear; // touching cells; cells within kNearCells
+    WorldGrid conservative, conservativeNear; // touching cells; cells within kLeaveOutCells
     WorldGrid inside, onSurface;              // centres inside; centres on the surface (left out)
 };
 
 // Uniform slicing: the oracles of cgal_oracle.hpp on the frame's cells.
 Expected uniformOracle(const MeshView& mesh, const CellGeometry& g) {
     Expected e;
-    test::ConservativeOracle c = test::oracleConservative(mesh, g, kNearCells);
+    test::ConservativeOracle c = test::oracleConservative(mesh, g, kLeaveOutCells);
     e.conservative = std::move(c.cells);
     e.conservativeNear = std::move(c.near);
     test::SolidOracle s = test::oracleSolid(mesh, g);
@@ -243,11 +243,11 @@ Expected frameOracle(const MeshView& mesh, const Frame& frame) {
                 const Vec3d b =
                     frame.worldFromGrid({double(x + 1), double(y + 1), m.near + double(s + 1) / m.scale});
                 const Vec3d lo = min(a, b), hi = max(a, b);
-                // The near band: the box grown by kNearCells of its own size along the slices
+                // The near band: the box grown by kLeaveOutCells of its own size along the slices
                 // (local slices are thinner than uniform ones) and of a cell across.
-                Vec3d grow = cell * kNearCells;
+                Vec3d grow = cell * kLeaveOutCells;
                 const int sa = sliceAxis(frame.axis());
-                grow[sa] = (hi[sa] - lo[sa]) * kNearCells;
+                grow[sa] = (hi[sa] - lo[sa]) * kLeaveOutCells;
                 const K::Iso_cuboid_3 box(Point3(lo.x, lo.y, lo.z), Point3(hi.x, hi.y, hi.z));
                 const K::Iso_cuboid_3 grown(Point3(lo.x - grow.x, lo.y - grow.y, lo.z - grow.z),
                                             Point3(hi.x + grow.x, hi.y + grow.y, hi.z + grow.z));
@@ -279,7 +279,7 @@ WorldGrid frameCells(const VoxelGrid& g) {
     return out;
 }
 
-// Centres whose line along the slicing axis passes within kNearCells of a mesh edge: the
+// Centres whose line along the slicing axis passes within kLeaveOutCells of a mesh edge: the
 // contacts here sit at "nice" fractions of the box, so in frames whose cells are not
 // representable (a resolution fit of 23 cells over 16 units) a centre line can pass through an
 // edge in exact arithmetic, and the oracle's rounded world centres and the rasterizer's rounded
@@ -291,14 +291,14 @@ void leaveOutNearlyDegenerateCentres(const MeshView& mesh, const Frame& frame, W
     using Point2 = K::Point_2;
     const int ax = columnXAxis(frame.axis()), ay = columnYAxis(frame.axis());
     const Vec3d cell = frame.cellSize();
-    const double tol = kNearCells * std::max(cell[ax], cell[ay]);
+    const double tol = kLeaveOutCells * std::max(cell[ax], cell[ay]);
     std::vector<K::Segment_2> edges;
     for (std::size_t t = 0; t < mesh.triangleCount; ++t)
         for (int k = 0; k < 3; ++k) {
             const Vec3d a = mesh.vertex(mesh.index(t, k)), b = mesh.vertex(mesh.index(t, (k + 1) % 3));
             edges.emplace_back(Point2(a[ax], a[ay]), Point2(b[ax], b[ay]));
         }
-    // Centres within kNearCells of a slice of the surface along their line: local slices are
+    // Centres within kLeaveOutCells of a slice of the surface along their line: local slices are
     // fitted to the geometry of their column (a face spanning a column puts the centre of its
     // middle slice on it), and faces through lattice-like points put centres on them.
     std::vector<Triangle3> tris = triangles(mesh);
@@ -318,8 +318,8 @@ void leaveOutNearlyDegenerateCentres(const MeshView& mesh, const Frame& frame, W
         for (int64_t x = 0; x < frame.width(); ++x)
             for (int64_t s = 0; s < frame.depth(); ++s) {
                 const Vec3d c = frame.cellCenter(x, y, s);
-                const double d =
-                    kNearCells * (frame.cellCenter(x, y, std::min<int64_t>(s + 1, frame.depth() - 1))[sa] -
+                const double d = kLeaveOutCells *
+                                 (frame.cellCenter(x, y, std::min<int64_t>(s + 1, frame.depth() - 1))[sa] -
                                   frame.cellCenter(x, y, std::max<int64_t>(s - 1, 0))[sa]);
                 Vec3d lo = c, hi = c;
                 lo[sa] -= std::abs(d);
@@ -366,7 +366,7 @@ WorldGrid minus(const WorldGrid& a, const WorldGrid& b) {
 
 constexpr VoxelizeMode kModes[] = {VoxelizeMode::Surface, VoxelizeMode::Conservative, VoxelizeMode::Solid,
                                    VoxelizeMode::SolidConservative, VoxelizeMode::Interior};
-constexpr RasterPath kPaths[] = {RasterPath::Binned, RasterPath::Direct};
+constexpr RasterPath kBothPaths[] = {RasterPath::Binned, RasterPath::Direct};
 
 VoxelGrid run(const Mesh& mesh, const Frame& frame, VoxelizeMode mode, RasterPath path, Slicing slicing) {
     VoxelizeOptions o;
@@ -384,7 +384,7 @@ int64_t expectEveryModeMatchesCgal(const Mesh& mesh, const Frame& frame) {
         SCOPED_TRACE(toString(slicing));
         Expected e;
         bool haveOracle = false;
-        for (RasterPath path : kPaths) {
+        for (RasterPath path : kBothPaths) {
             SCOPED_TRACE(path == RasterPath::Binned ? "binned" : "direct");
             for (VoxelizeMode mode : kModes) {
                 SCOPED_TRACE(toString(mode));
@@ -536,10 +536,10 @@ TEST(VoxelizeBorderTest, GearTipsOnTheSidesOfTheResolutionFitAt200AreConservativ
     for (Axis axis : {Axis::Z, Axis::X}) {
         SCOPED_TRACE(toString(axis));
         const Frame frame = resolutionFit(mesh, 200, axis);
-        for (RasterPath path : kPaths) {
+        for (RasterPath path : kBothPaths) {
             const VoxelGrid g = run(mesh, frame, VoxelizeMode::Conservative, path, Slicing::Uniform);
             const test::ConservativeOracle o =
-                test::oracleConservative(mesh.view(), CellGeometry::of(g), kNearCells);
+                test::oracleConservative(mesh.view(), CellGeometry::of(g), kLeaveOutCells);
             EXPECT_TRUE(same(toWorldGrid(g), o.cells, &o.near))
                 << (path == RasterPath::Binned ? "binned" : "direct");
         }
