@@ -108,21 +108,6 @@ TEST(ModuleLoaderTest, TheCommandStartsWithoutOpenVdbAssimpOrOpenExr) {
 
 // ---- One Assimp-to-mesh conversion: mirrored nodes ---------------------------------------------
 
-std::string base64(const std::string& bytes) {
-    static const char* kDigits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    for (std::size_t i = 0; i < bytes.size(); i += 3) {
-        uint32_t v = uint32_t(uint8_t(bytes[i])) << 16;
-        if (i + 1 < bytes.size()) v |= uint32_t(uint8_t(bytes[i + 1])) << 8;
-        if (i + 2 < bytes.size()) v |= uint32_t(uint8_t(bytes[i + 2]));
-        out += kDigits[(v >> 18) & 63];
-        out += kDigits[(v >> 12) & 63];
-        out += i + 1 < bytes.size() ? kDigits[(v >> 6) & 63] : '=';
-        out += i + 2 < bytes.size() ? kDigits[v & 63] : '=';
-    }
-    return out;
-}
-
 template <class T> void appendBytes(std::string& s, T v) {
     s.append(reinterpret_cast<const char*>(&v), sizeof(T));
 }
@@ -151,7 +136,7 @@ std::string mirroredGltf() {
             {"name": "twice", "scale": [1, 1, -2], "mesh": 0}],
   "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "mode": 4}]}],
   "buffers": [{"uri": "data:application/octet-stream;base64,)" +
-           base64(buffer) + R"(", "byteLength": )" + std::to_string(buffer.size()) + R"(}],
+           test::base64(buffer) + R"(", "byteLength": )" + std::to_string(buffer.size()) + R"(}],
   "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 96, "target": 34962},
                   {"buffer": 0, "byteOffset": 96, "byteLength": 72, "target": 34963}],
   "accessors": [{"bufferView": 0, "componentType": 5126, "count": 8, "type": "VEC3",

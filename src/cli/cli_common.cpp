@@ -13,7 +13,8 @@ double msSince(Clock::time_point t0) {
 }
 
 std::string withCommas(int64_t v) {
-    std::string s = std::to_string(v < 0 ? -v : v);
+    // The magnitude as unsigned: -v overflows for INT64_MIN.
+    std::string s = std::to_string(v < 0 ? uint64_t(0) - uint64_t(v) : uint64_t(v));
     for (int i = int(s.size()) - 3; i > 0; i -= 3) s.insert(size_t(i), 1, ',');
     if (v < 0) s.insert(0, 1, '-'); // not "-" + s: GCC 12 warns falsely (-Wrestrict) once inlined
     return s;

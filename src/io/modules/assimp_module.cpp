@@ -18,31 +18,22 @@
 
 #include "io/module_api.hpp"
 #include "voxfx/error.hpp"
+#include "voxfx/math.hpp"
 
 namespace voxfx::detail {
 
 namespace {
 
-// Row-major 4 x 4 affine transform in double (column vectors: p' = M p).
-struct Affine {
-    double m[4][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+// Node transforms compose as voxfx::Mat4d (header-only, so the module still names no voxfx symbol).
+using Affine = Mat4d;
 
-    Affine operator*(const Affine& b) const {
-        Affine r;
-        for (int i = 0; i < 4; ++i)
-            for (int j = 0; j < 4; ++j) {
-                double s = 0;
-                for (int k = 0; k < 4; ++k) s += m[i][k] * b.m[k][j];
-                r.m[i][j] = s;
-            }
-        return r;
-    }
-    double det3() const {
-        return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-               m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-               m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    }
-};
+/// Determinant of the linear part: negative for a mirroring transform.
+double det3(const Affine& t) {
+    const auto& m = t.m;
+    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+           m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+}
 
 Affine fromAssimp(const aiMatrix4x4& a) {
     Affine t;
@@ -72,7 +63,7 @@ void convert(const aiScene* ai, AssimpScene& out) {
         const Affine m = parent * fromAssimp(node->mTransformation);
         for (unsigned k = node->mNumChildren; k-- > 0;) stack.push_back({node->mChildren[k], m});
         // Normals transform with the inverse transpose; a mirroring transform flips the winding.
-        const double det = m.det3();
+        const double det = det3(m);
         const bool mirrored = det < 0;
         double normalMatrix[3][3]; // cofactor matrix = det * inverse transpose
         for (int r = 0; r < 3; ++r)
