@@ -36,16 +36,17 @@ if [ -x scripts/check-install.sh ]; then
   scripts/check-install.sh build
 fi
 
-echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
-# No benchmarks or examples here: they add build time and no test. -O1 with line tables (-g1)
-# compiles in less than half the time of -O2 -g and still gives sanitizer reports file:line.
-# Warnings are errors in the Release pass; at -O1 GCC 12 warns falsely on the allocation test's
-# replaced operator delete (-Wmismatched-new-delete), so not here.
-cmake -S . -B build-asan -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests (clang)"
+# Clang builds this pass: its instrumented code generation costs about two thirds of GCC's
+# (src/grid/morphology.cpp at -O1 -g1 with ASan and UBSan: 5.7 s of CPU against 8.6 s), and a
+# second compiler checks what GCC lets through. No benchmarks or examples here: they add build
+# time and no test. -O1 with line tables (-g1) still gives sanitizer reports file:line.
+# Warnings are errors in the Release pass only.
+CC=clang CXX=clang++ cmake -S . -B build-sanitize -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DVOXFX_WERROR=OFF \
   -DVOXFX_SANITIZE=ON -DVOXFX_BUILD_CLI=ON -DVOXFX_BUILD_TESTS=ON -DVOXFX_BUILD_BENCH=OFF \
   -DVOXFX_BUILD_EXAMPLES=OFF >/dev/null
-cmake --build build-asan -j "$jobs"
+cmake --build build-sanitize -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-  ctest --test-dir build-asan --no-tests=error --output-on-failure -j "$jobs" "${label_args[@]}"
+  ctest --test-dir build-sanitize --no-tests=error --output-on-failure -j "$jobs" "${label_args[@]}"
 echo "== all tests passed in $((SECONDS - start)) s"
