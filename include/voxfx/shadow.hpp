@@ -23,11 +23,9 @@
 //
 // Light views: spot lights get one perspective frame along their direction (field of view fitted to
 // the casters, at most twice the outer cone, at most 160 degrees); point lights six 90-degree cube
-// faces; directional lights an orthographic frame perpendicular to their direction, fitted to the
-// casters. Frame::orthographic only takes axis-aligned boxes, so a directional view is an
-// axis-aligned frame in a rotated "frame space": geometry is rotated into it before rasterizing
-// (LightView::frameSpaceFromWorld; toFrameSpace). Frame should grow an oriented orthographic
-// constructor; then the rotation disappears.
+// faces; directional lights an oriented orthographic frame (Frame::orthographic with a basis)
+// perpendicular to their direction, fitted to the casters: world-space geometry is rasterized into
+// it directly, nothing is rotated or copied.
 //
 // EXPERIMENTAL until the renderer issue closes.
 // Thread-safety: built maps are read-only: visibility and the lookups may run concurrently from
@@ -73,20 +71,14 @@ struct ShadowOptions {
     bool bilinear = false;
 };
 
-/// One view of a light: a frame and the rigid map from world space into the space that frame is
-/// defined in (identity for perspective views, a rotation for directional lights).
+/// One view of a light: a frame over world space (perspective, or oriented orthographic for
+/// directional lights).
 struct LightView {
     Frame frame;
-    Mat4d frameSpaceFromWorld; ///< rigid (rotation and translation)
-    bool rotated = false;
 
-    Vec3d frameSpace(const Vec3d& world) const { return rotated ? frameSpaceFromWorld.point(world) : world; }
-    Vec3d frameVector(const Vec3d& world) const {
-        return rotated ? frameSpaceFromWorld.vector(world) : world;
-    }
     /// Grid coordinates (gx, gy, frame depth) of a world point; for perspective views the point must
     /// lie in front of the eye (check covers first).
-    Vec3d gridFromWorld(const Vec3d& world) const { return frame.gridFromWorld(frameSpace(world)); }
+    Vec3d gridFromWorld(const Vec3d& world) const { return frame.gridFromWorld(world); }
     /// True when p lies in front of the light (perspective) and projects into the columns.
     bool covers(const Vec3d& world) const;
     /// World size of one column at p (the texel footprint: constant for orthographic views, growing
@@ -102,9 +94,6 @@ std::vector<LightView> makeLightViews(const Light& light, const Box3d& casterBou
                                       int64_t d);
 /// Index of the view that covers p (the cube face for point lights), or -1.
 int viewIndexFor(const std::vector<LightView>& views, const Vec3d& world);
-/// A copy of `mesh` in the view's frame space (vertices rotated) for rotated views; the positions of
-/// `mesh` otherwise. Keep the result alive while using its view().
-Mesh toFrameSpace(const MeshView& mesh, const LightView& view);
 
 /// The standard shadow map: the nearest caster depth per texel (centre-sampled fragments of the
 /// one rasterizer), binary depth comparison with percentage-closer filtering.
