@@ -16,6 +16,9 @@
 //                              absorption of the cells between the light and p). Grey, per write,
 //                              not per unit length: a crossing written once attenuates exactly by
 //                              e^-sigma, matching the per-crossing model of the exact reference.
+//   ShadowKind::Volumes        exact hard shadows by shadow volumes counted per G-buffer pixel, with
+//                              ED06 §3.2 culling and clamping (shadow_volume.hpp); built by the
+//                              renderer from its G-buffer (buildVolumeShadow), not by build().
 //
 // Self-shadowing bias, for all kinds: the lookup point is moved along the surface normal (turned
 // towards the light) by `normalOffset` column footprints, and the grids skip the `skipCells` cells
@@ -33,6 +36,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -46,9 +50,9 @@
 
 namespace voxfx {
 
-enum class ShadowKind : uint8_t { None, Map, Transmittance, Absorption };
+enum class ShadowKind : uint8_t { None, Map, Transmittance, Absorption, Volumes };
 const char* toString(ShadowKind k);
-/// Parses none | map | transmittance | absorption; throws voxfx::Error listing them otherwise.
+/// Parses none | map | transmittance | absorption | volumes; throws voxfx::Error listing them otherwise.
 ShadowKind parseShadowKind(const std::string& name);
 
 struct ShadowOptions {
@@ -69,6 +73,10 @@ struct ShadowOptions {
     /// filters a shadow map; more self-shadowing on tilted leaves); false: p's own column only
     /// (ED06's lookup, the default: the smaller error against exact transport at high resolution).
     bool bilinear = false;
+    /// Volumes: skip volumes without visible receivers (ED06 §3.2); the shadow is unchanged.
+    bool volumeCulling = true;
+    /// Volumes: end each volume at the last depth slab holding visible receivers; unchanged shadow.
+    bool volumeClamping = true;
 };
 
 /// One view of a light: a frame over world space (perspective, or oriented orthographic for
@@ -185,9 +193,13 @@ private:
 float absorptionPerCrossing(const Material& m, float opaqueAbsorption);
 
 struct ShadowBuildTimings {
-    double mapMs = 0;      ///< standard shadow map(s)
-    double voxelizeMs = 0; ///< transmittance / attribute voxelization from the light
+    double mapMs = 0;            ///< standard shadow map(s)
+    double voxelizeMs = 0;       ///< transmittance / attribute voxelization from the light
+    double volumeMs = 0;         ///< shadow volumes: culling, construction and counting
+    int64_t volumeFragments = 0; ///< shadow-volume fragments rasterized in the camera frame
 };
+
+struct ShadowVolumeMask;
 
 /// All shadow data of one light for one ShadowKind, built from a scene.
 class LightShadow {
@@ -199,6 +211,10 @@ public:
     /// RGB fraction of the light reaching world point p. `n`: unit geometric normal turned towards
     /// the light, for the normal offset (zero vector: no offset, the exact point is looked up).
     Vec3f visibility(const Vec3d& p, const Vec3d& n) const;
+    /// ShadowKind::Volumes: wraps a per-pixel mask of the G-buffer the renderer shades (points are
+    /// looked up by their pixel; see shadow_volume.hpp).
+    static LightShadow fromVolumes(const ShadowOptions& options,
+                                   std::shared_ptr<const ShadowVolumeMask> mask);
     ShadowKind kind() const { return options_.kind; }
     const std::vector<ShadowMap>& maps() const { return maps_; }
     const std::vector<TransmittanceShadowMap>& transmittanceMaps() const { return transmittance_; }
@@ -210,6 +226,7 @@ private:
     std::vector<ShadowMap> maps_;
     std::vector<TransmittanceShadowMap> transmittance_;
     std::vector<AbsorptionShadowMap> absorption_;
+    std::shared_ptr<const ShadowVolumeMask> volumes_;
 };
 
 } // namespace voxfx
