@@ -371,5 +371,39 @@ TEST(ShadowVolumeTest, CgalMeshCastersMatchRayTracingAndCulling) {
     EXPECT_EQ(diff, 0);
 }
 
+// The foliage-free demo scenes: the image with culling and clamping is the image without.
+void svExpectDemoUnchangedByCulling(Scene scene) {
+    const Camera camera = scene.cameras.at(0);
+    RenderOptions o;
+    o.width = 96;
+    o.height = 54;
+    o.shadow.kind = ShadowKind::Volumes;
+    const RenderResult with = render(scene, camera, o);
+    o.shadow.volumeCulling = o.shadow.volumeClamping = false;
+    const RenderResult without = render(scene, camera, o);
+    int64_t differ = 0;
+    for (int64_t y = 0; y < o.height; ++y)
+        for (int64_t x = 0; x < o.width; ++x) differ += !(with.image.at(x, y) == without.image.at(x, y));
+    EXPECT_EQ(differ, 0);
+    EXPECT_GT(without.shadowVolumeFragments, 0);
+    EXPECT_LE(with.shadowVolumeFragments, without.shadowVolumeFragments);
+}
+
+TEST(ShadowVolumeTest, FoliageFreeTreeDemoRendersTheSameWithAndWithoutCulling) {
+    TreeOptions t;
+    t.leaves = 0;
+    svExpectDemoUnchangedByCulling(makeTreeScene(t));
+}
+
+TEST(ShadowVolumeTest, FoliageFreeMeshDemosRenderTheSameWithAndWithoutCullingSlow) {
+    const std::string dir = test::dataPath("meshes");
+    if (!std::filesystem::exists(dir + "/bunny00.off")) {
+        if (test::dataRequired()) FAIL() << test::missingData("meshes/bunny00.off");
+        GTEST_SKIP() << test::missingData("meshes/bunny00.off");
+    }
+    svExpectDemoUnchangedByCulling(makeBunnyScene(dir, 0));
+    svExpectDemoUnchangedByCulling(makeCgalScene(dir, 0));
+}
+
 } // namespace
 } // namespace voxfx

@@ -78,7 +78,7 @@ struct ShadowVolumeOptions {
     bool cullReceivers = true;    ///< skip volumes holding no visible receiver
     bool cullOccluded = true;     ///< skip casters entirely in other casters' shadow
     bool clamp = true;            ///< end each volume at its last receiver slab
-    int64_t mapResolution = 512;  ///< light views for culling: columns along the longer side
+    int64_t mapResolution = 256;  ///< light views for culling: columns along the longer side
     int64_t receiverSlices = 128; ///< receiver slicemap: slices
 };
 

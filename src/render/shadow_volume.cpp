@@ -284,6 +284,7 @@ template <Coverage C, class Op> void svRasterTexels(const Frame& f, const Mesh& 
     SvTexelConsumer<Op> consumer{f.width(), op, &rect};
     RasterOptions ro;
     ro.coverage = C;
+    ro.rowsPerTile = f.height(); // one tile: callers run casters or views in parallel
     rasterize<C>(f, mesh.view(), ro, consumer);
 }
 
@@ -408,7 +409,8 @@ template <class T> void svReset(std::vector<T>& map, int64_t W, const SvRect& re
 // (see the file comment of shadow_volume.hpp): clears occluded[i] for casters that this view does
 // not show to be in shadow.
 void svOccludedInView(const std::vector<ShadowCaster>& casters, const std::vector<SvCasterLight>& setup,
-                      const LightView& view, bool cubeFace, std::vector<uint8_t>& occluded) {
+                      const std::vector<uint8_t>& keep, const LightView& view, bool cubeFace,
+                      std::vector<uint8_t>& occluded) {
     const Frame& f = view.frame;
     const int64_t W = f.width(), H = f.height();
     const std::size_t N = casters.size();
@@ -420,6 +422,7 @@ void svOccludedInView(const std::vector<ShadowCaster>& casters, const std::vecto
     std::vector<float> far(size_t(W * H), -kSvInf);
     std::vector<uint8_t> covered(size_t(W * H), 0);
     for (std::size_t i = 0; i < N; ++i) {
+        if (!keep[i]) continue;
         const ShadowCaster& c = casters[i];
         const SvCasterLight& s = setup[i];
         // Silhouette edges as triangles along the light ray: they project onto the edge.
@@ -562,18 +565,6 @@ ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Ligh
         const std::vector<LightView> views =
             makeLightViews(light, bounds, options.mapResolution, options.receiverSlices);
 
-        if (options.cullOccluded) {
-            std::vector<uint8_t> occluded(N, 1);
-            for (const LightView& v : views)
-                svOccludedInView(casters.casters, setup, v, views.size() > 1, occluded);
-            for (std::size_t i = 0; i < N; ++i)
-                if (occluded[i]) {
-                    keep[i] = 0;
-                    out.culled[i] = 2;
-                    ++st.culledOccluded;
-                }
-        }
-
         if (options.cullReceivers || options.clamp) {
             std::vector<BitGrid> slicemaps;
             for (const LightView& v : views)
@@ -602,47 +593,52 @@ ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Ligh
                     const Frame& f = views[v].frame;
                     const BitGrid& bits = slicemaps[v];
                     const int64_t VW = f.width(), VH = f.height();
-                    std::vector<float> minDepth(size_t(VW * VH), kSvInf);
-                    for (std::size_t i = 0; i < N; ++i) {
-                        if (!keep[i]) continue;
-                        const Mesh back = svSubMesh(casters.casters[i],
-                                                    [&](std::size_t t) { return setup[i].unlit[t] != 0; });
-                        SvRect rect;
-                        float* mp = minDepth.data();
-                        svRasterTexels<Coverage::Conservative>(
-                            f, back,
-                            [mp](int64_t texel, double dmin, double) {
-                                mp[texel] = std::min(mp[texel], float(dmin));
-                            },
-                            rect);
-                        if (rect.empty()) continue;
-                        // The footprint dilated by one column and one slice against the slicemap.
-                        const int64_t x0 = std::max<int64_t>(0, rect.v[0] - 1),
-                                      y0 = std::max<int64_t>(0, rect.v[1] - 1);
-                        const int64_t x1 = std::min<int64_t>(VW - 1, rect.v[2] + 1),
-                                      y1 = std::min<int64_t>(VH - 1, rect.v[3] + 1);
-                        double zmax = -std::numeric_limits<double>::infinity();
-                        for (int64_t y = y0; y <= y1; ++y)
-                            for (int64_t x = x0; x <= x1; ++x) {
-                                float m = kSvInf;
-                                for (int64_t yy = std::max<int64_t>(0, y - 1); yy <= std::min(VH - 1, y + 1);
-                                     ++yy)
-                                    for (int64_t xx = std::max<int64_t>(0, x - 1);
-                                         xx <= std::min(VW - 1, x + 1); ++xx)
-                                        m = std::min(m, minDepth[size_t(yy * VW + xx)]);
-                                if (!(m < kSvInf)) continue;
-                                const int64_t col = y * VW + x;
-                                const int64_t s0 = int64_t(std::floor(f.depthToSlice(col)(double(m)))) - 1;
-                                const int64_t top = svHighestSlice(bits, col, s0);
-                                if (top < 0) continue;
-                                hasReceivers[i] = 1;
-                                zmax =
-                                    std::max(zmax, svCellFar(f, x, y, top, setup[i].origin, setup[i].axis));
-                            }
-                        svReset(minDepth, VW, rect, kSvInf);
-                        // Views share the light: the farthest receiver over all of them.
-                        receiverFar[i] = std::max(receiverFar[i], zmax);
-                    }
+                    // Casters in parallel, each chunk with its own scratch map; each caster writes
+                    // only its own flags.
+                    parallelFor(0, int64_t(N), 4, [&](int64_t c0, int64_t c1) {
+                        std::vector<float> minDepth(size_t(VW * VH), kSvInf);
+                        for (std::size_t i = size_t(c0); i < size_t(c1); ++i) {
+                            if (!keep[i]) continue;
+                            const Mesh back = svSubMesh(
+                                casters.casters[i], [&](std::size_t t) { return setup[i].unlit[t] != 0; });
+                            SvRect rect;
+                            float* mp = minDepth.data();
+                            svRasterTexels<Coverage::Conservative>(
+                                f, back,
+                                [mp](int64_t texel, double dmin, double) {
+                                    mp[texel] = std::min(mp[texel], float(dmin));
+                                },
+                                rect);
+                            if (rect.empty()) continue;
+                            // The footprint dilated by one column and one slice against the slicemap.
+                            const int64_t x0 = std::max<int64_t>(0, rect.v[0] - 1),
+                                          y0 = std::max<int64_t>(0, rect.v[1] - 1);
+                            const int64_t x1 = std::min<int64_t>(VW - 1, rect.v[2] + 1),
+                                          y1 = std::min<int64_t>(VH - 1, rect.v[3] + 1);
+                            double zmax = -std::numeric_limits<double>::infinity();
+                            for (int64_t y = y0; y <= y1; ++y)
+                                for (int64_t x = x0; x <= x1; ++x) {
+                                    float m = kSvInf;
+                                    for (int64_t yy = std::max<int64_t>(0, y - 1);
+                                         yy <= std::min(VH - 1, y + 1); ++yy)
+                                        for (int64_t xx = std::max<int64_t>(0, x - 1);
+                                             xx <= std::min(VW - 1, x + 1); ++xx)
+                                            m = std::min(m, minDepth[size_t(yy * VW + xx)]);
+                                    if (!(m < kSvInf)) continue;
+                                    const int64_t col = y * VW + x;
+                                    const int64_t s0 =
+                                        int64_t(std::floor(f.depthToSlice(col)(double(m)))) - 1;
+                                    const int64_t top = svHighestSlice(bits, col, s0);
+                                    if (top < 0) continue;
+                                    hasReceivers[i] = 1;
+                                    zmax = std::max(zmax,
+                                                    svCellFar(f, x, y, top, setup[i].origin, setup[i].axis));
+                                }
+                            svReset(minDepth, VW, rect, kSvInf);
+                            // Views share the light: the farthest receiver over all of them.
+                            receiverFar[i] = std::max(receiverFar[i], zmax);
+                        }
+                    });
                 }
                 for (std::size_t i = 0; i < N; ++i) {
                     if (!keep[i]) continue;
@@ -662,6 +658,25 @@ ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Ligh
                         far[i] = clamped;
                         ++st.clamped;
                     }
+                }
+            }
+        }
+        // Second test, among the casters left: the light's map shows a caster in other casters'
+        // shadow. Views (cube faces) run in parallel, each clearing its own flags.
+        if (options.cullOccluded) {
+            std::vector<std::vector<uint8_t>> perView(views.size(), std::vector<uint8_t>(N, 1));
+            parallelFor(0, int64_t(views.size()), 1, [&](int64_t v0, int64_t v1) {
+                for (int64_t v = v0; v < v1; ++v)
+                    svOccludedInView(casters.casters, setup, keep, views[size_t(v)], views.size() > 1,
+                                     perView[size_t(v)]);
+            });
+            for (std::size_t i = 0; i < N; ++i) {
+                bool occluded = keep[i] != 0;
+                for (const std::vector<uint8_t>& o : perView) occluded = occluded && o[i];
+                if (occluded) {
+                    keep[i] = 0;
+                    out.culled[i] = 2;
+                    ++st.culledOccluded;
                 }
             }
         }
