@@ -33,12 +33,18 @@
 //              dilated by one column and one slice, holds no receiver cell at or behind them is
 //              skipped; otherwise its far cap is clamped to the farthest such cell.
 //              Receivers outside every view turn both off for that light.
-//   occluded   a caster lying entirely in the shadow of other casters: its whole conservative
-//              footprint in the light's map must be *clean* (no other caster's silhouette edge
-//              touches the texel, so every ray through it meets the same other casters) and
-//              covered by another caster whose farthest lit fragment in the texel is in front of
-//              the caster's nearest one. Then every point of V is already in those casters'
-//              volumes.
+//   occluded   then, among the casters left: a caster lying entirely in the shadow of the others.
+//              Its whole conservative footprint in the light's map must be *clean* (no other
+//              caster's silhouette edge touches the texel, so every ray through it meets the same
+//              other casters) and covered by another caster whose farthest lit fragment in the
+//              texel is in front of the caster's nearest one. Then every point of V is already in
+//              those casters' volumes (casters are assumed not to interpenetrate).
+// Culling costs rasterizations into the light's views per caster; on the CPU that can exceed the
+// fill it saves (BENCHMARKS.md).
+//
+// Lookups: the mask answers for the surface point of each G-buffer pixel. A point that is not
+// the G-buffer surface of the pixel it projects to (a refracted or reflected point) gets that
+// pixel's answer; shadow volumes only shade what the camera sees directly.
 //
 // EXPERIMENTAL until the renderer issue closes.
 // Thread-safety: ShadowCasterSet is read-only after build; computeShadowVolumes may run
@@ -120,8 +126,8 @@ ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Ligh
                                       const Box3d& sceneBounds, const ShadowVolumeOptions& options = {});
 
 /// The triangles of every caster's volume (near cap, silhouette quads, far cap, as the counting
-/// rasterizes them), unclamped and unculled, with per triangle whether it belongs to a depth-fail
-/// volume (else depth-pass). For tests and inspection.
+/// rasterizes them for depth-fail), unclamped and unculled, outward facing. For tests and
+/// inspection.
 Mesh shadowVolumeMesh(const ShadowCasterSet& casters, const Light& light, const Box3d& sceneBounds);
 
 /// The renderer's entry: ShadowKind::Volumes for one light (casters built once per render).
