@@ -398,6 +398,20 @@ namespace {
 
 constexpr float kSvInf = std::numeric_limits<float>::infinity();
 
+// False when caster c's bounding sphere lies wholly outside a perspective view's frustum (it then
+// has no fragment there); always true for orthographic views.
+bool svMayTouch(const LightView& view, const ShadowCaster& c) {
+    const Frame& f = view.frame;
+    if (!f.isPerspective()) return true;
+    const Projection& pr = f.projection();
+    const Vec3d q = pr.cameraFromWorld(c.sphereCentre);
+    const double r = c.sphereRadius * (1 + 1e-6) + 1e-9;
+    if (q.z < -r) return false;
+    const double nx = std::sqrt(1 + pr.tanX * pr.tanX), ny = std::sqrt(1 + pr.tanY * pr.tanY);
+    return (q.x - pr.tanX * q.z) / nx <= r && (-q.x - pr.tanX * q.z) / nx <= r &&
+           (q.y - pr.tanY * q.z) / ny <= r && (-q.y - pr.tanY * q.z) / ny <= r;
+}
+
 // Resets texels of `rect` in a W-wide map to `value`.
 template <class T> void svReset(std::vector<T>& map, int64_t W, const SvRect& rect, T value) {
     if (rect.empty()) return;
@@ -422,7 +436,7 @@ void svOccludedInView(const std::vector<ShadowCaster>& casters, const std::vecto
     std::vector<float> far(size_t(W * H), -kSvInf);
     std::vector<uint8_t> covered(size_t(W * H), 0);
     for (std::size_t i = 0; i < N; ++i) {
-        if (!keep[i]) continue;
+        if (!keep[i] || !svMayTouch(view, casters[i])) continue;
         const ShadowCaster& c = casters[i];
         const SvCasterLight& s = setup[i];
         // Silhouette edges as triangles along the light ray: they project onto the edge.
@@ -485,6 +499,7 @@ void svOccludedInView(const std::vector<ShadowCaster>& casters, const std::vecto
         const ShadowCaster& c = casters[i];
         // A single view must hold the caster whole (else part of it goes untested); cube faces
         // each test their own part of it.
+        if (cubeFace && !svMayTouch(view, c)) continue; // not in this face: nothing to test here
         if (!cubeFace) {
             bool inside = true;
             for (const Vec3f& p : c.positions) inside = inside && view.covers(Vec3d(p));
@@ -588,6 +603,13 @@ ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Ligh
             }
             if (st.receiversCovered) {
                 std::vector<uint8_t> hasReceivers(N, 0);
+                // Each caster's unlit triangles, once for all views.
+                std::vector<Mesh> backs(N);
+                parallelFor(0, int64_t(N), 4, [&](int64_t c0, int64_t c1) {
+                    for (std::size_t i = size_t(c0); i < size_t(c1); ++i)
+                        backs[i] = svSubMesh(casters.casters[i],
+                                             [&](std::size_t t) { return setup[i].unlit[t] != 0; });
+                });
                 std::vector<double> receiverFar(N, -std::numeric_limits<double>::infinity());
                 for (std::size_t v = 0; v < views.size(); ++v) {
                     const Frame& f = views[v].frame;
@@ -598,9 +620,8 @@ ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Ligh
                     parallelFor(0, int64_t(N), 4, [&](int64_t c0, int64_t c1) {
                         std::vector<float> minDepth(size_t(VW * VH), kSvInf);
                         for (std::size_t i = size_t(c0); i < size_t(c1); ++i) {
-                            if (!keep[i]) continue;
-                            const Mesh back = svSubMesh(
-                                casters.casters[i], [&](std::size_t t) { return setup[i].unlit[t] != 0; });
+                            if (!keep[i] || !svMayTouch(views[v], casters.casters[i])) continue;
+                            const Mesh& back = backs[i];
                             SvRect rect;
                             float* mp = minDepth.data();
                             svRasterTexels<Coverage::Conservative>(
