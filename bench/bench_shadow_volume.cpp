@@ -3,7 +3,7 @@
 // culling and clamping, the masks compared pixel for pixel, and the frame time of render() with
 // and without culling. One run per configuration (counts are deterministic; times are one sample).
 //
-//   ./build/bench/bench_shadow_volume [meshes-dir] [width height]
+//   ./build/bench_shadow_volume [meshes-dir] [width height]   (configure with -DVOXFX_BUILD_BENCH=ON)
 //       (defaults: data/meshes, 1280 x 720)
 //
 // Scenes: "field" (144 small closed casters on a 12 x 12 grid under a high point light, the camera
