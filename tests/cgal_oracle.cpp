@@ -282,4 +282,21 @@ bool writeWithCgal(const std::string& path, const CgalSoup& soup, bool binary) {
                                         CGAL::parameters::stream_precision(9).use_binary_mode(binary));
 }
 
+std::vector<uint8_t> oracleSegmentsHitMesh(const MeshView& mesh, const std::vector<Vec3d>& from,
+                                           const std::vector<Vec3d>& to) {
+    const std::vector<oracle::Triangle3> tris = oracle::triangles(mesh);
+    std::vector<CGAL::Bbox_3> boxes;
+    boxes.reserve(tris.size());
+    for (const oracle::Triangle3& t : tris) boxes.push_back(t.bbox());
+    std::vector<uint8_t> out(from.size(), 0);
+    for (std::size_t i = 0; i < from.size(); ++i) {
+        const oracle::K::Segment_3 seg(oracle::Point3(from[i].x, from[i].y, from[i].z),
+                                       oracle::Point3(to[i].x, to[i].y, to[i].z));
+        const CGAL::Bbox_3 sb = seg.bbox();
+        for (std::size_t t = 0; t < tris.size() && !out[i]; ++t)
+            if (CGAL::do_overlap(sb, boxes[t]) && CGAL::do_intersect(seg, tris[t])) out[i] = 1;
+    }
+    return out;
+}
+
 } // namespace voxfx::test

@@ -188,6 +188,12 @@ struct ConservativeOracle {
 /// nearCells * cell per side; 0 leaves `near` empty).
 ConservativeOracle oracleConservative(const MeshView& mesh, const CellGeometry& g, double nearCells = 0);
 
+/// For each segment (from[i], to[i]): whether it meets any triangle of `mesh`, closed segment
+/// against closed triangle, decided by CGAL's exact do_intersect(Segment_3, Triangle_3) on the
+/// double inputs (after an axis-aligned bounding box rejection). Brute force over the triangles.
+std::vector<uint8_t> oracleSegmentsHitMesh(const MeshView& mesh, const std::vector<Vec3d>& from,
+                                           const std::vector<Vec3d>& to);
+
 /// The walls plus every cell that no 6-connected path of non-wall cells joins to the grid border
 /// (breadth-first search from all non-wall border cells).
 inline WorldGrid floodFromBorder(const WorldGrid& walls) {

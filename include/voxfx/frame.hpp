@@ -16,6 +16,12 @@
 // cyclic order, so the grid is right-handed: axis Z -> columns (x, y); axis X -> columns (y, z);
 // axis Y -> columns (z, x).
 //
+// Oriented orthographic frames (Frame::orthographic with a basis) tile a box given in the local
+// coordinates (p . right, p . up, p . forward) of a right-handed orthonormal basis: columns run
+// along right and up, slices along forward (axis() is Z). Directional light views use them, so no
+// geometry is rotated into an axis-aligned copy. For such a frame box() is the *local* box and
+// cellSize() the cell size along (right, up, forward).
+//
 // Kernels (the rasterizer, its consumers, a future CUDA back end) see a frame through FrameView:
 // a trivially copyable value (projection, W, H, D, the uniform slicing and a pointer to the
 // local slicing table) with no allocation, exceptions or I/O in its member functions.
@@ -56,12 +62,15 @@ struct DepthToSlice {
 /// World -> grid coordinates of a frame (see the file comment), as plain data for kernels.
 ///   orthographic: grid = ((p[axisX] - origin[axisX]) * scale.x, (p[axisY] - origin[axisY]) * scale.y,
 ///                         (p[axisS] - origin[axisS]) * scale.z)
+///   oriented orthographic: q = p - origin (the world corner of the local box),
+///                 grid = ((q . right) * scale.x, (q . up) * scale.y, (q . forward) * scale.z)
 ///   perspective:  camera coordinates c = ((p - eye) . right, (p - eye) . up, (p - eye) . forward),
 ///                 grid = (imageX(c.x, c.z), imageY(c.y, c.z), c.z)
 /// The rasterizer uses exactly these functions, so its coordinates and Frame::gridFromWorld agree
 /// bit for bit.
 struct Projection {
     bool perspective = false;
+    bool oriented = false; ///< orthographic with an arbitrary basis (right, up, forward)
     int axisX = 0, axisY = 1, axisS = 2;
     Vec3d origin;
     Vec3d scale{1, 1, 1};
@@ -76,9 +85,13 @@ struct Projection {
     VOXFX_HOSTDEV double imageX(double cx, double cz) const { return (cx / (cz * tanX) + 1.0) * halfW; }
     VOXFX_HOSTDEV double imageY(double cy, double cz) const { return (cy / (cz * tanY) + 1.0) * halfH; }
     VOXFX_HOSTDEV Vec3d gridFromWorld(const Vec3d& p) const {
-        if (!perspective)
-            return {(p[axisX] - origin[axisX]) * scale.x, (p[axisY] - origin[axisY]) * scale.y,
-                    (p[axisS] - origin[axisS]) * scale.z};
+        if (!perspective) {
+            if (!oriented)
+                return {(p[axisX] - origin[axisX]) * scale.x, (p[axisY] - origin[axisY]) * scale.y,
+                        (p[axisS] - origin[axisS]) * scale.z};
+            const Vec3d q = p - origin;
+            return {dot(q, right) * scale.x, dot(q, up) * scale.y, dot(q, forward) * scale.z};
+        }
         const Vec3d c = cameraFromWorld(p);
         return {imageX(c.x, c.z), imageY(c.y, c.z), c.z};
     }
@@ -110,6 +123,14 @@ public:
     /// Throws voxfx::Error for an empty or non-finite box or a zero dimension.
     static Frame orthographic(const Box3d& box, Axis axis, int64_t w, int64_t h, int64_t d);
 
+    /// Oriented orthographic frame: W x H x D cells tile the world region whose local coordinates
+    /// (p . right, p . up, p . forward) lie in `localBox`; columns along right (W) and up (H),
+    /// slices along forward (D). The basis must be orthonormal and right-handed
+    /// (cross(right, up) = forward) to 1e-9. Throws voxfx::Error otherwise, or for an empty or
+    /// non-finite box or a zero dimension.
+    static Frame orthographic(const Box3d& localBox, const Vec3d& right, const Vec3d& up,
+                              const Vec3d& forward, int64_t w, int64_t h, int64_t d);
+
     /// Perspective frame for a camera or spot light at `eye` looking at `target`, with vertical
     /// field of view `fovY` (radians), W x H columns (pixels), and D slices spanning view
     /// distances [nearDepth, farDepth] along the view direction (world units, 0 < near < far).
@@ -117,6 +138,8 @@ public:
                              int64_t h, double nearDepth, double farDepth, int64_t d);
 
     bool isPerspective() const { return perspective_; }
+    /// Orthographic with an arbitrary basis (see the file comment).
+    bool isOriented() const { return projection_.oriented; }
     Axis axis() const { return axis_; }
     int64_t width() const { return w_; }
     int64_t height() const { return h_; }
@@ -124,6 +147,7 @@ public:
     int64_t columnCount() const { return w_ * h_; }
 
     /// Orthographic: the world box the grid tiles, and the world size of one cell per world axis.
+    /// Oriented: the local box, and the cell size along (right, up, forward).
     const Box3d& box() const { return box_; }
     Vec3d cellSize() const;
 

@@ -7,8 +7,8 @@
 //                     y down, flipped on output); a consumer of the one rasterizer keeps the
 //                     nearest centre-sampled fragment per pixel (depth, triangle). Ties go to the
 //                     lower triangle index, so the result does not depend on the thread count.
-//   3. shadows        one LightShadow per light (shadow.hpp): standard map, ED06 transmittance or
-//                     CHANG absorption.
+//   3. shadows        one LightShadow per light (shadow.hpp): standard map, ED06 transmittance,
+//                     CHANG absorption, or shadow volumes counted over the G-buffer.
 //   4. shade          deferred, tile rows in parallel: ambient + per light Blinn–Phong times the
 //                     light's RGB visibility. Surfaces are lit on both sides; the side facing away
 //                     from a light receives the light that crosses the surface
@@ -47,12 +47,14 @@ struct RenderOptions {
 struct RenderTimings {
     double flattenMs = 0, gbufferMs = 0, shadowMapMs = 0, lightVoxelizeMs = 0, shadingMs = 0, resolveMs = 0,
            totalMs = 0;
+    double shadowVolumeMs = 0; ///< ShadowKind::Volumes: culling, construction and counting
 };
 
 struct RenderResult {
     Image image;
     RenderTimings timings;
-    int64_t coveredPixels = 0; ///< pixels (at the supersampled resolution) showing geometry
+    int64_t coveredPixels = 0;         ///< pixels (at the supersampled resolution) showing geometry
+    int64_t shadowVolumeFragments = 0; ///< ShadowKind::Volumes: volume fragments, all lights
 };
 
 /// All meshes of a scene as one mesh, with per-triangle material and source mesh and per-vertex

@@ -16,6 +16,9 @@
 //                              absorption of the cells between the light and p). Grey, per write,
 //                              not per unit length: a crossing written once attenuates exactly by
 //                              e^-sigma, matching the per-crossing model of the exact reference.
+//   ShadowKind::Volumes        exact hard shadows by shadow volumes counted per G-buffer pixel, with
+//                              ED06 §3.2 culling and clamping (shadow_volume.hpp); built by the
+//                              renderer from its G-buffer (buildVolumeShadow), not by build().
 //
 // Self-shadowing bias, for all kinds: the lookup point is moved along the surface normal (turned
 // towards the light) by `normalOffset` column footprints, and the grids skip the `skipCells` cells
@@ -23,11 +26,9 @@
 //
 // Light views: spot lights get one perspective frame along their direction (field of view fitted to
 // the casters, at most twice the outer cone, at most 160 degrees); point lights six 90-degree cube
-// faces; directional lights an orthographic frame perpendicular to their direction, fitted to the
-// casters. Frame::orthographic only takes axis-aligned boxes, so a directional view is an
-// axis-aligned frame in a rotated "frame space": geometry is rotated into it before rasterizing
-// (LightView::frameSpaceFromWorld; toFrameSpace). Frame should grow an oriented orthographic
-// constructor; then the rotation disappears.
+// faces; directional lights an oriented orthographic frame (Frame::orthographic with a basis)
+// perpendicular to their direction, fitted to the casters: world-space geometry is rasterized into
+// it directly, nothing is rotated or copied.
 //
 // EXPERIMENTAL until the renderer issue closes.
 // Thread-safety: built maps are read-only: visibility and the lookups may run concurrently from
@@ -35,6 +36,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -48,9 +50,9 @@
 
 namespace voxfx {
 
-enum class ShadowKind : uint8_t { None, Map, Transmittance, Absorption };
+enum class ShadowKind : uint8_t { None, Map, Transmittance, Absorption, Volumes };
 const char* toString(ShadowKind k);
-/// Parses none | map | transmittance | absorption; throws voxfx::Error listing them otherwise.
+/// Parses none | map | transmittance | absorption | volumes; throws voxfx::Error listing them otherwise.
 ShadowKind parseShadowKind(const std::string& name);
 
 struct ShadowOptions {
@@ -71,22 +73,20 @@ struct ShadowOptions {
     /// filters a shadow map; more self-shadowing on tilted leaves); false: p's own column only
     /// (ED06's lookup, the default: the smaller error against exact transport at high resolution).
     bool bilinear = false;
+    /// Volumes: skip volumes without visible receivers (ED06 §3.2); the shadow is unchanged.
+    bool volumeCulling = true;
+    /// Volumes: end each volume at the last depth slab holding visible receivers; unchanged shadow.
+    bool volumeClamping = true;
 };
 
-/// One view of a light: a frame and the rigid map from world space into the space that frame is
-/// defined in (identity for perspective views, a rotation for directional lights).
+/// One view of a light: a frame over world space (perspective, or oriented orthographic for
+/// directional lights).
 struct LightView {
     Frame frame;
-    Mat4d frameSpaceFromWorld; ///< rigid (rotation and translation)
-    bool rotated = false;
 
-    Vec3d frameSpace(const Vec3d& world) const { return rotated ? frameSpaceFromWorld.point(world) : world; }
-    Vec3d frameVector(const Vec3d& world) const {
-        return rotated ? frameSpaceFromWorld.vector(world) : world;
-    }
     /// Grid coordinates (gx, gy, frame depth) of a world point; for perspective views the point must
     /// lie in front of the eye (check covers first).
-    Vec3d gridFromWorld(const Vec3d& world) const { return frame.gridFromWorld(frameSpace(world)); }
+    Vec3d gridFromWorld(const Vec3d& world) const { return frame.gridFromWorld(world); }
     /// True when p lies in front of the light (perspective) and projects into the columns.
     bool covers(const Vec3d& world) const;
     /// World size of one column at p (the texel footprint: constant for orthographic views, growing
@@ -102,9 +102,6 @@ std::vector<LightView> makeLightViews(const Light& light, const Box3d& casterBou
                                       int64_t d);
 /// Index of the view that covers p (the cube face for point lights), or -1.
 int viewIndexFor(const std::vector<LightView>& views, const Vec3d& world);
-/// A copy of `mesh` in the view's frame space (vertices rotated) for rotated views; the positions of
-/// `mesh` otherwise. Keep the result alive while using its view().
-Mesh toFrameSpace(const MeshView& mesh, const LightView& view);
 
 /// The standard shadow map: the nearest caster depth per texel (centre-sampled fragments of the
 /// one rasterizer), binary depth comparison with percentage-closer filtering.
@@ -196,9 +193,13 @@ private:
 float absorptionPerCrossing(const Material& m, float opaqueAbsorption);
 
 struct ShadowBuildTimings {
-    double mapMs = 0;      ///< standard shadow map(s)
-    double voxelizeMs = 0; ///< transmittance / attribute voxelization from the light
+    double mapMs = 0;            ///< standard shadow map(s)
+    double voxelizeMs = 0;       ///< transmittance / attribute voxelization from the light
+    double volumeMs = 0;         ///< shadow volumes: culling, construction and counting
+    int64_t volumeFragments = 0; ///< shadow-volume fragments rasterized in the camera frame
 };
+
+struct ShadowVolumeMask;
 
 /// All shadow data of one light for one ShadowKind, built from a scene.
 class LightShadow {
@@ -210,6 +211,10 @@ public:
     /// RGB fraction of the light reaching world point p. `n`: unit geometric normal turned towards
     /// the light, for the normal offset (zero vector: no offset, the exact point is looked up).
     Vec3f visibility(const Vec3d& p, const Vec3d& n) const;
+    /// ShadowKind::Volumes: wraps a per-pixel mask of the G-buffer the renderer shades (points are
+    /// looked up by their pixel; see shadow_volume.hpp).
+    static LightShadow fromVolumes(const ShadowOptions& options,
+                                   std::shared_ptr<const ShadowVolumeMask> mask);
     ShadowKind kind() const { return options_.kind; }
     const std::vector<ShadowMap>& maps() const { return maps_; }
     const std::vector<TransmittanceShadowMap>& transmittanceMaps() const { return transmittance_; }
@@ -221,6 +226,7 @@ private:
     std::vector<ShadowMap> maps_;
     std::vector<TransmittanceShadowMap> transmittance_;
     std::vector<AbsorptionShadowMap> absorption_;
+    std::shared_ptr<const ShadowVolumeMask> volumes_;
 };
 
 } // namespace voxfx

@@ -47,6 +47,53 @@ Frame Frame::orthographic(const Box3d& box, Axis axis, int64_t w, int64_t h, int
     return f;
 }
 
+Frame Frame::orthographic(const Box3d& localBox, const Vec3d& right, const Vec3d& up, const Vec3d& forward,
+                          int64_t w, int64_t h, int64_t d) {
+    if (localBox.empty() || !isFinite(localBox.lo) || !isFinite(localBox.hi))
+        fail("orthographic frame needs a finite, non-empty box");
+    if (w <= 0 || h <= 0 || d <= 0) fail("grid dimensions must be positive, got ", w, " x ", h, " x ", d);
+    if (!isFinite(right) || !isFinite(up) || !isFinite(forward))
+        fail("oriented orthographic frame needs a finite basis");
+    constexpr double tol = 1e-9;
+    const bool unit = std::abs(length(right) - 1) <= tol && std::abs(length(up) - 1) <= tol &&
+                      std::abs(length(forward) - 1) <= tol;
+    const bool orthogonal = std::abs(dot(right, up)) <= tol && std::abs(dot(up, forward)) <= tol &&
+                            std::abs(dot(forward, right)) <= tol;
+    if (!unit || !orthogonal || !(length(cross(right, up) - forward) <= 1e-8))
+        fail("oriented orthographic frame needs a right-handed orthonormal basis (right x up = forward)");
+    const Vec3d ext = localBox.extent();
+    if (!(ext.x > 0) || !(ext.y > 0) || !(ext.z > 0))
+        fail("orthographic frame needs a box with positive extent along every axis");
+    Frame f;
+    f.perspective_ = false;
+    f.axis_ = Axis::Z;
+    f.w_ = w;
+    f.h_ = h;
+    f.d_ = d;
+    f.box_ = localBox;
+    f.right_ = right;
+    f.up_ = up;
+    f.forward_ = forward;
+    const Vec3d origin = right * localBox.lo.x + up * localBox.lo.y + forward * localBox.lo.z;
+    f.eye_ = origin;
+    f.near_ = 0;
+    f.far_ = double(d);
+    f.uniform_ = {0.0, 1.0};
+    Projection& pr = f.projection_;
+    pr.perspective = false;
+    pr.oriented = true;
+    pr.axisX = 0;
+    pr.axisY = 1;
+    pr.axisS = 2;
+    pr.origin = origin;
+    pr.scale = {double(w) / ext.x, double(h) / ext.y, double(d) / ext.z};
+    pr.right = right;
+    pr.up = up;
+    pr.forward = forward;
+    pr.eye = origin;
+    return f;
+}
+
 Frame Frame::perspective(const Vec3d& eye, const Vec3d& target, const Vec3d& up, double fovY, int64_t w,
                          int64_t h, double nearDepth, double farDepth, int64_t d) {
     if (w <= 0 || h <= 0 || d <= 0) fail("grid dimensions must be positive, got ", w, " x ", h, " x ", d);
@@ -87,6 +134,7 @@ Frame Frame::perspective(const Vec3d& eye, const Vec3d& target, const Vec3d& up,
 
 Vec3d Frame::cellSize() const {
     const Vec3d ext = box_.extent();
+    if (projection_.oriented) return {ext.x / double(w_), ext.y / double(h_), ext.z / double(d_)};
     Vec3d n;
     n[columnXAxis(axis_)] = double(w_);
     n[columnYAxis(axis_)] = double(h_);
@@ -99,6 +147,11 @@ double Frame::viewDepth(const Vec3d& p) const { return dot(p - eye_, forward_); 
 Vec3d Frame::gridFromWorld(const Vec3d& p) const { return projection_.gridFromWorld(p); }
 
 Vec3d Frame::worldFromGrid(const Vec3d& g) const {
+    if (projection_.oriented) {
+        const Vec3d ext = box_.extent();
+        return projection_.origin + right_ * (g.x * (ext.x / double(w_))) +
+               up_ * (g.y * (ext.y / double(h_))) + forward_ * (g.z * (ext.z / double(d_)));
+    }
     if (!perspective_) {
         const int cx = columnXAxis(axis_), cy = columnYAxis(axis_), cs = sliceAxis(axis_);
         const Vec3d ext = box_.extent();
@@ -137,6 +190,8 @@ bool Frame::sameGrid(const Frame& o) const {
     if (perspective_ != o.perspective_ || w_ != o.w_ || h_ != o.h_ || d_ != o.d_ || axis_ != o.axis_)
         return false;
     if (!perspective_ && !(box_ == o.box_)) return false;
+    if (projection_.oriented != o.projection_.oriented) return false;
+    if (projection_.oriented && !(right_ == o.right_ && up_ == o.up_ && forward_ == o.forward_)) return false;
     if (perspective_ && !(eye_ == o.eye_ && forward_ == o.forward_ && up_ == o.up_ &&
                           tanHalfY_ == o.tanHalfY_ && near_ == o.near_ && far_ == o.far_))
         return false;

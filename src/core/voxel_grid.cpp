@@ -10,6 +10,7 @@ namespace voxfx {
 namespace {
 void requireOrthographic(const Frame& f, const char* what) {
     if (f.isPerspective()) fail(what, " needs an orthographic grid, this one is perspective");
+    if (f.isOriented()) fail(what, " needs an axis-aligned orthographic grid, this one is oriented");
 }
 
 // Re-slices along the next axis in cyclic order (a -> a+1). With the source sliced along a,

@@ -231,8 +231,8 @@ SurfaceMesh marchingCubes(const Field& f, const Frame& frame, float iso) {
 }
 
 void requireUniformOrthographic(const Frame& frame) {
-    if (frame.isPerspective() || frame.slicing() != Slicing::Uniform)
-        fail("surface extraction needs an orthographic, uniformly sliced grid");
+    if (frame.isPerspective() || frame.isOriented() || frame.slicing() != Slicing::Uniform)
+        fail("surface extraction needs an axis-aligned orthographic, uniformly sliced grid");
 }
 
 void checkIso(float iso) {

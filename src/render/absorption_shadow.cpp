@@ -17,14 +17,13 @@ AbsorptionShadowMap AbsorptionShadowMap::build(const LightView& view, const Mesh
                                                Slicing slicing, Progress* progress) {
     AbsorptionShadowMap map;
     map.view_ = view;
-    const Mesh local = toFrameSpace(casters, view);
     AttributeOptions ao;
     ao.coverage = coverage;
     ao.normals = false;
     ao.slicing = slicing;
     ao.progress = progress;
     // The sparse form of the attribute voxelization: light grids through foliage are mostly empty.
-    AttributeColumns grid = voxelizeAttributeColumns(local.view(), view.frame, triangleAbsorption, ao);
+    AttributeColumns grid = voxelizeAttributeColumns(casters, view.frame, triangleAbsorption, ao);
     map.frame_ = grid.frame;
     for (const uint16_t n : grid.count) map.writes_ += n;
     map.offsets_ = std::move(grid.offsets);

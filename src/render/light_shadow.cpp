@@ -8,6 +8,7 @@
 
 #include "core/enum_names.hpp"
 #include "voxfx/shadow.hpp"
+#include "voxfx/shadow_volume.hpp"
 
 namespace voxfx {
 
@@ -61,6 +62,8 @@ const char* toString(ShadowKind k) {
         return "transmittance";
     case ShadowKind::Absorption:
         return "absorption";
+    case ShadowKind::Volumes:
+        return "volumes";
     }
     return "?";
 }
@@ -69,7 +72,8 @@ ShadowKind parseShadowKind(const std::string& name) {
     static constexpr detail::EnumName<ShadowKind> kNames[] = {{"none", ShadowKind::None},
                                                               {"map", ShadowKind::Map},
                                                               {"transmittance", ShadowKind::Transmittance},
-                                                              {"absorption", ShadowKind::Absorption}};
+                                                              {"absorption", ShadowKind::Absorption},
+                                                              {"volumes", ShadowKind::Volumes}};
     return detail::parseEnum<ShadowKind>(name, "shadow kind", kNames);
 }
 
@@ -85,6 +89,8 @@ LightShadow LightShadow::build(const Scene& scene, const Light& light, const Sha
     LightShadow out;
     out.options_ = options;
     if (options.kind == ShadowKind::None) return out;
+    if (options.kind == ShadowKind::Volumes)
+        fail("shadow volumes are counted per pixel of a G-buffer: render() builds them (buildVolumeShadow)");
     if (options.mapResolution <= 0 || options.gridResolution <= 0 || options.gridDepth <= 0 ||
         options.pcfRadius < 0 || options.skipCells < 0)
         fail("shadow options: resolutions must be positive, PCF radius and skipped cells >= 0");
@@ -103,6 +109,8 @@ LightShadow LightShadow::build(const Scene& scene, const Light& light, const Sha
 
     switch (options.kind) {
     case ShadowKind::None:
+        break;
+    case ShadowKind::Volumes:
         break;
     case ShadowKind::Map:
         buildMaps(casters.all);
@@ -164,9 +172,22 @@ int lookupView(const std::vector<LightView>& views, const Vec3d& p, const Vec3d&
 
 } // namespace
 
+LightShadow LightShadow::fromVolumes(const ShadowOptions& options,
+                                     std::shared_ptr<const ShadowVolumeMask> mask) {
+    LightShadow out;
+    out.options_ = options;
+    out.options_.kind = ShadowKind::Volumes;
+    out.volumes_ = std::move(mask);
+    return out;
+}
+
 Vec3f LightShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     Vec3f v{1, 1, 1};
     if (options_.kind == ShadowKind::None) return v;
+    if (volumes_) {
+        const float lit = volumes_->visibility(p);
+        return {lit, lit, lit};
+    }
     Vec3d q;
     if (!maps_.empty()) {
         const int i = lookupView(mapViews_, p, n, options_.normalOffset, q);

@@ -1,8 +1,8 @@
 // voxfx — light views: the frames shadow maps and light grids live in (ED06 §3.1 voxelizes "from the
 // light": a perspective frame for spot and point lights, an orthographic one for directional lights).
 //
-// Frame::orthographic only takes axis-aligned boxes, so a directional light's frame is axis-aligned
-// in a rotated frame space (right, up, light direction); geometry and lookups are rotated into it.
+// A directional light's frame is an oriented orthographic frame with basis (right, up, light
+// direction), fitted to the casters' bounds in those local coordinates.
 #include <algorithm>
 #include <cmath>
 
@@ -47,9 +47,8 @@ LightView perspectiveView(const Vec3d& eye, const Vec3d& forward, double fovY, c
 } // namespace
 
 bool LightView::covers(const Vec3d& world) const {
-    const Vec3d q = frameSpace(world);
-    if (frame.isPerspective() && !(frame.viewDepth(q) > 0)) return false;
-    const Vec3d g = frame.gridFromWorld(q);
+    if (frame.isPerspective() && !(frame.viewDepth(world) > 0)) return false;
+    const Vec3d g = frame.gridFromWorld(world);
     // A relative tolerance of 1e-9 columns: cube faces meet exactly at their borders, and a point on
     // a face diagonal must not fall between two faces by a rounding error.
     const double ex = 1e-9 * double(frame.width()), ey = 1e-9 * double(frame.height());
@@ -72,22 +71,17 @@ std::vector<LightView> makeLightViews(const Light& light, const Box3d& bounds, i
     std::vector<LightView> views;
     switch (light.type) {
     case LightType::Directional: {
-        // Frame space: rows (right, up, direction), a right-handed rotation (right x up = direction).
+        // Local coordinates (p . right, p . up, p . direction), a right-handed basis
+        // (right x up = direction).
         const Vec3d dir = normalize(light.direction);
         const Vec3d hint = upHint(dir);
         const Vec3d up = normalize(hint - dir * dot(hint, dir));
         const Vec3d right = cross(up, dir);
         LightView v;
-        v.rotated = true;
-        for (int k = 0; k < 3; ++k) {
-            v.frameSpaceFromWorld.m[0][k] = right[k];
-            v.frameSpaceFromWorld.m[1][k] = up[k];
-            v.frameSpaceFromWorld.m[2][k] = dir[k];
-        }
         Vec3d c[8];
         corners(bounds, c);
         Box3d box;
-        for (const Vec3d& q : c) box.extend(v.frameSpaceFromWorld.point(q));
+        for (const Vec3d& q : c) box.extend(Vec3d{dot(q, right), dot(q, up), dot(q, dir)});
         // Pad by 1 % of the largest extent (and never flat), so that geometry on the bounds lies inside.
         const Vec3d ext = box.extent();
         const double pad = 0.01 * std::max({ext.x, ext.y, ext.z, 1e-9});
@@ -103,7 +97,7 @@ std::vector<LightView> makeLightViews(const Light& light, const Box3d& bounds, i
         box.hi.x = mid.x + 0.5 * double(w) * cell;
         box.lo.y = mid.y - 0.5 * double(h) * cell;
         box.hi.y = mid.y + 0.5 * double(h) * cell;
-        v.frame = Frame::orthographic(box, Axis::Z, w, h, d);
+        v.frame = Frame::orthographic(box, right, up, dir, w, h, d);
         views.push_back(v);
         break;
     }
@@ -155,15 +149,6 @@ int viewIndexFor(const std::vector<LightView>& views, const Vec3d& world) {
         }
     }
     return best;
-}
-
-Mesh toFrameSpace(const MeshView& mesh, const LightView& view) {
-    Mesh out;
-    out.positions.resize(mesh.vertexCount);
-    for (std::size_t i = 0; i < mesh.vertexCount; ++i)
-        out.positions[i] = Vec3f(view.frameSpace(mesh.vertex(i)));
-    out.indices.assign(mesh.indices, mesh.indices + 3 * mesh.triangleCount);
-    return out;
 }
 
 } // namespace voxfx

@@ -5,6 +5,7 @@
 
 #include "render/shading.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/shadow_volume.hpp"
 
 namespace voxfx {
 
@@ -54,13 +55,22 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
         for (const uint32_t tri : gbuffer.triangle) result.coveredPixels += tri != GBuffer::kNone;
 
         std::vector<LightShadow> shadows;
+        // Shadow volumes: closed casters with edge adjacency, built once for every light.
+        const bool volumes = options.shadow.kind == ShadowKind::Volumes;
+        const ShadowCasterSet casters = volumes ? ShadowCasterSet::build(scene) : ShadowCasterSet{};
         for (std::size_t i = 0; i < scene.lights.size(); ++i) {
             PassProgress sp(options.progress, 0.2 + 0.3 * double(i) / double(scene.lights.size()),
                             0.2 + 0.3 * double(i + 1) / double(scene.lights.size()));
             ShadowBuildTimings st;
-            shadows.push_back(LightShadow::build(scene, scene.lights[i], options.shadow, &st, sp.get()));
+            if (volumes)
+                shadows.push_back(buildVolumeShadow(casters, scene, scene.lights[i], gbuffer, geometry,
+                                                    options.shadow, &st));
+            else
+                shadows.push_back(LightShadow::build(scene, scene.lights[i], options.shadow, &st, sp.get()));
             t.shadowMapMs += st.mapMs;
             t.lightVoxelizeMs += st.voxelizeMs;
+            t.shadowVolumeMs += st.volumeMs;
+            result.shadowVolumeFragments += st.volumeFragments;
         }
 
         tp = Clock::now();

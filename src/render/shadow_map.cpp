@@ -35,11 +35,10 @@ ShadowMap ShadowMap::build(const MeshView& casters, const LightView& view, Progr
     ShadowMap map;
     map.view_ = view;
     map.depth_.assign(size_t(view.frame.columnCount()), std::numeric_limits<float>::infinity());
-    const Mesh local = toFrameSpace(casters, view);
     NearestDepthConsumer consumer{view.frame.width(), map.depth_};
     RasterOptions ro;
     ro.progress = progress;
-    rasterize(view.frame, local.view(), ro, consumer);
+    rasterize(view.frame, casters, ro, consumer);
     return map;
 }
 

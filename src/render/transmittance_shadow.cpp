@@ -24,12 +24,11 @@ TransmittanceShadowMap TransmittanceShadowMap::build(const LightView& view, std:
     TransmittanceShadowMap map;
     map.view_ = view;
     for (std::size_t k = 0; k < groups.size(); ++k) {
-        const Mesh local = toFrameSpace(groups[k], view);
         VoxelizeOptions vo;
         vo.mode = mode;
         vo.slicing = slicing;
         vo.progress = progress;
-        map.channels_.push_back({voxelize(local.view(), view.frame, vo), transmittances[k]});
+        map.channels_.push_back({voxelize(groups[k], view.frame, vo), transmittances[k]});
         // A column holds at most D filled cells.
         const Vec3f& t = transmittances[k];
         std::vector<Vec3f>& powers = map.powers_.emplace_back(size_t(view.frame.depth() + 1));

@@ -32,8 +32,8 @@ void Particles::push(const Vec3f& p, const Vec3f& v) {
 namespace {
 
 void requireUniformOrthographic(const Frame& f) {
-    if (f.isPerspective() || f.slicing() != Slicing::Uniform)
-        fail("particle collisions need an orthographic, uniformly sliced grid");
+    if (f.isPerspective() || f.isOriented() || f.slicing() != Slicing::Uniform)
+        fail("particle collisions need an axis-aligned orthographic, uniformly sliced grid");
 }
 
 // World <-> grid coordinates of an orthographic frame: per grid axis a world axis, an origin and

@@ -52,8 +52,8 @@ BitGrid rasterizeInto(const Frame& frame, const MeshView& mesh, VoxelizeMode kin
 }
 
 void requireUniformOrthographic(const Frame& frame, Fill fill) {
-    if (frame.isPerspective() || frame.slicing() != Slicing::Uniform)
-        fail("fill '", toString(fill), "' needs an orthographic frame with uniform slicing");
+    if (frame.isPerspective() || frame.isOriented() || frame.slicing() != Slicing::Uniform)
+        fail("fill '", toString(fill), "' needs an axis-aligned orthographic frame with uniform slicing");
 }
 
 // Inside cells by the requested fill. Flood includes the surface cells.

@@ -1,0 +1,138 @@
+// voxfx — shadow volumes (Crow 1977; depth-fail counting, Carmack / Everitt & Kilgard 2002) with
+// ED06 §3.2's voxel-based culling and clamping: exact hard shadows for point, spot and directional
+// lights, counted per pixel of the camera's G-buffer by a consumer of the one rasterizer.
+//
+// Casters. Each SceneMesh that casts shadows is welded by exact vertex position and its edge
+// adjacency is built once (ShadowCasterSet). A caster must be closed (every edge shared by exactly
+// two triangles traversing it in opposite directions); open or non-manifold casters are refused
+// with an error naming the mesh (their shadow volume is not a closed surface, so counting is
+// meaningless): mark them castsShadow = false or use another ShadowKind.
+//
+// Volumes. For a light, the triangles of a caster facing away from it (normal . toLight <= 0)
+// form the *near cap*, reversed; silhouette edges (between a lit and an unlit triangle) are
+// extruded away from the light into quads; the unlit triangles extruded form the *far cap*. So a
+// caster's volume V holds exactly the points whose segment to the light crosses an unlit triangle
+// of the caster before reaching them: lit surfaces never lie on their own volume's boundary. The
+// extrusion ends on a plane: dot(x - L, a) = Z (point and spot lights: a = the unit direction from
+// the light to the caster's bounding-sphere centre, and every vertex must lie in front of the
+// light along a, else the caster is refused; directional lights: a = the light direction). Z
+// passes the whole scene, or, *clamped*, the last depth slab holding visible receivers in V.
+//
+// Counting. Volume triangles are rasterized (centre-sampled, strict tie rule: watertight) in the
+// camera frame; per pixel the consumer adds, for depth-fail volumes, +1 for each back-facing and
+// -1 for each front-facing fragment *behind* the G-buffer depth, and for depth-pass volumes +1 for
+// each front-facing and -1 for each back-facing fragment *in front of* it. The sum is the number
+// of volumes holding the pixel's surface point: shadowed iff it is not 0. Depth-pass is used for a
+// caster when a ball around the eye (covering what the near clip cuts off) is lit by it
+// (conservatively, by its bounding sphere); it then needs no near cap. Depth-fail everywhere else.
+//
+// Culling and clamping (ED06 §3.2), both conservative, so the shadow is the same pixel for pixel:
+//   receivers  the visible *receivers* (G-buffer points facing the light, or of a translucent
+//              material) voxelized into a slicemap in the light's views (makeLightViews fitted to
+//              casters and receivers). A caster whose unlit triangles' conservative footprint,
+//              dilated by one column and one slice, holds no receiver cell at or behind them is
+//              skipped; otherwise its far cap is clamped to the farthest such cell.
+//              Receivers outside every view turn both off for that light.
+//   occluded   then, among the casters left: a caster lying entirely in the shadow of the others.
+//              Its whole conservative footprint in the light's map must be *clean* (no other
+//              caster's silhouette edge touches the texel, so every ray through it meets the same
+//              other casters) and covered by another caster whose farthest lit fragment in the
+//              texel is in front of the caster's nearest one. Then every point of V is already in
+//              those casters' volumes (casters are assumed not to interpenetrate).
+// Culling costs rasterizations into the light's views per caster; on the CPU that can exceed the
+// fill it saves (BENCHMARKS.md).
+//
+// Lookups: the mask answers for the surface point of each G-buffer pixel. A point that is not
+// the G-buffer surface of the pixel it projects to (a refracted or reflected point) gets that
+// pixel's answer; shadow volumes only shade what the camera sees directly.
+//
+// EXPERIMENTAL until the renderer issue closes.
+// Thread-safety: ShadowCasterSet is read-only after build; computeShadowVolumes may run
+// concurrently on the same set and G-buffer (it uses worker threads itself); the result does not
+// depend on the thread count.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "voxfx/render.hpp"
+
+namespace voxfx {
+
+/// One closed caster: welded positions, triangles and, per directed edge 3t+k (from corner k to
+/// corner k+1 of triangle t), the directed edge of the neighbour traversing it backwards.
+struct ShadowCaster {
+    std::string name;
+    std::vector<Vec3f> positions;
+    std::vector<uint32_t> indices;
+    std::vector<uint32_t> twin;
+    Vec3d sphereCentre; ///< bounding sphere (centre of the bounds, radius to the farthest vertex)
+    double sphereRadius = 0;
+};
+
+/// The closed casters of a scene with their edge adjacency, built once and used for every light.
+struct ShadowCasterSet {
+    std::vector<ShadowCaster> casters;
+    /// Every SceneMesh with castsShadow. Throws voxfx::Error naming the first open or non-manifold
+    /// caster (with its count of unmatched edges).
+    static ShadowCasterSet build(const Scene& scene);
+};
+
+struct ShadowVolumeOptions {
+    bool cullReceivers = true;    ///< skip volumes holding no visible receiver
+    bool cullOccluded = true;     ///< skip casters entirely in other casters' shadow
+    bool clamp = true;            ///< end each volume at its last receiver slab
+    int64_t mapResolution = 256;  ///< light views for culling: columns along the longer side
+    int64_t receiverSlices = 128; ///< receiver slicemap: slices
+};
+
+struct ShadowVolumeStats {
+    int64_t casters = 0;
+    int64_t culledNoReceiver = 0; ///< skipped: no visible receiver in the volume
+    int64_t culledOccluded = 0;   ///< skipped: entirely in other casters' shadow
+    int64_t clamped = 0;          ///< volumes ended before the scene's far bound
+    int64_t depthPass = 0, depthFail = 0;
+    int64_t silhouetteEdges = 0;
+    int64_t volumeTriangles = 0;
+    int64_t fragments = 0;        ///< volume fragments the rasterizer emitted in the camera frame
+    bool receiversCovered = true; ///< false: some receiver lay outside the light views (no culling)
+    double cullMs = 0, buildMs = 0, rasterMs = 0;
+};
+
+/// Per pixel of a G-buffer: whether its surface point lies in some caster's shadow for one light.
+struct ShadowVolumeMask {
+    Frame camera; ///< the G-buffer's frame
+    std::vector<uint8_t> shadowed;
+    ShadowVolumeStats stats;
+    /// Per caster: 0 drawn, 1 culled (no visible receiver), 2 culled (in other casters' shadow).
+    std::vector<uint8_t> culled;
+    /// 1 where the pixel under p (a G-buffer point) is not shadowed, 0 where it is; 1 outside.
+    float visibility(const Vec3d& p) const;
+};
+
+/// Which G-buffer pixels count as receivers for culling: a surface facing the light (geometric
+/// normal, towards the viewer, . direction to the light > 0) or of a non-opaque material.
+std::vector<uint8_t> shadowVolumeReceivers(const GBuffer& gbuffer, const SceneGeometry& geometry,
+                                           const Scene& scene, const Light& light);
+
+/// Shadow volumes of `casters` for `light`, counted per pixel of `gbuffer`. `sceneBounds` bounds
+/// every surface that can receive (the unclamped volumes pass it); `receivers` as returned by
+/// shadowVolumeReceivers (used for culling and clamping only). Throws voxfx::Error for a caster
+/// the light lies beside or inside (point and spot lights; see the file comment).
+ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Light& light,
+                                      const GBuffer& gbuffer, const std::vector<uint8_t>& receivers,
+                                      const Box3d& sceneBounds, const ShadowVolumeOptions& options = {});
+
+/// The triangles of every caster's volume (near cap, silhouette quads, far cap, as the counting
+/// rasterizes them for depth-fail), unclamped and unculled, outward facing. For tests and
+/// inspection.
+Mesh shadowVolumeMesh(const ShadowCasterSet& casters, const Light& light, const Box3d& sceneBounds);
+
+/// The renderer's entry: ShadowKind::Volumes for one light (casters built once per render).
+LightShadow buildVolumeShadow(const ShadowCasterSet& casters, const Scene& scene, const Light& light,
+                              const GBuffer& gbuffer, const SceneGeometry& geometry,
+                              const ShadowOptions& options, ShadowBuildTimings* timings = nullptr);
+
+} // namespace voxfx

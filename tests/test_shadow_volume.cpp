@@ -1,0 +1,409 @@
+// voxfx — shadow volumes: closed casters, closed volumes, the per-pixel count against an exact
+// ray-traced hard shadow (CGAL segment-triangle tests, nothing shared with the rasterizer), and
+// ED06 §3.2 culling and clamping leaving the shadow unchanged while rasterizing fewer fragments.
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "cgal_oracle.hpp"
+#include "test_util.hpp"
+#include "voxfx/demo.hpp"
+#include "voxfx/error.hpp"
+#include "voxfx/mesh_io.hpp"
+#include "voxfx/render.hpp"
+#include "voxfx/shadow_volume.hpp"
+
+namespace voxfx {
+namespace {
+
+Light svPointLight(const Vec3d& p) {
+    Light l;
+    l.type = LightType::Point;
+    l.name = "point";
+    l.position = p;
+    l.intensity = 30;
+    return l;
+}
+
+Light svSpotLight(const Vec3d& p, const Vec3d& target) {
+    Light l;
+    l.type = LightType::Spot;
+    l.name = "spot";
+    l.position = p;
+    l.direction = normalize(target - p);
+    l.outerConeAngle = 0.7;
+    l.innerConeAngle = 0.5;
+    l.intensity = 30;
+    return l;
+}
+
+Light svSun(const Vec3d& d) {
+    Light l;
+    l.type = LightType::Directional;
+    l.name = "sun";
+    l.direction = normalize(d);
+    l.intensity = 2;
+    return l;
+}
+
+void svAddCaster(Scene& s, const std::string& name, Mesh mesh) {
+    SceneMesh m;
+    m.name = name;
+    m.mesh = std::move(mesh);
+    m.material = 0;
+    s.meshes.push_back(std::move(m));
+}
+
+// A receive-only ground and closed casters: some stacked (one in another's shadow), one far off
+// to the side whose shadow leaves the picture, one low enough for the camera to see its shadow on
+// the others.
+Scene svScene() {
+    Scene s;
+    s.addMaterial(Material{});
+    SceneMesh g;
+    g.name = "ground";
+    test::appendQuad(g.mesh, {0, 0, 0}, {0, 0, 5}, {5, 0, 0});
+    g.castsShadow = false;
+    s.meshes.push_back(g);
+    svAddCaster(s, "torus", test::makeTorus({0, 1.0, 0}, 0.6, 0.2, 32, 12));
+    svAddCaster(s, "sphere", test::makeUvSphere({1.5, 0.6, 0.8}, 0.45, 14, 20));
+    svAddCaster(s, "box", test::makeBox({-2.0, 0.0, -0.5}, {-1.2, 0.9, 0.4}));
+    svAddCaster(s, "high", test::makeOctahedron({0.1, 2.6, -0.1}, 0.35));
+    svAddCaster(s, "far", test::makeBox({-40, 0.5, 30}, {-39, 1.5, 31})); // behind the camera
+    // A slab with a small sphere under it, wholly in its shadow for every light of the tests.
+    svAddCaster(s, "slab", test::makeBox({1.6, 1.9, -2.6}, {4.4, 2.0, 0.2}));
+    svAddCaster(s, "hidden", test::makeUvSphere({3.0, 1.2, -1.2}, 0.3, 10, 14));
+    // Under the ground: on screen behind it, its volume reaches no visible receiver.
+    svAddCaster(s, "buried", test::makeBox({-0.8, -3.6, -0.8}, {0.8, -2.9, 0.8}));
+    return s;
+}
+
+Camera svCamera(const Vec3d& eye, const Vec3d& target) {
+    Camera c;
+    c.position = eye;
+    c.target = target;
+    c.fovY = 0.9;
+    return c;
+}
+
+struct SvFixture {
+    Scene scene;
+    SceneGeometry geometry;
+    GBuffer gbuffer;
+};
+
+SvFixture svFixture(Scene scene, const Camera& camera, int64_t w, int64_t h) {
+    SvFixture f{std::move(scene), {}, {}};
+    f.geometry = flattenScene(f.scene);
+    f.gbuffer = renderGBuffer(f.geometry, cameraFrame(camera, w, h));
+    return f;
+}
+
+// The exact hard shadow at every G-buffer point: does the segment from the point to the light (for
+// a directional light, far along -direction) meet a caster triangle that faces away from the light?
+// For closed casters that is "occluded": a light ray through a caster leaves it through such a
+// triangle; lit surfaces are never tested against themselves.
+std::vector<uint8_t> svRayTraced(const SvFixture& f, const Light& light) {
+    Mesh unlit;
+    for (const SceneMesh& m : f.scene.meshes) {
+        if (!m.castsShadow) continue;
+        for (std::size_t t = 0; t < m.mesh.triangleCount(); ++t) {
+            const Vec3d a(m.mesh.positions[m.mesh.indices[3 * t]]),
+                b(m.mesh.positions[m.mesh.indices[3 * t + 1]]),
+                c(m.mesh.positions[m.mesh.indices[3 * t + 2]]);
+            const Vec3d toLight =
+                light.type == LightType::Directional ? -light.direction : light.position - a;
+            if (dot(cross(b - a, c - a), toLight) > 0) continue;
+            const auto base = uint32_t(unlit.positions.size());
+            unlit.positions.insert(unlit.positions.end(), {Vec3f(a), Vec3f(b), Vec3f(c)});
+            unlit.indices.insert(unlit.indices.end(), {base, base + 1, base + 2});
+        }
+    }
+    const Frame& cam = f.gbuffer.frame;
+    std::vector<Vec3d> from, to;
+    std::vector<size_t> pixel;
+    const double reach = 10 * length(f.scene.bounds().extent()) + 100;
+    for (int64_t y = 0; y < cam.height(); ++y)
+        for (int64_t x = 0; x < cam.width(); ++x) {
+            const auto i = size_t(y * cam.width() + x);
+            if (f.gbuffer.triangle[i] == GBuffer::kNone) continue;
+            const Vec3d p = cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, double(f.gbuffer.depth[i])});
+            from.push_back(p);
+            to.push_back(light.type == LightType::Directional ? p - light.direction * reach : light.position);
+            pixel.push_back(i);
+        }
+    const std::vector<uint8_t> hit = test::oracleSegmentsHitMesh(unlit.view(), from, to);
+    std::vector<uint8_t> out(f.gbuffer.triangle.size(), 0);
+    for (std::size_t k = 0; k < pixel.size(); ++k) out[pixel[k]] = hit[k];
+    return out;
+}
+
+struct SvComparison {
+    int64_t receivers = 0, shadowed = 0, mismatches = 0, offSilhouette = 0, silhouettePixels = 0;
+};
+
+// Mismatches at receiver pixels; a mismatch is on a silhouette when the reference changes between
+// the pixel and one of its 8 neighbours (a shadow boundary or a depth edge runs through it).
+SvComparison svCompare(const SvFixture& f, const std::vector<uint8_t>& receivers,
+                       const std::vector<uint8_t>& mask, const std::vector<uint8_t>& reference) {
+    SvComparison c;
+    const int64_t W = f.gbuffer.frame.width(), H = f.gbuffer.frame.height();
+    for (int64_t y = 0; y < H; ++y)
+        for (int64_t x = 0; x < W; ++x) {
+            const auto i = size_t(y * W + x);
+            if (!receivers[i]) continue;
+            ++c.receivers;
+            c.shadowed += reference[i];
+            bool boundary = false;
+            for (int64_t dy = -1; dy <= 1; ++dy)
+                for (int64_t dx = -1; dx <= 1; ++dx) {
+                    const int64_t xx = x + dx, yy = y + dy;
+                    if (xx < 0 || yy < 0 || xx >= W || yy >= H) continue;
+                    const auto j = size_t(yy * W + xx);
+                    boundary |= reference[j] != reference[i] || (f.gbuffer.triangle[j] == GBuffer::kNone) !=
+                                                                    (f.gbuffer.triangle[i] == GBuffer::kNone);
+                }
+            c.silhouettePixels += boundary;
+            if (mask[i] != reference[i]) {
+                ++c.mismatches;
+                c.offSilhouette += !boundary;
+            }
+        }
+    return c;
+}
+
+ShadowVolumeOptions svOptions(bool cull, bool clamp) {
+    ShadowVolumeOptions o;
+    o.cullReceivers = cull;
+    o.cullOccluded = cull;
+    o.clamp = clamp;
+    o.mapResolution = 256;
+    o.receiverSlices = 64;
+    return o;
+}
+
+TEST(ShadowVolumeTest, CasterSetPairsEveryEdgeAndRefusesOpenMeshes) {
+    Scene s;
+    s.addMaterial(Material{});
+    svAddCaster(s, "torus", test::makeTorus({0, 0, 0}, 1, 0.3, 12, 8));
+    const ShadowCasterSet set = ShadowCasterSet::build(s);
+    ASSERT_EQ(set.casters.size(), 1u);
+    const ShadowCaster& c = set.casters[0];
+    // The twin of a directed edge runs backwards, and twins pair up.
+    for (std::size_t e = 0; e < c.twin.size(); ++e) {
+        const std::size_t t = c.twin[e];
+        ASSERT_LT(t, c.twin.size());
+        EXPECT_EQ(c.twin[t], e);
+        EXPECT_EQ(c.indices[e], c.indices[t - t % 3 + (t % 3 + 1) % 3]);
+        EXPECT_EQ(c.indices[t], c.indices[e - e % 3 + (e % 3 + 1) % 3]);
+    }
+    // One triangle removed: three unmatched edges, refused with the mesh's name.
+    s.meshes[0].mesh.indices.resize(s.meshes[0].mesh.indices.size() - 3);
+    try {
+        ShadowCasterSet::build(s);
+        FAIL() << "an open caster was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("'torus'"), std::string::npos) << e.what();
+    }
+    // Receive-only meshes may be open.
+    s.meshes[0].castsShadow = false;
+    EXPECT_TRUE(ShadowCasterSet::build(s).casters.empty());
+}
+
+TEST(ShadowVolumeTest, VolumesAreClosedConsistentlyOrientedSurfaces) {
+    const Scene scene = svScene();
+    const ShadowCasterSet casters = ShadowCasterSet::build(scene);
+    for (const Light& light : {svPointLight({0.5, 5, 1.5}), svSun({0.3, -1, 0.2})}) {
+        SCOPED_TRACE(light.name);
+        Scene volumes;
+        volumes.addMaterial(Material{});
+        svAddCaster(volumes, "volumes", shadowVolumeMesh(casters, light, scene.bounds()));
+        EXPECT_NO_THROW(ShadowCasterSet::build(volumes));
+        // Outward orientation: a closed surface's signed volume is positive.
+        EXPECT_GT(test::meshVolume(volumes.meshes[0].mesh.view()), 0);
+    }
+}
+
+// The count against the exact ray-traced shadow, for point, spot and directional lights, and for a
+// camera far outside the volumes (depth-pass) and one inside a volume (depth-fail).
+TEST(ShadowVolumeTest, ShadowEqualsRayTracedHardShadowExceptAtSilhouettePixels) {
+    const Light lights[] = {svPointLight({0.5, 5, 1.5}), svSpotLight({-1.5, 5.5, 2}, {0, 0, 0}),
+                            svSun({0.3, -1, 0.2})};
+    const Camera cameras[] = {svCamera({0.5, 4.5, 6.5}, {0, 0.6, 0}),
+                              // Under the torus (outside it), in its shadow for every light: depth-fail.
+                              svCamera({0.1, 0.08, 0.05}, {2.5, 0.0, 2.5})};
+    for (const Camera& camera : cameras) {
+        const SvFixture f = svFixture(svScene(), camera, 80, 60);
+        const ShadowCasterSet casters = ShadowCasterSet::build(f.scene);
+        for (const Light& light : lights) {
+            SCOPED_TRACE(light.name + (&camera == &cameras[0] ? ", outside" : ", inside"));
+            const std::vector<uint8_t> receivers =
+                shadowVolumeReceivers(f.gbuffer, f.geometry, f.scene, light);
+            const ShadowVolumeMask mask = computeShadowVolumes(casters, light, f.gbuffer, receivers,
+                                                               f.scene.bounds(), svOptions(false, false));
+            const SvComparison c = svCompare(f, receivers, mask.shadowed, svRayTraced(f, light));
+            std::cout << "[ shadow ] " << light.name << ": " << c.receivers << " receivers, " << c.shadowed
+                      << " shadowed, " << c.mismatches << " mismatches (" << c.offSilhouette
+                      << " off silhouettes) among " << c.silhouettePixels << " silhouette pixels; depth-pass "
+                      << mask.stats.depthPass << ", depth-fail " << mask.stats.depthFail << "\n";
+            EXPECT_GT(c.shadowed, 20);
+            if (&camera == &cameras[0]) { EXPECT_LT(c.shadowed, c.receivers); }
+            EXPECT_EQ(c.offSilhouette, 0);
+            EXPECT_LE(c.mismatches * 10, c.silhouettePixels + 10);
+            if (&camera == &cameras[1]) {
+                EXPECT_GT(mask.stats.depthFail, 0);
+            } else {
+                EXPECT_GT(mask.stats.depthPass, 0);
+            }
+        }
+    }
+}
+
+// Culling and clamping are conservative: the same shadow at every receiver, fewer fragments.
+TEST(ShadowVolumeTest, CullingAndClampingKeepTheShadowPixelForPixel) {
+    const SvFixture f = svFixture(svScene(), svCamera({0.5, 4.5, 6.5}, {0, 0.6, 0}), 96, 72);
+    const ShadowCasterSet casters = ShadowCasterSet::build(f.scene);
+    for (const Light& light :
+         {svPointLight({0.5, 5, 1.5}), svSpotLight({-1.5, 5.5, 2}, {0, 0, 0}), svSun({0.3, -1, 0.2})}) {
+        SCOPED_TRACE(light.name);
+        const std::vector<uint8_t> receivers = shadowVolumeReceivers(f.gbuffer, f.geometry, f.scene, light);
+        const ShadowVolumeMask plain = computeShadowVolumes(casters, light, f.gbuffer, receivers,
+                                                            f.scene.bounds(), svOptions(false, false));
+        const ShadowVolumeMask culled = computeShadowVolumes(casters, light, f.gbuffer, receivers,
+                                                             f.scene.bounds(), svOptions(true, false));
+        const ShadowVolumeMask both = computeShadowVolumes(casters, light, f.gbuffer, receivers,
+                                                           f.scene.bounds(), svOptions(true, true));
+        int64_t diffCulled = 0, diffBoth = 0, shadowed = 0;
+        for (std::size_t i = 0; i < receivers.size(); ++i) {
+            if (!receivers[i]) continue;
+            shadowed += plain.shadowed[i];
+            diffCulled += plain.shadowed[i] != culled.shadowed[i];
+            diffBoth += plain.shadowed[i] != both.shadowed[i];
+        }
+        EXPECT_GT(shadowed, 20);
+        EXPECT_EQ(diffCulled, 0);
+        EXPECT_EQ(diffBoth, 0);
+        EXPECT_TRUE(both.stats.receiversCovered);
+        // The far and the buried casters reach no visible receiver; the sphere under the slab lies
+        // in its shadow.
+        EXPECT_GE(culled.stats.culledNoReceiver, 2);
+        EXPECT_GE(culled.stats.culledOccluded, 1);
+        EXPECT_GE(both.stats.clamped, 1);
+        EXPECT_LT(culled.stats.fragments, plain.stats.fragments);
+        EXPECT_LT(both.stats.fragments, culled.stats.fragments);
+        std::cout << "[ shadow ] " << light.name << ": fragments " << plain.stats.fragments << " / "
+                  << culled.stats.fragments << " / " << both.stats.fragments << ", culled "
+                  << culled.stats.culledNoReceiver << " + " << culled.stats.culledOccluded << " (" <<
+            [&] {
+                std::string names;
+                for (std::size_t i = 0; i < casters.casters.size(); ++i)
+                    if (culled.culled[i])
+                        names += casters.casters[i].name + (culled.culled[i] == 1 ? "/r " : "/o ");
+                return names;
+            }() << ")"
+                  << ", clamped " << both.stats.clamped << "\n";
+    }
+}
+
+TEST(ShadowVolumeTest, RendererDrawsVolumeShadowsAndCullingDoesNotChangeTheImage) {
+    Scene scene = svScene();
+    scene.lights = {svPointLight({0.5, 5, 1.5}), svSun({0.3, -1, 0.2})};
+    scene.cameras = {svCamera({0.5, 4.5, 6.5}, {0, 0.6, 0})};
+    RenderOptions o;
+    o.width = 80;
+    o.height = 60;
+    o.shadow.kind = ShadowKind::Volumes;
+    const RenderResult with = render(scene, scene.cameras[0], o);
+    o.shadow.volumeCulling = false;
+    o.shadow.volumeClamping = false;
+    const RenderResult without = render(scene, scene.cameras[0], o);
+    o.shadow.kind = ShadowKind::None;
+    const RenderResult none = render(scene, scene.cameras[0], o);
+    int64_t differ = 0, darker = 0;
+    for (int64_t y = 0; y < 60; ++y)
+        for (int64_t x = 0; x < 80; ++x) {
+            differ += !(with.image.at(x, y) == without.image.at(x, y));
+            darker += with.image.at(x, y).x < none.image.at(x, y).x;
+        }
+    EXPECT_EQ(differ, 0);
+    EXPECT_GT(darker, 50);
+    EXPECT_GT(without.shadowVolumeFragments, with.shadowVolumeFragments);
+    EXPECT_EQ(parseShadowKind("volumes"), ShadowKind::Volumes);
+    // LightShadow::build cannot count without a G-buffer: it says so.
+    EXPECT_THROW(LightShadow::build(scene, scene.lights[0], o.shadow = ShadowOptions{ShadowKind::Volumes}),
+                 Error);
+}
+
+// CGAL meshes as casters over a ground plane: exact against the ray tracer, unchanged by culling.
+TEST(ShadowVolumeTest, CgalMeshCastersMatchRayTracingAndCulling) {
+    const std::string path = test::dataPath("meshes/elephant.off");
+    if (!std::filesystem::exists(path)) {
+        if (test::dataRequired()) FAIL() << test::missingData("meshes/elephant.off");
+        GTEST_SKIP() << test::missingData("meshes/elephant.off");
+    }
+    Scene scene = svScene();
+    Mesh elephant = loadMesh(path);
+    const Box3d b = computeBounds(elephant.view());
+    const double k = 1.2 / std::max({b.extent().x, b.extent().y, b.extent().z});
+    for (Vec3f& p : elephant.positions)
+        p = Vec3f((Vec3d(p) - Vec3d{b.center().x, b.lo.y, b.center().z}) * k + Vec3d{-0.6, 0.0, 1.4});
+    svAddCaster(scene, "elephant", std::move(elephant));
+    const SvFixture f = svFixture(std::move(scene), svCamera({0.5, 4.0, 6.5}, {0, 0.6, 0.5}), 72, 54);
+    const ShadowCasterSet casters = ShadowCasterSet::build(f.scene);
+    const Light light = svPointLight({-2.0, 4.5, 3.5});
+    const std::vector<uint8_t> receivers = shadowVolumeReceivers(f.gbuffer, f.geometry, f.scene, light);
+    const ShadowVolumeMask plain =
+        computeShadowVolumes(casters, light, f.gbuffer, receivers, f.scene.bounds(), svOptions(false, false));
+    const ShadowVolumeMask both =
+        computeShadowVolumes(casters, light, f.gbuffer, receivers, f.scene.bounds(), svOptions(true, true));
+    const SvComparison c = svCompare(f, receivers, plain.shadowed, svRayTraced(f, light));
+    std::cout << "[ shadow ] elephant: " << c.receivers << " receivers, " << c.shadowed << " shadowed, "
+              << c.mismatches << " mismatches among " << c.silhouettePixels << " silhouette pixels\n";
+    EXPECT_EQ(c.offSilhouette, 0);
+    EXPECT_LE(c.mismatches * 10, c.silhouettePixels + 10);
+    int64_t diff = 0;
+    for (std::size_t i = 0; i < receivers.size(); ++i)
+        diff += receivers[i] && plain.shadowed[i] != both.shadowed[i];
+    EXPECT_EQ(diff, 0);
+}
+
+// The foliage-free demo scenes: the image with culling and clamping is the image without.
+void svExpectDemoUnchangedByCulling(Scene scene) {
+    const Camera camera = scene.cameras.at(0);
+    RenderOptions o;
+    o.width = 96;
+    o.height = 54;
+    o.shadow.kind = ShadowKind::Volumes;
+    const RenderResult with = render(scene, camera, o);
+    o.shadow.volumeCulling = o.shadow.volumeClamping = false;
+    const RenderResult without = render(scene, camera, o);
+    int64_t differ = 0;
+    for (int64_t y = 0; y < o.height; ++y)
+        for (int64_t x = 0; x < o.width; ++x) differ += !(with.image.at(x, y) == without.image.at(x, y));
+    EXPECT_EQ(differ, 0);
+    EXPECT_GT(without.shadowVolumeFragments, 0);
+    EXPECT_LE(with.shadowVolumeFragments, without.shadowVolumeFragments);
+}
+
+TEST(ShadowVolumeTest, FoliageFreeTreeDemoRendersTheSameWithAndWithoutCulling) {
+    TreeOptions t;
+    t.leaves = 0;
+    svExpectDemoUnchangedByCulling(makeTreeScene(t));
+}
+
+TEST(ShadowVolumeTest, FoliageFreeMeshDemosRenderTheSameWithAndWithoutCullingSlow) {
+    const std::string dir = test::dataPath("meshes");
+    if (!std::filesystem::exists(dir + "/bunny00.off")) {
+        if (test::dataRequired()) FAIL() << test::missingData("meshes/bunny00.off");
+        GTEST_SKIP() << test::missingData("meshes/bunny00.off");
+    }
+    svExpectDemoUnchangedByCulling(makeBunnyScene(dir, 0));
+    svExpectDemoUnchangedByCulling(makeCgalScene(dir, 0));
+}
+
+} // namespace
+} // namespace voxfx
