@@ -331,6 +331,38 @@ TEST(GlassTest, ASceneWithoutLightsIsLitByTheDefaultSunAndSkyAmbient) {
             << c;
 }
 
+TEST(GlassTest, CommandLineRendersGlassAndComparesTheVoxelMethodsWithTheExactTracer) {
+    test::TempDir dir;
+    // An octahedron of blue glass over a ground quad, in a JSON scene without lights.
+    test::writeFile(dir.file("gem.off"),
+                    "OFF\n6 8 0\n1 0 0\n-1 0 0\n0 1 0\n0 -1 0\n0 0 1\n0 0 -1\n"
+                    "3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n");
+    test::writeFile(dir.file("ground.off"),
+                    "OFF\n4 2 0\n-4 -1.2 -4\n4 -1.2 -4\n4 -1.2 4\n-4 -1.2 4\n3 0 2 1\n3 0 3 2\n");
+    test::writeFile(dir.file("scene.json"),
+                    R"({ "meshes": [ { "file": "gem.off", "material": { "transmission": 1, "ior": 1.5,
+                                                                         "baseColor": [0.6, 0.8, 1] } },
+                                     { "file": "ground.off" } ],
+                         "cameras": [ { "position": [0, 1, 4], "target": [0, 0, 0], "fovYDegrees": 50 } ] })");
+    const auto r =
+        test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + dir.file("a.png") +
+                                " --width 64 --height 48 --glass multi --glass-grid 32 --shadows exact");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("glass multi (grid 32)"), std::string::npos) << r.out;
+    const Image img = readPng(dir.file("a.png"));
+    EXPECT_EQ(img.width, 64);
+    const auto e =
+        test::runVoxfx(dir, "glass-error " + dir.file("scene.json") +
+                                " --width 64 --height 48 --resolutions 16,32 --methods multi,two-surface");
+    ASSERT_EQ(e.exitCode, 0) << e.err;
+    EXPECT_NE(e.out.find("| multi | 32³ |"), std::string::npos) << e.out;
+    EXPECT_NE(e.out.find("| two-surface | 16³ |"), std::string::npos) << e.out;
+    const auto bad = test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + dir.file("b.png") +
+                                             " --glass frosty");
+    EXPECT_NE(bad.exitCode, 0);
+    EXPECT_NE(bad.err.find("exact, multi, two-surface"), std::string::npos) << bad.err;
+}
+
 TEST(GlassTest, ImageErrorIsTheMeanAbsoluteAndPsnrOverTheMask) {
     Image a(2, 1), b(2, 1);
     a.at(0, 0) = {0.5f, 0.5f, 0.5f};
