@@ -363,6 +363,42 @@ TEST(GlassTest, CommandLineRendersGlassAndComparesTheVoxelMethodsWithTheExactTra
     EXPECT_NE(bad.err.find("exact, multi, two-surface"), std::string::npos) << bad.err;
 }
 
+TEST(GlassTest, FrostedThicknessCountsInsideCellsOfTheFrontAndBackSlicemaps) {
+    // A slab 0.6 thick facing a camera on the z axis, and beside it a sheet 0.001 thick (thinner than
+    // a slice: its front and back faces share cells, the ambiguous case from outside: one cell).
+    Mesh m = test::makeBox({-1, -1, -0.3}, {1, 1, 0.3});
+    test::appendBox(m, {1.5, -1, 0}, {2.5, 1, 0.001});
+    const Frame camera =
+        Frame::perspective({0.75, 0, 6}, {0.75, 0, 0}, {0, 1, 0}, 0.7, 160, 120, 0.1, 100, 1);
+    GlassMedium medium;
+    medium.ior = float(kGlassIor);
+    medium.sigma = {0.5f, 0.5f, 0.5f};
+    GlassOptions o;
+    o.kind = GlassKind::Frosted;
+    o.gridResolution = 128;
+    FrostedGlass glass(m.view(), std::vector<uint32_t>(m.triangleCount(), 0), {medium}, camera, o);
+    const double slice = (glass.frame().farDepth() - glass.frame().nearDepth()) / 128;
+    const Vec3d onSlab{0.2, 0.1, 0.3};
+    const Vec3d ray = normalize(onSlab - camera.eye());
+    // Closed form: the eye ray crosses 0.6 / cos(angle to the axis); counted to a cell at each end.
+    const double want = 0.6 / -ray.z;
+    EXPECT_NEAR(glass.thickness(onSlab), want, 2.5 * slice / -ray.z);
+    // The sheet's faces in one cell (the ambiguous rule: one inside cell) or in two neighbours (entry
+    // cell and exit cell), whichever the frame's slicing gives for its two depths.
+    auto sliceOf = [&](const Vec3d& q) {
+        const Vec3d g = glass.frame().gridFromWorld(q);
+        const int64_t c = int64_t(std::floor(g.y)) * glass.frame().width() + int64_t(std::floor(g.x));
+        return int64_t(std::floor(glass.frame().depthToSlice(c)(g.z)));
+    };
+    const Vec3d sheetFront{2.0, 0.1, 0.001}, sheetBack{2.0, 0.1, 0.0};
+    EXPECT_EQ(glass.insideCells(sheetFront), sliceOf(sheetFront) == sliceOf(sheetBack) ? 1 : 2);
+    const GlassPath p = glass.trace(onSlab, {0, 0, 1}, 0, ray, o);
+    const double F = fresnelDielectric(-ray.z, 1, kGlassIor);
+    EXPECT_NEAR(p.throughput.x, (1 - F) * (1 - F) * std::exp(-0.5 * glass.thickness(onSlab)), 1e-5);
+    EXPECT_GT(p.blurAngle, 0);
+    EXPECT_LT(p.blurAngle, o.frostedBlur);
+}
+
 TEST(GlassTest, ImageErrorIsTheMeanAbsoluteAndPsnrOverTheMask) {
     Image a(2, 1), b(2, 1);
     a.at(0, 0) = {0.5f, 0.5f, 0.5f};

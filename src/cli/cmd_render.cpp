@@ -118,8 +118,7 @@ int runRender(const RenderArgs& a) {
             int64_t glassPixels = 0;
             for (const uint8_t m : r.glassMask) glassPixels += m;
             std::cout << "glass " << toString(o.glass.kind);
-            if (o.glass.kind == GlassKind::Multi || o.glass.kind == GlassKind::TwoSurface)
-                std::cout << " (grid " << o.glass.gridResolution << ")";
+            if (o.glass.kind != GlassKind::Exact) std::cout << " (grid " << o.glass.gridResolution << ")";
             std::cout << ": " << withCommas(glassPixels) << " pixels, prepare "
                       << fmtMs(r.timings.glassPrepareMs) << ", trace " << fmtMs(r.timings.glassMs) << "\n";
         }
@@ -145,6 +144,8 @@ Glass (materials with transmission > 0):
                  reflection, Beer-Lambert over true lengths; the reference
   multi          CHANG: march through an attribute grid, refract at boundary voxels
   two-surface    Wyman 2005: refract at the front surface and at the first back surface
+  frosted        ED06: thickness from front/back-face slicemaps drives a refraction
+                 offset, attenuation and a blurred environment lookup
 A scene without lights is lit by a default sun and the sky (or --environment).
 
 Settings a JSON scene file gives under "render" are used unless a flag overrides them.
@@ -179,7 +180,7 @@ const Command kRender{
             ->check(CLI::PositiveNumber);
         app.add_option("-j,--threads", a->threads, "Worker threads, 0 = all (identical output)")
             ->check(CLI::NonNegativeNumber);
-        app.add_option("--glass", a->glass, "none | exact | multi | two-surface (default none)");
+        app.add_option("--glass", a->glass, "none | exact | multi | two-surface | frosted (default none)");
         app.add_option("--glass-grid", a->glassGrid, "Glass voxels along the longest side (default 128)")
             ->check(CLI::Range(int64_t(2), int64_t(4096)));
         app.add_option("--environment", a->environment, "Environment map: .exr .hdr .pfm .png, or 'sky'");

@@ -35,14 +35,17 @@ const char* toString(GlassKind k) {
         return "multi";
     case GlassKind::TwoSurface:
         return "two-surface";
+    case GlassKind::Frosted:
+        return "frosted";
     }
     return "?";
 }
 
 GlassKind parseGlassKind(const std::string& name) {
-    for (const GlassKind k : {GlassKind::None, GlassKind::Exact, GlassKind::Multi, GlassKind::TwoSurface})
+    for (const GlassKind k :
+         {GlassKind::None, GlassKind::Exact, GlassKind::Multi, GlassKind::TwoSurface, GlassKind::Frosted})
         if (name == toString(k)) return k;
-    fail("unknown glass method '", name, "' (allowed: none, exact, multi, two-surface)");
+    fail("unknown glass method '", name, "' (allowed: none, exact, multi, two-surface, frosted)");
 }
 
 bool refractDirection(const Vec3d& d, const Vec3d& n, double eta, Vec3d& out) {

@@ -44,8 +44,11 @@ void shadeGlass(const GBuffer& gbuffer, const SceneGeometry& geometry, const Sce
     const auto t0 = Clock::now();
     std::unique_ptr<ExactGlass> exact;
     std::unique_ptr<VoxelGlass> voxels;
+    std::unique_ptr<FrostedGlass> frosted;
     if (kind == GlassKind::Exact)
         exact = std::make_unique<ExactGlass>(glass.view(), geometry.normals, medium, media);
+    else if (kind == GlassKind::Frosted)
+        frosted = std::make_unique<FrostedGlass>(glass.view(), medium, media, gbuffer.frame, options.glass);
     else
         voxels = std::make_unique<VoxelGlass>(glass.view(), medium, media, options.glass);
     // What the light leaving the glass (and the reflection) comes from: the opaque scene, traced
@@ -57,7 +60,7 @@ void shadeGlass(const GBuffer& gbuffer, const SceneGeometry& geometry, const Sce
         const Box3d box = computeBounds(geometry.mesh.view());
         epsilon = std::max(1e-9, 1e-5 * length(box.extent()));
     }
-    auto incoming = [&](const Vec3d& from, const Vec3d& dir) -> Vec3f {
+    auto incoming = [&](const Vec3d& from, const Vec3d& dir, double blur) -> Vec3f {
         if (behind) {
             const TriangleTracer::Hit h =
                 behind->intersect(from, dir, epsilon, std::numeric_limits<double>::infinity());
@@ -80,7 +83,7 @@ void shadeGlass(const GBuffer& gbuffer, const SceneGeometry& geometry, const Sce
                 return shadePoint(s, scene, shadows, options, from) * (1.0f / options.exposure);
             }
         }
-        return env.lookup(dir);
+        return env.lookup(dir, blur);
     };
     const auto t1 = Clock::now();
     timings.glassPrepareMs += std::chrono::duration<double, std::milli>(t1 - t0).count();
@@ -97,10 +100,15 @@ void shadeGlass(const GBuffer& gbuffer, const SceneGeometry& geometry, const Sce
                 if (!surfaceAt(gbuffer, geometry, x, y, s)) continue;
                 const Vec3d d = normalize(s.position - eye);
                 const GlassPath p = exact ? exact->trace(eye, d, options.glass.maxEvents)
-                                          : voxels->trace(s.position, s.normal, s.material, d, options.glass);
+                                    : frosted
+                                        ? frosted->trace(s.position, s.normal, s.material, d, options.glass)
+                                        : voxels->trace(s.position, s.normal, s.material, d, options.glass);
                 if (!p.hit) continue;
-                const Vec3f through = incoming(s.position, p.reflectDir) * p.reflectance +
-                                      incoming(p.exitPoint, p.exitDir) * p.throughput;
+                // Frosted light is the blurred environment (ED06's pre-filtered map), never the scene.
+                const Vec3f through = incoming(s.position, p.reflectDir, 0) * p.reflectance +
+                                      (p.blurAngle > 0 ? env.lookup(p.exitDir, p.blurAngle)
+                                                       : incoming(p.exitPoint, p.exitDir, 0)) *
+                                          p.throughput;
                 const float tr = std::clamp(scene.materials[s.material].transmission, 0.0f, 1.0f);
                 shaded[i] = shaded[i] * (1 - tr) + through * (tr * options.exposure);
                 sampleMask[i] = 1;
