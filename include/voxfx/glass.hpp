@@ -24,7 +24,8 @@
 //               two slicemaps in a camera-aligned perspective frame; each pixel's column is walked
 //               front to back counting inside cells (a front-only cell enters, a back-only cell
 //               leaves, a cell with both is resolved by the state carried from the previous cell:
-//               inside stays inside, outside counts it as a thin sliver). The count gives the
+//               from outside a thin sliver, from inside the way out; it counts once and leaves the
+//               ray outside, which errs thin rather than filling the rest of the column). The count gives the
 //               thickness L the eye ray crosses; the light comes from the refracted direction
 //               displaced by L, attenuated by exp(-sigma L), blurred over a cone that grows with L
 //               (a lookup into the environment's pre-filtered pyramid).

@@ -70,8 +70,9 @@ int64_t FrostedGlass::insideCells(const Vec3d& p) const {
         } else if (b && !f) { // leaves (a stray back face outside is ignored)
             count += inside;
             inside = false;
-        } else if (f && b) { // ambiguous: inside stays inside; from outside it is a thin sliver
-            ++count;
+        } else if (f && b) { // ambiguous: a sliver from outside; from inside the way out (a surface
+            ++count;         // folded within one cell), so that a missed exit cannot fill the column
+            inside = false;
         } else {
             count += inside;
         }
