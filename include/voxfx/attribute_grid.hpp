@@ -36,6 +36,9 @@ struct AttributeOptions {
     Coverage coverage = Coverage::Center;
     /// Also accumulate normals (12 bytes per voxel; the glass renderer needs them, shadows do not).
     bool normals = true;
+    /// Material channel: one material index per triangle (a glass renderer reads the index of
+    /// refraction and attenuation of the voxel's material from it), or empty (no channel, no memory).
+    std::span<const uint32_t> triangleMaterial;
     /// ED06 local slicing: each column's D slices cover only the depth range its geometry spans.
     Slicing slicing = Slicing::Uniform;
     int threads = 0;              ///< worker threads, 0 = all; results are identical for every value
@@ -49,6 +52,11 @@ struct AttributeGrid {
     std::vector<uint16_t> count;   ///< writes per voxel, saturating at 65535
     std::vector<float> absorption; ///< sum over the voxel's writes of the triangle's absorption
     std::vector<Vec3f> normalSum;  ///< sum over the voxel's writes of the unit triangle normal (CCW)
+    /// Material of the voxel's first write (the lowest triangle index written into it: triangles are
+    /// visited in index order), kNoMaterial where nothing was written; empty when
+    /// AttributeOptions::triangleMaterial was.
+    std::vector<uint32_t> material;
+    static constexpr uint32_t kNoMaterial = 0xffffffffu;
 
     int64_t voxelCount() const { return frame.columnCount() * frame.depth(); }
     int64_t index(int64_t x, int64_t y, int64_t s) const {
@@ -63,7 +71,7 @@ struct AttributeGrid {
 };
 
 /// Bytes an attribute grid of this frame needs (to check before voxelizing).
-uint64_t attributeGridBytes(const Frame& frame, bool normals);
+uint64_t attributeGridBytes(const Frame& frame, bool normals, bool materials = false);
 
 /// Voxelizes `mesh` into `frame`, storing per-voxel attributes. `triangleAbsorption` holds one
 /// value per triangle (any unit; e.g. optical depth per write) added to the voxel on each write,
@@ -87,8 +95,8 @@ struct AttributeColumns {
     int64_t entryCount() const { return int64_t(slice.size()); }
 };
 
-/// Sparse attribute voxelization (counts and absorption; no normals), with the options and errors
-/// of voxelizeAttributes (options.normals is ignored).
+/// Sparse attribute voxelization (counts and absorption; no normals, no materials), with the options and
+/// errors of voxelizeAttributes (options.normals is ignored).
 AttributeColumns voxelizeAttributeColumns(const MeshView& mesh, const Frame& frame,
                                           std::span<const float> triangleAbsorption,
                                           const AttributeOptions& options = {});

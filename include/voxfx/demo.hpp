@@ -5,6 +5,7 @@
 //   bunny   the Stanford bunny (bunny00.off) under a canopy of leaves, lit by a spot light.
 //   cgal    meshes from the CGAL data set (elephant, armadillo, cactus) under a leafy pergola lit by
 //           a point light and a directional one.
+//   glass   glass objects (the bunny, a torus knot, two coloured glasses) over a checkered ground.
 // Every scene has one camera. Generation is deterministic (fixed seeds).
 //
 // EXPERIMENTAL until the renderer issue closes.
@@ -41,9 +42,13 @@ Scene makeBunnyScene(const std::string& meshesDir, int leaves = 4000, uint64_t s
 /// missing are skipped (at least one must load, else voxfx::Error).
 Scene makeCgalScene(const std::string& meshesDir, int leaves = 5000, uint64_t seed = 3);
 
-/// "tree", "bunny", "cgal".
+/// Glass (no lights: the default sun and sky): a glass bunny (meshesDir/bunny00.off), a
+/// self-occluding green glass torus knot and a block of amber and blue glass over a checkered ground.
+Scene makeGlassScene(const std::string& meshesDir);
+
+/// "tree", "bunny", "cgal", "glass".
 std::vector<std::string> demoSceneNames();
-/// makeTreeScene / makeBunnyScene / makeCgalScene by name; voxfx::Error for an unknown name.
+/// makeTreeScene / makeBunnyScene / makeCgalScene / makeGlassScene by name; voxfx::Error for an unknown name.
 Scene makeDemoScene(const std::string& name, const std::string& meshesDir);
 
 } // namespace voxfx

@@ -41,4 +41,18 @@ void writePfm(const Image& image, const std::string& path);
 /// naming the path.
 void writeExr(const Image& image, const std::string& path);
 
+/// Reads a PFM (colour "PF" or grey "Pf", either byte order; rows bottom to top in the file).
+Image readPfm(const std::string& path);
+/// Reads a Radiance .hdr (RGBE, "FORMAT=32-bit_rle_rgbe", orientation "-Y H +X W"), flat or with
+/// the new run-length encoding per scanline. XYZE files and other orientations are refused.
+Image readHdr(const std::string& path);
+/// Reads an OpenEXR file's R, G, B channels (missing ones read as 0; Y-only files as grey) as
+/// linear floats, through the exr module.
+Image readExr(const std::string& path);
+/// Reads .png, .pfm, .hdr or .exr by extension; throws voxfx::Error listing them otherwise.
+Image readImage(const std::string& path);
+/// One Radiance RGBE pixel as linear RGB, the way Radiance's colr_color decodes it:
+/// e == 0 gives black, otherwise channel c = (byte_c + 0.5) * 2^(e - 136).
+Vec3f decodeRgbe(uint8_t r, uint8_t g, uint8_t b, uint8_t e);
+
 } // namespace voxfx

@@ -25,6 +25,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "voxfx/environment.hpp"
+#include "voxfx/glass.hpp"
 #include "voxfx/image.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/scene.hpp"
@@ -38,7 +40,14 @@ struct RenderOptions {
     ShadowOptions shadow;               ///< shadow kind and its resolutions
     Vec3f ambient{0.05f, 0.06f, 0.08f}; ///< ambient irradiance (times albedo)
     Vec3f background{0.60f, 0.72f, 0.90f};
-    float exposure = 1;           ///< multiplies the linear result (background included)
+    float exposure = 1; ///< multiplies the linear result (background included)
+    GlassOptions glass; ///< refraction through transmissive materials (none: shaded as surfaces)
+    /// Radiance around the scene: shown as the background and seen through and in glass. Null: the
+    /// flat `background`, and the procedural sky (Environment::sky) where glass needs one. Not owned.
+    const Environment* environment = nullptr;
+    /// A scene without lights is lit by a sun (the sky's, or SkyOptions' default direction for maps)
+    /// and the environment's average radiance as ambient, as glTF viewers do.
+    bool defaultLights = true;
     int threads = 0;              ///< 0 = all; output is identical for every value
     Progress* progress = nullptr; ///< polled between tiles of every pass; may cancel
 };
@@ -48,6 +57,8 @@ struct RenderTimings {
     double flattenMs = 0, gbufferMs = 0, shadowMapMs = 0, lightVoxelizeMs = 0, shadingMs = 0, resolveMs = 0,
            totalMs = 0;
     double shadowVolumeMs = 0; ///< ShadowKind::Volumes: culling, construction and counting
+    double glassPrepareMs = 0; ///< Embree build (exact) or attribute voxelization (voxel methods)
+    double glassMs = 0;        ///< tracing the glass pixels
 };
 
 struct RenderResult {
@@ -55,6 +66,9 @@ struct RenderResult {
     RenderTimings timings;
     int64_t coveredPixels = 0;         ///< pixels (at the supersampled resolution) showing geometry
     int64_t shadowVolumeFragments = 0; ///< ShadowKind::Volumes: volume fragments, all lights
+    /// Per output pixel (row-major, row 0 on top): 1 where any of its samples shows glass, else 0.
+    /// Empty when options.glass.kind is None.
+    std::vector<uint8_t> glassMask;
 };
 
 /// All meshes of a scene as one mesh, with per-triangle material and source mesh and per-vertex

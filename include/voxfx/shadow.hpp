@@ -50,9 +50,10 @@
 
 namespace voxfx {
 
-enum class ShadowKind : uint8_t { None, Map, Transmittance, Absorption, Volumes };
+enum class ShadowKind : uint8_t { None, Map, Transmittance, Absorption, Volumes, Exact };
 const char* toString(ShadowKind k);
-/// Parses none | map | transmittance | absorption | volumes; throws voxfx::Error listing them otherwise.
+/// Parses none | map | transmittance | absorption | volumes | exact; throws voxfx::Error listing them
+/// otherwise.
 ShadowKind parseShadowKind(const std::string& name);
 
 struct ShadowOptions {
@@ -192,6 +193,25 @@ private:
 /// or `opaqueAbsorption` for opaque materials (and as an upper bound).
 float absorptionPerCrossing(const Material& m, float opaqueAbsorption);
 
+/// The exact reference for shadows through partial occluders: the product of the crossing
+/// transmittances of every caster triangle between a point and the light, ray traced on the actual
+/// triangles (Embree, glass.hpp's TriangleTracer). ShadowKind::Exact.
+class TriangleTracer;
+class ExactShadow {
+public:
+    /// `casters` in world space; one RGB crossing transmittance per triangle (0 for opaque ones).
+    ExactShadow(const MeshView& casters, std::vector<Vec3f> triangleTransmittance);
+    /// Product of the transmittances of the triangles crossed by p + t * dir, t in (epsilon, distance).
+    Vec3f transmittance(const Vec3d& p, const Vec3d& dir, double distance) const;
+    double epsilon() const { return epsilon_; }
+
+private:
+    Mesh mesh_;
+    std::vector<Vec3f> transmittance_;
+    std::shared_ptr<const TriangleTracer> tracer_;
+    double epsilon_ = 1e-6;
+};
+
 struct ShadowBuildTimings {
     double mapMs = 0;            ///< standard shadow map(s)
     double voxelizeMs = 0;       ///< transmittance / attribute voxelization from the light
@@ -227,6 +247,8 @@ private:
     std::vector<TransmittanceShadowMap> transmittance_;
     std::vector<AbsorptionShadowMap> absorption_;
     std::shared_ptr<const ShadowVolumeMask> volumes_;
+    std::shared_ptr<const ExactShadow> exact_; ///< ShadowKind::Exact
+    Light light_;                              ///< ShadowKind::Exact: the light traced towards
 };
 
 } // namespace voxfx

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "voxfx/environment.hpp"
 #include "voxfx/image.hpp"
 #include "voxfx/render.hpp"
 
@@ -10,7 +11,8 @@ namespace voxfx::cli {
 namespace {
 
 struct RenderArgs {
-    std::string input, output, shadows, slicing, voxelMode;
+    std::string input, output, shadows, slicing, voxelMode, glass, environment;
+    int64_t glassGrid = 0;
     int64_t width = 0, height = 0, grid = 0, gridDepth = 0, mapResolution = 0;
     int supersample = 0, pcf = 1, camera = 0, threads = 0;
     double exposure = 1;
@@ -72,6 +74,16 @@ int runRender(const RenderArgs& a) {
     if (s.background.x >= 0) o.background = s.background;
     o.exposure = float(a.exposure);
     o.threads = a.threads;
+    o.glass.kind = parseGlassKind(a.glass.empty() ? "none" : a.glass);
+    if (a.glassGrid) o.glass.gridResolution = a.glassGrid;
+    // The environment: --environment, the scene's map, or the procedural sky where glass or a scene
+    // without lights needs one (the background then shows it too).
+    const std::string envPath = !a.environment.empty() ? a.environment : s.environmentMap;
+    Environment environment;
+    if (!envPath.empty() || o.glass.kind != GlassKind::None || scene.lights.empty()) {
+        environment = loadEnvironment(envPath.empty() ? "sky" : envPath);
+        o.environment = &environment;
+    }
 
     Camera camera;
     if (scene.cameras.empty()) {
@@ -107,6 +119,14 @@ int runRender(const RenderArgs& a) {
                       << ", " << fmtMs(r.timings.shadowVolumeMs) << ")";
         std::cout << "\nload " << fmtMs(loadMs) << "; ";
         printTimings(r, a.output);
+        if (o.glass.kind != GlassKind::None) {
+            int64_t glassPixels = 0;
+            for (const uint8_t m : r.glassMask) glassPixels += m;
+            std::cout << "glass " << toString(o.glass.kind);
+            if (o.glass.kind != GlassKind::Exact) std::cout << " (grid " << o.glass.gridResolution << ")";
+            std::cout << ": " << withCommas(glassPixels) << " pixels, prepare "
+                      << fmtMs(r.timings.glassPrepareMs) << ", trace " << fmtMs(r.timings.glassMs) << "\n";
+        }
     }
     return 0;
 }
@@ -123,6 +143,18 @@ Shadow kinds:
   volumes        exact hard shadows: shadow volumes of the closed casters counted per
                  pixel (open casters are refused), culled and clamped against what the
                  camera sees (ED06 3.2; --no-volume-culling turns that off)
+  exact          ray traced on the triangles (Embree): the product of the transmittances
+                 of every surface crossed towards the light (the reference)
+
+Glass (materials with transmission > 0):
+  none           shaded like any surface
+  exact          ray tracing on the triangles (Embree): Snell, Fresnel, total internal
+                 reflection, Beer-Lambert over true lengths; the reference
+  multi          CHANG: march through an attribute grid, refract at boundary voxels
+  two-surface    Wyman 2005: refract at the front surface and at the first back surface
+  frosted        ED06: thickness from front/back-face slicemaps drives a refraction
+                 offset, attenuation and a blurred environment lookup
+A scene without lights is lit by a default sun and the sky (or --environment).
 
 Settings a JSON scene file gives under "render" are used unless a flag overrides them.
 Output by extension: .png (8-bit sRGB), .exr (OpenEXR, linear half-float RGB, HDR) or
@@ -139,7 +171,7 @@ const Command kRender{
         app.add_option("--height", a->height, "Image height (default 720)")
             ->check(CLI::Range(int64_t(1), int64_t(65536)));
         app.add_option("--shadows", a->shadows,
-                       "none | map | transmittance | absorption | volumes (default map)");
+                       "none | map | transmittance | absorption | volumes | exact (default map)");
         app.add_option("--supersample", a->supersample, "Render k x k samples per pixel (1..8)")
             ->check(CLI::Range(1, 8));
         app.add_option("--grid", a->grid, "Light grid columns, longer side (default 256)")
@@ -156,6 +188,10 @@ const Command kRender{
             ->check(CLI::PositiveNumber);
         app.add_option("-j,--threads", a->threads, "Worker threads, 0 = all (identical output)")
             ->check(CLI::NonNegativeNumber);
+        app.add_option("--glass", a->glass, "none | exact | multi | two-surface | frosted (default none)");
+        app.add_option("--glass-grid", a->glassGrid, "Glass voxels along the longest side (default 128)")
+            ->check(CLI::Range(int64_t(2), int64_t(4096)));
+        app.add_option("--environment", a->environment, "Environment map: .exr .hdr .pfm .png, or 'sky'");
         app.add_flag("--bilinear", a->bilinear, "Interpolate light-grid lookups between 4 columns (softer)");
         app.add_flag("--no-volume-culling", a->noVolumeCulling,
                      "Shadow volumes: no culling or clamping (the same image, more fragments)");

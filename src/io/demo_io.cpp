@@ -29,11 +29,14 @@ Scene makeCgalScene(const std::string& meshesDir, int leaves, uint64_t seed) {
     return detail::makeCgalScene(meshFolder(meshesDir), leaves, seed);
 }
 
+Scene makeGlassScene(const std::string& meshesDir) { return detail::makeGlassScene(meshFolder(meshesDir)); }
+
 Scene makeDemoScene(const std::string& name, const std::string& meshesDir) {
     if (name == "tree") return makeTreeScene();
     if (name == "bunny") return makeBunnyScene(meshesDir);
     if (name == "cgal") return makeCgalScene(meshesDir);
-    fail("unknown demo scene '", name, "' (allowed: tree, bunny, cgal)");
+    if (name == "glass") return makeGlassScene(meshesDir);
+    fail("unknown demo scene '", name, "' (allowed: tree, bunny, cgal, glass)");
 }
 
 } // namespace voxfx

@@ -2,9 +2,12 @@
 #include "voxfx/image.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <exception>
+#include <fstream>
 #include <limits>
 #include <memory>
 
@@ -13,6 +16,7 @@
 #include "core/atomic_file.hpp"
 #include "io/module_api.hpp"
 #include "voxfx/error.hpp"
+#include "voxfx/file_name.hpp"
 
 namespace voxfx {
 
@@ -136,6 +140,138 @@ void writeExr(const Image& image, const std::string& path) {
     if (!exr.writeRgb(file.tempPath().c_str(), int(image.width), int(image.height), rgb.data(), &error))
         fail("cannot write '", path, "': ", error);
     file.commit();
+}
+
+Image readExr(const std::string& path) {
+    const detail::ExrModule& exr = detail::exrModule();
+    int w = 0, h = 0;
+    std::vector<float> rgb;
+    std::string error;
+    if (!exr.readRgb(path.c_str(), &w, &h, &rgb, &error)) fail("cannot read '", path, "': ", error);
+    Image image(w, h);
+    for (size_t i = 0; i < image.pixels.size(); ++i)
+        image.pixels[i] = {rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]};
+    return image;
+}
+
+namespace {
+// One whitespace-delimited token of a PFM header.
+std::string imagePfmToken(std::istream& in) {
+    std::string t;
+    in >> t;
+    return t;
+}
+} // namespace
+
+Image readPfm(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail("cannot open image '", path, "'");
+    const std::string magic = imagePfmToken(in);
+    if (magic != "PF" && magic != "Pf") fail("'", path, "' is not a PFM file");
+    const int channels = magic == "PF" ? 3 : 1;
+    int64_t w = 0, h = 0;
+    double scale = 0;
+    try {
+        w = std::stoll(imagePfmToken(in));
+        h = std::stoll(imagePfmToken(in));
+        scale = std::stod(imagePfmToken(in));
+    } catch (const std::exception&) { fail("'", path, "': malformed PFM header"); }
+    if (w <= 0 || h <= 0 || w > (1 << 20) || h > (1 << 20) || scale == 0)
+        fail("'", path, "': malformed PFM header");
+    in.get(); // the single whitespace byte after the scale
+    const bool little = scale < 0;
+    std::vector<float> data(size_t(w * h * channels));
+    in.read(reinterpret_cast<char*>(data.data()), std::streamsize(data.size() * sizeof(float)));
+    if (!in) fail("'", path, "': truncated PFM data");
+    const bool hostLittle = std::endian::native == std::endian::little;
+    if (little != hostLittle)
+        for (float& f : data) {
+            uint32_t u;
+            std::memcpy(&u, &f, 4);
+            u = __builtin_bswap32(u);
+            std::memcpy(&f, &u, 4);
+        }
+    Image image(w, h);
+    for (int64_t y = 0; y < h; ++y) // PFM rows run bottom to top
+        for (int64_t x = 0; x < w; ++x) {
+            const float* p = data.data() + ((h - 1 - y) * w + x) * channels;
+            image.at(x, y) = channels == 3 ? Vec3f{p[0], p[1], p[2]} : Vec3f{p[0], p[0], p[0]};
+        }
+    return image;
+}
+
+Vec3f decodeRgbe(uint8_t r, uint8_t g, uint8_t b, uint8_t e) {
+    if (e == 0) return {0, 0, 0};
+    const float f = std::ldexp(1.0f, int(e) - (128 + 8));
+    return {(float(r) + 0.5f) * f, (float(g) + 0.5f) * f, (float(b) + 0.5f) * f};
+}
+
+Image readHdr(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail("cannot open image '", path, "'");
+    std::string line;
+    std::getline(in, line);
+    if (line.rfind("#?", 0) != 0) fail("'", path, "' is not a Radiance HDR file");
+    bool rgbe = true;
+    while (std::getline(in, line) && !line.empty())
+        if (line.rfind("FORMAT=", 0) == 0) rgbe = line == "FORMAT=32-bit_rle_rgbe";
+    if (!rgbe) fail("'", path, "': only FORMAT=32-bit_rle_rgbe is supported");
+    std::getline(in, line);
+    char ya[3] = {}, xa[3] = {};
+    long long h = 0, w = 0;
+    if (std::sscanf(line.c_str(), "%2s %lld %2s %lld", ya, &h, xa, &w) != 4 || std::string(ya) != "-Y" ||
+        std::string(xa) != "+X" || w <= 0 || h <= 0 || w > (1 << 20) || h > (1 << 20))
+        fail("'", path, "': unsupported resolution line '", line, "' (expected -Y H +X W)");
+    Image image(w, h);
+    std::vector<uint8_t> scan(size_t(w) * 4);
+    auto truncated = [&] { fail("'", path, "': truncated HDR data"); };
+    for (int64_t y = 0; y < h; ++y) {
+        uint8_t head[4];
+        if (!in.read(reinterpret_cast<char*>(head), 4)) truncated();
+        const bool rle = w >= 8 && w < 32768 && head[0] == 2 && head[1] == 2 && (head[2] & 0x80) == 0;
+        if (rle) {
+            if ((int64_t(head[2]) << 8 | head[3]) != w) fail("'", path, "': scanline width mismatch");
+            for (int c = 0; c < 4; ++c)
+                for (int64_t x = 0; x < w;) {
+                    const int n0 = in.get();
+                    if (n0 == EOF) truncated();
+                    if (n0 > 128) { // a run
+                        const int64_t n = n0 - 128;
+                        const int v = in.get();
+                        if (v == EOF || x + n > w) truncated();
+                        for (int64_t k = 0; k < n; ++k) scan[size_t((x + k) * 4 + c)] = uint8_t(v);
+                        x += n;
+                    } else { // literal bytes
+                        const int64_t n = n0;
+                        if (n == 0 || x + n > w) fail("'", path, "': bad run length");
+                        for (int64_t k = 0; k < n; ++k) {
+                            const int v = in.get();
+                            if (v == EOF) truncated();
+                            scan[size_t((x + k) * 4 + c)] = uint8_t(v);
+                        }
+                        x += n;
+                    }
+                }
+        } else { // flat pixels
+            std::memcpy(scan.data(), head, 4);
+            if (w > 1 && !in.read(reinterpret_cast<char*>(scan.data() + 4), std::streamsize((w - 1) * 4)))
+                truncated();
+        }
+        for (int64_t x = 0; x < w; ++x) {
+            const uint8_t* p = scan.data() + x * 4;
+            image.at(x, y) = decodeRgbe(p[0], p[1], p[2], p[3]);
+        }
+    }
+    return image;
+}
+
+Image readImage(const std::string& path) {
+    const std::string ext = fileExtension(path);
+    if (ext == ".png") return readPng(path);
+    if (ext == ".pfm") return readPfm(path);
+    if (ext == ".hdr") return readHdr(path);
+    if (ext == ".exr") return readExr(path);
+    fail(path, ": unknown image extension (allowed: .png, .pfm, .hdr, .exr)");
 }
 
 } // namespace voxfx

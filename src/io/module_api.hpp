@@ -105,6 +105,8 @@ struct ExrModule {
     uint32_t size;
     /// Half-float R, G, B from `rgb` (3 floats per pixel, row 0 on top), ZIP compression.
     bool (*writeRgb)(const char* path, int width, int height, const float* rgb, std::string* error);
+    /// R, G, B as floats (3 per pixel, row 0 on top) of the file's data window.
+    bool (*readRgb)(const char* path, int* width, int* height, std::vector<float>* rgb, std::string* error);
 };
 
 /// The loaded modules (loaded on first call; voxfx::Error naming where they were searched when

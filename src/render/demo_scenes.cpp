@@ -332,6 +332,6 @@ Scene makeCgalScene(const DemoMeshes& meshes, int leaves, uint64_t seed) {
 
 } // namespace detail
 
-std::vector<std::string> demoSceneNames() { return {"tree", "bunny", "cgal"}; }
+std::vector<std::string> demoSceneNames() { return {"tree", "bunny", "cgal", "glass"}; }
 
 } // namespace voxfx

@@ -22,5 +22,6 @@ struct DemoMeshes {
 
 Scene makeBunnyScene(const DemoMeshes& meshes, int leaves, uint64_t seed);
 Scene makeCgalScene(const DemoMeshes& meshes, int leaves, uint64_t seed);
+Scene makeGlassScene(const DemoMeshes& meshes);
 
 } // namespace voxfx::detail

@@ -4,6 +4,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include "core/enum_names.hpp"
@@ -64,6 +65,8 @@ const char* toString(ShadowKind k) {
         return "absorption";
     case ShadowKind::Volumes:
         return "volumes";
+    case ShadowKind::Exact:
+        return "exact";
     }
     return "?";
 }
@@ -73,7 +76,8 @@ ShadowKind parseShadowKind(const std::string& name) {
                                                               {"map", ShadowKind::Map},
                                                               {"transmittance", ShadowKind::Transmittance},
                                                               {"absorption", ShadowKind::Absorption},
-                                                              {"volumes", ShadowKind::Volumes}};
+                                                              {"volumes", ShadowKind::Volumes},
+                                                              {"exact", ShadowKind::Exact}};
     return detail::parseEnum<ShadowKind>(name, "shadow kind", kNames);
 }
 
@@ -150,6 +154,16 @@ LightShadow LightShadow::build(const Scene& scene, const Light& light, const Sha
         t.voxelizeMs += msSince(t0);
         break;
     }
+    case ShadowKind::Exact: {
+        const auto t0 = std::chrono::steady_clock::now();
+        std::vector<Vec3f> perTriangle(casters.allMaterialIndex.size());
+        for (std::size_t i = 0; i < perTriangle.size(); ++i)
+            perTriangle[i] = scene.materials[casters.allMaterialIndex[i]].crossingTransmittance();
+        out.exact_ = std::make_shared<const ExactShadow>(casters.all.view(), std::move(perTriangle));
+        out.light_ = light;
+        t.mapMs += msSince(t0);
+        break;
+    }
     }
     return out;
 }
@@ -195,6 +209,20 @@ Vec3f LightShadow::visibility(const Vec3d& p, const Vec3d& n) const {
             const double texel = mapViews_[size_t(i)].columnWorldSize(p);
             v = v * maps_[size_t(i)].visibility(q, options_.pcfRadius, options_.depthBias * texel);
         }
+    }
+    if (exact_) {
+        // Towards the light from p, offset along n against self-intersection.
+        Vec3d l;
+        double distance = std::numeric_limits<double>::infinity();
+        if (light_.type == LightType::Directional) {
+            l = -normalize(light_.direction);
+        } else {
+            l = light_.position - p;
+            distance = length(l);
+            l = l / std::max(distance, 1e-300);
+        }
+        const Vec3d o = p + n * (exact_->epsilon() * 10);
+        v = v * exact_->transmittance(o, l, distance);
     }
     if (!transmittance_.empty() || !absorption_.empty()) {
         const int i = lookupView(gridViews_, p, n, options_.normalOffset, q);

@@ -2,7 +2,9 @@
 // resolve, each pass timed (see render.hpp for the passes).
 #include <algorithm>
 #include <chrono>
+#include <optional>
 
+#include "render/glass_pass.hpp"
 #include "render/shading.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/shadow_volume.hpp"
@@ -39,6 +41,26 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     scene.validate();
     if (scene.triangleCount() == 0) fail("the scene has no triangles to render");
     const auto t0 = Clock::now();
+    // The environment (given, or the procedural sky when glass or default lights need one) and, for a
+    // scene without lights, the default sun and sky ambient.
+    std::optional<Environment> sky;
+    const bool addSun = scene.lights.empty() && options.defaultLights;
+    const Environment* env = options.environment;
+    if (!env && (addSun || options.glass.kind != GlassKind::None)) env = &sky.emplace(Environment::sky());
+    std::optional<Scene> sunlit;
+    RenderOptions litOptions = options;
+    if (addSun) {
+        Light sun;
+        sun.name = "default sun";
+        const Vec3d towards =
+            length(env->sunDirection()) > 0 ? env->sunDirection() : SkyOptions{}.sunDirection;
+        sun.direction = -normalize(towards);
+        sun.color = {1.0f, 0.96f, 0.9f};
+        sun.intensity = 3;
+        sunlit.emplace(scene).lights.push_back(sun);
+        litOptions.ambient = env->average();
+    }
+    const Scene& lit = sunlit ? *sunlit : scene;
     RenderResult result;
     RenderTimings& t = result.timings;
     const int k = options.supersample;
@@ -57,16 +79,16 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
         std::vector<LightShadow> shadows;
         // Shadow volumes: closed casters with edge adjacency, built once for every light.
         const bool volumes = options.shadow.kind == ShadowKind::Volumes;
-        const ShadowCasterSet casters = volumes ? ShadowCasterSet::build(scene) : ShadowCasterSet{};
-        for (std::size_t i = 0; i < scene.lights.size(); ++i) {
-            PassProgress sp(options.progress, 0.2 + 0.3 * double(i) / double(scene.lights.size()),
-                            0.2 + 0.3 * double(i + 1) / double(scene.lights.size()));
+        const ShadowCasterSet casters = volumes ? ShadowCasterSet::build(lit) : ShadowCasterSet{};
+        for (std::size_t i = 0; i < lit.lights.size(); ++i) {
+            PassProgress sp(options.progress, 0.2 + 0.3 * double(i) / double(lit.lights.size()),
+                            0.2 + 0.3 * double(i + 1) / double(lit.lights.size()));
             ShadowBuildTimings st;
             if (volumes)
-                shadows.push_back(buildVolumeShadow(casters, scene, scene.lights[i], gbuffer, geometry,
-                                                    options.shadow, &st));
+                shadows.push_back(
+                    buildVolumeShadow(casters, lit, lit.lights[i], gbuffer, geometry, options.shadow, &st));
             else
-                shadows.push_back(LightShadow::build(scene, scene.lights[i], options.shadow, &st, sp.get()));
+                shadows.push_back(LightShadow::build(lit, lit.lights[i], options.shadow, &st, sp.get()));
             t.shadowMapMs += st.mapMs;
             t.lightVoxelizeMs += st.voxelizeMs;
             t.shadowVolumeMs += st.volumeMs;
@@ -75,9 +97,24 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
 
         tp = Clock::now();
         PassProgress shp(options.progress, 0.5, 1.0);
-        const std::vector<Vec3f> shaded =
-            detail::shadeGBuffer(gbuffer, geometry, scene, shadows, options, shp.get());
+        std::vector<Vec3f> shaded =
+            detail::shadeGBuffer(gbuffer, geometry, lit, shadows, litOptions, shp.get());
+        if (options.environment) { // the background shows the environment along each pixel's ray
+            const Frame& cam = gbuffer.frame;
+            parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
+                for (int64_t y = y0; y < y1; ++y)
+                    for (int64_t x = 0; x < W; ++x)
+                        if (gbuffer.triangle[size_t(y * W + x)] == GBuffer::kNone)
+                            shaded[size_t(y * W + x)] =
+                                options.environment->lookup(
+                                    cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - cam.eye()) *
+                                options.exposure;
+            });
+        }
         t.shadingMs = msSince(tp);
+        std::vector<uint8_t> glassSamples;
+        if (options.glass.kind != GlassKind::None)
+            detail::shadeGlass(gbuffer, geometry, lit, shadows, litOptions, *env, shaded, glassSamples, t);
 
         // Box filter k x k and flip: frame rows run up, image rows down.
         tp = Clock::now();
@@ -92,6 +129,17 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
                     result.image.at(x, options.height - 1 - y) = sum * norm;
                 }
         });
+        if (!glassSamples.empty()) {
+            result.glassMask.assign(size_t(options.width * options.height), 0);
+            for (int64_t y = 0; y < options.height; ++y)
+                for (int64_t x = 0; x < options.width; ++x) {
+                    uint8_t any = 0;
+                    for (int dy = 0; dy < k; ++dy)
+                        for (int dx = 0; dx < k; ++dx)
+                            any |= glassSamples[size_t((y * k + dy) * W + x * k + dx)];
+                    result.glassMask[size_t((options.height - 1 - y) * options.width + x)] = any;
+                }
+        }
         t.resolveMs = msSince(tp);
     });
     t.totalMs = msSince(t0);

@@ -19,7 +19,8 @@ struct AttributeConsumer {
     const Frame& frame;
     AttributeGrid& grid;
     std::span<const float> absorption;
-    const std::vector<Vec3f>& faceNormals; // empty when normals are off
+    const std::vector<Vec3f>& faceNormals;      // empty when normals are off
+    std::span<const uint32_t> triangleMaterial; // empty when the material channel is off
 
     struct Sink {
         AttributeConsumer& c;
@@ -30,6 +31,8 @@ struct AttributeConsumer {
             if (n != 0xffff) ++n;
             if (!c.absorption.empty()) c.grid.absorption[i] += c.absorption[triangle];
             if (!c.faceNormals.empty()) c.grid.normalSum[i] += c.faceNormals[triangle];
+            if (!c.triangleMaterial.empty() && c.grid.material[i] == AttributeGrid::kNoMaterial)
+                c.grid.material[i] = c.triangleMaterial[triangle];
         }
         void fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool) {
             const int64_t column = y * c.frame.width() + x;
@@ -152,9 +155,10 @@ int64_t AttributeGrid::writeCount() const {
     return total;
 }
 
-uint64_t attributeGridBytes(const Frame& frame, bool normals) {
+uint64_t attributeGridBytes(const Frame& frame, bool normals, bool materials) {
     const uint64_t voxels = uint64_t(frame.columnCount()) * uint64_t(frame.depth());
-    return voxels * (sizeof(uint16_t) + sizeof(float) + (normals ? sizeof(Vec3f) : 0));
+    return voxels * (sizeof(uint16_t) + sizeof(float) + (normals ? sizeof(Vec3f) : 0) +
+                     (materials ? sizeof(uint32_t) : 0));
 }
 
 AttributeGrid voxelizeAttributes(const MeshView& mesh, const Frame& inFrame,
@@ -164,7 +168,11 @@ AttributeGrid voxelizeAttributes(const MeshView& mesh, const Frame& inFrame,
     AttributeGrid grid;
     withThreads(options.threads, [&] {
         const Frame frame = slicedFrame(mesh, inFrame, options);
-        checkMemory(attributeGridBytes(frame, options.normals), "attribute voxelization at this resolution");
+        if (!options.triangleMaterial.empty() && options.triangleMaterial.size() != mesh.triangleCount)
+            fail("attribute voxelization: ", options.triangleMaterial.size(), " material indices for ",
+                 mesh.triangleCount, " triangles");
+        checkMemory(attributeGridBytes(frame, options.normals, !options.triangleMaterial.empty()),
+                    "attribute voxelization at this resolution");
         grid.frame = frame;
         const auto voxels = size_t(grid.voxelCount());
         grid.count.assign(voxels, 0);
@@ -182,7 +190,9 @@ AttributeGrid voxelizeAttributes(const MeshView& mesh, const Frame& inFrame,
         RasterOptions ro;
         ro.coverage = options.coverage;
         ro.progress = options.progress;
-        AttributeConsumer consumer{grid.frame, grid, triangleAbsorption, faceNormals};
+        if (!options.triangleMaterial.empty()) grid.material.assign(voxels, AttributeGrid::kNoMaterial);
+        AttributeConsumer consumer{grid.frame, grid, triangleAbsorption, faceNormals,
+                                   options.triangleMaterial};
         rasterize(grid.frame, mesh, ro, consumer);
     });
     return grid;

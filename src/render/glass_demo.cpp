@@ -1,0 +1,167 @@
+// voxfx — the glass demo scene: a glass bunny, a self-occluding glass torus knot and a block of two
+// coloured glasses over a checkered ground, no lights (the default sun and sky light it).
+#include <cmath>
+#include <filesystem>
+
+#include "render/demo_scenes.hpp"
+#include "voxfx/error.hpp"
+
+namespace voxfx {
+
+namespace {
+
+// A (p, q) torus knot as a closed tube: `segments` along the curve, `sides` around the tube.
+Mesh glassDemoTorusKnot(int p, int q, double R, double r, double tube, int segments, int sides) {
+    auto curve = [&](double t) {
+        const double rr = R + r * std::cos(q * t);
+        return Vec3d{rr * std::cos(p * t), -r * std::sin(q * t), rr * std::sin(p * t)};
+    };
+    Mesh m;
+    for (int i = 0; i < segments; ++i) {
+        const double t = 2 * M_PI * i / segments, h = 1e-4;
+        const Vec3d c = curve(t);
+        const Vec3d T = normalize(curve(t + h) - curve(t - h));
+        const Vec3d N = normalize(curve(t + h) - c * 2.0 + curve(t - h));
+        const Vec3d B = cross(T, N);
+        for (int j = 0; j < sides; ++j) {
+            const double a = 2 * M_PI * j / sides;
+            m.positions.push_back(Vec3f(c + (N * std::cos(a) + B * std::sin(a)) * tube));
+        }
+    }
+    auto id = [&](int i, int j) {
+        return uint32_t(((i + segments) % segments) * sides + (j + sides) % sides);
+    };
+    for (int i = 0; i < segments; ++i)
+        for (int j = 0; j < sides; ++j)
+            for (const uint32_t v :
+                 {id(i, j), id(i, j + 1), id(i + 1, j + 1), id(i, j), id(i + 1, j + 1), id(i + 1, j)})
+                m.indices.push_back(v);
+    // Outward orientation: flip when the enclosed signed volume is negative.
+    double volume = 0;
+    for (size_t t = 0; t < m.triangleCount(); ++t) {
+        const Vec3d a(m.positions[m.indices[3 * t]]), b(m.positions[m.indices[3 * t + 1]]),
+            c(m.positions[m.indices[3 * t + 2]]);
+        volume += dot(a, cross(b, c));
+    }
+    if (volume < 0)
+        for (size_t t = 0; t < m.triangleCount(); ++t) std::swap(m.indices[3 * t + 1], m.indices[3 * t + 2]);
+    return m;
+}
+
+void glassDemoBox(Mesh& m, const Vec3d& lo, const Vec3d& hi) {
+    const auto base = uint32_t(m.positions.size());
+    for (int k = 0; k < 8; ++k)
+        m.positions.push_back(
+            Vec3f(Vec3d{(k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z}));
+    static const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                         {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : quads)
+        for (const uint32_t t : {q[0], q[1], q[2], q[0], q[2], q[3]}) m.indices.push_back(base + t);
+}
+
+Material glassDemoMaterial(const char* name, Vec3f tint, Vec3f attenuation, float distance) {
+    Material g;
+    g.name = name;
+    g.baseColor = tint;
+    g.transmission = 1;
+    g.ior = 1.5f;
+    g.attenuationColor = attenuation;
+    g.attenuationDistance = distance;
+    g.specular = 0.5f;
+    g.shininess = 200;
+    return g;
+}
+
+// Stands `mesh` on the ground, `height` tall, centred at (x, z).
+void glassDemoPlace(Mesh& mesh, double height, double x, double y0, double z) {
+    const Box3d b = computeBounds(mesh.view());
+    const double s = height / std::max(b.extent().y, 1e-12);
+    const Vec3d c = b.center();
+    for (Vec3f& p : mesh.positions)
+        p = Vec3f(
+            Vec3d{(double(p.x) - c.x) * s + x, (double(p.y) - b.lo.y) * s + y0, (double(p.z) - c.z) * s + z});
+}
+
+} // namespace
+
+namespace detail {
+
+Scene makeGlassScene(const DemoMeshes& meshes) {
+    std::optional<Mesh> bunny = meshes.mesh("bunny00.off");
+    if (!bunny)
+        fail("demo 'glass': ", (std::filesystem::path(meshes.folder) / "bunny00.off").string(), " not found");
+    Scene scene;
+    scene.source = "demo:glass";
+    // A checkered ground (the "texture" the glass distorts): 16 x 16 tiles of two materials.
+    Material light, dark;
+    light.name = "tile-light";
+    light.baseColor = {0.80f, 0.78f, 0.72f};
+    dark.name = "tile-dark";
+    dark.baseColor = {0.12f, 0.13f, 0.16f};
+    light.specular = dark.specular = 0.05f;
+    const uint32_t tiles[2] = {scene.addMaterial(light), scene.addMaterial(dark)};
+    const int n = 16;
+    const double half = 4.0, tile = 2 * half / n;
+    for (int k = 0; k < 2; ++k) {
+        SceneMesh g;
+        g.name = k == 0 ? "Ground-light" : "Ground-dark";
+        g.material = tiles[k];
+        g.castsShadow = false;
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j) {
+                if ((i + j) % 2 != k) continue;
+                const auto b = uint32_t(g.mesh.positions.size());
+                const double x0 = -half + i * tile, z0 = -half + j * tile;
+                for (const Vec3d p : {Vec3d{x0, 0, z0}, Vec3d{x0, 0, z0 + tile},
+                                      Vec3d{x0 + tile, 0, z0 + tile}, Vec3d{x0 + tile, 0, z0}})
+                    g.mesh.positions.push_back(Vec3f(p));
+                g.mesh.indices.insert(g.mesh.indices.end(), {b, b + 1, b + 2, b, b + 2, b + 3});
+            }
+        scene.meshes.push_back(std::move(g));
+    }
+    const uint32_t clear =
+        scene.addMaterial(glassDemoMaterial("clear-glass", {1, 1, 1}, {0.85f, 0.95f, 0.92f}, 1.0f));
+    const uint32_t green =
+        scene.addMaterial(glassDemoMaterial("green-glass", {1, 1, 1}, {0.35f, 0.85f, 0.45f}, 0.6f));
+    const uint32_t amber =
+        scene.addMaterial(glassDemoMaterial("amber-glass", {1, 1, 1}, {0.95f, 0.6f, 0.15f}, 0.5f));
+    const uint32_t blue =
+        scene.addMaterial(glassDemoMaterial("blue-glass", {1, 1, 1}, {0.25f, 0.45f, 0.95f}, 0.5f));
+
+    SceneMesh b;
+    b.name = "Bunny";
+    b.mesh = std::move(*bunny);
+    glassDemoPlace(b.mesh, 1.3, -1.7, 0, 0.2);
+    b.material = clear;
+    scene.meshes.push_back(std::move(b));
+
+    SceneMesh knot;
+    knot.name = "TorusKnot";
+    knot.mesh = glassDemoTorusKnot(2, 3, 0.5, 0.22, 0.13, 384, 32);
+    glassDemoPlace(knot.mesh, 0.75, 0.1, 0.35, -0.2);
+    knot.material = green;
+    scene.meshes.push_back(std::move(knot));
+
+    // One block of two glasses: amber below, blue above (two meshes touching).
+    for (int k = 0; k < 2; ++k) {
+        SceneMesh m;
+        m.name = k == 0 ? "Block-amber" : "Block-blue";
+        glassDemoBox(m.mesh, {1.3, 0.6 * k, -0.5}, {2.0, 0.6 * k + 0.6, 0.3});
+        m.material = k == 0 ? amber : blue;
+        scene.meshes.push_back(std::move(m));
+    }
+
+    Camera cam;
+    cam.name = "View";
+    cam.position = {0.2, 2.3, 4.6};
+    cam.target = {0.1, 0.55, 0};
+    cam.fovY = 42 * M_PI / 180;
+    cam.nearDepth = 0.05;
+    cam.farDepth = 100;
+    scene.cameras.push_back(cam);
+    scene.validate();
+    return scene;
+}
+
+} // namespace detail
+} // namespace voxfx

@@ -1,0 +1,120 @@
+// voxfx — the glass pass: per glass pixel, Fresnel reflection of the environment plus the light
+// that comes through (exact tracer or voxel march), mixed with the surface shading by the
+// material's transmission.
+#include "render/glass_pass.hpp"
+
+#include <chrono>
+#include <limits>
+#include <memory>
+
+#include "render/shading.hpp"
+
+namespace voxfx::detail {
+
+void shadeGlass(const GBuffer& gbuffer, const SceneGeometry& geometry, const Scene& scene,
+                const std::vector<LightShadow>& shadows, const RenderOptions& options, const Environment& env,
+                std::vector<Vec3f>& shaded, std::vector<uint8_t>& sampleMask, RenderTimings& timings) {
+    using Clock = std::chrono::steady_clock;
+    const GlassKind kind = options.glass.kind;
+    sampleMask.assign(shaded.size(), 0);
+    if (kind == GlassKind::None) return;
+    std::vector<uint8_t> isGlass(scene.materials.size());
+    std::vector<GlassMedium> media(scene.materials.size());
+    for (size_t m = 0; m < scene.materials.size(); ++m) {
+        isGlass[m] = scene.materials[m].transmission > 0;
+        media[m] = glassMedium(scene.materials[m]);
+    }
+    // The glass triangles, on the scene's vertices.
+    Mesh glass;
+    glass.positions = geometry.mesh.positions;
+    Mesh opaque;
+    opaque.positions = geometry.mesh.positions;
+    std::vector<uint32_t> medium, opaqueTriangle;
+    for (size_t t = 0; t < geometry.mesh.triangleCount(); ++t) {
+        const bool g = isGlass[geometry.triangleMaterial[t]];
+        for (int k = 0; k < 3; ++k)
+            (g ? glass : opaque).indices.push_back(geometry.mesh.indices[3 * t + size_t(k)]);
+        if (g)
+            medium.push_back(geometry.triangleMaterial[t]);
+        else
+            opaqueTriangle.push_back(uint32_t(t));
+    }
+    if (medium.empty()) return;
+
+    const auto t0 = Clock::now();
+    std::unique_ptr<ExactGlass> exact;
+    std::unique_ptr<VoxelGlass> voxels;
+    std::unique_ptr<FrostedGlass> frosted;
+    if (kind == GlassKind::Exact)
+        exact = std::make_unique<ExactGlass>(glass.view(), geometry.normals, medium, media);
+    else if (kind == GlassKind::Frosted)
+        frosted = std::make_unique<FrostedGlass>(glass.view(), medium, media, gbuffer.frame, options.glass);
+    else
+        voxels = std::make_unique<VoxelGlass>(glass.view(), medium, media, options.glass);
+    // What the light leaving the glass (and the reflection) comes from: the opaque scene, traced
+    // exactly for every method, else the environment.
+    std::unique_ptr<TriangleTracer> behind;
+    double epsilon = 1e-6;
+    if (options.glass.sceneBehind && !opaqueTriangle.empty()) {
+        behind = std::make_unique<TriangleTracer>(opaque.view());
+        const Box3d box = computeBounds(geometry.mesh.view());
+        epsilon = std::max(1e-9, 1e-5 * length(box.extent()));
+    }
+    auto incoming = [&](const Vec3d& from, const Vec3d& dir, double blur) -> Vec3f {
+        if (behind) {
+            const TriangleTracer::Hit h =
+                behind->intersect(from, dir, epsilon, std::numeric_limits<double>::infinity());
+            if (h.hit) {
+                const size_t t = opaqueTriangle[h.triangle];
+                const uint32_t ia = geometry.mesh.indices[3 * t], ib = geometry.mesh.indices[3 * t + 1],
+                               ic = geometry.mesh.indices[3 * t + 2];
+                const Vec3d a(geometry.mesh.positions[ia]), b(geometry.mesh.positions[ib]),
+                    c(geometry.mesh.positions[ic]);
+                SurfacePoint s;
+                s.position = from + dir * h.t;
+                s.geometricNormal = normalize(cross(b - a, c - a));
+                if (dot(s.geometricNormal, dir) > 0) s.geometricNormal = -s.geometricNormal;
+                s.normal = normalize(Vec3d(geometry.normals[ia]) * (1 - h.u - h.v) +
+                                     Vec3d(geometry.normals[ib]) * h.u + Vec3d(geometry.normals[ic]) * h.v);
+                if (!(length(s.normal) > 0)) s.normal = s.geometricNormal;
+                if (dot(s.normal, s.geometricNormal) < 0) s.normal = -s.normal;
+                s.material = geometry.triangleMaterial[t];
+                // shadePoint applies the exposure; the caller applies it to the whole glass radiance.
+                return shadePoint(s, scene, shadows, options, from) * (1.0f / options.exposure);
+            }
+        }
+        return env.lookup(dir, blur);
+    };
+    const auto t1 = Clock::now();
+    timings.glassPrepareMs += std::chrono::duration<double, std::milli>(t1 - t0).count();
+
+    const int64_t W = gbuffer.frame.width(), H = gbuffer.frame.height();
+    const Vec3d eye = gbuffer.frame.eye();
+    parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < W; ++x) {
+                const size_t i = size_t(y * W + x);
+                const uint32_t tri = gbuffer.triangle[i];
+                if (tri == GBuffer::kNone || !isGlass[geometry.triangleMaterial[tri]]) continue;
+                SurfacePoint s;
+                if (!surfaceAt(gbuffer, geometry, x, y, s)) continue;
+                const Vec3d d = normalize(s.position - eye);
+                const GlassPath p = exact ? exact->trace(eye, d, options.glass.maxEvents)
+                                    : frosted
+                                        ? frosted->trace(s.position, s.normal, s.material, d, options.glass)
+                                        : voxels->trace(s.position, s.normal, s.material, d, options.glass);
+                if (!p.hit) continue;
+                // Frosted light is the blurred environment (ED06's pre-filtered map), never the scene.
+                const Vec3f through = incoming(s.position, p.reflectDir, 0) * p.reflectance +
+                                      (p.blurAngle > 0 ? env.lookup(p.exitDir, p.blurAngle)
+                                                       : incoming(p.exitPoint, p.exitDir, 0)) *
+                                          p.throughput;
+                const float tr = std::clamp(scene.materials[s.material].transmission, 0.0f, 1.0f);
+                shaded[i] = shaded[i] * (1 - tr) + through * (tr * options.exposure);
+                sampleMask[i] = 1;
+            }
+    });
+    timings.glassMs += std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
+}
+
+} // namespace voxfx::detail

@@ -1,0 +1,417 @@
+// Tests of src/render/glass_optics.cpp and glass_trace.cpp: Snell, Fresnel and Beer–Lambert in closed
+// form; the exact tracer (Embree) and the voxel march on slabs and a sphere against the closed-form
+// refracted rays; the material channel of the attribute voxelization.
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "test_util.hpp"
+#include "voxfx/attribute_grid.hpp"
+#include "voxfx/glass.hpp"
+#include "voxfx/render.hpp"
+#include "voxfx/shadow.hpp"
+
+namespace voxfx {
+namespace {
+
+constexpr double kGlassIor = 1.5;
+
+Vec3d glassDirAt(double angle) { return {std::sin(angle), 0, -std::cos(angle)}; } // into -z, tilted to +x
+
+TEST(GlassTest, SnellBendsByTheSineLawAndReflectsTotallyPastTheCriticalAngle) {
+    const Vec3d n{0, 0, 1}; // facing a ray that travels along -z
+    for (double a = 0; a < 1.5; a += 0.1) {
+        Vec3d t;
+        ASSERT_TRUE(refractDirection(glassDirAt(a), n, 1 / kGlassIor, t));
+        EXPECT_NEAR(length(t), 1.0, 1e-12);
+        EXPECT_NEAR(t.x, std::sin(a) / kGlassIor, 1e-12); // sin(theta_t) = sin(theta_i) / n
+        EXPECT_LT(t.z, 0);
+        EXPECT_NEAR(t.y, 0, 1e-15);
+    }
+    const double critical = std::asin(1 / kGlassIor);
+    Vec3d t;
+    EXPECT_TRUE(refractDirection(glassDirAt(critical - 1e-6), n, kGlassIor, t));
+    EXPECT_FALSE(refractDirection(glassDirAt(critical + 1e-6), n, kGlassIor, t));
+    const Vec3d r = reflectDirection(glassDirAt(0.3), n);
+    EXPECT_NEAR(r.x, std::sin(0.3), 1e-12);
+    EXPECT_NEAR(r.z, std::cos(0.3), 1e-12);
+}
+
+TEST(GlassTest, FresnelMatchesNormalIncidenceBrewsterAndTotalReflection) {
+    const double r0 = (kGlassIor - 1) / (kGlassIor + 1);
+    EXPECT_NEAR(fresnelDielectric(1, 1, kGlassIor), r0 * r0, 1e-12);
+    EXPECT_NEAR(fresnelDielectric(1, kGlassIor, 1), r0 * r0, 1e-12); // reciprocity at normal incidence
+    // Brewster: tan(theta_B) = n, the p-polarized part vanishes: F = rs^2 / 2.
+    const double b = std::atan(kGlassIor), tb = std::asin(std::sin(b) / kGlassIor);
+    const double rs = std::sin(tb - b) / std::sin(tb + b);
+    EXPECT_NEAR(fresnelDielectric(std::cos(b), 1, kGlassIor), rs * rs / 2, 1e-12);
+    EXPECT_DOUBLE_EQ(fresnelDielectric(std::cos(1.2), kGlassIor, 1), 1.0);
+    EXPECT_NEAR(fresnelDielectric(0, 1, kGlassIor), 1.0, 1e-12); // grazing
+}
+
+TEST(GlassTest, AttenuationFollowsBeerLambertOfTheVolumeExtension) {
+    Material m;
+    m.attenuationColor = {0.5f, 0.25f, 1.0f};
+    m.attenuationDistance = 2;
+    const Vec3f s = attenuationCoefficient(m);
+    // After attenuationDistance the light is attenuationColor: exp(-sigma * 2) = colour.
+    const Vec3f t = beerLambert(s, 2.0);
+    EXPECT_NEAR(t.x, 0.5f, 1e-6f);
+    EXPECT_NEAR(t.y, 0.25f, 1e-6f);
+    EXPECT_NEAR(t.z, 1.0f, 1e-6f);
+    EXPECT_NEAR(beerLambert(s, 4.0).x, 0.25f, 1e-6f);
+    m.attenuationDistance = std::numeric_limits<float>::infinity();
+    EXPECT_EQ(attenuationCoefficient(m), (Vec3f{0, 0, 0}));
+}
+
+// A slab |z| <= h/2, wide in x and y.
+Mesh glassSlab(double h, double z0 = 0) {
+    return test::makeBox({-20, -20, z0 - h / 2}, {20, 20, z0 + h / 2});
+}
+
+// Closed form: a ray at angle a crosses a slab of thickness h: inside length h / cos(theta_t),
+// exits parallel to its entry, with throughput (1 - F_in)(1 - F_out) exp(-sigma L).
+TEST(GlassTest, ExactTracerExitsAParallelSlabParallelAndAttenuatedByTheTrueLength) {
+    const double h = 0.5, sigma = 0.8;
+    const Mesh slab = glassSlab(h);
+    GlassMedium medium;
+    medium.ior = float(kGlassIor);
+    medium.sigma = {float(sigma), float(sigma), float(sigma)};
+    ExactGlass glass(slab.view(), {}, std::vector<uint32_t>(slab.triangleCount(), 0), {medium});
+    for (const double a : {0.0, 0.3, 0.7, 1.2}) {
+        const Vec3d d = glassDirAt(a);
+        const Vec3d origin = Vec3d{0.123, 0.05, 3} - d * 0.0;
+        const GlassPath p = glass.trace(origin, d, 16);
+        ASSERT_TRUE(p.hit);
+        EXPECT_EQ(p.events, 2);
+        EXPECT_NEAR(length(p.exitDir - d), 0, 1e-5) << a;
+        const double tt = std::asin(std::sin(a) / kGlassIor);
+        const double L = h / std::cos(tt);
+        const double F = fresnelDielectric(std::cos(a), 1, kGlassIor);
+        const double Fout = fresnelDielectric(std::cos(tt), kGlassIor, 1);
+        EXPECT_NEAR(p.reflectance, F, 1e-5);
+        EXPECT_NEAR(p.throughput.x, (1 - F) * (1 - Fout) * std::exp(-sigma * L), 1e-4) << a;
+        // Lateral shift of the exit point against the straight line: h sin(a - tt) / cos(tt).
+        const double tIn = (origin.z - h / 2) / -d.z;
+        const Vec3d entry = origin + d * tIn;
+        const Vec3d exitPoint = entry + Vec3d{std::sin(tt), 0, -std::cos(tt)} * L;
+        EXPECT_NEAR(length(p.exitPoint - exitPoint), 0, 1e-4) << a;
+    }
+}
+
+TEST(GlassTest, ExactTracerMatchesTheClosedFormRayThroughASphere) {
+    // A finely tessellated unit sphere with its exact normals per vertex.
+    const double R = 1;
+    const Mesh sphere = test::makeUvSphere({0, 0, 0}, R, 255, 512); // odd: no ring on the equator
+    std::vector<Vec3f> normals;
+    for (const Vec3f& p : sphere.positions) normals.push_back(Vec3f(normalize(Vec3d(p))));
+    GlassMedium medium;
+    medium.ior = float(kGlassIor);
+    medium.sigma = {0.5f, 0.5f, 0.5f};
+    ExactGlass glass(sphere.view(), normals, std::vector<uint32_t>(sphere.triangleCount(), 0), {medium});
+    for (const double b : {0.0, 0.2, 0.5, 0.8, 0.95}) {
+        // Along -x at height b in the y direction (away from the poles on the z axis).
+        const Vec3d d{-1, 0, 0};
+        const GlassPath p = glass.trace({5, b, 0}, d, 16);
+        ASSERT_TRUE(p.hit);
+        EXPECT_EQ(p.events, 2) << b;
+        const double ti = std::asin(b / R), tt = std::asin(std::sin(ti) / kGlassIor);
+        const double deviation = 2 * (ti - tt); // turned towards the centre (-y for b > 0)
+        const Vec3d want{-std::cos(deviation), -std::sin(deviation), 0};
+        EXPECT_NEAR(length(p.exitDir - want), 0, 3e-3) << b;
+        const double chord = 2 * R * std::cos(tt);
+        const double F = fresnelDielectric(std::cos(ti), 1, kGlassIor);
+        const double Fout = fresnelDielectric(std::cos(tt), kGlassIor, 1);
+        EXPECT_NEAR(p.throughput.x, (1 - F) * (1 - Fout) * std::exp(-0.5 * chord), 3e-3) << b;
+        EXPECT_NEAR(length(p.exitPoint), R, 1e-3);
+    }
+}
+
+TEST(GlassTest, ExactTracerReflectsTotallyInsideAPrism) {
+    // A right-angle prism (45-45-90) lit normally through its hypotenuse face: the ray hits each leg
+    // at 45 degrees > the critical angle (41.8) twice and leaves back through the hypotenuse reversed.
+    Mesh prism;
+    const float L = 10;
+    // Cross-section in x-z: (-1, 0), (1, 0), (0, 1); extruded along y.
+    for (const float y : {-L, L})
+        for (const Vec3f p : {Vec3f{-1, y, 0}, Vec3f{1, y, 0}, Vec3f{0, y, 1}}) prism.positions.push_back(p);
+    prism.indices = {0, 1, 2, 3, 5, 4, 0, 3, 4, 0, 4, 1, 1, 4, 5, 1, 5, 2, 2, 5, 3, 2, 3, 0};
+    GlassMedium medium;
+    medium.ior = float(kGlassIor);
+    ExactGlass glass(prism.view(), {}, std::vector<uint32_t>(prism.triangleCount(), 0), {medium});
+    const GlassPath p = glass.trace({0.3, 0.1, -2}, {0, 0, 1}, 16);
+    ASSERT_TRUE(p.hit);
+    EXPECT_EQ(p.events, 4); // enter, two total reflections, exit
+    EXPECT_NEAR(length(p.exitDir - Vec3d{0, 0, -1}), 0, 1e-5);
+    EXPECT_NEAR(p.exitPoint.x, -0.3, 1e-4);
+}
+
+TEST(GlassTest, VoxelMarchThroughASlabExitsParallelLikeTheExactTracer) {
+    const double h = 0.5, sigma = 0.8;
+    const Mesh slab = test::makeBox({-1, -1, -h / 2}, {1, 1, h / 2});
+    GlassMedium medium;
+    medium.ior = float(kGlassIor);
+    medium.sigma = {float(sigma), float(sigma), float(sigma)};
+    GlassOptions o;
+    o.gridResolution = 64;
+    for (const GlassKind kind : {GlassKind::Multi, GlassKind::TwoSurface}) {
+        o.kind = kind;
+        VoxelGlass glass(slab.view(), std::vector<uint32_t>(slab.triangleCount(), 0), {medium}, o);
+        const double a = 0.4;
+        const Vec3d d = glassDirAt(a);
+        const GlassPath p = glass.trace({0.05, 0.02, h / 2}, {0, 0, 1}, 0, d, o);
+        ASSERT_TRUE(p.hit);
+        EXPECT_EQ(p.events, 2) << toString(kind);
+        EXPECT_NEAR(length(p.exitDir - d), 0, 1e-6) << toString(kind);
+        const double tt = std::asin(std::sin(a) / kGlassIor), L = h / std::cos(tt);
+        const double want = (1 - fresnelDielectric(std::cos(a), 1, kGlassIor)) *
+                            (1 - fresnelDielectric(std::cos(tt), kGlassIor, 1)) * std::exp(-sigma * L);
+        // The exit is placed mid-voxel: the length is right to about a voxel.
+        EXPECT_NEAR(p.throughput.x, want, want * sigma * 2 * glass.voxelSize()) << toString(kind);
+    }
+}
+
+TEST(GlassTest, MultipleRefractionSeesThroughTwoSlabsWhereTwoSurfaceStopsAfterOne) {
+    // Two parallel slabs, one behind the other: the refracted ray crosses both. Multi follows four
+    // refractions and exits parallel; two-surface stops after the first slab's back face (also parallel
+    // here, but with two events and the first slab's attenuation only).
+    Mesh two = test::makeBox({-1, -1, 0.5}, {1, 1, 0.8});
+    test::appendBox(two, {-1, -1, -0.8}, {1, 1, -0.5});
+    GlassMedium medium;
+    medium.ior = float(kGlassIor);
+    medium.sigma = {1, 1, 1};
+    GlassOptions o;
+    o.gridResolution = 64;
+    const Vec3d d = glassDirAt(0.3);
+    o.kind = GlassKind::Multi;
+    VoxelGlass glass(two.view(), std::vector<uint32_t>(two.triangleCount(), 0), {medium}, o);
+    const GlassPath multi = glass.trace({0, 0, 0.8}, {0, 0, 1}, 0, d, o);
+    EXPECT_EQ(multi.events, 4);
+    EXPECT_NEAR(length(multi.exitDir - d), 0, 1e-6);
+    EXPECT_LT(multi.exitPoint.z, -0.5);
+    o.kind = GlassKind::TwoSurface;
+    const GlassPath two2 = glass.trace({0, 0, 0.8}, {0, 0, 1}, 0, d, o);
+    EXPECT_EQ(two2.events, 2);
+    EXPECT_GT(two2.exitPoint.z, 0.4);
+    EXPECT_GT(two2.throughput.x, multi.throughput.x);
+    // The exact tracer agrees with multi on the exit direction and number of events.
+    ExactGlass exact(two.view(), {}, std::vector<uint32_t>(two.triangleCount(), 0), {medium});
+    const GlassPath e = exact.trace(Vec3d{0, 0, 0.8} - d, d, 16);
+    EXPECT_EQ(e.events, 4);
+    EXPECT_NEAR(length(e.exitDir - d), 0, 1e-5);
+    EXPECT_NEAR(e.throughput.x, multi.throughput.x, 0.05);
+}
+
+TEST(GlassTest, AttributeMaterialChannelHoldsTheFirstWritersMaterialWhereverSomethingWasWritten) {
+    Mesh m = test::makeBox({0.1, 0.1, 0.1}, {0.45, 0.9, 0.9});
+    test::appendBox(m, {0.55, 0.1, 0.1}, {0.9, 0.9, 0.9});
+    std::vector<uint32_t> mat(m.triangleCount());
+    for (size_t t = 12; t < mat.size(); ++t) mat[t] = 7;
+    AttributeOptions o;
+    o.coverage = Coverage::Conservative;
+    o.triangleMaterial = mat;
+    const Frame f = Frame::orthographic({{0, 0, 0}, {1, 1, 1}}, Axis::Z, 20, 20, 20);
+    const AttributeGrid g = voxelizeAttributes(m.view(), f, {}, o);
+    ASSERT_EQ(g.material.size(), g.count.size());
+    int64_t written = 0;
+    for (int64_t y = 0; y < 20; ++y)
+        for (int64_t x = 0; x < 20; ++x)
+            for (int64_t s = 0; s < 20; ++s) {
+                const int64_t i = g.index(x, y, s);
+                if (g.count[size_t(i)] == 0) {
+                    EXPECT_EQ(g.material[size_t(i)], AttributeGrid::kNoMaterial);
+                    continue;
+                }
+                ++written;
+                // The boxes are apart by two voxels: a voxel's x says whose it is.
+                EXPECT_EQ(g.material[size_t(i)], x < 10 ? 0u : 7u) << x << " " << y << " " << s;
+            }
+    EXPECT_GT(written, 100);
+    o.triangleMaterial = std::span<const uint32_t>(mat.data(), 3);
+    EXPECT_THROW(voxelizeAttributes(m.view(), f, {}, o), Error);
+}
+
+TEST(GlassTest, ExactShadowMultipliesTheTransmittancesOfEveryCrossing) {
+    // Two leaves above the origin (z = 1 and z = 2) and an opaque one off to the side.
+    Mesh m;
+    test::appendQuad(m, {0, 0, 1}, {1, 0, 0}, {0, 1, 0});
+    test::appendQuad(m, {0, 0, 2}, {1, 0, 0}, {0, 1, 0});
+    test::appendQuad(m, {5, 0, 1}, {1, 0, 0}, {0, 1, 0});
+    const Vec3f a{0.5f, 0.4f, 0.3f}, b{0.5f, 0.5f, 1.0f};
+    ExactShadow shadow(m.view(), {a, a, b, b, {0, 0, 0}, {0, 0, 0}});
+    const Vec3f both =
+        shadow.transmittance({0.1, 0.2, 0}, {0, 0, 1}, std::numeric_limits<double>::infinity());
+    EXPECT_NEAR(both.x, 0.25f, 1e-6f);
+    EXPECT_NEAR(both.y, 0.2f, 1e-6f);
+    EXPECT_NEAR(both.z, 0.3f, 1e-6f);
+    EXPECT_EQ(shadow.transmittance({0.1, 0.2, 0}, {0, 0, 1}, 1.5), a); // a point light between the leaves
+    EXPECT_EQ(shadow.transmittance({5, 0, 0}, {0, 0, 1}, 10), (Vec3f{0, 0, 0}));
+    EXPECT_EQ(shadow.transmittance({9, 9, 0}, {0, 0, 1}, 10), (Vec3f{1, 1, 1}));
+}
+
+Scene glassTestScene() {
+    Scene s;
+    Material ground;
+    ground.baseColor = {0.6f, 0.6f, 0.6f};
+    ground.specular = 0;
+    Material glass;
+    glass.transmission = 1;
+    glass.ior = 1.5f;
+    glass.attenuationColor = {0.5f, 0.9f, 0.6f};
+    glass.attenuationDistance = 1;
+    const uint32_t g = s.addMaterial(ground), c = s.addMaterial(glass);
+    SceneMesh floor;
+    test::appendQuad(floor.mesh, {0, 0, 0}, {0, 0, 3}, {3, 0, 0});
+    floor.material = g;
+    floor.castsShadow = false;
+    s.meshes.push_back(floor);
+    SceneMesh ball;
+    ball.mesh = test::makeUvSphere({0, 0.8, 0}, 0.7, 48, 96);
+    ball.material = c;
+    s.meshes.push_back(ball);
+    Camera cam;
+    cam.position = {0, 1.5, 4};
+    cam.target = {0, 0.6, 0};
+    cam.fovY = 0.6;
+    s.cameras.push_back(cam);
+    return s;
+}
+
+TEST(GlassTest, VoxelGlassRendersCloseToTheExactTracerAndDeterministically) {
+    const Scene s = glassTestScene();
+    RenderOptions o;
+    o.width = 96;
+    o.height = 72;
+    o.shadow.kind = ShadowKind::None;
+    o.glass.kind = GlassKind::Exact;
+    const RenderResult exact = render(s, s.cameras[0], o);
+    int64_t glassPixels = 0;
+    for (const uint8_t m : exact.glassMask) glassPixels += m;
+    EXPECT_GT(glassPixels, 500);
+    o.glass.kind = GlassKind::Multi;
+    o.glass.gridResolution = 64;
+    const RenderResult multi = render(s, s.cameras[0], o);
+    const ImageError e = imageError(multi.image, exact.image, exact.glassMask);
+    EXPECT_LT(e.mae, 0.06);
+    EXPECT_GT(e.psnr, 18);
+    o.threads = 1;
+    EXPECT_EQ(render(s, s.cameras[0], o).image.pixels, multi.image.pixels);
+    // Glass off: the mask is empty, and the sphere is shaded like a surface.
+    o.glass.kind = GlassKind::None;
+    EXPECT_TRUE(render(s, s.cameras[0], o).glassMask.empty());
+}
+
+TEST(GlassTest, ASceneWithoutLightsIsLitByTheDefaultSunAndSkyAmbient) {
+    Scene s = glassTestScene();
+    s.materials[1].transmission = 0; // opaque: plain shading
+    RenderOptions o;
+    o.width = 64;
+    o.height = 48;
+    o.ambient = {0, 0, 0};
+    o.background = {0, 0, 0};
+    o.shadow.kind = ShadowKind::None;
+    o.defaultLights = false;
+    const RenderResult dark = render(s, s.cameras[0], o);
+    for (const Vec3f& p : dark.image.pixels) EXPECT_EQ(p, (Vec3f{0, 0, 0}));
+    o.defaultLights = true;
+    const RenderResult lit = render(s, s.cameras[0], o);
+    // A ground pixel: albedo * sky average (ambient) + albedo / pi * E * cos(sun), hand-derived with
+    // the default sun (intensity 3, colour (1, 0.96, 0.9), towards SkyOptions' sun direction).
+    const Vec3d p{1.2, 0, 0.3}; // beside the ball, in view
+    const Vec3d g = cameraFrame(s.cameras[0], 64, 48).gridFromWorld(p);
+    const int64_t x = int64_t(std::floor(g.x)), y = 47 - int64_t(std::floor(g.y));
+    ASSERT_TRUE(x >= 0 && x < 64 && y >= 0 && y < 48) << x << " " << y;
+    const Vec3d sun = normalize(SkyOptions{}.sunDirection);
+    const Vec3f avg = Environment::sky().average();
+    const float albedo = 0.6f;
+    const Vec3f colour{1.0f, 0.96f, 0.9f};
+    for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(lit.image.at(x, y)[c], albedo * avg[c] + albedo / M_PI * 3 * colour[c] * sun.y, 1e-3)
+            << c;
+}
+
+TEST(GlassTest, CommandLineRendersGlassAndComparesTheVoxelMethodsWithTheExactTracer) {
+    test::TempDir dir;
+    // An octahedron of blue glass over a ground quad, in a JSON scene without lights.
+    test::writeFile(dir.file("gem.off"),
+                    "OFF\n6 8 0\n1 0 0\n-1 0 0\n0 1 0\n0 -1 0\n0 0 1\n0 0 -1\n"
+                    "3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n");
+    test::writeFile(dir.file("ground.off"),
+                    "OFF\n4 2 0\n-4 -1.2 -4\n4 -1.2 -4\n4 -1.2 4\n-4 -1.2 4\n3 0 2 1\n3 0 3 2\n");
+    test::writeFile(dir.file("scene.json"),
+                    R"({ "meshes": [ { "file": "gem.off", "material": { "transmission": 1, "ior": 1.5,
+                                                                         "baseColor": [0.6, 0.8, 1] } },
+                                     { "file": "ground.off" } ],
+                         "cameras": [ { "position": [0, 1, 4], "target": [0, 0, 0], "fovYDegrees": 50 } ] })");
+    const auto r =
+        test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + dir.file("a.png") +
+                                " --width 64 --height 48 --glass multi --glass-grid 32 --shadows exact");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("glass multi (grid 32)"), std::string::npos) << r.out;
+    const Image img = readPng(dir.file("a.png"));
+    EXPECT_EQ(img.width, 64);
+    const auto e =
+        test::runVoxfx(dir, "glass-error " + dir.file("scene.json") +
+                                " --width 64 --height 48 --resolutions 16,32 --methods multi,two-surface");
+    ASSERT_EQ(e.exitCode, 0) << e.err;
+    EXPECT_NE(e.out.find("| multi | 32³ |"), std::string::npos) << e.out;
+    EXPECT_NE(e.out.find("| two-surface | 16³ |"), std::string::npos) << e.out;
+    const auto bad = test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + dir.file("b.png") +
+                                             " --glass frosty");
+    EXPECT_NE(bad.exitCode, 0);
+    EXPECT_NE(bad.err.find("exact, multi, two-surface"), std::string::npos) << bad.err;
+}
+
+TEST(GlassTest, FrostedThicknessCountsInsideCellsOfTheFrontAndBackSlicemaps) {
+    // A slab 0.6 thick facing a camera on the z axis, and beside it a sheet 0.001 thick (thinner than
+    // a slice: its front and back faces share cells, the ambiguous case from outside: one cell).
+    Mesh m = test::makeBox({-1, -1, -0.3}, {1, 1, 0.3});
+    test::appendBox(m, {1.5, -1, 0}, {2.5, 1, 0.001});
+    const Frame camera =
+        Frame::perspective({0.75, 0, 6}, {0.75, 0, 0}, {0, 1, 0}, 0.7, 160, 120, 0.1, 100, 1);
+    GlassMedium medium;
+    medium.ior = float(kGlassIor);
+    medium.sigma = {0.5f, 0.5f, 0.5f};
+    GlassOptions o;
+    o.kind = GlassKind::Frosted;
+    o.gridResolution = 128;
+    FrostedGlass glass(m.view(), std::vector<uint32_t>(m.triangleCount(), 0), {medium}, camera, o);
+    const double slice = (glass.frame().farDepth() - glass.frame().nearDepth()) / 128;
+    const Vec3d onSlab{0.2, 0.1, 0.3};
+    const Vec3d ray = normalize(onSlab - camera.eye());
+    // Closed form: the eye ray crosses 0.6 / cos(angle to the axis); counted to a cell at each end.
+    const double want = 0.6 / -ray.z;
+    EXPECT_NEAR(glass.thickness(onSlab), want, 2.5 * slice / -ray.z);
+    // The sheet's faces in one cell (the ambiguous rule: one inside cell) or in two neighbours (entry
+    // cell and exit cell), whichever the frame's slicing gives for its two depths.
+    auto sliceOf = [&](const Vec3d& q) {
+        const Vec3d g = glass.frame().gridFromWorld(q);
+        const int64_t c = int64_t(std::floor(g.y)) * glass.frame().width() + int64_t(std::floor(g.x));
+        return int64_t(std::floor(glass.frame().depthToSlice(c)(g.z)));
+    };
+    const Vec3d sheetFront{2.0, 0.1, 0.001}, sheetBack{2.0, 0.1, 0.0};
+    EXPECT_EQ(glass.insideCells(sheetFront), sliceOf(sheetFront) == sliceOf(sheetBack) ? 1 : 2);
+    const GlassPath p = glass.trace(onSlab, {0, 0, 1}, 0, ray, o);
+    const double F = fresnelDielectric(-ray.z, 1, kGlassIor);
+    EXPECT_NEAR(p.throughput.x, (1 - F) * (1 - F) * std::exp(-0.5 * glass.thickness(onSlab)), 1e-5);
+    EXPECT_GT(p.blurAngle, 0);
+    EXPECT_LT(p.blurAngle, o.frostedBlur);
+}
+
+TEST(GlassTest, ImageErrorIsTheMeanAbsoluteAndPsnrOverTheMask) {
+    Image a(2, 1), b(2, 1);
+    a.at(0, 0) = {0.5f, 0.5f, 0.5f};
+    b.at(0, 0) = {0.6f, 0.4f, 0.5f};
+    a.at(1, 0) = {9, 9, 9}; // masked out
+    const ImageError e = imageError(a, b, {1, 0});
+    EXPECT_EQ(e.pixels, 1);
+    EXPECT_NEAR(e.mae, 0.2 / 3, 1e-6);
+    EXPECT_NEAR(e.psnr, 10 * std::log10(1 / (0.02 / 3)), 1e-4);
+    EXPECT_THROW(imageError(a, b, {1}), Error);
+    EXPECT_EQ(parseGlassKind("two-surface"), GlassKind::TwoSurface);
+    EXPECT_THROW(parseGlassKind("frosty"), Error);
+}
+
+} // namespace
+} // namespace voxfx
