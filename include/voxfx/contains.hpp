@@ -104,6 +104,10 @@ std::vector<uint8_t> contains(const MeshView& mesh, std::span<const Vec3d> point
 double windingNumber(const MeshView& mesh, const Vec3d& p);
 
 namespace exact {
+// Shewchuk's floating point filters, then exact expansion arithmetic on inputs scaled by a power
+// of two. Exact for finite inputs unless nonzero coordinate differences span more than about
+// 2^800 between the largest and the smallest (then tiny products underflow); real meshes are far
+// from that, and subnormal coordinates next to ordinary ones are handled.
 /// Sign (-1, 0, +1) of (b - a) x (c - a) in the xy plane, exactly (positive: counter-clockwise).
 int orient2d(double ax, double ay, double bx, double by, double cx, double cy);
 /// Sign of det[b - a; c - a; d - a] (rows), exactly: positive when d lies on the side of the

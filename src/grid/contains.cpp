@@ -5,6 +5,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <initializer_list>
 #include <numbers>
 
 #include "core/enum_names.hpp"
@@ -86,21 +87,36 @@ ContainsExpansion containsMul(const ContainsExpansion& e, const ContainsExpansio
     return out;
 }
 
+/// 2^k such that the largest |value| becomes about 2^target: scaling every input by a power of
+/// two is exact and keeps the sign of the determinant, and it moves tiny (even subnormal) inputs
+/// away from underflow and huge ones away from overflow in the products below.
+double containsScale(std::initializer_list<double> values, int target) {
+    double m = 0;
+    for (const double v : values) m = std::max(m, std::abs(v));
+    return m > 0 && std::isfinite(m) ? std::ldexp(1.0, target - std::ilogb(m)) : 1.0;
+}
+
 int containsOrient2dExact(double ax, double ay, double bx, double by, double cx, double cy) {
-    // (a - c) x (b - c), as Shewchuk's orient2d.
+    // (a - c) x (b - c), as Shewchuk's orient2d, on inputs scaled to about 2^450 (products stay
+    // below 2^1003).
+    const double k = containsScale({ax, ay, bx, by, cx, cy}, 450);
+    ax *= k, ay *= k, bx *= k, by *= k, cx *= k, cy *= k;
     const ContainsExpansion l = containsMul(containsDiff(ax, cx), containsDiff(by, cy));
     const ContainsExpansion r = containsMul(containsDiff(ay, cy), containsDiff(bx, cx));
     return containsAdd(l, containsNegate(r)).sign();
 }
 
-int containsOrient3dExact(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+int containsOrient3dExact(Vec3d a, Vec3d b, Vec3d c, Vec3d d) {
     // Rows u = b - a, v = c - a, w = d - a; det = u.z (v.x w.y - v.y w.x) + v.z (w.x u.y - u.x w.y)
-    //                                              + w.z (u.x v.y - v.x u.y).
+    //                                              + w.z (u.x v.y - v.x u.y), on inputs scaled to
+    // about 2^300 (products of three stay below 2^903).
+    const double k = containsScale({a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z}, 300);
+    a = a * k, b = b * k, c = c * k, d = d * k;
     ContainsExpansion u[3], v[3], w[3];
-    for (int k = 0; k < 3; ++k) {
-        u[k] = containsDiff(b[k], a[k]);
-        v[k] = containsDiff(c[k], a[k]);
-        w[k] = containsDiff(d[k], a[k]);
+    for (int i = 0; i < 3; ++i) {
+        u[i] = containsDiff(b[i], a[i]);
+        v[i] = containsDiff(c[i], a[i]);
+        w[i] = containsDiff(d[i], a[i]);
     }
     const auto minor = [](const ContainsExpansion& p, const ContainsExpansion& q, const ContainsExpansion& r,
                           const ContainsExpansion& s) { // p q - r s
@@ -119,22 +135,17 @@ thread_local int64_t tContainsFilterMisses = 0;
 namespace exact {
 
 int orient2d(double ax, double ay, double bx, double by, double cx, double cy) {
-    // Sign of (b - a) x (c - a) = (a - c) x (b - c) (Shewchuk's orient2d, filter A).
+    // Sign of (b - a) x (c - a) = (a - c) x (b - c): Shewchuk's orient2d filter A. Products near
+    // underflow (or overflowing) go to the exact path, where the filter's bound does not hold.
     const double detleft = (ax - cx) * (by - cy), detright = (ay - cy) * (bx - cx);
     const double det = detleft - detright;
-    double detsum;
-    if (detleft > 0) {
-        if (detright <= 0) return det > 0 ? 1 : (det < 0 ? -1 : 0);
-        detsum = detleft + detright;
-    } else if (detleft < 0) {
-        if (detright >= 0) return det > 0 ? 1 : (det < 0 ? -1 : 0);
-        detsum = -detleft - detright;
-    } else {
-        return det > 0 ? 1 : (det < 0 ? -1 : 0);
+    const double detsum = std::abs(detleft) + std::abs(detright);
+    if (detsum > 0x1p-800 && detsum < 0x1p1000) {
+        if ((detleft > 0 && detright <= 0) || (detleft < 0 && detright >= 0)) return detleft > 0 ? 1 : -1;
+        const double bound = kOrient2dBound * detsum;
+        if (det > bound) return 1;
+        if (-det > bound) return -1;
     }
-    const double bound = kOrient2dBound * detsum;
-    if (det >= bound) return 1;
-    if (-det >= bound) return -1;
     ++tContainsFilterMisses;
     return containsOrient2dExact(ax, ay, bx, by, cx, cy);
 }
@@ -148,9 +159,11 @@ int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
     const double permanent = (std::abs(vx * wy) + std::abs(vy * wx)) * std::abs(uz) +
                              (std::abs(wx * uy) + std::abs(ux * wy)) * std::abs(vz) +
                              (std::abs(ux * vy) + std::abs(vx * uy)) * std::abs(wz);
-    const double bound = kOrient3dBound * permanent;
-    if (det > bound) return 1;
-    if (-det > bound) return -1;
+    if (permanent > 0x1p-700 && permanent < 0x1p1000) {
+        const double bound = kOrient3dBound * permanent;
+        if (det > bound) return 1;
+        if (-det > bound) return -1;
+    }
     ++tContainsFilterMisses;
     return containsOrient3dExact(a, b, c, d);
 }
