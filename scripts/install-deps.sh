@@ -8,6 +8,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libpng-dev libopenexr-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcgal-dev libgmp-dev libmpfr-dev libeigen3-dev
   clang-format time ccache zlib1g-dev
+  python3-dev pybind11-dev python3-numpy python3-pytest python3-distributed
 )
 missing=()
 for p in "${packages[@]}"; do

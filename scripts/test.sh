@@ -26,8 +26,12 @@ echo "== format check"
 git ls-files '*.cpp' '*.hpp' | xargs clang-format --dry-run -Werror
 
 echo "== Release build and tests"
+# The Python module is built for Debian's interpreter, the one with NumPy, pytest and Dask
+# (python3-numpy, python3-pytest, python3-distributed); its pytest suite is the ctest test
+# python.pytest.
 cmake -S . -B build -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=Release -DVOXFX_WERROR=ON -DVOXFX_SANITIZE=OFF \
-  -DVOXFX_BUILD_CLI=ON -DVOXFX_BUILD_TESTS=ON -DVOXFX_BUILD_BENCH=ON -DVOXFX_BUILD_EXAMPLES=ON >/dev/null
+  -DVOXFX_BUILD_CLI=ON -DVOXFX_BUILD_TESTS=ON -DVOXFX_BUILD_BENCH=ON -DVOXFX_BUILD_EXAMPLES=ON \
+  -DVOXFX_BUILD_PYTHON=ON -DPython_EXECUTABLE=/usr/bin/python3 >/dev/null
 cmake --build build -j "$jobs"
 ctest --test-dir build --no-tests=error --output-on-failure -j "$jobs" "${label_args[@]}"
 
@@ -40,11 +44,12 @@ echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
 # No benchmarks or examples here: they add build time and no test. -O1 with line tables (-g1)
 # compiles in less than half the time of -O2 -g and still gives sanitizer reports file:line.
 # Warnings are errors in the Release pass; at -O1 GCC 12 warns falsely on the allocation test's
-# replaced operator delete (-Wmismatched-new-delete), so not here.
+# replaced operator delete (-Wmismatched-new-delete), so not here. No Python module: a sanitized
+# extension cannot load into an uninstrumented interpreter.
 cmake -S . -B build-asan -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DVOXFX_WERROR=OFF \
   -DVOXFX_SANITIZE=ON -DVOXFX_BUILD_CLI=ON -DVOXFX_BUILD_TESTS=ON -DVOXFX_BUILD_BENCH=OFF \
-  -DVOXFX_BUILD_EXAMPLES=OFF >/dev/null
+  -DVOXFX_BUILD_EXAMPLES=OFF -DVOXFX_BUILD_PYTHON=OFF >/dev/null
 cmake --build build-asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-asan --no-tests=error --output-on-failure -j "$jobs" "${label_args[@]}"
