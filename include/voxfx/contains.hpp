@@ -90,7 +90,8 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
-/// The resolution contains() picks for `triangles` triangles and `points` points.
+/// The resolution contains() picks for `triangles` triangles and `points` points (about
+/// max(1.3 cbrt(points), 0.25 sqrt(triangles)), in 16..512).
 int64_t defaultContainsResolution(std::size_t triangles, std::size_t points);
 
 /// out[i] = 1 when points[i] lies inside `mesh` (see the file comment). Throws voxfx::Error.

@@ -242,6 +242,11 @@ def test_contains_at_voxel_centres_equals_the_solid_grid(data_path):
     v, f = mesh
     np.testing.assert_array_equal(voxfx.contains(v, f, centres), inside)
     np.testing.assert_array_equal(voxfx.contains(v, f, centres, resolution=7, threads=1), inside)
+    classifier = voxfx.PointClassifier(mesh, resolution=20)
+    assert classifier.resolution == 20
+    np.testing.assert_array_equal(classifier(centres), inside)
+    np.testing.assert_array_equal(classifier(centres.astype(np.float32).astype(np.float64)),
+                                  voxfx.contains(mesh, centres.astype(np.float32)))
 
 
 def test_contains_methods_agree_on_a_closed_mesh(data_path):
@@ -276,8 +281,12 @@ def test_gil_is_released_while_voxelizing(data_path):
     while not stamps:
         time.sleep(0.001)
     t0 = time.perf_counter()
-    voxfx.voxelize(mesh, resolution=320)
+    voxfx.voxelize(mesh, resolution=600, threads=1)  # one thread: a core stays free for the counter
     t1 = time.perf_counter()
     stop.set()
     t.join()
-    assert sum(1 for s in stamps if t0 < s < t1) > 100
+    # With the GIL held the counter stalls for the whole voxelization: a gap of most of the call.
+    # (Around the call's start and end the interpreter may switch threads either way.)
+    assert t1 - t0 > 0.03
+    inside = [t0] + [s for s in stamps if t0 < s < t1] + [t1]
+    assert max(b - a for a, b in zip(inside, inside[1:])) < 0.5 * (t1 - t0)

@@ -32,6 +32,7 @@ from ._voxfx import (  # noqa: E402
     Error,
     Grid,
     Mesh,
+    PointClassifier,
     SurfaceMesh,
     __version__,
     closing,
@@ -55,7 +56,7 @@ from ._voxfx import (  # noqa: E402
 GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj")
 
 __all__ = [
-    "Density", "Error", "Grid", "Mesh", "SurfaceMesh", "GRID_FORMATS", "closing", "compute_density",
+    "Density", "Error", "Grid", "Mesh", "PointClassifier", "SurfaceMesh", "GRID_FORMATS", "closing", "compute_density",
     "contains", "csg", "dilate", "erode", "extract_surface", "from_numpy", "load_mesh", "morphology",
     "opening", "read_grid", "resample_to_uniform", "reslice", "voxelize",
 ]
