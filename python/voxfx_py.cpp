@@ -226,8 +226,11 @@ VoxelizeResult voxelizeMesh(const Mesh& mesh, const FitOptions& fo, const std::s
     vo.mode = parseVoxelizeMode(mode);
     vo.slicing = parseSlicing(slicing);
     vo.threads = threads;
+    const bool inside = vo.mode == VoxelizeMode::Solid || vo.mode == VoxelizeMode::SolidConservative ||
+                        vo.mode == VoxelizeMode::Interior;
     if (fill == "auto") {
-        vo.fill = analyzeTopology(mesh.view()).closed() ? Fill::Parity : Fill::Flood;
+        // The topology (hashing every edge) only matters where the fill does.
+        vo.fill = inside && analyzeTopology(mesh.view()).closed() ? Fill::Parity : Fill::Flood;
     } else {
         vo.fill = parseFill(fill);
     }
