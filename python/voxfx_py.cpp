@@ -582,9 +582,11 @@ PYBIND11_MODULE(_voxfx, m) {
         c.classify(std::span<const Vec3d>(p, n), std::span<uint8_t>(o, n));
         return out;
     };
-    const auto containsOptions = [](const std::string& method, std::optional<int64_t> resolution,
-                                    int threads) {
+    const auto containsOptions = [](const std::string& method, std::optional<int64_t> resolution, int threads,
+                                    double windingBeta) {
         ContainsOptions co;
+        if (!(windingBeta >= 0)) throw py::value_error("winding_beta must be >= 0");
+        co.windingBeta = windingBeta;
         co.method = parseContainsMethod(method);
         if (resolution && *resolution < 1) throw py::value_error("resolution must be at least 1");
         co.resolution = resolution.value_or(0);
@@ -594,14 +596,14 @@ PYBIND11_MODULE(_voxfx, m) {
     };
     m.def(
         "contains",
-        [classifyPoints, containsOptions](const py::object& meshOrVertices, const py::object& faces,
-                                          const py::object& pointsObj, const std::string& method,
-                                          std::optional<int64_t> resolution, int threads) {
+        [classifyPoints, containsOptions](
+            const py::object& meshOrVertices, const py::object& faces, const py::object& pointsObj,
+            const std::string& method, std::optional<int64_t> resolution, int threads, double windingBeta) {
             // contains(mesh, points): a voxfx.Mesh takes the faces' place.
             py::object facesArg = faces, pointsArg = pointsObj;
             if (py::isinstance<PyMesh>(meshOrVertices) && pointsArg.is_none()) std::swap(facesArg, pointsArg);
             const auto mesh = meshArgument(meshOrVertices, facesArg);
-            ContainsOptions co = containsOptions(method, resolution, threads);
+            ContainsOptions co = containsOptions(method, resolution, threads, windingBeta);
             const auto n = py::len(pointsArg);
             if (co.resolution == 0) co.resolution = defaultContainsResolution(mesh->mesh.triangleCount(), n);
             std::unique_ptr<PointClassifier> c;
@@ -613,22 +615,24 @@ PYBIND11_MODULE(_voxfx, m) {
         },
         py::arg("vertices"), py::arg("faces") = py::none(), py::arg("points") = py::none(), py::kw_only(),
         py::arg("method") = "parity", py::arg("resolution") = py::none(), py::arg("threads") = 0,
+        py::arg("winding_beta") = 3.0,
         "Whether each point (K, 3) lies inside the mesh: parity (exact, voxel centres' tie rule), winding "
-        "(generalized winding number >= 0.5) or flood (cells sealed off from the border, for open meshes)");
+        "(generalized winding number >= 0.5, Barill et al.'s approximation with winding_beta; 0 = exact "
+        "sum) or flood (cells sealed off from the border, for open meshes)");
     py::class_<PointClassifier>(m, "PointClassifier",
                                 "A mesh prepared for repeated contains() queries (the grids are built once)")
         .def(py::init([containsOptions](const py::object& meshOrVertices, const py::object& faces,
                                         const std::string& method, std::optional<int64_t> resolution,
-                                        int threads) {
+                                        int threads, double windingBeta) {
                  const auto mesh = meshArgument(meshOrVertices, faces);
-                 ContainsOptions co = containsOptions(method, resolution, threads);
+                 ContainsOptions co = containsOptions(method, resolution, threads, windingBeta);
                  if (co.resolution == 0)
                      co.resolution = defaultContainsResolution(mesh->mesh.triangleCount(), 1000000);
                  py::gil_scoped_release release;
                  return std::make_unique<PointClassifier>(mesh->mesh.view(), co);
              }),
              py::arg("vertices"), py::arg("faces") = py::none(), py::kw_only(), py::arg("method") = "parity",
-             py::arg("resolution") = py::none(), py::arg("threads") = 0)
+             py::arg("resolution") = py::none(), py::arg("threads") = 0, py::arg("winding_beta") = 3.0)
         .def("__call__", classifyPoints, py::arg("points"), "(K,) bool: whether each point lies inside")
         .def_property_readonly("resolution", &PointClassifier::resolution);
 

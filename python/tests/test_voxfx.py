@@ -258,6 +258,7 @@ def test_contains_methods_agree_on_a_closed_mesh(data_path):
     flood = voxfx.contains(mesh, pts, method="flood", resolution=64)
     assert parity.sum() > 100
     np.testing.assert_array_equal(parity, winding)
+    np.testing.assert_array_equal(parity, voxfx.contains(mesh, pts, method="winding", winding_beta=0))
     assert np.all(flood[parity])  # flood includes the surface cells
     with pytest.raises(voxfx.Error, match="unknown contains method"):
         voxfx.contains(mesh, pts, method="vote")
