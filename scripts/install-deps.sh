@@ -9,6 +9,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libcgal-dev libgmp-dev libmpfr-dev libeigen3-dev
   clang-format time ccache zlib1g-dev
   clang libclang-rt-dev
+  python3-dev pybind11-dev python3-numpy python3-pytest python3-distributed
 )
 missing=()
 for p in "${packages[@]}"; do

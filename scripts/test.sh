@@ -26,8 +26,12 @@ echo "== format check"
 git ls-files '*.cpp' '*.hpp' | xargs clang-format --dry-run -Werror
 
 echo "== Release build and tests"
+# The Python module is built for Debian's interpreter, the one with NumPy, pytest and Dask
+# (python3-numpy, python3-pytest, python3-distributed); its pytest suite is the ctest test
+# python.pytest.
 cmake -S . -B build -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=Release -DVOXFX_WERROR=ON -DVOXFX_SANITIZE=OFF \
-  -DVOXFX_BUILD_CLI=ON -DVOXFX_BUILD_TESTS=ON -DVOXFX_BUILD_BENCH=ON -DVOXFX_BUILD_EXAMPLES=ON >/dev/null
+  -DVOXFX_BUILD_CLI=ON -DVOXFX_BUILD_TESTS=ON -DVOXFX_BUILD_BENCH=ON -DVOXFX_BUILD_EXAMPLES=ON \
+  -DVOXFX_BUILD_PYTHON=ON -DPython_EXECUTABLE=/usr/bin/python3 >/dev/null
 cmake --build build -j "$jobs"
 ctest --test-dir build --no-tests=error --output-on-failure -j "$jobs" "${label_args[@]}"
 
@@ -41,11 +45,12 @@ echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests (clang)"
 # (src/grid/morphology.cpp at -O1 -g1 with ASan and UBSan: 5.7 s of CPU against 8.6 s), and a
 # second compiler checks what GCC lets through. No benchmarks or examples here: they add build
 # time and no test. -O1 with line tables (-g1) still gives sanitizer reports file:line.
-# Warnings are errors in the Release pass only.
+# Warnings are errors in the Release pass only. No Python module: a sanitized extension cannot
+# load into an uninstrumented interpreter.
 CC=clang CXX=clang++ cmake -S . -B build-sanitize -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DVOXFX_WERROR=OFF \
   -DVOXFX_SANITIZE=ON -DVOXFX_BUILD_CLI=ON -DVOXFX_BUILD_TESTS=ON -DVOXFX_BUILD_BENCH=OFF \
-  -DVOXFX_BUILD_EXAMPLES=OFF >/dev/null
+  -DVOXFX_BUILD_EXAMPLES=OFF -DVOXFX_BUILD_PYTHON=OFF >/dev/null
 cmake --build build-sanitize -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-sanitize --no-tests=error --output-on-failure -j "$jobs" "${label_args[@]}"
