@@ -21,7 +21,8 @@ struct BatchArgs {
 };
 
 // done/total, rate and ETA on stderr: in place on a terminal (at most 10 times a second),
-// otherwise one line every 10 s. Failed meshes are reported on a line of their own at once.
+// otherwise one line every 10 s; nothing for batches shorter than that. Failed meshes are reported on a line
+// of their own at once.
 class BatchProgressLine : public BatchProgress {
 public:
     explicit BatchProgressLine(bool enabled) : enabled_(enabled), tty_(isatty(fileno(stderr)) != 0) {}
@@ -31,10 +32,13 @@ public:
         if (r.status == BatchStatus::Skipped) ++skipped_;
         if (r.status == BatchStatus::Error) {
             clear();
-            std::cerr << "voxfx: " << r.mesh << ": " << r.error << "\n";
+            // Loader messages name the file already.
+            std::cerr << "voxfx: error: " << (r.error.find(r.mesh) == std::string::npos ? r.mesh + ": " : "")
+                      << r.error << "\n";
         }
+        // The summary follows the last job; the line is for the wait before it.
         const double ms = msSince(start_);
-        if (done < total && ms - lastMs_ < (tty_ ? 100 : 10000)) return;
+        if (done == total || ms - lastMs_ < (tty_ ? 100 : 10000)) return;
         lastMs_ = ms;
         // The rate counts meshes that were worked on; skipped ones cost next to nothing.
         const int64_t worked = done - skipped_;
@@ -58,7 +62,7 @@ public:
 private:
     bool enabled_, tty_, shown_ = false;
     int64_t skipped_ = 0;
-    double lastMs_ = -1e9;
+    double lastMs_ = 0;
     Clock::time_point start_ = Clock::now();
 };
 
