@@ -4,7 +4,8 @@
 // `voxfx voxelize MESH -o OUTPUT` does with the same options: load the mesh, pick the fill
 // (auto: parity for closed meshes, flood otherwise), fit the frame to the mesh bounds (or
 // `fit.bounds`), voxelize, write the grid atomically. Outputs are therefore byte-identical to
-// the single-file command. Jobs run in parallel over the meshes; a failing job (unreadable or
+// the single-file command (.vdb files differ in the UUID OpenVDB writes into every file's
+// header, run to run, and nowhere else). Jobs run in parallel over the meshes; a failing job (unreadable or
 // malformed mesh, grid too large, write error) is recorded with its message and the others go
 // on. An output that already exists is skipped (restart after an interruption: writers are
 // atomic, so an existing output is complete and a partial temporary file never counts).

@@ -103,9 +103,9 @@ int runBatchCommand(const BatchArgs& a) {
 const char* kBatchHelp = R"(
 Each line of MANIFEST is a mesh file, relative to the manifest's folder; lines starting
 with '#' and blank lines are ignored. Mesh M is written to OUTDIR/<stem of M>.<format>, byte
-for byte what 'voxfx voxelize M -o OUTDIR/<stem>.<format>' with the same options writes (see
-'voxfx voxelize --help' for grid placement, modes and fills). Two meshes with the same stem
-are refused before any work.
+for byte what 'voxfx voxelize M -o OUTDIR/<stem>.<format>' with the same options writes
+(.vdb: but for the UUID OpenVDB puts in every file; see 'voxfx voxelize --help' for grid
+placement, modes and fills). Two meshes with the same stem are refused before any work.
 
 Meshes run in parallel on every core (-j), each voxelized by one thread (--nested: by all).
 Outputs are written atomically and an existing output is skipped, so an interrupted batch is

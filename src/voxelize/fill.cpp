@@ -64,14 +64,15 @@ namespace {
 // outside reaches, spreads the outside sideways and along the span's free runs. Bands run in
 // parallel and only read columns of their own rows; between rounds a serial pass over the seams
 // between bands lets the outside cross them. The outside is the unique fixpoint, so the result
-// does not depend on the order of work or the number of threads.
+// does not depend on the order of work or the number of threads. The grid kept is the inside
+// (walls and free cells not known to be outside), so no inversion pass is needed at the end.
 class Flood {
 public:
     explicit Flood(const BitGrid& walls)
-        : walls_(walls), outside_(walls.width(), walls.height(), walls.depth()), W_(walls.width()),
-          H_(walls.height()), P_(walls.wordsPerColumn()), last_(walls.lastWordMask()), zero_(size_t(P_), 0),
-          queued_(size_t(W_ * H_), 0), saturated_(size_t(W_ * H_), 0), spanLo_(size_t(W_ * H_), 0),
-          spanHi_(size_t(W_ * H_), 0) {
+        : walls_(walls), inside_(walls.width(), walls.height(), walls.depth()), W_(walls.width()),
+          H_(walls.height()), P_(walls.wordsPerColumn()), last_(walls.lastWordMask()),
+          noOutside_(size_t(P_), ~uint64_t(0)), queued_(size_t(W_ * H_), 0), saturated_(size_t(W_ * H_), 0),
+          spanLo_(size_t(W_ * H_), 0), spanHi_(size_t(W_ * H_), 0) {
         // Fixed bands (never from the thread count): at least 8 rows, at most 32 bands.
         bandRows_ = std::max<int64_t>(8, (H_ + 31) / 32);
         bands_ = (H_ + bandRows_ - 1) / bandRows_;
@@ -88,7 +89,7 @@ public:
             });
             if (!crossSeams()) break;
         }
-        return std::move(outside_);
+        return std::move(inside_);
     }
 
 private:
@@ -108,26 +109,25 @@ private:
         parallelFor(0, W_ * H_, 2048, [&](int64_t c0, int64_t c1) {
             for (int64_t c = c0; c < c1; ++c) {
                 const uint64_t* wall = walls_.column(c);
-                uint64_t* out = outside_.column(c);
+                uint64_t* in = inside_.column(c);
                 const int64_t x = c % W_, y = c / W_;
                 int64_t lo = 0, hi = P_ - 1;
                 while (lo < P_ && wall[lo] == 0) ++lo;
                 if (lo == P_ || x == 0 || y == 0 || x == W_ - 1 || y == H_ - 1) {
-                    for (int64_t w = 0; w < P_; ++w) out[w] = ~wall[w];
-                    out[P_ - 1] &= last_;
+                    for (int64_t w = 0; w < P_; ++w) in[w] = wall[w];
                     saturated_[size_t(c)] = 1;
                     continue;
                 }
                 while (wall[hi] == 0) --hi;
-                for (int64_t w = 0; w < lo; ++w) out[w] = ~uint64_t(0);
-                for (int64_t w = lo; w <= hi; ++w) out[w] = 0;
-                for (int64_t w = hi + 1; w < P_; ++w) out[w] = ~uint64_t(0);
-                out[lo] |= (wall[lo] & (~wall[lo] + 1)) - 1;                       // below the lowest wall
-                out[hi] |= ~uint64_t(0) << (63 - std::countl_zero(wall[hi])) << 1; // above the highest
-                out[P_ - 1] &= last_;
+                for (int64_t w = 0; w < lo; ++w) in[w] = 0;
+                for (int64_t w = lo; w <= hi; ++w) in[w] = ~uint64_t(0);
+                for (int64_t w = hi + 1; w < P_; ++w) in[w] = 0;
+                in[lo] &= ~((wall[lo] & (~wall[lo] + 1)) - 1);                       // below the lowest wall
+                in[hi] &= ~(~uint64_t(0) << (63 - std::countl_zero(wall[hi])) << 1); // above the highest
+                in[P_ - 1] &= last_;
                 // Free cells between the lowest and the highest wall: not decided yet.
                 uint64_t open = 0;
-                for (int64_t w = lo; w <= hi; ++w) open |= ~wall[w] & ~out[w];
+                for (int64_t w = lo; w <= hi; ++w) open |= ~wall[w] & in[w];
                 saturated_[size_t(c)] = open == 0;
                 spanLo_[size_t(c)] = int32_t(lo);
                 spanHi_[size_t(c)] = int32_t(hi);
@@ -147,12 +147,12 @@ private:
                         if (saturated_[size_t(c)]) continue;
                         // Only the span can be undecided: outside it every free cell is outside.
                         const int64_t lo = spanLo_[size_t(c)], n = spanHi_[size_t(c)] - lo + 1;
-                        const uint64_t *wall = walls_.column(c) + lo, *out = outside_.column(c) + lo;
-                        const uint64_t *n0 = outside_.column(c - 1) + lo, *n1 = outside_.column(c + 1) + lo;
-                        const uint64_t *n2 = outside_.column(c - W_) + lo, *n3 = outside_.column(c + W_) + lo;
-                        uint64_t news = 0;
+                        const uint64_t *wall = walls_.column(c) + lo, *in = inside_.column(c) + lo;
+                        const uint64_t *n0 = inside_.column(c - 1) + lo, *n1 = inside_.column(c + 1) + lo;
+                        const uint64_t *n2 = inside_.column(c - W_) + lo, *n3 = inside_.column(c + W_) + lo;
+                        uint64_t news = 0; // free, undecided here, outside in a neighbour
                         for (int64_t w = 0; w < n; ++w)
-                            news |= (n0[w] | n1[w] | n2[w] | n3[w]) & ~wall[w] & ~out[w];
+                            news |= ~(n0[w] & n1[w] & n2[w] & n3[w]) & ~wall[w] & in[w];
                         if (news != 0) {
                             queued_[size_t(c)] = 1;
                             queues_[size_t(b)].push_back(c);
@@ -163,25 +163,28 @@ private:
     }
 
     // Gathers, over the words [lo, lo + n) of an undecided column c (its wall span), the free
-    // cells and the seeds: free cells that are outside in c or in a neighbour (n2, n3: the rows
-    // above and below, or zero_). Returns whether any seed is new to c.
+    // cells and the seeds: free cells that are outside in c or in a neighbour (the neighbours'
+    // inside; n2, n3: the rows above and below, or noOutside_). Returns whether any seed is new.
     bool gather(int64_t c, Scratch& s, const uint64_t* n2, const uint64_t* n3) const {
         const int64_t lo = spanLo_[size_t(c)], n = spanHi_[size_t(c)] - lo + 1;
         const uint64_t* wall = walls_.column(c) + lo;
-        const uint64_t* out = outside_.column(c) + lo;
-        const uint64_t *n0 = outside_.column(c - 1) + lo, *n1 = outside_.column(c + 1) + lo;
+        const uint64_t* in = inside_.column(c) + lo;
+        const uint64_t *n0 = inside_.column(c - 1) + lo, *n1 = inside_.column(c + 1) + lo;
         n2 += lo;
         n3 += lo;
         uint64_t news = 0;
         for (int64_t w = 0; w < n; ++w) {
             const uint64_t f = ~wall[w];
-            const uint64_t seed = (out[w] | n0[w] | n1[w] | n2[w] | n3[w]) & f;
+            const uint64_t seed = ~(in[w] & n0[w] & n1[w] & n2[w] & n3[w]) & f;
             s.freeCol[size_t(w)] = f;
             s.seed[size_t(w)] = seed;
-            news |= seed & ~out[w];
+            news |= seed & in[w];
         }
-        // Padding bits of the last word are never free (the neighbours' are zero, so no seed).
-        if (lo + n == P_) s.freeCol[size_t(n - 1)] &= last_;
+        // Padding bits of the last word are never free nor seeds (news has none: in's are zero).
+        if (lo + n == P_) {
+            s.freeCol[size_t(n - 1)] &= last_;
+            s.seed[size_t(n - 1)] &= last_;
+        }
         return news != 0;
     }
 
@@ -192,12 +195,14 @@ private:
         const int64_t lo = spanLo_[size_t(c)], n = spanHi_[size_t(c)] - lo + 1;
         fillUp(s.freeCol.data(), s.seed.data(), n);
         fillDown(s.freeCol.data(), s.seed.data(), n);
-        uint64_t* out = outside_.column(c) + lo;
+        uint64_t* in = inside_.column(c) + lo;
         bool grew = false, full = true;
         for (int64_t w = 0; w < n; ++w) {
-            if (s.seed[size_t(w)] != out[w]) {
+            // Inside = walls and the free cells not reached: everything but the seeds.
+            const uint64_t v = ~s.seed[size_t(w)] & (lo + w == P_ - 1 ? last_ : ~uint64_t(0));
+            if (v != in[w]) {
                 grew = true;
-                out[w] = s.seed[size_t(w)];
+                in[w] = v;
             }
             full &= s.seed[size_t(w)] == s.freeCol[size_t(w)];
         }
@@ -227,8 +232,8 @@ private:
             queued_[size_t(c)] = 0;
             if (saturated_[size_t(c)]) continue;
             const int64_t y = c / W_;
-            const uint64_t* n2 = y > yLo ? outside_.column(c - W_) : zero_.data();
-            const uint64_t* n3 = y + 1 < yHi ? outside_.column(c + W_) : zero_.data();
+            const uint64_t* n2 = y > yLo ? inside_.column(c - W_) : noOutside_.data();
+            const uint64_t* n3 = y + 1 < yHi ? inside_.column(c + W_) : noOutside_.data();
             // The column's outside is closed under the run fill already: without a new seed it
             // cannot grow (the common case when a column is queued again).
             if (!gather(c, s, n2, n3)) continue;
@@ -247,8 +252,7 @@ private:
                                              {(yBelow - 1) * W_ + x, yBelow * W_ + x}};
                 for (const auto& [c, other] : pairs) {
                     if (saturated_[size_t(c)]) continue;
-                    const uint64_t* o = outside_.column(other);
-                    if (!gather(c, s, o, zero_.data())) continue;
+                    if (!gather(c, s, inside_.column(other), noOutside_.data())) continue;
                     store(c, s);
                     changed = true;
                     const int64_t bc = band(c / W_);
@@ -261,10 +265,10 @@ private:
     }
 
     const BitGrid& walls_;
-    BitGrid outside_;
+    BitGrid inside_; ///< walls and the free cells not (yet) known to be outside
     int64_t W_, H_, P_;
     uint64_t last_;
-    std::vector<uint64_t> zero_;
+    std::vector<uint64_t> noOutside_; ///< a column that is all inside: stands for rows of other bands
     std::vector<uint8_t> queued_, saturated_;
     std::vector<int32_t> spanLo_, spanHi_; ///< words holding the lowest and highest wall
     int64_t bandRows_ = 1, bands_ = 1;
@@ -273,22 +277,7 @@ private:
 
 } // namespace
 
-BitGrid floodFillInside(const BitGrid& walls) {
-    const int64_t W = walls.width(), H = walls.height(), P = walls.wordsPerColumn();
-    const uint64_t last = walls.lastWordMask();
-    BitGrid outside = Flood(walls).run();
-    // Inside (with walls) = not outside: a flat loop over the words (vectorized), then the
-    // padding of each column's last word cleared again.
-    uint64_t* o = outside.words();
-    parallelFor(0, W * H, 4096, [&](int64_t b, int64_t e) {
-        uint64_t* __restrict p = o + b * P;
-        const int64_t n = (e - b) * P;
-        for (int64_t i = 0; i < n; ++i) p[i] = ~p[i];
-        if (last != ~uint64_t(0))
-            for (int64_t c = b; c < e; ++c) o[c * P + P - 1] &= last;
-    });
-    return outside;
-}
+BitGrid floodFillInside(const BitGrid& walls) { return Flood(walls).run(); }
 
 BitGrid majority(const BitGrid& a, const BitGrid& b, const BitGrid& c) {
     VOXFX_CHECK(a.wordCount() == b.wordCount() && a.wordCount() == c.wordCount());
