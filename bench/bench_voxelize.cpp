@@ -14,6 +14,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include "voxelize/fill.hpp"
 #include "voxfx/voxfx.hpp"
 
 namespace {
@@ -97,6 +98,28 @@ void writeGridBytesTwice(benchmark::State& state, const std::string& name) {
     state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(bytes) * 2);
 }
 
+// The flood fill alone (detail::floodFillInside on the conservative surface computed once,
+// outside the timing): what the "within 3x the write-twice floor" target of open meshes measures.
+void floodFillBench(benchmark::State& state, const std::string& name) {
+    const Mesh* m = mesh(name);
+    if (!m) {
+        state.SkipWithError("missing data: run scripts/fetch-data.sh (and bench/dense-meshes.sh for *1m)");
+        return;
+    }
+    FitOptions fo;
+    fo.resolution = state.range(0);
+    const Frame frame = fitFrame(computeBounds(m->view()), fo);
+    VoxelizeOptions vo;
+    vo.mode = VoxelizeMode::Conservative;
+    const VoxelGrid walls = voxelize(m->view(), frame, vo);
+    for (auto _ : state) {
+        BitGrid inside = detail::floodFillInside(walls.bits);
+        benchmark::DoNotOptimize(inside.words());
+    }
+    state.SetLabel(name + " " + std::to_string(frame.width()) + "x" + std::to_string(frame.height()) + "x" +
+                   std::to_string(frame.depth()));
+}
+
 struct Register {
     Register() {
         const std::pair<const char*, VoxelizeMode> modes[] = {
@@ -128,6 +151,13 @@ struct Register {
                         ->Arg(1024)
                         ->Unit(benchmark::kMillisecond)
                         ->UseRealTime();
+            benchmark::RegisterBenchmark((std::string("FloodFill/") + name).c_str(),
+                                         [=](benchmark::State& s) { floodFillBench(s, name); })
+                ->Arg(256)
+                ->Arg(512)
+                ->Arg(1024)
+                ->Unit(benchmark::kMillisecond)
+                ->UseRealTime();
             benchmark::RegisterBenchmark((std::string("WriteGridBytesTwice/") + name).c_str(),
                                          [=](benchmark::State& s) { writeGridBytesTwice(s, name); })
                 ->Arg(128)

@@ -400,6 +400,48 @@ TEST(VoxelizeOracleTest, FloodFillOfRandomWallsEqualsBorderSearch) {
         }
 }
 
+TEST(VoxelizeOracleTest, FloodFillOfNestedShellsWithHolesAcrossManyBandsEqualsBorderSearch) {
+    // Hollow boxes inside hollow boxes, each with one hole in a different face, plus sparse
+    // random walls: the outside must wind through every hole, along the slicing axis and across
+    // many bands of rows (H = 300: bands of 10 rows). Oracle: the voxel-by-voxel border search.
+    const Vec3i dims{23, 300, 150};
+    VoxelGrid walls = test::randomVoxelGrid({{0, 0, 0}, {double(dims.x), double(dims.y), double(dims.z)}},
+                                            Axis::Z, dims, 0.08, 7);
+    for (int k = 0; k < 4; ++k) {
+        const Vec3i lo{2 + 2 * k, 10 + 30 * k, 5 + 15 * k},
+            hi{dims.x - 3 - 2 * k, dims.y - 11 - 30 * k, dims.z - 6 - 15 * k};
+        for (int64_t z = lo.z; z <= hi.z; ++z)
+            for (int64_t y = lo.y; y <= hi.y; ++y)
+                for (int64_t x = lo.x; x <= hi.x; ++x) {
+                    const bool face =
+                        x == lo.x || x == hi.x || y == lo.y || y == hi.y || z == lo.z || z == hi.z;
+                    if (face)
+                        walls.bits.set(x, y, z);
+                    else if (k == 3)
+                        walls.bits.set(x, y, z, false); // an empty innermost room
+                }
+        // One hole per shell: in -z, +y, -x, +z faces in turn, off-centre.
+        const Vec3i c{(lo.x + hi.x) / 2, (lo.y + hi.y) / 2 + 3, (lo.z + hi.z) / 2 - 2};
+        const Vec3i hole = k == 0   ? Vec3i{c.x, c.y, lo.z}
+                           : k == 1 ? Vec3i{c.x, hi.y, c.z}
+                           : k == 2 ? Vec3i{lo.x, c.y, c.z}
+                                    : Vec3i{c.x, c.y, hi.z};
+        walls.bits.set(hole.x, hole.y, hole.z, false);
+    }
+    for (bool closeInner : {false, true}) {
+        SCOPED_TRACE(closeInner ? "innermost hole closed" : "all holes open");
+        VoxelGrid w = walls;
+        if (closeInner) {
+            const Vec3i lo{8, 100, 50}, hi{dims.x - 9, dims.y - 101, dims.z - 51};
+            w.bits.set((lo.x + hi.x) / 2, (lo.y + hi.y) / 2 + 3, hi.z);
+        }
+        const VoxelGrid filled{w.frame, detail::floodFillInside(w.bits)};
+        const WorldGrid expected = test::floodFromBorder(toWorldGrid(w));
+        EXPECT_TRUE(sameCells(toWorldGrid(filled), expected));
+        EXPECT_TRUE(test::paddingIsZero(filled.bits));
+    }
+}
+
 TEST(VoxelizeOracleTest, FloodEqualsBorderSearchAndSolidConservativeOnClosedMeshes) {
     // Flood = its walls (the conservative surface, checked against CGAL) plus what a
     // voxel-by-voxel search from the border cannot reach. The conservative surface of a closed

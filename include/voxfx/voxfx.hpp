@@ -4,6 +4,7 @@
 #pragma once
 
 // Meshes, frames, the slicemap and voxelization.
+#include "voxfx/batch.hpp"
 #include "voxfx/bitgrid.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/file_name.hpp"

@@ -10,28 +10,20 @@ namespace {
 struct VoxelizeArgs {
     std::string input, output;
     FitArgs fit;
-    std::string mode = "solid", fill = "auto", axis = "z", slicing = "uniform";
+    VoxelizeChoiceArgs choice;
     int threads = 0;
-    bool vdbFloat = false, quiet = false;
+    bool quiet = false;
 };
-
-const FitChoices kVoxelizeFit = [] {
-    FitChoices c;
-    c.voxelSize = c.dims = c.bounds = true;
-    return c;
-}();
 
 int runVoxelize(const VoxelizeArgs& a) {
     const auto t0 = Clock::now();
     // Everything that can be checked before the work starts is checked here, so a bad output
     // name does not cost a voxelization.
     const GridFormat format = gridFormatFromPath(a.output);
-    VoxelizeOptions vo;
-    vo.mode = parseVoxelizeMode(a.mode);
-    vo.slicing = parseSlicing(a.slicing);
+    VoxelizeOptions vo = toVoxelizeOptions(a.choice);
     vo.threads = a.threads;
-    FitOptions fo = toFitOptions(a.fit, kVoxelizeFit);
-    fo.axis = parseAxis(a.axis);
+    FitOptions fo = toFitOptions(a.fit, voxelizeFitChoices());
+    fo.axis = parseAxis(a.choice.axis);
 
     MeshLoadReport report;
     const Mesh mesh = loadMesh(a.input, &report);
@@ -41,7 +33,7 @@ int runVoxelize(const VoxelizeArgs& a) {
     const MeshTopology topo = analyzeTopology(mesh.view());
     const bool needsInside = vo.mode == VoxelizeMode::Solid || vo.mode == VoxelizeMode::SolidConservative ||
                              vo.mode == VoxelizeMode::Interior;
-    if (a.fill == "auto") {
+    if (a.choice.autoFill()) {
         vo.fill = topo.closed() ? Fill::Parity : Fill::Flood;
         if (needsInside && !topo.closed() && !a.quiet)
             std::cerr
@@ -49,7 +41,6 @@ int runVoxelize(const VoxelizeArgs& a) {
                 << topo.nonManifoldEdges << " non-manifold, " << topo.misorientedEdges
                 << " misoriented edges): using --fill flood (holes wider than a voxel let the flood in)\n";
     } else {
-        vo.fill = parseFill(a.fill);
         if (needsInside && !topo.closed() && vo.fill == Fill::Parity && !a.quiet)
             std::cerr << "voxfx: warning: " << a.input
                       << " is not closed; parity may fill wrong cells (try --fill flood or --fill vote)\n";
@@ -66,7 +57,7 @@ int runVoxelize(const VoxelizeArgs& a) {
 
     const auto tw = Clock::now();
     GridWriteOptions wo;
-    wo.vdbFloat = a.vdbFloat;
+    wo.vdbFloat = a.choice.vdbFloat;
     writeGrid(grid, a.output, wo);
     const double writeMs = msSince(tw);
 
@@ -123,20 +114,11 @@ const Command kVoxelize{
         auto a = std::make_shared<VoxelizeArgs>();
         app.add_option("MESH", a->input, "Mesh file (off, obj, ply, stl, gltf, glb, ...)")->required();
         app.add_option("-o,--output", a->output, "Output grid: .binvox .vdb .nrrd .ply .obj")->required();
-        addFitOptions(app, a->fit, kVoxelizeFit);
-        app.add_option("-m,--mode", a->mode, "surface | conservative | solid | solid-conservative | interior")
-            ->default_val("solid");
-        app.add_option("--fill", a->fill, "auto | parity | flood | vote | winding")->default_val("auto");
-        app.add_option("--axis", a->axis, "Slicing axis x | y | z (the result is the same voxels)")
-            ->default_val("z");
-        app.add_option("--slicing", a->slicing,
-                       "uniform | local (ED06 per-column near/far; resampled on export)")
-            ->default_val("uniform");
+        addFitOptions(app, a->fit, voxelizeFitChoices());
+        addVoxelizeChoiceOptions(app, a->choice);
         app.add_option("-j,--threads", a->threads, "Worker threads, 0 = all (results are identical)")
             ->default_val(0)
             ->check(CLI::NonNegativeNumber);
-        app.add_flag("--vdb-float", a->vdbFloat,
-                     "Write a FloatGrid (fog volume, 1 inside) instead of a BoolGrid");
         app.add_flag("-q,--quiet", a->quiet, "No summary or progress");
         return std::function<int()>([a] { return runVoxelize(*a); });
     }};

@@ -64,6 +64,36 @@ FitOptions toFitOptions(const FitArgs& args, const FitChoices& choices, int64_t 
     return fo;
 }
 
+const FitChoices& voxelizeFitChoices() {
+    static const FitChoices choices = [] {
+        FitChoices c;
+        c.voxelSize = c.dims = c.bounds = true;
+        return c;
+    }();
+    return choices;
+}
+
+void addVoxelizeChoiceOptions(CLI::App& app, VoxelizeChoiceArgs& args) {
+    app.add_option("-m,--mode", args.mode, "surface | conservative | solid | solid-conservative | interior")
+        ->default_val("solid");
+    app.add_option("--fill", args.fill, "auto | parity | flood | vote | winding")->default_val("auto");
+    app.add_option("--axis", args.axis, "Slicing axis x | y | z (the result is the same voxels)")
+        ->default_val("z");
+    app.add_option("--slicing", args.slicing,
+                   "uniform | local (ED06 per-column near/far; resampled on export)")
+        ->default_val("uniform");
+    app.add_flag("--vdb-float", args.vdbFloat,
+                 "Write a FloatGrid (fog volume, 1 inside) instead of a BoolGrid");
+}
+
+VoxelizeOptions toVoxelizeOptions(const VoxelizeChoiceArgs& args) {
+    VoxelizeOptions vo;
+    vo.mode = parseVoxelizeMode(args.mode);
+    vo.slicing = parseSlicing(args.slicing);
+    if (!args.autoFill()) vo.fill = parseFill(args.fill);
+    return vo;
+}
+
 void addGridInputOptions(CLI::App& app, GridInput& in, const std::string& marginHelp) {
     app.add_option("INPUT", in.path, "Grid (.binvox .vdb .nrrd) or mesh file")->required();
     in.choices.marginHelp = marginHelp;

@@ -43,6 +43,23 @@ void addFitOptions(CLI::App& app, FitArgs& args, const FitChoices& choices);
 /// Throws voxfx::Error for --bounds with min > max on an axis.
 FitOptions toFitOptions(const FitArgs& args, const FitChoices& choices, int64_t margin = -1);
 
+/// The fitting choices of `voxfx voxelize` and `voxfx batch` (resolution 256, --voxel-size,
+/// --dims, --bounds, margin 0): one definition, so both fit the same frames.
+const FitChoices& voxelizeFitChoices();
+
+/// The voxelization choices besides fitting, as `voxfx voxelize` and `voxfx batch` take them.
+struct VoxelizeChoiceArgs {
+    std::string mode = "solid", fill = "auto", axis = "z", slicing = "uniform";
+    bool vdbFloat = false;
+    bool autoFill() const { return fill == "auto"; }
+};
+
+/// Adds -m/--mode, --fill, --axis, --slicing and --vdb-float.
+void addVoxelizeChoiceOptions(CLI::App& app, VoxelizeChoiceArgs& args);
+
+/// Mode, slicing and (unless auto) fill parsed; throws voxfx::Error for unknown names.
+VoxelizeOptions toVoxelizeOptions(const VoxelizeChoiceArgs& args);
+
 struct GridInput {
     /// The defaults of -r and --margin for this command (margin < 0: the command decides).
     explicit GridInput(int64_t defaultResolution = 256, int64_t defaultMargin = 1) {

@@ -51,8 +51,11 @@ AtomicFile::~AtomicFile() {
 std::ostream& AtomicFile::stream() {
     if (!out_) {
         out_ = std::make_unique<std::ofstream>();
-        buffer_.resize(size_t(1) << 20);
-        out_->rdbuf()->pubsetbuf(buffer_.data(), std::streamsize(buffer_.size()));
+        // Not zero-filled: clearing 1 MiB (and faulting in all of its pages) per file cost more
+        // than writing a small grid (batches write thousands of them); only what is written is
+        // touched.
+        buffer_.reset(new char[kBufferBytes]);
+        out_->rdbuf()->pubsetbuf(buffer_.get(), std::streamsize(kBufferBytes));
         errno = 0;
         out_->open(temp_, std::ios::binary | std::ios::trunc);
         if (!*out_) fail("cannot write '", temp_.string(), "': ", systemReason(errno));

@@ -39,7 +39,8 @@ public:
 
 private:
     std::filesystem::path target_, temp_;
-    std::vector<char> buffer_;
+    static constexpr size_t kBufferBytes = size_t(1) << 20;
+    std::unique_ptr<char[]> buffer_;
     std::unique_ptr<std::ofstream> out_;
     bool committed_ = false;
 };

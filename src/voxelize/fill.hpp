@@ -7,8 +7,10 @@
 namespace voxfx::detail {
 
 /// Cells not reachable from the grid border through empty cells (6-connected), i.e. the walls
-/// plus everything they enclose. A column worklist fills whole runs per step (bit-parallel
-/// carries along depth), so cost ~ (columns touched) x (words per column) x (passes).
+/// plus everything they enclose. One pass settles each column outside its wall span (lowest to
+/// highest wall); a column worklist then fills whole runs of the spans per step (bit-parallel
+/// carries along depth), so cost ~ one pass over the grid + (columns reached sideways) x (words
+/// of their spans) x (passes).
 BitGrid floodFillInside(const BitGrid& walls);
 
 /// Bitwise majority of three grids of equal size.

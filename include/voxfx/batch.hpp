@@ -1,0 +1,98 @@
+// voxfx — batch voxelization: many mesh files to grid files in one process (dataset preparation).
+//
+// A batch is a list of jobs (mesh path -> output path). Each job does exactly what
+// `voxfx voxelize MESH -o OUTPUT` does with the same options: load the mesh, pick the fill
+// (auto: parity for closed meshes, flood otherwise), fit the frame to the mesh bounds (or
+// `fit.bounds`), voxelize, write the grid atomically. Outputs are therefore byte-identical to
+// the single-file command (.vdb files differ in the UUID OpenVDB writes into every file's
+// header, run to run, and nowhere else). Jobs run in parallel over the meshes; a failing job (unreadable or
+// malformed mesh, grid too large, write error) is recorded with its message and the others go
+// on. An output that already exists is skipped (restart after an interruption: writers are
+// atomic, so an existing output is complete and a partial temporary file never counts).
+//
+// Thread-safety: runBatch may be called concurrently for disjoint output paths; `progress` is
+// called from worker threads, one call at a time (serialized by runBatch).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "voxfx/grid_io.hpp"
+#include "voxfx/voxelize.hpp"
+
+namespace voxfx {
+
+struct BatchJob {
+    std::string mesh;   ///< mesh file
+    std::string output; ///< grid file (format from its extension)
+};
+
+/// The file extension (with the dot) of a grid format: ".binvox", ".vdb", ".nrrd", ".ply", ".obj".
+const char* gridFormatExtension(GridFormat format);
+
+/// Reads a manifest: one mesh path per line, relative to the manifest's folder (absolute paths
+/// stay); '#' starts a comment line, blank lines and surrounding whitespace are ignored. Each job
+/// writes `outDir`/<mesh file stem><extension of `format`>. Throws voxfx::Error naming the
+/// manifest for an unreadable file and, before any work, for two meshes with the same stem
+/// (their outputs would collide), naming both lines.
+std::vector<BatchJob> readBatchManifest(const std::string& manifestPath, const std::string& outDir,
+                                        GridFormat format);
+
+/// The jobs for a list of mesh paths (used as given), with the same output naming and the same
+/// duplicate-stem check as readBatchManifest.
+std::vector<BatchJob> batchJobs(const std::vector<std::string>& meshPaths, const std::string& outDir,
+                                GridFormat format);
+
+enum class BatchStatus : uint8_t { Ok, Skipped, Error };
+const char* toString(BatchStatus s); ///< "ok", "skipped", "error"
+
+struct BatchResult {
+    std::string mesh, output;
+    BatchStatus status = BatchStatus::Ok;
+    std::string error;      ///< the error message (status Error), else empty
+    int64_t triangles = -1; ///< triangles after loading; -1 when not loaded (skipped, load error)
+    double ms = 0;          ///< wall time of the job (load, voxelize, write)
+};
+
+/// Called once per finished job, in completion order, one call at a time.
+class BatchProgress {
+public:
+    virtual ~BatchProgress() = default;
+    /// `done` jobs of `total` are finished, `result` the one that just finished.
+    virtual void jobDone(const BatchResult& result, int64_t done, int64_t total) = 0;
+};
+
+struct BatchOptions {
+    FitOptions fit;                    ///< as for voxfx voxelize (default: resolution 256)
+    VoxelizeOptions voxelize;          ///< mode, fill, slicing; its `threads` and `progress` are ignored
+    bool autoFill = true;              ///< parity for closed meshes, flood for open ones (ignores .fill)
+    GridWriteOptions write;            ///< vdbFloat, grid name
+    int threads = 0;                   ///< worker threads for the whole batch, 0 = all
+    bool nested = false;               ///< also spread each voxelization over the workers (else 1 each)
+    bool skipExisting = true;          ///< an existing output is not redone (status Skipped)
+    BatchProgress* progress = nullptr; ///< not owned
+    BatchOptions() { fit.resolution = 256; }
+};
+
+struct BatchSummary {
+    std::vector<BatchResult> results; ///< in job order
+    int64_t ok = 0, skipped = 0, errors = 0;
+    double seconds = 0; ///< wall time of the whole batch
+};
+
+/// Runs the jobs (see the top of this header). Never throws for a failing job; throws
+/// voxfx::Error only for unusable options (e.g. no resolution, voxel size or dims). The summary
+/// lists the jobs in the order given, whatever the order they finished in.
+BatchSummary runBatch(const std::vector<BatchJob>& jobs, const BatchOptions& options);
+
+/// The inside fill `voxfx voxelize --fill auto` uses for this mesh: parity when it is closed,
+/// flood otherwise (for the surface and conservative modes the fill is unused: parity).
+Fill autoFillFor(const MeshView& mesh, VoxelizeMode mode);
+
+/// Writes the summary as JSON (atomically): {"ok", "skipped", "errors", "seconds",
+/// "jobs": [{"mesh", "output", "status", "error", "triangles", "ms"}, ...]} with "error" and
+/// "triangles" null where they do not apply. Throws voxfx::Error on a failed write.
+void writeBatchReport(const BatchSummary& summary, const std::string& path);
+
+} // namespace voxfx

@@ -1,0 +1,220 @@
+// voxfx — batch voxelization: manifest, parallel jobs over meshes, restart, JSON report.
+#include "voxfx/batch.hpp"
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <new>
+#include <set>
+
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.hpp"
+#include "voxfx/error.hpp"
+#include "voxfx/mesh_io.hpp"
+#include "voxfx/parallel.hpp"
+
+namespace voxfx {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using BatchClock = std::chrono::steady_clock;
+
+double batchMsSince(BatchClock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(BatchClock::now() - t0).count();
+}
+
+std::string trimmed(const std::string& s) {
+    const auto b = s.find_first_not_of(" \t\r\n");
+    if (b == std::string::npos) return {};
+    const auto e = s.find_last_not_of(" \t\r\n");
+    return s.substr(b, e - b + 1);
+}
+
+// The jobs for `meshes`, each with where it came from (for the duplicate message).
+std::vector<BatchJob> jobsFor(const std::vector<std::string>& meshes, const std::vector<std::string>& origins,
+                              const std::string& outDir, GridFormat format) {
+    std::vector<BatchJob> jobs;
+    jobs.reserve(meshes.size());
+    std::map<std::string, size_t> byStem;
+    for (size_t i = 0; i < meshes.size(); ++i) {
+        const std::string stem = fs::path(meshes[i]).stem().string();
+        if (stem.empty()) fail(origins[i], ": '", meshes[i], "' has no file name");
+        const auto [it, fresh] = byStem.emplace(stem, i);
+        if (!fresh)
+            fail(origins[i], ": '", meshes[i], "' and ", origins[it->second], ": '", meshes[it->second],
+                 "' would both write '", stem, gridFormatExtension(format),
+                 "' (outputs are named by the mesh file's stem; rename or link one of them)");
+        jobs.push_back({meshes[i], (fs::path(outDir) / (stem + gridFormatExtension(format))).string()});
+    }
+    return jobs;
+}
+
+bool needsInsideFill(VoxelizeMode mode) {
+    return mode == VoxelizeMode::Solid || mode == VoxelizeMode::SolidConservative ||
+           mode == VoxelizeMode::Interior;
+}
+
+// One job, as `voxfx voxelize MESH -o OUTPUT` does it.
+void runBatchJob(const BatchJob& job, const BatchOptions& o, BatchResult& r) {
+    const Mesh mesh = loadMesh(job.mesh);
+    r.triangles = int64_t(mesh.triangleCount());
+    VoxelizeOptions vo = o.voxelize;
+    vo.progress = nullptr;
+    vo.threads = o.nested ? 0 : 1;
+    if (o.autoFill) vo.fill = autoFillFor(mesh.view(), vo.mode);
+    const Frame frame = fitFrame(computeBounds(mesh.view()), o.fit);
+    const VoxelGrid grid = voxelize(mesh.view(), frame, vo);
+    writeGrid(grid, job.output, o.write);
+}
+
+} // namespace
+
+const char* gridFormatExtension(GridFormat format) {
+    switch (format) {
+    case GridFormat::Binvox:
+        return ".binvox";
+    case GridFormat::Vdb:
+        return ".vdb";
+    case GridFormat::Nrrd:
+        return ".nrrd";
+    case GridFormat::Ply:
+        return ".ply";
+    case GridFormat::Obj:
+        return ".obj";
+    }
+    return "";
+}
+
+const char* toString(BatchStatus s) {
+    switch (s) {
+    case BatchStatus::Ok:
+        return "ok";
+    case BatchStatus::Skipped:
+        return "skipped";
+    case BatchStatus::Error:
+        return "error";
+    }
+    return "?";
+}
+
+std::vector<BatchJob> readBatchManifest(const std::string& manifestPath, const std::string& outDir,
+                                        GridFormat format) {
+    std::ifstream in(manifestPath);
+    if (!in) fail("cannot read manifest '", manifestPath, "'");
+    const fs::path base = fs::path(manifestPath).parent_path();
+    std::vector<std::string> meshes, origins;
+    std::string line;
+    for (int64_t number = 1; std::getline(in, line); ++number) {
+        const std::string entry = trimmed(line);
+        if (entry.empty() || entry[0] == '#') continue;
+        const fs::path p(entry);
+        meshes.push_back(p.is_absolute() ? p.string() : (base / p).string());
+        origins.push_back(detail::concat(manifestPath, " line ", number));
+    }
+    if (in.bad()) fail("error reading manifest '", manifestPath, "'");
+    return jobsFor(meshes, origins, outDir, format);
+}
+
+std::vector<BatchJob> batchJobs(const std::vector<std::string>& meshPaths, const std::string& outDir,
+                                GridFormat format) {
+    std::vector<std::string> origins;
+    for (size_t i = 0; i < meshPaths.size(); ++i) origins.push_back(detail::concat("mesh ", i + 1));
+    return jobsFor(meshPaths, origins, outDir, format);
+}
+
+Fill autoFillFor(const MeshView& mesh, VoxelizeMode mode) {
+    if (!needsInsideFill(mode)) return Fill::Parity;
+    return analyzeTopology(mesh).closed() ? Fill::Parity : Fill::Flood;
+}
+
+BatchSummary runBatch(const std::vector<BatchJob>& jobs, const BatchOptions& options) {
+    const auto t0 = BatchClock::now();
+    // Unusable options fail once, before any job (rather than once per job).
+    if (options.fit.resolution <= 0 && options.fit.voxelSize <= 0 &&
+        (options.fit.dims.x <= 0 || options.fit.dims.y <= 0 || options.fit.dims.z <= 0))
+        fail("batch: give a resolution, a voxel size or dims");
+    std::set<std::string> dirs;
+    for (const BatchJob& j : jobs) dirs.insert(fs::path(j.output).parent_path().string());
+    for (const std::string& d : dirs) {
+        std::error_code ec;
+        if (!d.empty()) fs::create_directories(d, ec);
+        if (ec) fail("cannot create output folder '", d, "': ", ec.message());
+    }
+
+    BatchSummary summary;
+    summary.results.resize(jobs.size());
+    std::mutex progressMutex;
+    int64_t done = 0;
+    const int64_t total = int64_t(jobs.size());
+    withThreads(options.threads, [&] {
+        // One job per task: meshes differ wildly in cost, so the scheduler balances them.
+        parallelFor(0, total, 1, [&](int64_t b, int64_t e) {
+            for (int64_t i = b; i < e; ++i) {
+                const BatchJob& job = jobs[size_t(i)];
+                BatchResult& r = summary.results[size_t(i)];
+                r.mesh = job.mesh;
+                r.output = job.output;
+                const auto tj = BatchClock::now();
+                std::error_code ec;
+                if (options.skipExisting && fs::exists(job.output, ec)) {
+                    r.status = BatchStatus::Skipped;
+                } else {
+                    try {
+                        runBatchJob(job, options, r);
+                        r.status = BatchStatus::Ok;
+                    } catch (const std::bad_alloc&) {
+                        r.status = BatchStatus::Error;
+                        r.error = "out of memory";
+                    } catch (const std::exception& ex) {
+                        r.status = BatchStatus::Error;
+                        r.error = ex.what();
+                    }
+                }
+                r.ms = batchMsSince(tj);
+                const std::lock_guard lock(progressMutex);
+                ++done;
+                if (options.progress) options.progress->jobDone(r, done, total);
+            }
+        });
+    });
+    for (const BatchResult& r : summary.results) {
+        summary.ok += r.status == BatchStatus::Ok;
+        summary.skipped += r.status == BatchStatus::Skipped;
+        summary.errors += r.status == BatchStatus::Error;
+    }
+    summary.seconds = batchMsSince(t0) / 1000;
+    return summary;
+}
+
+void writeBatchReport(const BatchSummary& summary, const std::string& path) {
+    nlohmann::ordered_json j;
+    j["ok"] = summary.ok;
+    j["skipped"] = summary.skipped;
+    j["errors"] = summary.errors;
+    j["seconds"] = summary.seconds;
+    nlohmann::ordered_json list = nlohmann::ordered_json::array();
+    for (const BatchResult& r : summary.results) {
+        nlohmann::ordered_json e;
+        e["mesh"] = r.mesh;
+        e["output"] = r.output;
+        e["status"] = toString(r.status);
+        e["error"] =
+            r.status == BatchStatus::Error ? nlohmann::ordered_json(r.error) : nlohmann::ordered_json();
+        e["triangles"] = r.triangles >= 0 ? nlohmann::ordered_json(r.triangles) : nlohmann::ordered_json();
+        e["ms"] = r.ms;
+        list.push_back(std::move(e));
+    }
+    j["jobs"] = std::move(list);
+    detail::AtomicFile file(path);
+    // Invalid UTF-8 in a path or message is replaced rather than failing the report.
+    file.stream() << j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
+    file.commit();
+}
+
+} // namespace voxfx
