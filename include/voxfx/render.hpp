@@ -13,6 +13,8 @@
 //                     light's RGB visibility. Surfaces are lit on both sides; the side facing away
 //                     from a light receives the light that crosses the surface
 //                     (crossingTransmittance: back-lit leaves glow).
+//   4b. volumes       scenes with volume objects (scene.volumeScene): ray casting over fragment
+//                     lists from the camera, composited over the shaded image (render/volume_pass).
 //   5. resolve        box filter of supersample x supersample pixels.
 // Output is linear RGB (writePng encodes sRGB; writePfm keeps HDR). Deterministic for any thread
 // count.
@@ -41,18 +43,23 @@ struct RenderOptions {
     float exposure = 1;           ///< multiplies the linear result (background included)
     int threads = 0;              ///< 0 = all; output is identical for every value
     Progress* progress = nullptr; ///< polled between tiles of every pass; may cancel
+    /// Volume ray casting (scene.volumeScene): sample step in smallest voxel spacings.
+    double volumeStep = 1.0;
 };
 
 /// Wall-clock time of each pass, milliseconds.
 struct RenderTimings {
     double flattenMs = 0, gbufferMs = 0, shadowMapMs = 0, lightVoxelizeMs = 0, shadingMs = 0, resolveMs = 0,
            totalMs = 0;
+    double volumeMs = 0; ///< volume ray casting over fragment lists (scenes with volumes)
 };
 
 struct RenderResult {
     Image image;
     RenderTimings timings;
     int64_t coveredPixels = 0; ///< pixels (at the supersampled resolution) showing geometry
+    int64_t volumeSamples = 0; ///< volume samples the ray-casting pass took
+    DsmStats deepShadowStats;  ///< ShadowKind::Deep: node and memory statistics over all lights' maps
 };
 
 /// All meshes of a scene as one mesh, with per-triangle material and source mesh and per-vertex

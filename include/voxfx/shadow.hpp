@@ -35,11 +35,13 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "voxfx/attribute_grid.hpp"
+#include "voxfx/dsm.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/scene.hpp"
@@ -48,9 +50,9 @@
 
 namespace voxfx {
 
-enum class ShadowKind : uint8_t { None, Map, Transmittance, Absorption };
+enum class ShadowKind : uint8_t { None, Map, Transmittance, Absorption, Deep };
 const char* toString(ShadowKind k);
-/// Parses none | map | transmittance | absorption; throws voxfx::Error listing them otherwise.
+/// Parses none | map | transmittance | absorption | deep; throws voxfx::Error listing them otherwise.
 ShadowKind parseShadowKind(const std::string& name);
 
 struct ShadowOptions {
@@ -71,6 +73,11 @@ struct ShadowOptions {
     /// filters a shadow map; more self-shadowing on tilted leaves); false: p's own column only
     /// (ED06's lookup, the default: the smaller error against exact transport at high resolution).
     bool bilinear = false;
+    /// ShadowKind::Deep (voxfx/deep_shadow.hpp): texels per view side, ε, storage, clusters.
+    int64_t dsmResolution = 512;
+    double dsmEpsilon = 0.05;
+    DsmStorage dsmStorage = DsmStorage::Chunked;
+    int dsmClusters = 0; ///< deep: at most this many clustered maps per light (0, 1: off)
 };
 
 /// One view of a light: a frame and the rigid map from world space into the space that frame is
@@ -200,6 +207,8 @@ struct ShadowBuildTimings {
     double voxelizeMs = 0; ///< transmittance / attribute voxelization from the light
 };
 
+class DeepShadow; // voxfx/deep_shadow.hpp
+
 /// All shadow data of one light for one ShadowKind, built from a scene.
 class LightShadow {
 public:
@@ -214,6 +223,8 @@ public:
     const std::vector<ShadowMap>& maps() const { return maps_; }
     const std::vector<TransmittanceShadowMap>& transmittanceMaps() const { return transmittance_; }
     const std::vector<AbsorptionShadowMap>& absorptionMaps() const { return absorption_; }
+    /// ShadowKind::Deep: the deep shadow maps (null otherwise).
+    const DeepShadow* deepShadow() const { return deep_.get(); }
 
 private:
     ShadowOptions options_{ShadowKind::None};
@@ -221,6 +232,7 @@ private:
     std::vector<ShadowMap> maps_;
     std::vector<TransmittanceShadowMap> transmittance_;
     std::vector<AbsorptionShadowMap> absorption_;
+    std::shared_ptr<const DeepShadow> deep_;
 };
 
 } // namespace voxfx

@@ -13,7 +13,10 @@ struct RenderArgs {
     std::string input, output, shadows, slicing, voxelMode;
     int64_t width = 0, height = 0, grid = 0, gridDepth = 0, mapResolution = 0;
     int supersample = 0, pcf = 1, camera = 0, threads = 0;
-    double exposure = 1;
+    double exposure = 1, epsilon = 0.05;
+    std::string dsmStorage = "chunked";
+    int64_t dsmResolution = 512;
+    int clusters = 0;
     bool quiet = false, bilinear = false;
 };
 
@@ -21,8 +24,9 @@ void printTimings(const RenderResult& r, const std::string& output) {
     const RenderTimings& t = r.timings;
     std::cout << "time: G-buffer " << fmtMs(t.gbufferMs) << ", shadow map " << fmtMs(t.shadowMapMs)
               << ", voxelization from light " << fmtMs(t.lightVoxelizeMs) << ", shading "
-              << fmtMs(t.shadingMs) << ", resolve " << fmtMs(t.resolveMs) << " (flatten "
-              << fmtMs(t.flattenMs) << "), total " << fmtMs(t.totalMs) << " -> " << output << "\n";
+              << fmtMs(t.shadingMs) << (r.volumeSamples ? ", volumes " + fmtMs(t.volumeMs) : std::string())
+              << ", resolve " << fmtMs(t.resolveMs) << " (flatten " << fmtMs(t.flattenMs) << "), total "
+              << fmtMs(t.totalMs) << " -> " << output << "\n";
 }
 
 /// Writes .png (sRGB), .pfm or .exr (linear HDR); anything else is refused before rendering.
@@ -67,6 +71,10 @@ int runRender(const RenderArgs& a) {
         fail("--voxel-mode must be surface or conservative for shadows");
     o.shadow.pcfRadius = a.pcf;
     o.shadow.bilinear = a.bilinear;
+    o.shadow.dsmEpsilon = a.epsilon;
+    o.shadow.dsmStorage = parseDsmStorage(a.dsmStorage);
+    o.shadow.dsmResolution = a.dsmResolution;
+    o.shadow.dsmClusters = a.clusters;
     if (s.ambient.x >= 0) o.ambient = s.ambient;
     if (s.background.x >= 0) o.background = s.background;
     o.exposure = float(a.exposure);
@@ -97,9 +105,25 @@ int runRender(const RenderArgs& a) {
         if (o.shadow.kind == ShadowKind::Transmittance || o.shadow.kind == ShadowKind::Absorption)
             std::cout << " (grid " << o.shadow.gridResolution << " x " << o.shadow.gridDepth << ", "
                       << toString(o.shadow.slicing) << " slicing)";
+        else if (o.shadow.kind == ShadowKind::Deep)
+            std::cout << " (" << o.shadow.dsmResolution << " texels, epsilon " << o.shadow.dsmEpsilon << ", "
+                      << toString(o.shadow.dsmStorage) << " storage"
+                      << (o.shadow.dsmClusters > 1
+                              ? ", at most " + std::to_string(o.shadow.dsmClusters) + " clusters"
+                              : "")
+                      << ")";
         else if (o.shadow.kind == ShadowKind::Map)
             std::cout << " (" << o.shadow.mapResolution << " texels, PCF " << 2 * o.shadow.pcfRadius + 1
                       << "x" << 2 * o.shadow.pcfRadius + 1 << ")";
+        if (o.shadow.kind == ShadowKind::Deep && r.deepShadowStats.texels > 0) {
+            const DsmStats& d = r.deepShadowStats;
+            const double fixedMiB =
+                double(d.texels) * double(d.maxNodes * int64_t(sizeof(DsmNode)) + 2) / 1048576.0;
+            std::cout << "\ndeep shadow maps: " << withCommas(d.texels) << " texels, nodes per texel mean "
+                      << d.meanNodes() << " max " << d.maxNodes << ", " << double(d.bytes) / 1048576.0
+                      << " MiB " << toString(o.shadow.dsmStorage)
+                      << " (fixed layout sized by the worst texel: " << fixedMiB << " MiB)";
+        }
         std::cout << "\nload " << fmtMs(loadMs) << "; ";
         printTimings(r, a.output);
     }
@@ -115,6 +139,9 @@ Shadow kinds:
                  objects keep a standard shadow map
   absorption     CHANG: attribute voxelization from the light, absorption = write count x
                  material constant, summed along the light path
+  deep           deep shadow maps (Bornik et al.): per texel an epsilon-compressed
+                 visibility function over all fragments from the light; translucent
+                 surfaces are steps, volume objects attenuate continuously
 
 Settings a JSON scene file gives under "render" are used unless a flag overrides them.
 Output by extension: .png (8-bit sRGB), .exr (OpenEXR, linear half-float RGB, HDR) or
@@ -130,7 +157,8 @@ const Command kRender{
             ->check(CLI::Range(int64_t(1), int64_t(65536)));
         app.add_option("--height", a->height, "Image height (default 720)")
             ->check(CLI::Range(int64_t(1), int64_t(65536)));
-        app.add_option("--shadows", a->shadows, "none | map | transmittance | absorption (default map)");
+        app.add_option("--shadows", a->shadows,
+                       "none | map | transmittance | absorption | deep (default map)");
         app.add_option("--supersample", a->supersample, "Render k x k samples per pixel (1..8)")
             ->check(CLI::Range(1, 8));
         app.add_option("--grid", a->grid, "Light grid columns, longer side (default 256)")
@@ -147,6 +175,15 @@ const Command kRender{
             ->check(CLI::PositiveNumber);
         app.add_option("-j,--threads", a->threads, "Worker threads, 0 = all (identical output)")
             ->check(CLI::NonNegativeNumber);
+        app.add_option("--epsilon", a->epsilon, "Deep shadows: compression tolerance (default 0.05)")
+            ->check(CLI::Range(0.0, 1.0));
+        app.add_option("--dsm-storage", a->dsmStorage, "Deep shadows: fixed | chunked (default chunked)");
+        app.add_option("--dsm-resolution", a->dsmResolution,
+                       "Deep shadows: texels per view side (default 512)")
+            ->check(CLI::Range(int64_t(1), int64_t(16384)));
+        app.add_option("--clusters", a->clusters,
+                       "Deep shadows: at most M clustered maps per light (0 = off)")
+            ->check(CLI::Range(0, 64));
         app.add_flag("--bilinear", a->bilinear, "Interpolate light-grid lookups between 4 columns (softer)");
         app.add_flag("-q,--quiet", a->quiet, "No summary or progress");
         return std::function<int()>([a] { return runRender(*a); });

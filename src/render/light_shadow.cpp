@@ -7,6 +7,7 @@
 #include <map>
 
 #include "core/enum_names.hpp"
+#include "voxfx/deep_shadow.hpp"
 #include "voxfx/shadow.hpp"
 
 namespace voxfx {
@@ -61,6 +62,8 @@ const char* toString(ShadowKind k) {
         return "transmittance";
     case ShadowKind::Absorption:
         return "absorption";
+    case ShadowKind::Deep:
+        return "deep";
     }
     return "?";
 }
@@ -69,7 +72,8 @@ ShadowKind parseShadowKind(const std::string& name) {
     static constexpr detail::EnumName<ShadowKind> kNames[] = {{"none", ShadowKind::None},
                                                               {"map", ShadowKind::Map},
                                                               {"transmittance", ShadowKind::Transmittance},
-                                                              {"absorption", ShadowKind::Absorption}};
+                                                              {"absorption", ShadowKind::Absorption},
+                                                              {"deep", ShadowKind::Deep}};
     return detail::parseEnum<ShadowKind>(name, "shadow kind", kNames);
 }
 
@@ -91,7 +95,8 @@ LightShadow LightShadow::build(const Scene& scene, const Light& light, const Sha
     ShadowBuildTimings local;
     ShadowBuildTimings& t = timings ? *timings : local;
     const CasterSets casters = collectCasters(scene);
-    if (casters.all.indices.empty()) return out; // nothing casts: visibility 1
+    // Nothing casts: visibility 1 (deep shadows also see the scene's volume objects).
+    if (casters.all.indices.empty() && !(options.kind == ShadowKind::Deep && scene.volumeScene)) return out;
 
     auto buildMaps = [&](const Mesh& mesh) {
         const auto t0 = std::chrono::steady_clock::now();
@@ -107,6 +112,18 @@ LightShadow LightShadow::build(const Scene& scene, const Light& light, const Sha
     case ShadowKind::Map:
         buildMaps(casters.all);
         break;
+    case ShadowKind::Deep: {
+        const auto t0 = std::chrono::steady_clock::now();
+        DeepShadowOptions d;
+        d.resolution = options.dsmResolution;
+        d.epsilon = options.dsmEpsilon;
+        d.storage = options.dsmStorage;
+        d.clusters = options.dsmClusters;
+        out.deep_ =
+            std::make_shared<const DeepShadow>(DeepShadow::build(volumeSceneOf(scene), light, d, progress));
+        t.mapMs += msSince(t0);
+        break;
+    }
     case ShadowKind::Transmittance: {
         if (!casters.opaque.indices.empty()) buildMaps(casters.opaque);
         if (casters.partial.empty()) break;
@@ -167,6 +184,10 @@ int lookupView(const std::vector<LightView>& views, const Vec3d& p, const Vec3d&
 Vec3f LightShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     Vec3f v{1, 1, 1};
     if (options_.kind == ShadowKind::None) return v;
+    if (deep_) {
+        const float d = deep_->visibility(p, n, options_.normalOffset, options_.depthBias);
+        return {d, d, d};
+    }
     Vec3d q;
     if (!maps_.empty()) {
         const int i = lookupView(mapViews_, p, n, options_.normalOffset, q);

@@ -4,6 +4,8 @@
 #include <chrono>
 
 #include "render/shading.hpp"
+#include "render/volume_pass.hpp"
+#include "voxfx/deep_shadow.hpp"
 #include "voxfx/render.hpp"
 
 namespace voxfx {
@@ -61,13 +63,26 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
             shadows.push_back(LightShadow::build(scene, scene.lights[i], options.shadow, &st, sp.get()));
             t.shadowMapMs += st.mapMs;
             t.lightVoxelizeMs += st.voxelizeMs;
+            if (const DeepShadow* d = shadows.back().deepShadow()) {
+                const DsmStats ds = d->stats();
+                DsmStats& sum = result.deepShadowStats;
+                sum.texels += ds.texels;
+                sum.nodes += ds.nodes;
+                sum.maxNodes = std::max(sum.maxNodes, ds.maxNodes);
+                sum.bytes += ds.bytes;
+                sum.overflowTexels += ds.overflowTexels;
+                sum.maxEpsilon = std::max(sum.maxEpsilon, ds.maxEpsilon);
+            }
         }
 
         tp = Clock::now();
         PassProgress shp(options.progress, 0.5, 1.0);
-        const std::vector<Vec3f> shaded =
+        std::vector<Vec3f> shaded =
             detail::shadeGBuffer(gbuffer, geometry, scene, shadows, options, shp.get());
         t.shadingMs = msSince(tp);
+        tp = Clock::now();
+        result.volumeSamples = detail::compositeVolumes(gbuffer, scene, shadows, options, shaded, nullptr);
+        t.volumeMs = msSince(tp);
 
         // Box filter k x k and flip: frame rows run up, image rows down.
         tp = Clock::now();
