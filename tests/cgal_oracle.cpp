@@ -230,6 +230,21 @@ int64_t sideOfMeshDisagreements(const MeshView& mesh, const CellGeometry& g, con
     return wrong;
 }
 
+std::vector<int> sideOfClosedMesh(const MeshView& mesh, const std::vector<Vec3d>& points) {
+    using namespace oracle;
+    bool manifold = false;
+    const SurfaceMesh sm = surfaceMesh(mesh, 2, manifold);
+    if (!manifold || !CGAL::is_closed(sm)) return {};
+    CGAL::Side_of_triangle_mesh<SurfaceMesh, K> side(sm);
+    std::vector<int> out;
+    out.reserve(points.size());
+    for (const Vec3d& p : points) {
+        const CGAL::Bounded_side bs = side(Point3(p.x, p.y, p.z));
+        out.push_back(bs == CGAL::ON_BOUNDED_SIDE ? 1 : (bs == CGAL::ON_BOUNDARY ? 0 : -1));
+    }
+    return out;
+}
+
 ConservativeOracle oracleConservative(const MeshView& mesh, const CellGeometry& g, double nearCells) {
     using namespace oracle;
     ConservativeOracle r{WorldGrid(g.dims), WorldGrid(g.dims)};

@@ -177,6 +177,10 @@ SolidOracle oracleSolid(const MeshView& mesh, const CellGeometry& g, int lineAxi
 int64_t sideOfMeshDisagreements(const MeshView& mesh, const CellGeometry& g, const SolidOracle& oracle,
                                 int64_t stride);
 
+/// CGAL::Side_of_triangle_mesh at each point of a closed mesh: 1 inside, -1 outside, 0 on the
+/// boundary; empty when the mesh is not a closed manifold.
+std::vector<int> sideOfClosedMesh(const MeshView& mesh, const std::vector<Vec3d>& points);
+
 /// Result of oracleConservative, in world-axis index order.
 struct ConservativeOracle {
     WorldGrid cells; ///< the closed box meets a triangle

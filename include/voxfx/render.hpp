@@ -13,6 +13,8 @@
 //                     light's RGB visibility. Surfaces are lit on both sides; the side facing away
 //                     from a light receives the light that crosses the surface
 //                     (crossingTransmittance: back-lit leaves glow).
+//   4b. volumes       scenes with volume objects (scene.volumeScene): ray casting over fragment
+//                     lists from the camera, composited over the shaded image (render/volume_pass).
 //   5. resolve        box filter of supersample x supersample pixels.
 // Output is linear RGB (writePng encodes sRGB; writePfm keeps HDR). Deterministic for any thread
 // count.
@@ -50,6 +52,8 @@ struct RenderOptions {
     bool defaultLights = true;
     int threads = 0;              ///< 0 = all; output is identical for every value
     Progress* progress = nullptr; ///< polled between tiles of every pass; may cancel
+    /// Volume ray casting (scene.volumeScene): sample step in smallest voxel spacings.
+    double volumeStep = 1.0;
 };
 
 /// Wall-clock time of each pass, milliseconds.
@@ -59,6 +63,7 @@ struct RenderTimings {
     double shadowVolumeMs = 0; ///< ShadowKind::Volumes: culling, construction and counting
     double glassPrepareMs = 0; ///< Embree build (exact) or attribute voxelization (voxel methods)
     double glassMs = 0;        ///< tracing the glass pixels
+    double volumeMs = 0;       ///< volume ray casting over fragment lists (scenes with volumes)
 };
 
 struct RenderResult {
@@ -69,6 +74,8 @@ struct RenderResult {
     /// Per output pixel (row-major, row 0 on top): 1 where any of its samples shows glass, else 0.
     /// Empty when options.glass.kind is None.
     std::vector<uint8_t> glassMask;
+    int64_t volumeSamples = 0; ///< volume samples the ray-casting pass took
+    DsmStats deepShadowStats;  ///< ShadowKind::Deep: node and memory statistics over all lights' maps
 };
 
 /// All meshes of a scene as one mesh, with per-triangle material and source mesh and per-vertex

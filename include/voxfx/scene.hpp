@@ -23,6 +23,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,8 @@
 #include "voxfx/mesh.hpp"
 
 namespace voxfx {
+
+struct VolumeScene; // voxfx/volume_scene.hpp
 
 enum class LightType : uint8_t { Directional, Spot, Point };
 const char* toString(LightType t);
@@ -116,6 +119,9 @@ struct Scene {
     std::vector<Light> lights;
     std::vector<Camera> cameras;
     SceneSettings settings;
+    /// Volume objects and Boolean shapes (voxfx/volume_scene.hpp): deep shadows and volume ray
+    /// casting; null when the scene has none.
+    std::shared_ptr<const VolumeScene> volumeScene;
     std::string source; ///< file it was loaded from (for messages)
     /// What a loader understood but could not use (orthographic cameras, textures, non-triangle
     /// primitives ...), one line each; `voxfx scene-info` prints them.

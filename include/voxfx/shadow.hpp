@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "voxfx/attribute_grid.hpp"
+#include "voxfx/dsm.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/scene.hpp"
@@ -50,10 +51,10 @@
 
 namespace voxfx {
 
-enum class ShadowKind : uint8_t { None, Map, Transmittance, Absorption, Volumes, Exact };
+enum class ShadowKind : uint8_t { None, Map, Transmittance, Absorption, Volumes, Exact, Deep };
 const char* toString(ShadowKind k);
-/// Parses none | map | transmittance | absorption | volumes | exact; throws voxfx::Error listing them
-/// otherwise.
+/// Parses none | map | transmittance | absorption | volumes | exact | deep; throws voxfx::Error
+/// listing them otherwise.
 ShadowKind parseShadowKind(const std::string& name);
 
 struct ShadowOptions {
@@ -78,6 +79,11 @@ struct ShadowOptions {
     bool volumeCulling = true;
     /// Volumes: end each volume at the last depth slab holding visible receivers; unchanged shadow.
     bool volumeClamping = true;
+    /// ShadowKind::Deep (voxfx/deep_shadow.hpp): texels per view side, ε, storage, clusters.
+    int64_t dsmResolution = 512;
+    double dsmEpsilon = 0.05;
+    DsmStorage dsmStorage = DsmStorage::Chunked;
+    int dsmClusters = 0; ///< deep: at most this many clustered maps per light (0, 1: off)
 };
 
 /// One view of a light: a frame over world space (perspective, or oriented orthographic for
@@ -220,6 +226,7 @@ struct ShadowBuildTimings {
 };
 
 struct ShadowVolumeMask;
+class DeepShadow; // voxfx/deep_shadow.hpp
 
 /// All shadow data of one light for one ShadowKind, built from a scene.
 class LightShadow {
@@ -239,6 +246,8 @@ public:
     const std::vector<ShadowMap>& maps() const { return maps_; }
     const std::vector<TransmittanceShadowMap>& transmittanceMaps() const { return transmittance_; }
     const std::vector<AbsorptionShadowMap>& absorptionMaps() const { return absorption_; }
+    /// ShadowKind::Deep: the deep shadow maps (null otherwise).
+    const DeepShadow* deepShadow() const { return deep_.get(); }
 
 private:
     ShadowOptions options_{ShadowKind::None};
@@ -249,6 +258,7 @@ private:
     std::shared_ptr<const ShadowVolumeMask> volumes_;
     std::shared_ptr<const ExactShadow> exact_; ///< ShadowKind::Exact
     Light light_;                              ///< ShadowKind::Exact: the light traced towards
+    std::shared_ptr<const DeepShadow> deep_;
 };
 
 } // namespace voxfx

@@ -15,7 +15,10 @@ struct RenderArgs {
     int64_t glassGrid = 0;
     int64_t width = 0, height = 0, grid = 0, gridDepth = 0, mapResolution = 0;
     int supersample = 0, pcf = 1, camera = 0, threads = 0;
-    double exposure = 1;
+    double exposure = 1, epsilon = 0.05;
+    std::string dsmStorage = "chunked";
+    int64_t dsmResolution = 512;
+    int clusters = 0;
     bool quiet = false, bilinear = false, noVolumeCulling = false;
 };
 
@@ -23,8 +26,9 @@ void printTimings(const RenderResult& r, const std::string& output) {
     const RenderTimings& t = r.timings;
     std::cout << "time: G-buffer " << fmtMs(t.gbufferMs) << ", shadow map " << fmtMs(t.shadowMapMs)
               << ", voxelization from light " << fmtMs(t.lightVoxelizeMs) << ", shading "
-              << fmtMs(t.shadingMs) << ", resolve " << fmtMs(t.resolveMs) << " (flatten "
-              << fmtMs(t.flattenMs) << "), total " << fmtMs(t.totalMs) << " -> " << output << "\n";
+              << fmtMs(t.shadingMs) << (r.volumeSamples ? ", volumes " + fmtMs(t.volumeMs) : std::string())
+              << ", resolve " << fmtMs(t.resolveMs) << " (flatten " << fmtMs(t.flattenMs) << "), total "
+              << fmtMs(t.totalMs) << " -> " << output << "\n";
 }
 
 /// Writes .png (sRGB), .pfm or .exr (linear HDR); anything else is refused before rendering.
@@ -70,6 +74,10 @@ int runRender(const RenderArgs& a) {
     o.shadow.pcfRadius = a.pcf;
     o.shadow.bilinear = a.bilinear;
     o.shadow.volumeCulling = o.shadow.volumeClamping = !a.noVolumeCulling;
+    o.shadow.dsmEpsilon = a.epsilon;
+    o.shadow.dsmStorage = parseDsmStorage(a.dsmStorage);
+    o.shadow.dsmResolution = a.dsmResolution;
+    o.shadow.dsmClusters = a.clusters;
     if (s.ambient.x >= 0) o.ambient = s.ambient;
     if (s.background.x >= 0) o.background = s.background;
     o.exposure = float(a.exposure);
@@ -110,6 +118,13 @@ int runRender(const RenderArgs& a) {
         if (o.shadow.kind == ShadowKind::Transmittance || o.shadow.kind == ShadowKind::Absorption)
             std::cout << " (grid " << o.shadow.gridResolution << " x " << o.shadow.gridDepth << ", "
                       << toString(o.shadow.slicing) << " slicing)";
+        else if (o.shadow.kind == ShadowKind::Deep)
+            std::cout << " (" << o.shadow.dsmResolution << " texels, epsilon " << o.shadow.dsmEpsilon << ", "
+                      << toString(o.shadow.dsmStorage) << " storage"
+                      << (o.shadow.dsmClusters > 1
+                              ? ", at most " + std::to_string(o.shadow.dsmClusters) + " clusters"
+                              : "")
+                      << ")";
         else if (o.shadow.kind == ShadowKind::Map)
             std::cout << " (" << o.shadow.mapResolution << " texels, PCF " << 2 * o.shadow.pcfRadius + 1
                       << "x" << 2 * o.shadow.pcfRadius + 1 << ")";
@@ -117,6 +132,15 @@ int runRender(const RenderArgs& a) {
             std::cout << " (" << withCommas(r.shadowVolumeFragments)
                       << " volume fragments, culling and clamping " << (o.shadow.volumeCulling ? "on" : "off")
                       << ", " << fmtMs(r.timings.shadowVolumeMs) << ")";
+        if (o.shadow.kind == ShadowKind::Deep && r.deepShadowStats.texels > 0) {
+            const DsmStats& d = r.deepShadowStats;
+            const double fixedMiB =
+                double(d.texels) * double(d.maxNodes * int64_t(sizeof(DsmNode)) + 2) / 1048576.0;
+            std::cout << "\ndeep shadow maps: " << withCommas(d.texels) << " texels, nodes per texel mean "
+                      << d.meanNodes() << " max " << d.maxNodes << ", " << double(d.bytes) / 1048576.0
+                      << " MiB " << toString(o.shadow.dsmStorage)
+                      << " (fixed layout sized by the worst texel: " << fixedMiB << " MiB)";
+        }
         std::cout << "\nload " << fmtMs(loadMs) << "; ";
         printTimings(r, a.output);
         if (o.glass.kind != GlassKind::None) {
@@ -155,6 +179,9 @@ Glass (materials with transmission > 0):
   frosted        ED06: thickness from front/back-face slicemaps drives a refraction
                  offset, attenuation and a blurred environment lookup
 A scene without lights is lit by a default sun and the sky (or --environment).
+  deep           deep shadow maps (Bornik et al.): per texel an epsilon-compressed
+                 visibility function over all fragments from the light; translucent
+                 surfaces are steps, volume objects attenuate continuously
 
 Settings a JSON scene file gives under "render" are used unless a flag overrides them.
 Output by extension: .png (8-bit sRGB), .exr (OpenEXR, linear half-float RGB, HDR) or
@@ -171,7 +198,7 @@ const Command kRender{
         app.add_option("--height", a->height, "Image height (default 720)")
             ->check(CLI::Range(int64_t(1), int64_t(65536)));
         app.add_option("--shadows", a->shadows,
-                       "none | map | transmittance | absorption | volumes | exact (default map)");
+                       "none | map | transmittance | absorption | volumes | exact | deep (default map)");
         app.add_option("--supersample", a->supersample, "Render k x k samples per pixel (1..8)")
             ->check(CLI::Range(1, 8));
         app.add_option("--grid", a->grid, "Light grid columns, longer side (default 256)")
@@ -192,6 +219,15 @@ const Command kRender{
         app.add_option("--glass-grid", a->glassGrid, "Glass voxels along the longest side (default 128)")
             ->check(CLI::Range(int64_t(2), int64_t(4096)));
         app.add_option("--environment", a->environment, "Environment map: .exr .hdr .pfm .png, or 'sky'");
+        app.add_option("--epsilon", a->epsilon, "Deep shadows: compression tolerance (default 0.05)")
+            ->check(CLI::Range(0.0, 1.0));
+        app.add_option("--dsm-storage", a->dsmStorage, "Deep shadows: fixed | chunked (default chunked)");
+        app.add_option("--dsm-resolution", a->dsmResolution,
+                       "Deep shadows: texels per view side (default 512)")
+            ->check(CLI::Range(int64_t(1), int64_t(16384)));
+        app.add_option("--clusters", a->clusters,
+                       "Deep shadows: at most M clustered maps per light (0 = off)")
+            ->check(CLI::Range(0, 64));
         app.add_flag("--bilinear", a->bilinear, "Interpolate light-grid lookups between 4 columns (softer)");
         app.add_flag("--no-volume-culling", a->noVolumeCulling,
                      "Shadow volumes: no culling or clamping (the same image, more fragments)");

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <set>
 
 #include "core/atomic_file.hpp"
@@ -11,6 +12,9 @@
 #include "voxfx/file_name.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/scene.hpp"
+#include "voxfx/smoke.hpp"
+#include "voxfx/volume_io.hpp"
+#include "voxfx/volume_scene.hpp"
 
 namespace voxfx {
 
@@ -100,6 +104,165 @@ Mat4d wrapperTransform(const json& j, const std::string& where) {
     return t * r * s;
 }
 
+// ---- volume objects and Boolean shapes (deep shadow maps) ---------------------------------------
+
+struct SceneObjectsParser {
+    Scene& scene;
+    VolumeScene& vs;
+    std::function<std::string(const std::string&)> resolve;
+
+    // A shape expression; returns its node. `volumeBox` is the object's volume box (or empty).
+    int32_t shape(const json& j, const Box3d& volumeBox, const std::string& where, bool& plainMesh,
+                  Mesh* meshOut) {
+        if (!j.is_object() || j.size() == 0) fail(where, ": a shape must be a JSON object");
+        for (const auto& [op, what] : {std::pair<const char*, ShapeOp>{"union", ShapeOp::Union},
+                                       {"intersection", ShapeOp::Intersection},
+                                       {"difference", ShapeOp::Difference}}) {
+            if (!j.contains(op)) continue;
+            allowKeys(j, {op}, where);
+            const json& args = j[op];
+            if (!args.is_array() || args.size() < 2 || (what == ShapeOp::Difference && args.size() != 2))
+                fail(where, ": \"", op, "\" needs ",
+                     what == ShapeOp::Difference ? "two shapes" : "two or more shapes");
+            bool dummy = false;
+            int32_t node = shape(args[0], volumeBox, concat(where, ".", op, "[0]"), dummy, nullptr);
+            for (std::size_t i = 1; i < args.size(); ++i)
+                node = vs.addNode(
+                    what, node,
+                    shape(args[i], volumeBox, concat(where, ".", op, "[", i, "]"), dummy, nullptr));
+            plainMesh = false;
+            return node;
+        }
+        Mesh mesh;
+        if (j.contains("mesh")) {
+            allowKeys(j, {"mesh", "translate", "scale", "rotate"}, where);
+            mesh = loadMesh(resolve(str(j, "mesh", where)));
+            const Mat4d xf = wrapperTransform(j, where);
+            for (Vec3f& p : mesh.positions) p = Vec3f(xf.point(Vec3d(p)));
+            const double det = xf.m[0][0] * (xf.m[1][1] * xf.m[2][2] - xf.m[1][2] * xf.m[2][1]) -
+                               xf.m[0][1] * (xf.m[1][0] * xf.m[2][2] - xf.m[1][2] * xf.m[2][0]) +
+                               xf.m[0][2] * (xf.m[1][0] * xf.m[2][1] - xf.m[1][1] * xf.m[2][0]);
+            if (det < 0)
+                for (std::size_t t = 0; t < mesh.indices.size(); t += 3)
+                    std::swap(mesh.indices[t + 1], mesh.indices[t + 2]);
+        } else if (j.contains("box")) {
+            allowKeys(j, {"box"}, where);
+            const json& b = j["box"];
+            if (!b.is_array() || b.size() != 2) fail(where, ": \"box\" must be [[lo x, y, z], [hi x, y, z]]");
+            const json pair = {{"lo", b[0]}, {"hi", b[1]}};
+            Box3d box;
+            box.lo = vec3(pair, "lo", where + ".box");
+            box.hi = vec3(pair, "hi", where + ".box");
+            if (!(box.lo.x < box.hi.x && box.lo.y < box.hi.y && box.lo.z < box.hi.z))
+                fail(where, ": \"box\" needs lo < hi on every axis");
+            mesh = boxMesh(box);
+        } else if (j.contains("volumeBox")) {
+            allowKeys(j, {"volumeBox"}, where);
+            if (volumeBox.empty()) fail(where, ": \"volumeBox\" outside a volume object");
+            mesh = boxMesh(volumeBox);
+        } else {
+            fail(where, ": unknown shape (expected mesh, box, volumeBox, union, intersection or difference)");
+        }
+        plainMesh = true;
+        if (meshOut) *meshOut = mesh;
+        return vs.addLeaf(std::move(mesh));
+    }
+
+    void object(const json& o, const std::string& whereIn) {
+        allowKeys(o,
+                  {"name", "kind", "opacity", "color", "shape", "castsShadow", "volume", "translate", "scale",
+                   "transfer", "opacityLength"},
+                  whereIn);
+        VolumeSceneObject out;
+        out.name = o.contains("name") ? str(o, "name", whereIn) : "object";
+        const std::string where = concat(whereIn, " '", out.name, "'");
+        const std::string kind = o.contains("kind") ? str(o, "kind", where) : "opaque";
+        out.castsShadow = o.value("castsShadow", true);
+        out.color = Vec3f(vec3Or(o, "color", Vec3d(out.color), where));
+        if (kind == "volume") {
+            out.kind = ObjectKind::Volume;
+            if (!o.contains("volume")) fail(where, ": a volume object needs \"volume\"");
+            const json& v = o["volume"];
+            Volume volume;
+            if (v.is_string()) {
+                volume = loadVolume(resolve(v.get<std::string>()));
+            } else if (v.is_object() && v.contains("smoke")) {
+                const json& sm = v["smoke"];
+                allowKeys(sm, {"dims", "box", "seed", "octaves", "frequency"}, where + ".volume.smoke");
+                SmokeParams p;
+                if (sm.contains("dims")) {
+                    const Vec3d d = vec3(sm, "dims", where);
+                    p.dims = {int64_t(d.x), int64_t(d.y), int64_t(d.z)};
+                }
+                if (sm.contains("box")) {
+                    const json& b = sm["box"];
+                    if (!b.is_array() || b.size() != 2) fail(where, ": smoke \"box\" must be [[lo], [hi]]");
+                    const json pair = {{"lo", b[0]}, {"hi", b[1]}};
+                    p.box.lo = vec3(pair, "lo", where);
+                    p.box.hi = vec3(pair, "hi", where);
+                }
+                p.seed = uint32_t(num(sm, "seed", p.seed, where));
+                p.octaves = int(num(sm, "octaves", p.octaves, where));
+                p.frequency = num(sm, "frequency", p.frequency, where);
+                volume = makeSmoke(p);
+            } else {
+                fail(where, ": \"volume\" must be a file name or {\"smoke\": {...}}");
+            }
+            // Placement: world = file position * scale + translate.
+            const double scale = num(o, "scale", 1, where);
+            if (!(scale > 0) || !std::isfinite(scale)) fail(where, ": \"scale\" must be a positive number");
+            const Vec3d tr = vec3Or(o, "translate", {0, 0, 0}, where);
+            Volume placed(volume.dims(), volume.lo() * scale + tr, volume.spacing() * scale,
+                          volume.sourceType());
+            placed.values() = std::move(volume.values());
+            if (!o.contains("transfer")) fail(where, ": a volume object needs \"transfer\"");
+            const json& t = o["transfer"];
+            out.transfer = t.is_string() ? loadTransferFunction(resolve(t.get<std::string>()))
+                                         : parseTransferFunction(t.dump(), where + ".transfer");
+            const Vec3d sp = placed.spacing();
+            out.opacityLength = num(o, "opacityLength", std::min({sp.x, sp.y, sp.z}), where);
+            const Box3d box = placed.box();
+            vs.volumes.push_back(std::make_shared<const Volume>(std::move(placed)));
+            out.volume = int32_t(vs.volumes.size() - 1);
+            bool plain = false;
+            out.shape = o.contains("shape") ? shape(o["shape"], box, where + ".shape", plain, nullptr)
+                                            : vs.addLeaf(boxMesh(box));
+            vs.addObject(std::move(out));
+            return;
+        }
+        if (kind != "opaque" && kind != "translucent")
+            fail(where, ": unknown kind \"", kind, "\" (allowed: opaque, translucent, volume)");
+        for (const char* k : {"volume", "transfer", "opacityLength", "translate", "scale"})
+            if (o.contains(k)) fail(where, ": \"", k, "\" is only for volume objects");
+        out.kind = kind == "opaque" ? ObjectKind::Opaque : ObjectKind::Translucent;
+        out.opacity = kind == "opaque" ? 1.0f : float(num(o, "opacity", 0.5, where));
+        if (!(out.opacity >= 0 && out.opacity <= 1)) fail(where, ": \"opacity\" must be in [0, 1]");
+        if (!o.contains("shape")) fail(where, ": needs \"shape\"");
+        bool plain = false;
+        Mesh mesh;
+        const std::size_t leaves = vs.leaves.size(), nodes = vs.nodes.size();
+        const int32_t node = shape(o["shape"], Box3d{}, where + ".shape", plain, &mesh);
+        if (plain) {
+            // A single mesh: an ordinary scene mesh, drawn and shadowed like the others.
+            vs.leaves.resize(leaves);
+            vs.nodes.resize(nodes);
+            Material m;
+            m.name = out.name;
+            m.baseColor = out.color;
+            m.opacity = out.opacity;
+            SceneMesh sm;
+            sm.name = out.name;
+            sm.mesh = std::move(mesh);
+            sm.material = scene.addMaterial(m);
+            sm.castsShadow = out.castsShadow;
+            scene.meshes.push_back(std::move(sm));
+            return;
+        }
+        out.shape = node;
+        vs.addObject(std::move(out));
+    }
+};
+
 Scene loadWrapper(const std::string& path) {
     const std::string text = detail::readTextFile(path, "scene file");
     json doc;
@@ -112,8 +275,10 @@ Scene loadWrapper(const std::string& path) {
     };
     Scene scene;
     try {
-        allowKeys(doc, {"gltf", "meshes", "lights", "cameras", "receiversOnly", "render", "environmentMap"},
-                  path);
+        allowKeys(
+            doc,
+            {"gltf", "meshes", "lights", "cameras", "receiversOnly", "render", "environmentMap", "objects"},
+            path);
         if (doc.contains("gltf")) scene = detail::loadGltfScene(resolve(str(doc, "gltf", path)));
         // Wrapper meshes without a material get a default one, never the glTF's first material
         // (which may be a leaf or glass: a partial occluder).
@@ -234,6 +399,16 @@ Scene loadWrapper(const std::string& path) {
         }
         if (doc.contains("environmentMap"))
             scene.settings.environmentMap = resolve(str(doc, "environmentMap", path));
+        if (doc.contains("objects")) {
+            const json& objects = doc["objects"];
+            if (!objects.is_array()) fail(path, ": \"objects\" must be an array");
+            auto vs = std::make_shared<VolumeScene>();
+            SceneObjectsParser parser{scene, *vs, resolve};
+            for (std::size_t i = 0; i < objects.size(); ++i)
+                parser.object(objects[i], concat(path, ": objects[", i, "]"));
+            vs->validate();
+            if (!vs->objects.empty()) scene.volumeScene = std::move(vs);
+        }
     } catch (const json::exception& e) { fail(path, ": unexpected content: ", e.what()); }
     scene.source = path;
     return scene;

@@ -8,6 +8,7 @@
 #include <map>
 
 #include "core/enum_names.hpp"
+#include "voxfx/deep_shadow.hpp"
 #include "voxfx/shadow.hpp"
 #include "voxfx/shadow_volume.hpp"
 
@@ -67,6 +68,8 @@ const char* toString(ShadowKind k) {
         return "volumes";
     case ShadowKind::Exact:
         return "exact";
+    case ShadowKind::Deep:
+        return "deep";
     }
     return "?";
 }
@@ -77,7 +80,8 @@ ShadowKind parseShadowKind(const std::string& name) {
                                                               {"transmittance", ShadowKind::Transmittance},
                                                               {"absorption", ShadowKind::Absorption},
                                                               {"volumes", ShadowKind::Volumes},
-                                                              {"exact", ShadowKind::Exact}};
+                                                              {"exact", ShadowKind::Exact},
+                                                              {"deep", ShadowKind::Deep}};
     return detail::parseEnum<ShadowKind>(name, "shadow kind", kNames);
 }
 
@@ -101,7 +105,8 @@ LightShadow LightShadow::build(const Scene& scene, const Light& light, const Sha
     ShadowBuildTimings local;
     ShadowBuildTimings& t = timings ? *timings : local;
     const CasterSets casters = collectCasters(scene);
-    if (casters.all.indices.empty()) return out; // nothing casts: visibility 1
+    // Nothing casts: visibility 1 (deep shadows also see the scene's volume objects).
+    if (casters.all.indices.empty() && !(options.kind == ShadowKind::Deep && scene.volumeScene)) return out;
 
     auto buildMaps = [&](const Mesh& mesh) {
         const auto t0 = std::chrono::steady_clock::now();
@@ -119,6 +124,18 @@ LightShadow LightShadow::build(const Scene& scene, const Light& light, const Sha
     case ShadowKind::Map:
         buildMaps(casters.all);
         break;
+    case ShadowKind::Deep: {
+        const auto t0 = std::chrono::steady_clock::now();
+        DeepShadowOptions d;
+        d.resolution = options.dsmResolution;
+        d.epsilon = options.dsmEpsilon;
+        d.storage = options.dsmStorage;
+        d.clusters = options.dsmClusters;
+        out.deep_ =
+            std::make_shared<const DeepShadow>(DeepShadow::build(volumeSceneOf(scene), light, d, progress));
+        t.mapMs += msSince(t0);
+        break;
+    }
     case ShadowKind::Transmittance: {
         if (!casters.opaque.indices.empty()) buildMaps(casters.opaque);
         if (casters.partial.empty()) break;
@@ -201,6 +218,10 @@ Vec3f LightShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     if (volumes_) {
         const float lit = volumes_->visibility(p);
         return {lit, lit, lit};
+    }
+    if (deep_) {
+        const float d = deep_->visibility(p, n, options_.normalOffset, options_.depthBias);
+        return {d, d, d};
     }
     Vec3d q;
     if (!maps_.empty()) {

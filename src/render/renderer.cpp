@@ -6,6 +6,8 @@
 
 #include "render/glass_pass.hpp"
 #include "render/shading.hpp"
+#include "render/volume_pass.hpp"
+#include "voxfx/deep_shadow.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/shadow_volume.hpp"
 
@@ -93,6 +95,16 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
             t.lightVoxelizeMs += st.voxelizeMs;
             t.shadowVolumeMs += st.volumeMs;
             result.shadowVolumeFragments += st.volumeFragments;
+            if (const DeepShadow* d = shadows.back().deepShadow()) {
+                const DsmStats ds = d->stats();
+                DsmStats& sum = result.deepShadowStats;
+                sum.texels += ds.texels;
+                sum.nodes += ds.nodes;
+                sum.maxNodes = std::max(sum.maxNodes, ds.maxNodes);
+                sum.bytes += ds.bytes;
+                sum.overflowTexels += ds.overflowTexels;
+                sum.maxEpsilon = std::max(sum.maxEpsilon, ds.maxEpsilon);
+            }
         }
 
         tp = Clock::now();
@@ -115,6 +127,9 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
         std::vector<uint8_t> glassSamples;
         if (options.glass.kind != GlassKind::None)
             detail::shadeGlass(gbuffer, geometry, lit, shadows, litOptions, *env, shaded, glassSamples, t);
+        tp = Clock::now();
+        result.volumeSamples = detail::compositeVolumes(gbuffer, lit, shadows, litOptions, shaded, nullptr);
+        t.volumeMs = msSince(tp);
 
         // Box filter k x k and flip: frame rows run up, image rows down.
         tp = Clock::now();

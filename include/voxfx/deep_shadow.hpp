@@ -1,0 +1,101 @@
+// voxfx — deep shadow maps of mixed polygon and volume scenes (Bornik et al. 2012 §4): per light
+// view (LightView: spot one perspective frame, point six cube faces, directional one orthographic
+// frame) the scene's boundary triangles are rasterized into fragment lists (FragmentLists); every
+// texel walks its list front to back (SegmentWalker): crossings of opaque and translucent objects
+// are steps (V *= 1 - α, opaque α = 1), segments inside volume objects are sampled at steps of
+// `stepVoxels` smallest voxel spacings (σ = -ln(1 - α(value)) / opacityLength, V *= exp(-σ·dl)),
+// empty space between fragments is skipped and the walk stops when V falls below `termination`
+// (V is then set to 0). The visibility function is ε-compressed on the fly into fixed or chunked
+// storage (voxfx/dsm.hpp). Depths are the light frame's depths (perspective: view distance along
+// the light's axis; orthographic: slices).
+//
+// Lookup: p (moved along its normal by normalOffset texel footprints) is projected into the view
+// that covers it; the visibility at its depth (minus depthBias texel footprints) is interpolated
+// bilinearly between the four texels around it. Points outside every view are lit.
+//
+// Thread-safety: build uses worker threads; a built DeepShadow is read-only (lookups from any number
+// of threads).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "voxfx/dsm.hpp"
+#include "voxfx/scene.hpp"
+#include "voxfx/shadow.hpp"
+#include "voxfx/volume_scene.hpp"
+
+namespace voxfx {
+
+struct DeepShadowOptions {
+    int64_t resolution = 512; ///< texels along the longer side of each view
+    double epsilon = 0.05;    ///< compression tolerance (0: every node kept)
+    DsmStorage storage = DsmStorage::Chunked;
+    int32_t fixedNodes = 0;    ///< fixed storage: nodes per texel, 0 = sized by the worst texel
+    double stepVoxels = 1.0;   ///< volume sample step, in smallest voxel spacings
+    double termination = 1e-4; ///< early ray termination: V below this becomes 0
+    /// Clustering (Bornik et al. §4.4): at most this many maps per light view, each fitted to a
+    /// cluster of objects (0 or 1: one map fitted to all casters). Spot and directional lights.
+    int clusters = 0;
+    /// d0: objects whose light-space projected boxes differ by at most this (fraction of the
+    /// light view's side) share a cluster.
+    double clusterThreshold = 0.2;
+};
+
+/// The paper's clustering heuristic on boxes (any 2D extent, e.g. light-space projected boxes):
+/// d(A, B) = the largest difference of their min and max corners; pairs are visited by increasing
+/// d, an object joins the cluster whose members are all within d0 of it (the one with the smallest
+/// largest distance), or opens a new one while fewer than maxClusters exist, or else joins the
+/// cluster whose largest distance to it is smallest. Returns the cluster of each box (0-based,
+/// numbered in order of opening). Deterministic.
+struct ProjectedBox {
+    double lo[2], hi[2];
+};
+std::vector<int> clusterBoxes(const std::vector<ProjectedBox>& boxes, int maxClusters, double d0);
+
+struct DeepShadowTimings {
+    double fragmentsMs = 0; ///< rasterizing the fragment lists
+    double buildMs = 0;     ///< walking the texels, compressing, storing
+};
+
+class DeepShadow {
+public:
+    DeepShadow() = default;
+    /// One deep shadow map per view of `light` fitted to the casters' bounds (all objects with
+    /// castsShadow). Throws voxfx::Error for an invalid scene or options, or when progress cancels.
+    static DeepShadow build(const VolumeScene& scene, const Light& light, const DeepShadowOptions& options,
+                            Progress* progress = nullptr);
+    /// The same with given views (a fitted frustum per cluster, tests).
+    static DeepShadow build(const VolumeScene& scene, std::vector<LightView> views,
+                            const DeepShadowOptions& options, Progress* progress = nullptr);
+
+    /// Fraction of the light reaching world point p (see the file comment); `n` the unit normal
+    /// turned towards the light (zero: no offset).
+    float visibility(const Vec3d& p, const Vec3d& n = {0, 0, 0}, double normalOffset = 0,
+                     double depthBias = 0) const;
+    const std::vector<LightView>& views() const { return views_; }
+    const std::vector<DeepShadowMap>& maps() const { return maps_; }
+    /// Clusters: views [groupBegin[g], groupBegin[g + 1]) hold the objects of cluster g; the
+    /// visibility is the product over clusters. One group without clustering.
+    const std::vector<std::size_t>& groupBegin() const { return groupBegin_; }
+    /// Node and memory statistics summed over the views (maxNodes: the largest texel of any).
+    DsmStats stats() const;
+    const DeepShadowTimings& timings() const { return timings_; }
+
+private:
+    std::vector<LightView> views_;
+    std::vector<DeepShadowMap> maps_;
+    std::vector<std::size_t> groupBegin_;
+    DeepShadowTimings timings_;
+};
+
+/// The exact (uncompressed, epsilon ignored) visibility function along texel (x, y) of `view`, as
+/// the deep shadow map builds it: for tests and error measurements.
+std::vector<DsmNode> deepShadowTexel(const VolumeScene& scene, const LightView& view, int64_t x, int64_t y,
+                                     const DeepShadowOptions& options);
+
+/// The renderer's scene as a volume scene: every mesh a leaf and an object (opaque, or translucent
+/// with opacity 1 - luminance(crossingTransmittance)), then the objects of scene.volumeScene.
+VolumeScene volumeSceneOf(const Scene& scene);
+
+} // namespace voxfx

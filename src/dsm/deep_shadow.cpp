@@ -1,0 +1,381 @@
+// voxfx — deep shadow maps from lights over fragment lists (voxfx/deep_shadow.hpp).
+#include "voxfx/deep_shadow.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <tuple>
+
+#include "voxfx/error.hpp"
+#include "voxfx/fragment_list.hpp"
+
+namespace voxfx {
+
+namespace {
+
+double deepShadowMsSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// World point of a frame-space point of `view` (frame space = R * world + t for rotated views).
+Vec3d deepShadowWorldOf(const LightView& view, const Vec3d& q) {
+    if (!view.rotated) return q;
+    const auto& m = view.frameSpaceFromWorld.m;
+    const Vec3d d{q.x - m[0][3], q.y - m[1][3], q.z - m[2][3]};
+    return {m[0][0] * d.x + m[1][0] * d.y + m[2][0] * d.z, m[0][1] * d.x + m[1][1] * d.y + m[2][1] * d.z,
+            m[0][2] * d.x + m[1][2] * d.y + m[2][2] * d.z};
+}
+
+// What every texel of one view shares.
+struct DeepShadowView {
+    const VolumeScene* scene;
+    const LightView* view;
+    const FlatLeaves* leaves;
+    const FragmentLists* lists;
+    DeepShadowOptions options;
+    double step; // world sample step inside volumes
+
+    // Feeds texel (x, y) into the builder.
+    void texel(int64_t x, int64_t y, VisibilityBuilder& b) const {
+        const std::span<const ListFragment> frags = lists->column(x, y);
+        if (frags.empty()) return;
+        // The texel's ray is affine in the frame depth: world(z) = origin + z * perDepth.
+        const Frame& f = view->frame;
+        const Vec3d g1 = deepShadowWorldOf(*view, f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}));
+        const Vec3d g2 = deepShadowWorldOf(*view, f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 2.0}));
+        const Vec3d perDepth = g2 - g1, origin = g1 - perDepth;
+        const double lengthPerDepth = length(perDepth);
+        const double term = options.termination;
+        SegmentWalker walker(*scene, leaves->triangleLeaf, true);
+        walker.walk(
+            frags,
+            [&](double z, std::size_t o, bool) {
+                const VolumeSceneObject& obj = scene->objects[o];
+                b.surface(z, obj.kind == ObjectKind::Opaque ? 1.0 : double(obj.opacity));
+                if (b.visibility() < term) {
+                    if (b.visibility() > 0) b.ramp(z, 0.0);
+                    return false;
+                }
+                return true;
+            },
+            [&](double z0, double z1, std::span<const uint8_t> inside) {
+                const double worldLength = (z1 - z0) * lengthPerDepth;
+                const int64_t n = std::max<int64_t>(1, int64_t(std::ceil(worldLength / step)));
+                const double dz = (z1 - z0) / double(n), dl = worldLength / double(n);
+                b.volumeBegin(z0);
+                for (int64_t k = 0; k < n; ++k) {
+                    const Vec3d p = origin + perDepth * (z0 + (double(k) + 0.5) * dz);
+                    double sigma = 0;
+                    for (std::size_t o = 0; o < inside.size(); ++o) {
+                        const VolumeSceneObject& obj = scene->objects[o];
+                        if (!inside[o] || obj.kind != ObjectKind::Volume) continue;
+                        const float value = scene->volumes[std::size_t(obj.volume)]->sample(p);
+                        const double a = std::min(obj.transfer.opacity(double(value)), 1.0 - 1e-7);
+                        sigma += -std::log1p(-a) / obj.opacityLength;
+                    }
+                    const double zk = k + 1 == n ? z1 : z0 + double(k + 1) * dz;
+                    b.volumeSample(zk, sigma, dl);
+                    if (b.visibility() < term) {
+                        b.ramp(zk, 0.0);
+                        return false;
+                    }
+                }
+                return true;
+            });
+    }
+};
+
+double deepShadowStep(const VolumeScene& scene, const DeepShadowOptions& options) {
+    double spacing = std::numeric_limits<double>::infinity();
+    for (const auto& v : scene.volumes)
+        if (v) spacing = std::min({spacing, v->spacing().x, v->spacing().y, v->spacing().z});
+    return std::isfinite(spacing) ? spacing * options.stepVoxels : 1.0;
+}
+
+void checkDeepShadowOptions(const DeepShadowOptions& o) {
+    if (o.resolution <= 0 || o.resolution > 16384)
+        fail("deep shadow map: resolution ", o.resolution, " is not in 1..16384");
+    if (!(o.stepVoxels > 0) || !std::isfinite(o.stepVoxels))
+        fail("deep shadow map: the volume step must be positive, got ", o.stepVoxels, " voxels");
+    if (!(o.termination >= 0 && o.termination < 1))
+        fail("deep shadow map: early termination threshold ", o.termination, " is not in [0, 1)");
+}
+
+} // namespace
+
+std::vector<int> clusterBoxes(const std::vector<ProjectedBox>& boxes, int maxClusters, double d0) {
+    const std::size_t n = boxes.size();
+    std::vector<int> cluster(n, -1);
+    if (n == 0) return cluster;
+    maxClusters = std::max(1, maxClusters);
+    auto dist = [&](std::size_t a, std::size_t b) {
+        double d = 0;
+        for (int k = 0; k < 2; ++k)
+            d = std::max(
+                {d, std::abs(boxes[a].lo[k] - boxes[b].lo[k]), std::abs(boxes[a].hi[k] - boxes[b].hi[k])});
+        return d;
+    };
+    // Pairs by increasing distance (ties by index): objects are placed in the order they appear.
+    std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
+    for (std::size_t a = 0; a < n; ++a)
+        for (std::size_t b = a + 1; b < n; ++b) pairs.emplace_back(dist(a, b), a, b);
+    std::sort(pairs.begin(), pairs.end());
+    std::vector<std::size_t> order;
+    for (const auto& [d, a, b] : pairs)
+        for (const std::size_t o : {a, b})
+            if (std::find(order.begin(), order.end(), o) == order.end()) order.push_back(o);
+    if (order.empty()) order.push_back(0);
+    std::vector<std::vector<std::size_t>> members;
+    for (const std::size_t o : order) {
+        int best = -1, nearest = -1;
+        double bestD = std::numeric_limits<double>::infinity(), nearestD = bestD;
+        for (std::size_t c = 0; c < members.size(); ++c) {
+            double worst = 0;
+            for (const std::size_t m : members[c]) worst = std::max(worst, dist(o, m));
+            if (worst <= d0 && worst < bestD) {
+                best = int(c);
+                bestD = worst;
+            }
+            if (worst < nearestD) {
+                nearest = int(c);
+                nearestD = worst;
+            }
+        }
+        if (best < 0 && int(members.size()) < maxClusters) {
+            members.emplace_back();
+            best = int(members.size() - 1);
+        }
+        if (best < 0) best = nearest;
+        members[std::size_t(best)].push_back(o);
+        cluster[o] = best;
+    }
+    return cluster;
+}
+
+namespace {
+
+// Light-space projected box of the leaves under `node`, in fractions of the view's sides.
+void deepShadowLeavesOf(const VolumeScene& s, int32_t node, std::vector<int32_t>& out) {
+    const ShapeNode& n = s.nodes[std::size_t(node)];
+    if (n.op == ShapeOp::Leaf) {
+        out.push_back(n.leaf);
+        return;
+    }
+    deepShadowLeavesOf(s, n.a, out);
+    deepShadowLeavesOf(s, n.b, out);
+}
+
+} // namespace
+
+DeepShadow DeepShadow::build(const VolumeScene& scene, const Light& light, const DeepShadowOptions& options,
+                             Progress* progress) {
+    checkDeepShadowOptions(options);
+    scene.validate();
+    std::vector<LightView> all = makeLightViews(light, scene.bounds(true), options.resolution, 1);
+    if (options.clusters <= 1 || light.type == LightType::Point) return build(scene, all, options, progress);
+    // Project every casting object's bounds into the light view fitted to all casters.
+    const LightView& base = all[0];
+    std::vector<std::size_t> casters;
+    std::vector<ProjectedBox> boxes;
+    std::vector<Box3d> worldBoxes;
+    for (std::size_t o = 0; o < scene.objects.size(); ++o) {
+        if (!scene.objects[o].castsShadow) continue;
+        std::vector<int32_t> leaves;
+        deepShadowLeavesOf(scene, scene.objects[o].shape, leaves);
+        Box3d wb;
+        for (const int32_t l : leaves) wb.extend(computeBounds(scene.leaves[std::size_t(l)].view()));
+        ProjectedBox pb{{1e300, 1e300}, {-1e300, -1e300}};
+        for (int k = 0; k < 8; ++k) {
+            const Vec3d c{(k & 1) ? wb.hi.x : wb.lo.x, (k & 2) ? wb.hi.y : wb.lo.y,
+                          (k & 4) ? wb.hi.z : wb.lo.z};
+            const Vec3d g = base.covers(c) ? base.gridFromWorld(c) : Vec3d{0, 0, 0};
+            const double u = g.x / double(base.frame.width()), v = g.y / double(base.frame.height());
+            pb.lo[0] = std::min(pb.lo[0], u);
+            pb.hi[0] = std::max(pb.hi[0], u);
+            pb.lo[1] = std::min(pb.lo[1], v);
+            pb.hi[1] = std::max(pb.hi[1], v);
+        }
+        casters.push_back(o);
+        boxes.push_back(pb);
+        worldBoxes.push_back(wb);
+    }
+    const std::vector<int> cluster = clusterBoxes(boxes, options.clusters, options.clusterThreshold);
+    const int count = cluster.empty() ? 0 : *std::max_element(cluster.begin(), cluster.end()) + 1;
+    DeepShadow out;
+    for (int c = 0; c < count; ++c) {
+        VolumeScene part = scene;
+        Box3d bounds;
+        for (VolumeSceneObject& o : part.objects) o.castsShadow = false;
+        for (std::size_t i = 0; i < casters.size(); ++i)
+            if (cluster[i] == c) {
+                part.objects[casters[i]].castsShadow = true;
+                bounds.extend(worldBoxes[i]);
+            }
+        DeepShadow d = build(part, makeLightViews(light, bounds, options.resolution, 1), options, progress);
+        out.groupBegin_.push_back(out.views_.size());
+        for (std::size_t i = 0; i < d.views_.size(); ++i) {
+            out.views_.push_back(std::move(d.views_[i]));
+            out.maps_.push_back(std::move(d.maps_[i]));
+        }
+        out.timings_.fragmentsMs += d.timings_.fragmentsMs;
+        out.timings_.buildMs += d.timings_.buildMs;
+    }
+    out.groupBegin_.push_back(out.views_.size());
+    return out;
+}
+
+DeepShadow DeepShadow::build(const VolumeScene& scene, std::vector<LightView> views,
+                             const DeepShadowOptions& options, Progress* progress) {
+    checkDeepShadowOptions(options);
+    scene.validate();
+    DeepShadow out;
+    out.views_ = std::move(views);
+    out.groupBegin_ = {0, out.views_.size()};
+    const FlatLeaves leaves = flattenLeaves(scene, true);
+    const double step = deepShadowStep(scene, options);
+    for (const LightView& v : out.views_) {
+        auto t0 = std::chrono::steady_clock::now();
+        Mesh local;
+        if (v.rotated) local = toFrameSpace(leaves.mesh.view(), v);
+        const FragmentLists lists =
+            FragmentLists::build(v.frame, v.rotated ? local.view() : leaves.mesh.view(), progress);
+        out.timings_.fragmentsMs += deepShadowMsSince(t0);
+        t0 = std::chrono::steady_clock::now();
+        const DeepShadowView ctx{&scene, &v, &leaves, &lists, options, step};
+        DsmBuildOptions bo;
+        bo.epsilon = options.epsilon;
+        bo.fixedNodes = options.fixedNodes;
+        out.maps_.push_back(DeepShadowMap::build(
+            v.frame.width(), v.frame.height(),
+            [&ctx](int64_t x, int64_t y, VisibilityBuilder& b) { ctx.texel(x, y, b); }, options.storage, bo));
+        out.timings_.buildMs += deepShadowMsSince(t0);
+    }
+    return out;
+}
+
+namespace {
+
+// The view among `count` that covers p (viewIndexFor on a sub-range): one frame, or the cube face
+// whose axis is closest to the direction of p.
+int deepShadowViewIndex(const LightView* views, std::size_t count, const Vec3d& p) {
+    if (count == 1) return views[0].covers(p) ? 0 : -1;
+    int best = -1;
+    double bestDot = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+        const double dd = dot(p - views[i].frame.eye(), views[i].frame.forward());
+        if (dd > bestDot) {
+            bestDot = dd;
+            best = int(i);
+        }
+    }
+    return best;
+}
+
+// Lookup among views [b, e) (one light's views: one frame, or six cube faces).
+float deepShadowLookup(const std::vector<LightView>& views, const std::vector<DeepShadowMap>& maps,
+                       std::size_t b, std::size_t e, const Vec3d& p, const Vec3d& n, double normalOffset,
+                       double depthBias) {
+    const LightView* group = views.data() + b;
+    const std::size_t count = e - b;
+    int i = deepShadowViewIndex(group, count, p);
+    if (i < 0) return 1.0f;
+    const double texel = group[i].columnWorldSize(p);
+    const Vec3d q = p + n * (normalOffset * texel);
+    if (count > 1) {
+        const int j = deepShadowViewIndex(group, count, q);
+        if (j >= 0) i = j;
+    }
+    const LightView& v = group[i];
+    if (!v.covers(q)) return 1.0f;
+    const Vec3d g = v.gridFromWorld(q);
+    const double z = g.z - depthBias * texel / v.worldPerDepthUnit();
+    return maps[b + std::size_t(i)].view().visibilityBilinear(float(g.x), float(g.y), float(z));
+}
+
+} // namespace
+
+float DeepShadow::visibility(const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias) const {
+    float v = 1.0f;
+    for (std::size_t g = 0; g + 1 < groupBegin_.size(); ++g)
+        v *= deepShadowLookup(views_, maps_, groupBegin_[g], groupBegin_[g + 1], p, n, normalOffset,
+                              depthBias);
+    return v;
+}
+
+DsmStats DeepShadow::stats() const {
+    DsmStats s;
+    for (const DeepShadowMap& m : maps_) {
+        const DsmStats& t = m.stats();
+        s.texels += t.texels;
+        s.nodes += t.nodes;
+        s.maxNodes = std::max(s.maxNodes, t.maxNodes);
+        s.bytes += t.bytes;
+        s.overflowTexels += t.overflowTexels;
+        s.maxEpsilon = std::max(s.maxEpsilon, t.maxEpsilon);
+    }
+    return s;
+}
+
+std::vector<DsmNode> deepShadowTexel(const VolumeScene& scene, const LightView& view, int64_t x, int64_t y,
+                                     const DeepShadowOptions& options) {
+    checkDeepShadowOptions(options);
+    scene.validate();
+    const FlatLeaves leaves = flattenLeaves(scene, true);
+    // One column only: a frame of the same camera would change the rasterization; rasterize the
+    // whole view (tests use small views).
+    Mesh local;
+    if (view.rotated) local = toFrameSpace(leaves.mesh.view(), view);
+    const FragmentLists lists =
+        FragmentLists::build(view.frame, view.rotated ? local.view() : leaves.mesh.view());
+    const DeepShadowView ctx{&scene, &view, &leaves, &lists, options, deepShadowStep(scene, options)};
+    std::vector<DsmNode> out;
+    VisibilityBuilder b(-1.0, out);
+    ctx.texel(x, y, b);
+    b.finish();
+    return out;
+}
+
+VolumeScene volumeSceneOf(const Scene& scene) {
+    VolumeScene v;
+    for (const SceneMesh& m : scene.meshes) {
+        const Material& mat = scene.materials[m.material];
+        VolumeSceneObject o;
+        o.name = m.name;
+        o.shape = v.addLeaf(m.mesh);
+        o.castsShadow = m.castsShadow;
+        o.color = mat.baseColor;
+        if (mat.isOpaque()) {
+            o.kind = ObjectKind::Opaque;
+        } else {
+            const Vec3f t = mat.crossingTransmittance();
+            o.kind = ObjectKind::Translucent;
+            o.opacity = std::clamp(1.0f - (0.2126f * t.x + 0.7152f * t.y + 0.0722f * t.z), 0.0f, 1.0f);
+        }
+        v.addObject(std::move(o));
+    }
+    if (scene.volumeScene) {
+        const VolumeScene& s = *scene.volumeScene;
+        const auto leafBase = int32_t(v.leaves.size()), nodeBase = int32_t(v.nodes.size()),
+                   volumeBase = int32_t(v.volumes.size());
+        v.leaves.insert(v.leaves.end(), s.leaves.begin(), s.leaves.end());
+        for (ShapeNode n : s.nodes) {
+            if (n.op == ShapeOp::Leaf) {
+                n.leaf += leafBase;
+            } else {
+                n.a += nodeBase;
+                n.b += nodeBase;
+            }
+            v.nodes.push_back(n);
+        }
+        v.volumes.insert(v.volumes.end(), s.volumes.begin(), s.volumes.end());
+        for (VolumeSceneObject o : s.objects) {
+            o.shape += nodeBase;
+            if (o.volume >= 0) o.volume += volumeBase;
+            v.objects.push_back(std::move(o));
+        }
+    }
+    return v;
+}
+
+} // namespace voxfx

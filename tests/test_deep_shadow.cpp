@@ -1,0 +1,766 @@
+// Tests of fragment lists, the Boolean volume scene and deep shadow maps from lights
+// (voxfx/fragment_list.hpp, voxfx/volume_scene.hpp, voxfx/deep_shadow.hpp). Oracles: brute-force
+// ray-triangle crossings, CGAL::Side_of_triangle_mesh, the standard shadow map, and a dense ray
+// march from the light written here (dsmrRef*) that shares no code with the deep shadow map.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "cgal_oracle.hpp"
+#include "test_util.hpp"
+#include "voxfx/deep_shadow.hpp"
+#include "voxfx/fragment_list.hpp"
+#include "voxfx/mesh_io.hpp"
+#include "voxfx/render.hpp"
+#include "voxfx/smoke.hpp"
+#include "voxfx/volume_scene.hpp"
+
+namespace voxfx {
+namespace {
+
+// ---- independent helpers --------------------------------------------------------------------
+
+// Ray-triangle crossing (Möller-Trumbore, double): the ray parameter and the smallest barycentric
+// coordinate (how far from an edge the hit is); false when the ray misses or is parallel.
+bool dsmrRayTriangle(const Vec3d& o, const Vec3d& d, const Vec3d& a, const Vec3d& b, const Vec3d& c,
+                     double& t, double& edge) {
+    const Vec3d e1 = b - a, e2 = c - a, p = cross(d, e2);
+    const double det = dot(e1, p);
+    if (std::abs(det) < 1e-300) return false;
+    const Vec3d s = o - a;
+    const double u = dot(s, p) / det;
+    const Vec3d q = cross(s, e1);
+    const double v = dot(d, q) / det;
+    t = dot(e2, q) / det;
+    edge = std::min({u, v, 1 - u - v});
+    return edge >= -1e-12;
+}
+
+struct DsmrHit {
+    double t;
+    int leaf;
+};
+
+// Crossings of the ray o + t d (t in (0, tMax)) with every leaf of the scene; `nearEdge` is set
+// when a hit lies within 1e-7 (barycentric) of an edge, where the rasterizer's tie rule decides.
+std::vector<DsmrHit> dsmrCrossings(const VolumeScene& s, const Vec3d& o, const Vec3d& d, double tMax,
+                                   bool& nearEdge) {
+    std::vector<DsmrHit> hits;
+    for (std::size_t l = 0; l < s.leaves.size(); ++l) {
+        const MeshView m = s.leaves[l].view();
+        for (std::size_t tr = 0; tr < m.triangleCount; ++tr) {
+            double t = 0, edge = 0;
+            if (!dsmrRayTriangle(o, d, m.vertex(m.index(tr, 0)), m.vertex(m.index(tr, 1)),
+                                 m.vertex(m.index(tr, 2)), t, edge))
+                continue;
+            if (edge < 1e-7) nearEdge = true;
+            if (t > 0 && t < tMax) hits.push_back({t, int(l)});
+        }
+    }
+    std::sort(hits.begin(), hits.end(), [](const DsmrHit& a, const DsmrHit& b) { return a.t < b.t; });
+    return hits;
+}
+
+// The Boolean shape of node `n`, evaluated on leaf flags (written apart from VolumeScene::evalShape).
+bool dsmrShape(const VolumeScene& s, int32_t n, const std::vector<int>& inside) {
+    const ShapeNode& node = s.nodes[std::size_t(n)];
+    if (node.op == ShapeOp::Leaf) return inside[std::size_t(node.leaf)] != 0;
+    const bool a = dsmrShape(s, node.a, inside), b = dsmrShape(s, node.b, inside);
+    if (node.op == ShapeOp::Union) return a || b;
+    if (node.op == ShapeOp::Intersection) return a && b;
+    return a && !b;
+}
+
+// Reference transmittance from `from` to `to` through the scene's casting objects: exact crossings
+// (parity per leaf), surfaces where an object's flag flips, volumes sampled every `step` world
+// units (midpoints). Returns -1 when a crossing lies on a triangle edge (ambiguous ray).
+double dsmrReferenceTransmittance(const VolumeScene& s, const Vec3d& from, const Vec3d& to, double step) {
+    const Vec3d d = to - from;
+    bool nearEdge = false;
+    const std::vector<DsmrHit> hits = dsmrCrossings(s, from, d, 1.0, nearEdge);
+    if (nearEdge) return -1;
+    const double len = length(d);
+    std::vector<int> inside(s.leaves.size(), 0);
+    std::vector<int> objIn(s.objects.size(), 0);
+    double v = 1;
+    double t = 0;
+    std::size_t h = 0;
+    while (true) {
+        const double tNext = h < hits.size() ? hits[h].t : 1.0;
+        // Volume objects inside over (t, tNext).
+        bool anyVolume = false;
+        for (std::size_t o = 0; o < s.objects.size(); ++o)
+            anyVolume |= objIn[o] && s.objects[o].kind == ObjectKind::Volume && s.objects[o].castsShadow;
+        if (anyVolume && tNext > t) {
+            const double segLen = (tNext - t) * len;
+            const int64_t n = std::max<int64_t>(1, int64_t(std::ceil(segLen / step)));
+            for (int64_t k = 0; k < n; ++k) {
+                const Vec3d p = from + d * (t + (tNext - t) * (double(k) + 0.5) / double(n));
+                double sigma = 0;
+                for (std::size_t o = 0; o < s.objects.size(); ++o) {
+                    const VolumeSceneObject& obj = s.objects[o];
+                    if (!objIn[o] || obj.kind != ObjectKind::Volume || !obj.castsShadow) continue;
+                    const double a = std::min(
+                        obj.transfer.opacity(s.volumes[std::size_t(obj.volume)]->sample(p)), 1.0 - 1e-7);
+                    sigma += -std::log(1 - a) / obj.opacityLength;
+                }
+                v *= std::exp(-sigma * segLen / double(n));
+            }
+        }
+        if (h >= hits.size()) break;
+        // Apply every crossing at this parameter (coincident hits flip together).
+        const double tc = hits[h].t;
+        for (; h < hits.size() && hits[h].t == tc; ++h) inside[std::size_t(hits[h].leaf)] ^= 1;
+        for (std::size_t o = 0; o < s.objects.size(); ++o) {
+            const int now = dsmrShape(s, s.objects[o].shape, inside) ? 1 : 0;
+            const VolumeSceneObject& obj = s.objects[o];
+            if (now != objIn[o] && obj.castsShadow && obj.kind != ObjectKind::Volume)
+                v *= obj.kind == ObjectKind::Opaque ? 0.0 : 1.0 - double(obj.opacity);
+            objIn[o] = now;
+        }
+        t = tc;
+    }
+    return v;
+}
+
+Mesh dsmrLoadScaled(const std::string& name, const Box3d& into) {
+    Mesh m = loadMesh(test::dataPath("meshes/" + name + ".off"));
+    const Box3d b = computeBounds(m.view());
+    const double scale = std::min(
+        {into.extent().x / b.extent().x, into.extent().y / b.extent().y, into.extent().z / b.extent().z});
+    for (Vec3f& p : m.positions) p = Vec3f((Vec3d(p) - b.center()) * scale + into.center());
+    return m;
+}
+
+TransferFunction dsmrSmokeTransfer() {
+    return TransferFunction({{0, {1, 1, 1}}, {1, {1, 1, 1}}}, {{0, 0}, {0.1, 0}, {1, 0.6}});
+}
+
+// A real mixed scene: the elephant opaque, the knot translucent, a smoke volume bounded by its box
+// minus a sphere (a Boolean volume object).
+VolumeScene dsmrMixedScene() {
+    VolumeScene s;
+    VolumeSceneObject elephant;
+    elephant.name = "elephant";
+    elephant.shape = s.addLeaf(dsmrLoadScaled("elephant", {{-1.0, -1.0, -1.2}, {0.0, 0.0, -0.4}}));
+    s.addObject(elephant);
+    VolumeSceneObject knot;
+    knot.name = "knot";
+    knot.kind = ObjectKind::Translucent;
+    knot.opacity = 0.4f;
+    knot.shape = s.addLeaf(dsmrLoadScaled("knot1", {{0.1, -0.9, -1.0}, {0.9, -0.1, -0.2}}));
+    s.addObject(knot);
+    SmokeParams sp;
+    sp.dims = {24, 24, 24};
+    sp.box = {{-0.8, -0.6, 0.0}, {0.8, 1.0, 1.0}};
+    auto smoke = std::make_shared<Volume>(makeSmoke(sp));
+    VolumeSceneObject cloud;
+    cloud.name = "smoke";
+    cloud.kind = ObjectKind::Volume;
+    const int32_t box = s.addLeaf(boxMesh(smoke->box()));
+    const int32_t ball = s.addLeaf(test::makeUvSphere({0.3, 0.5, 0.6}, 0.35, 12, 16));
+    cloud.shape = s.addNode(ShapeOp::Difference, box, ball);
+    s.volumes.push_back(smoke);
+    cloud.volume = 0;
+    cloud.transfer = dsmrSmokeTransfer();
+    cloud.opacityLength = 0.1;
+    s.addObject(cloud);
+    return s;
+}
+
+Light dsmrSpot() {
+    Light l;
+    l.type = LightType::Spot;
+    l.position = {0.3, 0.2, 4.0};
+    l.direction = normalize(Vec3d{-0.1, -0.1, -1});
+    l.outerConeAngle = 0.7;
+    return l;
+}
+
+// ---- fragment lists ---------------------------------------------------------------------------
+
+TEST(FragmentListTest, KeepsEveryCrossingOfEachColumnSortedAndAlternatingOnAClosedMesh) {
+    VOXFX_REQUIRE_DATA("meshes/knot1.off");
+    const Mesh mesh = dsmrLoadScaled("knot1", {{-1, -1, -1}, {1, 1, 1}});
+    const Frame frame = Frame::orthographic({{-1.1, -1.1, -1.1}, {1.1, 1.1, 1.1}}, Axis::Z, 40, 40, 64);
+    const FragmentLists lists = FragmentLists::build(frame, mesh.view());
+    VolumeScene scene;
+    scene.addLeaf(mesh);
+    int64_t checked = 0;
+    for (int64_t y = 0; y < 40; ++y)
+        for (int64_t x = 0; x < 40; ++x) {
+            const auto col = lists.column(x, y);
+            for (std::size_t i = 0; i + 1 < col.size(); ++i) ASSERT_LE(col[i].depth, col[i + 1].depth);
+            // A ray along the column from below the box: brute-force crossings.
+            const Vec3d a = frame.worldFromGrid({double(x) + 0.5, double(y) + 0.5, -1.0});
+            const Vec3d b = frame.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 65.0});
+            bool nearEdge = false;
+            const auto hits = dsmrCrossings(scene, a, b - a, 1.0, nearEdge);
+            if (nearEdge) continue;
+            ASSERT_EQ(col.size(), hits.size()) << "column " << x << ", " << y;
+            for (std::size_t i = 0; i < col.size(); ++i) {
+                EXPECT_EQ(col[i].front, i % 2 == 0); // enters, leaves, enters ...
+                const double depth = -1.0 + hits[i].t * 66.0;
+                EXPECT_NEAR(col[i].depth, depth, 1e-6);
+            }
+            ++checked;
+        }
+    EXPECT_GT(checked, 1000);
+    EXPECT_GT(lists.maxPerColumn(), 2);
+}
+
+TEST(FragmentListTest, ListsDoNotDependOnTheThreadCount) {
+    const Mesh mesh = test::makeTorus({0, 0, 0}, 0.6, 0.25, 24, 12);
+    const Frame frame = Frame::perspective({0.3, 0.2, 3}, {0, 0, 0}, {0, 1, 0}, 0.8, 37, 29, 0.5, 6, 1);
+    FragmentLists one, all;
+    withThreads(1, [&] { one = FragmentLists::build(frame, mesh.view()); });
+    withThreads(0, [&] { all = FragmentLists::build(frame, mesh.view()); });
+    ASSERT_EQ(one.fragmentCount(), all.fragmentCount());
+    ASSERT_GT(one.fragmentCount(), 0);
+    for (int64_t y = 0; y < 29; ++y)
+        for (int64_t x = 0; x < 37; ++x) {
+            const auto a = one.column(x, y), b = all.column(x, y);
+            ASSERT_EQ(a.size(), b.size());
+            for (std::size_t i = 0; i < a.size(); ++i) {
+                EXPECT_EQ(a[i].depth, b[i].depth);
+                EXPECT_EQ(a[i].triangle, b[i].triangle);
+                EXPECT_EQ(a[i].front, b[i].front);
+            }
+        }
+}
+
+// ---- Boolean scene graph --------------------------------------------------------------------
+
+TEST(VolumeSceneTest, BooleanNodesAgreeWithCgalInsideTestsAlongFragmentSegments) {
+    VOXFX_REQUIRE_DATA("meshes/elephant.off");
+    VOXFX_REQUIRE_DATA("meshes/knot1.off");
+    VolumeScene s;
+    const int32_t a = s.addLeaf(dsmrLoadScaled("elephant", {{-1, -1, -1}, {0.6, 0.6, 0.6}}));
+    const int32_t b = s.addLeaf(dsmrLoadScaled("knot1", {{-0.5, -0.6, -0.7}, {1, 0.9, 0.8}}));
+    const int32_t u = s.addNode(ShapeOp::Union, a, b), i = s.addNode(ShapeOp::Intersection, a, b),
+                  d = s.addNode(ShapeOp::Difference, a, b), e = s.addNode(ShapeOp::Difference, b, u);
+    for (int32_t n : {u, i, d, e}) {
+        VolumeSceneObject o;
+        o.shape = n;
+        o.name = toString(s.nodes[std::size_t(n)].op);
+        s.addObject(o);
+    }
+    s.validate();
+    const FlatLeaves flat = flattenLeaves(s, false);
+    const Frame frame = Frame::perspective({1.5, 1.1, 1.8}, {0, 0, 0}, {0, 1, 0}, 1.0, 64, 64, 0.5, 8, 1);
+    const FragmentLists lists = FragmentLists::build(frame, flat.mesh.view());
+    // Midpoints of every segment, with the walker's flags.
+    std::vector<Vec3d> points;
+    std::vector<std::vector<uint8_t>> flags;
+    SegmentWalker walker(s, flat.triangleLeaf);
+    for (int64_t y = 0; y < 64; ++y)
+        for (int64_t x = 0; x < 64; ++x)
+            walker.walk(
+                lists.column(x, y), [](double, std::size_t, bool) { return true; },
+                [&](double z0, double z1, std::span<const uint8_t> inside) {
+                    if (z1 - z0 > 1e-5) {
+                        points.push_back(
+                            frame.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 0.5 * (z0 + z1)}));
+                        flags.emplace_back(inside.begin(), inside.end());
+                    }
+                    return true;
+                },
+                true);
+    ASSERT_GT(points.size(), 700u);
+    const std::vector<int> inA = test::sideOfClosedMesh(s.leaves[0].view(), points);
+    const std::vector<int> inB = test::sideOfClosedMesh(s.leaves[1].view(), points);
+    ASSERT_EQ(inA.size(), points.size());
+    ASSERT_EQ(inB.size(), points.size());
+    int64_t wrong = 0, insideSome = 0;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        if (inA[k] == 0 || inB[k] == 0) continue;
+        const std::vector<int> leaf{inA[k] > 0, inB[k] > 0};
+        for (std::size_t o = 0; o < s.objects.size(); ++o) {
+            const bool expected = dsmrShape(s, s.objects[o].shape, leaf);
+            wrong += expected != (flags[k][o] != 0);
+            insideSome += expected;
+        }
+    }
+    EXPECT_EQ(wrong, 0);
+    EXPECT_GT(insideSome, 500);
+}
+
+// ---- deep shadow maps -------------------------------------------------------------------------
+
+TEST(DeepShadowTest, OpaqueSurfacesOnlyGiveTheStandardShadowMap) {
+    VOXFX_REQUIRE_DATA("meshes/elephant.off");
+    VolumeScene s;
+    VolumeSceneObject o;
+    o.shape = s.addLeaf(dsmrLoadScaled("elephant", {{-1, -1, -1}, {1, 1, 1}}));
+    s.addObject(o);
+    Mesh ground;
+    test::appendQuad(ground, {0, 0, -1.2}, {1.5, 0, 0}, {0, 1.5, 0});
+    o.shape = s.addLeaf(ground);
+    s.addObject(o);
+    const FlatLeaves flat = flattenLeaves(s, true);
+    for (const Light& light : {dsmrSpot(), Light{}}) { // spot and directional
+        const std::vector<LightView> views = makeLightViews(light, s.bounds(true), 48, 1);
+        DeepShadowOptions opt;
+        opt.epsilon = 0.1;
+        const DeepShadow deep = DeepShadow::build(s, views, opt);
+        for (std::size_t vi = 0; vi < views.size(); ++vi) {
+            const ShadowMap map = ShadowMap::build(flat.mesh.view(), views[vi]);
+            const DsmView dv = deep.maps()[vi].view();
+            int64_t shadowed = 0;
+            for (int64_t y = 0; y < views[vi].frame.height(); ++y)
+                for (int64_t x = 0; x < views[vi].frame.width(); ++x) {
+                    const float depth = map.depthAt(x, y);
+                    const float zs[] = {0.0f,         depth,        std::nextafter(depth, 1e30f),
+                                        depth * 0.5f, depth * 1.5f, 1e30f};
+                    for (float z : zs) {
+                        const float expected = std::isfinite(depth) && z > depth ? 0.0f : 1.0f;
+                        ASSERT_EQ(dv.visibility(x, y, z), expected) << x << ", " << y << " at " << z;
+                        shadowed += expected == 0;
+                    }
+                }
+            EXPECT_GT(shadowed, 500);
+        }
+    }
+}
+
+TEST(DeepShadowTest, CompressedStaysWithinEpsilonOfExactAndNeverIncreasesOverEveryTexel) {
+    VOXFX_REQUIRE_DATA("meshes/elephant.off");
+    VOXFX_REQUIRE_DATA("meshes/knot1.off");
+    const VolumeScene s = dsmrMixedScene();
+    const std::vector<LightView> views = makeLightViews(dsmrSpot(), s.bounds(true), 40, 1);
+    DeepShadowOptions exactOpt;
+    exactOpt.epsilon = 0;
+    exactOpt.termination = 0;
+    const DeepShadow exact = DeepShadow::build(s, views, exactOpt);
+    int64_t volumeTexels = 0;
+    for (const double eps : {0.01, 0.05, 0.2}) {
+        for (const DsmStorage storage : {DsmStorage::Chunked, DsmStorage::Fixed}) {
+            DeepShadowOptions opt = exactOpt;
+            opt.epsilon = eps;
+            opt.storage = storage;
+            const DeepShadow comp = DeepShadow::build(s, views, opt);
+            const DsmView e = exact.maps()[0].view(), c = comp.maps()[0].view();
+            EXPECT_EQ(comp.maps()[0].stats().overflowTexels, 0);
+            EXPECT_LT(comp.stats().nodes, exact.stats().nodes);
+            for (int64_t y = 0; y < views[0].frame.height(); ++y)
+                for (int64_t x = 0; x < views[0].frame.width(); ++x) {
+                    std::vector<DsmNode> ne = exact.maps()[0].texel(x, y), nc = comp.maps()[0].texel(x, y);
+                    volumeTexels += ne.size() > 8;
+                    for (const auto* nodes : {&ne, &nc})
+                        for (std::size_t k = 1; k < nodes->size(); ++k) {
+                            ASSERT_LE((*nodes)[k].v, (*nodes)[k - 1].v) << x << ", " << y;
+                            ASSERT_GE((*nodes)[k].z, (*nodes)[k - 1].z);
+                        }
+                    // Both functions are linear between the union of their depths: check both
+                    // one-sided limits there and the midpoints.
+                    std::vector<float> zs;
+                    for (const auto* nodes : {&ne, &nc})
+                        for (const DsmNode& n : *nodes) zs.push_back(n.z);
+                    std::sort(zs.begin(), zs.end());
+                    const std::size_t count = zs.size();
+                    for (std::size_t k = 0; k + 1 < count; ++k) zs.push_back(0.5f * (zs[k] + zs[k + 1]));
+                    for (std::size_t k = 0; k < count; ++k) zs.push_back(std::nextafter(zs[k], 1e30f));
+                    for (const float z : zs)
+                        ASSERT_NEAR(c.visibility(x, y, z), e.visibility(x, y, z), eps + 1e-5)
+                            << "texel " << x << ", " << y << " depth " << z << " epsilon " << eps;
+                }
+        }
+    }
+    EXPECT_GT(volumeTexels, 50);
+}
+
+TEST(DeepShadowTest, LookupsAgreeWithADenseRayMarchFromTheLight) {
+    VOXFX_REQUIRE_DATA("meshes/elephant.off");
+    VOXFX_REQUIRE_DATA("meshes/knot1.off");
+    const VolumeScene s = dsmrMixedScene();
+    const Light light = dsmrSpot();
+    const std::vector<LightView> views = makeLightViews(light, s.bounds(true), 48, 1);
+    DeepShadowOptions opt;
+    opt.epsilon = 0.02;
+    const DeepShadow deep = DeepShadow::build(s, views, opt);
+    const double voxel = s.volumes[0]->spacing().x;
+    // Points on texel-centre rays (no bilinear blur), at depths through and behind everything.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> unit(0, 1);
+    const Frame& f = views[0].frame;
+    double maxErr = 0, sumErr = 0;
+    int64_t n = 0, dark = 0, partial = 0;
+    for (int k = 0; k < 1500; ++k) {
+        const int64_t x = int64_t(unit(rng) * double(f.width())), y = int64_t(unit(rng) * double(f.height()));
+        const double z = f.nearDepth() + unit(rng) * (f.farDepth() - f.nearDepth());
+        const Vec3d p = f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, z});
+        const double ref = dsmrReferenceTransmittance(s, light.position, p, voxel / 4);
+        if (ref < 0) continue;
+        const double got = deep.maps()[0].view().visibility(x, y, float(f.gridFromWorld(p).z));
+        // A point within a float ulp of a surface may see either side.
+        const double err = std::abs(got - ref);
+        maxErr = std::max(maxErr, err);
+        sumErr += err;
+        ++n;
+        dark += ref < 0.01;
+        partial += ref > 0.05 && ref < 0.95;
+    }
+    ASSERT_GT(n, 1200);
+    EXPECT_GT(dark, 5);
+    EXPECT_GT(partial, 50);
+    // ε plus the volume sampling (one voxel steps against an eighth).
+    EXPECT_LT(sumErr / double(n), 0.01);
+    EXPECT_LT(maxErr, opt.epsilon + 0.05);
+}
+
+TEST(DeepShadowTest, PointLightsUseSixFacesAndLookupsFollowThem) {
+    VOXFX_REQUIRE_DATA("meshes/knot1.off");
+    VolumeScene s;
+    VolumeSceneObject o;
+    o.kind = ObjectKind::Translucent;
+    o.opacity = 0.5f;
+    o.shape = s.addLeaf(dsmrLoadScaled("knot1", {{-1, -1, -1}, {1, 1, 1}}));
+    s.addObject(o);
+    Light l;
+    l.type = LightType::Point;
+    l.position = {0, 0, 0.05};
+    DeepShadowOptions opt;
+    opt.resolution = 64;
+    opt.epsilon = 0.01;
+    const DeepShadow deep = DeepShadow::build(s, l, opt);
+    ASSERT_EQ(deep.views().size(), 6u);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-1, 1);
+    int64_t n = 0, wrong = 0;
+    for (int k = 0; k < 2000; ++k) {
+        const Vec3d p{1.5 * u(rng), 1.5 * u(rng), 1.5 * u(rng)};
+        const double ref = dsmrReferenceTransmittance(s, l.position, p, 1.0);
+        if (ref < 0) continue;
+        ++n;
+        // Bilinear lookups blur one texel: count the points whose value is off by more than a step.
+        wrong += std::abs(deep.visibility(p) - ref) > 0.26;
+    }
+    ASSERT_GT(n, 1500);
+    EXPECT_LT(double(wrong) / double(n), 0.05);
+}
+
+TEST(DeepShadowTest, InvalidScenesAndOptionsThrow) {
+    VolumeScene s;
+    VolumeSceneObject o;
+    o.shape = s.addLeaf(test::makeBox({0, 0, 0}, {1, 1, 1}));
+    o.kind = ObjectKind::Volume; // without a volume
+    s.addObject(o);
+    EXPECT_THROW(s.validate(), Error);
+    s.objects[0].kind = ObjectKind::Opaque;
+    s.validate();
+    s.nodes.push_back({ShapeOp::Union, -1, 0, 5});
+    EXPECT_THROW(s.validate(), Error);
+    s.nodes.pop_back();
+    DeepShadowOptions opt;
+    opt.resolution = 0;
+    EXPECT_THROW(DeepShadow::build(s, dsmrSpot(), opt), Error);
+}
+
+// ---- clustering -------------------------------------------------------------------------------
+
+TEST(DeepShadowClusterTest, NearBoxesShareAClusterAndTheCountIsCapped) {
+    std::vector<ProjectedBox> boxes;
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> jitter(0, 0.05);
+    for (int g = 0; g < 3; ++g)
+        for (int k = 0; k < 4; ++k) {
+            const double x = 0.3 * g + jitter(rng), y = 0.1 + jitter(rng);
+            boxes.push_back({{x, y}, {x + 0.1 + jitter(rng), y + 0.1 + jitter(rng)}});
+        }
+    const std::vector<int> c = clusterBoxes(boxes, 8, 0.12);
+    // Every pair within a cluster is within d0 (brute force), and the three groups are apart.
+    auto dist = [&](std::size_t a, std::size_t b) {
+        double d = 0;
+        for (int k = 0; k < 2; ++k)
+            d = std::max(
+                {d, std::abs(boxes[a].lo[k] - boxes[b].lo[k]), std::abs(boxes[a].hi[k] - boxes[b].hi[k])});
+        return d;
+    };
+    for (std::size_t a = 0; a < boxes.size(); ++a)
+        for (std::size_t b = 0; b < boxes.size(); ++b) {
+            if (c[a] == c[b]) { EXPECT_LE(dist(a, b), 0.12); }
+            if (a / 4 == b / 4) {
+                EXPECT_EQ(c[a], c[b]);
+            } else {
+                EXPECT_NE(c[a], c[b]);
+            }
+        }
+    const std::vector<int> capped = clusterBoxes(boxes, 2, 0.12);
+    EXPECT_EQ(*std::max_element(capped.begin(), capped.end()), 1);
+    const std::vector<int> one = clusterBoxes(boxes, 1, 0.12);
+    EXPECT_EQ(*std::max_element(one.begin(), one.end()), 0);
+}
+
+TEST(DeepShadowClusterTest, ClusteredMapsAgreeWithTheReferenceOnASparseScene) {
+    VOXFX_REQUIRE_DATA("meshes/knot1.off");
+    VOXFX_REQUIRE_DATA("meshes/elephant.off");
+    // Two small objects far apart under one spot light, and a ground that receives only.
+    VolumeScene s;
+    VolumeSceneObject o;
+    o.kind = ObjectKind::Translucent;
+    o.opacity = 0.6f;
+    o.shape = s.addLeaf(dsmrLoadScaled("knot1", {{-2.2, -0.3, -0.3}, {-1.6, 0.3, 0.3}}));
+    s.addObject(o);
+    o.kind = ObjectKind::Opaque;
+    o.shape = s.addLeaf(dsmrLoadScaled("elephant", {{1.6, -0.3, -0.3}, {2.2, 0.3, 0.3}}));
+    s.addObject(o);
+    Light l;
+    l.type = LightType::Spot;
+    l.position = {0, 0, 3};
+    l.direction = {0, 0, -1};
+    l.outerConeAngle = 1.0;
+    DeepShadowOptions opt;
+    opt.resolution = 64;
+    opt.epsilon = 0.01;
+    const DeepShadow single = DeepShadow::build(s, l, opt);
+    opt.clusters = 4;
+    opt.clusterThreshold = 0.2;
+    const DeepShadow clustered = DeepShadow::build(s, l, opt);
+    ASSERT_EQ(single.groupBegin().size(), 2u);
+    ASSERT_EQ(clustered.groupBegin().size(), 3u); // two clusters, one map each
+    // Points on a plane behind both objects: the clustered maps put more texels on each object.
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-1, 1);
+    double errSingle = 0, errClustered = 0;
+    int64_t n = 0;
+    for (int k = 0; k < 1600; ++k) {
+        const double side = k % 2 ? 1.9 : -1.9;
+        const Vec3d p{side + 0.45 * u(rng), 0.45 * u(rng), -0.8};
+        const double ref = dsmrReferenceTransmittance(s, l.position, p, 1.0);
+        if (ref < 0) continue;
+        errSingle += std::abs(single.visibility(p) - ref);
+        errClustered += std::abs(clustered.visibility(p) - ref);
+        ++n;
+    }
+    ASSERT_GT(n, 1400);
+    EXPECT_LT(errClustered / double(n), 0.08);
+    EXPECT_LT(errClustered, errSingle);
+}
+
+// ---- the renderer: ShadowKind::Deep, volumes in the scene, ray casting, the scene file ----------
+
+Scene dsmrGroundAndSmoke(bool withVolume) {
+    Scene s;
+    Material ground;
+    ground.baseColor = {0.5f, 0.5f, 0.5f};
+    ground.specular = 0;
+    SceneMesh g;
+    g.name = "Ground";
+    test::appendQuad(g.mesh, {0, 0, 0}, {0, 0, 4}, {4, 0, 0});
+    g.material = s.addMaterial(ground);
+    g.castsShadow = false;
+    s.meshes.push_back(g);
+    Light sun;
+    sun.direction = {0, -1, 0};
+    sun.intensity = 2;
+    s.lights.push_back(sun);
+    Camera c;
+    c.position = {0, 5, 5};
+    c.target = {0, 0, 0};
+    c.fovY = 0.7;
+    s.cameras.push_back(c);
+    if (withVolume) {
+        auto vs = std::make_shared<VolumeScene>();
+        SmokeParams sp;
+        sp.dims = {20, 20, 20};
+        sp.box = {{-1, 0.5, -1}, {1, 1.5, 1}};
+        vs->addVolumeBox(std::make_shared<Volume>(makeSmoke(sp)), dsmrSmokeTransfer(), 0.05, "smoke");
+        s.volumeScene = vs;
+    }
+    return s;
+}
+
+TEST(DeepShadowRenderTest, LightShadowDeepSeesSceneVolumesAndMatchesTheReference) {
+    const Scene s = dsmrGroundAndSmoke(true);
+    ShadowOptions so;
+    so.kind = ShadowKind::Deep;
+    so.dsmResolution = 64;
+    so.dsmEpsilon = 0.01;
+    const LightShadow ls = LightShadow::build(s, s.lights[0], so);
+    ASSERT_NE(ls.deepShadow(), nullptr);
+    const VolumeScene vs = volumeSceneOf(s);
+    int64_t n = 0, shadowed = 0;
+    double err = 0;
+    for (double x = -1.5; x <= 1.5; x += 0.1)
+        for (double z = -1.5; z <= 1.5; z += 0.1) {
+            const Vec3d p{x, 0, z};
+            const double ref = dsmrReferenceTransmittance(vs, p + Vec3d{0, 10, 0}, p, 0.01);
+            if (ref < 0) continue;
+            err += std::abs(double(ls.visibility(p, {0, 0, 0}).x) - ref);
+            shadowed += ref < 0.9;
+            ++n;
+        }
+    ASSERT_GT(n, 700);
+    EXPECT_GT(shadowed, 100);
+    EXPECT_LT(err / double(n), 0.03);
+    EXPECT_EQ(ls.visibility({3.5, 0, 3.5}, {0, 1, 0}).x, 1.0f);
+}
+
+TEST(DeepShadowRenderTest, RayCastingCompositesVolumesOverTheImageAndOnlyThere) {
+    RenderOptions o;
+    o.width = 64;
+    o.height = 48;
+    o.shadow.kind = ShadowKind::None; // the smoke's shadow on the ground is tested above
+    o.background = {0, 0, 0};
+    const RenderResult with = render(dsmrGroundAndSmoke(true), dsmrGroundAndSmoke(true).cameras[0], o);
+    const RenderResult without = render(dsmrGroundAndSmoke(false), dsmrGroundAndSmoke(false).cameras[0], o);
+    EXPECT_GT(with.volumeSamples, 1000);
+    EXPECT_EQ(without.volumeSamples, 0);
+    // Pixels whose camera ray misses the smoke's box are identical; some through it differ.
+    const Frame cam = cameraFrame(dsmrGroundAndSmoke(true).cameras[0], 64, 48);
+    const Box3d box{{-1, 0.5, -1}, {1, 1.5, 1}};
+    int64_t differ = 0, same = 0;
+    for (int64_t y = 0; y < 48; ++y)
+        for (int64_t x = 0; x < 64; ++x) {
+            const Vec3d eye = cam.eye(), p = cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0});
+            const Vec3d d = p - eye;
+            double t0 = 0, t1 = 1e30;
+            for (int a = 0; a < 3; ++a) {
+                double ta = (box.lo[a] - eye[a]) / d[a], tb = (box.hi[a] - eye[a]) / d[a];
+                if (ta > tb) std::swap(ta, tb);
+                t0 = std::max(t0, ta);
+                t1 = std::min(t1, tb);
+            }
+            const Vec3f a = with.image.at(x, 47 - y), b = without.image.at(x, 47 - y);
+            const bool diff = a.x != b.x || a.y != b.y || a.z != b.z;
+            if (t0 > t1 + 1e-3) {
+                same += !diff;
+                EXPECT_FALSE(diff) << x << ", " << y;
+            } else {
+                differ += diff;
+            }
+        }
+    EXPECT_GT(differ, 50);
+    EXPECT_GT(same, 500);
+}
+
+TEST(DeepShadowSceneFileTest, ObjectsWithVolumesTransferFunctionsAndBooleanShapesLoad) {
+    test::TempDir dir;
+    test::writeFile(dir.file("cube.off"),
+                    "OFF\n8 6 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
+                    "4 0 2 3 1\n4 4 5 7 6\n4 0 1 5 4\n4 2 6 7 3\n4 0 4 6 2\n4 1 3 7 5\n");
+    test::writeFile(dir.file("tf.json"), R"({"opacity": [[0, 0], [1, 0.5]], "color": [[0, 1, 1, 1]]})");
+    test::writeFile(dir.file("scene.json"), R"({
+      "meshes": [{"file": "cube.off", "name": "floor", "scale": [4, 0.1, 4], "translate": [-2, -0.1, -2]}],
+      "lights": [{"type": "spot", "position": [0, 5, 0], "direction": [0, -1, 0], "outerConeDegrees": 40}],
+      "objects": [
+        {"name": "smoke", "kind": "volume", "volume": {"smoke": {"dims": [8, 8, 8], "box": [[-1, 0, -1], [1, 2, 1]]}},
+         "transfer": "tf.json", "opacityLength": 0.2,
+         "shape": {"difference": [{"volumeBox": true}, {"mesh": "cube.off", "translate": [-0.5, 0.5, -0.5]}]}},
+        {"name": "glass", "kind": "translucent", "opacity": 0.3, "shape": {"box": [[1, 0, 1], [1.5, 0.5, 1.5]]}},
+        {"name": "lens", "kind": "opaque", "shape": {"intersection": [{"box": [[-2, 0, -2], [-1, 1, -1]]},
+                                                                      {"mesh": "cube.off", "translate": [-1.5, 0.5, -1.5]}]}}
+      ],
+      "render": {"shadows": "deep"}
+    })");
+    const Scene s = loadScene(dir.file("scene.json"));
+    ASSERT_TRUE(s.volumeScene);
+    const VolumeScene& vs = *s.volumeScene;
+    ASSERT_EQ(vs.objects.size(), 2u); // the plain translucent box became a scene mesh
+    EXPECT_EQ(vs.objects[0].kind, ObjectKind::Volume);
+    EXPECT_EQ(vs.nodes[std::size_t(vs.objects[0].shape)].op, ShapeOp::Difference);
+    EXPECT_EQ(vs.nodes[std::size_t(vs.objects[1].shape)].op, ShapeOp::Intersection);
+    EXPECT_EQ(vs.volumes[0]->dims(), (Vec3i{8, 8, 8}));
+    EXPECT_DOUBLE_EQ(vs.objects[0].transfer.opacity(1.0), 0.5);
+    ASSERT_EQ(s.meshes.size(), 2u);
+    EXPECT_FLOAT_EQ(s.materials[s.meshes[1].material].opacity, 0.3f);
+
+    // Bad objects: a clear error naming the object, no scene.
+    const std::pair<const char*, const char*> bad[] = {
+        {R"({"name": "a", "kind": "fog", "shape": {"box": [[0,0,0],[1,1,1]]}})", "unknown kind"},
+        {R"({"name": "b", "kind": "volume", "volume": {"smoke": {}}})", "needs \"transfer\""},
+        {R"({"name": "c", "kind": "volume", "volume": {"smoke": {}}, "transfer": {"opacity": [[0, 2]], "color": [[0, 1, 1, 1]]}})",
+         "opacity"},
+        {R"({"name": "d", "kind": "volume", "volume": "missing.inr", "transfer": "tf.json"})", "missing.inr"},
+        {R"({"name": "e", "kind": "opaque", "shape": {"difference": [{"box": [[0,0,0],[1,1,1]]}]}})",
+         "two shapes"},
+        {R"({"name": "f", "kind": "translucent", "opacity": 1.5, "shape": {"box": [[0,0,0],[1,1,1]]}})",
+         "opacity"}};
+    for (const auto& [object, message] : bad) {
+        test::writeFile(dir.file("bad.json"), std::string(R"({"objects": [)") + object + "]}");
+        try {
+            loadScene(dir.file("bad.json"));
+            ADD_FAILURE() << "accepted " << object;
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+        }
+    }
+}
+
+TEST(DeepShadowCliTest, RenderWithDeepShadowsEveryStorageAndClusters) {
+    test::TempDir dir;
+    test::writeFile(dir.file("cube.off"),
+                    "OFF\n8 6 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
+                    "4 0 2 3 1\n4 4 5 7 6\n4 0 1 5 4\n4 2 6 7 3\n4 0 4 6 2\n4 1 3 7 5\n");
+    test::writeFile(dir.file("scene.json"), R"({
+      "meshes": [{"file": "cube.off", "name": "floor", "scale": [4, 0.1, 4], "translate": [-2, -0.1, -2]},
+                 {"file": "cube.off", "name": "box", "scale": 0.5, "translate": [0.5, 0.5, 0]}],
+      "receiversOnly": ["floor"],
+      "lights": [{"type": "spot", "position": [0, 5, 0.5], "direction": [0, -1, 0], "outerConeDegrees": 50}],
+      "objects": [{"name": "smoke", "kind": "volume", "volume": {"smoke": {"dims": [8, 8, 8], "box": [[-1, 0, -1], [0, 1, 0]]}},
+                   "transfer": {"opacity": [[0, 0], [1, 0.5]], "color": [[0, 1, 1, 1]]}}]
+    })");
+    for (const char* flags : {"--dsm-storage fixed --epsilon 0.1", "--dsm-storage chunked --clusters 2"}) {
+        const test::CommandRun r =
+            test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + dir.file("out.png") +
+                                    " --shadows deep --dsm-resolution 64 --width 40 --height 30 " + flags);
+        EXPECT_EQ(r.exitCode, 0) << r.err;
+        EXPECT_NE(r.out.find("shadows deep"), std::string::npos) << r.out;
+        EXPECT_NE(r.out.find("volumes"), std::string::npos) << r.out;
+        EXPECT_TRUE(std::filesystem::exists(dir.file("out.png")));
+        std::filesystem::remove(dir.file("out.png"));
+    }
+    const test::CommandRun bad =
+        test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + dir.file("out.png") +
+                                " --shadows deep --dsm-storage linked");
+    EXPECT_NE(bad.exitCode, 0);
+    EXPECT_NE(bad.err.find("linked"), std::string::npos) << bad.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("out.png")));
+}
+
+// The table of BENCHMARKS.md: DSM lookups (bilinear, at random points of the mixed scene) against the
+// dense reference as ε and the resolution vary. Slow: the reference marches at an eighth of a voxel.
+TEST(DeepShadowSlowTest, ErrorAgainstTheDenseReferenceAsEpsilonAndResolutionVary) {
+    VOXFX_REQUIRE_DATA("meshes/elephant.off");
+    VOXFX_REQUIRE_DATA("meshes/knot1.off");
+    const VolumeScene s = dsmrMixedScene();
+    const Light light = dsmrSpot();
+    const double voxel = s.volumes[0]->spacing().x;
+    // Points in the lit volume below the light: inside the smoke, on and behind the objects.
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> u(0, 1);
+    const Box3d b = s.bounds(true);
+    std::vector<Vec3d> points;
+    std::vector<double> refs;
+    while (points.size() < 4000) {
+        const Vec3d p = b.lo + b.extent() * Vec3d{u(rng), u(rng), u(rng)};
+        const double ref = dsmrReferenceTransmittance(s, light.position, p, voxel / 8);
+        if (ref < 0) continue;
+        points.push_back(p);
+        refs.push_back(ref);
+    }
+    std::printf("| resolution | epsilon | mean abs error | max abs error | nodes/texel mean | max |\n");
+    for (const int64_t res : {64, 128, 256, 512})
+        for (const double eps : {0.0, 0.01, 0.05, 0.1, 0.2}) {
+            DeepShadowOptions opt;
+            opt.resolution = res;
+            opt.epsilon = eps;
+            const DeepShadow d = DeepShadow::build(s, light, opt);
+            double sum = 0, worst = 0;
+            for (std::size_t i = 0; i < points.size(); ++i) {
+                const double e = std::abs(d.visibility(points[i]) - refs[i]);
+                sum += e;
+                worst = std::max(worst, e);
+            }
+            std::printf("| %lld | %.2f | %.4f | %.3f | %.2f | %lld |\n", static_cast<long long>(res), eps,
+                        sum / double(points.size()), worst, d.stats().meanNodes(),
+                        static_cast<long long>(d.stats().maxNodes));
+            if (res == 512 && eps <= 0.05) { EXPECT_LT(sum / double(points.size()), 0.03); }
+        }
+}
+
+} // namespace
+} // namespace voxfx
