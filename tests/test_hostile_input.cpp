@@ -239,6 +239,17 @@ TEST(HostileInputTest, CsgCanonicalFormReadsBackForAnyPathBytes) {
     }
 }
 
+TEST(HostileInputTest, CsgQuotedPathStartingWithABraceReadsBack) {
+    // libFuzzer (voxfx_fuzz_csg), tests/regress/csg/: the quoted path "{" printed unquoted, and
+    // the canonical form then read as the JSON syntax.
+    const std::string text =
+        test::readFileBytes(std::string(VOXFX_REGRESS_DIR) + "/csg/quoted-brace-path.txt");
+    ASSERT_EQ(text, "\"{\"");
+    const CsgNode node = parseCsgExpression(text);
+    EXPECT_EQ(node.mesh, "{");
+    EXPECT_EQ(parseCsgExpression(toString(node)).mesh, "{");
+}
+
 TEST(HostileInputTest, TransferFunctionGarbageIsAnError) {
     for (const char* text : {"", "{", "[1,2", R"({"points": 5})", R"({"points": [{"value": "x"}]})",
                              R"({"color": [[1e999, 0, 0, 0]]})"})

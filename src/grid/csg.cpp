@@ -419,7 +419,8 @@ private:
 };
 
 bool needsQuotes(const std::string& path) {
-    if (path.empty()) return true;
+    // A leading '{' would read back as the JSON syntax.
+    if (path.empty() || path.front() == '{') return true;
     for (const char c : path)
         if (std::isspace(static_cast<unsigned char>(c)) || c == ',' || c == '(' || c == ')' || c == '"' ||
             c == '\\')

@@ -266,8 +266,8 @@ void readBitsImpl(const char* path, void* ctx,
     initializeOpenVdb();
     // The whole file, checked by the walker (vdb_validate.hpp) before OpenVDB reads those very
     // bytes from memory: OpenVDB trusts every size and count in a file.
-    const std::string bytes = readWholeFile(path);
-    vdbcheck::validate(bytes);
+    std::string bytes = readWholeFile(path);
+    vdbcheck::validateAndNeutralize(bytes);
     openvdb::GridPtrVecPtr grids;
     try {
         // Exceptions on: a read past the end (which the walker rules out) would otherwise feed

@@ -47,6 +47,9 @@ class Walker {
 public:
     explicit Walker(std::string_view bytes) : b_(bytes) {}
 
+    /// Offsets of the "__delayedload" metadata type names found by walkFile().
+    const std::vector<uint64_t>& delayedLoadTypes() const { return delayedLoad_; }
+
     void walkFile() {
         header();
         metadata("file metadata");
@@ -134,13 +137,10 @@ private:
             const int64_t fixed = fixedMetadataSize(type);
             if (fixed >= 0 && int64_t(size) != fixed)
                 bad("metadata of type ", type, " has ", size, " bytes instead of ", fixed);
-            if (type == "__delayedload" && size > 0) {
-                // Its count sizes arrays of at least a byte each.
-                if (size < 4) bad("delayed-load metadata of ", size, " bytes");
-                uint32_t n;
-                std::memcpy(&n, b_.data() + pos_, 4);
-                if (n > size) bad("delayed-load metadata counts ", n, " leaves in ", size, " bytes");
-            }
+            // OpenVDB's delayed-load table (written with zip compression) sizes its arrays from
+            // fields of its own, and serves only delayed loading, which voxfx does not use: its
+            // type is renamed for OpenVDB to skip it as unknown "__" metadata (see neutralize).
+            if (type == "__delayedload") delayedLoad_.push_back(pos_ - 4 - type.size());
             if (type == "bool" && uint8_t(b_[pos_]) > 1) bad("bool metadata is not 0 or 1");
             pos_ += size;
         }
@@ -373,9 +373,16 @@ private:
     bool half_ = false, isBool_ = false;
     uint64_t valueBytes_ = 0, chunkValueBytes_ = 0;
     std::vector<Coord> leaves_;
+    std::vector<uint64_t> delayedLoad_;
 };
 
-/// Throws voxfx::Error when the bytes are not a .vdb file this walker can vouch for.
-inline void validate(std::string_view bytes) { Walker(bytes).walkFile(); }
+/// Throws voxfx::Error when the bytes are not a .vdb file this walker can vouch for; otherwise
+/// renames the delayed-load metadata type ("__delayedload" -> "__xelayedload", same length) so that
+/// OpenVDB reads past it as unknown metadata instead of trusting the sizes inside it.
+inline void validateAndNeutralize(std::string& bytes) {
+    Walker walker(bytes);
+    walker.walkFile();
+    for (const uint64_t typeName : walker.delayedLoadTypes()) bytes[typeName + 2] = 'x';
+}
 
 } // namespace voxfx::detail::vdbcheck
