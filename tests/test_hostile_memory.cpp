@@ -2,6 +2,7 @@
 // another must not grow: every failed read releases what it allocated. Measured as the live heap
 // (glibc's mallinfo2, or AddressSanitizer's own count under the sanitizers, whose quarantine
 // makes the resident size meaningless) after warm-up rounds and after many more.
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -18,7 +19,8 @@
 #endif
 #endif
 #ifdef VOXFX_HOSTILE_ASAN
-#include <sanitizer/allocator_interface.h>
+// From the sanitizer runtime (GCC ships no sanitizer/allocator_interface.h to declare it).
+extern "C" std::size_t __sanitizer_get_current_allocated_bytes();
 #endif
 
 #include "test_util.hpp"
