@@ -18,15 +18,6 @@ double deepShadowMsSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// World point of a frame-space point of `view` (frame space = R * world + t for rotated views).
-Vec3d deepShadowWorldOf(const LightView& view, const Vec3d& q) {
-    if (!view.rotated) return q;
-    const auto& m = view.frameSpaceFromWorld.m;
-    const Vec3d d{q.x - m[0][3], q.y - m[1][3], q.z - m[2][3]};
-    return {m[0][0] * d.x + m[1][0] * d.y + m[2][0] * d.z, m[0][1] * d.x + m[1][1] * d.y + m[2][1] * d.z,
-            m[0][2] * d.x + m[1][2] * d.y + m[2][2] * d.z};
-}
-
 // What every texel of one view shares.
 struct DeepShadowView {
     const VolumeScene* scene;
@@ -42,8 +33,8 @@ struct DeepShadowView {
         if (frags.empty()) return;
         // The texel's ray is affine in the frame depth: world(z) = origin + z * perDepth.
         const Frame& f = view->frame;
-        const Vec3d g1 = deepShadowWorldOf(*view, f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}));
-        const Vec3d g2 = deepShadowWorldOf(*view, f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 2.0}));
+        const Vec3d g1 = f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0});
+        const Vec3d g2 = f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 2.0});
         const Vec3d perDepth = g2 - g1, origin = g1 - perDepth;
         const double lengthPerDepth = length(perDepth);
         const double term = options.termination;
@@ -236,10 +227,8 @@ DeepShadow DeepShadow::build(const VolumeScene& scene, std::vector<LightView> vi
     const double step = deepShadowStep(scene, options);
     for (const LightView& v : out.views_) {
         auto t0 = std::chrono::steady_clock::now();
-        Mesh local;
-        if (v.rotated) local = toFrameSpace(leaves.mesh.view(), v);
-        const FragmentLists lists =
-            FragmentLists::build(v.frame, v.rotated ? local.view() : leaves.mesh.view(), progress);
+        // Directional views are oriented orthographic frames: the world mesh rasterizes directly.
+        const FragmentLists lists = FragmentLists::build(v.frame, leaves.mesh.view(), progress);
         out.timings_.fragmentsMs += deepShadowMsSince(t0);
         t0 = std::chrono::steady_clock::now();
         const DeepShadowView ctx{&scene, &v, &leaves, &lists, options, step};
@@ -324,10 +313,7 @@ std::vector<DsmNode> deepShadowTexel(const VolumeScene& scene, const LightView& 
     const FlatLeaves leaves = flattenLeaves(scene, true);
     // One column only: a frame of the same camera would change the rasterization; rasterize the
     // whole view (tests use small views).
-    Mesh local;
-    if (view.rotated) local = toFrameSpace(leaves.mesh.view(), view);
-    const FragmentLists lists =
-        FragmentLists::build(view.frame, view.rotated ? local.view() : leaves.mesh.view());
+    const FragmentLists lists = FragmentLists::build(view.frame, leaves.mesh.view());
     const DeepShadowView ctx{&scene, &view, &leaves, &lists, options, deepShadowStep(scene, options)};
     std::vector<DsmNode> out;
     VisibilityBuilder b(-1.0, out);

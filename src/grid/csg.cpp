@@ -181,7 +181,13 @@ std::string jsonReason(const nlohmann::json::parse_error& e) {
     fail("CSG expression, at ", pointer.empty() ? std::string("the top level") : pointer, ": ", what);
 }
 
-CsgNode nodeFromJson(const nlohmann::json& j, const std::string& pointer) {
+// Deeper trees are refused: parsing, printing and evaluation recurse once per level, and a hostile
+// "union(union(union(..." must end in an error, not in a stack overflow.
+constexpr int kMaxCsgDepth = 256;
+
+CsgNode nodeFromJson(const nlohmann::json& j, const std::string& pointer, int depth = 0) {
+    if (depth > kMaxCsgDepth)
+        jsonFail(pointer, detail::concat("operations nested deeper than ", kMaxCsgDepth, " levels"));
     CsgNode node;
     if (j.is_string()) {
         node.mesh = j.get<std::string>();
@@ -211,7 +217,7 @@ CsgNode nodeFromJson(const nlohmann::json& j, const std::string& pointer) {
     if (args.empty()) jsonFail(pointer + "/args", "\"args\" needs at least one argument");
     node.isMesh = false;
     for (size_t i = 0; i < args.size(); ++i)
-        node.args.push_back(nodeFromJson(args[i], detail::concat(pointer, "/args/", i)));
+        node.args.push_back(nodeFromJson(args[i], detail::concat(pointer, "/args/", i), depth + 1));
     return node;
 }
 
@@ -275,8 +281,10 @@ private:
         ++pos_;
     }
 
-    CsgNode parseFunctional() {
+    CsgNode parseFunctional(int depth = 0) {
         skipBlanks();
+        if (depth > kMaxCsgDepth)
+            error(detail::concat("operations nested deeper than ", kMaxCsgDepth, " levels"));
         CsgNode node;
         const size_t column = pos_ + 1;
         if (pos_ >= text_.size()) error("expected a mesh path or an operation, the text ended");
@@ -306,10 +314,10 @@ private:
             node.isMesh = false;
             node.op = op;
             if (peek(')')) error(detail::concat(toString(op), " needs at least one argument"));
-            node.args.push_back(parseFunctional());
+            node.args.push_back(parseFunctional(depth + 1));
             while (peek(',')) {
                 ++pos_;
-                node.args.push_back(parseFunctional());
+                node.args.push_back(parseFunctional(depth + 1));
             }
             expect(')',
                    detail::concat("to close ", toString(op), " (opened at column ", column, ")").c_str());
@@ -319,16 +327,91 @@ private:
         return node;
     }
 
-    // A double-quoted string with JSON escapes: find its end here, decode it with nlohmann.
+    // A double-quoted string with JSON's escapes (\" \\ \/ \b \f \n \r \t \uXXXX, surrogate
+    // pairs included); any other byte stands for itself, since a path is bytes (control
+    // characters and non-UTF-8 names included), so every name toString quotes reads back.
     std::string parseQuoted() {
-        const size_t open = pos_;
-        size_t end = pos_ + 1;
-        while (end < text_.size() && text_[end] != '"') end += text_[end] == '\\' ? 2 : 1;
-        if (end >= text_.size()) error("unterminated string");
-        pos_ = end + 1;
-        try {
-            return nlohmann::json::parse(text_.substr(open, pos_ - open)).get<std::string>();
-        } catch (const nlohmann::json::parse_error& e) { parseFail(open + e.byte, jsonReason(e)); }
+        const size_t open = pos_++;
+        std::string out;
+        auto hex4 = [&](size_t at) {
+            if (at + 4 > text_.size()) parseFail(at + 1, "\\u needs four hexadecimal digits");
+            unsigned v = 0;
+            for (size_t k = at; k < at + 4; ++k) {
+                const char c = text_[k];
+                const int d = c >= '0' && c <= '9'   ? c - '0'
+                              : c >= 'a' && c <= 'f' ? c - 'a' + 10
+                              : c >= 'A' && c <= 'F' ? c - 'A' + 10
+                                                     : -1;
+                if (d < 0) parseFail(k + 1, "\\u needs four hexadecimal digits");
+                v = v * 16 + unsigned(d);
+            }
+            return v;
+        };
+        for (;;) {
+            if (pos_ >= text_.size()) parseFail(open + 1, "unterminated string");
+            const char c = text_[pos_++];
+            if (c == '"') return out;
+            if (c != '\\') {
+                out += c;
+                continue;
+            }
+            if (pos_ >= text_.size()) parseFail(open + 1, "unterminated string");
+            const char e = text_[pos_++];
+            switch (e) {
+            case '"':
+            case '\\':
+            case '/':
+                out += e;
+                break;
+            case 'b':
+                out += '\b';
+                break;
+            case 'f':
+                out += '\f';
+                break;
+            case 'n':
+                out += '\n';
+                break;
+            case 'r':
+                out += '\r';
+                break;
+            case 't':
+                out += '\t';
+                break;
+            case 'u': {
+                unsigned cp = hex4(pos_);
+                pos_ += 4;
+                if (cp >= 0xD800 && cp <= 0xDBFF) { // a high surrogate: its low half must follow
+                    if (pos_ + 6 > text_.size() || text_[pos_] != '\\' || text_[pos_ + 1] != 'u')
+                        parseFail(pos_ + 1, "a \\u surrogate pair is incomplete");
+                    const unsigned low = hex4(pos_ + 2);
+                    if (low < 0xDC00 || low > 0xDFFF) parseFail(pos_ + 1, "a \\u surrogate pair is invalid");
+                    pos_ += 6;
+                    cp = 0x10000 + ((cp - 0xD800) << 10) + (low - 0xDC00);
+                } else if (cp >= 0xDC00 && cp <= 0xDFFF) {
+                    parseFail(pos_ - 5, "a lone \\u surrogate");
+                }
+                if (cp < 0x80) {
+                    out += char(cp);
+                } else if (cp < 0x800) {
+                    out += char(0xC0 | (cp >> 6));
+                    out += char(0x80 | (cp & 0x3F));
+                } else if (cp < 0x10000) {
+                    out += char(0xE0 | (cp >> 12));
+                    out += char(0x80 | ((cp >> 6) & 0x3F));
+                    out += char(0x80 | (cp & 0x3F));
+                } else {
+                    out += char(0xF0 | (cp >> 18));
+                    out += char(0x80 | ((cp >> 12) & 0x3F));
+                    out += char(0x80 | ((cp >> 6) & 0x3F));
+                    out += char(0x80 | (cp & 0x3F));
+                }
+                break;
+            }
+            default:
+                parseFail(pos_, detail::concat("unknown escape '\\", e, "' in a quoted path"));
+            }
+        }
     }
 
     std::string_view text_;
@@ -336,7 +419,8 @@ private:
 };
 
 bool needsQuotes(const std::string& path) {
-    if (path.empty()) return true;
+    // A leading '{' would read back as the JSON syntax.
+    if (path.empty() || path.front() == '{') return true;
     for (const char c : path)
         if (std::isspace(static_cast<unsigned char>(c)) || c == ',' || c == '(' || c == ')' || c == '"' ||
             c == '\\')

@@ -55,6 +55,15 @@ double num(const json& j, const char* key, double fallback, const std::string& w
     return j[key].get<double>();
 }
 
+// A count or size of the render settings: a whole number in [0, 2^31) (a double out of int64's
+// range, or NaN, would make the conversion undefined behaviour).
+int64_t settingsCount(const json& j, const char* key, const std::string& where) {
+    const double v = num(j, key, 0, where);
+    if (!(v >= 0 && v < 2147483648.0) || v != std::floor(v))
+        fail(where, ": \"", key, "\" must be a whole number in [0, 2^31), got ", v);
+    return int64_t(v);
+}
+
 std::string str(const json& j, const char* key, const std::string& where) {
     if (!j.contains(key)) return {};
     if (!j[key].is_string()) fail(where, ": \"", key, "\" must be a string");
@@ -386,12 +395,12 @@ Scene loadWrapper(const std::string& path) {
                       where);
             SceneSettings& s = scene.settings;
             s.shadows = str(r, "shadows", where);
-            s.width = int64_t(num(r, "width", 0, where));
-            s.height = int64_t(num(r, "height", 0, where));
-            s.supersample = int(num(r, "supersample", 0, where));
-            s.gridResolution = int64_t(num(r, "gridResolution", 0, where));
-            s.gridDepth = int64_t(num(r, "gridDepth", 0, where));
-            s.shadowMapResolution = int64_t(num(r, "shadowMapResolution", 0, where));
+            s.width = settingsCount(r, "width", where);
+            s.height = settingsCount(r, "height", where);
+            s.supersample = int(settingsCount(r, "supersample", where));
+            s.gridResolution = settingsCount(r, "gridResolution", where);
+            s.gridDepth = settingsCount(r, "gridDepth", where);
+            s.shadowMapResolution = settingsCount(r, "shadowMapResolution", where);
             s.slicing = str(r, "slicing", where);
             s.voxelMode = str(r, "voxelMode", where);
             s.ambient = Vec3f(vec3Or(r, "ambient", {-1, -1, -1}, where));

@@ -45,6 +45,11 @@ private:
     std::string path_;
 };
 
+/// Inflates up to `expected` bytes after the `prefix` already inflated, growing the buffer with
+/// what the stream really holds: a header that claims more than the data costs no more memory
+/// than the data. Returns fewer bytes only when the stream ends first.
+std::vector<uint8_t> inflateUpTo(GzipStream& in, uint64_t expected, std::vector<uint8_t> prefix = {});
+
 /// Inflates exactly `expected` bytes of samples; throws when the stream holds fewer or more.
 std::vector<uint8_t> inflateExactly(std::span<const uint8_t> compressed, uint64_t expected,
                                     const std::string& path);
@@ -52,6 +57,10 @@ std::vector<uint8_t> inflateExactly(std::span<const uint8_t> compressed, uint64_
 /// The number of bytes a volume of `dims` samples of `type` needs; throws (naming the path) for
 /// dimensions < 1 or above kMaxVolumeVoxels voxels.
 uint64_t checkedSampleBytes(const Vec3i& dims, ScalarType type, const std::string& path);
+
+/// Throws (naming the path) when a volume of `dims` (4 bytes a voxel) plus `bufferBytes` of
+/// buffers alive beside it needs more memory than the machine has available.
+void checkVolumeMemory(const Vec3i& dims, uint64_t bufferBytes, const std::string& path);
 
 /// Converts the samples (x fastest) to the volume's floats, swapping bytes when the file's
 /// endianness is not the host's. Throws (naming the path and the voxel) for a NaN or infinite

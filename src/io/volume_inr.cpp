@@ -172,6 +172,7 @@ Volume readInr(std::span<const uint8_t> bytes, const std::string& path, VolumeLo
         if (available > expected)
             fail(path, ": INR file holds ", available - expected, " bytes more than the ", expected,
                  " bytes of samples its header declares (wrong sizes or type?)");
+        checkVolumeMemory(h.dims, 0, path);
         Volume v = makeVolume(h);
         decodeSamples(bytes.data() + end, h.type, h.bigEndian, v, path);
         return v;
@@ -202,13 +203,13 @@ Volume readInr(std::span<const uint8_t> bytes, const std::string& path, VolumeLo
         fail(path, ": INR header declares ", expected, " bytes of samples (", h.dims.x, " x ", h.dims.y,
              " x ", h.dims.z, " ", toString(h.type), "), more than ", bytes.size(),
              " bytes of gzip data can hold (truncated or wrong sizes?)");
-    std::vector<uint8_t> data(static_cast<std::size_t>(expected));
-    const std::size_t already = std::min<std::size_t>(head.size() - end, data.size());
-    std::memcpy(data.data(), head.data() + end, already);
-    const bool extraInHead = head.size() - end > already;
-    const std::size_t got = already + in.read(data.data() + already, data.size() - already);
-    if (got < data.size())
-        fail(path, ": INR data is truncated: the gzip data holds ", got, " of the ", expected,
+    checkVolumeMemory(h.dims, expected, path);
+    // The samples grow with what the stream holds, from those already inflated with the header.
+    const bool extraInHead = head.size() - end > expected;
+    std::vector<uint8_t> data =
+        inflateUpTo(in, expected, std::vector<uint8_t>(head.begin() + std::ptrdiff_t(end), head.end()));
+    if (data.size() < expected)
+        fail(path, ": INR data is truncated: the gzip data holds ", data.size(), " of the ", expected,
              " bytes of samples its header declares");
     uint8_t extra[1];
     if (extraInHead || in.read(extra, 1) != 0)

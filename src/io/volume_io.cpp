@@ -13,6 +13,7 @@
 #include <zlib.h>
 
 #include "io/volume_formats.hpp"
+#include "voxfx/bitgrid.hpp"
 
 namespace voxfx {
 
@@ -21,6 +22,11 @@ namespace detail {
 std::vector<uint8_t> readVolumeFile(const std::string& path) {
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) fail(path, ": cannot read file: it is a directory");
+    // A header names its data file (NRRD "data file", raw + JSON "file"): a device or a pipe
+    // there would be read without end (/dev/zero) or block (a FIFO), so only regular files.
+    const auto status = std::filesystem::status(path, ec);
+    if (!ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+        fail(path, ": cannot read file: not a regular file (a device, pipe or socket)");
     errno = 0;
     std::ifstream in(path, std::ios::binary);
     if (!in) fail(path, ": cannot open file: ", errno ? std::strerror(errno) : "unknown error");
@@ -101,22 +107,43 @@ std::size_t GzipStream::read(uint8_t* dst, std::size_t n) {
     return produced;
 }
 
+std::vector<uint8_t> inflateUpTo(GzipStream& in, uint64_t expected, std::vector<uint8_t> prefix) {
+    std::vector<uint8_t> out = std::move(prefix);
+    std::size_t have = std::min<std::size_t>(out.size(), std::size_t(expected));
+    out.resize(have);
+    while (have < expected) {
+        // Doubling from 1 MiB: amortized linear, and never more than twice what was inflated.
+        const auto next =
+            std::size_t(std::min<uint64_t>(expected, std::max<uint64_t>(uint64_t(1) << 20, 2 * have)));
+        out.resize(next);
+        have += in.read(out.data() + have, next - have);
+        if (have < next) break;
+    }
+    out.resize(have);
+    return out;
+}
+
 std::vector<uint8_t> inflateExactly(std::span<const uint8_t> compressed, uint64_t expected,
                                     const std::string& path) {
     if (expected > maxInflatedBytes(compressed.size()))
         fail(path, ": header declares ", expected, " bytes of samples, more than ", compressed.size(),
              " bytes of gzip data can hold (truncated or wrong sizes?)");
-    std::vector<uint8_t> out(static_cast<std::size_t>(expected));
     GzipStream in(compressed, path);
-    const std::size_t got = in.read(out.data(), out.size());
-    if (got < out.size())
-        fail(path, ": gzip data is truncated: it inflates to ", got, " of the ", expected,
+    std::vector<uint8_t> out = inflateUpTo(in, expected);
+    if (out.size() < expected)
+        fail(path, ": gzip data is truncated: it inflates to ", out.size(), " of the ", expected,
              " bytes of samples the header declares");
     uint8_t extra[1];
     if (in.read(extra, 1) != 0)
         fail(path, ": gzip data inflates to more than the ", expected,
              " bytes of samples the header declares (wrong sizes or type?)");
     return out;
+}
+
+void checkVolumeMemory(const Vec3i& dims, uint64_t bufferBytes, const std::string& path) {
+    const uint64_t voxels = uint64_t(dims.x) * uint64_t(dims.y) * uint64_t(dims.z); // <= 2^40, checked
+    const std::string what = concat(path, ": a volume of ", dims.x, " x ", dims.y, " x ", dims.z, " voxels");
+    checkMemory(voxels * sizeof(float) + bufferBytes, what.c_str());
 }
 
 uint64_t checkedSampleBytes(const Vec3i& dims, ScalarType type, const std::string& path) {

@@ -236,6 +236,8 @@ Volume readScalarNrrd(std::span<const uint8_t> bytes, const std::string& path, V
     Vec3d centre0 = haveOrigin ? origin : cell * 0.5;
     for (int a = 0; a < 3; ++a)
         if (mirror[a]) centre0[a] -= double(dims[a] - 1) * cell[a];
+    // The data is all there: now the memory the volume takes (beside the inflated samples).
+    checkVolumeMemory(dims, inflated.size(), dataPath);
     Volume v(dims, centre0 - cell * 0.5, cell, type);
     decodeSamples(data.data(), type, bigEndian, v, dataPath);
     for (int a = 0; a < 3; ++a)

@@ -123,6 +123,8 @@ Volume readRawJson(std::span<const uint8_t> bytes, const std::string& path, Volu
         fail(raw, ": the file holds ", data.size() - expected, " bytes more than the ", expected,
              " bytes of samples ", path, " declares (wrong dims or type?)");
     }
+    // The data is all there: now the memory the volume takes (beside the inflated samples).
+    checkVolumeMemory(dims, inflated.size(), path);
     Volume v(dims, centre0 - spacing * 0.5, spacing, type);
     decodeSamples(data.data(), type, bigEndian, v, raw);
     return v;

@@ -13,8 +13,11 @@
 #include <bit>
 #include <cmath>
 #include <fstream>
+#include <istream>
 #include <memory>
 #include <mutex>
+#include <streambuf>
+#include <string>
 #include <vector>
 
 #include <openvdb/io/Stream.h>
@@ -23,6 +26,7 @@
 
 #include "core/bitops.hpp"
 #include "io/module_api.hpp"
+#include "io/modules/vdb_validate.hpp"
 #include "voxfx/error.hpp"
 
 namespace voxfx::detail {
@@ -222,16 +226,54 @@ template <class GridT> void readTree(const GridT& grid, const openvdb::Coord& o,
     }
 }
 
+// An istream's buffer over bytes in memory, seekable within them.
+class MemoryBuffer : public std::streambuf {
+public:
+    explicit MemoryBuffer(const std::string& bytes) {
+        char* p = const_cast<char*>(bytes.data()); // read only: no put area
+        setg(p, p, p + bytes.size());
+    }
+
+protected:
+    pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode) override {
+        const off_type size = egptr() - eback();
+        const off_type base = dir == std::ios_base::beg   ? 0
+                              : dir == std::ios_base::cur ? gptr() - eback()
+                                                          : size;
+        if (off < -base || off > size - base) return pos_type(off_type(-1));
+        setg(eback(), eback() + (base + off), egptr());
+        return pos_type(base + off);
+    }
+    pos_type seekpos(pos_type p, std::ios_base::openmode mode) override {
+        return seekoff(off_type(p), std::ios_base::beg, mode);
+    }
+};
+
+std::string readWholeFile(const char* path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail("cannot open the file");
+    in.seekg(0, std::ios::end);
+    const std::streamoff size = in.tellg();
+    if (size < 0) fail("cannot determine the file size (not a regular file?)");
+    in.seekg(0, std::ios::beg);
+    std::string bytes(std::size_t(size), '\0');
+    if (!in.read(bytes.data(), size)) fail("cannot read the file (it got shorter while reading?)");
+    return bytes;
+}
+
 void readBitsImpl(const char* path, void* ctx,
                   uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn)) {
     initializeOpenVdb();
+    // The whole file, checked by the walker (vdb_validate.hpp) before OpenVDB reads those very
+    // bytes from memory: OpenVDB trusts every size and count in a file.
+    std::string bytes = readWholeFile(path);
+    vdbcheck::validateAndNeutralize(bytes);
     openvdb::GridPtrVecPtr grids;
     try {
-        // Read through our own stream with exceptions on: OpenVDB trusts the sizes and counts in
-        // the file, and a truncated file read on past its end feeds it zeros or stale bytes
-        // (huge allocations, runaway node counts). Failing on the first short read avoids that.
-        std::ifstream in(path, std::ios::binary);
-        if (!in) fail("cannot open the file");
+        // Exceptions on: a read past the end (which the walker rules out) would otherwise feed
+        // OpenVDB zeros or stale bytes.
+        MemoryBuffer buffer(bytes);
+        std::istream in(&buffer);
         in.exceptions(std::ios::failbit | std::ios::badbit);
         openvdb::io::Stream stream(in, /*delayLoad=*/false);
         grids = stream.getGrids();
@@ -268,7 +310,10 @@ void readBitsImpl(const char* path, void* ctx,
     } else {
         fail("grid '", base->getName(), "' has no active voxels and no stored dimensions");
     }
-    const openvdb::Coord o = box.min(), n = box.dim();
+    // Sizes in 64 bits: an index box from -2^31 to 2^31 - 1 has 2^32 voxels along an axis.
+    const openvdb::Coord o = box.min();
+    const int64_t n[3] = {int64_t(box.max().x()) - o.x() + 1, int64_t(box.max().y()) - o.y() + 1,
+                          int64_t(box.max().z()) - o.z() + 1};
     VdbReadBox out;
     for (int a = 0; a < 3; ++a) {
         out.dims[a] = n[a];
@@ -277,7 +322,7 @@ void readBitsImpl(const char* path, void* ctx,
     }
     int64_t wpc = 0;
     uint64_t* words = allocate(ctx, out, &wpc);
-    const Target g{n.x(), n.y(), n.z(), wpc, words};
+    const Target g{n[0], n[1], n[2], wpc, words};
     if (auto b = openvdb::GridBase::grid<openvdb::BoolGrid>(base))
         readTree(*b, o, g);
     else if (auto f = openvdb::GridBase::grid<openvdb::FloatGrid>(base))

@@ -1,0 +1,12 @@
+// voxfx — fuzz target: the binvox reader (io/binvox.cpp).
+#include "fuzz_target.hpp"
+#include "io/grid_formats.hpp"
+
+VOXFX_FUZZ_TARGET(binvox) {
+    voxfx::fuzz::expectCleanError([&] {
+        const voxfx::VoxelGrid g = voxfx::detail::readBinvox(data);
+        voxfx::fuzz::require(g.bits.width() == g.frame.width() && g.bits.height() == g.frame.height() &&
+                                 g.bits.depth() == g.frame.depth(),
+                             "the grid's bits match its frame");
+    });
+}
