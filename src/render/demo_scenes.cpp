@@ -61,17 +61,6 @@ void appendCylinder(Mesh& m, const Vec3d& a, const Vec3d& b, double ra, double r
     }
 }
 
-void appendBox(Mesh& m, const Vec3d& lo, const Vec3d& hi) {
-    const auto base = uint32_t(m.positions.size());
-    for (int k = 0; k < 8; ++k)
-        m.positions.push_back(
-            Vec3f(Vec3d{(k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z}));
-    static const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                         {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    for (const auto& q : quads)
-        for (const uint32_t t : {q[0], q[1], q[2], q[0], q[2], q[3]}) m.indices.push_back(base + t);
-}
-
 SceneMesh groundPlane(double halfSize, uint32_t material) {
     SceneMesh g;
     g.name = "Ground";
@@ -179,7 +168,7 @@ Scene groundedScene(const char* source, double groundHalfSize, const char* groun
 void appendPosts(Mesh& m, std::initializer_list<double> xs, std::initializer_list<double> zs, double half,
                  double height) {
     for (const double x : xs)
-        for (const double z : zs) appendBox(m, {x - half, 0, z - half}, {x + half, height, z + half});
+        for (const double z : zs) detail::appendBox(m, {x - half, 0, z - half}, {x + half, height, z + half});
 }
 
 Light directionalLight(const char* name, const Vec3d& direction, Vec3f colour, float intensity) {
@@ -243,6 +232,17 @@ Scene makeTreeScene(const TreeOptions& o) {
 }
 
 namespace detail {
+
+void appendBox(Mesh& m, const Vec3d& lo, const Vec3d& hi) {
+    const auto base = uint32_t(m.positions.size());
+    for (int k = 0; k < 8; ++k)
+        m.positions.push_back(
+            Vec3f(Vec3d{(k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z}));
+    static const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                         {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : quads)
+        for (const uint32_t t : {q[0], q[1], q[2], q[0], q[2], q[3]}) m.indices.push_back(base + t);
+}
 
 Scene makeBunnyScene(const DemoMeshes& meshes, int leaves, uint64_t seed) {
     std::optional<Mesh> bunny = meshes.mesh("bunny00.off");

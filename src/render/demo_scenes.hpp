@@ -24,4 +24,7 @@ Scene makeBunnyScene(const DemoMeshes& meshes, int leaves, uint64_t seed);
 Scene makeCgalScene(const DemoMeshes& meshes, int leaves, uint64_t seed);
 Scene makeGlassScene(const DemoMeshes& meshes);
 
+/// Appends the axis-aligned box [lo, hi] to m: 8 corners, 12 outward-facing triangles.
+void appendBox(Mesh& m, const Vec3d& lo, const Vec3d& hi);
+
 } // namespace voxfx::detail

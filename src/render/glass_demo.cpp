@@ -48,17 +48,6 @@ Mesh glassDemoTorusKnot(int p, int q, double R, double r, double tube, int segme
     return m;
 }
 
-void glassDemoBox(Mesh& m, const Vec3d& lo, const Vec3d& hi) {
-    const auto base = uint32_t(m.positions.size());
-    for (int k = 0; k < 8; ++k)
-        m.positions.push_back(
-            Vec3f(Vec3d{(k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z}));
-    static const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                         {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    for (const auto& q : quads)
-        for (const uint32_t t : {q[0], q[1], q[2], q[0], q[2], q[3]}) m.indices.push_back(base + t);
-}
-
 Material glassDemoMaterial(const char* name, Vec3f tint, Vec3f attenuation, float distance) {
     Material g;
     g.name = name;
@@ -146,7 +135,7 @@ Scene makeGlassScene(const DemoMeshes& meshes) {
     for (int k = 0; k < 2; ++k) {
         SceneMesh m;
         m.name = k == 0 ? "Block-amber" : "Block-blue";
-        glassDemoBox(m.mesh, {1.3, 0.6 * k, -0.5}, {2.0, 0.6 * k + 0.6, 0.3});
+        appendBox(m.mesh, {1.3, 0.6 * k, -0.5}, {2.0, 0.6 * k + 0.6, 0.3});
         m.material = k == 0 ? amber : blue;
         scene.meshes.push_back(std::move(m));
     }
