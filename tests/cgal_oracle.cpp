@@ -1,16 +1,26 @@
 // voxfx tests — the CGAL side of the exactness oracle (see cgal_oracle.hpp).
 #include "cgal_oracle.hpp"
 
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/IO/polygon_soup_io.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Side_of_triangle_mesh.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/convex_hull_2.h>
 #include <gtest/gtest.h>
-
-#include "cgal_oracle_kernel.hpp"
 
 namespace voxfx::test {
 
 namespace oracle {
+
+// The CGAL types behind the oracle.
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point2 = K::Point_2;
+using Point3 = K::Point_3;
+using Triangle3 = K::Triangle_3;
+using SurfaceMesh = CGAL::Surface_mesh<Point3>;
 
 /// The mesh's triangles in world space (float coordinates widen to double exactly).
 std::vector<Triangle3> triangles(const MeshView& mesh) {
@@ -312,6 +322,191 @@ std::vector<uint8_t> oracleSegmentsHitMesh(const MeshView& mesh, const std::vect
             if (CGAL::do_overlap(sb, boxes[t]) && CGAL::do_intersect(seg, tris[t])) out[i] = 1;
     }
     return out;
+}
+
+// See cgal_oracle.hpp.
+FrameOracle oracleFrameCells(const MeshView& mesh, const Frame& frame, double nearCells) {
+    using namespace oracle;
+    const int64_t W = frame.width(), H = frame.height(), D = frame.depth();
+    FrameOracle e{WorldGrid({W, H, D}), WorldGrid({W, H, D}), WorldGrid({W, H, D}), WorldGrid({W, H, D}),
+                  false};
+    const std::vector<Triangle3> tris = triangles(mesh);
+    bool manifold = false;
+    const SurfaceMesh sm = surfaceMesh(mesh, 2, manifold);
+    e.closed = manifold && CGAL::is_closed(sm);
+    CGAL::Side_of_triangle_mesh<SurfaceMesh, K> side(sm);
+    const Vec3d cell = frame.cellSize();
+    for (int64_t y = 0; y < H; ++y)
+        for (int64_t x = 0; x < W; ++x) {
+            const DepthToSlice m = frame.depthToSlice(y * W + x);
+            for (int64_t s = 0; s < D; ++s) {
+                const Vec3d a = frame.worldFromGrid({double(x), double(y), m.near + double(s) / m.scale});
+                const Vec3d b =
+                    frame.worldFromGrid({double(x + 1), double(y + 1), m.near + double(s + 1) / m.scale});
+                const Vec3d lo = min(a, b), hi = max(a, b);
+                // The near band: the box grown by nearCells of its own size along the slices
+                // (local slices are thinner than uniform ones) and of a cell across.
+                Vec3d grow = cell * nearCells;
+                const int sa = sliceAxis(frame.axis());
+                grow[sa] = (hi[sa] - lo[sa]) * nearCells;
+                const K::Iso_cuboid_3 box(Point3(lo.x, lo.y, lo.z), Point3(hi.x, hi.y, hi.z));
+                const K::Iso_cuboid_3 grown(Point3(lo.x - grow.x, lo.y - grow.y, lo.z - grow.z),
+                                            Point3(hi.x + grow.x, hi.y + grow.y, hi.z + grow.z));
+                bool touch = false, near = false;
+                for (const Triangle3& t : tris) {
+                    if (CGAL::do_intersect(t, box)) {
+                        touch = true;
+                        break;
+                    }
+                    near = near || CGAL::do_intersect(t, grown);
+                }
+                e.conservative.at(x, y, s) = touch;
+                e.conservativeNear.at(x, y, s) = !touch && near;
+                const Vec3d c = frame.cellCenter(x, y, s);
+                const CGAL::Bounded_side bs = side(Point3(c.x, c.y, c.z));
+                e.inside.at(x, y, s) = bs == CGAL::ON_BOUNDED_SIDE;
+                e.onSurface.at(x, y, s) = bs == CGAL::ON_BOUNDARY;
+            }
+        }
+    return e;
+}
+
+// See cgal_oracle.hpp.
+void markNearlyDegenerateCentres(const MeshView& mesh, const Frame& frame, double nearCells,
+                                 WorldGrid& onSurface, bool worldOrder) {
+    using namespace oracle;
+    using Point2 = K::Point_2;
+    const int ax = columnXAxis(frame.axis()), ay = columnYAxis(frame.axis());
+    const Vec3d cell = frame.cellSize();
+    const double tol = nearCells * std::max(cell[ax], cell[ay]);
+    std::vector<K::Segment_2> edges;
+    for (std::size_t t = 0; t < mesh.triangleCount; ++t)
+        for (int k = 0; k < 3; ++k) {
+            const Vec3d a = mesh.vertex(mesh.index(t, k)), b = mesh.vertex(mesh.index(t, (k + 1) % 3));
+            edges.emplace_back(Point2(a[ax], a[ay]), Point2(b[ax], b[ay]));
+        }
+    // Centres within nearCells of a slice of the surface along their line: local slices are
+    // fitted to the geometry of their column (a face spanning a column puts the centre of its
+    // middle slice on it), and faces through lattice-like points put centres on them.
+    std::vector<Triangle3> tris = triangles(mesh);
+    auto mark = [&](int64_t x, int64_t y, int64_t s) {
+        if (!worldOrder) {
+            onSurface.at(x, y, s) = 1;
+            return;
+        }
+        Vec3i w;
+        w[ax] = x;
+        w[ay] = y;
+        w[sliceAxis(frame.axis())] = s;
+        onSurface.at(w.x, w.y, w.z) = 1;
+    };
+    const int sa = sliceAxis(frame.axis());
+    for (int64_t y = 0; y < frame.height(); ++y)
+        for (int64_t x = 0; x < frame.width(); ++x)
+            for (int64_t s = 0; s < frame.depth(); ++s) {
+                const Vec3d c = frame.cellCenter(x, y, s);
+                const double d =
+                    nearCells * (frame.cellCenter(x, y, std::min<int64_t>(s + 1, frame.depth() - 1))[sa] -
+                                 frame.cellCenter(x, y, std::max<int64_t>(s - 1, 0))[sa]);
+                Vec3d lo = c, hi = c;
+                lo[sa] -= std::abs(d);
+                hi[sa] += std::abs(d);
+                const K::Segment_3 probe(Point3(lo.x, lo.y, lo.z), Point3(hi.x, hi.y, hi.z));
+                for (const Triangle3& t : tris) {
+                    if (t.bbox().xmax() < lo.x || t.bbox().xmin() > hi.x || t.bbox().ymax() < lo.y ||
+                        t.bbox().ymin() > hi.y || t.bbox().zmax() < lo.z || t.bbox().zmin() > hi.z)
+                        continue;
+                    if (CGAL::do_intersect(t, probe)) {
+                        mark(x, y, s);
+                        break;
+                    }
+                }
+            }
+    for (int64_t y = 0; y < frame.height(); ++y)
+        for (int64_t x = 0; x < frame.width(); ++x) {
+            const Vec3d c = frame.cellCenter(x, y, 0);
+            const Point2 p(c[ax], c[ay]);
+            bool near = false;
+            for (const K::Segment_2& e : edges)
+                near = near || CGAL::to_double(CGAL::squared_distance(e, p)) <= tol * tol;
+            if (!near) continue;
+            for (int64_t s = 0; s < frame.depth(); ++s) mark(x, y, s);
+        }
+}
+
+std::vector<int> sideOfClosedMeshPerturbed(const MeshView& mesh, const std::vector<Vec3d>& points) {
+    using EK = CGAL::Exact_predicates_exact_constructions_kernel;
+    using EKMesh = CGAL::Surface_mesh<EK::Point_3>;
+    bool manifold = false;
+    const oracle::SurfaceMesh sm = oracle::surfaceMesh(mesh, 2, manifold); // axis 2: no permutation
+    if (!manifold) return {};
+    // The same mesh with exact (rational) coordinates.
+    EKMesh em;
+    for (const auto v : sm.vertices()) {
+        const auto& p = sm.point(v);
+        em.add_vertex(EK::Point_3(p.x(), p.y(), p.z()));
+    }
+    for (const auto f : sm.faces()) {
+        std::vector<EKMesh::Vertex_index> corners;
+        for (const auto v : CGAL::vertices_around_face(sm.halfedge(f), sm))
+            corners.push_back(EKMesh::Vertex_index(uint32_t(v)));
+        em.add_face(corners);
+    }
+    CGAL::Side_of_triangle_mesh<EKMesh, EK> side(em);
+    const Box3d b = computeBounds(mesh);
+    const double scale = std::max({b.extent().x, b.extent().y, b.extent().z});
+    // delta far below float feature sizes (2^-24 of the extent); eps1 far below delta times any
+    // slope a float triangle can have; eps2 far below eps1 times any edge's dx / dy ratio.
+    const EK::FT delta = EK::FT(scale) * std::ldexp(1.0, -60);
+    const EK::FT eps1 = delta * EK::FT(std::ldexp(1.0, -200));
+    const EK::FT eps2 = eps1 * EK::FT(std::ldexp(1.0, -200));
+    std::vector<int> out;
+    out.reserve(points.size());
+    for (const Vec3d& p : points) {
+        const CGAL::Bounded_side bs =
+            side(EK::Point_3(EK::FT(p.x) + eps1, EK::FT(p.y) + eps2, EK::FT(p.z) - delta));
+        out.push_back(bs == CGAL::ON_BOUNDED_SIDE ? 1 : (bs == CGAL::ON_BOUNDARY ? 0 : -1));
+    }
+    return out;
+}
+
+int oracleOrient2d(double ax, double ay, double bx, double by, double cx, double cy) {
+    using oracle::Point2;
+    const CGAL::Orientation o = CGAL::orientation(Point2(ax, ay), Point2(bx, by), Point2(cx, cy));
+    return o == CGAL::LEFT_TURN ? 1 : (o == CGAL::RIGHT_TURN ? -1 : 0);
+}
+
+int oracleOrient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+    using oracle::Point3;
+    const CGAL::Orientation o = CGAL::orientation(Point3(a.x, a.y, a.z), Point3(b.x, b.y, b.z),
+                                                  Point3(c.x, c.y, c.z), Point3(d.x, d.y, d.z));
+    return o == CGAL::POSITIVE ? 1 : (o == CGAL::NEGATIVE ? -1 : 0);
+}
+
+std::vector<Point2d> oracleConvexHull2(const std::vector<Point2d>& points) {
+    using oracle::Point2;
+    std::vector<Point2> in, hull;
+    for (const Point2d& p : points) in.emplace_back(p[0], p[1]);
+    CGAL::convex_hull_2(in.begin(), in.end(), std::back_inserter(hull));
+    std::vector<Point2d> out;
+    for (const Point2& p : hull) out.push_back({p.x(), p.y()});
+    return out;
+}
+
+double oracleDistanceToSegment2(const Point2d& a, const Point2d& b, const Point2d& p) {
+    using oracle::K;
+    using oracle::Point2;
+    const K::Segment_2 e(Point2(a[0], a[1]), Point2(b[0], b[1]));
+    return std::sqrt(CGAL::to_double(CGAL::squared_distance(e, Point2(p[0], p[1]))));
+}
+
+bool oracleTriangleMeetsBox(const std::array<Vec3d, 3>& t, const Box3d& box) {
+    using oracle::K;
+    using oracle::Point3;
+    const K::Triangle_3 tri(Point3(t[0].x, t[0].y, t[0].z), Point3(t[1].x, t[1].y, t[1].z),
+                            Point3(t[2].x, t[2].y, t[2].z));
+    const K::Iso_cuboid_3 b(Point3(box.lo.x, box.lo.y, box.lo.z), Point3(box.hi.x, box.hi.y, box.hi.z));
+    return CGAL::do_intersect(tri, b);
 }
 
 } // namespace voxfx::test

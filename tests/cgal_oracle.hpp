@@ -198,6 +198,51 @@ ConservativeOracle oracleConservative(const MeshView& mesh, const CellGeometry& 
 std::vector<uint8_t> oracleSegmentsHitMesh(const MeshView& mesh, const std::vector<Vec3d>& from,
                                            const std::vector<Vec3d>& to);
 
+/// Result of oracleFrameCells, in the frame's index order (x, y, s) as WorldGrids of dims (W, H, D).
+struct FrameOracle {
+    WorldGrid conservative;     ///< the cell's closed box meets a triangle
+    WorldGrid conservativeNear; ///< misses every triangle, but meets one once grown by the tolerance
+    WorldGrid inside;           ///< the centre is inside (Side_of_triangle_mesh ON_BOUNDED_SIDE)
+    WorldGrid onSurface;        ///< the centre is on the surface (ON_BOUNDARY): left out of comparisons
+    bool closed = false;        ///< the mesh is a closed Surface_mesh; `inside` means nothing otherwise
+};
+/// Any frame (local slicing, non-cubic cells): every cell of `frame`, with its world box from the
+/// frame's own per-column slicing, against every triangle (exact do_intersect; brute force, for
+/// small meshes and grids); centres by CGAL::Side_of_triangle_mesh. The near band grows each box
+/// by `nearCells` of its own size along the slices and of a cell across.
+FrameOracle oracleFrameCells(const MeshView& mesh, const Frame& frame, double nearCells);
+
+/// Marks in `onSurface` the centres whose line along the slicing axis passes within `nearCells`
+/// of a mesh edge, or within `nearCells` slices of the surface along that line: in frames whose
+/// cells are not representable, exact contacts at "nice" fractions of the box can put the
+/// oracle's rounded world centres and the rasterizer's rounded grid coordinates on different
+/// sides. `onSurface` is in world-axis order when `worldOrder`, else in frame order (x, y, s).
+void markNearlyDegenerateCentres(const MeshView& mesh, const Frame& frame, double nearCells,
+                                 WorldGrid& onSurface, bool worldOrder);
+
+/// CGAL::Side_of_triangle_mesh, with exact (rational) coordinates, at each point p moved to
+/// p + (eps1, eps2, -delta) where delta = 2^-60 * scale, eps1 = 2^-200 * delta and
+/// eps2 = 2^-200 * eps1 (scale: the largest extent of the mesh): 1 inside, -1 outside, 0 when
+/// still on the boundary (the perturbation was too small). Empty when the mesh is not a
+/// manifold. Decides points lying exactly on the surface by the tie rule of voxfx/contains.hpp.
+std::vector<int> sideOfClosedMeshPerturbed(const MeshView& mesh, const std::vector<Vec3d>& points);
+
+/// CGAL::orientation on the double inputs: 1 left turn (counter-clockwise), -1 right turn, 0
+/// collinear.
+int oracleOrient2d(double ax, double ay, double bx, double by, double cx, double cy);
+/// CGAL::orientation(a, b, c, d): 1 when d lies on the positive side of (a, b, c), i.e.
+/// det[b - a, c - a, d - a] > 0; -1 on the negative side; 0 coplanar.
+int oracleOrient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d);
+
+using Point2d = std::array<double, 2>;
+/// The convex hull of `points` (CGAL::convex_hull_2), counter-clockwise, without collinear points.
+std::vector<Point2d> oracleConvexHull2(const std::vector<Point2d>& points);
+/// The distance from `p` to the closed segment [a, b] (CGAL::squared_distance, then a square root).
+double oracleDistanceToSegment2(const Point2d& a, const Point2d& b, const Point2d& p);
+/// Whether the closed triangle meets the closed box (CGAL::do_intersect(Triangle_3, Iso_cuboid_3),
+/// exact on the double inputs).
+bool oracleTriangleMeetsBox(const std::array<Vec3d, 3>& triangle, const Box3d& box);
+
 /// The walls plus every cell that no 6-connected path of non-wall cells joins to the grid border
 /// (breadth-first search from all non-wall border cells).
 inline WorldGrid floodFromBorder(const WorldGrid& walls) {

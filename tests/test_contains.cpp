@@ -16,11 +16,9 @@
 #include <string>
 #include <vector>
 
-#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <gtest/gtest.h>
 
 #include "cgal_oracle.hpp"
-#include "cgal_oracle_kernel.hpp"
 #include "test_util.hpp"
 #include "voxfx/contains.hpp"
 #include "voxfx/mesh_io.hpp"
@@ -28,9 +26,6 @@
 
 namespace voxfx {
 namespace {
-
-using ContainsEK = CGAL::Exact_predicates_exact_constructions_kernel;
-using ContainsEKMesh = CGAL::Surface_mesh<ContainsEK::Point_3>;
 
 /// Random points in the mesh's bounds grown by 10% on every side.
 std::vector<Vec3d> containsRandomPoints(const MeshView& mesh, std::size_t n, uint64_t seed) {
@@ -52,11 +47,9 @@ TEST(Contains, ParityMatchesCgalSideOfMeshOnRandomPoints) {
     for (const char* name : kContainsMeshes) {
         VOXFX_REQUIRE_DATA(name);
         const Mesh mesh = loadMesh(test::dataPath(name));
-        bool valid = false;
-        const test::oracle::SurfaceMesh sm = test::oracle::surfaceMesh(mesh.view(), 2, valid);
-        ASSERT_TRUE(valid && CGAL::is_closed(sm)) << name;
-        CGAL::Side_of_triangle_mesh<test::oracle::SurfaceMesh, test::oracle::K> side(sm);
         const std::vector<Vec3d> pts = containsRandomPoints(mesh.view(), 20000, 7);
+        const std::vector<int> side = test::sideOfClosedMesh(mesh.view(), pts);
+        ASSERT_EQ(side.size(), pts.size()) << name << " is not a closed manifold";
         for (const int64_t resolution : {int64_t(0), int64_t(16), int64_t(97)}) {
             ContainsOptions o;
             o.resolution = resolution;
@@ -66,9 +59,8 @@ TEST(Contains, ParityMatchesCgalSideOfMeshOnRandomPoints) {
             classifier.classify(pts, got, &stats);
             int64_t wrong = 0, inside = 0;
             for (std::size_t i = 0; i < pts.size(); ++i) {
-                const CGAL::Bounded_side s = side(test::oracle::Point3(pts[i].x, pts[i].y, pts[i].z));
-                if (s == CGAL::ON_BOUNDARY) continue;
-                const bool expected = s == CGAL::ON_BOUNDED_SIDE;
+                if (side[i] == 0) continue; // on the boundary
+                const bool expected = side[i] > 0;
                 inside += expected;
                 if (bool(got[i]) != expected && wrong++ < 5)
                     ADD_FAILURE() << name << " resolution " << resolution << ": point (" << pts[i].x << ", "
@@ -106,43 +98,21 @@ TEST(Contains, ParityOnVerticesEdgesAndFacesFollowsTheTieRule) {
     for (const char* name : {"meshes/cube-meshed.off", "meshes/cross.off", "meshes/pinion.off"}) {
         VOXFX_REQUIRE_DATA(name);
         const Mesh mesh = loadMesh(test::dataPath(name));
-        bool valid = false;
-        const test::oracle::SurfaceMesh sm = test::oracle::surfaceMesh(mesh.view(), 2, valid);
-        ASSERT_TRUE(valid);
-        CGAL::Side_of_triangle_mesh<test::oracle::SurfaceMesh, test::oracle::K> side(sm);
-        // The same mesh with exact (rational) coordinates, for the perturbed points.
-        ContainsEKMesh em;
-        for (const auto v : sm.vertices()) {
-            const auto& p = sm.point(v);
-            em.add_vertex(ContainsEK::Point_3(p.x(), p.y(), p.z()));
-        }
-        for (const auto f : sm.faces()) {
-            std::vector<ContainsEKMesh::Vertex_index> corners;
-            for (const auto v : CGAL::vertices_around_face(sm.halfedge(f), sm))
-                corners.push_back(ContainsEKMesh::Vertex_index(uint32_t(v)));
-            em.add_face(corners);
-        }
-        CGAL::Side_of_triangle_mesh<ContainsEKMesh, ContainsEK> exactSide(em);
-        const Box3d b = computeBounds(mesh.view());
-        const double scale = std::max({b.extent().x, b.extent().y, b.extent().z});
-        // delta far below float feature sizes (2^-24 of the extent); eps far below delta times any
-        // slope a float triangle can have; eps^2 far below eps times any edge's dx / dy ratio.
-        const ContainsEK::FT delta = ContainsEK::FT(scale) * std::ldexp(1.0, -60);
-        const ContainsEK::FT eps1 = delta * ContainsEK::FT(std::ldexp(1.0, -200));
-        const ContainsEK::FT eps2 = eps1 * ContainsEK::FT(std::ldexp(1.0, -200));
-
+        const std::vector<Vec3d> candidates = containsSurfacePoints(mesh, 150);
+        const std::vector<int> side = test::sideOfClosedMesh(mesh.view(), candidates);
+        ASSERT_EQ(side.size(), candidates.size()) << name << " is not a closed manifold";
         std::vector<Vec3d> pts;
-        for (const Vec3d& p : containsSurfacePoints(mesh, 150))
-            if (side(test::oracle::Point3(p.x, p.y, p.z)) == CGAL::ON_BOUNDARY) pts.push_back(p);
+        for (std::size_t i = 0; i < candidates.size(); ++i)
+            if (side[i] == 0) pts.push_back(candidates[i]); // exactly on the surface
         ASSERT_GT(pts.size(), 200u) << name;
         const std::vector<uint8_t> got = contains(mesh.view(), pts);
+        // The exact side of each point moved off the surface by the tie rule's perturbation.
+        const std::vector<int> perturbed = test::sideOfClosedMeshPerturbed(mesh.view(), pts);
+        ASSERT_EQ(perturbed.size(), pts.size()) << name;
         int64_t wrong = 0, inside = 0;
         for (std::size_t i = 0; i < pts.size(); ++i) {
-            const ContainsEK::Point_3 q(ContainsEK::FT(pts[i].x) + eps1, ContainsEK::FT(pts[i].y) + eps2,
-                                        ContainsEK::FT(pts[i].z) - delta);
-            const CGAL::Bounded_side s = exactSide(q);
-            ASSERT_NE(s, CGAL::ON_BOUNDARY) << name << ": the perturbation is too small";
-            const bool expected = s == CGAL::ON_BOUNDED_SIDE;
+            ASSERT_NE(perturbed[i], 0) << name << ": the perturbation is too small";
+            const bool expected = perturbed[i] > 0;
             inside += expected;
             if (bool(got[i]) != expected && wrong++ < 5)
                 ADD_FAILURE() << name << ": surface point (" << pts[i].x << ", " << pts[i].y << ", "
@@ -206,10 +176,9 @@ TEST(Contains, WindingAndFloodOnAClosedMeshAgreeWithCgal) {
     const char* name = "meshes/knot.off";
     VOXFX_REQUIRE_DATA(name);
     const Mesh mesh = loadMesh(test::dataPath(name));
-    bool valid = false;
-    const test::oracle::SurfaceMesh sm = test::oracle::surfaceMesh(mesh.view(), 2, valid);
-    CGAL::Side_of_triangle_mesh<test::oracle::SurfaceMesh, test::oracle::K> side(sm);
     const std::vector<Vec3d> pts = containsRandomPoints(mesh.view(), 2000, 11);
+    const std::vector<int> side = test::sideOfClosedMesh(mesh.view(), pts);
+    ASSERT_EQ(side.size(), pts.size()) << name << " is not a closed manifold";
     ContainsOptions wo;
     wo.method = ContainsMethod::Winding;
     const std::vector<uint8_t> winding = contains(mesh.view(), pts, wo);
@@ -219,8 +188,7 @@ TEST(Contains, WindingAndFloodOnAClosedMeshAgreeWithCgal) {
     const std::vector<uint8_t> flood = contains(mesh.view(), pts, fo);
     int64_t windingWrong = 0, floodMissing = 0, floodExtra = 0, inside = 0;
     for (std::size_t i = 0; i < pts.size(); ++i) {
-        const CGAL::Bounded_side s = side(test::oracle::Point3(pts[i].x, pts[i].y, pts[i].z));
-        const bool expected = s == CGAL::ON_BOUNDED_SIDE;
+        const bool expected = side[i] > 0;
         inside += expected;
         windingWrong += bool(winding[i]) != expected;
         floodMissing += expected && !flood[i];
@@ -336,9 +304,7 @@ TEST(ContainsExact, OrientationsMatchCgalOnNearlyDegenerateInputs) {
         const double ax = coord(), ay = coord(), bx = coord(), by = coord(), t = weight();
         const double cx = nudge(ax + t * (bx - ax)), cy = nudge(ay + t * (by - ay));
         const int got = exact::orient2d(ax, ay, bx, by, cx, cy);
-        const CGAL::Orientation o = CGAL::orientation(
-            test::oracle::Point2(ax, ay), test::oracle::Point2(bx, by), test::oracle::Point2(cx, cy));
-        ASSERT_EQ(got, o == CGAL::LEFT_TURN ? 1 : (o == CGAL::RIGHT_TURN ? -1 : 0));
+        ASSERT_EQ(got, test::oracleOrient2d(ax, ay, bx, by, cx, cy));
         zeros2 += got == 0;
 
         const Vec3d a{coord(), coord(), coord()}, b{coord(), coord(), coord()}, c{coord(), coord(), coord()};
@@ -346,19 +312,12 @@ TEST(ContainsExact, OrientationsMatchCgalOnNearlyDegenerateInputs) {
         Vec3d d = a + (b - a) * s + (c - a) * r;
         d.z = nudge(d.z);
         const int got3 = exact::orient3d(a, b, c, d);
-        const test::oracle::Point3 pa(a.x, a.y, a.z), pb(b.x, b.y, b.z), pc(c.x, c.y, c.z), pd(d.x, d.y, d.z);
-        // CGAL: POSITIVE when d lies on the positive side of (a, b, c), i.e. det[b-a, c-a, d-a] > 0.
-        const CGAL::Orientation o3 = CGAL::orientation(pa, pb, pc, pd);
-        ASSERT_EQ(got3, o3 == CGAL::POSITIVE ? 1 : (o3 == CGAL::NEGATIVE ? -1 : 0)) << n;
+        ASSERT_EQ(got3, test::oracleOrient3d(a, b, c, d)) << n;
         zeros3 += got3 == 0;
     }
     // Products that underflow: a subnormal coordinate next to ordinary ones (found by this test).
     const double tiny = std::ldexp(1.0, -1074), ax = -0x1.66p-3, bx = -0x1.29p-1, by = 0x1.048p-1;
-    EXPECT_EQ(exact::orient2d(ax, 0.0, bx, by, ax, -tiny),
-              CGAL::orientation(test::oracle::Point2(ax, 0.0), test::oracle::Point2(bx, by),
-                                test::oracle::Point2(ax, -tiny)) == CGAL::LEFT_TURN
-                  ? 1
-                  : -1);
+    EXPECT_EQ(exact::orient2d(ax, 0.0, bx, by, ax, -tiny), test::oracleOrient2d(ax, 0.0, bx, by, ax, -tiny));
     EXPECT_EQ(exact::orient3d({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.25, 0.5, tiny}), 1);
     EXPECT_EQ(exact::orient3d({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.25, 0.5, -tiny}), -1);
     EXPECT_EQ(exact::orient3d({0, 0, 0}, {1e300, 0, 0}, {0, 1e300, 0}, {1e299, 1e299, 0}), 0);

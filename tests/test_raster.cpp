@@ -9,18 +9,15 @@
 #include <tuple>
 #include <vector>
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/convex_hull_2.h>
 #include <gtest/gtest.h>
 
+#include "cgal_oracle.hpp"
 #include "test_util.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/raster.hpp"
 
 namespace voxfx {
 namespace {
-
-using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 
 struct Fragment {
     int64_t x, y;
@@ -128,26 +125,25 @@ Mesh bipyramid(double cx, double cy, double z0, double zm, double z1, double r, 
 }
 
 // Where the grid point (px, py) lies relative to the convex hull of the projected vertices
-// (grid x, y): +1 strictly inside, 0 on the boundary, -1 outside (exact, CGAL).
-int hullSide(const std::vector<K::Point_2>& hull, double px, double py) {
-    const K::Point_2 p(px, py);
+// (grid x, y): +1 strictly inside, 0 on the boundary, -1 outside (exact, CGAL's orientation).
+int hullSide(const std::vector<test::Point2d>& hull, double px, double py) {
     int side = 1;
     for (std::size_t k = 0; k < hull.size(); ++k) {
-        const CGAL::Orientation o = CGAL::orientation(hull[k], hull[(k + 1) % hull.size()], p);
-        if (o == CGAL::RIGHT_TURN) return -1;
-        if (o == CGAL::COLLINEAR) side = 0;
+        const test::Point2d &a = hull[k], &b = hull[(k + 1) % hull.size()];
+        const int o = test::oracleOrient2d(a[0], a[1], b[0], b[1], px, py);
+        if (o < 0) return -1;
+        if (o == 0) side = 0;
     }
     return side;
 }
 
-std::vector<K::Point_2> projectedHull(const Frame& frame, const Mesh& mesh) {
-    std::vector<K::Point_2> points, hull;
+std::vector<test::Point2d> projectedHull(const Frame& frame, const Mesh& mesh) {
+    std::vector<test::Point2d> points;
     for (const Vec3f& v : mesh.positions) {
         const Vec3d g = frame.gridFromWorld(Vec3d(v));
-        points.emplace_back(g.x, g.y);
+        points.push_back({g.x, g.y});
     }
-    CGAL::convex_hull_2(points.begin(), points.end(), std::back_inserter(hull)); // counter-clockwise
-    return hull;
+    return test::oracleConvexHull2(points); // counter-clockwise
 }
 
 // Per column: (fragments, front fragments).
@@ -260,9 +256,8 @@ TEST(RasterTest, CentreCoverageThroughAPerspectiveFrameCrossesAConvexSolidTwice)
                 // The outline from rounded projections: decide only centres clearly off it.
                 double dist = INFINITY;
                 for (std::size_t k = 0; k < hull.size(); ++k) {
-                    const K::Segment_2 e(hull[k], hull[(k + 1) % hull.size()]);
-                    dist = std::min(dist, std::sqrt(CGAL::to_double(
-                                              CGAL::squared_distance(e, K::Point_2(x + 0.5, y + 0.5)))));
+                    dist = std::min(dist, test::oracleDistanceToSegment2(hull[k], hull[(k + 1) % hull.size()],
+                                                                         {x + 0.5, y + 0.5}));
                 }
                 if (dist < 1e-6) continue;
                 inside += side > 0;
@@ -321,8 +316,7 @@ TEST(RasterTest, ConservativeSpansHoldTheExactDepthRangeOfTheTriangleInEachClose
         // Corners as the mesh stores them (float).
         Vec3d p[3];
         for (int k = 0; k < 3; ++k) p[k] = Vec3d(mesh.positions[size_t(k)]);
-        const K::Triangle_3 tri(K::Point_3(p[0].x, p[0].y, p[0].z), K::Point_3(p[1].x, p[1].y, p[1].z),
-                                K::Point_3(p[2].x, p[2].y, p[2].z));
+        const std::array<Vec3d, 3> tri{p[0], p[1], p[2]};
         for (RasterPath path : {RasterPath::Binned, RasterPath::Direct}) {
             DirectCollector c;
             rasterizeInto(c, frame, mesh, Coverage::Conservative, path, 3);
@@ -334,25 +328,24 @@ TEST(RasterTest, ConservativeSpansHoldTheExactDepthRangeOfTheTriangleInEachClose
             for (int64_t y = 0; y < 10; ++y)
                 for (int64_t x = 0; x < 12; ++x) {
                     auto prism = [&](double grow, double z0, double z1) {
-                        return K::Iso_cuboid_3(K::Point_3(x - grow, y - grow, z0),
-                                               K::Point_3(x + 1 + grow, y + 1 + grow, z1));
+                        return Box3d{{x - grow, y - grow, z0}, {x + 1 + grow, y + 1 + grow, z1}};
                     };
                     const Span* s = spanOf[size_t(y * 12 + x)];
                     if (!s) {
-                        EXPECT_FALSE(CGAL::do_intersect(tri, prism(0, -big, big)))
+                        EXPECT_FALSE(test::oracleTriangleMeetsBox(tri, prism(0, -big, big)))
                             << "missed column " << x << ", " << y;
                         continue;
                     }
                     ++checkedSpans;
-                    EXPECT_TRUE(CGAL::do_intersect(tri, prism(slack, -big, big)))
+                    EXPECT_TRUE(test::oracleTriangleMeetsBox(tri, prism(slack, -big, big)))
                         << "extra column " << x << ", " << y;
                     EXPECT_LE(s->lo, s->hi);
                     // Tight: the triangle reaches both ends, and nothing of it in the prism lies
                     // beyond them.
-                    EXPECT_TRUE(CGAL::do_intersect(tri, prism(slack, s->lo - tol, s->lo + tol)));
-                    EXPECT_TRUE(CGAL::do_intersect(tri, prism(slack, s->hi - tol, s->hi + tol)));
-                    EXPECT_FALSE(CGAL::do_intersect(tri, prism(0, -big, s->lo - tol)));
-                    EXPECT_FALSE(CGAL::do_intersect(tri, prism(0, s->hi + tol, big)));
+                    EXPECT_TRUE(test::oracleTriangleMeetsBox(tri, prism(slack, s->lo - tol, s->lo + tol)));
+                    EXPECT_TRUE(test::oracleTriangleMeetsBox(tri, prism(slack, s->hi - tol, s->hi + tol)));
+                    EXPECT_FALSE(test::oracleTriangleMeetsBox(tri, prism(0, -big, s->lo - tol)));
+                    EXPECT_FALSE(test::oracleTriangleMeetsBox(tri, prism(0, s->hi + tol, big)));
                 }
             // Dense samples (barycentric lattice, edges included).
             const int n = 64;

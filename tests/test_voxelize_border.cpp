@@ -18,7 +18,6 @@
 #include <gtest/gtest.h>
 
 #include "cgal_oracle.hpp"
-#include "cgal_oracle_kernel.hpp"
 #include "voxfx/voxelize.hpp"
 
 namespace voxfx {
@@ -222,52 +221,12 @@ Expected uniformOracle(const MeshView& mesh, const CellGeometry& g) {
     return e;
 }
 
-// Local slicing (or any frame): every cell of the frame, with its world box from the frame's
-// own per-column slicing, against every triangle; centres by Side_of_triangle_mesh. Results in
-// frame index order (x, y, s) stored as WorldGrid of dims (W, H, D).
+// Local slicing (or any frame): the oracle of cgal_oracle.hpp on the frame's own cells.
 Expected frameOracle(const MeshView& mesh, const Frame& frame) {
-    using namespace test::oracle;
-    const int64_t W = frame.width(), H = frame.height(), D = frame.depth();
-    Expected e{WorldGrid({W, H, D}), WorldGrid({W, H, D}), WorldGrid({W, H, D}), WorldGrid({W, H, D})};
-    const std::vector<Triangle3> tris = triangles(mesh);
-    bool manifold = false;
-    const SurfaceMesh sm = surfaceMesh(mesh, 2, manifold);
-    EXPECT_TRUE(manifold && CGAL::is_closed(sm));
-    CGAL::Side_of_triangle_mesh<SurfaceMesh, K> side(sm);
-    const Vec3d cell = frame.cellSize();
-    for (int64_t y = 0; y < H; ++y)
-        for (int64_t x = 0; x < W; ++x) {
-            const DepthToSlice m = frame.depthToSlice(y * W + x);
-            for (int64_t s = 0; s < D; ++s) {
-                const Vec3d a = frame.worldFromGrid({double(x), double(y), m.near + double(s) / m.scale});
-                const Vec3d b =
-                    frame.worldFromGrid({double(x + 1), double(y + 1), m.near + double(s + 1) / m.scale});
-                const Vec3d lo = min(a, b), hi = max(a, b);
-                // The near band: the box grown by kLeaveOutCells of its own size along the slices
-                // (local slices are thinner than uniform ones) and of a cell across.
-                Vec3d grow = cell * kLeaveOutCells;
-                const int sa = sliceAxis(frame.axis());
-                grow[sa] = (hi[sa] - lo[sa]) * kLeaveOutCells;
-                const K::Iso_cuboid_3 box(Point3(lo.x, lo.y, lo.z), Point3(hi.x, hi.y, hi.z));
-                const K::Iso_cuboid_3 grown(Point3(lo.x - grow.x, lo.y - grow.y, lo.z - grow.z),
-                                            Point3(hi.x + grow.x, hi.y + grow.y, hi.z + grow.z));
-                bool touch = false, near = false;
-                for (const Triangle3& t : tris) {
-                    if (CGAL::do_intersect(t, box)) {
-                        touch = true;
-                        break;
-                    }
-                    near = near || CGAL::do_intersect(t, grown);
-                }
-                e.conservative.at(x, y, s) = touch;
-                e.conservativeNear.at(x, y, s) = !touch && near;
-                const Vec3d c = frame.cellCenter(x, y, s);
-                const CGAL::Bounded_side bs = side(Point3(c.x, c.y, c.z));
-                e.inside.at(x, y, s) = bs == CGAL::ON_BOUNDED_SIDE;
-                e.onSurface.at(x, y, s) = bs == CGAL::ON_BOUNDARY;
-            }
-        }
-    return e;
+    test::FrameOracle f = test::oracleFrameCells(mesh, frame, kLeaveOutCells);
+    EXPECT_TRUE(f.closed);
+    return Expected{std::move(f.conservative), std::move(f.conservativeNear), std::move(f.inside),
+                    std::move(f.onSurface)};
 }
 
 // The grid in frame index order (x, y, s), as a WorldGrid of dims (W, H, D).
@@ -277,74 +236,6 @@ WorldGrid frameCells(const VoxelGrid& g) {
         for (int64_t y = 0; y < g.bits.height(); ++y)
             for (int64_t x = 0; x < g.bits.width(); ++x) out.at(x, y, s) = g.bits.get(x, y, s);
     return out;
-}
-
-// Centres whose line along the slicing axis passes within kLeaveOutCells of a mesh edge: the
-// contacts here sit at "nice" fractions of the box, so in frames whose cells are not
-// representable (a resolution fit of 23 cells over 16 units) a centre line can pass through an
-// edge in exact arithmetic, and the oracle's rounded world centres and the rasterizer's rounded
-// grid coordinates may then put it on different sides. Such columns are left out of the inside
-// comparison (marked in `onSurface`, dims in world order as `e`).
-void leaveOutNearlyDegenerateCentres(const MeshView& mesh, const Frame& frame, WorldGrid& onSurface,
-                                     bool worldOrder) {
-    using namespace test::oracle;
-    using Point2 = K::Point_2;
-    const int ax = columnXAxis(frame.axis()), ay = columnYAxis(frame.axis());
-    const Vec3d cell = frame.cellSize();
-    const double tol = kLeaveOutCells * std::max(cell[ax], cell[ay]);
-    std::vector<K::Segment_2> edges;
-    for (std::size_t t = 0; t < mesh.triangleCount; ++t)
-        for (int k = 0; k < 3; ++k) {
-            const Vec3d a = mesh.vertex(mesh.index(t, k)), b = mesh.vertex(mesh.index(t, (k + 1) % 3));
-            edges.emplace_back(Point2(a[ax], a[ay]), Point2(b[ax], b[ay]));
-        }
-    // Centres within kLeaveOutCells of a slice of the surface along their line: local slices are
-    // fitted to the geometry of their column (a face spanning a column puts the centre of its
-    // middle slice on it), and faces through lattice-like points put centres on them.
-    std::vector<Triangle3> tris = triangles(mesh);
-    auto mark = [&](int64_t x, int64_t y, int64_t s) {
-        if (!worldOrder) {
-            onSurface.at(x, y, s) = 1;
-            return;
-        }
-        Vec3i w;
-        w[ax] = x;
-        w[ay] = y;
-        w[sliceAxis(frame.axis())] = s;
-        onSurface.at(w.x, w.y, w.z) = 1;
-    };
-    const int sa = sliceAxis(frame.axis());
-    for (int64_t y = 0; y < frame.height(); ++y)
-        for (int64_t x = 0; x < frame.width(); ++x)
-            for (int64_t s = 0; s < frame.depth(); ++s) {
-                const Vec3d c = frame.cellCenter(x, y, s);
-                const double d = kLeaveOutCells *
-                                 (frame.cellCenter(x, y, std::min<int64_t>(s + 1, frame.depth() - 1))[sa] -
-                                  frame.cellCenter(x, y, std::max<int64_t>(s - 1, 0))[sa]);
-                Vec3d lo = c, hi = c;
-                lo[sa] -= std::abs(d);
-                hi[sa] += std::abs(d);
-                const K::Segment_3 probe(Point3(lo.x, lo.y, lo.z), Point3(hi.x, hi.y, hi.z));
-                for (const Triangle3& t : tris) {
-                    if (t.bbox().xmax() < lo.x || t.bbox().xmin() > hi.x || t.bbox().ymax() < lo.y ||
-                        t.bbox().ymin() > hi.y || t.bbox().zmax() < lo.z || t.bbox().zmin() > hi.z)
-                        continue;
-                    if (CGAL::do_intersect(t, probe)) {
-                        mark(x, y, s);
-                        break;
-                    }
-                }
-            }
-    for (int64_t y = 0; y < frame.height(); ++y)
-        for (int64_t x = 0; x < frame.width(); ++x) {
-            const Vec3d c = frame.cellCenter(x, y, 0);
-            const Point2 p(c[ax], c[ay]);
-            bool near = false;
-            for (const K::Segment_2& e : edges)
-                near = near || CGAL::to_double(CGAL::squared_distance(e, p)) <= tol * tol;
-            if (!near) continue;
-            for (int64_t s = 0; s < frame.depth(); ++s) mark(x, y, s);
-        }
 }
 
 ::testing::AssertionResult same(const WorldGrid& actual, const WorldGrid& expected, const WorldGrid* ignore) {
@@ -394,8 +285,8 @@ int64_t expectEveryModeMatchesCgal(const Mesh& mesh, const Frame& frame) {
                     // spans): the oracle follows the grid's own frame, rebuilt when it changes.
                     e = slicing == Slicing::Uniform ? uniformOracle(mesh.view(), CellGeometry::of(g))
                                                     : frameOracle(mesh.view(), g.frame);
-                    leaveOutNearlyDegenerateCentres(mesh.view(), g.frame, e.onSurface,
-                                                    slicing == Slicing::Uniform);
+                    test::markNearlyDegenerateCentres(mesh.view(), g.frame, kLeaveOutCells, e.onSurface,
+                                                      slicing == Slicing::Uniform);
                     haveOracle = slicing == Slicing::Uniform;
                 }
                 const WorldGrid actual = slicing == Slicing::Uniform ? toWorldGrid(g) : frameCells(g);
