@@ -3,7 +3,10 @@
 // brute-force centre coverage and CGAL's exact triangle/box overlap, determinism across thread
 // counts, local slicing and bad input.
 #include <cmath>
+#include <iterator>
+#include <limits>
 #include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -261,6 +264,7 @@ TEST(AttributeGridTest, SparseColumnsHoldExactlyTheDenseWrites) {
             AttributeOptions o;
             o.coverage = coverage;
             o.slicing = slicing;
+            o.slabOverlap = slicing == Slicing::Local ? 0.3 : 0; // widened slabs write alike too
             const Frame f = unitFrame(24);
             const AttributeGrid dense = voxelizeAttributes(leaves.view(), f, absorption, o);
             const AttributeColumns sparse = voxelizeAttributeColumns(leaves.view(), f, absorption, o);
@@ -299,6 +303,173 @@ TEST(AttributeGridTest, EmptyMeshGivesAnEmptyGrid) {
     const AttributeGrid g = voxelizeAttributes(empty.view(), unitFrame(), {});
     EXPECT_EQ(g.writeCount(), 0);
     EXPECT_EQ(g.occupancy().count(), 0);
+}
+
+// A triangle through `centre` at angle `theta` (radians) to the projection axis z, its horizontal
+// edge along azimuth `phi`: 12 cells tall along its tilted direction, 10 cells wide.
+Mesh steepTriangle(const Vec3d& centre, double theta, double phi) {
+    const Vec3d u{std::cos(phi), std::sin(phi), 0};
+    const Vec3d v{-std::sin(phi) * std::sin(theta), std::cos(phi) * std::sin(theta), std::cos(theta)};
+    Mesh m;
+    m.positions = {Vec3f(centre + v * 6.0), Vec3f(centre - v * 6.0 + u * 5.0),
+                   Vec3f(centre - v * 6.0 - u * 5.0)};
+    m.indices = {0, 1, 2};
+    return m;
+}
+
+// Written cells of an attribute grid in world-axis order (unit frame along z: i = x, j = y, k = s).
+test::WorldGrid writtenCells(const AttributeGrid& g) {
+    const VoxelGrid v{g.frame, g.occupancy()};
+    return test::toWorldGrid(v);
+}
+
+TEST(AttributeGridTest, WiderSlabsTradeMissedVoxelsForDoubledOnes) {
+    // CHANG §2: widening each slice's clipping slab writes a steep triangle's centre fragments into
+    // neighbouring slices too: fewer missed voxels, more doubled ones. Reference: CGAL's exact
+    // triangle/box overlap (the cells the triangle passes through). Missed = reference cells not
+    // written; doubled = written cells the triangle does not pass through. In a column whose centre
+    // the triangle covers, its depth over the column's footprint stays within h = (|dz/dx| +
+    // |dz/dy|) / 2 slices of the centre's depth, so an overlap above h misses nothing there.
+    const double overlaps[] = {0, 0.25, 0.5, 1, 2, 4, 8};
+    int cases = 0;
+    for (const double thetaDeg : {12.0, 25.0, 40.0})
+        for (const double phiDeg : {0.0, 33.0, 71.0}) {
+            const Mesh tri = steepTriangle({8.03, 7.97, 8.01}, thetaDeg * M_PI / 180, phiDeg * M_PI / 180);
+            Vec3d p[3];
+            for (int k = 0; k < 3; ++k) p[k] = Vec3d(tri.positions[size_t(k)]);
+            const Vec3d n = cross(p[1] - p[0], p[2] - p[0]);
+            const double h = 0.5 * (std::abs(n.x / n.z) + std::abs(n.y / n.z));
+            const Frame f = unitFrame();
+            const test::ConservativeOracle oracle = test::oracleConservative(
+                tri.view(), test::CellGeometry::of(VoxelGrid{f, BitGrid(16, 16, 16)}));
+            int64_t lastMissed = std::numeric_limits<int64_t>::max(), lastDoubled = -1, missed0 = 0;
+            for (const double w : overlaps) {
+                AttributeOptions o;
+                o.slabOverlap = w;
+                const test::WorldGrid got = writtenCells(voxelizeAttributes(tri.view(), f, {}, o));
+                int64_t missed = 0, doubled = 0, missedCovered = 0;
+                for (int64_t k = 0; k < 16; ++k)
+                    for (int64_t j = 0; j < 16; ++j)
+                        for (int64_t i = 0; i < 16; ++i) {
+                            const bool want = oracle.cells.at(i, j, k), have = got.at(i, j, k);
+                            missed += want && !have;
+                            doubled += have && !want;
+                            if (want && !have && coveringTriangles(tri, double(i) + 0.5, double(j) + 0.5) > 0)
+                                ++missedCovered;
+                        }
+                const std::string at = "theta " + std::to_string(thetaDeg) + " phi " +
+                                       std::to_string(phiDeg) + " overlap " + std::to_string(w);
+                EXPECT_LE(missed, lastMissed) << at;
+                EXPECT_GE(doubled, lastDoubled) << at;
+                if (w == 0) {
+                    EXPECT_EQ(doubled, 0) << at;       // centre fragments lie on the triangle
+                    EXPECT_GT(missedCovered, 0) << at; // steep: the depth jumps slices between centres
+                    missed0 = missed;
+                }
+                if (w > h + 1e-6) { EXPECT_EQ(missedCovered, 0) << at << " h " << h; }
+                if (w == overlaps[std::size(overlaps) - 1]) {
+                    EXPECT_LT(missed, missed0) << at;
+                    EXPECT_GT(doubled, 0) << at;
+                }
+                lastMissed = missed;
+                lastDoubled = doubled;
+            }
+            ++cases;
+        }
+    EXPECT_EQ(cases, 9);
+}
+
+TEST(AttributeGridTest, ConservativeCoverageLeavesNoHolesOnSteepTriangles) {
+    // Triangles at 0 (parallel to the projection axis) to 10 degrees from it, at several azimuths:
+    // every cell the triangle passes through (CGAL's exact triangle/box overlap) is written, with
+    // and without widened slabs, and nothing else is (up to the rasterizer's 1e-9 cell slack).
+    const Frame f = unitFrame();
+    const test::CellGeometry geometry = test::CellGeometry::of(VoxelGrid{f, BitGrid(16, 16, 16)});
+    for (const double thetaDeg : {0.0, 0.05, 0.5, 2.0, 10.0})
+        for (const double phiDeg : {0.0, 17.0, 45.0, 90.0}) {
+            const Mesh tri = steepTriangle({8.03, 7.97, 8.01}, thetaDeg * M_PI / 180, phiDeg * M_PI / 180);
+            const test::ConservativeOracle oracle = test::oracleConservative(tri.view(), geometry, 2e-9);
+            AttributeOptions o;
+            o.coverage = Coverage::Conservative;
+            const test::WorldGrid got = writtenCells(voxelizeAttributes(tri.view(), f, {}, o));
+            const test::GridDiff d = test::compareGrids(got, oracle.cells, &oracle.near);
+            EXPECT_TRUE(d.equal()) << "theta " << thetaDeg << " phi " << phiDeg << ": " << d;
+            EXPECT_GT(oracle.cells.count(), 11);
+            o.slabOverlap = 0.5; // widened: still a superset
+            const test::WorldGrid wide = writtenCells(voxelizeAttributes(tri.view(), f, {}, o));
+            EXPECT_EQ(test::compareGrids(wide, oracle.cells, &oracle.near).missing, 0);
+        }
+}
+
+TEST(AttributeGridTest, ChannelsAreStoredOnlyWhenAskedFor) {
+    // Two boxes two voxels apart with materials 0 and 1: a voxel's x says whose it is, so the
+    // material, ior and attenuation channels must hold that material's values where written (0
+    // elsewhere). Each use's channel set holds only its arrays, at the bytes per voxel of the
+    // element types (2 count, 4 absorption, 12 normals, 4 id, 4 ior, 12 attenuation).
+    Mesh m = test::makeBox({0.1, 0.1, 0.1}, {0.45, 0.9, 0.9});
+    test::appendBox(m, {0.55, 0.1, 0.1}, {0.9, 0.9, 0.9});
+    std::vector<uint32_t> mat(m.triangleCount(), 0);
+    for (size_t t = 12; t < mat.size(); ++t) mat[t] = 1;
+    const std::vector<float> absorption(m.triangleCount(), 0.5f);
+    const std::vector<AttributeMaterial> table{{1.33f, {0.1f, 0.2f, 0.3f}}, {1.9f, {2.0f, 0.0f, 0.5f}}};
+    const Frame f = Frame::orthographic({{0, 0, 0}, {1, 1, 1}}, Axis::Z, 20, 20, 20);
+    AttributeOptions o;
+    o.coverage = Coverage::Conservative;
+    o.triangleMaterial = mat;
+    o.materials = table;
+    o.channels = AttributeChannels::all();
+    const AttributeGrid all = voxelizeAttributes(m.view(), f, absorption, o);
+    const int64_t voxels = 20 * 20 * 20;
+    EXPECT_EQ(all.bytes(), uint64_t(voxels) * (2 + 4 + 12 + 4 + 4 + 12));
+    int64_t written = 0;
+    for (int64_t y = 0; y < 20; ++y)
+        for (int64_t x = 0; x < 20; ++x)
+            for (int64_t s = 0; s < 20; ++s) {
+                const auto i = size_t(all.index(x, y, s));
+                if (all.count[i] == 0) {
+                    EXPECT_EQ(all.material[i], AttributeGrid::kNoMaterial);
+                    EXPECT_EQ(all.ior[i], 0.0f);
+                    EXPECT_EQ(all.attenuation[i].y, 0.0f);
+                    continue;
+                }
+                ++written;
+                const AttributeMaterial& want = table[x < 10 ? 0 : 1];
+                EXPECT_EQ(all.ior[i], want.ior);
+                EXPECT_EQ(all.attenuation[i].x, want.attenuation.x);
+                EXPECT_EQ(all.attenuation[i].z, want.attenuation.z);
+            }
+    EXPECT_GT(written, 100);
+
+    o.channels = AttributeChannels::shadows();
+    const AttributeGrid shadows = voxelizeAttributes(m.view(), f, absorption, o);
+    EXPECT_EQ(shadows.bytes(), uint64_t(voxels) * (2 + 4));
+    EXPECT_TRUE(shadows.normalSum.empty() && shadows.material.empty() && shadows.attenuation.empty());
+    EXPECT_EQ(shadows.absorption, all.absorption);
+
+    o.channels = AttributeChannels::glass();
+    const AttributeGrid glass = voxelizeAttributes(m.view(), f, {}, o);
+    EXPECT_EQ(glass.bytes(), uint64_t(voxels) * (12 + 4));
+    EXPECT_TRUE(glass.count.empty() && glass.absorption.empty() && glass.ior.empty());
+    EXPECT_EQ(glass.occupancy().count(), written); // occupancy from the material id
+    EXPECT_EQ(glass.material, all.material);
+
+    AttributeOptions only = o; // the attenuation channel alone still knows first writes
+    only.channels = {false, false, false, false, false, true};
+    const AttributeGrid att = voxelizeAttributes(m.view(), f, {}, only);
+    EXPECT_EQ(att.bytes(), uint64_t(voxels) * 12);
+    for (int64_t i = 0; i < voxels; ++i) {
+        EXPECT_EQ(att.attenuation[size_t(i)].x, all.attenuation[size_t(i)].x);
+        EXPECT_EQ(att.attenuation[size_t(i)].z, all.attenuation[size_t(i)].z);
+    }
+    EXPECT_THROW(att.occupancy(), Error);
+
+    const std::vector<AttributeMaterial> shortTable{table[0]}; // id 1 is outside it
+    only.materials = shortTable;
+    EXPECT_THROW(voxelizeAttributes(m.view(), f, {}, only), Error);
+    o.slabOverlap = -1;
+    EXPECT_THROW(voxelizeAttributes(m.view(), f, {}, o), Error);
+    o.slabOverlap = INFINITY;
+    EXPECT_THROW(voxelizeAttributeColumns(m.view(), f, absorption, o), Error);
 }
 
 } // namespace

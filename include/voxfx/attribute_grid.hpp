@@ -1,21 +1,25 @@
-// voxfx — attribute voxelization (CHANG §2): per voxel, how many times it was written, the sum of
-// the normals written into it, and the material absorption accumulated from those writes.
+// voxfx — attribute voxelization (CHANG §2): per voxel, the channels a use asks for: how many
+// times it was written, the sum of the normals written into it, the absorption accumulated from
+// those writes, and the material (id, refraction index, RGB attenuation coefficient) of its first
+// write.
 //
 // CHANG duplicates every triangle once per slice its depth range spans, clips each copy to the
-// slab of its slice and rasterizes it into that slice. With centre sampling this writes each
-// (triangle, column) pair exactly once, into the slice holding the triangle's depth at the column
-// centre: the same fragments as ED06 surface voxelization, so Coverage::Center is the faithful
-// mode here. Coverage::Conservative instead writes every voxel the triangle touches (CHANG's
-// widened slabs taken to the limit: no missed voxels, more doubled ones).
+// slab of its slice and rasterizes it into that slice. With centre sampling a piece clipped to
+// slab s covers a column centre exactly when the triangle covers it at a depth inside the slab, so
+// the writes are: per (triangle, covered column centre), the slices whose slab holds the
+// triangle's depth there. With slabOverlap = 0 that is one slice (the same fragments as ED06
+// surface voxelization). CHANG widens the slabs so that neighbouring voxels overlap: with
+// slabOverlap = w each slab [s, s + 1) grows to [s - w, s + 1 + w) (in slices), and a centre is
+// written into every slice whose widened slab holds its depth. Steep triangles, whose depth jumps
+// by several slices from one column centre to the next, then miss fewer voxels, at the price of
+// doubled ones (voxels the triangle does not pass through; CHANG's refraction skips them with its
+// angle threshold). Coverage::Conservative writes every voxel whose closed box the triangle meets:
+// no missed voxels at all, steep triangles included (slabOverlap widens its spans too).
 //
-// Layout: flat arrays of W * H * D entries in the slicemap's order: column c = y * W + x
-// (row-major), the D voxels of a column consecutive, voxel (x, y, s) at index c * D + s.
-// Each tile of rows has one owner, so the sums are deterministic for any thread count (the
-// triangles of a tile are visited in index order).
+// Channels (AttributeChannels) are chosen per use, so each pays only for what it reads: absorption
+// shadows store count + absorption (6 bytes per voxel), the glass renderer normals + material id
+// (16 bytes); everything is 38 bytes per voxel.
 //
-// EXPERIMENTAL until the renderer issue closes.
-// Thread-safety: calls may run concurrently (no global state) as long as no call writes what
-// another reads; voxelizeAttribute* spread one call over worker threads (`threads`) themselves.
 #pragma once
 
 #include <cstdint>
@@ -30,33 +34,76 @@
 
 namespace voxfx {
 
+/// The per-voxel channels of an AttributeGrid (bytes per voxel in brackets). A channel is stored
+/// when it is asked for and, for absorption and material id, when its per-triangle input is given.
+struct AttributeChannels {
+    bool count = true;        ///< [2] writes per voxel, saturating at 65535
+    bool absorption = true;   ///< [4] sum of the triangles' absorption (needs triangleAbsorption)
+    bool normals = true;      ///< [12] sum of the unit triangle normals
+    bool material = true;     ///< [4] material id of the first write (needs triangleMaterial)
+    bool ior = false;         ///< [4] refraction index of the first write's material (needs materials)
+    bool attenuation = false; ///< [12] RGB attenuation coefficient of that material (needs materials)
+
+    /// CHANG §3 absorption shadows: count and absorption only.
+    static AttributeChannels shadows() { return {true, true, false, false, false, false}; }
+    /// The voxel glass methods: normals and material id (occupancy from the id).
+    static AttributeChannels glass() { return {false, false, true, true, false, false}; }
+    /// Every channel.
+    static AttributeChannels all() { return {true, true, true, true, true, true}; }
+    /// Bytes per voxel of these channels.
+    uint64_t bytesPerVoxel() const;
+};
+
+/// A material as the attribute channels see it.
+struct AttributeMaterial {
+    float ior = 1.5f;                    ///< refraction index
+    Vec3f attenuation{0.0f, 0.0f, 0.0f}; ///< Beer–Lambert coefficient per world unit, RGB
+};
+
 struct AttributeOptions {
-    /// Center: one write per triangle and covered column centre (CHANG, default).
+    /// Center: per triangle and covered column centre, the slice(s) of its depth (CHANG, default).
     /// Conservative: one write per triangle and touched voxel.
     Coverage coverage = Coverage::Center;
-    /// Also accumulate normals (12 bytes per voxel; the glass renderer needs them, shadows do not).
-    bool normals = true;
-    /// Material channel: one material index per triangle (a glass renderer reads the index of
-    /// refraction and attenuation of the voxel's material from it), or empty (no channel, no memory).
+    /// CHANG's widened slabs: each slab grows by this many slices on both sides (>= 0, finite).
+    double slabOverlap = 0;
+    /// What to store (see AttributeChannels).
+    AttributeChannels channels;
+    /// One material id per triangle (the material, ior and attenuation channels read it), or empty.
     std::span<const uint32_t> triangleMaterial;
+    /// Material table indexed by the ids of triangleMaterial: needed by the ior and attenuation
+    /// channels, ignored otherwise.
+    std::span<const AttributeMaterial> materials;
     /// ED06 local slicing: each column's D slices cover only the depth range its geometry spans.
     Slicing slicing = Slicing::Uniform;
     int threads = 0;              ///< worker threads, 0 = all; results are identical for every value
     Progress* progress = nullptr; ///< polled between tiles; may cancel. Not owned.
 };
 
-/// The result of an attribute voxelization. Value type; all arrays have voxelCount() entries except
-/// normalSum, which is empty when normals were not requested.
+/// The result of an attribute voxelization. Value type; each channel's array has voxelCount()
+/// entries when the channel was stored (see channels()) and is empty otherwise.
 struct AttributeGrid {
     Frame frame;
     std::vector<uint16_t> count;   ///< writes per voxel, saturating at 65535
     std::vector<float> absorption; ///< sum over the voxel's writes of the triangle's absorption
     std::vector<Vec3f> normalSum;  ///< sum over the voxel's writes of the unit triangle normal (CCW)
     /// Material of the voxel's first write (the lowest triangle index written into it: triangles are
-    /// visited in index order), kNoMaterial where nothing was written; empty when
-    /// AttributeOptions::triangleMaterial was.
+    /// visited in index order), kNoMaterial where nothing was written.
     std::vector<uint32_t> material;
+    std::vector<float> ior;         ///< refraction index of the first write's material, 0 where unwritten
+    std::vector<Vec3f> attenuation; ///< attenuation coefficient of that material, 0 where unwritten
     static constexpr uint32_t kNoMaterial = 0xffffffffu;
+
+    /// The channels this grid holds.
+    AttributeChannels channels() const;
+    /// Bytes held by the channels.
+    uint64_t bytes() const;
+    /// True when voxel i was written at least once. Needs the count, material or ior channel (false
+    /// everywhere without them).
+    bool written(int64_t i) const {
+        if (!count.empty()) return count[size_t(i)] != 0;
+        if (!material.empty()) return material[size_t(i)] != kNoMaterial;
+        return !ior.empty() && ior[size_t(i)] != 0;
+    }
 
     int64_t voxelCount() const { return frame.columnCount() * frame.depth(); }
     int64_t index(int64_t x, int64_t y, int64_t s) const {
@@ -64,20 +111,22 @@ struct AttributeGrid {
     }
     /// Unit average normal of voxel i (zero when it was never written or the normals cancel).
     Vec3f normal(int64_t i) const;
-    /// Cells written at least once, as a slicemap in the same frame.
+    /// Cells written at least once (see written()), as a slicemap in the same frame. Throws
+    /// voxfx::Error when the grid has none of the count, material and ior channels.
     BitGrid occupancy() const;
-    /// Total number of writes (sum of count).
+    /// Total number of writes (sum of count; 0 without the count channel).
     int64_t writeCount() const;
 };
 
-/// Bytes an attribute grid of this frame needs (to check before voxelizing).
-uint64_t attributeGridBytes(const Frame& frame, bool normals, bool materials = false);
+/// Bytes an attribute grid of this frame with these channels needs (to check before voxelizing).
+uint64_t attributeGridBytes(const Frame& frame, const AttributeChannels& channels);
 
 /// Voxelizes `mesh` into `frame`, storing per-voxel attributes. `triangleAbsorption` holds one
 /// value per triangle (any unit; e.g. optical depth per write) added to the voxel on each write,
-/// or is empty (absorption stays zero). For local slicing the returned frame carries the per-column
-/// ranges. Throws voxfx::Error for an invalid mesh, a span of the wrong size, or a grid larger than
-/// the available memory. Cost: O(triangles + writes + voxels) time, attributeGridBytes memory.
+/// or is empty (no absorption channel). For local slicing the returned frame carries the per-column
+/// ranges. Throws voxfx::Error for an invalid mesh, a span of the wrong size, a material id outside
+/// the table, a negative or non-finite slabOverlap, or a grid larger than the available memory. Cost:
+/// O(triangles + writes + voxels) time, attributeGridBytes memory.
 AttributeGrid voxelizeAttributes(const MeshView& mesh, const Frame& frame,
                                  std::span<const float> triangleAbsorption,
                                  const AttributeOptions& options = {});
@@ -96,7 +145,7 @@ struct AttributeColumns {
 };
 
 /// Sparse attribute voxelization (counts and absorption; no normals, no materials), with the options and
-/// errors of voxelizeAttributes (options.normals is ignored).
+/// errors of voxelizeAttributes (options.channels is ignored).
 AttributeColumns voxelizeAttributeColumns(const MeshView& mesh, const Frame& frame,
                                           std::span<const float> triangleAbsorption,
                                           const AttributeOptions& options = {});

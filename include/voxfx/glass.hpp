@@ -65,6 +65,10 @@ enum class GlassKind : uint8_t { None, Exact, Multi, TwoSurface, Frosted };
 const char* toString(GlassKind k);
 /// Parses none | exact | multi | two-surface | frosted; throws voxfx::Error listing them otherwise.
 GlassKind parseGlassKind(const std::string& name);
+/// The method a scene's glass renders with when none is asked for: Exact where some mesh has a
+/// material with transmission > 0 (the reference, and on CPUs the fastest: see BENCHMARKS.md, the
+/// voxel methods are built for a GPU's texture fetches), else None.
+GlassKind defaultGlassKind(const Scene& scene);
 
 struct GlassOptions {
     GlassKind kind = GlassKind::None;

@@ -202,18 +202,43 @@ float absorptionPerCrossing(const Material& m, float opaqueAbsorption);
 /// The exact reference for shadows through partial occluders: the product of the crossing
 /// transmittances of every caster triangle between a point and the light, ray traced on the actual
 /// triangles (Embree, glass.hpp's TriangleTracer). ShadowKind::Exact.
+///
+/// Glass (materials with transmission > 0) is a volume, not a sheet: each crossing passes the
+/// Fresnel-transmitted fraction 1 - F (exact unpolarized dielectric F at the shadow ray's angle to
+/// the face, taken from the outside: by reciprocity the same fraction leaves a parallel slab as
+/// enters it), the tint (the material's crossing transmittance) applies once where the ray enters,
+/// and Beer–Lambert exp(-sigma * length) applies over the straight length between entering and
+/// leaving (a front face, CCW towards the ray, enters). The shadow ray is not bent: light focused or
+/// spread by refraction (caustics) is not modelled.
 class TriangleTracer;
 class ExactShadow {
 public:
-    /// `casters` in world space; one RGB crossing transmittance per triangle (0 for opaque ones).
-    ExactShadow(const MeshView& casters, std::vector<Vec3f> triangleTransmittance);
-    /// Product of the transmittances of the triangles crossed by p + t * dir, t in (epsilon, distance).
+    /// How glass triangles pass light (see the class comment).
+    struct Glass {
+        float ior = 1.5f;
+        Vec3f sigma{0.0f, 0.0f, 0.0f}; ///< Beer–Lambert coefficient per world unit
+        Vec3f tint{1.0f, 1.0f, 1.0f};  ///< applied once per entering crossing
+    };
+    static constexpr uint32_t kNotGlass = 0xffffffffu;
+
+    /// `casters` in world space; one RGB crossing transmittance per triangle (0 for opaque ones);
+    /// optionally, per triangle, an index into `glass` or kNotGlass (empty: no glass).
+    ExactShadow(const MeshView& casters, std::vector<Vec3f> triangleTransmittance,
+                std::vector<uint32_t> triangleGlass = {}, std::vector<Glass> glass = {});
+    /// From scene materials: crossingTransmittance per triangle, and glass for materials with
+    /// transmission > 0 (ior, KHR_materials_volume attenuation, tint = crossingTransmittance).
+    static ExactShadow fromMaterials(const MeshView& casters, std::span<const uint32_t> triangleMaterial,
+                                     std::span<const Material> materials);
+    /// Light fraction along p + t * dir, t in (epsilon, distance): the product over the crossed
+    /// triangles (and glass volumes) described above.
     Vec3f transmittance(const Vec3d& p, const Vec3d& dir, double distance) const;
     double epsilon() const { return epsilon_; }
 
 private:
     Mesh mesh_;
     std::vector<Vec3f> transmittance_;
+    std::vector<uint32_t> triangleGlass_;
+    std::vector<Glass> glass_;
     std::shared_ptr<const TriangleTracer> tracer_;
     double epsilon_ = 1e-6;
 };

@@ -63,6 +63,7 @@ int runDemo(const DemoArgs& a) {
             o.shadow.slicing = parseSlicing(a.slicing);
             o.threads = a.threads;
             o.shadow.bilinear = a.bilinear;
+            o.glass.kind = defaultGlassKind(scene); // the glass demo renders its glass as glass
             ProgressLine progress("rendering " + name + " (" + toString(kind) + ")", !a.quiet);
             o.progress = &progress;
             const RenderResult r = render(scene, scene.cameras.at(0), o);

@@ -82,7 +82,7 @@ int runRender(const RenderArgs& a) {
     if (s.background.x >= 0) o.background = s.background;
     o.exposure = float(a.exposure);
     o.threads = a.threads;
-    o.glass.kind = parseGlassKind(a.glass.empty() ? "none" : a.glass);
+    o.glass.kind = a.glass.empty() ? defaultGlassKind(scene) : parseGlassKind(a.glass);
     if (a.glassGrid) o.glass.gridResolution = a.glassGrid;
     // The environment: --environment, the scene's map, or the procedural sky where glass or a scene
     // without lights needs one (the background then shows it too).
@@ -215,7 +215,9 @@ const Command kRender{
             ->check(CLI::PositiveNumber);
         app.add_option("-j,--threads", a->threads, "Worker threads, 0 = all (identical output)")
             ->check(CLI::NonNegativeNumber);
-        app.add_option("--glass", a->glass, "none | exact | multi | two-surface | frosted (default none)");
+        app.add_option("--glass", a->glass,
+                       "none | exact | multi | two-surface | frosted (default: exact if the scene has glass, "
+                       "else none)");
         app.add_option("--glass-grid", a->glassGrid, "Glass voxels along the longest side (default 128)")
             ->check(CLI::Range(int64_t(2), int64_t(4096)));
         app.add_option("--environment", a->environment, "Environment map: .exr .hdr .pfm .png, or 'sky'");

@@ -19,7 +19,7 @@ AbsorptionShadowMap AbsorptionShadowMap::build(const LightView& view, const Mesh
     map.view_ = view;
     AttributeOptions ao;
     ao.coverage = coverage;
-    ao.normals = false;
+    ao.channels = AttributeChannels::shadows();
     ao.slicing = slicing;
     ao.progress = progress;
     // The sparse form of the attribute voxelization: light grids through foliage are mostly empty.

@@ -48,6 +48,13 @@ GlassKind parseGlassKind(const std::string& name) {
     fail("unknown glass method '", name, "' (allowed: none, exact, multi, two-surface, frosted)");
 }
 
+GlassKind defaultGlassKind(const Scene& scene) {
+    for (const SceneMesh& m : scene.meshes)
+        if (m.material < scene.materials.size() && scene.materials[m.material].transmission > 0)
+            return GlassKind::Exact;
+    return GlassKind::None;
+}
+
 bool refractDirection(const Vec3d& d, const Vec3d& n, double eta, Vec3d& out) {
     const double cosI = -dot(d, n);
     const double sin2T = eta * eta * std::max(0.0, 1 - cosI * cosI);

@@ -149,7 +149,7 @@ VoxelGlass::VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMediu
     origin_ = grid.lo;
     AttributeOptions ao;
     ao.coverage = options.coverage;
-    ao.normals = true;
+    ao.channels = AttributeChannels::glass(); // normals and material id: 16 bytes per voxel
     ao.triangleMaterial = triangleMedium;
     grid_ = voxelizeAttributes(mesh, Frame::orthographic(grid, Axis::Z, dims[0], dims[1], dims[2]), {}, ao);
 }
@@ -189,7 +189,7 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
             const int axis = walk.nextAxis();
             const double tLeave = std::min(walk.tMax[axis], clip.t1);
             const int64_t i = (walk.cell[1] * dims[0] + walk.cell[0]) * D + walk.cell[2];
-            if (grid_.count[size_t(i)] > 0) {
+            if (grid_.written(i)) {
                 const Vec3d n = Vec3d(grid_.normal(i));
                 const double dn = dot(d, n);
                 const bool candidate =

@@ -173,10 +173,8 @@ LightShadow LightShadow::build(const Scene& scene, const Light& light, const Sha
     }
     case ShadowKind::Exact: {
         const auto t0 = std::chrono::steady_clock::now();
-        std::vector<Vec3f> perTriangle(casters.allMaterialIndex.size());
-        for (std::size_t i = 0; i < perTriangle.size(); ++i)
-            perTriangle[i] = scene.materials[casters.allMaterialIndex[i]].crossingTransmittance();
-        out.exact_ = std::make_shared<const ExactShadow>(casters.all.view(), std::move(perTriangle));
+        out.exact_ = std::make_shared<const ExactShadow>(
+            ExactShadow::fromMaterials(casters.all.view(), casters.allMaterialIndex, scene.materials));
         out.light_ = light;
         t.mapMs += msSince(t0);
         break;

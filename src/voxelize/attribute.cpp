@@ -1,9 +1,11 @@
-// voxfx — attribute voxelization (CHANG §2: per-voxel write count, normal sum, material absorption).
+// voxfx — attribute voxelization (CHANG §2: per-voxel write count, normal sum, material absorption,
+// material id, refraction index and attenuation; the channels a use asks for).
 //
-// A consumer of the one rasterizer. Centre coverage reproduces CHANG's slab clipping (one write per
-// triangle and covered column centre, in the slice of the triangle's depth there); conservative
-// coverage writes every voxel the triangle's exact depth span in the column touches. Each tile owns
-// its rows and visits triangles in index order, so the float sums are deterministic.
+// A consumer of the one rasterizer. Centre coverage reproduces CHANG's slab clipping (per triangle
+// and covered column centre, the slices whose slab, widened by slabOverlap, holds the triangle's
+// depth there); conservative coverage writes every voxel the triangle's exact depth span in the
+// column touches (widened the same way). Each tile owns its rows and visits triangles in index
+// order, so the float sums are deterministic.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -15,34 +17,79 @@ namespace voxfx {
 
 namespace {
 
+// The slices written for a centre fragment at `depth`: those whose slab [s - w, s + 1 + w) (slice
+// units, the last one closed at the far plane) holds it; w = 0 gives the one slice of the depth.
+bool attributeCentreSlices(const FrameView& frame, int64_t column, double depth, double w, int64_t& s0,
+                           int64_t& s1) {
+    if (w == 0) {
+        s0 = s1 = detail::fragmentSlice(frame, column, depth);
+        return s0 >= 0;
+    }
+    const double t = frame.depthToSlice(column)(depth);
+    const int64_t D = frame.depth;
+    if (!(t >= -w && t <= double(D) + w)) return false;
+    s0 = std::clamp<int64_t>(int64_t(std::floor(t - 1 - w)) + 1, 0, D - 1);
+    s1 = std::clamp<int64_t>(int64_t(std::floor(t + w)), 0, D - 1);
+    return s0 <= s1;
+}
+
+// The slices written for a conservative span: spanSlices on the span widened by w slices.
+bool attributeSpanSlices(const FrameView& frame, int64_t column, double depthMin, double depthMax, double w,
+                         int64_t& s0, int64_t& s1) {
+    if (w == 0) return detail::spanSlices(frame, column, depthMin, depthMax, s0, s1);
+    const DepthToSlice m = frame.depthToSlice(column);
+    const double t0 = m(depthMin) - detail::kConservativeSlack - w;
+    const double t1 = m(depthMax) + detail::kConservativeSlack + w;
+    const int64_t D = frame.depth;
+    if (!(t1 >= 0 && t0 <= double(D))) return false;
+    s0 = std::max<int64_t>(0, int64_t(std::ceil(std::max(t0, -1.0))) - 1);
+    s1 = std::min<int64_t>(D - 1, int64_t(std::floor(std::min(t1, double(D)))));
+    return s0 <= s1;
+}
+
 struct AttributeConsumer {
     const Frame& frame;
     AttributeGrid& grid;
-    std::span<const float> absorption;
+    std::span<const float> absorption;          // empty when the absorption channel is off
     const std::vector<Vec3f>& faceNormals;      // empty when normals are off
-    std::span<const uint32_t> triangleMaterial; // empty when the material channel is off
+    std::span<const uint32_t> triangleMaterial; // empty when no material channel is stored
+    std::span<const AttributeMaterial> materials;
+    double overlap;
+    bool attenuationMarksFirst; // the attenuation channel alone tells first writes (sentinel -1)
 
     struct Sink {
         AttributeConsumer& c;
         FrameView frame;
         void write(int64_t column, int64_t s, uint32_t triangle) {
+            AttributeGrid& g = c.grid;
             const auto i = size_t(column * c.frame.depth() + s);
-            uint16_t& n = c.grid.count[i];
-            if (n != 0xffff) ++n;
-            if (!c.absorption.empty()) c.grid.absorption[i] += c.absorption[triangle];
-            if (!c.faceNormals.empty()) c.grid.normalSum[i] += c.faceNormals[triangle];
-            if (!c.triangleMaterial.empty() && c.grid.material[i] == AttributeGrid::kNoMaterial)
-                c.grid.material[i] = c.triangleMaterial[triangle];
+            if (!c.triangleMaterial.empty()) {
+                // The first write sets the material channels (triangles arrive in index order).
+                const bool first = !g.material.empty() ? g.material[i] == AttributeGrid::kNoMaterial
+                                   : !g.ior.empty()    ? g.ior[i] == 0
+                                   : !g.count.empty() && !c.attenuationMarksFirst ? g.count[i] == 0
+                                                                                  : g.attenuation[i].x < 0;
+                if (first) {
+                    const uint32_t m = c.triangleMaterial[triangle];
+                    if (!g.material.empty()) g.material[i] = m;
+                    if (!g.ior.empty()) g.ior[i] = c.materials[m].ior;
+                    if (!g.attenuation.empty()) g.attenuation[i] = c.materials[m].attenuation;
+                }
+            }
+            if (!g.count.empty() && g.count[i] != 0xffff) ++g.count[i];
+            if (!c.absorption.empty()) g.absorption[i] += c.absorption[triangle];
+            if (!c.faceNormals.empty()) g.normalSum[i] += c.faceNormals[triangle];
         }
         void fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool) {
             const int64_t column = y * c.frame.width() + x;
-            const int64_t s = detail::fragmentSlice(frame, column, depth);
-            if (s >= 0) write(column, s, triangle);
+            int64_t s0, s1;
+            if (!attributeCentreSlices(frame, column, depth, c.overlap, s0, s1)) return;
+            for (int64_t s = s0; s <= s1; ++s) write(column, s, triangle);
         }
         void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t triangle) {
             const int64_t column = y * c.frame.width() + x;
             int64_t s0, s1;
-            if (!detail::spanSlices(frame, column, depthMin, depthMax, s0, s1)) return;
+            if (!attributeSpanSlices(frame, column, depthMin, depthMax, c.overlap, s0, s1)) return;
             for (int64_t s = s0; s <= s1; ++s) write(column, s, triangle);
         }
         void finish() {}
@@ -56,6 +103,7 @@ struct AttributeConsumer {
 struct ColumnWritesConsumer {
     const Frame& frame;
     std::span<const float> absorption;
+    double overlap;
     struct Entry {
         int64_t column;
         int64_t slice;
@@ -75,13 +123,14 @@ struct ColumnWritesConsumer {
         std::vector<Entry> entries;
         void fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool) {
             const int64_t column = y * c.frame.width() + x;
-            const int64_t s = detail::fragmentSlice(frame, column, depth);
-            if (s >= 0) entries.push_back({column, s, triangle});
+            int64_t s0, s1;
+            if (!attributeCentreSlices(frame, column, depth, c.overlap, s0, s1)) return;
+            for (int64_t s = s0; s <= s1; ++s) entries.push_back({column, s, triangle});
         }
         void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t triangle) {
             const int64_t column = y * c.frame.width() + x;
             int64_t s0, s1;
-            if (!detail::spanSlices(frame, column, depthMin, depthMax, s0, s1)) return;
+            if (!attributeSpanSlices(frame, column, depthMin, depthMax, c.overlap, s0, s1)) return;
             for (int64_t s = s0; s <= s1; ++s) entries.push_back({column, s, triangle});
         }
         void finish() {
@@ -108,10 +157,32 @@ struct ColumnWritesConsumer {
     Sink tile(const Tile& t) { return {*this, frame.view(), out[size_t(t.index)], {}}; }
 };
 
-void checkAbsorption(const MeshView& mesh, std::span<const float> triangleAbsorption) {
+void checkAbsorption(const MeshView& mesh, std::span<const float> triangleAbsorption,
+                     const AttributeOptions& options) {
     if (!triangleAbsorption.empty() && triangleAbsorption.size() != mesh.triangleCount)
         fail("attribute voxelization: ", triangleAbsorption.size(), " absorption values for ",
              mesh.triangleCount, " triangles");
+    if (!(options.slabOverlap >= 0 && std::isfinite(options.slabOverlap)))
+        fail("attribute voxelization: slab overlap must be finite and >= 0, got ", options.slabOverlap);
+}
+
+// What is stored: the channels asked for whose inputs are given.
+AttributeChannels storedChannels(const MeshView& mesh, std::span<const float> triangleAbsorption,
+                                 const AttributeOptions& options) {
+    AttributeChannels c = options.channels;
+    c.absorption = c.absorption && !triangleAbsorption.empty();
+    const bool needTable = c.ior || c.attenuation;
+    if ((needTable || (c.material && !options.triangleMaterial.empty())) &&
+        options.triangleMaterial.size() != mesh.triangleCount)
+        fail("attribute voxelization: ", options.triangleMaterial.size(), " material indices for ",
+             mesh.triangleCount, " triangles");
+    c.material = c.material && !options.triangleMaterial.empty();
+    if (needTable)
+        for (const uint32_t m : options.triangleMaterial)
+            if (m >= options.materials.size())
+                fail("attribute voxelization: material id ", m, " outside the table of ",
+                     options.materials.size(), " materials (the ior and attenuation channels read it)");
+    return c;
 }
 
 // ED06 fig. 2: each column's slices spread over the depth range its geometry spans.
@@ -136,14 +207,15 @@ Vec3f AttributeGrid::normal(int64_t i) const {
 }
 
 BitGrid AttributeGrid::occupancy() const {
+    if (voxelCount() > 0 && count.empty() && material.empty() && ior.empty())
+        fail("attribute grid occupancy needs the count, material or ior channel");
     BitGrid bits(frame.width(), frame.height(), frame.depth());
     const int64_t D = frame.depth();
     parallelFor(0, frame.columnCount(), 1024, [&](int64_t b, int64_t e) {
         for (int64_t c = b; c < e; ++c) {
             uint64_t* col = bits.column(c);
-            const uint16_t* n = count.data() + c * D;
             for (int64_t s = 0; s < D; ++s)
-                if (n[s]) col[s >> 6] |= uint64_t(1) << (s & 63);
+                if (written(c * D + s)) col[s >> 6] |= uint64_t(1) << (s & 63);
         }
     });
     return bits;
@@ -155,30 +227,41 @@ int64_t AttributeGrid::writeCount() const {
     return total;
 }
 
-uint64_t attributeGridBytes(const Frame& frame, bool normals, bool materials) {
-    const uint64_t voxels = uint64_t(frame.columnCount()) * uint64_t(frame.depth());
-    return voxels * (sizeof(uint16_t) + sizeof(float) + (normals ? sizeof(Vec3f) : 0) +
-                     (materials ? sizeof(uint32_t) : 0));
+uint64_t AttributeChannels::bytesPerVoxel() const {
+    return (count ? sizeof(uint16_t) : 0) + (absorption ? sizeof(float) : 0) + (normals ? sizeof(Vec3f) : 0) +
+           (material ? sizeof(uint32_t) : 0) + (ior ? sizeof(float) : 0) + (attenuation ? sizeof(Vec3f) : 0);
+}
+
+AttributeChannels AttributeGrid::channels() const {
+    return {!count.empty(),    !absorption.empty(), !normalSum.empty(),
+            !material.empty(), !ior.empty(),        !attenuation.empty()};
+}
+
+uint64_t AttributeGrid::bytes() const {
+    return count.size() * sizeof(uint16_t) + absorption.size() * sizeof(float) +
+           normalSum.size() * sizeof(Vec3f) + material.size() * sizeof(uint32_t) +
+           ior.size() * sizeof(float) + attenuation.size() * sizeof(Vec3f);
+}
+
+uint64_t attributeGridBytes(const Frame& frame, const AttributeChannels& channels) {
+    return uint64_t(frame.columnCount()) * uint64_t(frame.depth()) * channels.bytesPerVoxel();
 }
 
 AttributeGrid voxelizeAttributes(const MeshView& mesh, const Frame& inFrame,
                                  std::span<const float> triangleAbsorption, const AttributeOptions& options) {
     validateMesh(mesh, "mesh");
-    checkAbsorption(mesh, triangleAbsorption);
+    checkAbsorption(mesh, triangleAbsorption, options);
+    const AttributeChannels ch = storedChannels(mesh, triangleAbsorption, options);
     AttributeGrid grid;
     withThreads(options.threads, [&] {
         const Frame frame = slicedFrame(mesh, inFrame, options);
-        if (!options.triangleMaterial.empty() && options.triangleMaterial.size() != mesh.triangleCount)
-            fail("attribute voxelization: ", options.triangleMaterial.size(), " material indices for ",
-                 mesh.triangleCount, " triangles");
-        checkMemory(attributeGridBytes(frame, options.normals, !options.triangleMaterial.empty()),
-                    "attribute voxelization at this resolution");
+        checkMemory(attributeGridBytes(frame, ch), "attribute voxelization at this resolution");
         grid.frame = frame;
         const auto voxels = size_t(grid.voxelCount());
-        grid.count.assign(voxels, 0);
-        grid.absorption.assign(voxels, 0.0f);
+        if (ch.count) grid.count.assign(voxels, 0);
+        if (ch.absorption) grid.absorption.assign(voxels, 0.0f);
         std::vector<Vec3f> faceNormals;
-        if (options.normals) {
+        if (ch.normals) {
             grid.normalSum.assign(voxels, Vec3f{});
             faceNormals.resize(mesh.triangleCount);
             for (size_t t = 0; t < mesh.triangleCount; ++t) {
@@ -187,13 +270,30 @@ AttributeGrid voxelizeAttributes(const MeshView& mesh, const Frame& inFrame,
                 faceNormals[t] = Vec3f(normalize(cross(b - a, c - a)));
             }
         }
+        if (ch.material) grid.material.assign(voxels, AttributeGrid::kNoMaterial);
+        if (ch.ior) grid.ior.assign(voxels, 0.0f);
+        // Without a material, ior or count channel, -1 marks the attenuation of unwritten voxels.
+        const bool attenuationMarksFirst = ch.attenuation && !ch.material && !ch.ior && !ch.count;
+        if (ch.attenuation) {
+            const float unset = attenuationMarksFirst ? -1.0f : 0.0f;
+            grid.attenuation.assign(voxels, Vec3f{unset, unset, unset});
+        }
         RasterOptions ro;
         ro.coverage = options.coverage;
         ro.progress = options.progress;
-        if (!options.triangleMaterial.empty()) grid.material.assign(voxels, AttributeGrid::kNoMaterial);
-        AttributeConsumer consumer{grid.frame, grid, triangleAbsorption, faceNormals,
-                                   options.triangleMaterial};
+        const bool anyMaterial = ch.material || ch.ior || ch.attenuation;
+        AttributeConsumer consumer{grid.frame,
+                                   grid,
+                                   ch.absorption ? triangleAbsorption : std::span<const float>{},
+                                   faceNormals,
+                                   anyMaterial ? options.triangleMaterial : std::span<const uint32_t>{},
+                                   options.materials,
+                                   options.slabOverlap,
+                                   attenuationMarksFirst};
         rasterize(grid.frame, mesh, ro, consumer);
+        if (attenuationMarksFirst)
+            for (Vec3f& a : grid.attenuation)
+                if (a.x < 0) a = Vec3f{};
     });
     return grid;
 }
@@ -202,7 +302,7 @@ AttributeColumns voxelizeAttributeColumns(const MeshView& mesh, const Frame& inF
                                           std::span<const float> triangleAbsorption,
                                           const AttributeOptions& options) {
     validateMesh(mesh, "mesh");
-    checkAbsorption(mesh, triangleAbsorption);
+    checkAbsorption(mesh, triangleAbsorption, options);
     AttributeColumns out;
     withThreads(options.threads, [&] {
         out.frame = slicedFrame(mesh, inFrame, options);
@@ -212,7 +312,7 @@ AttributeColumns voxelizeAttributeColumns(const MeshView& mesh, const Frame& inF
         ro.progress = options.progress;
         ro.rowsPerTile = std::max<int64_t>(1, (H + 63) / 64);
         std::vector<ColumnWritesConsumer::TileOut> tiles(size_t((H + ro.rowsPerTile - 1) / ro.rowsPerTile));
-        ColumnWritesConsumer consumer{out.frame, triangleAbsorption, tiles};
+        ColumnWritesConsumer consumer{out.frame, triangleAbsorption, options.slabOverlap, tiles};
         rasterize(out.frame, mesh, ro, consumer);
         // Tiles own consecutive row ranges, so their column-sorted entries concatenate in order.
         std::size_t total = 0;
