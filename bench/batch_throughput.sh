@@ -83,7 +83,10 @@ for r in "${resolutions[@]}"; do
                 $mode >/dev/null || true
             t1=$(now)
             cpu=$(tail -1 "$work/cpu" | awk '{print $1 + $2}')
-            echo "batch $list ${mode:-(1 thread per mesh)}: $(rate "$(wc -l <"$work/$list.txt")" "$(echo "$t1 - $t0" | bc)"), CPU (user + sys) $cpu s"
+            # The rate counts the meshes written (report.json's "ok"); failures are counted apart.
+            read -r ok failed < <(python3 -c 'import json, sys; r = json.load(open(sys.argv[1])); print(r["ok"], r["errors"])' \
+                "$work/out/report.json")
+            echo "batch $list ${mode:-(1 thread per mesh)}: $(rate "$ok" "$(echo "$t1 - $t0" | bc)") written, $failed failed, CPU (user + sys) $cpu s"
         done
     done
     # One process per distinct mesh: a serial loop, and two at a time.
@@ -94,12 +97,13 @@ for r in "${resolutions[@]}"; do
         "$voxfx" voxelize "$work/$l" -o "$work/single/${f%.*}.binvox" -r "$r" -q 2>/dev/null || true
     done <"$work/distinct.txt"
     t1=$(now)
-    echo "process per mesh, loop: $(rate "$n" "$(echo "$t1 - $t0" | bc)")"
+    written=$(find "$work/single" -name '*.binvox' | wc -l)
+    echo "process per mesh, loop: $(rate "$written" "$(echo "$t1 - $t0" | bc)") written, $((n - written)) failed"
     t0=$(now)
     (cd "$work" && xargs -P 2 -I{} sh -c 'f=$(basename {}); "$0" voxelize {} -o single/${f%.*}.binvox -r "$1" -q 2>/dev/null || true' \
         "$voxfx" "$r" <distinct.txt)
     t1=$(now)
-    echo "process per mesh, xargs -P 2: $(rate "$n" "$(echo "$t1 - $t0" | bc)")"
+    echo "process per mesh, xargs -P 2: $(rate "$written" "$(echo "$t1 - $t0" | bc)") written, $((n - written)) failed"
     # The batch's outputs of the first repeat against the single processes', byte for byte.
     rm -rf "$work/out" && "$voxfx" batch "$work/distinct.txt" -o "$work/out" -r "$r" -q >/dev/null || true
     same=0 differ=0

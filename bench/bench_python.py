@@ -10,12 +10,23 @@
                   (voxfx.contains, checked against CGAL::Side_of_triangle_mesh in the C++ tests).
 
 Usage: PYTHONPATH=build/python /usr/bin/python3 bench/bench_python.py [--points N] [--repeat R]
-       [--resolution N] [meshes...]   (default: a few closed CGAL meshes under data/meshes)
+       [--resolution N] [--embree-fix auto|off] [meshes...]
+       (default: a few closed CGAL meshes under data/meshes)
 Timings are the best of R runs, wall clock, all threads of both libraries.
+
+Debian's Open3D 0.16 casts rays that hit nothing: Open3D sets every ray's mask to 0, which only
+works with an Embree built without ray masks (as Open3D's bundled one is), and Debian's libembree3
+is built with them. With --embree-fix auto (the default) the script checks a ray into a box and,
+when it misses, compiles bench/open3d_embree_mask_fix.c (a preloaded shim that sets the masks to
+0xFFFFFFFF) and runs itself again under LD_PRELOAD. --embree-fix off measures Open3D as installed.
 """
 import argparse
+import atexit
 import os
+import shutil
+import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -28,6 +39,26 @@ except ImportError:  # pragma: no cover
     sys.exit("bench_python.py needs Open3D (Debian: python3-open3d)")
 
 DEFAULT_MESHES = ["bunny00.off", "armadillo.off", "elephant.off", "knot.off", "cow.off", "pinion.off"]
+
+
+def open3d_rays_hit():
+    """Whether a ray from the centre of a unit box hits the box in Open3D's RaycastingScene."""
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.t.geometry.TriangleMesh.from_legacy(o3d.geometry.TriangleMesh.create_box()))
+    rays = o3d.core.Tensor([[0.5, 0.5, 0.5, 1, 0, 0]], dtype=o3d.core.Dtype.Float32)
+    return bool(np.isfinite(scene.cast_rays(rays)["t_hit"].numpy()[0]))
+
+
+def run_with_embree_fix():
+    """Compiles the ray-mask shim and runs this script again with it preloaded (does not return)."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    lib = os.path.join(tempfile.mkdtemp(prefix="voxfx-o3d-fix."), "open3d_embree_mask_fix.so")
+    subprocess.run(["cc", "-O2", "-shared", "-fPIC", "-o", lib, os.path.join(here, "open3d_embree_mask_fix.c"),
+                    "-ldl"], check=True)
+    env = dict(os.environ, VOXFX_BENCH_EMBREE_FIX=lib)
+    env["LD_PRELOAD"] = lib + (":" + env["LD_PRELOAD"] if env.get("LD_PRELOAD") else "")
+    sys.stdout.flush()
+    os.execve(sys.executable, [sys.executable] + sys.argv, env)
 
 
 def best(fn, repeat):
@@ -92,11 +123,23 @@ def main():
     ap.add_argument("--pairs", type=float, default=2e7,
                     help="cap the surface resolution so that triangles x voxels stays under this")
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--embree-fix", choices=("auto", "off"), default="auto",
+                    help="preload the ray-mask shim when Open3D's rays miss everything (see above)")
     a = ap.parse_args()
+    fix = os.environ.get("VOXFX_BENCH_EMBREE_FIX")
+    if fix:  # the compiled shim's folder goes when this run ends (the library stays mapped)
+        atexit.register(shutil.rmtree, os.path.dirname(fix), True)
+    if open3d_rays_hit():
+        rays = "works with bench/open3d_embree_mask_fix.c preloaded" if fix else "works as installed"
+    elif a.embree_fix == "auto" and not fix:
+        run_with_embree_fix()
+    else:
+        rays = "BROKEN: every ray misses (occupancy answers are all 0)"
     data = os.environ.get("VOXFX_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "data"))
     paths = a.meshes or [os.path.join(data, "meshes", m) for m in DEFAULT_MESHES]
     print(f"voxfx {voxfx.__version__}, Open3D {o3d.__version__}, {os.cpu_count()} CPUs; "
           f"surface at up to {a.resolution} cells along the longest side, {a.points:,} points, best of {a.repeat}")
+    print(f"Open3D ray casting: {rays}")
     print("| mesh | triangles | grid | voxfx ms | Open3D ms | voxfx cells | Open3D missing | Open3D extra |"
           " voxfx contains ms (Mpts/s) | Open3D occupancy ms (Mpts/s) | Open3D wrong |")
     print("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|")

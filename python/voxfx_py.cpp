@@ -13,6 +13,8 @@
 //     released while the library works.
 #include <algorithm>
 #include <cstring>
+#include <exception>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <span>
@@ -259,6 +261,53 @@ struct PyDensity {
     Frame fine;
 };
 
+// ---- batch ----------------------------------------------------------------------------------
+
+/// A Python str from bytes that should be UTF-8 (messages quote file contents, which need not be):
+/// invalid bytes become U+FFFD, as in the JSON report.
+py::str utf8Text(const std::string& s) {
+    PyObject* o = PyUnicode_DecodeUTF8(s.data(), py::ssize_t(s.size()), "replace");
+    if (!o) throw py::error_already_set();
+    return py::reinterpret_steal<py::str>(o);
+}
+
+/// A path argument: str or os.PathLike.
+std::string pathString(const py::handle& p) { return py::str(py::module_::import("os").attr("fspath")(p)); }
+
+/// One job of the report, with the keys of the JSON report (writeBatchReport).
+py::dict batchResultDict(const BatchResult& r) {
+    py::dict d;
+    d["mesh"] = utf8Text(r.mesh);
+    d["output"] = utf8Text(r.output);
+    d["status"] = toString(r.status);
+    d["error"] = r.status == BatchStatus::Error ? py::object(utf8Text(r.error)) : py::object(py::none());
+    d["triangles"] = r.triangles >= 0 ? py::object(py::int_(r.triangles)) : py::object(py::none());
+    d["ms"] = r.ms;
+    return d;
+}
+
+/// Calls a Python callable per finished job, from the worker thread that finished it (runBatch
+/// serializes the calls), holding the GIL for the call only. The first exception it raises stops
+/// further calls (the meshes go on) and is raised again when the batch is over.
+class PyBatchProgress : public BatchProgress {
+public:
+    explicit PyBatchProgress(py::object fn) : fn_(std::move(fn)) {}
+    void jobDone(const BatchResult& r, int64_t done, int64_t total) override {
+        if (error_) return;
+        py::gil_scoped_acquire gil;
+        try {
+            fn_(batchResultDict(r), done, total);
+        } catch (...) { error_ = std::current_exception(); }
+    }
+    void raiseIfFailed() const {
+        if (error_) std::rethrow_exception(error_);
+    }
+
+private:
+    py::object fn_;
+    std::exception_ptr error_;
+};
+
 } // namespace
 
 PYBIND11_MODULE(_voxfx, m) {
@@ -268,7 +317,12 @@ PYBIND11_MODULE(_voxfx, m) {
     py::register_exception_translator([](std::exception_ptr p) {
         try {
             if (p) std::rethrow_exception(p);
-        } catch (const Error& e) { PyErr_SetString(error.ptr(), e.what()); }
+        } catch (const Error& e) {
+            // Messages quote file contents, which need not be UTF-8: invalid bytes are replaced
+            // (PyErr_SetString would raise UnicodeDecodeError instead of voxfx.Error).
+            const py::str message = utf8Text(e.what());
+            PyErr_SetObject(error.ptr(), message.ptr());
+        }
     });
 
     // ---- Mesh
@@ -635,6 +689,89 @@ PYBIND11_MODULE(_voxfx, m) {
              py::arg("resolution") = py::none(), py::arg("threads") = 0, py::arg("winding_beta") = 3.0)
         .def("__call__", classifyPoints, py::arg("points"), "(K,) bool: whether each point lies inside")
         .def_property_readonly("resolution", &PointClassifier::resolution);
+
+    // ---- batch
+    m.def(
+        "batch",
+        [](const py::object& manifestOrList, const py::object& outDirObj, const std::string& format,
+           std::optional<int64_t> resolution, std::optional<double> voxelSize,
+           std::optional<std::vector<int64_t>> dims, std::optional<std::vector<double>> bounds,
+           int64_t margin, const std::string& mode, const std::string& fill, const std::string& axis,
+           const std::string& slicing, bool vdbFloat, int threads, bool nested, bool skipExisting,
+           const py::object& report, const py::object& progress) {
+            const std::string outDir = pathString(outDirObj);
+            const GridFormat gridFormat =
+                gridFormatFromPath("x" + (format.starts_with(".") ? format : "." + format));
+            BatchOptions bo;
+            bo.fit = fitOptions(resolution, voxelSize, dims, bounds, margin, axis);
+            bo.voxelize.mode = parseVoxelizeMode(mode);
+            bo.voxelize.slicing = parseSlicing(slicing);
+            bo.autoFill = fill == "auto";
+            if (!bo.autoFill) bo.voxelize.fill = parseFill(fill);
+            bo.write.vdbFloat = vdbFloat;
+            if (threads < 0) throw py::value_error("threads must be >= 0");
+            bo.threads = threads;
+            bo.nested = nested;
+            bo.skipExisting = skipExisting;
+            std::string reportPath;
+            if (report.is_none()) {
+                reportPath = (std::filesystem::path(outDir) / "report.json").string();
+            } else if (!(py::isinstance<py::bool_>(report) && !report.cast<bool>())) {
+                reportPath = pathString(report);
+            }
+            std::vector<BatchJob> jobs;
+            if (py::isinstance<py::str>(manifestOrList) || py::hasattr(manifestOrList, "__fspath__")) {
+                const std::string manifest = pathString(manifestOrList);
+                py::gil_scoped_release release;
+                jobs = readBatchManifest(manifest, outDir, gridFormat);
+            } else {
+                std::vector<std::string> meshes;
+                for (const py::handle p : manifestOrList) meshes.push_back(pathString(p));
+                jobs = batchJobs(meshes, outDir, gridFormat);
+            }
+            std::optional<PyBatchProgress> pyProgress;
+            if (!progress.is_none()) {
+                if (!PyCallable_Check(progress.ptr()))
+                    throw py::type_error("progress must be callable as progress(job, done, total), or None");
+                bo.progress = &pyProgress.emplace(progress);
+            }
+            BatchSummary summary;
+            {
+                py::gil_scoped_release release;
+                std::error_code ec;
+                std::filesystem::create_directories(outDir, ec);
+                if (ec) fail("cannot create output folder '", outDir, "': ", ec.message());
+                summary = runBatch(jobs, bo);
+                if (!reportPath.empty()) writeBatchReport(summary, reportPath);
+            }
+            if (pyProgress) pyProgress->raiseIfFailed();
+            py::dict out;
+            out["ok"] = summary.ok;
+            out["skipped"] = summary.skipped;
+            out["errors"] = summary.errors;
+            out["seconds"] = summary.seconds;
+            out["ok_per_second"] = summary.okPerSecond();
+            py::list list;
+            for (const BatchResult& r : summary.results) list.append(batchResultDict(r));
+            out["jobs"] = list;
+            return out;
+        },
+        py::arg("meshes"), py::arg("out_dir"), py::kw_only(), py::arg("format") = ".binvox",
+        py::arg("resolution") = py::none(), py::arg("voxel_size") = py::none(), py::arg("dims") = py::none(),
+        py::arg("bounds") = py::none(), py::arg("margin") = 0, py::arg("mode") = "solid",
+        py::arg("fill") = "auto", py::arg("axis") = "z", py::arg("slicing") = "uniform",
+        py::arg("vdb_float") = false, py::arg("threads") = 0, py::arg("nested") = false,
+        py::arg("skip_existing") = true, py::arg("report") = py::none(), py::arg("progress") = py::none(),
+        "Voxelizes many meshes in this process, as `voxfx batch` does (the same outputs, byte for byte): "
+        "meshes is a manifest file (one path per line, relative to its folder, '#' comments) or a list of "
+        "paths; mesh M is written to out_dir/<stem of M><format>. Options as voxelize; threads: workers for "
+        "the whole batch (0 = all), each mesh on one of them (nested=True: on all). A mesh that fails is "
+        "recorded with its error and the rest go on; existing outputs are skipped (skip_existing=False "
+        "redoes them). report: the JSON report's path (None: out_dir/report.json, False: none). progress: "
+        "progress(job, done, total) after each mesh, from a worker thread. Returns the report as a dict: "
+        "ok, skipped, errors, seconds, ok_per_second (meshes written per second; failed ones are not in "
+        "it) and jobs, a list of {mesh, output, status ('ok', 'skipped', 'error'), error, triangles, ms} "
+        "in the order given. The GIL is released while meshes are processed.");
 
     m.attr("__version__") = "0.1.0";
 }

@@ -183,6 +183,8 @@ TEST(BatchTest, BadMeshesAreReportedWhileTheOthersSucceed) {
     EXPECT_EQ(report["ok"], 2);
     EXPECT_EQ(report["errors"], 4);
     ASSERT_EQ(report["jobs"].size(), 6u);
+    // The rate counts the two meshes written, not the four that failed.
+    EXPECT_DOUBLE_EQ(report["ok_per_second"].get<double>(), 2 / report["seconds"].get<double>());
     const char* expected[] = {"ok", "error", "error", "error", "error", "ok"};
     for (size_t i = 0; i < 6; ++i) {
         const nlohmann::json& j = report["jobs"][i];
@@ -203,6 +205,23 @@ TEST(BatchTest, BadMeshesAreReportedWhileTheOthersSucceed) {
         << report["jobs"][2]["error"];
     EXPECT_NE(report["jobs"][3]["error"].get<std::string>().find("50"), std::string::npos)
         << report["jobs"][3]["error"];
+}
+
+TEST(BatchTest, RateLeavesOutFailedMeshes) {
+    // Files that fail fast (the corpus of a broken dataset) must not read as a fast batch.
+    test::TempDir dir;
+    const std::string cube(kBatchCubeOff);
+    std::vector<std::string> meshes;
+    for (int i = 0; i < 8; ++i)
+        meshes.push_back(
+            test::writeFile(dir.file("cut" + std::to_string(i) + ".off"), cube.substr(0, 20 + i)));
+    BatchOptions bo;
+    bo.fit.resolution = 8;
+    const BatchSummary s = runBatch(batchJobs(meshes, dir.file("out"), GridFormat::Binvox), bo);
+    EXPECT_EQ(s.errors, 8);
+    EXPECT_EQ(s.ok, 0);
+    EXPECT_GT(s.seconds, 0);
+    EXPECT_EQ(s.okPerSecond(), 0);
 }
 
 TEST(BatchTest, DuplicateStemsAreRefusedBeforeAnyWork) {

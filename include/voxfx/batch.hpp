@@ -79,6 +79,10 @@ struct BatchSummary {
     std::vector<BatchResult> results; ///< in job order
     int64_t ok = 0, skipped = 0, errors = 0;
     double seconds = 0; ///< wall time of the whole batch
+    /// The rate: meshes voxelized and written per second of the batch's wall time. Failed meshes
+    /// are not in it (they are counted in `errors`; a corpus of unreadable files fails fast and
+    /// would otherwise show as a high rate), nor are skipped ones.
+    double okPerSecond() const { return seconds > 0 ? double(ok) / seconds : 0; }
 };
 
 /// Runs the jobs (see the top of this header). Never throws for a failing job; throws
@@ -91,8 +95,8 @@ BatchSummary runBatch(const std::vector<BatchJob>& jobs, const BatchOptions& opt
 Fill autoFillFor(const MeshView& mesh, VoxelizeMode mode);
 
 /// Writes the summary as JSON (atomically): {"ok", "skipped", "errors", "seconds",
-/// "jobs": [{"mesh", "output", "status", "error", "triangles", "ms"}, ...]} with "error" and
-/// "triangles" null where they do not apply. Throws voxfx::Error on a failed write.
+/// "ok_per_second" (okPerSecond()), "jobs": [{"mesh", "output", "status", "error", "triangles", "ms"}, ...]}
+/// with "error" and "triangles" null where they do not apply. Throws voxfx::Error on a failed write.
 void writeBatchReport(const BatchSummary& summary, const std::string& path);
 
 } // namespace voxfx

@@ -198,6 +198,7 @@ void writeBatchReport(const BatchSummary& summary, const std::string& path) {
     j["skipped"] = summary.skipped;
     j["errors"] = summary.errors;
     j["seconds"] = summary.seconds;
+    j["ok_per_second"] = summary.okPerSecond();
     nlohmann::ordered_json list = nlohmann::ordered_json::array();
     for (const BatchResult& r : summary.results) {
         nlohmann::ordered_json e;

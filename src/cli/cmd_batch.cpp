@@ -20,9 +20,9 @@ struct BatchArgs {
     bool nested = false, force = false, quiet = false;
 };
 
-// done/total, rate and ETA on stderr: in place on a terminal (at most 10 times a second),
-// otherwise one line every 10 s; nothing for batches shorter than that. Failed meshes are reported on a line
-// of their own at once.
+// done/total, failures, rate and ETA on stderr: in place on a terminal (at most 10 times a
+// second), otherwise one line every 10 s; nothing for batches shorter than that. Failed meshes are
+// reported on a line of their own at once.
 class BatchProgressLine : public BatchProgress {
 public:
     explicit BatchProgressLine(bool enabled) : enabled_(enabled), tty_(isatty(fileno(stderr)) != 0) {}
@@ -30,7 +30,9 @@ public:
     void jobDone(const BatchResult& r, int64_t done, int64_t total) override {
         if (!enabled_) return;
         if (r.status == BatchStatus::Skipped) ++skipped_;
+        if (r.status == BatchStatus::Ok) ++ok_;
         if (r.status == BatchStatus::Error) {
+            ++failed_;
             clear();
             // Loader messages name the file already.
             std::cerr << "voxfx: error: " << (r.error.find(r.mesh) == std::string::npos ? r.mesh + ": " : "")
@@ -40,12 +42,13 @@ public:
         const double ms = msSince(start_);
         if (done == total || ms - lastMs_ < (tty_ ? 100 : 10000)) return;
         lastMs_ = ms;
-        // The rate counts meshes that were worked on; skipped ones cost next to nothing.
-        const int64_t worked = done - skipped_;
-        const double rate = ms > 0 ? double(worked) * 1000 / ms : 0;
-        std::string line =
-            "batch: " + withCommas(done) + "/" + withCommas(total) + " meshes, " + fmt(rate, 3) + " meshes/s";
-        if (done < total && rate > 0) line += ", ETA " + fmtMs(double(total - done) / rate * 1000);
+        // The rate counts the meshes written: failed ones (often fast to fail) and skipped ones
+        // (next to free) would inflate it. The ETA counts every mesh worked on.
+        const double rate = ms > 0 ? double(ok_) * 1000 / ms : 0;
+        const double worked = ms > 0 ? double(done - skipped_) * 1000 / ms : 0;
+        std::string line = "batch: " + withCommas(done) + "/" + withCommas(total) + " meshes, " +
+                           withCommas(failed_) + " failed, " + fmt(rate, 3) + " meshes/s";
+        if (done < total && worked > 0) line += ", ETA " + fmtMs(double(total - done) / worked * 1000);
         if (tty_) {
             std::cerr << "\r" << line << "\033[K" << std::flush;
             shown_ = true;
@@ -61,7 +64,7 @@ public:
 
 private:
     bool enabled_, tty_, shown_ = false;
-    int64_t skipped_ = 0;
+    int64_t skipped_ = 0, ok_ = 0, failed_ = 0;
     double lastMs_ = 0;
     Clock::time_point start_ = Clock::now();
 };
@@ -92,11 +95,11 @@ int runBatchCommand(const BatchArgs& a) {
     progress.clear();
     writeBatchReport(s, reportPath);
 
-    const int64_t worked = s.ok + s.errors;
+    // The rate is over the meshes written (BatchSummary::okPerSecond); failures are counted apart.
     std::cout << "batch: " << withCommas(int64_t(jobs.size())) << " meshes: " << withCommas(s.ok) << " ok, "
               << withCommas(s.skipped) << " skipped (already done), " << withCommas(s.errors) << " failed in "
-              << fmtMs(s.seconds * 1000) << " (" << fmt(s.seconds > 0 ? double(worked) / s.seconds : 0, 3)
-              << " meshes/s) -> " << a.outDir << ", report " << reportPath << "\n";
+              << fmtMs(s.seconds * 1000) << " (" << fmt(s.okPerSecond(), 3) << " meshes/s written) -> "
+              << a.outDir << ", report " << reportPath << "\n";
     return s.errors > 0 ? 2 : 0;
 }
 
@@ -114,7 +117,9 @@ restarted by running the same command again (--force redoes everything). A mesh 
 and in the report, and the others go on.
 
 The report (default OUTDIR/report.json) lists every mesh: {mesh, output, status (ok, skipped,
-error), error, triangles, ms}, with the counts and the total time.
+error), error, triangles, ms}, with the counts, the total time and ok_per_second. The rate
+(there, in the progress line and in the summary) counts the meshes written: failed and skipped
+meshes are counted separately and left out of it.
 
 Exit status: 0 when every mesh is ok or skipped, 2 when at least one mesh failed (the report
 says which), 1 when the batch could not start (bad manifest, duplicate stems, bad options).)";
