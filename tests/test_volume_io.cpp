@@ -20,7 +20,9 @@
 #include "io/module_api.hpp"
 #include "test_util.hpp"
 #include "voxfx/grid_io.hpp"
+#include "voxfx/scene.hpp"
 #include "voxfx/volume_io.hpp"
+#include "voxfx/volume_scene.hpp"
 
 namespace voxfx {
 namespace {
@@ -753,6 +755,27 @@ TEST(VolumeIo, VdbVolumeErrorsNameTheFileAndTheCause) {
     expectError([&] { loadVolume(dir.file("missing.vdb")); }, {"missing.vdb", "no such file"});
     const std::string inr = writeFile(dir.file("x.inr"), "");
     expectError([&] { loadVolume(inr, other); }, {inr, "only for .vdb"});
+}
+
+TEST(VolumeIo, VdbGridNamedInASceneFileBecomesTheObjectsVolume) {
+    TempDir dir;
+    vdbvol::write(dir, "density.vdb");
+    writeFile(dir.file("scene.json"), R"({"objects": [
+      {"name": "cloud", "kind": "volume", "volume": {"file": "density.vdb", "grid": "density"}, "scale": 2,
+       "translate": [1, 0, 0], "transfer": {"color": [[0, 1, 1, 1]], "opacity": [[0, 0], [40, 1]]}}]})");
+    const Scene scene = loadScene(dir.file("scene.json"));
+    ASSERT_TRUE(scene.volumeScene);
+    ASSERT_EQ(scene.volumeScene->volumes.size(), 1u);
+    const Volume& v = *scene.volumeScene->volumes[0];
+    ASSERT_TRUE(v.dims() == vdbvol::kDims);
+    EXPECT_EQ(v.at(2, 3, 1), vdbvol::value(2, 3, 1));
+    // Placement: world = file position * scale + translate.
+    EXPECT_NEAR(v.voxelCenter(0, 0, 0).x, vdbvol::kCentre0[0] * 2 + 1, 1e-12);
+    EXPECT_NEAR(v.spacing().z, vdbvol::kCell[2] * 2, 1e-12);
+    writeFile(dir.file("bad.json"), R"({"objects": [
+      {"name": "cloud", "kind": "volume", "volume": {"file": "density.vdb", "grid": "smoke"},
+       "transfer": {"color": [[0, 1, 1, 1]], "opacity": [[0, 0], [40, 1]]}}]})");
+    expectError([&] { loadScene(dir.file("bad.json")); }, {"density.vdb", "no grid named 'smoke'"});
 }
 
 } // namespace
