@@ -3,6 +3,7 @@
 // crafted ones must end in voxfx::Error naming the file, and (checked by the sanitizer pass of
 // the test command, with LeakSanitizer) without leaks or undefined behaviour.
 #include <cstring>
+#include <limits>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -11,6 +12,7 @@
 #include "test_util.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/grid_io.hpp"
+#include "voxfx/volume_io.hpp"
 
 namespace voxfx {
 namespace {
@@ -121,6 +123,77 @@ TEST(HostileVdbTest, CraftedCountsAndSizesAreRefusedByName) {
     const uint32_t version = 9999;
     std::memcpy(m.data() + 8, &version, 4);
     EXPECT_NE(vdbHostileRead(dir, m).find("version 9999"), std::string::npos) << vdbHostileRead(dir, m);
+}
+
+// ---- float grids as volumes (loadVolume) -------------------------------------------------------
+
+// Writes `grid` with plain OpenVDB (an independent writer) and returns the path.
+std::string vdbHostileWriteGrid(const TempDir& dir, const char* name, const openvdb::GridBase::Ptr& grid) {
+    const std::string path = dir.file(name);
+    openvdb::io::File file(path);
+    file.write({grid});
+    file.close();
+    return path;
+}
+
+TEST(HostileVdbTest, FloatGridVolumesHoldTilesBackgroundAndVoxels) {
+    // Background 0.25, an active 8^3 tile of 3 at (8, 0, 0) and a voxel of 2 at (1, 2, 3): the dense
+    // box is the active voxels' box (1..15, 0..7, 0..7), the background fills what is not stored.
+    TempDir dir;
+    openvdb::initialize();
+    auto grid = openvdb::FloatGrid::create(0.25f);
+    grid->tree().addTile(1, openvdb::Coord(8, 0, 0), 3.0f, true);
+    grid->tree().setValue(openvdb::Coord(1, 2, 3), 2.0f);
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(0.5));
+    grid->setName("tiles");
+    const std::string path = vdbHostileWriteGrid(dir, "tiles.vdb", grid);
+    const Volume v = loadVolume(path);
+    ASSERT_TRUE(v.dims() == Vec3i(15, 8, 8));
+    for (int64_t k = 0; k < 8; ++k)
+        for (int64_t j = 0; j < 8; ++j)
+            for (int64_t i = 0; i < 15; ++i) {
+                const int64_t x = i + 1; // index box starts at x = 1
+                const float expected = x >= 8 ? 3.0f : (x == 1 && j == 2 && k == 3 ? 2.0f : 0.25f);
+                ASSERT_EQ(v.at(i, j, k), expected) << x << ", " << j << ", " << k;
+            }
+    // Index (1, 0, 0) is the first voxel's centre, at 0.5 with a voxel size of 0.5.
+    EXPECT_DOUBLE_EQ(v.lo().x, 0.25);
+    EXPECT_DOUBLE_EQ(v.lo().y, -0.25);
+    EXPECT_DOUBLE_EQ(v.spacing().z, 0.5);
+}
+
+TEST(HostileVdbTest, FloatGridVolumesRefuseRotationsHugeBoxesAndNaN) {
+    TempDir dir;
+    openvdb::initialize();
+    auto expectVolumeError = [](const std::string& path, const std::string& cause) {
+        try {
+            loadVolume(path);
+            ADD_FAILURE() << path << ": no error";
+        } catch (const Error& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(path), std::string::npos) << what;
+            EXPECT_NE(what.find(cause), std::string::npos) << what;
+        }
+    };
+    auto rotated = openvdb::FloatGrid::create(0.0f);
+    rotated->tree().setValue(openvdb::Coord(1, 2, 3), 1.0f);
+    auto xform = openvdb::math::Transform::createLinearTransform(1.0);
+    xform->postRotate(0.3, openvdb::math::Z_AXIS);
+    rotated->setTransform(xform);
+    expectVolumeError(vdbHostileWriteGrid(dir, "rotated.vdb", rotated), "rotated");
+    // Two voxels 2^20 apart on every axis: 2^60 voxels between them, refused before allocating.
+    auto sparse = openvdb::FloatGrid::create(0.0f);
+    sparse->tree().setValue(openvdb::Coord(0, 0, 0), 1.0f);
+    sparse->tree().setValue(openvdb::Coord(1 << 20, 1 << 20, 1 << 20), 1.0f);
+    expectVolumeError(vdbHostileWriteGrid(dir, "sparse.vdb", sparse), "2^40");
+    // 2^13 apart: 2^39 voxels, within the limit but not within memory (2 TiB of floats).
+    auto wide = openvdb::FloatGrid::create(0.0f);
+    wide->tree().setValue(openvdb::Coord(0, 0, 0), 1.0f);
+    wide->tree().setValue(openvdb::Coord(8191, 8191, 8191), 1.0f);
+    expectVolumeError(vdbHostileWriteGrid(dir, "wide.vdb", wide), "of memory is available");
+    auto nan = openvdb::FloatGrid::create(0.0f);
+    nan->tree().setValue(openvdb::Coord(4, 5, 6), std::numeric_limits<float>::quiet_NaN());
+    expectVolumeError(vdbHostileWriteGrid(dir, "nan.vdb", nan), "(4, 5, 6) is NaN");
 }
 
 // ---- fuzz findings (tests/regress/vdb/, also replayed by FuzzCorpusReplay) --------------------

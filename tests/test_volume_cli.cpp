@@ -3,6 +3,7 @@
 #include <string>
 
 #include "test_util.hpp"
+#include "voxfx/grid_io.hpp"
 
 namespace voxfx {
 namespace {
@@ -29,6 +30,20 @@ TEST(VolumeCli, VolumeInfoSummarizesAVolumeAndATransferFunction) {
     EXPECT_NE(r.out.find("type:       uint8"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("min 0, max 23, mean 11.5, 23 non-zero"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("13 voxels with opacity > 0"), std::string::npos) << r.out;
+}
+
+TEST(VolumeCli, VolumeInfoReadsAnOpenVdbFloatGrid) {
+    // A float fog volume with 1 in the filled voxels of a random grid (writeGrid's --vdb-float).
+    TempDir dir;
+    const VoxelGrid g = test::randomVoxelGrid(Box3d{{0, 0, 0}, {2, 1, 1}}, Axis::Z, {10, 6, 5}, 0.3, 11);
+    const std::string vdb = dir.file("fog.vdb");
+    writeGrid(g, vdb, GridWriteOptions{true, "fog"});
+    const test::CommandRun r = test::runVoxfx(dir, "volume-info " + vdb + " --grid fog");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("grid:       'fog' (fog volume)"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("dims:       10 x 6 x 5 (300 voxels)"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(", " + std::to_string(g.bits.count()) + " non-zero"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("spacing:    (0.2, 0.166667, 0.2)"), std::string::npos) << r.out;
 }
 
 TEST(VolumeCli, BadVolumeOrTransferFunctionGivesOneErrorAndNoOutput) {

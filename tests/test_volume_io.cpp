@@ -1,5 +1,6 @@
 // Tests of loadVolume: INR (CGAL's images and files written here), NRRD and raw + JSON of every
-// scalar type and both byte orders, plain and gzipped, and every kind of bad input.
+// scalar type and both byte orders, plain and gzipped, OpenVDB float grids, and every kind of bad
+// input.
 //
 // Oracles: the files are written here byte by byte (samples shifted out in the byte order the
 // header names, gzip by zlib's deflate); CGAL's images are decoded here with plain code from the
@@ -16,8 +17,12 @@
 
 #include <zlib.h>
 
+#include "io/module_api.hpp"
 #include "test_util.hpp"
+#include "voxfx/grid_io.hpp"
+#include "voxfx/scene.hpp"
 #include "voxfx/volume_io.hpp"
+#include "voxfx/volume_scene.hpp"
 
 namespace voxfx {
 namespace {
@@ -658,6 +663,119 @@ TEST(VolumeIo, UnknownOrMissingFilesGiveAClearError) {
     const std::string gone = dir.file("gone.nrrd");
     expectError([&] { loadVolume(gone); }, {gone, "cannot open"});
     expectError([&] { loadVolume(dir.path().string()); }, {"directory"});
+}
+
+// ---- OpenVDB float grids ---------------------------------------------------------------------
+// Written by the voxfx_vdb module's float writer (OpenVDB's own FloatGrid and File), read back by
+// loadVolume: the samples must be the values written and the placement the writer's transform
+// (index (i, j, k) at centre0 + (i, j, k) * cell).
+
+namespace vdbvol {
+
+const Vec3i kDims{6, 5, 4};
+constexpr double kCell[3] = {0.5, 0.25, 2.0}, kCentre0[3] = {-1.0, 3.0, 0.75};
+
+float value(int64_t i, int64_t j, int64_t k) {
+    if (i == kDims.x - 1 || (i + j + k) % 7 == 0) return 0.0f; // zeros: inactive, and an empty border
+    return float(i + 1) + 10.0f * float(j) - 3.5f * float(k);
+}
+
+std::string write(const TempDir& dir, const std::string& name) {
+    std::vector<float> values;
+    for (int64_t k = 0; k < kDims.z; ++k)
+        for (int64_t j = 0; j < kDims.y; ++j)
+            for (int64_t i = 0; i < kDims.x; ++i) values.push_back(value(i, j, k));
+    const std::string path = dir.file(name);
+    detail::VdbPlacement placement;
+    for (int a = 0; a < 3; ++a) {
+        placement.cell[a] = kCell[a];
+        placement.centre0[a] = kCentre0[a];
+    }
+    const int64_t dims[3] = {kDims.x, kDims.y, kDims.z};
+    std::string error;
+    EXPECT_TRUE(
+        detail::vdbModule().writeFloats(path.c_str(), dims, values.data(), placement, "density", &error))
+        << error;
+    return path;
+}
+
+} // namespace vdbvol
+
+TEST(VolumeIo, VdbFloatGridReadsBackItsSamplesAndTransform) {
+    TempDir dir;
+    const std::string path = vdbvol::write(dir, "density.vdb");
+    for (const std::string grid : {"", "density"}) {
+        VolumeLoadReport report;
+        VolumeLoadOptions options;
+        options.vdbGrid = grid;
+        const Volume v = loadVolume(path, options, &report);
+        EXPECT_EQ(report.format, VolumeFormat::Vdb);
+        EXPECT_EQ(report.gridName, "density");
+        EXPECT_EQ(report.gridClass, "fog volume");
+        EXPECT_EQ(v.sourceType(), ScalarType::Float32);
+        ASSERT_TRUE(v.dims() == vdbvol::kDims) << v.dims().x << " x " << v.dims().y << " x " << v.dims().z;
+        int64_t nonzero = 0;
+        for (int64_t k = 0; k < vdbvol::kDims.z; ++k)
+            for (int64_t j = 0; j < vdbvol::kDims.y; ++j)
+                for (int64_t i = 0; i < vdbvol::kDims.x; ++i) {
+                    ASSERT_EQ(v.at(i, j, k), vdbvol::value(i, j, k)) << i << ", " << j << ", " << k;
+                    nonzero += v.at(i, j, k) != 0;
+                    const Vec3d c = v.voxelCenter(i, j, k);
+                    const Vec3d ijk{double(i), double(j), double(k)};
+                    for (int a = 0; a < 3; ++a)
+                        EXPECT_NEAR(c[a], vdbvol::kCentre0[a] + ijk[a] * vdbvol::kCell[a], 1e-12);
+                    EXPECT_EQ(v.sample(c), vdbvol::value(i, j, k));
+                }
+        EXPECT_GT(nonzero, 60);
+        for (int a = 0; a < 3; ++a) EXPECT_EQ(v.spacing()[a], vdbvol::kCell[a]);
+    }
+}
+
+TEST(VolumeIo, VdbVolumeErrorsNameTheFileAndTheCause) {
+    TempDir dir;
+    const std::string good = vdbvol::write(dir, "density.vdb");
+    VolumeLoadOptions other;
+    other.vdbGrid = "smoke";
+    expectError([&] { loadVolume(good, other); }, {good, "no grid named 'smoke'", "'density'"});
+    // A bool grid is not a volume.
+    const std::string bools = dir.file("bools.vdb");
+    writeGrid(test::randomVoxelGrid(Box3d{{0, 0, 0}, {1, 1, 1}}, Axis::Z, {8, 8, 8}, 0.5, 3), bools);
+    expectError([&] { loadVolume(bools); }, {bools, "no float or double grid", "(bool)"});
+    // Truncated and corrupt files: clear errors, no volume.
+    const std::string bytes = test::readFileBytes(good);
+    ASSERT_GT(bytes.size(), 100u);
+    for (const std::size_t cut : {std::size_t(0), std::size_t(20), bytes.size() / 2, bytes.size() - 1}) {
+        const std::string p = writeFile(dir.file("cut" + std::to_string(cut) + ".vdb"), bytes.substr(0, cut));
+        expectError([&] { loadVolume(p); }, {p});
+    }
+    std::string corrupt = bytes;
+    corrupt[0] ^= 0x5a; // the magic number
+    const std::string bad = writeFile(dir.file("magic.vdb"), corrupt);
+    expectError([&] { loadVolume(bad); }, {bad, "not a valid .vdb"});
+    expectError([&] { loadVolume(dir.file("missing.vdb")); }, {"missing.vdb", "no such file"});
+    const std::string inr = writeFile(dir.file("x.inr"), "");
+    expectError([&] { loadVolume(inr, other); }, {inr, "only for .vdb"});
+}
+
+TEST(VolumeIo, VdbGridNamedInASceneFileBecomesTheObjectsVolume) {
+    TempDir dir;
+    vdbvol::write(dir, "density.vdb");
+    writeFile(dir.file("scene.json"), R"({"objects": [
+      {"name": "cloud", "kind": "volume", "volume": {"file": "density.vdb", "grid": "density"}, "scale": 2,
+       "translate": [1, 0, 0], "transfer": {"color": [[0, 1, 1, 1]], "opacity": [[0, 0], [40, 1]]}}]})");
+    const Scene scene = loadScene(dir.file("scene.json"));
+    ASSERT_TRUE(scene.volumeScene);
+    ASSERT_EQ(scene.volumeScene->volumes.size(), 1u);
+    const Volume& v = *scene.volumeScene->volumes[0];
+    ASSERT_TRUE(v.dims() == vdbvol::kDims);
+    EXPECT_EQ(v.at(2, 3, 1), vdbvol::value(2, 3, 1));
+    // Placement: world = file position * scale + translate.
+    EXPECT_NEAR(v.voxelCenter(0, 0, 0).x, vdbvol::kCentre0[0] * 2 + 1, 1e-12);
+    EXPECT_NEAR(v.spacing().z, vdbvol::kCell[2] * 2, 1e-12);
+    writeFile(dir.file("bad.json"), R"({"objects": [
+      {"name": "cloud", "kind": "volume", "volume": {"file": "density.vdb", "grid": "smoke"},
+       "transfer": {"color": [[0, 1, 1, 1]], "opacity": [[0, 0], [40, 1]]}}]})");
+    expectError([&] { loadScene(dir.file("bad.json")); }, {"density.vdb", "no grid named 'smoke'"});
 }
 
 } // namespace

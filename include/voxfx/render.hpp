@@ -13,8 +13,11 @@
 //                     light's RGB visibility. Surfaces are lit on both sides; the side facing away
 //                     from a light receives the light that crosses the surface
 //                     (crossingTransmittance: back-lit leaves glow).
-//   4b. volumes       scenes with volume objects (scene.volumeScene): ray casting over fragment
-//                     lists from the camera, composited over the shaded image (render/volume_pass).
+//   4b. volumes       scenes with volume objects or Boolean shapes (scene.volumeScene): ray casting
+//                     over fragment lists from the camera, composited over the shaded image
+//                     (render/volume_pass): volumes sampled, and the visible surfaces of opaque and
+//                     translucent objects (where a Boolean's inside flag changes) shaded like meshes
+//                     and α-blended in depth order.
 //   5. resolve        box filter of supersample x supersample pixels.
 // Output is linear RGB (writePng encodes sRGB; writePfm keeps HDR). Deterministic for any thread
 // count.

@@ -119,8 +119,8 @@ struct Scene {
     std::vector<Light> lights;
     std::vector<Camera> cameras;
     SceneSettings settings;
-    /// Volume objects and Boolean shapes (voxfx/volume_scene.hpp): deep shadows and volume ray
-    /// casting; null when the scene has none.
+    /// Volume objects and Boolean shapes (voxfx/volume_scene.hpp): deep shadows, and drawn by the
+    /// renderer's ray casting over fragment lists; null when the scene has none.
     std::shared_ptr<const VolumeScene> volumeScene;
     std::string source; ///< file it was loaded from (for messages)
     /// What a loader understood but could not use (orthographic cameras, textures, non-triangle

@@ -13,7 +13,14 @@
 //                   "origin" is the centre of voxel (0, 0, 0) (box from 0 without it), "file"
 //                   is relative to the JSON file, "offset" skips a header of that many bytes,
 //                   "encoding": "gzip" inflates the file first
-// OpenVDB float grids are not read yet (.vdb gives an error saying so).
+//   .vdb            OpenVDB: the first float or double grid, or the one named by
+//                   VolumeLoadOptions::vdbGrid; the dense box is the grid's stored dimensions
+//                   (voxfx's "voxfx_dims" metadata) or else the bounding box of its active voxels,
+//                   and every voxel there gets the grid's value (active or not: the background
+//                   where nothing is stored). The transform must be an axis-aligned scale (per axis)
+//                   and translation: index (i, j, k) is the centre of voxel (i, j, k) of that box;
+//                   rotated, sheared, mirrored and non-linear transforms are refused. Read through
+//                   the voxfx_vdb module, which checks the file's structure before OpenVDB reads it.
 // Every header is checked against the bytes the file holds before anything is allocated, and a
 // NaN or infinite sample is an error: voxfx::Error names the file and what is wrong.
 #pragma once
@@ -27,7 +34,7 @@
 namespace voxfx {
 
 /// File format of a volume.
-enum class VolumeFormat : uint8_t { Inr, Nrrd, RawJson };
+enum class VolumeFormat : uint8_t { Inr, Nrrd, RawJson, Vdb };
 const char* toString(VolumeFormat f);
 
 /// What loadVolume found besides the volume.
@@ -35,11 +42,21 @@ struct VolumeLoadReport {
     VolumeFormat format = VolumeFormat::Inr;
     bool gzip = false;      ///< the samples were gzip-compressed
     uint64_t fileBytes = 0; ///< size of the file named (the header for a detached NRRD or JSON)
+    std::string gridName;   ///< .vdb: the grid read
+    std::string gridClass;  ///< .vdb: its class ("fog volume", "level set", ...)
+};
+
+/// How loadVolume reads a file.
+struct VolumeLoadOptions {
+    /// .vdb: the name of the grid to read; empty reads the first float or double grid.
+    std::string vdbGrid;
 };
 
 /// Reads a scalar volume (see the file comment for the formats). Throws voxfx::Error naming the
-/// file and the problem. OpenVDB float grids are not read here yet.
+/// file and the problem.
 Volume loadVolume(const std::string& path, VolumeLoadReport* report = nullptr);
+Volume loadVolume(const std::string& path, const VolumeLoadOptions& options,
+                  VolumeLoadReport* report = nullptr);
 
 /// Reads a transfer function's JSON file (format: voxfx/transfer_function.hpp).
 TransferFunction loadTransferFunction(const std::string& path);

@@ -1,4 +1,4 @@
-// voxfx volume-info VOLUME [--tf TF.json] — what a scalar volume file holds: format, type,
+// voxfx volume-info VOLUME [--tf TF.json] [--grid NAME] — what a scalar volume file holds: format, type,
 // dimensions, placement and value range; with a transfer function, how much of it is visible.
 #include <iostream>
 
@@ -13,13 +13,15 @@ std::string vecString(const Vec3d& v) {
     return "(" + fmt(v.x, 6) + ", " + fmt(v.y, 6) + ", " + fmt(v.z, 6) + ")";
 }
 
-int runVolumeInfo(const std::string& path, const std::string& tfPath) {
+int runVolumeInfo(const std::string& path, const std::string& tfPath, const std::string& grid) {
     // Everything that can fail is read before anything is printed.
     TransferFunction tf;
     if (!tfPath.empty()) tf = loadTransferFunction(tfPath);
     const auto t0 = Clock::now();
     VolumeLoadReport report;
-    const Volume v = loadVolume(path, &report);
+    VolumeLoadOptions options;
+    options.vdbGrid = grid;
+    const Volume v = loadVolume(path, options, &report);
     const double loadMs = msSince(t0);
 
     double sum = 0;
@@ -33,6 +35,8 @@ int runVolumeInfo(const std::string& path, const std::string& tfPath) {
     std::cout << "file:       " << path << " (" << toString(report.format) << (report.gzip ? ", gzip" : "")
               << ", " << withCommas(int64_t(report.fileBytes)) << " bytes, loaded in " << fmtMs(loadMs)
               << ")\n";
+    if (report.format == VolumeFormat::Vdb)
+        std::cout << "grid:       '" << report.gridName << "' (" << report.gridClass << ")\n";
     std::cout << "type:       " << toString(v.sourceType()) << "\n";
     std::cout << "dims:       " << d.x << " x " << d.y << " x " << d.z << " (" << withCommas(v.voxelCount())
               << " voxels)\n";
@@ -49,13 +53,16 @@ int runVolumeInfo(const std::string& path, const std::string& tfPath) {
 
 const Command kVolumeInfo{
     "volume-info",
-    "Print a scalar volume's type, dimensions, placement and value range (INR, NRRD, raw+JSON)",
+    "Print a scalar volume's type, dimensions, placement and value range (INR, NRRD, raw+JSON, OpenVDB)",
     [](CLI::App& app) {
         auto path = std::make_shared<std::string>();
         auto tf = std::make_shared<std::string>();
-        app.add_option("VOLUME", *path, "Volume file (.inr, .inr.gz, .nrrd, .nhdr, .json)")->required();
+        auto grid = std::make_shared<std::string>();
+        app.add_option("VOLUME", *path, "Volume file (.inr, .inr.gz, .nrrd, .nhdr, .json, .vdb)")->required();
         app.add_option("--tf", *tf, "Transfer function (JSON) to check against the volume");
-        return std::function<int()>([path, tf] { return runVolumeInfo(*path, *tf); });
+        app.add_option("--grid", *grid,
+                       "Grid of a .vdb file to read (default: the first float or double grid)");
+        return std::function<int()>([path, tf, grid] { return runVolumeInfo(*path, *tf, *grid); });
     }};
 
 } // namespace

@@ -20,7 +20,7 @@
 namespace voxfx::detail {
 
 /// Bump when a table below changes.
-inline constexpr uint32_t kModuleAbi = 1;
+inline constexpr uint32_t kModuleAbi = 2;
 
 /// The library's parallel-for handed to a module (so that modules follow withThreads and name no
 /// thread library): calls call(body, b, e) over chunks of `grain` items covering [begin, end).
@@ -47,6 +47,15 @@ struct VdbReadBox {
     double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
 };
 
+/// What readFloats found, for the caller to allocate the volume: the index box's size, the world
+/// corner of its voxel (0, 0, 0) and the voxel size, and the grid read.
+struct VdbFloatBox {
+    int64_t dims[3] = {0, 0, 0};
+    double lo[3] = {0, 0, 0}, spacing[3] = {1, 1, 1};
+    std::string name, gridClass;
+    bool isDouble = false;
+};
+
 struct VdbModule {
     uint32_t abi;
     uint32_t size; ///< sizeof(VdbModule) as the module was built
@@ -61,6 +70,13 @@ struct VdbModule {
     bool (*readBits)(const char* path, void* ctx,
                      uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn),
                      std::string* error);
+    /// Reads the grid named `gridName` (empty: the first float or double grid) as dense floats
+    /// over its index box (the stored dimensions, else the active voxels' box), x fastest:
+    /// `allocate` receives the box and returns dims[0] * dims[1] * dims[2] floats, or null to
+    /// stop (it must not throw). Rotated, sheared, mirrored and non-linear transforms and values
+    /// that are not finite floats are errors.
+    bool (*readFloats)(const char* path, const char* gridName, void* ctx,
+                       float* (*allocate)(void* ctx, const VdbFloatBox& box), std::string* error);
 };
 
 // ---- voxfx_assimp: Assimp (glTF 2.0 and the long tail) ----------------------------------------

@@ -195,6 +195,12 @@ struct SceneObjectsParser {
             Volume volume;
             if (v.is_string()) {
                 volume = loadVolume(resolve(v.get<std::string>()));
+            } else if (v.is_object() && v.contains("file")) {
+                // {"file": "smoke.vdb", "grid": "density"}: a named grid of an OpenVDB file.
+                allowKeys(v, {"file", "grid"}, where + ".volume");
+                VolumeLoadOptions lo;
+                if (v.contains("grid")) lo.vdbGrid = str(v, "grid", where + ".volume");
+                volume = loadVolume(resolve(str(v, "file", where + ".volume")), lo);
             } else if (v.is_object() && v.contains("smoke")) {
                 const json& sm = v["smoke"];
                 allowKeys(sm, {"dims", "box", "seed", "octaves", "frequency"}, where + ".volume.smoke");
@@ -215,7 +221,9 @@ struct SceneObjectsParser {
                 p.frequency = num(sm, "frequency", p.frequency, where);
                 volume = makeSmoke(p);
             } else {
-                fail(where, ": \"volume\" must be a file name or {\"smoke\": {...}}");
+                fail(
+                    where,
+                    ": \"volume\" must be a file name, {\"file\": ..., \"grid\": ...} or {\"smoke\": {...}}");
             }
             // Placement: world = file position * scale + translate.
             const double scale = num(o, "scale", 1, where);

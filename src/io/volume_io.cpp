@@ -233,6 +233,8 @@ const char* toString(VolumeFormat f) {
         return "nrrd";
     case VolumeFormat::RawJson:
         return "raw+json";
+    case VolumeFormat::Vdb:
+        return "vdb";
     }
     return "unknown";
 }
@@ -251,12 +253,17 @@ bool startsWith(std::span<const uint8_t> bytes, std::string_view magic) {
 
 } // namespace
 
-Volume loadVolume(const std::string& path, VolumeLoadReport* report) {
+Volume loadVolume(const std::string& path, VolumeLoadReport* report) { return loadVolume(path, {}, report); }
+
+Volume loadVolume(const std::string& path, const VolumeLoadOptions& options, VolumeLoadReport* report) {
     VolumeLoadReport local;
     VolumeLoadReport& r = report ? *report : local;
     const std::string name = lowerName(path);
-    if (name.ends_with(".vdb"))
-        fail(path, ": OpenVDB volumes are not read yet (convert to .nrrd, .inr or raw + .json)");
+    if (name.ends_with(".vdb")) {
+        r.format = VolumeFormat::Vdb;
+        return detail::readVdbVolume(path, options.vdbGrid, r);
+    }
+    if (!options.vdbGrid.empty()) fail(path, ": a grid name is only for .vdb files");
     const std::vector<uint8_t> bytes = detail::readVolumeFile(path);
     r.fileBytes = bytes.size();
     const std::span<const uint8_t> all(bytes);
@@ -274,8 +281,8 @@ Volume loadVolume(const std::string& path, VolumeLoadReport* report) {
         kind = Kind::kNrrd;
     if (kind == Kind::kUnknown)
         fail(path,
-             ": unknown volume format (known: .inr, .inr.gz, .nrrd, .nhdr, and raw samples described by a "
-             ".json header)");
+             ": unknown volume format (known: .inr, .inr.gz, .nrrd, .nhdr, .vdb, and raw samples described "
+             "by a .json header)");
     switch (kind) {
     case Kind::kInr:
         r.format = VolumeFormat::Inr;

@@ -41,7 +41,8 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     if (options.supersample < 1 || options.supersample > 8)
         fail("supersampling must be between 1 and 8, got ", options.supersample);
     scene.validate();
-    if (scene.triangleCount() == 0) fail("the scene has no triangles to render");
+    if (scene.triangleCount() == 0 && !(scene.volumeScene && !scene.volumeScene->objects.empty()))
+        fail("the scene has no triangles to render");
     const auto t0 = Clock::now();
     // The environment (given, or the procedural sky when glass or default lights need one) and, for a
     // scene without lights, the default sun and sky ambient.

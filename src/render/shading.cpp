@@ -36,7 +36,11 @@ Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight) {
 
 Vec3f shadePoint(const SurfacePoint& s, const Scene& scene, const std::vector<LightShadow>& shadows,
                  const RenderOptions& options, const Vec3d& eye) {
-    const Material& m = scene.materials[s.material];
+    return shadePoint(s, scene.materials[s.material], scene, shadows, options, eye);
+}
+
+Vec3f shadePoint(const SurfacePoint& s, const Material& m, const Scene& scene,
+                 const std::vector<LightShadow>& shadows, const RenderOptions& options, const Vec3d& eye) {
     Vec3f out = options.ambient * m.baseColor;
     const Vec3d toEye = normalize(eye - s.position);
     for (std::size_t k = 0; k < scene.lights.size(); ++k) {

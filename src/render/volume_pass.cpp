@@ -1,38 +1,154 @@
-// voxfx — volume ray casting over fragment lists, composited over the shaded G-buffer
-// (render/volume_pass.hpp).
+// voxfx — volume ray casting over fragment lists, composited over the shaded G-buffer, with the
+// visible surfaces of Boolean-shaped opaque and translucent objects (render/volume_pass.hpp).
 #include "render/volume_pass.hpp"
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 
 #include "render/shading.hpp"
-#include "voxfx/fragment_list.hpp"
-#include "voxfx/volume_scene.hpp"
 
 namespace voxfx::detail {
 
+namespace {
+
+void volumePassMarkLeaves(const VolumeScene& s, int32_t node, std::vector<uint8_t>& used) {
+    const ShapeNode& n = s.nodes[std::size_t(node)];
+    if (n.op == ShapeOp::Leaf) {
+        used[std::size_t(n.leaf)] = 1;
+        return;
+    }
+    volumePassMarkLeaves(s, n.a, used);
+    volumePassMarkLeaves(s, n.b, used);
+}
+
+Vec3d volumePassCorner(const Mesh& m, uint32_t t, int k) {
+    return Vec3d(m.positions[m.indices[3 * std::size_t(t) + std::size_t(k)]]);
+}
+
+} // namespace
+
+ObjectSurfaces::ObjectSurfaces(const VolumeScene& s) : scene(&s), flat(flattenLeaves(s, false)) {
+    objectLeaves.reserve(s.objects.size());
+    for (const VolumeSceneObject& o : s.objects) {
+        std::vector<uint8_t> used(s.leaves.size(), 0);
+        volumePassMarkLeaves(s, o.shape, used);
+        objectLeaves.push_back(std::move(used));
+    }
+    // Area-weighted vertex normals (the cross product's length is twice the area).
+    const Mesh& m = flat.mesh;
+    vertexNormals.assign(m.positions.size(), Vec3d{0, 0, 0});
+    for (uint32_t t = 0; t < uint32_t(m.triangleCount()); ++t) {
+        const Vec3d a = volumePassCorner(m, t, 0);
+        const Vec3d n = cross(volumePassCorner(m, t, 1) - a, volumePassCorner(m, t, 2) - a);
+        for (int k = 0; k < 3; ++k) vertexNormals[m.indices[3 * std::size_t(t) + std::size_t(k)]] += n;
+    }
+    for (Vec3d& n : vertexNormals)
+        if (length(n) > 0) n = normalize(n);
+}
+
+ObjectSurfaceHit ObjectSurfaces::hit(const Frame& frame, int64_t x, int64_t y,
+                                     std::span<const ListFragment> fragments, double z, std::size_t o,
+                                     bool entering) const {
+    ObjectSurfaceHit h;
+    h.depth = z;
+    h.object = uint32_t(o);
+    h.entering = entering;
+    // The fragments at depth z are sorted by triangle: the first whose leaf the object uses.
+    auto it = std::lower_bound(fragments.begin(), fragments.end(), z,
+                               [](const ListFragment& f, double d) { return f.depth < d; });
+    h.triangle = it != fragments.end() ? it->triangle : 0;
+    for (; it != fragments.end() && it->depth == z; ++it)
+        if (objectLeaves[o][flat.triangleLeaf[it->triangle]]) {
+            h.triangle = it->triangle;
+            break;
+        }
+    const Vec3d eye = frame.eye();
+    const Vec3d dir = frame.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - eye;
+    h.position = eye + dir * z;
+    const Vec3d a = volumePassCorner(flat.mesh, h.triangle, 0);
+    Vec3d n =
+        cross(volumePassCorner(flat.mesh, h.triangle, 1) - a, volumePassCorner(flat.mesh, h.triangle, 2) - a);
+    n = length(n) > 0 ? normalize(n) : -normalize(dir);
+    // Entering, the outside is towards the eye; leaving, away from it. Which way the leaf's triangle
+    // faces does not matter: a subtracted leaf's surface points into that leaf.
+    if ((dot(n, dir) < 0) != entering) n = -n;
+    h.outwardNormal = n;
+    return h;
+}
+
+Vec3d ObjectSurfaces::shadingNormal(const ObjectSurfaceHit& h, const Vec3d& facing) const {
+    const Mesh& m = flat.mesh;
+    const Vec3d a = volumePassCorner(m, h.triangle, 0), b = volumePassCorner(m, h.triangle, 1),
+                c = volumePassCorner(m, h.triangle, 2);
+    Vec3d ng = cross(b - a, c - a);
+    const double area2 = dot(ng, ng);
+    if (!(area2 > 0)) return dot(h.outwardNormal, facing) < 0 ? -h.outwardNormal : h.outwardNormal;
+    ng = ng / std::sqrt(area2);
+    const Vec3d& p = h.position;
+    const double w[3] = {std::max(0.0, dot(cross(b - p, c - p), ng) / std::sqrt(area2)),
+                         std::max(0.0, dot(cross(c - p, a - p), ng) / std::sqrt(area2)), 0};
+    const double weights[3] = {w[0], w[1], std::max(0.0, 1.0 - w[0] - w[1])};
+    Vec3d n{0, 0, 0};
+    for (int k = 0; k < 3; ++k) {
+        const Vec3d& v = vertexNormals[m.indices[3 * std::size_t(h.triangle) + std::size_t(k)]];
+        // Across a crease (a box's edge, a Boolean's seam) the face normal, not an average.
+        n += (dot(v, ng) > 0.766 ? v : ng) * weights[k];
+    }
+    n = length(n) > 0 ? normalize(n) : ng;
+    return dot(ng, facing) < 0 ? -n : n;
+}
+
+std::vector<std::vector<ObjectSurfaceHit>> objectSurfaceHits(const VolumeScene& vs, const Frame& frame) {
+    const ObjectSurfaces surfaces(vs);
+    const FragmentLists lists = FragmentLists::build(frame, surfaces.flat.mesh.view());
+    const int64_t W = frame.width(), H = frame.height();
+    std::vector<std::vector<ObjectSurfaceHit>> out(std::size_t(W * H));
+    parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
+        SegmentWalker walker(vs, surfaces.flat.triangleLeaf);
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < W; ++x) {
+                const auto col = lists.column(x, y);
+                auto& hits = out[std::size_t(y * W + x)];
+                walker.walk(
+                    col,
+                    [&](double z, std::size_t o, bool entering) {
+                        if (z < frame.nearDepth()) return true;
+                        hits.push_back(surfaces.hit(frame, x, y, col, z, o, entering));
+                        return vs.objects[o].kind != ObjectKind::Opaque;
+                    },
+                    [](double, double, std::span<const uint8_t>) { return true; });
+            }
+    });
+    return out;
+}
+
 int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::vector<LightShadow>& shadows,
                          const RenderOptions& options, std::vector<Vec3f>& shaded, Progress* progress) {
-    if (!scene.volumeScene) return 0;
+    if (!scene.volumeScene || scene.volumeScene->objects.empty()) return 0;
     const VolumeScene& vs = *scene.volumeScene;
-    bool anyVolume = false;
     double spacing = std::numeric_limits<double>::infinity();
     for (const VolumeSceneObject& o : vs.objects)
         if (o.kind == ObjectKind::Volume) {
-            anyVolume = true;
             const Vec3d s = vs.volumes[std::size_t(o.volume)]->spacing();
             spacing = std::min({spacing, s.x, s.y, s.z});
         }
-    if (!anyVolume) return 0;
     const double step = spacing * options.volumeStep;
-    const FlatLeaves flat = flattenLeaves(vs, false);
+    // Opaque and translucent objects are shaded as meshes of their colour and opacity.
+    std::vector<Material> materials(vs.objects.size());
+    for (std::size_t o = 0; o < vs.objects.size(); ++o) {
+        materials[o].name = vs.objects[o].name;
+        materials[o].baseColor = vs.objects[o].color;
+        materials[o].opacity = vs.objects[o].kind == ObjectKind::Translucent ? vs.objects[o].opacity : 1.0f;
+    }
+    const ObjectSurfaces surfaces(vs);
     const Frame& f = gbuffer.frame;
-    const FragmentLists lists = FragmentLists::build(f, flat.mesh.view(), progress);
+    const FragmentLists lists = FragmentLists::build(f, surfaces.flat.mesh.view(), progress);
     const int64_t W = f.width(), H = f.height();
     std::atomic<int64_t> samples{0};
     parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
-        SegmentWalker walker(vs, flat.triangleLeaf);
+        SegmentWalker walker(vs, surfaces.flat.triangleLeaf);
         int64_t local = 0;
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
@@ -48,7 +164,22 @@ int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::
                 Vec3f color{0, 0, 0};
                 double transmittance = 1;
                 walker.walk(
-                    col, [](double, std::size_t, bool) { return true; },
+                    col,
+                    [&](double z, std::size_t o, bool entering) {
+                        if (z >= zMax) return false;
+                        if (z < f.nearDepth()) return true;
+                        const ObjectSurfaceHit h = surfaces.hit(f, x, y, col, z, o, entering);
+                        SurfacePoint s;
+                        s.position = h.position;
+                        s.geometricNormal =
+                            dot(h.outwardNormal, perDepth) < 0 ? h.outwardNormal : -h.outwardNormal;
+                        s.normal = surfaces.shadingNormal(h, -perDepth);
+                        const Material& m = materials[o];
+                        const double a = m.opacity;
+                        color += shadePoint(s, m, scene, shadows, options, eye) * float(a * transmittance);
+                        transmittance *= 1.0 - a;
+                        return transmittance >= 1e-3;
+                    },
                     [&](double z0, double z1, std::span<const uint8_t> inside) {
                         if (z0 >= zMax) return false;
                         z1 = std::min(z1, zMax);
@@ -74,15 +205,15 @@ int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::
                                                                          : Vec3f{1, 1, 1};
                                     light += e * vis * float(1.0 / M_PI);
                                 }
-                                color += Vec3f{c.r, c.g, c.b} * light * float(a * transmittance);
+                                color += Vec3f{c.r, c.g, c.b} * light *
+                                         float(a * transmittance * options.exposure);
                                 transmittance *= 1.0 - a;
                             }
                             if (transmittance < 1e-3) return false;
                         }
                         return true;
                     });
-                if (transmittance < 1.0)
-                    shaded[pixel] = color * options.exposure + shaded[pixel] * float(transmittance);
+                if (transmittance < 1.0) shaded[pixel] = color + shaded[pixel] * float(transmittance);
             }
         samples += local;
     });

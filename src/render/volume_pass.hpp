@@ -1,22 +1,63 @@
-// voxfx — the volume ray-casting pass (internal): volumes of the scene's VolumeScene composited over
-// the shaded G-buffer (Bornik et al. §3).
+// voxfx — the volume ray-casting pass (internal): the objects of the scene's VolumeScene composited
+// over the shaded G-buffer (Bornik et al. §3): volumes, and opaque and translucent objects whose
+// shapes are Booleans (the G-buffer draws only plain meshes).
 #pragma once
 
 #include <vector>
 
+#include "voxfx/fragment_list.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/volume_scene.hpp"
 
 namespace voxfx::detail {
 
 /// Camera ray casting over fragment lists: the boundary triangles of the scene's volume scene are
-/// rasterized into fragment lists over the camera frame; each pixel walks its list front to back,
-/// skips segments outside every volume object, samples the volumes inside at steps of
-/// `options.volumeStep` smallest voxel spacings up to the G-buffer's depth, composites
-/// front to back (sample opacity 1 - (1 - α)^(dl / opacityLength), colour = transfer colour ×
-/// (ambient + Σ lights irradiance × shadow visibility / π)), stops when the accumulated opacity
-/// reaches 0.999, and blends the result over `shaded` (row-major, y up). Returns the number of
-/// volume samples taken. Nothing happens when the scene has no volume objects.
+/// rasterized into fragment lists over the camera frame; each pixel walks its list front to back up
+/// to the G-buffer's depth. Where an opaque or translucent object's inside flag changes, the ray
+/// crosses its visible surface (ObjectSurfaceHit): it is shaded like a mesh of the object's colour
+/// (Blinn–Phong, shadows) and composited with α = 1 (opaque: the walk stops) or the object's
+/// opacity. Segments inside volume objects are sampled at steps of `options.volumeStep` smallest
+/// voxel spacings and composited front to back (sample opacity 1 - (1 - α)^(dl / opacityLength),
+/// colour = transfer colour × (ambient + Σ lights irradiance × shadow visibility / π)). The walk
+/// stops when the accumulated opacity reaches 0.999, and the result is blended over `shaded`
+/// (row-major, y up). Returns the number of volume samples taken. Nothing happens when the scene
+/// has no volume scene objects.
 int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::vector<LightShadow>& shadows,
                          const RenderOptions& options, std::vector<Vec3f>& shaded, Progress* progress);
+
+/// A crossing of an opaque or translucent object's boundary along a camera ray.
+struct ObjectSurfaceHit {
+    double depth = 0;      ///< frame depth (the ray's point is eye + (pixel's depth-1 point - eye) * depth)
+    uint32_t object = 0;   ///< index into VolumeScene::objects
+    uint32_t triangle = 0; ///< the triangle of the flattened leaves (lowest index of those at this depth)
+    bool entering = false; ///< the ray enters the object's shape here
+    Vec3d position;
+    /// Unit geometric normal pointing out of the object's shape (a subtracted leaf's triangle gets
+    /// its normal reversed).
+    Vec3d outwardNormal;
+};
+
+/// What the pass needs of a volume scene besides its fragment lists: the flattened leaves and,
+/// per object, which leaves its shape uses.
+struct ObjectSurfaces {
+    explicit ObjectSurfaces(const VolumeScene& scene);
+    /// The hit of the surface the walker reported at depth z (object o, entering) in column
+    /// `fragments` of pixel (x, y) of `frame`.
+    ObjectSurfaceHit hit(const Frame& frame, int64_t x, int64_t y, std::span<const ListFragment> fragments,
+                         double z, std::size_t o, bool entering) const;
+    /// Unit shading normal at the hit (vertex normals averaged over the leaf, the face normal across
+    /// creases sharper than 40 degrees), on the side of `facing`.
+    Vec3d shadingNormal(const ObjectSurfaceHit& h, const Vec3d& facing) const;
+
+    const VolumeScene* scene;
+    FlatLeaves flat;
+    std::vector<Vec3d> vertexNormals;               ///< area-weighted, per flat.mesh vertex
+    std::vector<std::vector<uint8_t>> objectLeaves; ///< per object, per leaf: used by its shape
+};
+
+/// For every pixel of `frame` (row-major, y up), the surfaces of opaque and translucent objects its
+/// ray crosses beyond the near plane, nearest first, up to and including the first opaque one: the
+/// surfaces compositeVolumes composites (tests compare them with exact inside tests).
+std::vector<std::vector<ObjectSurfaceHit>> objectSurfaceHits(const VolumeScene& scene, const Frame& frame);
 
 } // namespace voxfx::detail

@@ -1,4 +1,5 @@
-// voxfx_vdb — the OpenVDB module: .vdb reading and writing (see io/module_api.hpp, io/vdb.cpp).
+// voxfx_vdb — the OpenVDB module: .vdb reading and writing (see io/module_api.hpp, io/vdb.cpp,
+// io/volume_vdb.cpp).
 //
 // Written grids: a BoolGrid (or a FloatGrid fog volume with 1 in filled voxels) whose index
 // (i, j, k) is voxel (i, j, k) of the grid and whose transform maps it to the voxel centre:
@@ -14,6 +15,7 @@
 #include <cmath>
 #include <fstream>
 #include <istream>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <streambuf>
@@ -261,8 +263,8 @@ std::string readWholeFile(const char* path) {
     return bytes;
 }
 
-void readBitsImpl(const char* path, void* ctx,
-                  uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn)) {
+// Every grid of the file, read by OpenVDB after the walker checked the bytes.
+openvdb::GridPtrVecPtr readValidatedGrids(const char* path) {
     initializeOpenVdb();
     // The whole file, checked by the walker (vdb_validate.hpp) before OpenVDB reads those very
     // bytes from memory: OpenVDB trusts every size and count in a file.
@@ -283,6 +285,26 @@ void readBitsImpl(const char* path, void* ctx,
         // OpenVDB reports malformed files with its own exceptions (and the odd std one).
         fail("OpenVDB: ", e.what());
     }
+    return grids;
+}
+
+// The index box of a grid: its stored dimensions when they cover every active voxel, else the
+// bounding box of its active voxels.
+openvdb::CoordBBox indexBox(const openvdb::GridBase& grid) {
+    openvdb::CoordBBox active;
+    const bool any = grid.baseTree().evalActiveVoxelBoundingBox(active);
+    const auto dims = grid.getMetadata<openvdb::Vec3IMetadata>(kDimsMeta);
+    if (dims && dims->value().x() > 0 && dims->value().y() > 0 && dims->value().z() > 0) {
+        const openvdb::CoordBBox box(openvdb::Coord(0), openvdb::Coord(dims->value()) - openvdb::Coord(1));
+        return any && !box.isInside(active) ? active : box;
+    }
+    if (!any) fail("grid '", grid.getName(), "' has no active voxels and no stored dimensions");
+    return active;
+}
+
+void readBitsImpl(const char* path, void* ctx,
+                  uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn)) {
+    const openvdb::GridPtrVecPtr grids = readValidatedGrids(path);
     openvdb::GridBase::Ptr base;
     for (const auto& gp : *grids)
         if (gp && (gp->isType<openvdb::BoolGrid>() || gp->isType<openvdb::FloatGrid>() ||
@@ -297,19 +319,7 @@ void readBitsImpl(const char* path, void* ctx,
     double cell[3], centre0[3];
     boxTransform(*base, cell, centre0);
 
-    // Index box: the stored dimensions when they cover every active voxel, else the active box.
-    openvdb::CoordBBox active;
-    const bool any = base->baseTree().evalActiveVoxelBoundingBox(active);
-    openvdb::CoordBBox box;
-    const auto dims = base->getMetadata<openvdb::Vec3IMetadata>(kDimsMeta);
-    if (dims && dims->value().x() > 0 && dims->value().y() > 0 && dims->value().z() > 0) {
-        box = openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(dims->value()) - openvdb::Coord(1));
-        if (any && !box.isInside(active)) box = active;
-    } else if (any) {
-        box = active;
-    } else {
-        fail("grid '", base->getName(), "' has no active voxels and no stored dimensions");
-    }
+    const openvdb::CoordBBox box = indexBox(*base);
     // Sizes in 64 bits: an index box from -2^31 to 2^31 - 1 has 2^32 voxels along an axis.
     const openvdb::Coord o = box.min();
     const int64_t n[3] = {int64_t(box.max().x()) - o.x() + 1, int64_t(box.max().y()) - o.y() + 1,
@@ -329,6 +339,98 @@ void readBitsImpl(const char* path, void* ctx,
         readTree(*f, o, g);
     else
         readTree(*openvdb::GridBase::grid<openvdb::DoubleGrid>(base), o, g);
+}
+
+// A scalar value as a volume sample: finite and within float's range, or an error naming where.
+template <class ValueT>
+float volumeSample(const openvdb::GridBase& grid, ValueT v, const char* what, const openvdb::Coord& at) {
+    if (std::isfinite(v) && std::abs(double(v)) <= double(std::numeric_limits<float>::max())) return float(v);
+    fail("grid '", grid.getName(), "': ", what, " at index (", at.x(), ", ", at.y(), ", ", at.z(), ") is ",
+         std::isnan(v) ? "NaN" : (std::isinf(v) ? "infinite" : "beyond the range of float"),
+         " (volume samples must be finite)");
+}
+
+// The dense values of a float or double grid over the index box from `o` of n voxels per axis,
+// x fastest. Every voxel has a value, active or not: the background first, then the tiles above
+// the leaves (active or not, clipped to the box), then each leaf's 512 values.
+template <class GridT>
+void readDense(const GridT& grid, const openvdb::Coord& o, const int64_t n[3], float* out) {
+    using TreeT = typename GridT::TreeType;
+    const TreeT& tree = grid.tree();
+    const auto index = [&](int64_t x, int64_t y, int64_t z) {
+        return std::size_t((z * n[1] + y) * n[0] + x);
+    };
+    std::fill(out, out + n[0] * n[1] * n[2], volumeSample(grid, tree.background(), "the background", o));
+    auto tile = tree.cbeginValueAll();
+    tile.setMaxDepth(TreeT::ValueAllCIter::LEAF_DEPTH - 1);
+    for (; tile; ++tile) {
+        const openvdb::CoordBBox bb = tile.getBoundingBox();
+        int64_t lo[3], hi[3];
+        bool empty = false;
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::max<int64_t>(0, int64_t(bb.min()[a]) - o[a]);
+            hi[a] = std::min<int64_t>(n[a], int64_t(bb.max()[a]) - o[a] + 1);
+            empty = empty || lo[a] >= hi[a];
+        }
+        if (empty) continue;
+        const float v = volumeSample(grid, *tile, "the tile", bb.min());
+        for (int64_t z = lo[2]; z < hi[2]; ++z)
+            for (int64_t y = lo[1]; y < hi[1]; ++y)
+                std::fill(out + index(lo[0], y, z), out + index(hi[0], y, z), v);
+    }
+    for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf)
+        for (openvdb::Index i = 0; i < TreeT::LeafNodeType::SIZE; ++i) {
+            const openvdb::Coord c = leaf->offsetToGlobalCoord(i);
+            const int64_t x = int64_t(c.x()) - o.x(), y = int64_t(c.y()) - o.y(), z = int64_t(c.z()) - o.z();
+            if (x < 0 || y < 0 || z < 0 || x >= n[0] || y >= n[1] || z >= n[2]) continue;
+            out[index(x, y, z)] = volumeSample(grid, leaf->getValue(i), "the value", c);
+        }
+}
+
+void readFloatsImpl(const char* path, const char* gridName, void* ctx,
+                    float* (*allocate)(void* ctx, const VdbFloatBox& box)) {
+    const openvdb::GridPtrVecPtr grids = readValidatedGrids(path);
+    const std::string wanted = gridName ? gridName : "";
+    auto scalar = [](const openvdb::GridBase& g) {
+        return g.isType<openvdb::FloatGrid>() || g.isType<openvdb::DoubleGrid>();
+    };
+    openvdb::GridBase::Ptr base;
+    std::string seen;
+    for (const auto& gp : *grids) {
+        if (!gp) continue;
+        if (wanted.empty() ? scalar(*gp) : gp->getName() == wanted) {
+            base = gp;
+            break;
+        }
+        seen += (seen.empty() ? "" : ", ") + ("'" + gp->getName() + "' (" + gp->valueType() + ")");
+    }
+    const std::string holds = seen.empty() ? std::string(" (it holds no grid)") : " (it holds " + seen + ")";
+    if (!base && wanted.empty()) fail("the file holds no float or double grid", holds);
+    if (!base) fail("the file holds no grid named '", wanted, "'", holds);
+    if (!scalar(*base))
+        fail("grid '", base->getName(), "' is a ", base->valueType(),
+             " grid; volumes are read from float or double grids");
+
+    double cell[3], centre0[3];
+    boxTransform(*base, cell, centre0);
+    const openvdb::CoordBBox box = indexBox(*base);
+    const openvdb::Coord o = box.min();
+    VdbFloatBox out;
+    for (int a = 0; a < 3; ++a) {
+        out.dims[a] = int64_t(box.max()[a]) - o[a] + 1;
+        out.spacing[a] = cell[a];
+        out.lo[a] = centre0[a] + (double(o[a]) - 0.5) * cell[a];
+    }
+    out.name = base->getName();
+    out.gridClass = openvdb::GridBase::gridClassToString(base->getGridClass());
+    out.isDouble = base->isType<openvdb::DoubleGrid>();
+    // The caller checks the dense size against the limits and the memory available first.
+    float* values = allocate(ctx, out);
+    if (!values) fail("no memory for the dense volume");
+    if (auto f = openvdb::GridBase::grid<openvdb::FloatGrid>(base))
+        readDense(*f, o, out.dims, values);
+    else
+        readDense(*openvdb::GridBase::grid<openvdb::DoubleGrid>(base), o, out.dims, values);
 }
 
 // Runs f, turning any exception into a message for the caller (nothing crosses the boundary).
@@ -398,7 +500,12 @@ bool readBits(const char* path, void* ctx,
     return guarded(error, [&] { readBitsImpl(path, ctx, allocate); });
 }
 
-constexpr VdbModule kTable{kModuleAbi, sizeof(VdbModule), writeBits, writeFloats, readBits};
+bool readFloats(const char* path, const char* gridName, void* ctx,
+                float* (*allocate)(void* ctx, const VdbFloatBox& box), std::string* error) {
+    return guarded(error, [&] { readFloatsImpl(path, gridName, ctx, allocate); });
+}
+
+constexpr VdbModule kTable{kModuleAbi, sizeof(VdbModule), writeBits, writeFloats, readBits, readFloats};
 
 } // namespace
 } // namespace voxfx::detail

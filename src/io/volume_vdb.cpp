@@ -1,0 +1,63 @@
+// voxfx — OpenVDB float and double grids as volumes, through the voxfx_vdb module (its readFloats
+// holds the conventions: the index box, every voxel's value, the transform's checks).
+//
+// The grid's transform becomes the volume's placement: index (i, j, k) of the grid is the centre
+// of a voxel, so the volume's voxel size is the transform's scale (per axis: non-uniform scales
+// are kept) and its box starts half a voxel before the first index's centre. The dense size is
+// checked against the voxel limit and the memory available before anything is allocated.
+#include <exception>
+#include <filesystem>
+
+#include "io/module_api.hpp"
+#include "io/volume_formats.hpp"
+
+namespace voxfx::detail {
+
+namespace {
+
+struct VdbVolumeTarget {
+    const std::string* path;
+    Volume volume;
+    VdbFloatBox box;
+    std::exception_ptr error; ///< what stopped the allocation (rethrown after the module returns)
+};
+
+float* allocateVdbVolume(void* ctx, const VdbFloatBox& box) {
+    auto& t = *static_cast<VdbVolumeTarget*>(ctx);
+    try {
+        t.box = box;
+        const Vec3i dims{box.dims[0], box.dims[1], box.dims[2]};
+        const ScalarType type = box.isDouble ? ScalarType::Float64 : ScalarType::Float32;
+        const std::string where = concat(*t.path, " (grid '", box.name, "')");
+        checkedSampleBytes(dims, type, where);
+        checkVolumeMemory(dims, 0, where);
+        t.volume = Volume(dims, {box.lo[0], box.lo[1], box.lo[2]},
+                          {box.spacing[0], box.spacing[1], box.spacing[2]}, type);
+        return t.volume.values().data();
+    } catch (...) {
+        t.error = std::current_exception();
+        return nullptr;
+    }
+}
+
+} // namespace
+
+Volume readVdbVolume(const std::string& path, const std::string& gridName, VolumeLoadReport& report) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) fail(path, ": cannot open file: no such file");
+    if (std::filesystem::is_directory(path, ec)) fail(path, ": cannot read file: it is a directory");
+    if (!std::filesystem::is_regular_file(path, ec))
+        fail(path, ": cannot read file: not a regular file (a device, pipe or socket)");
+    report.fileBytes = std::filesystem::file_size(path, ec);
+    const VdbModule& vdb = vdbModule();
+    VdbVolumeTarget target{&path, {}, {}, nullptr};
+    std::string error;
+    const bool ok = vdb.readFloats(path.c_str(), gridName.c_str(), &target, allocateVdbVolume, &error);
+    if (target.error) std::rethrow_exception(target.error);
+    if (!ok) fail(path, ": ", error);
+    report.gridName = target.box.name;
+    report.gridClass = target.box.gridClass;
+    return std::move(target.volume);
+}
+
+} // namespace voxfx::detail
