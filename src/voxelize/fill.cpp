@@ -80,8 +80,10 @@ public:
     explicit Flood(const BitGrid& walls)
         : walls_(walls), inside_(walls.width(), walls.height(), walls.depth()), W_(walls.width()),
           H_(walls.height()), P_(walls.wordsPerColumn()), last_(walls.lastWordMask()),
-          dirty_(size_t(W_ * H_), 0), saturated_(size_t(W_ * H_), 0), lo_(size_t(W_ * H_), 0),
-          hi_(size_t(W_ * H_), 0) {
+          dirty_(std::make_unique_for_overwrite<uint8_t[]>(size_t(W_ * H_))),
+          saturated_(std::make_unique_for_overwrite<uint8_t[]>(size_t(W_ * H_))),
+          lo_(std::make_unique_for_overwrite<int32_t[]>(size_t(W_ * H_))),
+          hi_(std::make_unique_for_overwrite<int32_t[]>(size_t(W_ * H_))) {
         // Fixed bands (never from the thread count), at least 2 rows so that the bands that sweep
         // at the same time never mark the same row of the band between them.
         bandRows_ = std::max<int64_t>(8, (H_ + 15) / 16);
@@ -136,6 +138,7 @@ private:
                 if (lo == P_ || x == 0 || y == 0 || x == W_ - 1 || y == H_ - 1) {
                     for (int64_t w = 0; w < P_; ++w) in[w] = wall[w];
                     saturated_[size_t(c)] = 1;
+                    dirty_[size_t(c)] = 0;
                     continue;
                 }
                 while (wall[hi] == 0) --hi;
@@ -247,8 +250,10 @@ private:
     BitGrid inside_; ///< walls and the free cells not (yet) known to be outside
     int64_t W_, H_, P_;
     uint64_t last_;
-    std::vector<uint8_t> dirty_, saturated_;
-    std::vector<int32_t> lo_, hi_; ///< words holding the column's undecided cells
+    // Per column, every entry written by the first pass (no clearing pass before it); lo_ and
+    // hi_ are read for columns that are not saturated only.
+    std::unique_ptr<uint8_t[]> dirty_, saturated_;
+    std::unique_ptr<int32_t[]> lo_, hi_; ///< words holding the column's undecided cells
     int64_t bandRows_ = 1, bands_ = 1;
     std::unique_ptr<std::atomic<uint8_t>[]> pending_;
 };
