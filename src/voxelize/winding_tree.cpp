@@ -129,12 +129,13 @@ private:
         return w >= 0;
     }
 
-    // Whether a surface cell lies in [x0, x1) x [y0, y1) x [z0, z1) grown by one cell.
-    bool surfaceNear(int64_t x0, int64_t x1, int64_t y0, int64_t y1, int64_t z0, int64_t z1) const {
-        x0 = std::max<int64_t>(x0 - 1, 0), y0 = std::max<int64_t>(y0 - 1, 0),
-        z0 = std::max<int64_t>(z0 - 1, 0);
-        x1 = std::min(x1 + 1, surface_.width()), y1 = std::min(y1 + 1, surface_.height());
-        z1 = std::min(z1 + 1, surface_.depth());
+    // Whether a surface cell lies in [x0, x1) x [y0, y1) x [z0, z1) grown by `grow` cells.
+    bool surfaceNear(int64_t x0, int64_t x1, int64_t y0, int64_t y1, int64_t z0, int64_t z1,
+                     int64_t grow) const {
+        x0 = std::max<int64_t>(x0 - grow, 0), y0 = std::max<int64_t>(y0 - grow, 0);
+        z0 = std::max<int64_t>(z0 - grow, 0);
+        x1 = std::min(x1 + grow, surface_.width()), y1 = std::min(y1 + grow, surface_.height());
+        z1 = std::min(z1 + grow, surface_.depth());
         const int64_t w0 = z0 >> 6, w1 = (z1 - 1) >> 6;
         const uint64_t m0 = ~uint64_t(0) << (z0 & 63), m1 = ~uint64_t(0) >> (63 - ((z1 - 1) & 63));
         for (int64_t y = y0; y < y1; ++y)
@@ -157,7 +158,10 @@ private:
         bool agree = true;
         for (int k = 1; k < 8 && agree; ++k)
             agree = insideAt(k & 1 ? x1 - 1 : x0, k & 2 ? y1 - 1 : y0, k & 4 ? z1 - 1 : z0) == first;
-        if (agree && !surfaceNear(x0, x1, y0, y1, z0, z1)) {
+        // Blocks of 8 cells and more keep a cell of margin from the surface; smaller ones only
+        // need none inside (near the surface, most cells lie in such blocks).
+        const int64_t grow = std::max({x1 - x0, y1 - y0, z1 - z0}) >= 8 ? 1 : 0;
+        if (agree && !surfaceNear(x0, x1, y0, y1, z0, z1, grow)) {
             if (first)
                 for (int64_t y = y0; y < y1; ++y)
                     for (int64_t x = x0; x < x1; ++x) setSlices(out_.column(x, y), z0, z1);

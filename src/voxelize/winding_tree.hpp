@@ -43,9 +43,9 @@ private:
 /// Fill::Gwn: the cells whose centre has a winding number >= 0.5 (`tree` built from the mesh;
 /// `surface` its conservative surface in `frame`). Not every centre is evaluated: blocks of cells
 /// (16, 8, 4, 2 cells wide) take the answer of their eight corner cells when those agree and no
-/// surface cell lies in the block or next to it (the winding number is harmonic, so smooth, away
-/// from the surface); other blocks are split, down to single cells. Cost ~ (cells near the
-/// surface + blocks) x one evaluation. Deterministic for every thread count.
+/// surface cell lies in the block (nor next to it, for blocks of 8 and 16): the winding number
+/// is harmonic, so smooth, away from the surface. Other blocks are split, down to single cells. Cost ~ (cells
+/// near the surface + blocks) x one evaluation. Deterministic for every thread count.
 BitGrid gwnFillInside(const Frame& frame, const WindingTree& tree, const BitGrid& surface);
 
 } // namespace voxfx::detail
