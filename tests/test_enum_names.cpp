@@ -63,7 +63,7 @@ TEST(EnumNamesTest, UnknownNamesSayWhereWhatAndTheChoices) {
         parseFill("");
         FAIL() << "no error";
     } catch (const Error& e) {
-        EXPECT_STREQ(e.what(), "unknown fill '' (allowed: parity, flood, vote, winding)");
+        EXPECT_STREQ(e.what(), "unknown fill '' (allowed: parity, flood, vote, winding, gwn)");
     }
 }
 

@@ -26,6 +26,11 @@
 //                       holes and bad triangles (an error must fool two of three axes), costs 3×.
 //   Fill::Winding       nonzero winding number from per-column sorted front/back fragments: the
 //                       union of overlapping closed parts (needs consistent orientation).
+//   Fill::Gwn           generalized winding number >= 0.5 at the cell centre (Jacobson et al.
+//                       2013), fast approximation after Barill et al. 2018 (the evaluator of
+//                       contains()' winding method, beta 2). Closes holes wider than a cell that
+//                       let the flood in; needs consistent orientation; costs one evaluation per
+//                       cell near the surface and per uniform block elsewhere (voxfx/contains.hpp).
 // Thread-safety: calls may run concurrently on shared const meshes (no global state); each call
 // spreads its tiles over worker threads (`threads`); results do not depend on their number.
 #pragma once
@@ -41,7 +46,7 @@
 namespace voxfx {
 
 enum class VoxelizeMode : uint8_t { Surface, Conservative, Solid, SolidConservative, Interior };
-enum class Fill : uint8_t { Parity, Flood, Vote, Winding };
+enum class Fill : uint8_t { Parity, Flood, Vote, Winding, Gwn };
 
 const char* toString(VoxelizeMode m);
 const char* toString(Fill f);

@@ -36,14 +36,15 @@ int runVoxelize(const VoxelizeArgs& a) {
     if (a.choice.autoFill()) {
         vo.fill = topo.closed() ? Fill::Parity : Fill::Flood;
         if (needsInside && !topo.closed() && !a.quiet)
-            std::cerr
-                << "voxfx: " << a.input << " is not closed (" << topo.boundaryEdges << " boundary, "
-                << topo.nonManifoldEdges << " non-manifold, " << topo.misorientedEdges
-                << " misoriented edges): using --fill flood (holes wider than a voxel let the flood in)\n";
+            std::cerr << "voxfx: " << a.input << " is not closed (" << topo.boundaryEdges << " boundary, "
+                      << topo.nonManifoldEdges << " non-manifold, " << topo.misorientedEdges
+                      << " misoriented edges): using --fill flood (holes wider than a voxel let the flood "
+                         "in; --fill gwn closes them)\n";
     } else {
         if (needsInside && !topo.closed() && vo.fill == Fill::Parity && !a.quiet)
             std::cerr << "voxfx: warning: " << a.input
-                      << " is not closed; parity may fill wrong cells (try --fill flood or --fill vote)\n";
+                      << " is not closed; parity may fill wrong cells (try --fill flood, --fill gwn or "
+                         "--fill vote)\n";
     }
 
     const Frame frame = fitFrame(computeBounds(mesh.view()), fo);

@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "core/enum_names.hpp"
+#include "voxelize/winding_tree.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/voxelize.hpp"
@@ -209,109 +210,7 @@ double windingNumber(const MeshView& mesh, const Vec3d& p) {
     return sum / (4.0 * std::numbers::pi);
 }
 
-// Not in an anonymous namespace: PointClassifier::Impl holds a WindingTree, and the library's
-// unity build would make that a -Wsubobject-linkage warning.
-namespace containsdetail {
-
-/// A node of the winding number hierarchy: triangles [begin, end) of the permuted order, their
-/// dipole (vector area at the area-weighted centroid) and bounding sphere around that centroid.
-struct WindingNode {
-    Vec3d centre;
-    Vec3d area; // sum of (b - a) x (c - a) / 2
-    double radius = 0;
-    uint32_t begin = 0, end = 0;
-    int32_t left = -1, right = -1;
-};
-
-struct WindingTree {
-    std::vector<WindingNode> nodes;
-    std::vector<std::array<Vec3d, 3>> triangles; // in leaf order
-    double beta = 2.0;
-
-    void build(const MeshView& mesh, double betaValue) {
-        beta = betaValue;
-        const std::size_t T = mesh.triangleCount;
-        std::vector<std::array<Vec3d, 3>> tris(T);
-        std::vector<Vec3d> centroid(T);
-        std::vector<uint32_t> order(T);
-        for (std::size_t t = 0; t < T; ++t) {
-            for (int k = 0; k < 3; ++k) tris[t][std::size_t(k)] = mesh.vertex(mesh.index(t, k));
-            centroid[t] = (tris[t][0] + tris[t][1] + tris[t][2]) * (1.0 / 3.0);
-            order[t] = uint32_t(t);
-        }
-        nodes.clear();
-        nodes.reserve(2 * T / 4 + 1);
-        split(tris, centroid, order, 0, uint32_t(T));
-        triangles.resize(T);
-        for (std::size_t i = 0; i < T; ++i) triangles[i] = tris[order[i]];
-    }
-
-    int32_t split(const std::vector<std::array<Vec3d, 3>>& tris, const std::vector<Vec3d>& centroid,
-                  std::vector<uint32_t>& order, uint32_t begin, uint32_t end) {
-        const auto index = int32_t(nodes.size());
-        nodes.emplace_back();
-        WindingNode n;
-        n.begin = begin;
-        n.end = end;
-        double totalArea = 0;
-        Vec3d weighted{0, 0, 0}, lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
-        for (uint32_t i = begin; i < end; ++i) {
-            const auto& t = tris[order[i]];
-            const Vec3d a = cross(t[1] - t[0], t[2] - t[0]) * 0.5;
-            n.area = n.area + a;
-            const double len = length(a);
-            totalArea += len;
-            weighted = weighted + centroid[order[i]] * len;
-            lo = min(lo, centroid[order[i]]);
-            hi = max(hi, centroid[order[i]]);
-        }
-        n.centre = totalArea > 0 ? weighted * (1.0 / totalArea) : (lo + hi) * 0.5;
-        for (uint32_t i = begin; i < end; ++i)
-            for (const Vec3d& v : tris[order[i]]) n.radius = std::max(n.radius, length(v - n.centre));
-        if (end - begin > 8) {
-            const Vec3d ext = hi - lo;
-            const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
-            const uint32_t mid = begin + (end - begin) / 2;
-            std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
-                             [&](uint32_t a, uint32_t b) { return centroid[a][axis] < centroid[b][axis]; });
-            n.left = split(tris, centroid, order, begin, mid);
-            n.right = split(tris, centroid, order, mid, end);
-        }
-        nodes[std::size_t(index)] = n;
-        return index;
-    }
-
-    double at(const Vec3d& p) const {
-        double sum = 0; // solid angles
-        int32_t stack[128];
-        int top = 0;
-        stack[top++] = 0;
-        while (top > 0) {
-            const WindingNode& n = nodes[std::size_t(stack[--top])];
-            const Vec3d d = n.centre - p;
-            const double dist = length(d);
-            if (beta > 0 && dist > beta * n.radius) {
-                sum += dot(d, n.area) / (dist * dist * dist); // dipole: solid angle of a far patch
-            } else if (n.left < 0 || top + 2 > 128) {
-                for (uint32_t i = n.begin; i < n.end; ++i) {
-                    const auto& t = triangles[i];
-                    const Vec3d a = t[0] - p, b = t[1] - p, c = t[2] - p;
-                    const double la = length(a), lb = length(b), lc = length(c);
-                    const double det = dot(a, cross(b, c));
-                    const double den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
-                    sum += 2.0 * std::atan2(det, den);
-                }
-            } else {
-                stack[top++] = n.left;
-                stack[top++] = n.right;
-            }
-        }
-        return sum / (4.0 * std::numbers::pi);
-    }
-};
-
-} // namespace containsdetail
-using containsdetail::WindingTree;
+using detail::WindingTree;
 
 void windingNumbers(const MeshView& mesh, std::span<const Vec3d> points, std::span<double> out, double beta,
                     int threads) {

@@ -2,8 +2,9 @@
 #include "voxelize/fill.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
-#include <deque>
+#include <memory>
 #include <vector>
 
 #include "voxfx/parallel.hpp"
@@ -29,25 +30,29 @@ void fillUp(const uint64_t* freeBits, uint64_t* seeds, int64_t words) {
     }
 }
 
-// Grows seeds downward (towards lower slices) through runs of free bits: a Kogge–Stone smear
-// inside each word (six shift steps, p = "free for the next 2^k bits"), words from the top down,
-// the lowest bit of a word seeding the top bit of the word below.
+// Grows seeds downward (towards lower slices) through runs of free bits, words from the top down,
+// the lowest bit of a word seeding the top bit of the word below. A word needs work only where a
+// free cell not reached lies right below a reached one (after fillUp, only below the lowest seed
+// of a run); there a Kogge-Stone smear (six shift steps, p = "free for the next 2^k bits") fills
+// the rest of the run inside the word.
 void fillDown(const uint64_t* freeBits, uint64_t* seeds, int64_t words) {
     uint64_t carry = 0;
     for (int64_t w = words - 1; w >= 0; --w) {
         uint64_t p = freeBits[w];
         uint64_t g = (seeds[w] | (carry << 63)) & p;
-        g |= p & (g >> 1);
-        p &= p >> 1;
-        g |= p & (g >> 2);
-        p &= p >> 2;
-        g |= p & (g >> 4);
-        p &= p >> 4;
-        g |= p & (g >> 8);
-        p &= p >> 8;
-        g |= p & (g >> 16);
-        p &= p >> 16;
-        g |= p & (g >> 32);
+        if ((p & ~g & (g >> 1)) != 0) {
+            g |= p & (g >> 1);
+            p &= p >> 1;
+            g |= p & (g >> 2);
+            p &= p >> 2;
+            g |= p & (g >> 4);
+            p &= p >> 4;
+            g |= p & (g >> 8);
+            p &= p >> 8;
+            g |= p & (g >> 16);
+            p &= p >> 16;
+            g |= p & (g >> 32);
+        }
         seeds[w] = g;
         carry = g & 1;
     }
@@ -59,35 +64,51 @@ namespace {
 
 // The outside flood. First one parallel pass settles what needs no neighbour (border columns,
 // columns without walls, and the cells below each column's lowest wall and above its highest);
-// only the free cells between those walls (the column's wall span) can still be undecided.
-// Then a column worklist per band of rows, seeded with the undecided columns a neighbour's
-// outside reaches, spreads the outside sideways and along the span's free runs. Bands run in
-// parallel and only read columns of their own rows; between rounds a serial pass over the seams
-// between bands lets the outside cross them. The outside is the unique fixpoint, so the result
-// does not depend on the order of work or the number of threads. The grid kept is the inside
-// (walls and free cells not known to be outside), so no inversion pass is needed at the end.
+// only free cells between those walls can still be undecided, and each column keeps the range
+// of words that hold its undecided cells (it only shrinks: a free run holding an undecided cell
+// is undecided as a whole, so no run crosses the range's ends). Then row sweeps spread the
+// outside sideways: a column is looked at when it is dirty (never looked at, or a neighbour grew
+// since), its seeds (free undecided cells that are outside in a neighbour) run through its free
+// runs, and when it grows its neighbours become dirty. Rows are swept in order, each row left to
+// right and then right to left, forward then backward, so one sweep carries the outside across
+// many columns (a FIFO worklist moved it one column per visit). Bands of rows sweep in parallel,
+// even bands then odd ones, so a band reads the rows of its neighbours while they stand still.
+// The outside is the unique fixpoint, so the result does not depend on the order of work or the
+// number of threads. The grid kept is the inside (walls and free cells not known to be outside).
 class Flood {
 public:
     explicit Flood(const BitGrid& walls)
         : walls_(walls), inside_(walls.width(), walls.height(), walls.depth()), W_(walls.width()),
           H_(walls.height()), P_(walls.wordsPerColumn()), last_(walls.lastWordMask()),
-          noOutside_(size_t(P_), ~uint64_t(0)), queued_(size_t(W_ * H_), 0), saturated_(size_t(W_ * H_), 0),
-          spanLo_(size_t(W_ * H_), 0), spanHi_(size_t(W_ * H_), 0) {
-        // Fixed bands (never from the thread count): at least 8 rows, at most 32 bands.
-        bandRows_ = std::max<int64_t>(8, (H_ + 31) / 32);
+          dirty_(std::make_unique_for_overwrite<uint8_t[]>(size_t(W_ * H_))),
+          saturated_(std::make_unique_for_overwrite<uint8_t[]>(size_t(W_ * H_))),
+          lo_(std::make_unique_for_overwrite<int32_t[]>(size_t(W_ * H_))),
+          hi_(std::make_unique_for_overwrite<int32_t[]>(size_t(W_ * H_))) {
+        // Fixed bands (never from the thread count), at least 2 rows so that the bands that sweep
+        // at the same time never mark the same row of the band between them.
+        bandRows_ = std::max<int64_t>(8, (H_ + 15) / 16);
         bands_ = (H_ + bandRows_ - 1) / bandRows_;
-        queues_.resize(size_t(bands_));
+        pending_ = std::make_unique<std::atomic<uint8_t>[]>(size_t(bands_));
+        for (int64_t b = 0; b < bands_; ++b) pending_[size_t(b)].store(1, std::memory_order_relaxed);
     }
 
     BitGrid run() {
         seedFromColumnEnds();
-        queueSeededColumns();
-        for (;;) {
-            parallelFor(0, bands_, 1, [&](int64_t b0, int64_t b1) {
-                Scratch s(P_);
-                for (int64_t b = b0; b < b1; ++b) drain(b, s);
-            });
-            if (!crossSeams()) break;
+        for (bool again = true; again;) {
+            again = false;
+            for (int64_t parity = 0; parity < 2; ++parity) {
+                std::atomic<bool> marked{false};
+                parallelFor(0, (bands_ + 1 - parity) / 2, 1, [&](int64_t k0, int64_t k1) {
+                    Scratch s(P_);
+                    for (int64_t k = k0; k < k1; ++k) {
+                        const int64_t b = 2 * k + parity;
+                        if (pending_[size_t(b)].exchange(0, std::memory_order_relaxed) && sweepBand(b, s))
+                            marked.store(true, std::memory_order_relaxed);
+                    }
+                });
+                // Marks from the odd bands make even bands pending again: one more round.
+                if (parity == 1 && marked.load()) again = true;
+            }
         }
         return std::move(inside_);
     }
@@ -104,7 +125,8 @@ private:
     // free cell of a border column or of a column without walls (both ends of a column touch the
     // grid border), and elsewhere the cells below the column's lowest wall and above its highest
     // (free runs from the ends). Each column's outside is then a union of whole free runs, as the
-    // flood keeps it. A column whose free cells are all outside is saturated.
+    // flood keeps it. A column whose free cells are all outside is saturated; the others are
+    // dirty (not looked at yet).
     void seedFromColumnEnds() {
         parallelFor(0, W_ * H_, 2048, [&](int64_t c0, int64_t c1) {
             for (int64_t c = c0; c < c1; ++c) {
@@ -116,6 +138,7 @@ private:
                 if (lo == P_ || x == 0 || y == 0 || x == W_ - 1 || y == H_ - 1) {
                     for (int64_t w = 0; w < P_; ++w) in[w] = wall[w];
                     saturated_[size_t(c)] = 1;
+                    dirty_[size_t(c)] = 0;
                     continue;
                 }
                 while (wall[hi] == 0) --hi;
@@ -126,153 +149,113 @@ private:
                 in[hi] &= ~(~uint64_t(0) << (63 - std::countl_zero(wall[hi])) << 1); // above the highest
                 in[P_ - 1] &= last_;
                 // Free cells between the lowest and the highest wall: not decided yet.
-                uint64_t open = 0;
-                for (int64_t w = lo; w <= hi; ++w) open |= ~wall[w] & in[w];
+                uint64_t open = (~wall[lo] & in[lo]) | (~wall[hi] & in[hi]);
+                for (int64_t w = lo + 1; w < hi; ++w) open |= ~wall[w];
                 saturated_[size_t(c)] = open == 0;
-                spanLo_[size_t(c)] = int32_t(lo);
-                spanHi_[size_t(c)] = int32_t(hi);
+                dirty_[size_t(c)] = open != 0;
+                lo_[size_t(c)] = int32_t(lo);
+                hi_[size_t(c)] = int32_t(hi);
             }
         });
     }
 
-    // Queues, band by band, the undecided columns that a neighbour's outside reaches. Read-only
-    // on the grids, so the bands run in parallel; each band's queue is in column order.
-    void queueSeededColumns() {
-        parallelFor(0, bands_, 1, [&](int64_t b0, int64_t b1) {
-            for (int64_t b = b0; b < b1; ++b) {
-                const int64_t yLo = b * bandRows_, yHi = std::min(H_, yLo + bandRows_);
-                for (int64_t y = std::max<int64_t>(yLo, 1); y < std::min(yHi, H_ - 1); ++y)
-                    for (int64_t x = 1; x < W_ - 1; ++x) {
-                        const int64_t c = y * W_ + x;
-                        if (saturated_[size_t(c)]) continue;
-                        // Only the span can be undecided: outside it every free cell is outside.
-                        const int64_t lo = spanLo_[size_t(c)], n = spanHi_[size_t(c)] - lo + 1;
-                        const uint64_t *wall = walls_.column(c) + lo, *in = inside_.column(c) + lo;
-                        const uint64_t *n0 = inside_.column(c - 1) + lo, *n1 = inside_.column(c + 1) + lo;
-                        const uint64_t *n2 = inside_.column(c - W_) + lo, *n3 = inside_.column(c + W_) + lo;
-                        uint64_t news = 0; // free, undecided here, outside in a neighbour
-                        for (int64_t w = 0; w < n; ++w)
-                            news |= ~(n0[w] & n1[w] & n2[w] & n3[w]) & ~wall[w] & in[w];
-                        if (news != 0) {
-                            queued_[size_t(c)] = 1;
-                            queues_[size_t(b)].push_back(c);
-                        }
-                    }
-            }
-        });
-    }
-
-    // Gathers, over the words [lo, lo + n) of an undecided column c (its wall span), the free
-    // cells and the seeds: free cells that are outside in c or in a neighbour (the neighbours'
-    // inside; n2, n3: the rows above and below, or noOutside_). Returns whether any seed is new.
-    bool gather(int64_t c, Scratch& s, const uint64_t* n2, const uint64_t* n3) const {
-        const int64_t lo = spanLo_[size_t(c)], n = spanHi_[size_t(c)] - lo + 1;
+    // Looks at a dirty column: gathers over its undecided words the free cells and the seeds
+    // (free cells outside here or in a neighbour), runs the seeds through the free runs and
+    // stores the result. When the column grew, its neighbours that can still grow become dirty
+    // (marking a row of another band makes that band pending). Returns whether it grew.
+    bool visit(int64_t c, Scratch& s, int64_t yLo, int64_t yHi, bool& markedOtherBand) {
+        dirty_[size_t(c)] = 0;
+        const int64_t lo = lo_[size_t(c)], n = hi_[size_t(c)] - lo + 1;
         const uint64_t* wall = walls_.column(c) + lo;
-        const uint64_t* in = inside_.column(c) + lo;
+        uint64_t* in = inside_.column(c) + lo;
         const uint64_t *n0 = inside_.column(c - 1) + lo, *n1 = inside_.column(c + 1) + lo;
-        n2 += lo;
-        n3 += lo;
+        const uint64_t *n2 = inside_.column(c - W_) + lo, *n3 = inside_.column(c + W_) + lo;
+        // First only whether a free undecided cell is outside in a neighbour (loads and ORs, no
+        // stores): the common case when a neighbour's growth was elsewhere is no news, and the
+        // column's outside is closed under the run fill already, so it cannot grow.
         uint64_t news = 0;
+        for (int64_t w = 0; w < n; ++w) news |= ~(n0[w] & n1[w] & n2[w] & n3[w]) & ~wall[w] & in[w];
+        if (news == 0) return false;
         for (int64_t w = 0; w < n; ++w) {
             const uint64_t f = ~wall[w];
-            const uint64_t seed = ~(in[w] & n0[w] & n1[w] & n2[w] & n3[w]) & f;
             s.freeCol[size_t(w)] = f;
-            s.seed[size_t(w)] = seed;
-            news |= seed & in[w];
+            s.seed[size_t(w)] = ~(in[w] & n0[w] & n1[w] & n2[w] & n3[w]) & f;
         }
-        // Padding bits of the last word are never free nor seeds (news has none: in's are zero).
+        // Padding bits of the last word are never free nor seeds.
         if (lo + n == P_) {
             s.freeCol[size_t(n - 1)] &= last_;
             s.seed[size_t(n - 1)] &= last_;
         }
-        return news != 0;
-    }
-
-    // Runs the gathered seeds through the free runs of the span and stores them, and says whether
-    // the column grew (and whether it is now saturated: every free cell outside). The span is
-    // bounded by walls, so no free run crosses its ends: the words outside it are settled.
-    bool store(int64_t c, Scratch& s) {
-        const int64_t lo = spanLo_[size_t(c)], n = spanHi_[size_t(c)] - lo + 1;
         fillUp(s.freeCol.data(), s.seed.data(), n);
         fillDown(s.freeCol.data(), s.seed.data(), n);
-        uint64_t* in = inside_.column(c) + lo;
-        bool grew = false, full = true;
+        // Inside = walls and the free cells not reached: everything but the seeds. The undecided
+        // range shrinks to the words that still hold a free cell not reached.
+        int64_t first = -1, lastOpen = -1;
         for (int64_t w = 0; w < n; ++w) {
-            // Inside = walls and the free cells not reached: everything but the seeds.
             const uint64_t v = ~s.seed[size_t(w)] & (lo + w == P_ - 1 ? last_ : ~uint64_t(0));
-            if (v != in[w]) {
-                grew = true;
-                in[w] = v;
+            in[w] = v;
+            if ((s.freeCol[size_t(w)] & v) != 0) {
+                if (first < 0) first = w;
+                lastOpen = w;
             }
-            full &= s.seed[size_t(w)] == s.freeCol[size_t(w)];
         }
-        saturated_[size_t(c)] = full;
+        if (first < 0) {
+            saturated_[size_t(c)] = 1;
+        } else {
+            lo_[size_t(c)] = int32_t(lo + first);
+            hi_[size_t(c)] = int32_t(lo + lastOpen);
+        }
+        const int64_t y = c / W_;
+        const int64_t nb[4] = {c - 1, c + 1, c - W_, c + W_};
+        for (int k = 0; k < 4; ++k) {
+            const int64_t d = nb[k];
+            if (saturated_[size_t(d)] || dirty_[size_t(d)]) continue;
+            dirty_[size_t(d)] = 1;
+            if ((k == 2 && y - 1 < yLo) || (k == 3 && y + 1 >= yHi)) {
+                pending_[size_t(band(d / W_))].store(1, std::memory_order_relaxed);
+                markedOtherBand = true;
+            }
+        }
+        return true;
+    }
+
+    // Visits the dirty columns of one row, left to right, then right to left.
+    bool sweepRow(int64_t y, Scratch& s, int64_t yLo, int64_t yHi, bool& marked) {
+        bool grew = false;
+        const int64_t row = y * W_;
+        for (int64_t x = 1; x < W_ - 1; ++x)
+            if (dirty_[size_t(row + x)]) grew |= visit(row + x, s, yLo, yHi, marked);
+        for (int64_t x = W_ - 2; x >= 1; --x)
+            if (dirty_[size_t(row + x)]) grew |= visit(row + x, s, yLo, yHi, marked);
         return grew;
     }
 
-    // Queues the neighbours of c inside rows [yLo, yHi) that can still grow.
-    void queueNeighbours(int64_t c, int64_t yLo, int64_t yHi, std::deque<int64_t>& q) {
-        const int64_t x = c % W_, y = c / W_;
-        const int64_t n[4] = {x > 0 ? c - 1 : -1, x + 1 < W_ ? c + 1 : -1, y > yLo ? c - W_ : -1,
-                              y + 1 < yHi ? c + W_ : -1};
-        for (int64_t k : n)
-            if (k >= 0 && !queued_[size_t(k)] && !saturated_[size_t(k)]) {
-                queued_[size_t(k)] = 1;
-                q.push_back(k);
-            }
-    }
-
-    // Columns that are not saturated are inner columns with walls (seedFromColumnEnds).
-    void drain(int64_t b, Scratch& s) {
+    // Sweeps the rows of band b forward and backward until none of its columns is dirty.
+    // Returns whether it marked a column of another band.
+    bool sweepBand(int64_t b, Scratch& s) {
         const int64_t yLo = b * bandRows_, yHi = std::min(H_, yLo + bandRows_);
-        std::deque<int64_t>& q = queues_[size_t(b)];
-        while (!q.empty()) {
-            const int64_t c = q.front();
-            q.pop_front();
-            queued_[size_t(c)] = 0;
-            if (saturated_[size_t(c)]) continue;
-            const int64_t y = c / W_;
-            const uint64_t* n2 = y > yLo ? inside_.column(c - W_) : noOutside_.data();
-            const uint64_t* n3 = y + 1 < yHi ? inside_.column(c + W_) : noOutside_.data();
-            // The column's outside is closed under the run fill already: without a new seed it
-            // cannot grow (the common case when a column is queued again).
-            if (!gather(c, s, n2, n3)) continue;
-            if (store(c, s)) queueNeighbours(c, yLo, yHi, q);
+        const int64_t y0 = std::max<int64_t>(yLo, 1), y1 = std::min(yHi, H_ - 1);
+        bool marked = false;
+        for (bool grew = true; grew;) {
+            grew = false;
+            for (int64_t y = y0; y < y1; ++y) grew |= sweepRow(y, s, yLo, yHi, marked);
+            if (!grew) break;
+            grew = false;
+            for (int64_t y = y1 - 1; y >= y0; --y) grew |= sweepRow(y, s, yLo, yHi, marked);
         }
-    }
-
-    // Lets the outside cross every seam between bands, both ways; queues what grew. Serial.
-    bool crossSeams() {
-        bool changed = false;
-        Scratch s(P_);
-        for (int64_t b = 1; b < bands_; ++b) {
-            const int64_t yBelow = b * bandRows_; // first row of band b; row yBelow - 1 is band b - 1
-            for (int64_t x = 0; x < W_; ++x) {
-                const int64_t pairs[2][2] = {{yBelow * W_ + x, (yBelow - 1) * W_ + x},
-                                             {(yBelow - 1) * W_ + x, yBelow * W_ + x}};
-                for (const auto& [c, other] : pairs) {
-                    if (saturated_[size_t(c)]) continue;
-                    if (!gather(c, s, inside_.column(other), noOutside_.data())) continue;
-                    store(c, s);
-                    changed = true;
-                    const int64_t bc = band(c / W_);
-                    queueNeighbours(c, bc * bandRows_, std::min(H_, (bc + 1) * bandRows_),
-                                    queues_[size_t(bc)]);
-                }
-            }
-        }
-        return changed;
+        return marked;
     }
 
     const BitGrid& walls_;
     BitGrid inside_; ///< walls and the free cells not (yet) known to be outside
     int64_t W_, H_, P_;
     uint64_t last_;
-    std::vector<uint64_t> noOutside_; ///< a column that is all inside: stands for rows of other bands
-    std::vector<uint8_t> queued_, saturated_;
-    std::vector<int32_t> spanLo_, spanHi_; ///< words holding the lowest and highest wall
+    // Per column, every entry written by the first pass (no clearing pass before it); lo_ and
+    // hi_ are read for columns that are not saturated only.
+    std::unique_ptr<uint8_t[]> dirty_, saturated_;
+    std::unique_ptr<int32_t[]> lo_, hi_; ///< words holding the column's undecided cells
     int64_t bandRows_ = 1, bands_ = 1;
-    std::vector<std::deque<int64_t>> queues_;
+    std::unique_ptr<std::atomic<uint8_t>[]> pending_;
 };
 
 } // namespace

@@ -8,9 +8,10 @@ namespace voxfx::detail {
 
 /// Cells not reachable from the grid border through empty cells (6-connected), i.e. the walls
 /// plus everything they enclose. One pass settles each column outside its wall span (lowest to
-/// highest wall); a column worklist then fills whole runs of the spans per step (bit-parallel
-/// carries along depth), so cost ~ one pass over the grid + (columns reached sideways) x (words
-/// of their spans) x (passes).
+/// highest wall); row sweeps over the columns still undecided then carry the outside sideways
+/// and along the free runs (bit-parallel carries along depth), a column looked at only when a
+/// neighbour grew since. Cost ~ one pass over the grid + (undecided columns) x (words of their
+/// undecided range) x (times looked at).
 BitGrid floodFillInside(const BitGrid& walls);
 
 /// Bitwise majority of three grids of equal size.
