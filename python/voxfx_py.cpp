@@ -447,7 +447,8 @@ PYBIND11_MODULE(_voxfx, m) {
         py::arg("slicing") = "uniform", py::arg("threads") = 0,
         "Voxelizes a mesh (a voxfx.Mesh, or vertices and faces arrays) like `voxfx voxelize`: resolution "
         "(default 256), voxel_size or dims; bounds (xmin ymin zmin xmax ymax zmax); mode surface | "
-        "conservative | solid | solid-conservative | interior; fill auto | parity | flood | vote | winding "
+        "conservative | solid | solid-conservative | interior; fill auto | parity | flood | vote | winding | "
+        "gwn "
         "(auto: parity for closed meshes, flood otherwise); threads 0 = all.");
 
     m.def(
