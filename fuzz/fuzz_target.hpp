@@ -55,12 +55,6 @@ inline std::string_view asText(std::span<const uint8_t> data) {
     return {reinterpret_cast<const char*>(data.data()), data.size()};
 }
 
-/// A path in a folder private to this process, for the readers that take a path (OpenVDB, the
-/// JSON scene wrapper); the folder is created on first use and removed at exit.
-std::string scratchPath(const char* fileName);
-/// Writes the bytes to `path` (replacing it).
-void writeFile(const std::string& path, std::span<const uint8_t> data);
-
 } // namespace voxfx::fuzz
 
 #ifdef VOXFX_FUZZ_LIBFUZZER

@@ -272,8 +272,8 @@ struct SceneObjectsParser {
     }
 };
 
-Scene loadWrapper(const std::string& path) {
-    const std::string text = detail::readTextFile(path, "scene file");
+// The wrapper's text; `path` names it in messages and anchors its relative file names.
+Scene parseWrapper(std::string_view text, const std::string& path) {
     json doc;
     try {
         doc = json::parse(text);
@@ -461,7 +461,7 @@ Scene loadScene(const std::string& path) {
     if (ext == ".gltf" || ext == ".glb") {
         scene = detail::loadGltfScene(path);
     } else if (ext == ".json") {
-        scene = loadWrapper(path);
+        scene = parseWrapper(detail::readTextFile(path, "scene file"), path);
     } else if (ext == ".off" || ext == ".obj" || ext == ".ply" || ext == ".stl" || ext == ".fbx" ||
                ext == ".dae" || ext == ".3ds") {
         SceneMesh m;
@@ -474,6 +474,13 @@ Scene loadScene(const std::string& path) {
         fail(path, ": unknown scene extension '", ext.empty() ? std::string("(none)") : ext,
              "' (allowed: .gltf .glb .json, or a mesh: .off .obj .ply .stl .fbx .dae .3ds)");
     }
+    scene.source = path;
+    scene.validate();
+    return scene;
+}
+
+Scene parseSceneJson(std::string_view text, const std::string& path) {
+    Scene scene = parseWrapper(text, path);
     scene.source = path;
     scene.validate();
     return scene;

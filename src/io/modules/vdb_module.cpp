@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <fstream>
 #include <istream>
 #include <memory>
 #include <mutex>
@@ -249,24 +248,13 @@ protected:
     }
 };
 
-std::string readWholeFile(const char* path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) fail("cannot open the file");
-    in.seekg(0, std::ios::end);
-    const std::streamoff size = in.tellg();
-    if (size < 0) fail("cannot determine the file size (not a regular file?)");
-    in.seekg(0, std::ios::beg);
-    std::string bytes(std::size_t(size), '\0');
-    if (!in.read(bytes.data(), size)) fail("cannot read the file (it got shorter while reading?)");
-    return bytes;
-}
-
-void readBitsImpl(const char* path, void* ctx,
+void readBitsImpl(const uint8_t* data, std::size_t size, void* ctx,
                   uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn)) {
     initializeOpenVdb();
     // The whole file, checked by the walker (vdb_validate.hpp) before OpenVDB reads those very
-    // bytes from memory: OpenVDB trusts every size and count in a file.
-    std::string bytes = readWholeFile(path);
+    // bytes from memory: OpenVDB trusts every size and count in a file. (A copy: the walker
+    // neutralizes parts of it.)
+    std::string bytes(reinterpret_cast<const char*>(data), size);
     vdbcheck::validateAndNeutralize(bytes);
     openvdb::GridPtrVecPtr grids;
     try {
@@ -392,10 +380,10 @@ bool writeFloats(const char* path, const int64_t dims[3], const float* values, c
     });
 }
 
-bool readBits(const char* path, void* ctx,
+bool readBits(const uint8_t* data, std::size_t size, void* ctx,
               uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn),
               std::string* error) {
-    return guarded(error, [&] { readBitsImpl(path, ctx, allocate); });
+    return guarded(error, [&] { readBitsImpl(data, size, ctx, allocate); });
 }
 
 constexpr VdbModule kTable{kModuleAbi, sizeof(VdbModule), writeBits, writeFloats, readBits};
