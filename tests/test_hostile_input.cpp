@@ -201,6 +201,31 @@ TEST(HostileInputTest, SceneRenderSizesOutsideIntegersAreRefused) {
     }
 }
 
+TEST(HostileInputTest, SceneSmokeNumbersOutsideTheirTypesAreRefused) {
+    // Smoke dimensions, seed and octaves convert to integers: out of range or fractional values
+    // would do so with undefined behaviour (found reading the code behind the scene_json target).
+    auto smoke = [](const std::string& params) {
+        return R"({"objects": [{"kind": "volume", "transfer": {"points": [[0, 0], [1, 1]]},
+                   "volume": {"smoke": {)" +
+               params + "}}}]}";
+    };
+    const std::string path = "/nonexistent-voxfx-test/scene.json";
+    for (const char* dims : {"[1e300, 4, 4]", "[4, -1, 4]", "[4, 4, 2.5]", "[4, 4, 1e19]"})
+        expectMentions(hostileError([&] { parseSceneJson(smoke(std::string(R"("dims": )") + dims), path); }),
+                       {path, "dims", "whole number"});
+    for (const char* seed : {"-1", "1e20", "0.5"})
+        expectMentions(hostileError([&] { parseSceneJson(smoke(std::string(R"("seed": )") + seed), path); }),
+                       {path, "seed", "whole number"});
+    for (const char* octaves : {"1e10", "-3", "0"})
+        expectMentions(
+            hostileError([&] { parseSceneJson(smoke(std::string(R"("octaves": )") + octaves), path); }),
+            {path, "octaves", "whole number"});
+    // 2^39 voxels (2 TiB of floats) is within the volume limit but not within any memory here: an
+    // error before the allocation, not std::bad_alloc.
+    expectMentions(hostileError([&] { parseSceneJson(smoke(R"("dims": [8192, 8192, 8192])"), path); }),
+                   {"smoke", "8192", "memory"});
+}
+
 TEST(HostileInputTest, CsgNestingIsBoundedInBothSyntaxes) {
     // 100000 levels would overflow the stack of a recursive parser.
     std::string functional, json;

@@ -64,6 +64,14 @@ int64_t settingsCount(const json& j, const char* key, const std::string& where) 
     return int64_t(v);
 }
 
+// A whole number in [lo, hi] (checked before any conversion: a double out of the target type's
+// range, or NaN, would make it undefined behaviour).
+int64_t wholeNumber(double v, double lo, double hi, const char* key, const std::string& where) {
+    if (!(v >= lo && v <= hi) || v != std::floor(v))
+        fail(where, ": \"", key, "\" must be a whole number in [", lo, ", ", hi, "], got ", v);
+    return int64_t(v);
+}
+
 std::string str(const json& j, const char* key, const std::string& where) {
     if (!j.contains(key)) return {};
     if (!j[key].is_string()) fail(where, ": \"", key, "\" must be a string");
@@ -201,7 +209,10 @@ struct SceneObjectsParser {
                 SmokeParams p;
                 if (sm.contains("dims")) {
                     const Vec3d d = vec3(sm, "dims", where);
-                    p.dims = {int64_t(d.x), int64_t(d.y), int64_t(d.z)};
+                    const std::string w = where + ".volume.smoke";
+                    p.dims = {wholeNumber(d.x, 1, 2147483647.0, "dims", w),
+                              wholeNumber(d.y, 1, 2147483647.0, "dims", w),
+                              wholeNumber(d.z, 1, 2147483647.0, "dims", w)};
                 }
                 if (sm.contains("box")) {
                     const json& b = sm["box"];
@@ -210,8 +221,9 @@ struct SceneObjectsParser {
                     p.box.lo = vec3(pair, "lo", where);
                     p.box.hi = vec3(pair, "hi", where);
                 }
-                p.seed = uint32_t(num(sm, "seed", p.seed, where));
-                p.octaves = int(num(sm, "octaves", p.octaves, where));
+                p.seed =
+                    uint32_t(wholeNumber(num(sm, "seed", p.seed, where), 0, 4294967295.0, "seed", where));
+                p.octaves = int(wholeNumber(num(sm, "octaves", p.octaves, where), 1, 16, "octaves", where));
                 p.frequency = num(sm, "frequency", p.frequency, where);
                 volume = makeSmoke(p);
             } else {
