@@ -226,6 +226,21 @@ TEST(HostileInputTest, SceneSmokeNumbersOutsideTheirTypesAreRefused) {
                    {"smoke", "8192", "memory"});
 }
 
+TEST(HostileInputTest, JsonNumbersPastDoubleRangeAreErrorsInEveryJsonReader) {
+    // nlohmann-json throws out_of_range, not parse_error, for a number that overflows a double;
+    // readers that caught parse_error only let it escape (found by the scene_json target).
+    TempDir dir;
+    const std::string scene = "/nonexistent-voxfx-test/scene.json";
+    expectMentions(hostileError([&] { parseSceneJson(R"({"render": {"width": 1e999}})", scene); }),
+                   {scene, "1e999"});
+    const std::string gltf = test::writeFile(dir.file("big.gltf"), R"({"asset": {"version": 1e999}})");
+    expectMentions(hostileError([&] { loadScene(gltf); }), {gltf, "1e999"});
+    expectMentions(hostileError([&] { parseCsgExpression(R"({"op": "union", "args": [1e999]})"); }),
+                   {"CSG expression, column 26", "1e999"});
+    expectMentions(hostileError([&] { parseTransferFunction(R"({"points": [[1e999, 0]]})", "tf.json"); }),
+                   {"tf.json", "1e999"});
+}
+
 TEST(HostileInputTest, CsgNestingIsBoundedInBothSyntaxes) {
     // 100000 levels would overflow the stack of a recursive parser.
     std::string functional, json;

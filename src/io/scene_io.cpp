@@ -289,7 +289,10 @@ Scene parseWrapper(std::string_view text, const std::string& path) {
     json doc;
     try {
         doc = json::parse(text);
-    } catch (const json::parse_error& e) { fail(path, ": malformed JSON: ", e.what()); }
+    } catch (const json::exception& e) {
+        // parse_error, and out_of_range for a number past double's range (1e999)
+        fail(path, ": malformed JSON: ", e.what());
+    }
     const std::filesystem::path dir = std::filesystem::path(path).parent_path();
     auto resolve = [&](const std::string& p) {
         return std::filesystem::path(p).is_absolute() ? p : (dir / p).string();
