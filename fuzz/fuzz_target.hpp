@@ -55,16 +55,17 @@ inline std::string_view asText(std::span<const uint8_t> data) {
     return {reinterpret_cast<const char*>(data.data()), data.size()};
 }
 
-/// A path in a folder private to this process, for the readers that take a path (OpenVDB, the
-/// JSON scene wrapper); the folder is created on first use and removed at exit.
-std::string scratchPath(const char* fileName);
-/// Writes the bytes to `path` (replacing it).
-void writeFile(const std::string& path, std::span<const uint8_t> data);
-
 } // namespace voxfx::fuzz
 
 #ifdef VOXFX_FUZZ_LIBFUZZER
+// A memory budget for what one input may make voxfx allocate (VOXFX_MEMORY_LIMIT, see
+// availableMemoryBytes): a few bytes of .vdb tiles can describe a valid grid of gigabytes, which the
+// machine's memory would allow and libFuzzer's 2 GB limit would report as an out-of-memory finding.
 #define VOXFX_FUZZ_TARGET(name)                                                                              \
+    extern "C" int LLVMFuzzerInitialize(int*, char***) {                                                     \
+        setenv("VOXFX_MEMORY_LIMIT", "256M", 0);                                                             \
+        return 0;                                                                                            \
+    }                                                                                                        \
     static void voxfxFuzz_##name(std::span<const uint8_t> data);                                             \
     extern "C" int LLVMFuzzerTestOneInput(const uint8_t* bytes, size_t size) {                               \
         voxfxFuzz_##name({bytes, size});                                                                     \

@@ -1,14 +1,13 @@
-// voxfx — fuzz target: .vdb input (readGrid and loadVolume through the voxfx_vdb module and OpenVDB).
+// voxfx — fuzz target: .vdb input, in memory (readGrid's path for .vdb and loadVolume's: the
+// voxfx_vdb module checks the bytes, then OpenVDB reads them as a stream from memory).
 #include "fuzz_target.hpp"
 #include "fuzz_volume.hpp"
-#include "voxfx/grid_io.hpp"
+#include "io/grid_formats.hpp"
 
 VOXFX_FUZZ_TARGET(vdb) {
-    static const std::string path = voxfx::fuzz::scratchPath("grid.vdb");
-    voxfx::fuzz::writeFile(path, data);
     int64_t voxels = -1;
     voxfx::fuzz::expectCleanError([&] {
-        const voxfx::VoxelGrid g = voxfx::readGrid(path);
+        const voxfx::VoxelGrid g = voxfx::detail::readVdb(data);
         voxfx::fuzz::require(g.bits.width() == g.frame.width() && g.bits.height() == g.frame.height() &&
                                  g.bits.depth() == g.frame.depth(),
                              "the grid's bits match its frame");
@@ -18,5 +17,8 @@ VOXFX_FUZZ_TARGET(vdb) {
     // voxels far apart, and a dense box of gigabytes (which the memory check allows) would be
     // reported as the fuzzer's out-of-memory.
     if (voxels >= 0 && voxels <= (int64_t(1) << 22))
-        voxfx::fuzz::expectCleanError([&] { voxfx::fuzz::checkVolume(voxfx::loadVolume(path)); });
+        voxfx::fuzz::expectCleanError([&] {
+            voxfx::VolumeLoadReport report;
+            voxfx::fuzz::checkVolume(voxfx::detail::readVdbVolume(data, voxfx::fuzz::kNowhere, "", report));
+        });
 }

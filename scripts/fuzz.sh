@@ -25,7 +25,7 @@ done
 if [ ${#targets[@]} -eq 0 ]; then
   for f in fuzz/fuzz_*.cpp; do
     t="$(basename "$f" .cpp)"; t="${t#fuzz_}"
-    [ "$t" = support ] || targets+=("$t")
+    targets+=("$t")
   done
 fi
 
@@ -39,15 +39,20 @@ cmake -S . -B build-fuzz -G Ninja "${launcher[@]}" -DCMAKE_CXX_COMPILER=clang++ 
 cmake --build build-fuzz -j "$(nproc)" --target "${targets[@]/#/voxfx_fuzz_}"
 
 failed=()
-printf '%-18s %12s %10s %8s %10s %s\n' target execs exec/s corpus bytes result
+printf '%-18s %12s %8s %8s %10s %8s %10s %s\n' target execs seconds cpu-s exec/s corpus bytes result
 for t in "${targets[@]}"; do
   mkdir -p "build-fuzz/corpus/$t" "build-fuzz/artifacts/$t"
   log="build-fuzz/artifacts/$t.log"
   rc=0
-  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+  start=$SECONDS
+  # CPU seconds (user + system) besides wall seconds: on a loaded machine exec/s measures the
+  # share of the CPU a target got, execs per CPU second the target itself.
+  TIMEFORMAT='%U %S'
+  { time ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     "build-fuzz/voxfx_fuzz_$t" "${limit[@]}" -rss_limit_mb=2048 -malloc_limit_mb=1024 -timeout=20 \
     -print_final_stats=1 -artifact_prefix="build-fuzz/artifacts/$t/" \
-    "build-fuzz/corpus/$t" "fuzz/corpus/$t" >"$log" 2>&1 || rc=$?
+    "build-fuzz/corpus/$t" "fuzz/corpus/$t" >"$log" 2>&1 || rc=$?; } 2>"$log.cpu"
+  cpu="$(awk '{ printf "%.1f", $1 + $2 }' "$log.cpu")"
   execs="$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)"
   rate="$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)"
   corp="$(grep -o 'corp: [0-9]*/[0-9]*[a-zA-Z]*' "$log" | tail -1 | sed 's/corp: //')"
@@ -56,7 +61,8 @@ for t in "${targets[@]}"; do
     result="FAILED (rc $rc, see $log)"
     failed+=("$t")
   fi
-  printf '%-18s %12s %10s %8s %10s %s\n' "$t" "${execs:-?}" "${rate:-?}" "${corp%%/*}" "${corp##*/}" "$result"
+  printf '%-18s %12s %8s %8s %10s %8s %10s %s\n' "$t" "${execs:-?}" "$((SECONDS - start))" "${cpu:-?}" "${rate:-?}" \
+    "${corp%%/*}" "${corp##*/}" "$result"
 done
 if [ ${#failed[@]} -gt 0 ]; then
   echo "fuzz.sh: findings in: ${failed[*]}" >&2

@@ -201,6 +201,46 @@ TEST(HostileInputTest, SceneRenderSizesOutsideIntegersAreRefused) {
     }
 }
 
+TEST(HostileInputTest, SceneSmokeNumbersOutsideTheirTypesAreRefused) {
+    // Smoke dimensions, seed and octaves convert to integers: out of range or fractional values
+    // would do so with undefined behaviour (found reading the code behind the scene_json target).
+    auto smoke = [](const std::string& params) {
+        return R"({"objects": [{"kind": "volume", "transfer": {"points": [[0, 0], [1, 1]]},
+                   "volume": {"smoke": {)" +
+               params + "}}}]}";
+    };
+    const std::string path = "/nonexistent-voxfx-test/scene.json";
+    for (const char* dims : {"[1e300, 4, 4]", "[4, -1, 4]", "[4, 4, 2.5]", "[4, 4, 1e19]"})
+        expectMentions(hostileError([&] { parseSceneJson(smoke(std::string(R"("dims": )") + dims), path); }),
+                       {path, "dims", "whole number"});
+    for (const char* seed : {"-1", "1e20", "0.5"})
+        expectMentions(hostileError([&] { parseSceneJson(smoke(std::string(R"("seed": )") + seed), path); }),
+                       {path, "seed", "whole number"});
+    for (const char* octaves : {"1e10", "-3", "0"})
+        expectMentions(
+            hostileError([&] { parseSceneJson(smoke(std::string(R"("octaves": )") + octaves), path); }),
+            {path, "octaves", "whole number"});
+    // 2^39 voxels (2 TiB of floats) is within the volume limit but not within any memory here: an
+    // error before the allocation, not std::bad_alloc.
+    expectMentions(hostileError([&] { parseSceneJson(smoke(R"("dims": [8192, 8192, 8192])"), path); }),
+                   {"smoke", "8192", "memory"});
+}
+
+TEST(HostileInputTest, JsonNumbersPastDoubleRangeAreErrorsInEveryJsonReader) {
+    // nlohmann-json throws out_of_range, not parse_error, for a number that overflows a double;
+    // readers that caught parse_error only let it escape (found by the scene_json target).
+    TempDir dir;
+    const std::string scene = "/nonexistent-voxfx-test/scene.json";
+    expectMentions(hostileError([&] { parseSceneJson(R"({"render": {"width": 1e999}})", scene); }),
+                   {scene, "1e999"});
+    const std::string gltf = test::writeFile(dir.file("big.gltf"), R"({"asset": {"version": 1e999}})");
+    expectMentions(hostileError([&] { loadScene(gltf); }), {gltf, "1e999"});
+    expectMentions(hostileError([&] { parseCsgExpression(R"({"op": "union", "args": [1e999]})"); }),
+                   {"CSG expression, column 26", "1e999"});
+    expectMentions(hostileError([&] { parseTransferFunction(R"({"points": [[1e999, 0]]})", "tf.json"); }),
+                   {"tf.json", "1e999"});
+}
+
 TEST(HostileInputTest, CsgNestingIsBoundedInBothSyntaxes) {
     // 100000 levels would overflow the stack of a recursive parser.
     std::string functional, json;

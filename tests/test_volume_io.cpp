@@ -752,7 +752,7 @@ TEST(VolumeIo, VdbVolumeErrorsNameTheFileAndTheCause) {
     corrupt[0] ^= 0x5a; // the magic number
     const std::string bad = writeFile(dir.file("magic.vdb"), corrupt);
     expectError([&] { loadVolume(bad); }, {bad, "not a valid .vdb"});
-    expectError([&] { loadVolume(dir.file("missing.vdb")); }, {"missing.vdb", "no such file"});
+    expectError([&] { loadVolume(dir.file("missing.vdb")); }, {"missing.vdb", "No such file"});
     const std::string inr = writeFile(dir.file("x.inr"), "");
     expectError([&] { loadVolume(inr, other); }, {inr, "only for .vdb"});
 }

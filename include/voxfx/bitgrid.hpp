@@ -120,7 +120,10 @@ private:
     std::unique_ptr<uint64_t[], Free> words_;
 };
 
-/// Bytes of memory the machine can still hand out (MemAvailable), for up-front size checks.
+/// Bytes of memory the machine can still hand out (MemAvailable), for up-front size checks; at
+/// most the budget in the environment variable VOXFX_MEMORY_LIMIT when it is set (bytes, or with
+/// a K, M, G or T suffix in powers of 1024: "512M"), so that a service reading untrusted files
+/// can cap what any one file may make voxfx allocate. A malformed value is an Error.
 uint64_t availableMemoryBytes();
 /// Throws voxfx::Error("<what> needs X GiB, but only Y GiB of memory is available") when
 /// `bytes` exceeds what is available.

@@ -25,6 +25,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "voxfx/math.hpp"
@@ -168,6 +169,11 @@ struct Scene {
 /// the allowed list), malformed JSON (with the position), unknown keys or light types, a light
 /// without a usable direction, and everything Scene::validate rejects.
 Scene loadScene(const std::string& path);
+
+/// The JSON wrapper from text, as loadScene reads it from a .json file: `path` names the text in
+/// messages and is the file its relative names are resolved against (it is not read itself).
+/// Throws voxfx::Error as loadScene does.
+Scene parseSceneJson(std::string_view json, const std::string& path);
 
 /// Writes a scene as glTF 2.0: .gltf (JSON with the buffer embedded as a base64 data URI) or .glb
 /// (binary container). Materials with their extensions, lights (KHR_lights_punctual) and cameras are

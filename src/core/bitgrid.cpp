@@ -1,9 +1,13 @@
 #include "voxfx/bitgrid.hpp"
 
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iomanip>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,23 +27,58 @@ std::string gib(uint64_t bytes) {
     s << std::fixed << std::setprecision(2) << double(bytes) / double(uint64_t(1) << 30) << " GiB";
     return s.str();
 }
+
+// VOXFX_MEMORY_LIMIT: bytes, or a number with K, M, G or T (powers of 1024, "B" or "iB" may
+// follow: 512M, 1.5GiB).
+std::optional<uint64_t> memoryBudgetBytes() {
+    const char* text = std::getenv("VOXFX_MEMORY_LIMIT");
+    if (!text || !*text) return std::nullopt;
+    char* end = nullptr;
+    errno = 0;
+    const double value = std::strtod(text, &end);
+    std::string unit(end ? end : "");
+    for (char& c : unit) c = char(std::toupper(static_cast<unsigned char>(c)));
+    double scale = 0;
+    for (const auto& [name, s] : {std::pair<const char*, double>{"", 1},
+                                  {"B", 1},
+                                  {"K", 0x1p10},
+                                  {"M", 0x1p20},
+                                  {"G", 0x1p30},
+                                  {"T", 0x1p40}})
+        for (const char* tail : {"", "B", "IB"})
+            if (unit == std::string(name) + (*name && *name != 'B' ? tail : "")) scale = s;
+    if (end == text || errno != 0 || scale == 0 || !(value >= 0) || value * scale >= 0x1p64)
+        fail("VOXFX_MEMORY_LIMIT must be bytes or a size with K, M, G or T (powers of 1024), got '", text,
+             "'");
+    return uint64_t(value * scale);
+}
 } // namespace
 
 uint64_t availableMemoryBytes() {
+    const std::optional<uint64_t> budget = memoryBudgetBytes();
     std::ifstream meminfo("/proc/meminfo");
     std::string key;
     uint64_t kib = 0;
     std::string unit;
-    while (meminfo >> key >> kib >> unit)
-        if (key == "MemAvailable:") return kib * 1024;
-    const long pages = sysconf(_SC_PHYS_PAGES), pageSize = sysconf(_SC_PAGE_SIZE);
-    return pages > 0 && pageSize > 0 ? uint64_t(pages) * uint64_t(pageSize) : ~uint64_t(0);
+    uint64_t available = ~uint64_t(0);
+    bool found = false;
+    while (!found && meminfo >> key >> kib >> unit)
+        if (key == "MemAvailable:") {
+            available = kib * 1024;
+            found = true;
+        }
+    if (!found) {
+        const long pages = sysconf(_SC_PHYS_PAGES), pageSize = sysconf(_SC_PAGE_SIZE);
+        if (pages > 0 && pageSize > 0) available = uint64_t(pages) * uint64_t(pageSize);
+    }
+    return budget ? std::min(available, *budget) : available;
 }
 
 void checkMemory(uint64_t bytes, const char* what) {
     const uint64_t available = availableMemoryBytes();
     if (bytes > available)
-        fail(what, " needs ", gib(bytes), ", but only ", gib(available), " of memory is available");
+        fail(what, " needs ", gib(bytes), ", but only ", gib(available), " of memory is available",
+             memoryBudgetBytes() ? " (VOXFX_MEMORY_LIMIT)" : "");
 }
 
 uint64_t BitGrid::requiredBytes(int64_t w, int64_t h, int64_t d) {

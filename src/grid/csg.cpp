@@ -245,7 +245,16 @@ CsgNode parseJsonExpression(std::string_view text) {
     nlohmann::json doc;
     try {
         doc = nlohmann::json::parse(text.begin(), text.end());
-    } catch (const nlohmann::json::parse_error& e) { parseFail(tokenColumn(text, e.byte), jsonReason(e)); }
+    } catch (const nlohmann::json::parse_error& e) {
+        parseFail(tokenColumn(text, e.byte), jsonReason(e));
+    } catch (const nlohmann::json::out_of_range& e) {
+        // A number past double's range (1e999): nlohmann names the token, not its position.
+        const std::string what = e.what();
+        const size_t open = what.find('\''), close = what.rfind('\'');
+        const std::string token = open < close ? what.substr(open + 1, close - open - 1) : std::string();
+        const size_t at = token.empty() ? std::string_view::npos : text.find(token);
+        parseFail(at == std::string_view::npos ? 1 : at + 1, "number out of range: " + token);
+    }
     return nodeFromJson(doc, "");
 }
 

@@ -8,7 +8,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
+#include "voxfx/bitgrid.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
@@ -76,6 +78,12 @@ Volume makeSmoke(const SmokeParams& params) {
     const Vec3i n = params.dims;
     if (n.x < 1 || n.y < 1 || n.z < 1)
         fail("smoke dimensions must be at least 1, got ", n.x, " x ", n.y, " x ", n.z);
+    // Checked against the memory available before allocating (a scene file can ask for any size);
+    // sizes past 2^40 voxels are left to the volume's own limit.
+    if (n.x <= kMaxVolumeVoxels && n.y <= kMaxVolumeVoxels / n.x && n.z <= kMaxVolumeVoxels / (n.x * n.y)) {
+        const std::string what = detail::concat("a smoke volume of ", n.x, " x ", n.y, " x ", n.z, " voxels");
+        checkMemory(uint64_t(n.x * n.y * n.z) * sizeof(float), what.c_str());
+    }
     const Vec3d spacing = b.extent() * Vec3d(1.0 / double(n.x), 1.0 / double(n.y), 1.0 / double(n.z));
     Volume vol(n, b.lo, spacing, ScalarType::Float32);
     const uint32_t seed = params.seed;

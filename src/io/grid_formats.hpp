@@ -1,5 +1,5 @@
 // voxfx — the grid file formats behind grid_io.hpp (internal). Writers take an orthographic,
-// uniformly sliced grid (writeGrid prepares it); readers take the file's bytes (or path) and
+// uniformly sliced grid (writeGrid prepares it); readers take the file's bytes and
 // throw voxfx::Error with the cause only: readGrid prefixes the path.
 #pragma once
 
@@ -23,7 +23,7 @@ VoxelGrid readBinvox(std::span<const uint8_t> bytes);
 
 /// Writes through the temporary file's path (OpenVDB opens files by name).
 void writeVdb(const VoxelGrid& grid, AtomicFile& file, const GridWriteOptions& options);
-VoxelGrid readVdb(const std::string& path);
+VoxelGrid readVdb(std::span<const uint8_t> bytes);
 
 void writeNrrd(const VoxelGrid& grid, std::ostream& out);
 VoxelGrid readNrrd(std::span<const uint8_t> bytes);

@@ -113,13 +113,9 @@ VoxelGrid readGrid(const std::string& path) {
             return detail::readBinvox(readFileBytes(path));
         case GridFormat::Nrrd:
             return detail::readNrrd(readFileBytes(path));
-        default: {
-            // OpenVDB reports a missing file with its own wording; give ours.
-            std::error_code ec;
-            if (!std::filesystem::exists(path, ec)) fail("cannot read '", path, "': ", std::strerror(ENOENT));
-            if (std::filesystem::is_directory(path, ec)) fail("cannot read '", path, "': it is a directory");
-            return detail::readVdb(path);
-        }
+        default:
+            // The module checks the bytes, then hands them to OpenVDB as a stream.
+            return detail::readVdb(readFileBytes(path));
         }
     } catch (const Error& e) {
         const std::string what = e.what();

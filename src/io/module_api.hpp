@@ -20,7 +20,7 @@
 namespace voxfx::detail {
 
 /// Bump when a table below changes.
-inline constexpr uint32_t kModuleAbi = 2;
+inline constexpr uint32_t kModuleAbi = 3;
 
 /// The library's parallel-for handed to a module (so that modules follow withThreads and name no
 /// thread library): calls call(body, b, e) over chunks of `grain` items covering [begin, end).
@@ -65,17 +65,19 @@ struct VdbModule {
     /// A FloatGrid fog volume from dense values, x fastest, then y, then z; zeros stay inactive.
     bool (*writeFloats)(const char* path, const int64_t dims[3], const float* values,
                         const VdbPlacement& placement, const char* gridName, std::string* error);
-    /// Reads the first bool, float or double grid: `allocate` receives its box and returns the
-    /// z-sliced words to set (zeroed, wordsPerColumn per column).
-    bool (*readBits)(const char* path, void* ctx,
+    /// Reads the first bool, float or double grid of a .vdb file's bytes (in memory: checked,
+    /// then handed to OpenVDB as a stream): `allocate` receives its box and returns the z-sliced
+    /// words to set (zeroed, wordsPerColumn per column).
+    bool (*readBits)(const uint8_t* data, std::size_t size, void* ctx,
                      uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn),
                      std::string* error);
-    /// Reads the grid named `gridName` (empty: the first float or double grid) as dense floats
+    /// Reads the grid named `gridName` (empty: the first float or double grid) of a .vdb file's
+    /// bytes (checked, then read from memory, as readBits) as dense floats
     /// over its index box (the stored dimensions, else the active voxels' box), x fastest:
     /// `allocate` receives the box and returns dims[0] * dims[1] * dims[2] floats, or null to
     /// stop (it must not throw). Rotated, sheared, mirrored and non-linear transforms and values
     /// that are not finite floats are errors.
-    bool (*readFloats)(const char* path, const char* gridName, void* ctx,
+    bool (*readFloats)(const uint8_t* data, std::size_t size, const char* gridName, void* ctx,
                        float* (*allocate)(void* ctx, const VdbFloatBox& box), std::string* error);
 };
 

@@ -337,7 +337,10 @@ json readGltfJson(const std::string& path, bool binary) {
     }
     try {
         return json::parse(text);
-    } catch (const json::parse_error& e) { fail(path, ": malformed JSON: ", e.what()); }
+    } catch (const json::exception& e) {
+        // parse_error, and out_of_range for a number past double's range (1e999)
+        fail(path, ": malformed JSON: ", e.what());
+    }
 }
 
 Scene loadGltfScene(const std::string& path) {

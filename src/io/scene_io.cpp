@@ -64,6 +64,14 @@ int64_t settingsCount(const json& j, const char* key, const std::string& where) 
     return int64_t(v);
 }
 
+// A whole number in [lo, hi] (checked before any conversion: a double out of the target type's
+// range, or NaN, would make it undefined behaviour).
+int64_t wholeNumber(double v, double lo, double hi, const char* key, const std::string& where) {
+    if (!(v >= lo && v <= hi) || v != std::floor(v))
+        fail(where, ": \"", key, "\" must be a whole number in [", lo, ", ", hi, "], got ", v);
+    return int64_t(v);
+}
+
 std::string str(const json& j, const char* key, const std::string& where) {
     if (!j.contains(key)) return {};
     if (!j[key].is_string()) fail(where, ": \"", key, "\" must be a string");
@@ -207,7 +215,10 @@ struct SceneObjectsParser {
                 SmokeParams p;
                 if (sm.contains("dims")) {
                     const Vec3d d = vec3(sm, "dims", where);
-                    p.dims = {int64_t(d.x), int64_t(d.y), int64_t(d.z)};
+                    const std::string w = where + ".volume.smoke";
+                    p.dims = {wholeNumber(d.x, 1, 2147483647.0, "dims", w),
+                              wholeNumber(d.y, 1, 2147483647.0, "dims", w),
+                              wholeNumber(d.z, 1, 2147483647.0, "dims", w)};
                 }
                 if (sm.contains("box")) {
                     const json& b = sm["box"];
@@ -216,8 +227,9 @@ struct SceneObjectsParser {
                     p.box.lo = vec3(pair, "lo", where);
                     p.box.hi = vec3(pair, "hi", where);
                 }
-                p.seed = uint32_t(num(sm, "seed", p.seed, where));
-                p.octaves = int(num(sm, "octaves", p.octaves, where));
+                p.seed =
+                    uint32_t(wholeNumber(num(sm, "seed", p.seed, where), 0, 4294967295.0, "seed", where));
+                p.octaves = int(wholeNumber(num(sm, "octaves", p.octaves, where), 1, 16, "octaves", where));
                 p.frequency = num(sm, "frequency", p.frequency, where);
                 volume = makeSmoke(p);
             } else {
@@ -280,12 +292,15 @@ struct SceneObjectsParser {
     }
 };
 
-Scene loadWrapper(const std::string& path) {
-    const std::string text = detail::readTextFile(path, "scene file");
+// The wrapper's text; `path` names it in messages and anchors its relative file names.
+Scene parseWrapper(std::string_view text, const std::string& path) {
     json doc;
     try {
         doc = json::parse(text);
-    } catch (const json::parse_error& e) { fail(path, ": malformed JSON: ", e.what()); }
+    } catch (const json::exception& e) {
+        // parse_error, and out_of_range for a number past double's range (1e999)
+        fail(path, ": malformed JSON: ", e.what());
+    }
     const std::filesystem::path dir = std::filesystem::path(path).parent_path();
     auto resolve = [&](const std::string& p) {
         return std::filesystem::path(p).is_absolute() ? p : (dir / p).string();
@@ -469,7 +484,7 @@ Scene loadScene(const std::string& path) {
     if (ext == ".gltf" || ext == ".glb") {
         scene = detail::loadGltfScene(path);
     } else if (ext == ".json") {
-        scene = loadWrapper(path);
+        scene = parseWrapper(detail::readTextFile(path, "scene file"), path);
     } else if (ext == ".off" || ext == ".obj" || ext == ".ply" || ext == ".stl" || ext == ".fbx" ||
                ext == ".dae" || ext == ".3ds") {
         SceneMesh m;
@@ -482,6 +497,13 @@ Scene loadScene(const std::string& path) {
         fail(path, ": unknown scene extension '", ext.empty() ? std::string("(none)") : ext,
              "' (allowed: .gltf .glb .json, or a mesh: .off .obj .ply .stl .fbx .dae .3ds)");
     }
+    scene.source = path;
+    scene.validate();
+    return scene;
+}
+
+Scene parseSceneJson(std::string_view text, const std::string& path) {
+    Scene scene = parseWrapper(text, path);
     scene.source = path;
     scene.validate();
     return scene;

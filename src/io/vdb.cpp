@@ -32,7 +32,7 @@ void writeVdb(const VoxelGrid& grid, AtomicFile& file, const GridWriteOptions& o
         fail("cannot write '", file.targetPath().string(), "': ", error);
 }
 
-VoxelGrid readVdb(const std::string& path) {
+VoxelGrid readVdb(std::span<const uint8_t> bytes) {
     const VdbModule& vdb = vdbModule();
     VoxelGrid g;
     auto allocate = [](void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn) -> uint64_t* {
@@ -44,7 +44,7 @@ VoxelGrid readVdb(const std::string& path) {
         return out.bits.column(0);
     };
     std::string error;
-    if (!vdb.readBits(path.c_str(), &g, allocate, &error)) fail(error);
+    if (!vdb.readBits(bytes.data(), bytes.size(), &g, allocate, &error)) fail(error);
     return g;
 }
 

@@ -75,8 +75,9 @@ void flipAxis(Volume& volume, int axis);
 Volume readInr(std::span<const uint8_t> bytes, const std::string& path, VolumeLoadReport& report);
 Volume readScalarNrrd(std::span<const uint8_t> bytes, const std::string& path, VolumeLoadReport& report);
 Volume readRawJson(std::span<const uint8_t> bytes, const std::string& path, VolumeLoadReport& report);
-/// The float or double grid `gridName` (the first one when empty) of a .vdb file, through the
-/// voxfx_vdb module.
-Volume readVdbVolume(const std::string& path, const std::string& gridName, VolumeLoadReport& report);
+/// The float or double grid `gridName` (the first one when empty) of a .vdb file's bytes, through
+/// the voxfx_vdb module (which checks them before OpenVDB reads them from memory).
+Volume readVdbVolume(std::span<const uint8_t> bytes, const std::string& path, const std::string& gridName,
+                     VolumeLoadReport& report);
 
 } // namespace voxfx::detail

@@ -6,7 +6,6 @@
 // are kept) and its box starts half a voxel before the first index's centre. The dense size is
 // checked against the voxel limit and the memory available before anything is allocated.
 #include <exception>
-#include <filesystem>
 
 #include "io/module_api.hpp"
 #include "io/volume_formats.hpp"
@@ -42,17 +41,14 @@ float* allocateVdbVolume(void* ctx, const VdbFloatBox& box) {
 
 } // namespace
 
-Volume readVdbVolume(const std::string& path, const std::string& gridName, VolumeLoadReport& report) {
-    std::error_code ec;
-    if (!std::filesystem::exists(path, ec)) fail(path, ": cannot open file: no such file");
-    if (std::filesystem::is_directory(path, ec)) fail(path, ": cannot read file: it is a directory");
-    if (!std::filesystem::is_regular_file(path, ec))
-        fail(path, ": cannot read file: not a regular file (a device, pipe or socket)");
-    report.fileBytes = std::filesystem::file_size(path, ec);
+Volume readVdbVolume(std::span<const uint8_t> bytes, const std::string& path, const std::string& gridName,
+                     VolumeLoadReport& report) {
+    report.fileBytes = bytes.size();
     const VdbModule& vdb = vdbModule();
     VdbVolumeTarget target{&path, {}, {}, nullptr};
     std::string error;
-    const bool ok = vdb.readFloats(path.c_str(), gridName.c_str(), &target, allocateVdbVolume, &error);
+    const bool ok =
+        vdb.readFloats(bytes.data(), bytes.size(), gridName.c_str(), &target, allocateVdbVolume, &error);
     if (target.error) std::rethrow_exception(target.error);
     if (!ok) fail(path, ": ", error);
     report.gridName = target.box.name;

@@ -13,7 +13,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <fstream>
 #include <istream>
 #include <limits>
 #include <memory>
@@ -251,24 +250,13 @@ protected:
     }
 };
 
-std::string readWholeFile(const char* path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) fail("cannot open the file");
-    in.seekg(0, std::ios::end);
-    const std::streamoff size = in.tellg();
-    if (size < 0) fail("cannot determine the file size (not a regular file?)");
-    in.seekg(0, std::ios::beg);
-    std::string bytes(std::size_t(size), '\0');
-    if (!in.read(bytes.data(), size)) fail("cannot read the file (it got shorter while reading?)");
-    return bytes;
-}
-
-// Every grid of the file, read by OpenVDB after the walker checked the bytes.
-openvdb::GridPtrVecPtr readValidatedGrids(const char* path) {
+// Every grid of a .vdb file's bytes, read by OpenVDB after the walker checked them.
+openvdb::GridPtrVecPtr readValidatedGrids(const uint8_t* data, std::size_t size) {
     initializeOpenVdb();
     // The whole file, checked by the walker (vdb_validate.hpp) before OpenVDB reads those very
-    // bytes from memory: OpenVDB trusts every size and count in a file.
-    std::string bytes = readWholeFile(path);
+    // bytes from memory: OpenVDB trusts every size and count in a file. (A copy: the walker
+    // neutralizes parts of it.)
+    std::string bytes(reinterpret_cast<const char*>(data), size);
     vdbcheck::validateAndNeutralize(bytes);
     openvdb::GridPtrVecPtr grids;
     try {
@@ -302,9 +290,9 @@ openvdb::CoordBBox indexBox(const openvdb::GridBase& grid) {
     return active;
 }
 
-void readBitsImpl(const char* path, void* ctx,
+void readBitsImpl(const uint8_t* data, std::size_t size, void* ctx,
                   uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn)) {
-    const openvdb::GridPtrVecPtr grids = readValidatedGrids(path);
+    const openvdb::GridPtrVecPtr grids = readValidatedGrids(data, size);
     openvdb::GridBase::Ptr base;
     for (const auto& gp : *grids)
         if (gp && (gp->isType<openvdb::BoolGrid>() || gp->isType<openvdb::FloatGrid>() ||
@@ -387,9 +375,9 @@ void readDense(const GridT& grid, const openvdb::Coord& o, const int64_t n[3], f
         }
 }
 
-void readFloatsImpl(const char* path, const char* gridName, void* ctx,
+void readFloatsImpl(const uint8_t* data, std::size_t size, const char* gridName, void* ctx,
                     float* (*allocate)(void* ctx, const VdbFloatBox& box)) {
-    const openvdb::GridPtrVecPtr grids = readValidatedGrids(path);
+    const openvdb::GridPtrVecPtr grids = readValidatedGrids(data, size);
     const std::string wanted = gridName ? gridName : "";
     auto scalar = [](const openvdb::GridBase& g) {
         return g.isType<openvdb::FloatGrid>() || g.isType<openvdb::DoubleGrid>();
@@ -494,15 +482,15 @@ bool writeFloats(const char* path, const int64_t dims[3], const float* values, c
     });
 }
 
-bool readBits(const char* path, void* ctx,
+bool readBits(const uint8_t* data, std::size_t size, void* ctx,
               uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn),
               std::string* error) {
-    return guarded(error, [&] { readBitsImpl(path, ctx, allocate); });
+    return guarded(error, [&] { readBitsImpl(data, size, ctx, allocate); });
 }
 
-bool readFloats(const char* path, const char* gridName, void* ctx,
+bool readFloats(const uint8_t* data, std::size_t size, const char* gridName, void* ctx,
                 float* (*allocate)(void* ctx, const VdbFloatBox& box), std::string* error) {
-    return guarded(error, [&] { readFloatsImpl(path, gridName, ctx, allocate); });
+    return guarded(error, [&] { readFloatsImpl(data, size, gridName, ctx, allocate); });
 }
 
 constexpr VdbModule kTable{kModuleAbi, sizeof(VdbModule), writeBits, writeFloats, readBits, readFloats};
