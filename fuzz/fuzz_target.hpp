@@ -51,6 +51,12 @@ inline void require(bool ok, const char* what) {
     }
 }
 
+/// A memory budget for what one input may make voxfx allocate (VOXFX_MEMORY_LIMIT, see
+/// availableMemoryBytes), unless the environment sets one: a few bytes of .vdb tiles can describe
+/// a valid grid of gigabytes, which the machine's memory would allow and libFuzzer's 2 GB limit
+/// would report as an out-of-memory finding (tests/regress/vdb/tiles-of-a-4.5GiB-grid.vdb).
+inline void applyMemoryBudget() { setenv("VOXFX_MEMORY_LIMIT", "256M", 0); }
+
 inline std::string_view asText(std::span<const uint8_t> data) {
     return {reinterpret_cast<const char*>(data.data()), data.size()};
 }
@@ -58,12 +64,9 @@ inline std::string_view asText(std::span<const uint8_t> data) {
 } // namespace voxfx::fuzz
 
 #ifdef VOXFX_FUZZ_LIBFUZZER
-// A memory budget for what one input may make voxfx allocate (VOXFX_MEMORY_LIMIT, see
-// availableMemoryBytes): a few bytes of .vdb tiles can describe a valid grid of gigabytes, which the
-// machine's memory would allow and libFuzzer's 2 GB limit would report as an out-of-memory finding.
 #define VOXFX_FUZZ_TARGET(name)                                                                              \
     extern "C" int LLVMFuzzerInitialize(int*, char***) {                                                     \
-        setenv("VOXFX_MEMORY_LIMIT", "256M", 0);                                                             \
+        ::voxfx::fuzz::applyMemoryBudget();                                                                  \
         return 0;                                                                                            \
     }                                                                                                        \
     static void voxfxFuzz_##name(std::span<const uint8_t> data);                                             \

@@ -15,6 +15,7 @@
 
 int main(int argc, char** argv) {
     namespace fs = std::filesystem;
+    voxfx::fuzz::applyMemoryBudget(); // as the libFuzzer programs run
     int missing = 0;
     for (const voxfx::fuzz::Target& target : voxfx::fuzz::targets()) {
         std::vector<fs::path> files;

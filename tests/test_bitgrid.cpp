@@ -183,9 +183,7 @@ TEST(BitGridTest, TheMemoryBudgetInTheEnvironmentCapsWhatMayBeAllocated) {
              {"4096", 4096}, {"2k", 2048}, {"3MiB", 3u << 20}, {"1.5G", 3u << 29}, {"1gb", 1u << 30}}) {
         BitGridScopedEnv env("VOXFX_MEMORY_LIMIT", text);
         // The budget, or what the machine has when that is less.
-        if (bytes < machine / 2) {
-            EXPECT_EQ(availableMemoryBytes(), bytes) << text;
-        }
+        if (bytes < machine / 2) { EXPECT_EQ(availableMemoryBytes(), bytes) << text; }
     }
     for (const char* bad : {"lots", "-1M", "12Q", "1e30T", "nan", "5 M"}) {
         BitGridScopedEnv env("VOXFX_MEMORY_LIMIT", bad);
