@@ -94,6 +94,8 @@ struct FlatLeaves {
     std::vector<uint32_t> triangleLeaf;
 };
 FlatLeaves flattenLeaves(const VolumeScene& scene, bool castersOnly);
+/// Sets used[leaf] = 1 for every leaf under shape node `node` (used has one entry per leaf).
+void markShapeLeaves(const VolumeScene& scene, int32_t node, std::vector<uint8_t>& used);
 
 /// Walks a column's fragments (of a FlatLeaves mesh) front to back and reports, in depth order:
 ///   surface(depth, object, entering)   an opaque or translucent object's boundary is crossed

@@ -102,21 +102,10 @@ bool VolumeScene::evalShape(int32_t node, std::span<const uint8_t> leafInside) c
 
 namespace {
 
-// Marks the leaves under `node`.
-void volumeSceneMarkLeaves(const VolumeScene& s, int32_t node, std::vector<uint8_t>& used) {
-    const ShapeNode& n = s.nodes[std::size_t(node)];
-    if (n.op == ShapeOp::Leaf) {
-        used[std::size_t(n.leaf)] = 1;
-        return;
-    }
-    volumeSceneMarkLeaves(s, n.a, used);
-    volumeSceneMarkLeaves(s, n.b, used);
-}
-
 std::vector<uint8_t> volumeSceneUsedLeaves(const VolumeScene& s, bool castersOnly) {
     std::vector<uint8_t> used(s.leaves.size(), 0);
     for (const VolumeSceneObject& o : s.objects)
-        if (!castersOnly || o.castsShadow) volumeSceneMarkLeaves(s, o.shape, used);
+        if (!castersOnly || o.castsShadow) markShapeLeaves(s, o.shape, used);
     return used;
 }
 
@@ -156,6 +145,16 @@ void VolumeScene::validate() const {
                      o.opacityLength);
         }
     }
+}
+
+void markShapeLeaves(const VolumeScene& s, int32_t node, std::vector<uint8_t>& used) {
+    const ShapeNode& n = s.nodes[std::size_t(node)];
+    if (n.op == ShapeOp::Leaf) {
+        used[std::size_t(n.leaf)] = 1;
+        return;
+    }
+    markShapeLeaves(s, n.a, used);
+    markShapeLeaves(s, n.b, used);
 }
 
 FlatLeaves flattenLeaves(const VolumeScene& scene, bool castersOnly) {

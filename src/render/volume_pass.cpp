@@ -13,16 +13,6 @@ namespace voxfx::detail {
 
 namespace {
 
-void volumePassMarkLeaves(const VolumeScene& s, int32_t node, std::vector<uint8_t>& used) {
-    const ShapeNode& n = s.nodes[std::size_t(node)];
-    if (n.op == ShapeOp::Leaf) {
-        used[std::size_t(n.leaf)] = 1;
-        return;
-    }
-    volumePassMarkLeaves(s, n.a, used);
-    volumePassMarkLeaves(s, n.b, used);
-}
-
 Vec3d volumePassCorner(const Mesh& m, uint32_t t, int k) {
     return Vec3d(m.positions[m.indices[3 * std::size_t(t) + std::size_t(k)]]);
 }
@@ -33,7 +23,7 @@ ObjectSurfaces::ObjectSurfaces(const VolumeScene& s) : scene(&s), flat(flattenLe
     objectLeaves.reserve(s.objects.size());
     for (const VolumeSceneObject& o : s.objects) {
         std::vector<uint8_t> used(s.leaves.size(), 0);
-        volumePassMarkLeaves(s, o.shape, used);
+        markShapeLeaves(s, o.shape, used);
         objectLeaves.push_back(std::move(used));
     }
     // Area-weighted vertex normals (the cross product's length is twice the area).
