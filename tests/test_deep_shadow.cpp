@@ -667,6 +667,7 @@ TEST(DeepShadowSceneFileTest, ObjectsWithVolumesTransferFunctionsAndBooleanShape
     EXPECT_DOUBLE_EQ(vs.objects[0].transfer.opacity(1.0), 0.5);
     ASSERT_EQ(s.meshes.size(), 2u);
     EXPECT_FLOAT_EQ(s.materials[s.meshes[1].material].opacity, 0.3f);
+    EXPECT_TRUE(s.materials[s.meshes[1].material].blend); // the camera sees through it
 
     // Bad objects: a clear error naming the object, no scene.
     const std::pair<const char*, const char*> bad[] = {

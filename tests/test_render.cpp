@@ -204,6 +204,61 @@ TEST(RenderTest, ShadowsInTheImageAreAmbientOrTransmittedLight) {
     EXPECT_NEAR(a.image.at(lx, ly).y, ambient + 0.5f * direct, 1e-4f);
 }
 
+TEST(RenderTest, BlendedMeshIsSeenThroughAndAMaskedOneIsNot) {
+    // A quad of opacity 0.4 one unit over the ground, no shadows. Blended (Material::blend), every
+    // pixel must be 0.4 x the pixel of the same quad drawn opaque plus 0.6 x the pixel without the
+    // quad (both drawn by the G-buffer: an independent path). Masked (blend = false, foliage), the
+    // pixels it covers must not depend on the ground behind it.
+    auto withQuad = [](bool blend, float opacity, Vec3f groundColour) {
+        Scene s = groundScene();
+        s.materials[0].baseColor = groundColour;
+        Material glassy;
+        glassy.name = "tinted";
+        glassy.baseColor = {0.2f, 0.6f, 0.9f};
+        glassy.specular = 0.3f;
+        glassy.opacity = opacity;
+        glassy.blend = blend;
+        SceneMesh q;
+        q.name = "quad";
+        appendQuad(q.mesh, {0, 1, 0}, {0, 0, 1}, {1, 0, 0});
+        q.material = s.addMaterial(glassy);
+        s.meshes.push_back(q);
+        return s;
+    };
+    const RenderOptions o = smallOptions(ShadowKind::None, 96, 72);
+    const Scene bare = groundScene();
+    const Image ground = render(bare, bare.cameras[0], o).image;
+    const Scene opaqueQuad = withQuad(false, 1, {0.5f, 0.5f, 0.5f});
+    const Image front = render(opaqueQuad, opaqueQuad.cameras[0], o).image;
+    const Scene blendedQuad = withQuad(true, 0.4f, {0.5f, 0.5f, 0.5f});
+    const RenderResult blended = render(blendedQuad, blendedQuad.cameras[0], o);
+    int64_t covered = 0;
+    for (int64_t y = 0; y < o.height; ++y)
+        for (int64_t x = 0; x < o.width; ++x) {
+            const Vec3f f = front.at(x, y), g = ground.at(x, y), b = blended.image.at(x, y);
+            covered += f.x != g.x || f.y != g.y || f.z != g.z;
+            const Vec3f want = f * 0.4f + g * 0.6f;
+            ASSERT_NEAR(b.x, want.x, 1e-4f * (1 + want.x)) << x << ", " << y;
+            ASSERT_NEAR(b.y, want.y, 1e-4f * (1 + want.y)) << x << ", " << y;
+            ASSERT_NEAR(b.z, want.z, 1e-4f * (1 + want.z)) << x << ", " << y;
+        }
+    EXPECT_GT(covered, o.width * o.height / 20); // the quad is in view
+    // The G-buffer does not hold the blended quad: the pixels it covers see the ground.
+    EXPECT_EQ(blended.coveredPixels, render(bare, bare.cameras[0], o).coveredPixels);
+
+    const Scene maskedGrey = withQuad(false, 0.4f, {0.5f, 0.5f, 0.5f});
+    const Scene maskedRed = withQuad(false, 0.4f, {0.9f, 0.1f, 0.1f});
+    const Image grey = render(maskedGrey, maskedGrey.cameras[0], o).image;
+    const Image red = render(maskedRed, maskedRed.cameras[0], o).image;
+    for (int64_t y = 0; y < o.height; ++y)
+        for (int64_t x = 0; x < o.width; ++x) {
+            const Vec3f f = front.at(x, y), g = ground.at(x, y);
+            if (f.x == g.x && f.y == g.y && f.z == g.z) continue; // not on the quad
+            EXPECT_EQ(grey.at(x, y).x, red.at(x, y).x) << x << ", " << y;
+            EXPECT_EQ(grey.at(x, y).z, red.at(x, y).z) << x << ", " << y;
+        }
+}
+
 TEST(RenderTest, SupersamplingIsABoxFilterOfTheFineImage) {
     TreeOptions t;
     t.leaves = 300;

@@ -129,12 +129,14 @@ TEST(SceneTest, GltfMaterialsIncludingExtensions) {
     const Material& leaf = s.materials[meshNamed(s, "Tri").material];
     EXPECT_EQ(leaf.name, "Leaf");
     EXPECT_FLOAT_EQ(leaf.opacity, 0.6f); // alphaMode BLEND: alpha is the opacity
+    EXPECT_TRUE(leaf.blend);             // and the camera sees through it
     EXPECT_TRUE(leaf.doubleSided);
     EXPECT_FLOAT_EQ(leaf.baseColor.y, 0.4f);
     EXPECT_FALSE(leaf.isOpaque());
     const Material& glass = s.materials[meshNamed(s, "Lens").material];
     EXPECT_EQ(glass.name, "Glass");
     EXPECT_FLOAT_EQ(glass.opacity, 1.0f); // OPAQUE alpha mode ignores alpha
+    EXPECT_FALSE(glass.blend);
     EXPECT_FLOAT_EQ(glass.transmission, 0.9f);
     EXPECT_FLOAT_EQ(glass.ior, 1.45f);
     EXPECT_FLOAT_EQ(glass.thickness, 0.1f);
@@ -276,7 +278,13 @@ void expectGltfHoldsSceneBySpec(const Scene& tree, const std::string& path) {
 TEST(SceneTest, WriteGltfRoundTripsGltfAndGlbAndFollowsTheSpec) {
     TreeOptions o;
     o.leaves = 200;
-    const Scene tree = makeTreeScene(o);
+    Scene tree = makeTreeScene(o);
+    // Leaves are drawn solid (MASK); one material blended (BLEND) so that both round trip.
+    for (Material& m : tree.materials)
+        if (m.opacity < 1) {
+            m.blend = true;
+            break;
+        }
     test::TempDir dir;
     for (const char* name : {"tree.gltf", "tree.glb"}) {
         const std::string path = dir.file(name);
@@ -294,6 +302,7 @@ TEST(SceneTest, WriteGltfRoundTripsGltfAndGlbAndFollowsTheSpec) {
             const Material &ma = tree.materials[a.material], &mb = back.materials[b.material];
             EXPECT_EQ(ma.name, mb.name);
             EXPECT_TRUE(ma.crossingTransmittance() == mb.crossingTransmittance()) << ma.name;
+            EXPECT_EQ(ma.blend, mb.blend) << ma.name;
             EXPECT_FLOAT_EQ(ma.shininess, mb.shininess);
             EXPECT_FLOAT_EQ(ma.specular, mb.specular);
         }
@@ -332,6 +341,7 @@ TEST(SceneTest, JsonWrapperAddsMeshesLightsCamerasAndSettings) {
     expectVec(Vec3d(tet.mesh.positions[1]), {1, 0, -2});
     EXPECT_EQ(s.materials[tet.material].name, "red");
     EXPECT_FLOAT_EQ(s.materials[tet.material].opacity, 0.5f);
+    EXPECT_TRUE(s.materials[tet.material].blend); // see-through unless "blend": false
     // A wrapper mesh without a material gets the default (opaque grey) material, not the glTF's
     // first one (here the glass, a partial occluder).
     const Material& plain = s.materials[meshNamed(s, "TetPlain").material];
@@ -404,6 +414,12 @@ TEST(SceneTest, BadInputGivesClearErrors) {
     const std::string noMesh =
         test::writeFile(dir.file("nomesh.json"), R"({"meshes": [{"file": "gone.off"}]})");
     EXPECT_NE(errorOf(noMesh).find("gone.off"), std::string::npos) << errorOf(noMesh);
+
+    test::writeFile(dir.file("tri.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    const std::string blend =
+        test::writeFile(dir.file("blend.json"),
+                        R"({"meshes": [{"file": "tri.off", "material": {"opacity": 0.5, "blend": "yes"}}]})");
+    EXPECT_NE(errorOf(blend).find("\"blend\" must be true or false"), std::string::npos) << errorOf(blend);
 
     const std::string cam = test::writeFile(dir.file("cam.json"),
                                             R"({"cameras": [{"position": [1, 1, 1], "target": [1, 1, 1]}]})");

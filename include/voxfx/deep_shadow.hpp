@@ -94,8 +94,15 @@ private:
 std::vector<DsmNode> deepShadowTexel(const VolumeScene& scene, const LightView& view, int64_t x, int64_t y,
                                      const DeepShadowOptions& options);
 
-/// The renderer's scene as a volume scene: every mesh a leaf and an object (opaque, or translucent
-/// with opacity 1 - luminance(crossingTransmittance)), then the objects of scene.volumeScene.
-VolumeScene volumeSceneOf(const Scene& scene);
+/// Which of a Scene's meshes volumeSceneOf turns into objects.
+enum class SceneMeshes {
+    All,     ///< every mesh: what the light sees (deep shadows)
+    Blended, ///< the meshes of blended materials (Material::blend): what the camera's G-buffer leaves out
+};
+
+/// The renderer's scene as a volume scene: the chosen meshes, each a leaf and an object (opaque, or
+/// translucent with opacity 1 - luminance(crossingTransmittance); `material` names the mesh's
+/// material), then the objects of scene.volumeScene.
+VolumeScene volumeSceneOf(const Scene& scene, SceneMeshes meshes = SceneMeshes::All);
 
 } // namespace voxfx

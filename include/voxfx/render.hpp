@@ -2,7 +2,7 @@
 //
 // Passes (each separable, so later effects — glass, deep shadow maps — slot in as new passes):
 //   1. flattenScene   every SceneMesh into one indexed mesh with per-triangle material and vertex
-//                     normals (once per scene).
+//                     normals (once per scene); meshes of blended materials last.
 //   2. renderGBuffer  the camera is a perspective Frame whose columns are pixels (y up; images are
 //                     y down, flipped on output); a consumer of the one rasterizer keeps the
 //                     nearest centre-sampled fragment per pixel (depth, triangle). Ties go to the
@@ -13,11 +13,11 @@
 //                     light's RGB visibility. Surfaces are lit on both sides; the side facing away
 //                     from a light receives the light that crosses the surface
 //                     (crossingTransmittance: back-lit leaves glow).
-//   4b. volumes       scenes with volume objects or Boolean shapes (scene.volumeScene): ray casting
-//                     over fragment lists from the camera, composited over the shaded image
-//                     (render/volume_pass): volumes sampled, and the visible surfaces of opaque and
-//                     translucent objects (where a Boolean's inside flag changes) shaded like meshes
-//                     and α-blended in depth order.
+//   4b. volumes       scenes with volume objects, Boolean shapes (scene.volumeScene) or meshes of
+//                     blended materials: ray casting over fragment lists from the camera, composited
+//                     over the shaded image (render/volume_pass): volumes sampled, and the visible
+//                     surfaces of opaque and translucent objects (where a Boolean's inside flag
+//                     changes) and of blended meshes shaded like meshes and α-blended in depth order.
 //   5. resolve        box filter of supersample x supersample pixels.
 // Output is linear RGB (writePng encodes sRGB; writePfm keeps HDR). Deterministic for any thread
 // count.
@@ -82,11 +82,15 @@ struct RenderResult {
 };
 
 /// All meshes of a scene as one mesh, with per-triangle material and source mesh and per-vertex
-/// unit normals (given ones, or area-weighted face normals).
+/// unit normals (given ones, or area-weighted face normals). The meshes the G-buffer draws come
+/// first, in scene order; the meshes of blended materials (Material::blend) follow them.
 struct SceneGeometry {
     Mesh mesh;
     std::vector<uint32_t> triangleMaterial, triangleMesh;
     std::vector<Vec3f> normals;
+    /// Triangles [0, drawnTriangles) are drawn by the G-buffer; the rest are blended meshes, which
+    /// the fragment-list pass draws (they still cast shadows and refract in glass like the others).
+    std::size_t drawnTriangles = 0;
 };
 SceneGeometry flattenScene(const Scene& scene);
 

@@ -54,6 +54,12 @@ struct Material {
     float specular = 0.2f;    ///< Blinn–Phong specular weight (glTF: from roughness)
     float shininess = 32;     ///< Blinn–Phong exponent (glTF: 2 / roughness^4 - 2, clamped to [1, 1000])
     bool doubleSided = false; ///< glTF doubleSided (informative: the renderer lights both sides)
+    /// The camera sees through the surface: it is drawn blended by its opacity over what lies behind
+    /// it (glTF alphaMode BLEND; the fragment-list pass draws it, depth-sorted with the volumes).
+    /// False: the camera sees a solid surface even when opacity < 1 (foliage: a leaf whose gaps pass
+    /// light to the shadows but which the eye sees as a leaf; glTF alphaMode MASK). Shadows are the
+    /// same either way.
+    bool blend = false;
 
     /// RGB fraction of the light that passes one crossing of the surface:
     ///   (1 - opacity) + opacity * transmission * baseColor

@@ -57,6 +57,9 @@ struct VolumeSceneObject {
     TransferFunction transfer; ///< Volume kind: value -> colour and opacity
     double opacityLength = 1;  ///< Volume kind: world length the transfer function's opacity is for
     bool castsShadow = true;
+    /// An object made of a scene mesh (volumeSceneOf): the index of its Material in Scene::materials,
+    /// which shades it; -1 otherwise (shaded with `color`).
+    int32_t material = -1;
 };
 
 struct VolumeScene {

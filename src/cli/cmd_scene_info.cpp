@@ -29,7 +29,7 @@ int runSceneInfo(const std::string& path) {
                   << (m.isOpaque()
                           ? std::string("opaque")
                           : "partial occluder, passes " + vec(m.crossingTransmittance()) + " per crossing")
-                  << "\n";
+                  << (m.blend ? ", seen through (blend)" : "") << "\n";
     }
     std::cout << "meshes:\n";
     for (const SceneMesh& m : scene.meshes)

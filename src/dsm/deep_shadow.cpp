@@ -322,12 +322,14 @@ std::vector<DsmNode> deepShadowTexel(const VolumeScene& scene, const LightView& 
     return out;
 }
 
-VolumeScene volumeSceneOf(const Scene& scene) {
+VolumeScene volumeSceneOf(const Scene& scene, SceneMeshes meshes) {
     VolumeScene v;
     for (const SceneMesh& m : scene.meshes) {
         const Material& mat = scene.materials[m.material];
+        if (meshes == SceneMeshes::Blended && !mat.blend) continue;
         VolumeSceneObject o;
         o.name = m.name;
+        o.material = int32_t(m.material);
         o.shape = v.addLeaf(m.mesh);
         o.castsShadow = m.castsShadow;
         o.color = mat.baseColor;

@@ -122,6 +122,7 @@ Material readMaterial(const json& j, std::size_t index, const std::string& path)
     if (alphaMode != "OPAQUE" && alphaMode != "BLEND" && alphaMode != "MASK")
         fail(where, ": unknown alphaMode '", alphaMode, "' (allowed: OPAQUE, BLEND, MASK)");
     m.opacity = alphaMode == "OPAQUE" ? 1.0f : std::clamp(alpha, 0.0f, 1.0f);
+    m.blend = alphaMode == "BLEND";
     m.doubleSided = j.value("doubleSided", false);
     const double roughness = std::clamp(number(pbr, "roughnessFactor", 1.0, where), 0.0, 1.0);
     // Blinn–Phong from roughness: alpha = roughness^2, exponent 2 / alpha^2 - 2 (Walter et al. 2007).

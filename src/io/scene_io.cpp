@@ -80,7 +80,8 @@ std::string str(const json& j, const char* key, const std::string& where) {
 
 Material wrapperMaterial(const json& j, const std::string& where) {
     allowKeys(j,
-              {"name", "baseColor", "opacity", "transmission", "ior", "specular", "shininess", "doubleSided"},
+              {"name", "baseColor", "opacity", "transmission", "ior", "specular", "shininess", "doubleSided",
+               "blend"},
               where);
     Material m;
     m.name = j.contains("name") ? str(j, "name", where) : "material";
@@ -91,6 +92,9 @@ Material wrapperMaterial(const json& j, const std::string& where) {
     m.specular = float(num(j, "specular", m.specular, where));
     m.shininess = float(num(j, "shininess", m.shininess, where));
     m.doubleSided = j.value("doubleSided", false);
+    // A material the author made see-through is drawn see-through, unless "blend": false (foliage).
+    if (j.contains("blend") && !j["blend"].is_boolean()) fail(where, ": \"blend\" must be true or false");
+    m.blend = j.value("blend", m.opacity < 1);
     return m;
 }
 
@@ -279,6 +283,7 @@ struct SceneObjectsParser {
             m.name = out.name;
             m.baseColor = out.color;
             m.opacity = out.opacity;
+            m.blend = true; // the camera sees through a translucent object
             SceneMesh sm;
             sm.name = out.name;
             sm.mesh = std::move(mesh);
@@ -567,9 +572,11 @@ void writeGltf(const Scene& scene, const std::string& path) {
                      {{"baseColorFactor", {m.baseColor.x, m.baseColor.y, m.baseColor.z, m.opacity}},
                       {"metallicFactor", 0.0},
                       {"roughnessFactor", std::clamp(std::sqrt(a), 0.0, 1.0)}}},
-                    {"alphaMode", m.opacity < 1 ? "BLEND" : "OPAQUE"},
+                    // MASK with cutoff 0: drawn solid (foliage), its opacity kept for the shadows.
+                    {"alphaMode", m.opacity < 1 ? (m.blend ? "BLEND" : "MASK") : "OPAQUE"},
                     {"doubleSided", m.doubleSided},
                     {"extras", {{"voxfx", {{"specular", m.specular}, {"shininess", m.shininess}}}}}};
+        if (m.opacity < 1 && !m.blend) mat["alphaCutoff"] = 0.0;
         json matExt = json::object();
         if (m.transmission > 0) {
             matExt["KHR_materials_transmission"] = {{"transmissionFactor", m.transmission}};

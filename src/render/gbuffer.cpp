@@ -51,8 +51,18 @@ SceneGeometry flattenScene(const Scene& scene) {
     g.normals.reserve(vertices);
     g.triangleMaterial.reserve(triangles);
     g.triangleMesh.reserve(triangles);
-    for (std::size_t k = 0; k < scene.meshes.size(); ++k) {
+    // The G-buffer draws a prefix of the triangles: meshes of blended materials go last.
+    auto blended = [&](const SceneMesh& m) {
+        return m.material < scene.materials.size() && scene.materials[m.material].blend;
+    };
+    std::vector<std::size_t> order;
+    order.reserve(scene.meshes.size());
+    for (int pass = 0; pass < 2; ++pass)
+        for (std::size_t k = 0; k < scene.meshes.size(); ++k)
+            if (blended(scene.meshes[k]) == (pass == 1)) order.push_back(k);
+    for (const std::size_t k : order) {
         const SceneMesh& m = scene.meshes[k];
+        if (!blended(m)) g.drawnTriangles += m.mesh.triangleCount();
         const auto base = uint32_t(g.mesh.positions.size());
         g.mesh.positions.insert(g.mesh.positions.end(), m.mesh.positions.begin(), m.mesh.positions.end());
         for (const uint32_t i : m.mesh.indices) g.mesh.indices.push_back(base + i);
@@ -89,11 +99,13 @@ GBuffer renderGBuffer(const SceneGeometry& geometry, const Frame& camera, Progre
     g.frame = camera;
     g.depth.assign(size_t(camera.columnCount()), std::numeric_limits<float>::infinity());
     g.triangle.assign(size_t(camera.columnCount()), GBuffer::kNone);
-    if (geometry.mesh.indices.empty()) return g;
+    if (geometry.drawnTriangles == 0) return g;
     NearestFragmentConsumer consumer{camera.width(), camera.nearDepth(), g};
     RasterOptions ro;
     ro.progress = progress;
-    rasterize(camera, geometry.mesh.view(), ro, consumer);
+    MeshView drawn = geometry.mesh.view();
+    drawn.triangleCount = geometry.drawnTriangles;
+    rasterize(camera, drawn, ro, consumer);
     return g;
 }
 

@@ -6,8 +6,10 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "render/shading.hpp"
+#include "voxfx/deep_shadow.hpp"
 
 namespace voxfx::detail {
 
@@ -116,8 +118,16 @@ std::vector<std::vector<ObjectSurfaceHit>> objectSurfaceHits(const VolumeScene& 
 
 int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::vector<LightShadow>& shadows,
                          const RenderOptions& options, std::vector<Vec3f>& shaded, Progress* progress) {
-    if (!scene.volumeScene || scene.volumeScene->objects.empty()) return 0;
-    const VolumeScene& vs = *scene.volumeScene;
+    // What the camera draws here: the volume scene's objects, and the meshes of blended materials
+    // (left out of the G-buffer) as translucent objects.
+    const bool anyBlended = std::any_of(scene.meshes.begin(), scene.meshes.end(), [&](const SceneMesh& m) {
+        return m.material < scene.materials.size() && scene.materials[m.material].blend;
+    });
+    std::optional<VolumeScene> merged;
+    if (anyBlended) merged.emplace(volumeSceneOf(scene, SceneMeshes::Blended));
+    const VolumeScene* chosen = merged ? &*merged : scene.volumeScene.get();
+    if (!chosen || chosen->objects.empty()) return 0;
+    const VolumeScene& vs = *chosen;
     double spacing = std::numeric_limits<double>::infinity();
     for (const VolumeSceneObject& o : vs.objects)
         if (o.kind == ObjectKind::Volume) {
@@ -125,12 +135,15 @@ int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::
             spacing = std::min({spacing, s.x, s.y, s.z});
         }
     const double step = spacing * options.volumeStep;
-    // Opaque and translucent objects are shaded as meshes of their colour and opacity.
+    // Opaque and translucent objects are shaded as meshes of their colour and opacity (a blended
+    // mesh with its own material).
     std::vector<Material> materials(vs.objects.size());
     for (std::size_t o = 0; o < vs.objects.size(); ++o) {
-        materials[o].name = vs.objects[o].name;
-        materials[o].baseColor = vs.objects[o].color;
-        materials[o].opacity = vs.objects[o].kind == ObjectKind::Translucent ? vs.objects[o].opacity : 1.0f;
+        const VolumeSceneObject& obj = vs.objects[o];
+        if (obj.material >= 0) materials[o] = scene.materials[std::size_t(obj.material)];
+        materials[o].name = obj.name;
+        materials[o].baseColor = obj.color;
+        materials[o].opacity = obj.kind == ObjectKind::Translucent ? obj.opacity : 1.0f;
     }
     const ObjectSurfaces surfaces(vs);
     const Frame& f = gbuffer.frame;

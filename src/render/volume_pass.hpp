@@ -1,6 +1,6 @@
 // voxfx — the volume ray-casting pass (internal): the objects of the scene's VolumeScene composited
-// over the shaded G-buffer (Bornik et al. §3): volumes, and opaque and translucent objects whose
-// shapes are Booleans (the G-buffer draws only plain meshes).
+// over the shaded G-buffer (Bornik et al. §3): volumes, opaque and translucent objects whose shapes
+// are Booleans, and meshes of blended materials (the G-buffer draws only the other plain meshes).
 #pragma once
 
 #include <vector>
@@ -20,8 +20,10 @@ namespace voxfx::detail {
 /// voxel spacings and composited front to back (sample opacity 1 - (1 - α)^(dl / opacityLength),
 /// colour = transfer colour × (ambient + Σ lights irradiance × shadow visibility / π)). The walk
 /// stops when the accumulated opacity reaches 0.999, and the result is blended over `shaded`
-/// (row-major, y up). Returns the number of volume samples taken. Nothing happens when the scene
-/// has no volume scene objects.
+/// (row-major, y up). The meshes of blended materials (Material::blend), which the G-buffer leaves
+/// out, are walked here too, as translucent objects shaded with their own material. Returns the
+/// number of volume samples taken. Nothing happens when the scene has neither volume scene objects
+/// nor blended meshes.
 int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::vector<LightShadow>& shadows,
                          const RenderOptions& options, std::vector<Vec3f>& shaded, Progress* progress);
 
