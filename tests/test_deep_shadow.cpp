@@ -679,7 +679,10 @@ TEST(DeepShadowSceneFileTest, ObjectsWithVolumesTransferFunctionsAndBooleanShape
         {R"({"name": "e", "kind": "opaque", "shape": {"difference": [{"box": [[0,0,0],[1,1,1]]}]}})",
          "two shapes"},
         {R"({"name": "f", "kind": "translucent", "opacity": 1.5, "shape": {"box": [[0,0,0],[1,1,1]]}})",
-         "opacity"}};
+         "opacity"},
+        {R"({"name": "g", "kind": "volume", "volume": {"smoke": {"frequency": -1}}, "transfer": "tf.json"})",
+         "objects[0] 'g'.volume.smoke: smoke frequency"},
+        {R"({"name": "h", "kind": "opaque", "shape": {"mesh": "gone.off"}})", "gone.off"}};
     for (const auto& [object, message] : bad) {
         test::writeFile(dir.file("bad.json"), std::string(R"({"objects": [)") + object + "]}");
         try {
@@ -687,6 +690,8 @@ TEST(DeepShadowSceneFileTest, ObjectsWithVolumesTransferFunctionsAndBooleanShape
             ADD_FAILURE() << "accepted " << object;
         } catch (const Error& e) {
             EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+            // Files it names and generators it calls fail with the scene file's name too.
+            EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
         }
     }
 }

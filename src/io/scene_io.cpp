@@ -25,6 +25,14 @@ namespace {
 
 // ---- JSON wrapper --------------------------------------------------------------------------------
 
+// What a file the scene names or a generator it calls throws, prefixed with where in the scene
+// file it was asked for (the scene's path and the entry).
+template <class F> auto inScene(const std::string& where, F&& f) -> decltype(f()) {
+    try {
+        return f();
+    } catch (const Error& e) { fail(where, ": ", e.what()); }
+}
+
 void allowKeys(const json& j, std::initializer_list<const char*> keys, const std::string& where) {
     if (!j.is_object()) fail(where, ": expected a JSON object");
     for (const auto& [key, value] : j.items()) {
@@ -125,6 +133,18 @@ Mat4d wrapperTransform(const json& j, const std::string& where) {
     return t * r * s;
 }
 
+// Moves the mesh by xf; a mirroring transform (negative determinant) reverses the triangles'
+// winding so that they keep facing out.
+void placeMesh(Mesh& mesh, const Mat4d& xf) {
+    for (Vec3f& p : mesh.positions) p = Vec3f(xf.point(Vec3d(p)));
+    const double det = xf.m[0][0] * (xf.m[1][1] * xf.m[2][2] - xf.m[1][2] * xf.m[2][1]) -
+                       xf.m[0][1] * (xf.m[1][0] * xf.m[2][2] - xf.m[1][2] * xf.m[2][0]) +
+                       xf.m[0][2] * (xf.m[1][0] * xf.m[2][1] - xf.m[1][1] * xf.m[2][0]);
+    if (det < 0)
+        for (std::size_t t = 0; t < mesh.indices.size(); t += 3)
+            std::swap(mesh.indices[t + 1], mesh.indices[t + 2]);
+}
+
 // ---- volume objects and Boolean shapes (deep shadow maps) ---------------------------------------
 
 struct SceneObjectsParser {
@@ -157,15 +177,8 @@ struct SceneObjectsParser {
         Mesh mesh;
         if (j.contains("mesh")) {
             allowKeys(j, {"mesh", "translate", "scale", "rotate"}, where);
-            mesh = loadMesh(resolve(str(j, "mesh", where)));
-            const Mat4d xf = wrapperTransform(j, where);
-            for (Vec3f& p : mesh.positions) p = Vec3f(xf.point(Vec3d(p)));
-            const double det = xf.m[0][0] * (xf.m[1][1] * xf.m[2][2] - xf.m[1][2] * xf.m[2][1]) -
-                               xf.m[0][1] * (xf.m[1][0] * xf.m[2][2] - xf.m[1][2] * xf.m[2][0]) +
-                               xf.m[0][2] * (xf.m[1][0] * xf.m[2][1] - xf.m[1][1] * xf.m[2][0]);
-            if (det < 0)
-                for (std::size_t t = 0; t < mesh.indices.size(); t += 3)
-                    std::swap(mesh.indices[t + 1], mesh.indices[t + 2]);
+            mesh = inScene(where, [&] { return loadMesh(resolve(str(j, "mesh", where))); });
+            placeMesh(mesh, wrapperTransform(j, where));
         } else if (j.contains("box")) {
             allowKeys(j, {"box"}, where);
             const json& b = j["box"];
@@ -206,13 +219,14 @@ struct SceneObjectsParser {
             const json& v = o["volume"];
             Volume volume;
             if (v.is_string()) {
-                volume = loadVolume(resolve(v.get<std::string>()));
+                volume = inScene(where, [&] { return loadVolume(resolve(v.get<std::string>())); });
             } else if (v.is_object() && v.contains("file")) {
                 // {"file": "smoke.vdb", "grid": "density"}: a named grid of an OpenVDB file.
                 allowKeys(v, {"file", "grid"}, where + ".volume");
                 VolumeLoadOptions lo;
                 if (v.contains("grid")) lo.vdbGrid = str(v, "grid", where + ".volume");
-                volume = loadVolume(resolve(str(v, "file", where + ".volume")), lo);
+                volume = inScene(where,
+                                 [&] { return loadVolume(resolve(str(v, "file", where + ".volume")), lo); });
             } else if (v.is_object() && v.contains("smoke")) {
                 const json& sm = v["smoke"];
                 allowKeys(sm, {"dims", "box", "seed", "octaves", "frequency"}, where + ".volume.smoke");
@@ -235,7 +249,7 @@ struct SceneObjectsParser {
                     uint32_t(wholeNumber(num(sm, "seed", p.seed, where), 0, 4294967295.0, "seed", where));
                 p.octaves = int(wholeNumber(num(sm, "octaves", p.octaves, where), 1, 16, "octaves", where));
                 p.frequency = num(sm, "frequency", p.frequency, where);
-                volume = makeSmoke(p);
+                volume = inScene(where + ".volume.smoke", [&] { return makeSmoke(p); });
             } else {
                 fail(
                     where,
@@ -250,8 +264,10 @@ struct SceneObjectsParser {
             placed.values() = std::move(volume.values());
             if (!o.contains("transfer")) fail(where, ": a volume object needs \"transfer\"");
             const json& t = o["transfer"];
-            out.transfer = t.is_string() ? loadTransferFunction(resolve(t.get<std::string>()))
-                                         : parseTransferFunction(t.dump(), where + ".transfer");
+            out.transfer =
+                t.is_string()
+                    ? inScene(where, [&] { return loadTransferFunction(resolve(t.get<std::string>())); })
+                    : parseTransferFunction(t.dump(), where + ".transfer");
             const Vec3d sp = placed.spacing();
             out.opacityLength = num(o, "opacityLength", std::min({sp.x, sp.y, sp.z}), where);
             const Box3d box = placed.box();
@@ -335,17 +351,10 @@ Scene parseWrapper(std::string_view text, const std::string& path) {
             allowKeys(m, {"file", "name", "translate", "scale", "rotate", "material", "castsShadow"}, where);
             if (!m.contains("file")) fail(where, ": needs \"file\"");
             SceneMesh out;
-            out.mesh = loadMesh(resolve(str(m, "file", where)));
+            out.mesh = inScene(where, [&] { return loadMesh(resolve(str(m, "file", where))); });
             out.name = m.contains("name") ? str(m, "name", where)
                                           : std::filesystem::path(str(m, "file", where)).stem().string();
-            const Mat4d xf = wrapperTransform(m, where);
-            for (Vec3f& p : out.mesh.positions) p = Vec3f(xf.point(Vec3d(p)));
-            const double det = xf.m[0][0] * (xf.m[1][1] * xf.m[2][2] - xf.m[1][2] * xf.m[2][1]) -
-                               xf.m[0][1] * (xf.m[1][0] * xf.m[2][2] - xf.m[1][2] * xf.m[2][0]) +
-                               xf.m[0][2] * (xf.m[1][0] * xf.m[2][1] - xf.m[1][1] * xf.m[2][0]);
-            if (det < 0)
-                for (std::size_t t = 0; t < out.mesh.indices.size(); t += 3)
-                    std::swap(out.mesh.indices[t + 1], out.mesh.indices[t + 2]);
+            placeMesh(out.mesh, wrapperTransform(m, where));
             out.material = m.contains("material")
                                ? scene.addMaterial(wrapperMaterial(m["material"], where + ".material"))
                                : defaultIndex();
