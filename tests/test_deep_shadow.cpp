@@ -637,6 +637,58 @@ TEST(DeepShadowRenderTest, RayCastingCompositesVolumesOverTheImageAndOnlyThere) 
     EXPECT_GT(same, 500);
 }
 
+TEST(DeepShadowEmptySpaceTest, SkippedSamplesAreTransparentAndSkippingChangesNoPixel) {
+    // maxOpacity against the opacity sampled densely over random intervals (an upper bound that
+    // the curve reaches).
+    const TransferFunction tf = dsmrSmokeTransfer();
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-0.3, 1.3);
+    for (int i = 0; i < 200; ++i) {
+        double a = u(rng), b = u(rng);
+        if (a > b) std::swap(a, b);
+        double dense = 0;
+        for (int k = 0; k <= 400; ++k)
+            dense = std::max(dense, tf.opacity(std::min(b, a + (b - a) * k / 400.0)));
+        EXPECT_GE(tf.maxOpacity(a, b), dense);
+        EXPECT_LE(tf.maxOpacity(a, b), dense + 0.6 * (b - a) / 400.0 / 0.9 + 1e-12);
+    }
+    // Every point the brick map calls empty samples to opacity 0 (random points, and points on
+    // brick and voxel boundaries); the map is not trivially "never".
+    SmokeParams sp;
+    sp.dims = {21, 18, 20};
+    sp.box = {{-1, 0.5, -1}, {1, 1.5, 1}};
+    const Volume smoke = makeSmoke(sp);
+    const EmptySpace es(smoke, tf);
+    EXPECT_GT(es.emptyFraction(), 0.2);
+    std::uniform_real_distribution<double> x(-1.1, 1.1), y(0.4, 1.6), fz(-1.1, 1.1);
+    int64_t empty = 0;
+    for (int i = 0; i < 20000; ++i) {
+        Vec3d p{x(rng), y(rng), fz(rng)};
+        if (i % 2) // snap one coordinate to a voxel boundary (every brick boundary is one)
+            for (int a = 0; a < 3; ++a)
+                if (i % 6 == 2 * a + 1)
+                    p[a] = smoke.lo()[a] +
+                           smoke.spacing()[a] * std::round((p[a] - smoke.lo()[a]) / smoke.spacing()[a]);
+        if (!es.empty(p)) continue;
+        ++empty;
+        ASSERT_EQ(tf.opacity(smoke.sample(p)), 0.0) << p.x << ", " << p.y << ", " << p.z;
+    }
+    EXPECT_GT(empty, 2000);
+    // Rendering and deep shadows with and without skipping: the same pixels, fewer samples.
+    const Scene scene = dsmrGroundAndSmoke(true);
+    RenderOptions o;
+    o.width = 48;
+    o.height = 36;
+    o.shadow.kind = ShadowKind::Deep;
+    o.shadow.dsmResolution = 48;
+    const RenderResult skipping = render(scene, scene.cameras[0], o);
+    o.skipEmptySpace = o.shadow.dsmSkipEmptySpace = false;
+    const RenderResult sampling = render(scene, scene.cameras[0], o);
+    EXPECT_LT(skipping.volumeSamples, sampling.volumeSamples);
+    EXPECT_EQ(skipping.deepShadowStats.nodes, sampling.deepShadowStats.nodes);
+    EXPECT_EQ(skipping.image.pixels, sampling.image.pixels);
+}
+
 TEST(DeepShadowSceneFileTest, ObjectsWithVolumesTransferFunctionsAndBooleanShapesLoad) {
     test::TempDir dir;
     test::writeFile(dir.file("cube.off"),

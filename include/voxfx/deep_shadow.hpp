@@ -40,6 +40,9 @@ struct DeepShadowOptions {
     /// d0: objects whose light-space projected boxes differ by at most this (fraction of the
     /// light view's side) share a cluster.
     double clusterThreshold = 0.2;
+    /// Volume bricks the transfer function leaves transparent are not sampled (EmptySpace in
+    /// voxfx/volume_scene.hpp); the map is the same either way, only faster.
+    bool skipEmptySpace = true;
 };
 
 /// The paper's clustering heuristic on boxes (any 2D extent, e.g. light-space projected boxes):

@@ -83,7 +83,8 @@ struct ShadowOptions {
     int64_t dsmResolution = 512;
     double dsmEpsilon = 0.05;
     DsmStorage dsmStorage = DsmStorage::Chunked;
-    int dsmClusters = 0; ///< deep: at most this many clustered maps per light (0, 1: off)
+    int dsmClusters = 0;           ///< deep: at most this many clustered maps per light (0, 1: off)
+    bool dsmSkipEmptySpace = true; ///< deep: DeepShadowOptions::skipEmptySpace
 };
 
 /// One view of a light: a frame over world space (perspective, or oriented orthographic for

@@ -54,6 +54,12 @@ public:
     /// transparent black (colour 0, opacity 0).
     Rgba operator()(double value) const;
 
+    /// An upper bound of the opacity over the values [lo, hi], exact for this piecewise-linear
+    /// curve: the larger end, or a control point between them (0 for a default-constructed
+    /// function). Empty-space skipping reads it: a region whose values span [lo, hi] is invisible
+    /// when it is 0.
+    double maxOpacity(double lo, double hi) const;
+
     /// Range of values spanned by the control points (first to last of both curves).
     double minValue() const;
     double maxValue() const;

@@ -19,7 +19,7 @@ struct RenderArgs {
     std::string dsmStorage = "chunked";
     int64_t dsmResolution = 512;
     int clusters = 0;
-    bool quiet = false, bilinear = false, noVolumeCulling = false;
+    bool quiet = false, bilinear = false, noVolumeCulling = false, noEmptySpaceSkipping = false;
 };
 
 void printTimings(const RenderResult& r, const std::string& output) {
@@ -78,6 +78,7 @@ int runRender(const RenderArgs& a) {
     o.shadow.dsmStorage = parseDsmStorage(a.dsmStorage);
     o.shadow.dsmResolution = a.dsmResolution;
     o.shadow.dsmClusters = a.clusters;
+    o.skipEmptySpace = o.shadow.dsmSkipEmptySpace = !a.noEmptySpaceSkipping;
     if (s.ambient.x >= 0) o.ambient = s.ambient;
     if (s.background.x >= 0) o.background = s.background;
     o.exposure = float(a.exposure);
@@ -233,6 +234,9 @@ const Command kRender{
         app.add_flag("--bilinear", a->bilinear, "Interpolate light-grid lookups between 4 columns (softer)");
         app.add_flag("--no-volume-culling", a->noVolumeCulling,
                      "Shadow volumes: no culling or clamping (the same image, more fragments)");
+        app.add_flag("--no-empty-space-skipping", a->noEmptySpaceSkipping,
+                     "Volumes: sample the bricks the transfer function leaves transparent too (the same "
+                     "image, slower; for timing)");
         app.add_flag("-q,--quiet", a->quiet, "No summary or progress");
         return std::function<int()>([a] { return runRender(*a); });
     }};

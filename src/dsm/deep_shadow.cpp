@@ -26,6 +26,9 @@ struct DeepShadowView {
     const FragmentLists* lists;
     DeepShadowOptions options;
     double step; // world sample step inside volumes
+    /// Per object, the bricks whose samples are transparent; null: sample everywhere (the
+    /// reference deepShadowTexel keeps, so that tests compare the skipping build against it).
+    const std::vector<EmptySpace>* emptySpace = nullptr;
 
     // Feeds texel (x, y) into the builder.
     void texel(int64_t x, int64_t y, VisibilityBuilder& b) const {
@@ -61,6 +64,7 @@ struct DeepShadowView {
                     for (std::size_t o = 0; o < inside.size(); ++o) {
                         const VolumeSceneObject& obj = scene->objects[o];
                         if (!inside[o] || obj.kind != ObjectKind::Volume) continue;
+                        if (emptySpace && (*emptySpace)[o].empty(p)) continue; // adds sigma 0
                         const float value = scene->volumes[std::size_t(obj.volume)]->sample(p);
                         const double a = std::min(obj.transfer.opacity(double(value)), 1.0 - 1e-7);
                         sigma += -std::log1p(-a) / obj.opacityLength;
@@ -225,13 +229,15 @@ DeepShadow DeepShadow::build(const VolumeScene& scene, std::vector<LightView> vi
     out.groupBegin_ = {0, out.views_.size()};
     const FlatLeaves leaves = flattenLeaves(scene, true);
     const double step = deepShadowStep(scene, options);
+    const std::vector<EmptySpace> emptySpace =
+        options.skipEmptySpace ? emptySpaceOf(scene) : std::vector<EmptySpace>(scene.objects.size());
     for (const LightView& v : out.views_) {
         auto t0 = std::chrono::steady_clock::now();
         // Directional views are oriented orthographic frames: the world mesh rasterizes directly.
         const FragmentLists lists = FragmentLists::build(v.frame, leaves.mesh.view(), progress);
         out.timings_.fragmentsMs += deepShadowMsSince(t0);
         t0 = std::chrono::steady_clock::now();
-        const DeepShadowView ctx{&scene, &v, &leaves, &lists, options, step};
+        const DeepShadowView ctx{&scene, &v, &leaves, &lists, options, step, &emptySpace};
         DsmBuildOptions bo;
         bo.epsilon = options.epsilon;
         bo.fixedNodes = options.fixedNodes;

@@ -131,6 +131,7 @@ LightShadow LightShadow::build(const Scene& scene, const Light& light, const Sha
         d.epsilon = options.dsmEpsilon;
         d.storage = options.dsmStorage;
         d.clusters = options.dsmClusters;
+        d.skipEmptySpace = options.dsmSkipEmptySpace;
         out.deep_ =
             std::make_shared<const DeepShadow>(DeepShadow::build(volumeSceneOf(scene), light, d, progress));
         t.mapMs += msSince(t0);

@@ -67,6 +67,14 @@ Rgba TransferFunction::operator()(double value) const {
     return {float(c.x), float(c.y), float(c.z), float(opacity(value))};
 }
 
+double TransferFunction::maxOpacity(double lo, double hi) const {
+    if (opacity_.empty()) return 0;
+    double m = std::max(opacity(lo), opacity(hi));
+    for (const OpacityPoint& p : opacity_)
+        if (p.value >= lo && p.value <= hi) m = std::max(m, p.opacity);
+    return m;
+}
+
 double TransferFunction::minValue() const {
     if (color_.empty()) return 0;
     return std::min(color_.front().value, opacity_.front().value);

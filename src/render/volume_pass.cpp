@@ -146,6 +146,8 @@ int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::
         materials[o].opacity = obj.kind == ObjectKind::Translucent ? obj.opacity : 1.0f;
     }
     const ObjectSurfaces surfaces(vs);
+    const std::vector<EmptySpace> emptySpace =
+        options.skipEmptySpace ? emptySpaceOf(vs) : std::vector<EmptySpace>(vs.objects.size());
     const Frame& f = gbuffer.frame;
     const FragmentLists lists = FragmentLists::build(f, surfaces.flat.mesh.view(), progress);
     const int64_t W = f.width(), H = f.height();
@@ -194,9 +196,14 @@ int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::
                             for (std::size_t o = 0; o < inside.size(); ++o) {
                                 const VolumeSceneObject& obj = vs.objects[o];
                                 if (!inside[o] || obj.kind != ObjectKind::Volume) continue;
-                                const Rgba c = obj.transfer(vs.volumes[std::size_t(obj.volume)]->sample(p));
+                                if (emptySpace[o].empty(p)) continue; // would be transparent
+                                const double value = vs.volumes[std::size_t(obj.volume)]->sample(p);
                                 ++local;
-                                if (c.a <= 0) continue;
+                                // Opacity first: the colour only where something shows.
+                                const float alpha = float(obj.transfer.opacity(value));
+                                if (alpha <= 0) continue;
+                                const Vec3d tc = obj.transfer.color(value);
+                                const Rgba c{float(tc.x), float(tc.y), float(tc.z), alpha};
                                 const double a = 1.0 - std::pow(1.0 - std::min(double(c.a), 1.0 - 1e-7),
                                                                 dl / obj.opacityLength);
                                 Vec3f light = options.ambient;
