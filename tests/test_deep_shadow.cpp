@@ -658,22 +658,29 @@ TEST(DeepShadowEmptySpaceTest, SkippedSamplesAreTransparentAndSkippingChangesNoP
     sp.dims = {21, 18, 20};
     sp.box = {{-1, 0.5, -1}, {1, 1.5, 1}};
     const Volume smoke = makeSmoke(sp);
-    const EmptySpace es(smoke, tf);
-    EXPECT_GT(es.emptyFraction(), 0.2);
-    std::uniform_real_distribution<double> x(-1.1, 1.1), y(0.4, 1.6), fz(-1.1, 1.1);
-    int64_t empty = 0;
-    for (int i = 0; i < 20000; ++i) {
-        Vec3d p{x(rng), y(rng), fz(rng)};
-        if (i % 2) // snap one coordinate to a voxel boundary (every brick boundary is one)
-            for (int a = 0; a < 3; ++a)
-                if (i % 6 == 2 * a + 1)
-                    p[a] = smoke.lo()[a] +
-                           smoke.spacing()[a] * std::round((p[a] - smoke.lo()[a]) / smoke.spacing()[a]);
-        if (!es.empty(p)) continue;
-        ++empty;
-        ASSERT_EQ(tf.opacity(smoke.sample(p)), 0.0) << p.x << ", " << p.y << ", " << p.z;
+    Volume turned = smoke; // and the same turned 40 degrees about z (about its lo corner)
+    const double c = std::cos(0.7), n = std::sin(0.7);
+    turned.setAxes({c, n, 0}, {-n, c, 0}, {0, 0, 1});
+    for (const Volume* v : {&smoke, static_cast<const Volume*>(&turned)}) {
+        const EmptySpace es(*v, tf);
+        EXPECT_GT(es.emptyFraction(), 0.2);
+        const Box3d box = v->box();
+        std::uniform_real_distribution<double> x(box.lo.x, box.hi.x), y(box.lo.y, box.hi.y),
+            fz(box.lo.z, box.hi.z);
+        int64_t empty = 0;
+        for (int i = 0; i < 20000; ++i) {
+            Vec3d p{x(rng), y(rng), fz(rng)};
+            if (i % 2) { // snap one voxel coordinate to a voxel boundary (every brick boundary is one)
+                const int a = (i / 2) % 3;
+                const double w = v->view().voxelCoordinate(p, a);
+                p = p + v->axis(a) * ((std::round(w) - w) * v->spacing()[a]);
+            }
+            if (!es.empty(p)) continue;
+            ++empty;
+            ASSERT_EQ(tf.opacity(v->sample(p)), 0.0) << p.x << ", " << p.y << ", " << p.z;
+        }
+        EXPECT_GT(empty, 2000);
     }
-    EXPECT_GT(empty, 2000);
     // Rendering and deep shadows with and without skipping: the same pixels, fewer samples.
     const Scene scene = dsmrGroundAndSmoke(true);
     RenderOptions o;
@@ -687,6 +694,45 @@ TEST(DeepShadowEmptySpaceTest, SkippedSamplesAreTransparentAndSkippingChangesNoP
     EXPECT_LT(skipping.volumeSamples, sampling.volumeSamples);
     EXPECT_EQ(skipping.deepShadowStats.nodes, sampling.deepShadowStats.nodes);
     EXPECT_EQ(skipping.image.pixels, sampling.image.pixels);
+}
+
+TEST(DeepShadowSceneFileTest, VolumeObjectsTurnWithRotateAndKeepTheirSamples) {
+    // The same smoke placed plainly and scaled, turned 90 degrees about z and moved: every sample
+    // of the plain one is found at its turned place, and the default shape is the turned box.
+    test::TempDir dir;
+    auto load = [&](const std::string& placement) {
+        test::writeFile(dir.file("s.json"), R"({"objects": [{"name": "smoke", "kind": "volume",
+            "volume": {"smoke": {"dims": [6, 7, 8], "box": [[0, 0, 0], [1, 2, 1]]}},
+            "transfer": {"opacity": [[0, 0], [1, 1]], "color": [[0, 1, 1, 1]]})" +
+                                                placement + "}]}");
+        return loadScene(dir.file("s.json"));
+    };
+    const Scene plain = load(R"(, "scale": 2)");
+    const Scene turned = load(R"(, "scale": 2, "rotate": [0, 0, 1, 90], "translate": [5, 0, 0])");
+    const Volume& a = *plain.volumeScene->volumes[0];
+    const Volume& b = *turned.volumeScene->volumes[0];
+    auto place = [](const Vec3d& p) { return Vec3d{5 - p.y, p.x, p.z}; };
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-0.2, 4.2);
+    for (int i = 0; i < 2000; ++i) {
+        const Vec3d p{u(rng) / 2, u(rng), u(rng) / 2};
+        ASSERT_NEAR(b.sample(place(p), -1.0f), a.sample(p, -1.0f), 1e-5) << p.x << ", " << p.y << ", " << p.z;
+    }
+    const Mesh& box = turned.volumeScene->leaves[0];
+    ASSERT_EQ(box.positions.size(), 8u);
+    double volume6 = 0; // six times the signed volume: positive when the faces point out
+    for (std::size_t t = 0; t < box.indices.size(); t += 3) {
+        const Vec3d p0(box.positions[box.indices[t]]), p1(box.positions[box.indices[t + 1]]),
+            p2(box.positions[box.indices[t + 2]]);
+        volume6 += dot(p0, cross(p1, p2));
+    }
+    EXPECT_NEAR(volume6 / 6, 2.0 * 4.0 * 2.0, 1e-4);
+    for (const Vec3f& q : box.positions) { // each corner is a turned corner of the plain box
+        bool found = false;
+        for (const Vec3f& r : plain.volumeScene->leaves[0].positions)
+            found = found || length(Vec3d(q) - place(Vec3d(r))) < 1e-5;
+        EXPECT_TRUE(found) << q.x << ", " << q.y << ", " << q.z;
+    }
 }
 
 TEST(DeepShadowSceneFileTest, ObjectsWithVolumesTransferFunctionsAndBooleanShapesLoad) {

@@ -382,6 +382,41 @@ TEST(VolumeIo, NrrdNegativeDirectionIsMirroredSoEverySampleKeepsItsWorldPosition
             }
 }
 
+TEST(VolumeIo, NrrdObliqueDirectionsTurnTheVolumeSoEverySampleKeepsItsWorldPosition) {
+    // Directions turned 30 degrees about z (voxel sizes 2, 1, 0.5): voxel (i, j, k)'s centre is
+    // origin + i d0 + j d1 + k d2, computed here from the header's numbers.
+    TempDir dir;
+    const Samples s = makeSamples(ScalarType::Int16, 60, false);
+    const double c = std::cos(M_PI / 6), n = std::sin(M_PI / 6);
+    const Vec3d d0{2 * c, 2 * n, 0}, d1{-n, c, 0}, d2{0, 0, 0.5}, origin{10, 0, 7};
+    char directions[256];
+    std::snprintf(directions, sizeof directions,
+                  "space directions: (%.17g,%.17g,0) (%.17g,%.17g,0) (0,0,0.5)\nspace origin: (10,0,7)\n",
+                  d0.x, d0.y, d1.x, d1.y);
+    const Volume v = loadVolume(
+        writeFile(dir.file("oblique.nrrd"), nrrdHeader("short", false, "raw", directions) + s.bytes));
+    ASSERT_EQ(v.dims(), kDims);
+    EXPECT_FALSE(v.axisAligned());
+    expectVecNear(v.spacing(), {2, 1, 0.5}, 1e-12);
+    for (int64_t k = 0; k < 5; ++k)
+        for (int64_t j = 0; j < 4; ++j)
+            for (int64_t i = 0; i < 3; ++i) {
+                const Vec3d world = origin + d0 * double(i) + d1 * double(j) + d2 * double(k);
+                expectVecNear(v.voxelCenter(i, j, k), world, 1e-9);
+                const float want = s.expected[std::size_t(i + 3 * (j + 4 * k))];
+                EXPECT_EQ(v.at(i, j, k), want);
+                EXPECT_NEAR(v.sample(world), want, 1e-6 * (1 + std::fabs(want)));
+            }
+    // The box holds every corner; a point beyond the turned box samples "outside".
+    const Box3d b = v.box();
+    for (const Vec3d& corner : {origin - (d0 + d1 + d2) * 0.5, origin + d0 * 2.5 + d1 * 3.5 + d2 * 4.5})
+        for (int a = 0; a < 3; ++a) {
+            EXPECT_GE(corner[a], b.lo[a] - 1e-9);
+            EXPECT_LE(corner[a], b.hi[a] + 1e-9);
+        }
+    EXPECT_EQ(v.sample(origin - d0, -7.0f), -7.0f);
+}
+
 TEST(VolumeIo, NrrdDetachedHeaderSpacingsAndSkipsRead) {
     TempDir dir;
     const Samples s = makeSamples(ScalarType::UInt16, 60, true);
@@ -556,7 +591,7 @@ TEST(VolumeIo, BadNrrdGivesAnErrorNamingTheFileAndTheProblem) {
          "2^40"},
         {"rotated.nrrd",
          nrrdHeader("uchar", false, "raw", "space directions: (1,1,0) (0,1,0) (0,0,1)\n") + data,
-         "axis-aligned"},
+         "orthogonal"},
         {"flat.nrrd", nrrdHeader("uchar", false, "raw", "spacings: 1 0 1\n") + data, "positive"},
         {"nodata.nrrd", nrrdHeader("uchar", false, "raw", ""), "no data"},
         {"missing.nhdr", nrrdHeader("uchar", false, "raw", "data file: nowhere.raw\n"), "nowhere.raw"},

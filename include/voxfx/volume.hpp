@@ -3,6 +3,9 @@
 // Placement follows VoxelGrid's convention: voxel (i, j, k) covers
 //     [lo + (i, j, k) * spacing, lo + (i + 1, j + 1, k + 1) * spacing]
 // and its value is the sample at the voxel's centre, lo + (i + 0.5, j + 0.5, k + 0.5) * spacing.
+// A volume may also be turned (setAxes: NRRD's oblique "space directions", a scene's "rotate"):
+// the voxel axes i, j, k then run along orthonormal world directions axes[0..2], and the centre
+// of voxel (i, j, k) is lo + axes[0] (i + 0.5) spacing.x + axes[1] (j + 0.5) spacing.y + ...
 // Values are stored as float, x fastest: index = i + nx * (j + ny * k), the order of INR, NRRD
 // and raw files; the scalar type the file stored is kept in sourceType().
 //
@@ -15,6 +18,7 @@
 
 #include "voxfx/frame.hpp"
 #include "voxfx/math.hpp"
+#include "voxfx/mesh.hpp"
 
 namespace voxfx {
 
@@ -39,8 +43,16 @@ struct VolumeView {
     int64_t nx = 0, ny = 0, nz = 0;
     Vec3d lo{0, 0, 0};
     Vec3d spacing{1, 1, 1};
+    /// World directions of the voxel axes i, j, k (orthonormal; the world axes unless turned).
+    Vec3d axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
 
     VOXFX_HOSTDEV float at(int64_t i, int64_t j, int64_t k) const { return values[i + nx * (j + ny * k)]; }
+    /// Continuous voxel coordinate of world point p along voxel axis a (0 at the volume's lo face,
+    /// n at the far one). For the world axes the products with 0 and 1 are exact: (p - lo)[a].
+    VOXFX_HOSTDEV double voxelCoordinate(const Vec3d& p, int a) const {
+        const Vec3d d = p - lo;
+        return (d.x * axes[a].x + d.y * axes[a].y + d.z * axes[a].z) / spacing[a];
+    }
 
     /// Trilinear interpolation of the voxel-centre samples at world point p: clamped to the nearest
     /// centres within half a voxel of the box's faces, `outside` beyond the box or for a NaN p.
@@ -52,7 +64,7 @@ struct VolumeView {
         for (int a = 0; a < 3; ++a) {
             // Continuous index of the sample lattice: voxel centres sit at integers. Written so
             // that a NaN coordinate fails both comparisons and lands outside.
-            const double u = (p[a] - lo[a]) / spacing[a];
+            const double u = voxelCoordinate(p, a);
             if (!(u >= 0 && u <= double(n[a]))) return outside;
             const double c = u - 0.5;
             if (c <= 0) {
@@ -93,8 +105,20 @@ public:
     /// World corner of voxel (0, 0, 0) and the size of one voxel.
     const Vec3d& lo() const { return lo_; }
     const Vec3d& spacing() const { return spacing_; }
-    /// The world box the voxels tile.
+    /// World directions of the voxel axes i, j, k (the world axes unless setAxes turned them).
+    const Vec3d& axis(int a) const { return axes_[a]; }
+    /// True when the voxel axes are the world axes.
+    bool axisAligned() const;
+    /// Turns the volume about `lo`: voxel axis a runs along world direction axes[a]. Throws
+    /// voxfx::Error unless the three are unit length and pairwise orthogonal (within 1e-6).
+    void setAxes(const Vec3d& i, const Vec3d& j, const Vec3d& k);
+    /// World point of continuous voxel coordinates u (voxel (i, j, k) spans u in [i, i + 1] x ...).
+    Vec3d worldFromVoxel(const Vec3d& u) const;
+    /// The world bounding box of the voxels (the box they tile when the volume is not turned).
     Box3d box() const;
+    /// The voxels' box as a closed, outward-facing triangle mesh (12 triangles), turned with the
+    /// volume: the default shape of a volume object.
+    Mesh boxMesh() const;
     /// World centre of voxel (i, j, k).
     Vec3d voxelCenter(int64_t i, int64_t j, int64_t k) const;
 
@@ -113,14 +137,21 @@ public:
     float sample(const Vec3d& p, float outside = 0.0f) const { return view().sample(p, outside); }
     /// The plain view kernels sample (see VolumeView).
     VolumeView view() const {
-        return {values_.empty() ? nullptr : values_.data(), dims_.x, dims_.y, dims_.z, lo_, spacing_};
+        return {values_.empty() ? nullptr : values_.data(),
+                dims_.x,
+                dims_.y,
+                dims_.z,
+                lo_,
+                spacing_,
+                {axes_[0], axes_[1], axes_[2]}};
     }
 
     /// Smallest and largest value (0 and 0 for an empty volume).
     float minValue() const;
     float maxValue() const;
 
-    /// The orthographic frame whose cells are this volume's voxels, sliced along `axis`:
+    /// The orthographic frame whose cells are this volume's voxels, sliced along `axis` (an
+    /// oriented one for a turned volume):
     /// frame.cellCenter(x, y, s) is the centre of the voxel whose index along columnXAxis(axis) is
     /// x, along columnYAxis(axis) y and along the axis s.
     Frame frame(Axis axis = Axis::Z) const;
@@ -129,6 +160,7 @@ private:
     Vec3i dims_{0, 0, 0};
     Vec3d lo_{0, 0, 0};
     Vec3d spacing_{1, 1, 1};
+    Vec3d axes_[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
     ScalarType type_ = ScalarType::Float32;
     std::vector<float> values_;
 };

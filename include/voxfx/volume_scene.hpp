@@ -105,7 +105,7 @@ public:
         int64_t b[3];
         for (int a = 0; a < 3; ++a) {
             // The continuous voxel coordinate as VolumeView::sample computes it.
-            const double u = (p[a] - lo_[a]) / spacing_[a];
+            const double u = place_.voxelCoordinate(p, a);
             if (!(u >= 0 && u <= double(voxels_[a]))) return outsideEmpty_;
             b[a] = std::min(int64_t(u) / kBrick, bricks_[a] - 1);
         }
@@ -115,7 +115,7 @@ public:
     double emptyFraction() const;
 
 private:
-    Vec3d lo_{0, 0, 0}, spacing_{1, 1, 1};
+    VolumeView place_; // the volume's placement (no values)
     int64_t voxels_[3] = {0, 0, 0}, bricks_[3] = {0, 0, 0};
     bool outsideEmpty_ = false;
     std::vector<uint8_t> empty_;

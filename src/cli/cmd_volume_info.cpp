@@ -41,6 +41,9 @@ int runVolumeInfo(const std::string& path, const std::string& tfPath, const std:
     std::cout << "dims:       " << d.x << " x " << d.y << " x " << d.z << " (" << withCommas(v.voxelCount())
               << " voxels)\n";
     std::cout << "spacing:    " << vecString(v.spacing()) << "\n";
+    if (!v.axisAligned())
+        std::cout << "axes:       i " << vecString(v.axis(0)) << ", j " << vecString(v.axis(1)) << ", k "
+                  << vecString(v.axis(2)) << " (turned; bounds are the box around it)\n";
     std::cout << "bounds:     " << boxString(v.box()) << "\n";
     std::cout << "values:     min " << fmt(v.minValue(), 6) << ", max " << fmt(v.maxValue(), 6) << ", mean "
               << fmt(sum / double(v.voxelCount()), 6) << ", " << withCommas(nonzero) << " non-zero\n";

@@ -60,8 +60,8 @@ int32_t VolumeScene::addObject(VolumeSceneObject object) {
     return int32_t(objects.size() - 1);
 }
 
-EmptySpace::EmptySpace(const Volume& volume, const TransferFunction& transfer)
-    : lo_(volume.lo()), spacing_(volume.spacing()) {
+EmptySpace::EmptySpace(const Volume& volume, const TransferFunction& transfer) : place_(volume.view()) {
+    place_.values = nullptr;
     const Vec3i d = volume.dims();
     const int64_t n[3] = {d.x, d.y, d.z};
     for (int a = 0; a < 3; ++a) {
@@ -134,7 +134,7 @@ int32_t VolumeScene::addVolumeBox(std::shared_ptr<const Volume> volume, Transfer
     if (!volume) fail("volume scene: addVolumeBox without a volume");
     VolumeSceneObject o;
     o.name = name;
-    o.shape = addLeaf(boxMesh(volume->box()));
+    o.shape = addLeaf(volume->boxMesh());
     o.kind = ObjectKind::Volume;
     volumes.push_back(std::move(volume));
     o.volume = int32_t(volumes.size() - 1);

@@ -152,8 +152,9 @@ struct SceneObjectsParser {
     VolumeScene& vs;
     std::function<std::string(const std::string&)> resolve;
 
-    // A shape expression; returns its node. `volumeBox` is the object's volume box (or empty).
-    int32_t shape(const json& j, const Box3d& volumeBox, const std::string& where, bool& plainMesh,
+    // A shape expression; returns its node. `volumeBox` is the object's volume's box mesh (turned
+    // with the volume), or null outside volume objects.
+    int32_t shape(const json& j, const Mesh* volumeBox, const std::string& where, bool& plainMesh,
                   Mesh* meshOut) {
         if (!j.is_object() || j.size() == 0) fail(where, ": a shape must be a JSON object");
         for (const auto& [op, what] : {std::pair<const char*, ShapeOp>{"union", ShapeOp::Union},
@@ -192,8 +193,8 @@ struct SceneObjectsParser {
             mesh = boxMesh(box);
         } else if (j.contains("volumeBox")) {
             allowKeys(j, {"volumeBox"}, where);
-            if (volumeBox.empty()) fail(where, ": \"volumeBox\" outside a volume object");
-            mesh = boxMesh(volumeBox);
+            if (!volumeBox) fail(where, ": \"volumeBox\" outside a volume object");
+            mesh = *volumeBox;
         } else {
             fail(where, ": unknown shape (expected mesh, box, volumeBox, union, intersection or difference)");
         }
@@ -205,7 +206,7 @@ struct SceneObjectsParser {
     void object(const json& o, const std::string& whereIn) {
         allowKeys(o,
                   {"name", "kind", "opacity", "color", "shape", "castsShadow", "volume", "translate", "scale",
-                   "transfer", "opacityLength"},
+                   "rotate", "transfer", "opacityLength"},
                   whereIn);
         VolumeSceneObject out;
         out.name = o.contains("name") ? str(o, "name", whereIn) : "object";
@@ -255,12 +256,20 @@ struct SceneObjectsParser {
                     where,
                     ": \"volume\" must be a file name, {\"file\": ..., \"grid\": ...} or {\"smoke\": {...}}");
             }
-            // Placement: world = file position * scale + translate.
+            // Placement: world = rotate(file position * scale) + translate (scale, then rotate
+            // [axis, degrees] about the file's origin, then translate, as for meshes).
             const double scale = num(o, "scale", 1, where);
             if (!(scale > 0) || !std::isfinite(scale)) fail(where, ": \"scale\" must be a positive number");
             const Vec3d tr = vec3Or(o, "translate", {0, 0, 0}, where);
-            Volume placed(volume.dims(), volume.lo() * scale + tr, volume.spacing() * scale,
-                          volume.sourceType());
+            const bool turned = o.contains("rotate");
+            const Mat4d r = turned ? wrapperTransform(json{{"rotate", o["rotate"]}}, where) : Mat4d{};
+            Volume placed(volume.dims(), (turned ? r.vector(volume.lo() * scale) : volume.lo() * scale) + tr,
+                          volume.spacing() * scale, volume.sourceType());
+            if (turned || !volume.axisAligned())
+                inScene(where, [&] {
+                    placed.setAxes(r.vector(volume.axis(0)), r.vector(volume.axis(1)),
+                                   r.vector(volume.axis(2)));
+                });
             placed.values() = std::move(volume.values());
             if (!o.contains("transfer")) fail(where, ": a volume object needs \"transfer\"");
             const json& t = o["transfer"];
@@ -270,18 +279,18 @@ struct SceneObjectsParser {
                     : parseTransferFunction(t.dump(), where + ".transfer");
             const Vec3d sp = placed.spacing();
             out.opacityLength = num(o, "opacityLength", std::min({sp.x, sp.y, sp.z}), where);
-            const Box3d box = placed.box();
+            const Mesh box = placed.boxMesh();
             vs.volumes.push_back(std::make_shared<const Volume>(std::move(placed)));
             out.volume = int32_t(vs.volumes.size() - 1);
             bool plain = false;
-            out.shape = o.contains("shape") ? shape(o["shape"], box, where + ".shape", plain, nullptr)
-                                            : vs.addLeaf(boxMesh(box));
+            out.shape = o.contains("shape") ? shape(o["shape"], &box, where + ".shape", plain, nullptr)
+                                            : vs.addLeaf(box);
             vs.addObject(std::move(out));
             return;
         }
         if (kind != "opaque" && kind != "translucent")
             fail(where, ": unknown kind \"", kind, "\" (allowed: opaque, translucent, volume)");
-        for (const char* k : {"volume", "transfer", "opacityLength", "translate", "scale"})
+        for (const char* k : {"volume", "transfer", "opacityLength", "translate", "scale", "rotate"})
             if (o.contains(k)) fail(where, ": \"", k, "\" is only for volume objects");
         out.kind = kind == "opaque" ? ObjectKind::Opaque : ObjectKind::Translucent;
         out.opacity = kind == "opaque" ? 1.0f : float(num(o, "opacity", 0.5, where));
@@ -290,7 +299,7 @@ struct SceneObjectsParser {
         bool plain = false;
         Mesh mesh;
         const std::size_t leaves = vs.leaves.size(), nodes = vs.nodes.size();
-        const int32_t node = shape(o["shape"], Box3d{}, where + ".shape", plain, &mesh);
+        const int32_t node = shape(o["shape"], nullptr, where + ".shape", plain, &mesh);
         if (plain) {
             // A single mesh: an ordinary scene mesh, drawn and shadowed like the others.
             vs.leaves.resize(leaves);

@@ -4,9 +4,10 @@
 // write: NRRD0001..NRRD0005, dimension 3, any of uchar, signed char, short, ushort, int, uint,
 // float, double under their many spellings, raw or gzip encoding, either endian, an attached
 // (.nrrd) or detached (.nhdr + "data file: NAME") data file, "byte skip" and "line skip".
-// Placement: "space origin" is the centre of voxel (0, 0, 0); "space directions" must be diagonal
-// (an axis with a negative direction is mirrored so the volume runs towards +world), or "spacings"
-// give the voxel size. Without an origin the box starts at 0, as in voxfx's grid reader.
+// Placement: "space origin" is the centre of voxel (0, 0, 0); diagonal "space directions" (an axis
+// with a negative direction is mirrored so the volume runs towards +world), oblique ones that are
+// orthogonal (the volume is turned: Volume::setAxes; skewed ones are refused), or "spacings" give
+// the voxel size. Without an origin the box starts at 0, as in voxfx's grid reader.
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -167,17 +168,24 @@ Volume readScalarNrrd(std::span<const uint8_t> bytes, const std::string& path, V
     if (scalarBytes(type) > 1 && !haveEndian)
         fail(path, ": NRRD header has no 'endian' field, needed for ", toString(type), " samples");
 
-    // Voxel size and orientation: diagonal directions (negative ones mirror the axis) or spacings.
+    // Voxel size and orientation: diagonal directions (negative ones mirror the axis), oblique
+    // ones (the volume is turned: voxel axis a runs along dirs[a]), or spacings.
     Vec3d cell = spacings;
     bool mirror[3] = {false, false, false};
+    bool oblique = false;
+    Vec3d axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
     if (haveDirections) {
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) oblique = oblique || (a != b && dirs[a][b] != 0);
         for (int a = 0; a < 3; ++a) {
-            for (int b = 0; b < 3; ++b)
-                if (a != b && dirs[a][b] != 0)
-                    fail(path, ": NRRD space directions must be axis-aligned (diagonal); axis ", a,
-                         " is not (rotated volumes are not supported)");
-            cell[a] = std::fabs(dirs[a][a]);
-            mirror[a] = dirs[a][a] < 0;
+            if (oblique) {
+                const Vec3d d{dirs[a][0], dirs[a][1], dirs[a][2]};
+                cell[a] = length(d);
+                if (std::isfinite(cell[a]) && cell[a] > 0) axes[a] = d / cell[a];
+            } else {
+                cell[a] = std::fabs(dirs[a][a]);
+                mirror[a] = dirs[a][a] < 0;
+            }
         }
     } else if (!haveSpacings) {
         cell = {1, 1, 1};
@@ -238,7 +246,12 @@ Volume readScalarNrrd(std::span<const uint8_t> bytes, const std::string& path, V
         if (mirror[a]) centre0[a] -= double(dims[a] - 1) * cell[a];
     // The data is all there: now the memory the volume takes (beside the inflated samples).
     checkVolumeMemory(dims, inflated.size(), dataPath);
-    Volume v(dims, centre0 - cell * 0.5, cell, type);
+    const Vec3d corner0 =
+        centre0 - axes[0] * (0.5 * cell.x) - axes[1] * (0.5 * cell.y) - axes[2] * (0.5 * cell.z);
+    Volume v(dims, corner0, cell, type);
+    if (oblique) try {
+            v.setAxes(axes[0], axes[1], axes[2]);
+        } catch (const Error& e) { fail(path, ": NRRD space directions: ", e.what()); }
     decodeSamples(data.data(), type, bigEndian, v, dataPath);
     for (int a = 0; a < 3; ++a)
         if (mirror[a]) flipAxis(v, a);
