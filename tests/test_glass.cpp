@@ -8,6 +8,7 @@
 
 #include "test_util.hpp"
 #include "voxfx/attribute_grid.hpp"
+#include "voxfx/demo.hpp"
 #include "voxfx/glass.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/shadow.hpp"
@@ -350,6 +351,49 @@ TEST(GlassTest, GlassBallCastsAColouredShadowUnderExactShadows) {
     Scene plain = s;
     plain.materials[1].transmission = 0;
     EXPECT_EQ(defaultGlassKind(plain), GlassKind::None);
+}
+
+TEST(GlassTest, CrossingCountingShadowsPassWhatExactShadowsPassThroughGlass) {
+    // The ball of glassTestScene under the sun, its material given the thickness of the ball's
+    // diameter: transmittance, absorption and deep shadow maps multiply two crossings of
+    // sqrt(tint) (1 - F0) exp(-sigma thickness / 2), which must agree with the exact tracer's
+    // Fresnel x tint x Beer–Lambert under the ball's centre (luminance for the grey methods), and
+    // not pass the tint twice with no Fresnel (what every crossing passed before).
+    Scene s = glassTestScene();
+    s.materials[1].thickness = 1.4f;
+    s.materials[1].attenuationColor = {0.3f, 0.5f, 0.4f}; // far from the tint alone
+    Light sun;
+    sun.type = LightType::Directional;
+    sun.direction = {0, -1, 0};
+    auto luminance = [](const Vec3f& v) { return 0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z; };
+    const Vec3d under{0.05, 0, 0.03};
+    ShadowOptions o;
+    o.kind = ShadowKind::Exact;
+    const Vec3f exact = LightShadow::build(s, sun, o).visibility(under, {0, 1, 0});
+    const Vec3f tint = s.materials[1].crossingTransmittance();
+    for (const ShadowKind kind : {ShadowKind::Transmittance, ShadowKind::Absorption, ShadowKind::Deep}) {
+        o.kind = kind;
+        o.gridResolution = 64;
+        o.gridDepth = 64;
+        o.dsmResolution = 64;
+        o.dsmEpsilon = 0;
+        const Vec3f v = LightShadow::build(s, sun, o).visibility(under, {0, 1, 0});
+        EXPECT_NEAR(luminance(v), luminance(exact), 0.03) << toString(kind);
+        EXPECT_GT(std::abs(luminance(v) - luminance(tint * tint)), 0.1) << toString(kind);
+        if (kind == ShadowKind::Transmittance) { // RGB: the attenuation's colour too
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(v[c], exact[c], 0.03) << c;
+        }
+    }
+    // A leaf's transmission (opacity < 1) is a sheet, not glass: the tree renders without glass.
+    TreeOptions t;
+    t.leaves = 50;
+    const Scene tree = makeTreeScene(t);
+    EXPECT_EQ(defaultGlassKind(tree), GlassKind::None);
+    for (const Material& m : tree.materials)
+        if (m.transmission > 0) {
+            EXPECT_FALSE(m.isGlass()) << m.name;
+            EXPECT_EQ(m.shadowCrossingTransmittance(), m.crossingTransmittance()) << m.name;
+        }
 }
 
 TEST(GlassTest, VoxelGlassRendersCloseToTheExactTracerAndDeterministically) {

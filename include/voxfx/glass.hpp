@@ -1,6 +1,7 @@
 // voxfx — glass: refraction through transparent objects, by voxels and by an exact reference.
 //
-// Materials with transmission > 0 (KHR_materials_transmission) are glass. A camera ray that hits
+// Materials with transmission > 0 (KHR_materials_transmission) and no gaps (opacity 1) are glass
+// (Material::isGlass; a leaf's transmission with opacity < 1 is a sheet). A camera ray that hits
 // glass (the G-buffer's nearest surface) splits at that front surface, with the exact dielectric
 // Fresnel factor F (unpolarized, the same in every method): F of the environment seen along the
 // mirror direction, plus (1 - F) times the light that comes through, tinted by the base colour.

@@ -68,6 +68,18 @@ struct Material {
     Vec3f crossingTransmittance() const;
     /// True when no light passes a crossing (crossingTransmittance is zero in every channel).
     bool isOpaque() const;
+    /// Glass: a dielectric volume that refracts the camera's rays and whose crossings pass
+    /// 1 - Fresnel (transmission > 0 on a surface without gaps, opacity 1). A surface with gaps
+    /// (opacity < 1) and transmission, such as a leaf, is a sheet: light passes its gaps and its
+    /// tissue unbent.
+    bool isGlass() const;
+    /// What one crossing passes for the shadow methods that multiply crossings (transmittance,
+    /// absorption, deep shadow maps). A sheet: crossingTransmittance. Glass, crossed twice per
+    /// passage: each crossing passes 1 - F0 (Fresnel at normal incidence, ((ior - 1) / (ior + 1))^2),
+    /// half the tint (its square root) and half the Beer–Lambert loss over `thickness`
+    /// (KHR_materials_volume's typical thickness; none when 0), so that a passage gives what
+    /// ExactShadow gives at normal incidence through that thickness.
+    Vec3f shadowCrossingTransmittance() const;
 };
 
 /// One mesh in world space with one material.

@@ -204,7 +204,7 @@ float absorptionPerCrossing(const Material& m, float opaqueAbsorption);
 /// transmittances of every caster triangle between a point and the light, ray traced on the actual
 /// triangles (Embree, glass.hpp's TriangleTracer). ShadowKind::Exact.
 ///
-/// Glass (materials with transmission > 0) is a volume, not a sheet: each crossing passes the
+/// Glass (Material::isGlass: transmission > 0, opacity 1) is a volume, not a sheet: each crossing passes the
 /// Fresnel-transmitted fraction 1 - F (exact unpolarized dielectric F at the shadow ray's angle to
 /// the face, taken from the outside: by reciprocity the same fraction leaves a parallel slab as
 /// enters it), the tint (the material's crossing transmittance) applies once where the ray enters,
@@ -226,8 +226,8 @@ public:
     /// optionally, per triangle, an index into `glass` or kNotGlass (empty: no glass).
     ExactShadow(const MeshView& casters, std::vector<Vec3f> triangleTransmittance,
                 std::vector<uint32_t> triangleGlass = {}, std::vector<Glass> glass = {});
-    /// From scene materials: crossingTransmittance per triangle, and glass for materials with
-    /// transmission > 0 (ior, KHR_materials_volume attenuation, tint = crossingTransmittance).
+    /// From scene materials: crossingTransmittance per triangle, and glass for glass materials
+    /// (Material::isGlass; ior, KHR_materials_volume attenuation, tint = crossingTransmittance).
     static ExactShadow fromMaterials(const MeshView& casters, std::span<const uint32_t> triangleMaterial,
                                      std::span<const Material> materials);
     /// Light fraction along p + t * dir, t in (epsilon, distance): the product over the crossed

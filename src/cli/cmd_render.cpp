@@ -171,7 +171,7 @@ Shadow kinds:
   exact          ray traced on the triangles (Embree): the product of the transmittances
                  of every surface crossed towards the light (the reference)
 
-Glass (materials with transmission > 0):
+Glass (materials with transmission > 0 and opacity 1):
   none           shaded like any surface
   exact          ray tracing on the triangles (Embree): Snell, Fresnel, total internal
                  reflection, Beer-Lambert over true lengths; the reference

@@ -342,7 +342,7 @@ VolumeScene volumeSceneOf(const Scene& scene, SceneMeshes meshes) {
         if (mat.isOpaque()) {
             o.kind = ObjectKind::Opaque;
         } else {
-            const Vec3f t = mat.crossingTransmittance();
+            const Vec3f t = mat.shadowCrossingTransmittance();
             o.kind = ObjectKind::Translucent;
             o.opacity = std::clamp(1.0f - (0.2126f * t.x + 0.7152f * t.y + 0.0722f * t.z), 0.0f, 1.0f);
         }

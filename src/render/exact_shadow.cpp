@@ -42,7 +42,7 @@ ExactShadow ExactShadow::fromMaterials(const MeshView& casters, std::span<const 
     std::vector<uint32_t> glassOf(materials.size(), kNotGlass);
     std::vector<Glass> glass;
     for (size_t m = 0; m < materials.size(); ++m)
-        if (materials[m].transmission > 0) {
+        if (materials[m].isGlass()) {
             glassOf[m] = uint32_t(glass.size());
             glass.push_back({std::max(1.0f, materials[m].ior), attenuationCoefficient(materials[m]),
                              materials[m].crossingTransmittance()});

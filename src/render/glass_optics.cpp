@@ -50,7 +50,7 @@ GlassKind parseGlassKind(const std::string& name) {
 
 GlassKind defaultGlassKind(const Scene& scene) {
     for (const SceneMesh& m : scene.meshes)
-        if (m.material < scene.materials.size() && scene.materials[m.material].transmission > 0)
+        if (m.material < scene.materials.size() && scene.materials[m.material].isGlass())
             return GlassKind::Exact;
     return GlassKind::None;
 }

@@ -21,7 +21,7 @@ void shadeGlass(const GBuffer& gbuffer, const SceneGeometry& geometry, const Sce
     std::vector<uint8_t> isGlass(scene.materials.size());
     std::vector<GlassMedium> media(scene.materials.size());
     for (size_t m = 0; m < scene.materials.size(); ++m) {
-        isGlass[m] = scene.materials[m].transmission > 0;
+        isGlass[m] = scene.materials[m].isGlass();
         media[m] = glassMedium(scene.materials[m]);
     }
     // The glass triangles, on the scene's vertices.

@@ -43,7 +43,7 @@ CasterSets collectCasters(const Scene& scene) {
         if (mat.isOpaque()) {
             append(s.opaque, m.mesh);
         } else {
-            const Vec3f t = mat.crossingTransmittance();
+            const Vec3f t = mat.shadowCrossingTransmittance();
             append(s.partial[{t.x, t.y, t.z}], m.mesh);
         }
     }
@@ -87,7 +87,7 @@ ShadowKind parseShadowKind(const std::string& name) {
 
 float absorptionPerCrossing(const Material& m, float opaqueAbsorption) {
     if (m.isOpaque()) return opaqueAbsorption;
-    const Vec3f t = m.crossingTransmittance();
+    const Vec3f t = m.shadowCrossingTransmittance();
     const float luminance = 0.2126f * t.x + 0.7152f * t.y + 0.0722f * t.z;
     return std::min(opaqueAbsorption, -std::log(std::max(luminance, 1e-30f)));
 }

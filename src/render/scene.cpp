@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "voxfx/glass.hpp"
+
 namespace voxfx {
 
 using detail::concat;
@@ -26,6 +28,20 @@ Vec3f Material::crossingTransmittance() const {
     Vec3f out;
     for (int c = 0; c < 3; ++c)
         out[c] = std::clamp((1 - a) + a * t * std::clamp(baseColor[c], 0.0f, 1.0f), 0.0f, 1.0f);
+    return out;
+}
+
+bool Material::isGlass() const { return transmission > 0 && opacity >= 1; }
+
+Vec3f Material::shadowCrossingTransmittance() const {
+    const Vec3f tint = crossingTransmittance();
+    if (!isGlass()) return tint;
+    const double n = std::max(1.0f, ior), f0 = ((n - 1) / (n + 1)) * ((n - 1) / (n + 1));
+    const Vec3f sigma = attenuationCoefficient(*this);
+    const double half = std::isfinite(thickness) && thickness > 0 ? 0.5 * double(thickness) : 0.0;
+    Vec3f out;
+    for (int c = 0; c < 3; ++c)
+        out[c] = float(std::sqrt(double(tint[c])) * (1 - f0) * std::exp(-double(sigma[c]) * half));
     return out;
 }
 
