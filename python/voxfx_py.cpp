@@ -274,16 +274,10 @@ py::str utf8Text(const std::string& s) {
 /// A path argument: str or os.PathLike.
 std::string pathString(const py::handle& p) { return py::str(py::module_::import("os").attr("fspath")(p)); }
 
-/// One job of the report, with the keys of the JSON report (writeBatchReport).
-py::dict batchResultDict(const BatchResult& r) {
-    py::dict d;
-    d["mesh"] = utf8Text(r.mesh);
-    d["output"] = utf8Text(r.output);
-    d["status"] = toString(r.status);
-    d["error"] = r.status == BatchStatus::Error ? py::object(utf8Text(r.error)) : py::object(py::none());
-    d["triangles"] = r.triangles >= 0 ? py::object(py::int_(r.triangles)) : py::object(py::none());
-    d["ms"] = r.ms;
-    return d;
+/// JSON text of the library's batch report (batchReportJson, batchResultJson) as Python objects:
+/// the dicts voxfx.batch returns and hands to progress have the report file's shape by construction.
+py::object batchJsonObject(const std::string& text) {
+    return py::module_::import("json").attr("loads")(text);
 }
 
 /// Calls a Python callable per finished job, from the worker thread that finished it (runBatch
@@ -296,7 +290,7 @@ public:
         if (error_) return;
         py::gil_scoped_acquire gil;
         try {
-            fn_(batchResultDict(r), done, total);
+            fn_(batchJsonObject(batchResultJson(r)), done, total);
         } catch (...) { error_ = std::current_exception(); }
     }
     void raiseIfFailed() const {
@@ -746,16 +740,7 @@ PYBIND11_MODULE(_voxfx, m) {
                 if (!reportPath.empty()) writeBatchReport(summary, reportPath);
             }
             if (pyProgress) pyProgress->raiseIfFailed();
-            py::dict out;
-            out["ok"] = summary.ok;
-            out["skipped"] = summary.skipped;
-            out["errors"] = summary.errors;
-            out["seconds"] = summary.seconds;
-            out["ok_per_second"] = summary.okPerSecond();
-            py::list list;
-            for (const BatchResult& r : summary.results) list.append(batchResultDict(r));
-            out["jobs"] = list;
-            return out;
+            return batchJsonObject(batchReportJson(summary, -1));
         },
         py::arg("meshes"), py::arg("out_dir"), py::kw_only(), py::arg("format") = ".binvox",
         py::arg("resolution") = py::none(), py::arg("voxel_size") = py::none(), py::arg("dims") = py::none(),
