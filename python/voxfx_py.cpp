@@ -280,6 +280,24 @@ py::object batchJsonObject(const std::string& text) {
     return py::module_::import("json").attr("loads")(text);
 }
 
+/// The batch's grid format from an extension, with or without its dot.
+GridFormat batchGridFormat(const std::string& format) {
+    return gridFormatFromPath("x" + (format.starts_with(".") ? format : "." + format));
+}
+
+/// The jobs of a batch argument: a manifest path (str or os.PathLike) or an iterable of mesh paths.
+std::vector<BatchJob> batchJobsArgument(const py::object& manifestOrList, const std::string& outDir,
+                                        GridFormat format) {
+    if (py::isinstance<py::str>(manifestOrList) || py::hasattr(manifestOrList, "__fspath__")) {
+        const std::string manifest = pathString(manifestOrList);
+        py::gil_scoped_release release;
+        return readBatchManifest(manifest, outDir, format);
+    }
+    std::vector<std::string> meshes;
+    for (const py::handle p : manifestOrList) meshes.push_back(pathString(p));
+    return batchJobs(meshes, outDir, format);
+}
+
 /// Calls a Python callable per finished job, from the worker thread that finished it (runBatch
 /// serializes the calls), holding the GIL for the call only. The first exception it raises stops
 /// further calls (the meshes go on) and is raised again when the batch is over.
@@ -695,8 +713,7 @@ PYBIND11_MODULE(_voxfx, m) {
            const std::string& slicing, bool vdbFloat, int threads, bool nested, bool skipExisting,
            const py::object& report, const py::object& progress) {
             const std::string outDir = pathString(outDirObj);
-            const GridFormat gridFormat =
-                gridFormatFromPath("x" + (format.starts_with(".") ? format : "." + format));
+            const GridFormat gridFormat = batchGridFormat(format);
             BatchOptions bo;
             bo.fit = fitOptions(resolution, voxelSize, dims, bounds, margin, axis);
             bo.voxelize.mode = parseVoxelizeMode(mode);
@@ -714,16 +731,7 @@ PYBIND11_MODULE(_voxfx, m) {
             } else if (!(py::isinstance<py::bool_>(report) && !report.cast<bool>())) {
                 reportPath = pathString(report);
             }
-            std::vector<BatchJob> jobs;
-            if (py::isinstance<py::str>(manifestOrList) || py::hasattr(manifestOrList, "__fspath__")) {
-                const std::string manifest = pathString(manifestOrList);
-                py::gil_scoped_release release;
-                jobs = readBatchManifest(manifest, outDir, gridFormat);
-            } else {
-                std::vector<std::string> meshes;
-                for (const py::handle p : manifestOrList) meshes.push_back(pathString(p));
-                jobs = batchJobs(meshes, outDir, gridFormat);
-            }
+            const std::vector<BatchJob> jobs = batchJobsArgument(manifestOrList, outDir, gridFormat);
             std::optional<PyBatchProgress> pyProgress;
             if (!progress.is_none()) {
                 if (!PyCallable_Check(progress.ptr()))
@@ -758,6 +766,20 @@ PYBIND11_MODULE(_voxfx, m) {
         "ok, skipped, errors, seconds, ok_per_second (meshes written per second; failed ones are not in "
         "it) and jobs, a list of {mesh, output, status ('ok', 'skipped', 'error'), error, triangles, ms} "
         "in the order given. The GIL is released while meshes are processed.");
+
+    m.def(
+        "batch_jobs",
+        [](const py::object& manifestOrList, const py::object& outDirObj, const std::string& format) {
+            py::list out;
+            for (const BatchJob& j :
+                 batchJobsArgument(manifestOrList, pathString(outDirObj), batchGridFormat(format)))
+                out.append(py::make_tuple(utf8Text(j.mesh), utf8Text(j.output)));
+            return out;
+        },
+        py::arg("meshes"), py::arg("out_dir"), py::kw_only(), py::arg("format") = ".binvox",
+        "The (mesh, output) pairs voxfx.batch(meshes, out_dir, format=...) would process, in order, "
+        "without running them: the manifest read and the outputs named as `voxfx batch` does, with "
+        "its error for two meshes of the same stem.");
 
     m.attr("__version__") = "0.1.0";
 }
