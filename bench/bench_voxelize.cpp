@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,16 +46,30 @@ const Mesh* mesh(const std::string& name) {
     return cache.emplace(name, std::move(m)).first->second.get();
 }
 
-void voxelizeBench(benchmark::State& state, const std::string& name, VoxelizeMode mode, Fill fill,
-                   RasterPath path = RasterPath::Auto) {
+// The preamble of the benchmarks over one mesh: the mesh `name` and a frame fitted to its bounds
+// at resolution state.range(0); nothing, with the benchmark marked skipped, when its data is missing.
+struct FittedMesh {
+    const Mesh* mesh;
+    Frame frame;
+};
+
+std::optional<FittedMesh> fittedMesh(benchmark::State& state, const std::string& name) {
     const Mesh* m = mesh(name);
     if (!m) {
         state.SkipWithError("missing data: run scripts/fetch-data.sh (and bench/dense-meshes.sh for *1m)");
-        return;
+        return std::nullopt;
     }
     FitOptions fo;
     fo.resolution = state.range(0);
-    const Frame frame = fitFrame(computeBounds(m->view()), fo);
+    return FittedMesh{m, fitFrame(computeBounds(m->view()), fo)};
+}
+
+void voxelizeBench(benchmark::State& state, const std::string& name, VoxelizeMode mode, Fill fill,
+                   RasterPath path = RasterPath::Auto) {
+    const auto in = fittedMesh(state, name);
+    if (!in) return;
+    const Mesh* m = in->mesh;
+    const Frame& frame = in->frame;
     VoxelizeOptions vo;
     vo.mode = mode;
     vo.fill = fill;
@@ -105,14 +120,10 @@ void writeGridBytesTwice(benchmark::State& state, const std::string& name) {
 // The flood fill alone (detail::floodFillInside on the conservative surface computed once,
 // outside the timing): what the "within 3x the write-twice floor" target of open meshes measures.
 void floodFillBench(benchmark::State& state, const std::string& name) {
-    const Mesh* m = mesh(name);
-    if (!m) {
-        state.SkipWithError("missing data: run scripts/fetch-data.sh (and bench/dense-meshes.sh for *1m)");
-        return;
-    }
-    FitOptions fo;
-    fo.resolution = state.range(0);
-    const Frame frame = fitFrame(computeBounds(m->view()), fo);
+    const auto in = fittedMesh(state, name);
+    if (!in) return;
+    const Mesh* m = in->mesh;
+    const Frame& frame = in->frame;
     VoxelizeOptions vo;
     vo.mode = VoxelizeMode::Conservative;
     const VoxelGrid walls = voxelize(m->view(), frame, vo);
@@ -131,14 +142,10 @@ void floodFillBench(benchmark::State& state, const std::string& name) {
 // renderer's absorption shadows use (count + absorption of written voxels only). The dense arrays
 // are allocated and zeroed in every iteration, as voxelizeAttributes does.
 void attributeBench(benchmark::State& state, const std::string& name, const std::string& use) {
-    const Mesh* m = mesh(name);
-    if (!m) {
-        state.SkipWithError("missing data: run scripts/fetch-data.sh (and bench/dense-meshes.sh for *1m)");
-        return;
-    }
-    FitOptions fo;
-    fo.resolution = state.range(0);
-    const Frame frame = fitFrame(computeBounds(m->view()), fo);
+    const auto in = fittedMesh(state, name);
+    if (!in) return;
+    const Mesh* m = in->mesh;
+    const Frame& frame = in->frame;
     std::vector<float> absorption(m->triangleCount(), 0.1f);
     std::vector<uint32_t> material(m->triangleCount(), 0);
     const std::vector<AttributeMaterial> table{{1.5f, {0.1f, 0.2f, 0.3f}}};

@@ -274,16 +274,28 @@ py::str utf8Text(const std::string& s) {
 /// A path argument: str or os.PathLike.
 std::string pathString(const py::handle& p) { return py::str(py::module_::import("os").attr("fspath")(p)); }
 
-/// One job of the report, with the keys of the JSON report (writeBatchReport).
-py::dict batchResultDict(const BatchResult& r) {
-    py::dict d;
-    d["mesh"] = utf8Text(r.mesh);
-    d["output"] = utf8Text(r.output);
-    d["status"] = toString(r.status);
-    d["error"] = r.status == BatchStatus::Error ? py::object(utf8Text(r.error)) : py::object(py::none());
-    d["triangles"] = r.triangles >= 0 ? py::object(py::int_(r.triangles)) : py::object(py::none());
-    d["ms"] = r.ms;
-    return d;
+/// JSON text of the library's batch report (batchReportJson, batchResultJson) as Python objects:
+/// the dicts voxfx.batch returns and hands to progress have the report file's shape by construction.
+py::object batchJsonObject(const std::string& text) {
+    return py::module_::import("json").attr("loads")(text);
+}
+
+/// The batch's grid format from an extension, with or without its dot.
+GridFormat batchGridFormat(const std::string& format) {
+    return gridFormatFromPath("x" + (format.starts_with(".") ? format : "." + format));
+}
+
+/// The jobs of a batch argument: a manifest path (str or os.PathLike) or an iterable of mesh paths.
+std::vector<BatchJob> batchJobsArgument(const py::object& manifestOrList, const std::string& outDir,
+                                        GridFormat format) {
+    if (py::isinstance<py::str>(manifestOrList) || py::hasattr(manifestOrList, "__fspath__")) {
+        const std::string manifest = pathString(manifestOrList);
+        py::gil_scoped_release release;
+        return readBatchManifest(manifest, outDir, format);
+    }
+    std::vector<std::string> meshes;
+    for (const py::handle p : manifestOrList) meshes.push_back(pathString(p));
+    return batchJobs(meshes, outDir, format);
 }
 
 /// Calls a Python callable per finished job, from the worker thread that finished it (runBatch
@@ -296,7 +308,7 @@ public:
         if (error_) return;
         py::gil_scoped_acquire gil;
         try {
-            fn_(batchResultDict(r), done, total);
+            fn_(batchJsonObject(batchResultJson(r)), done, total);
         } catch (...) { error_ = std::current_exception(); }
     }
     void raiseIfFailed() const {
@@ -701,8 +713,7 @@ PYBIND11_MODULE(_voxfx, m) {
            const std::string& slicing, bool vdbFloat, int threads, bool nested, bool skipExisting,
            const py::object& report, const py::object& progress) {
             const std::string outDir = pathString(outDirObj);
-            const GridFormat gridFormat =
-                gridFormatFromPath("x" + (format.starts_with(".") ? format : "." + format));
+            const GridFormat gridFormat = batchGridFormat(format);
             BatchOptions bo;
             bo.fit = fitOptions(resolution, voxelSize, dims, bounds, margin, axis);
             bo.voxelize.mode = parseVoxelizeMode(mode);
@@ -720,16 +731,7 @@ PYBIND11_MODULE(_voxfx, m) {
             } else if (!(py::isinstance<py::bool_>(report) && !report.cast<bool>())) {
                 reportPath = pathString(report);
             }
-            std::vector<BatchJob> jobs;
-            if (py::isinstance<py::str>(manifestOrList) || py::hasattr(manifestOrList, "__fspath__")) {
-                const std::string manifest = pathString(manifestOrList);
-                py::gil_scoped_release release;
-                jobs = readBatchManifest(manifest, outDir, gridFormat);
-            } else {
-                std::vector<std::string> meshes;
-                for (const py::handle p : manifestOrList) meshes.push_back(pathString(p));
-                jobs = batchJobs(meshes, outDir, gridFormat);
-            }
+            const std::vector<BatchJob> jobs = batchJobsArgument(manifestOrList, outDir, gridFormat);
             std::optional<PyBatchProgress> pyProgress;
             if (!progress.is_none()) {
                 if (!PyCallable_Check(progress.ptr()))
@@ -746,16 +748,7 @@ PYBIND11_MODULE(_voxfx, m) {
                 if (!reportPath.empty()) writeBatchReport(summary, reportPath);
             }
             if (pyProgress) pyProgress->raiseIfFailed();
-            py::dict out;
-            out["ok"] = summary.ok;
-            out["skipped"] = summary.skipped;
-            out["errors"] = summary.errors;
-            out["seconds"] = summary.seconds;
-            out["ok_per_second"] = summary.okPerSecond();
-            py::list list;
-            for (const BatchResult& r : summary.results) list.append(batchResultDict(r));
-            out["jobs"] = list;
-            return out;
+            return batchJsonObject(batchReportJson(summary, -1));
         },
         py::arg("meshes"), py::arg("out_dir"), py::kw_only(), py::arg("format") = ".binvox",
         py::arg("resolution") = py::none(), py::arg("voxel_size") = py::none(), py::arg("dims") = py::none(),
@@ -773,6 +766,20 @@ PYBIND11_MODULE(_voxfx, m) {
         "ok, skipped, errors, seconds, ok_per_second (meshes written per second; failed ones are not in "
         "it) and jobs, a list of {mesh, output, status ('ok', 'skipped', 'error'), error, triangles, ms} "
         "in the order given. The GIL is released while meshes are processed.");
+
+    m.def(
+        "batch_jobs",
+        [](const py::object& manifestOrList, const py::object& outDirObj, const std::string& format) {
+            py::list out;
+            for (const BatchJob& j :
+                 batchJobsArgument(manifestOrList, pathString(outDirObj), batchGridFormat(format)))
+                out.append(py::make_tuple(utf8Text(j.mesh), utf8Text(j.output)));
+            return out;
+        },
+        py::arg("meshes"), py::arg("out_dir"), py::kw_only(), py::arg("format") = ".binvox",
+        "The (mesh, output) pairs voxfx.batch(meshes, out_dir, format=...) would process, in order, "
+        "without running them: the manifest read and the outputs named as `voxfx batch` does, with "
+        "its error for two meshes of the same stem.");
 
     m.attr("__version__") = "0.1.0";
 }

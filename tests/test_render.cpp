@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <set>
+#include <sstream>
 
 #include <OpenEXR/ImfRgbaFile.h>
 #include <gtest/gtest.h>
@@ -537,17 +539,44 @@ TEST(RenderTest, RenderCommandWritesAnImageAndPrintsPassTimings) {
     EXPECT_NE(missing.err.find("no such file"), std::string::npos) << missing.err;
 }
 
-TEST(RenderTest, DemoCommandRendersTheTree) {
+TEST(RenderTest, DemoCommandRendersTheTreeWithEveryShadowKindOfAll) {
+    // `demo --shadows all` writes one image per kind its --help lists for "all" (and the scene, and
+    // its timings), and every shadow kind left out of that list refuses the tree scene when
+    // rendered here through the library.
     test::TempDir dir;
+    const test::CommandRun help = test::runVoxfx(dir, "demo --help");
+    const std::size_t open = help.out.find("all ("), close = help.out.find(')', open);
+    ASSERT_NE(close, std::string::npos) << help.out;
+    std::set<std::string> listed;
+    std::stringstream list(help.out.substr(open + 5, close - open - 5));
+    for (std::string name; std::getline(list, name, ',');)
+        listed.insert(name.substr(name.find_first_not_of(' ')));
+    EXPECT_TRUE(listed.count("exact") && listed.count("deep")) << help.out; // what "all" used to leave out
+
+    const std::filesystem::path out = dir.path() / "images";
     const test::CommandRun r =
-        test::runVoxfx(dir, "demo --scenes tree --shadows map,transmittance --width 64 --height 36 "
-                            "--supersample 1 --grid 64 -o " +
-                                dir.path().string() + " --write-scenes " + dir.path().string());
+        test::runVoxfx(dir, "demo --scenes tree --shadows all --width 4 --height 2 --supersample 1 --grid 8 "
+                            "--grid-depth 8 -o " +
+                                out.string() + " --write-scenes " + dir.path().string());
     ASSERT_EQ(r.exitCode, 0) << r.err;
-    EXPECT_TRUE(std::filesystem::exists(dir.file("tree-map.png")));
-    EXPECT_TRUE(std::filesystem::exists(dir.file("tree-transmittance.png")));
     EXPECT_TRUE(std::filesystem::exists(dir.file("tree.glb")));
     EXPECT_NE(r.out.find("voxelization from light"), std::string::npos) << r.out;
+    std::set<std::string> written, expected;
+    for (const auto& e : std::filesystem::directory_iterator(out))
+        written.insert(e.path().filename().string());
+    for (const std::string& k : listed) expected.insert("tree-" + k + ".png");
+    EXPECT_EQ(written, expected);
+
+    const Scene tree = makeDemoScene("tree", "");
+    for (int k = 0; k <= int(ShadowKind::Deep); ++k) {
+        if (listed.count(toString(ShadowKind(k)))) continue;
+        RenderOptions o;
+        o.width = 4;
+        o.height = 2;
+        o.supersample = 1;
+        o.shadow.kind = ShadowKind(k);
+        EXPECT_THROW(render(tree, tree.cameras.at(0), o), Error) << toString(ShadowKind(k));
+    }
 }
 
 } // namespace

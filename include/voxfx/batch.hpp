@@ -94,9 +94,17 @@ BatchSummary runBatch(const std::vector<BatchJob>& jobs, const BatchOptions& opt
 /// flood otherwise (for the surface and conservative modes the fill is unused: parity).
 Fill autoFillFor(const MeshView& mesh, VoxelizeMode mode);
 
-/// Writes the summary as JSON (atomically): {"ok", "skipped", "errors", "seconds",
-/// "ok_per_second" (okPerSecond()), "jobs": [{"mesh", "output", "status", "error", "triangles", "ms"}, ...]}
-/// with "error" and "triangles" null where they do not apply. Throws voxfx::Error on a failed write.
+/// The batch report as JSON text, the one definition of its shape: {"ok", "skipped", "errors",
+/// "seconds", "ok_per_second" (okPerSecond()), "jobs": [batchResultJson of each result, in order]}.
+/// `indent` as nlohmann-json's dump: spaces per level, -1 for one line. Text that is not UTF-8
+/// (paths, messages quoting file contents) has its invalid bytes replaced by U+FFFD.
+std::string batchReportJson(const BatchSummary& summary, int indent = 2);
+
+/// One job's record in the report: {"mesh", "output", "status" (toString), "error", "triangles",
+/// "ms"}, with "error" and "triangles" null where they do not apply; one line.
+std::string batchResultJson(const BatchResult& result);
+
+/// Writes batchReportJson(summary) and a newline, atomically. Throws voxfx::Error on a failed write.
 void writeBatchReport(const BatchSummary& summary, const std::string& path);
 
 } // namespace voxfx

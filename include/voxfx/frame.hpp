@@ -194,6 +194,13 @@ public:
     }
 
 private:
+    /// The fields every constructor sets from its (already checked) arguments: kind, slicing axis,
+    /// dimensions, camera basis, uniform slicing over [nearDepth, farDepth] and the projection's
+    /// camera (kind, eye, basis). The caller adds what is particular to its kind.
+    static Frame withCamera(bool perspective, Axis axis, int64_t w, int64_t h, int64_t d, const Vec3d& eye,
+                            const Vec3d& right, const Vec3d& up, const Vec3d& forward, double nearDepth,
+                            double farDepth);
+
     bool perspective_ = false;
     Axis axis_ = Axis::Z;
     int64_t w_ = 0, h_ = 0, d_ = 0;

@@ -1,6 +1,6 @@
-"""voxfx.dask on a LocalCluster of two worker processes: outputs byte-identical to
-`voxfx voxelize MESH -o OUT` with the same options, a bad mesh reported without stopping the
-rest, finished outputs skipped on a second run."""
+"""voxfx.dask on a LocalCluster of two worker processes: outputs and per-mesh report records
+identical to `voxfx batch` with the same options, a bad mesh reported without stopping the rest,
+finished outputs skipped on a second run."""
 import json
 import os
 import subprocess
@@ -24,6 +24,12 @@ def client():
     cluster.close()
 
 
+def records_without_times(report):
+    """The per-mesh records without the timings and with outputs by file name (folders differ)."""
+    return [dict({k: v for k, v in j.items() if k != "ms"}, output=os.path.basename(j["output"]))
+            for j in report["jobs"]]
+
+
 def test_run_manifest_matches_the_cli(tmp_path, cli, data_path, client):
     meshes = [data_path("meshes/" + m) for m in MESHES]
     manifest = tmp_path / "list" / "manifest.txt"
@@ -35,22 +41,34 @@ def test_run_manifest_matches_the_cli(tmp_path, cli, data_path, client):
     out = tmp_path / "out"
     report = voxfx.dask.run_manifest(str(manifest), str(out), client=client, chunk=2, resolution=40,
                                      mode="solid", format=".binvox", threads=1)
-    assert [r["mesh"] for r in report] == meshes + [str(manifest.parent / "missing.off")]
-    assert all(r["error"] is None for r in report[:-1])
-    assert "missing.off" in report[-1]["error"]
-    assert json.loads((out / "report.json").read_text()) == report
-    for m in meshes:
-        stem = os.path.splitext(os.path.basename(m))[0]
-        expected = tmp_path / (stem + ".cli.binvox")
-        subprocess.run([cli, "voxelize", m, "-o", expected, "-r", "40", "-m", "solid", "-q", "-j", "1"],
-                       check=True, capture_output=True)
-        assert (out / (stem + ".binvox")).read_bytes() == expected.read_bytes(), m
-    # No temporary files are left behind.
-    assert sorted(os.listdir(out)) == sorted([os.path.splitext(m)[0] + ".binvox" for m in MESHES] + ["report.json"])
+    theirs = tmp_path / "cli"
+    r = subprocess.run([cli, "batch", str(manifest), "-o", str(theirs), "-r", "40", "-m", "solid", "-q", "-j", "1"],
+                       capture_output=True, text=True)
+    assert r.returncode == 2, r.stderr  # one mesh failed
+    cli_report = json.loads((theirs / "report.json").read_text())
 
-    # A second run skips what is there.
+    # The same per-mesh records as the command's (times aside), in manifest order, the counts
+    # recomputed over all chunks, and the file is the returned report.
+    assert records_without_times(report) == records_without_times(cli_report)
+    assert [os.path.realpath(j["mesh"]) for j in report["jobs"]] == \
+        [os.path.realpath(m) for m in meshes + [str(manifest.parent / "missing.off")]]
+    assert [j["status"] for j in report["jobs"]] == ["ok"] * len(MESHES) + ["error"]
+    assert "missing.off" in report["jobs"][-1]["error"]
+    assert list(report) == list(cli_report)  # the command's keys, in its order
+    assert (report["ok"], report["skipped"], report["errors"]) == (len(MESHES), 0, 1)
+    assert report["ok_per_second"] == pytest.approx(report["ok"] / report["seconds"])
+    assert json.loads((out / "report.json").read_text()) == report
+
+    # Outputs byte-identical to the command's; no temporary files left behind.
+    for m in MESHES:
+        name = os.path.splitext(m)[0] + ".binvox"
+        assert (out / name).read_bytes() == (theirs / name).read_bytes(), m
+    assert sorted(os.listdir(out)) == sorted(os.listdir(theirs))
+
+    # A second run skips what is there, in other chunks, and counts it.
     again = voxfx.dask.run_manifest(str(manifest), str(out), client=client, chunk=3, resolution=40)
-    assert all(r["skipped"] for r in again[:-1]) and again[-1]["error"]
+    assert [j["status"] for j in again["jobs"]] == ["skipped"] * len(MESHES) + ["error"]
+    assert (again["ok"], again["skipped"], again["errors"]) == (0, len(MESHES), 1)
 
 
 def test_run_manifest_rejects_bad_options(tmp_path):
@@ -60,3 +78,8 @@ def test_run_manifest_rejects_bad_options(tmp_path):
         voxfx.dask.run_manifest(str(manifest), str(tmp_path), resolutoin=3)
     with pytest.raises(ValueError):
         voxfx.dask.run_manifest(str(manifest), str(tmp_path), format=".xyz")
+    # Two meshes whose outputs would collide: refused as the command refuses them, before any work.
+    manifest.write_text("a/x.off\nb/x.off\n")
+    with pytest.raises(voxfx.Error, match="stem"):
+        voxfx.dask.run_manifest(str(manifest), str(tmp_path / "never"))
+    assert not (tmp_path / "never").exists()

@@ -192,7 +192,31 @@ BatchSummary runBatch(const std::vector<BatchJob>& jobs, const BatchOptions& opt
     return summary;
 }
 
-void writeBatchReport(const BatchSummary& summary, const std::string& path) {
+namespace {
+
+nlohmann::ordered_json batchResultObject(const BatchResult& r) {
+    nlohmann::ordered_json e;
+    e["mesh"] = r.mesh;
+    e["output"] = r.output;
+    e["status"] = toString(r.status);
+    e["error"] = r.status == BatchStatus::Error ? nlohmann::ordered_json(r.error) : nlohmann::ordered_json();
+    e["triangles"] = r.triangles >= 0 ? nlohmann::ordered_json(r.triangles) : nlohmann::ordered_json();
+    e["ms"] = r.ms;
+    return e;
+}
+
+// Invalid UTF-8 in a path or message is replaced rather than failing the report.
+std::string batchJsonText(const nlohmann::ordered_json& j, int indent) {
+    return j.dump(indent, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+}
+
+} // namespace
+
+std::string batchResultJson(const BatchResult& result) {
+    return batchJsonText(batchResultObject(result), -1);
+}
+
+std::string batchReportJson(const BatchSummary& summary, int indent) {
     nlohmann::ordered_json j;
     j["ok"] = summary.ok;
     j["skipped"] = summary.skipped;
@@ -200,21 +224,15 @@ void writeBatchReport(const BatchSummary& summary, const std::string& path) {
     j["seconds"] = summary.seconds;
     j["ok_per_second"] = summary.okPerSecond();
     nlohmann::ordered_json list = nlohmann::ordered_json::array();
-    for (const BatchResult& r : summary.results) {
-        nlohmann::ordered_json e;
-        e["mesh"] = r.mesh;
-        e["output"] = r.output;
-        e["status"] = toString(r.status);
-        e["error"] =
-            r.status == BatchStatus::Error ? nlohmann::ordered_json(r.error) : nlohmann::ordered_json();
-        e["triangles"] = r.triangles >= 0 ? nlohmann::ordered_json(r.triangles) : nlohmann::ordered_json();
-        e["ms"] = r.ms;
-        list.push_back(std::move(e));
-    }
+    for (const BatchResult& r : summary.results) list.push_back(batchResultObject(r));
     j["jobs"] = std::move(list);
+    return batchJsonText(j, indent);
+}
+
+void writeBatchReport(const BatchSummary& summary, const std::string& path) {
+    const std::string text = batchReportJson(summary);
     detail::AtomicFile file(path);
-    // Invalid UTF-8 in a path or message is replaced rather than failing the report.
-    file.stream() << j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
+    file.stream() << text << "\n";
     file.commit();
 }
 

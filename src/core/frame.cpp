@@ -7,17 +7,36 @@ namespace voxfx {
 const char* toString(Axis a) { return a == Axis::X ? "x" : (a == Axis::Y ? "y" : "z"); }
 const char* toString(Slicing s) { return s == Slicing::Uniform ? "uniform" : "local"; }
 
-Frame Frame::orthographic(const Box3d& box, Axis axis, int64_t w, int64_t h, int64_t d) {
-    if (box.empty() || !isFinite(box.lo) || !isFinite(box.hi))
-        fail("orthographic frame needs a finite, non-empty box");
-    if (w <= 0 || h <= 0 || d <= 0) fail("grid dimensions must be positive, got ", w, " x ", h, " x ", d);
+Frame Frame::withCamera(bool perspective, Axis axis, int64_t w, int64_t h, int64_t d, const Vec3d& eye,
+                        const Vec3d& right, const Vec3d& up, const Vec3d& forward, double nearDepth,
+                        double farDepth) {
     Frame f;
-    f.perspective_ = false;
+    f.perspective_ = perspective;
     f.axis_ = axis;
     f.w_ = w;
     f.h_ = h;
     f.d_ = d;
-    f.box_ = box;
+    f.eye_ = eye;
+    f.right_ = right;
+    f.up_ = up;
+    f.forward_ = forward;
+    f.near_ = nearDepth;
+    f.far_ = farDepth;
+    // Orthographic: [0, D] to D slices, scale exactly 1.
+    f.uniform_ = {nearDepth, double(d) / (farDepth - nearDepth)};
+    Projection& pr = f.projection_;
+    pr.perspective = perspective;
+    pr.eye = eye;
+    pr.right = right;
+    pr.up = up;
+    pr.forward = forward;
+    return f;
+}
+
+Frame Frame::orthographic(const Box3d& box, Axis axis, int64_t w, int64_t h, int64_t d) {
+    if (box.empty() || !isFinite(box.lo) || !isFinite(box.hi))
+        fail("orthographic frame needs a finite, non-empty box");
+    if (w <= 0 || h <= 0 || d <= 0) fail("grid dimensions must be positive, got ", w, " x ", h, " x ", d);
     const int cx = columnXAxis(axis), cy = columnYAxis(axis), cs = sliceAxis(axis);
     const Vec3d ext = box.extent();
     if (!(ext[cx] > 0) || !(ext[cy] > 0) || !(ext[cs] > 0))
@@ -26,24 +45,14 @@ Frame Frame::orthographic(const Box3d& box, Axis axis, int64_t w, int64_t h, int
     r[cx] = 1;
     u[cy] = 1;
     fw[cs] = 1;
-    f.right_ = r;
-    f.up_ = u;
-    f.forward_ = fw;
-    f.eye_ = box.lo;
-    f.near_ = 0;
-    f.far_ = double(d);
-    f.uniform_ = {0.0, 1.0};
+    Frame f = withCamera(false, axis, w, h, d, box.lo, r, u, fw, 0, double(d));
+    f.box_ = box;
     Projection& pr = f.projection_;
-    pr.perspective = false;
     pr.axisX = cx;
     pr.axisY = cy;
     pr.axisS = cs;
     pr.origin = box.lo;
     pr.scale = {double(w) / ext[cx], double(h) / ext[cy], double(d) / ext[cs]};
-    pr.right = r;
-    pr.up = u;
-    pr.forward = fw;
-    pr.eye = box.lo;
     return f;
 }
 
@@ -64,33 +73,16 @@ Frame Frame::orthographic(const Box3d& localBox, const Vec3d& right, const Vec3d
     const Vec3d ext = localBox.extent();
     if (!(ext.x > 0) || !(ext.y > 0) || !(ext.z > 0))
         fail("orthographic frame needs a box with positive extent along every axis");
-    Frame f;
-    f.perspective_ = false;
-    f.axis_ = Axis::Z;
-    f.w_ = w;
-    f.h_ = h;
-    f.d_ = d;
-    f.box_ = localBox;
-    f.right_ = right;
-    f.up_ = up;
-    f.forward_ = forward;
     const Vec3d origin = right * localBox.lo.x + up * localBox.lo.y + forward * localBox.lo.z;
-    f.eye_ = origin;
-    f.near_ = 0;
-    f.far_ = double(d);
-    f.uniform_ = {0.0, 1.0};
+    Frame f = withCamera(false, Axis::Z, w, h, d, origin, right, up, forward, 0, double(d));
+    f.box_ = localBox;
     Projection& pr = f.projection_;
-    pr.perspective = false;
     pr.oriented = true;
     pr.axisX = 0;
     pr.axisY = 1;
     pr.axisS = 2;
     pr.origin = origin;
     pr.scale = {double(w) / ext.x, double(h) / ext.y, double(d) / ext.z};
-    pr.right = right;
-    pr.up = up;
-    pr.forward = forward;
-    pr.eye = origin;
     return f;
 }
 
@@ -104,27 +96,10 @@ Frame Frame::perspective(const Vec3d& eye, const Vec3d& target, const Vec3d& up,
     const Vec3d r = normalize(cross(fw, up));
     if (length(fw) == 0 || length(r) == 0)
         fail("perspective frame: eye equals target or up is parallel to the view");
-    Frame f;
-    f.perspective_ = true;
-    f.axis_ = Axis::Z;
-    f.w_ = w;
-    f.h_ = h;
-    f.d_ = d;
-    f.eye_ = eye;
-    f.forward_ = fw;
-    f.right_ = r;
-    f.up_ = cross(r, fw);
+    Frame f = withCamera(true, Axis::Z, w, h, d, eye, r, cross(r, fw), fw, nearDepth, farDepth);
     f.tanHalfY_ = std::tan(fovY * 0.5);
     f.tanHalfX_ = f.tanHalfY_ * double(w) / double(h);
-    f.near_ = nearDepth;
-    f.far_ = farDepth;
-    f.uniform_ = {nearDepth, double(d) / (farDepth - nearDepth)};
     Projection& pr = f.projection_;
-    pr.perspective = true;
-    pr.eye = eye;
-    pr.right = f.right_;
-    pr.up = f.up_;
-    pr.forward = f.forward_;
     pr.tanX = f.tanHalfX_;
     pr.tanY = f.tanHalfY_;
     pr.halfW = 0.5 * double(w);

@@ -8,6 +8,7 @@
 #include <ostream>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "core/atomic_file.hpp"
 #include "voxfx/grid_io.hpp"
@@ -23,7 +24,10 @@ VoxelGrid readBinvox(std::span<const uint8_t> bytes);
 
 /// Writes through the temporary file's path (OpenVDB opens files by name).
 void writeVdb(const VoxelGrid& grid, AtomicFile& file, const GridWriteOptions& options);
-VoxelGrid readVdb(std::span<const uint8_t> bytes);
+/// `release`, when given, is the buffer holding `bytes`: it is emptied (its memory returned) once
+/// OpenVDB has parsed them, before the grid is allocated, so the file and the grid are not both
+/// held at the peak.
+VoxelGrid readVdb(std::span<const uint8_t> bytes, std::vector<uint8_t>* release = nullptr);
 
 void writeNrrd(const VoxelGrid& grid, std::ostream& out);
 VoxelGrid readNrrd(std::span<const uint8_t> bytes);

@@ -113,9 +113,12 @@ VoxelGrid readGrid(const std::string& path) {
             return detail::readBinvox(readFileBytes(path));
         case GridFormat::Nrrd:
             return detail::readNrrd(readFileBytes(path));
-        default:
-            // The module checks the bytes, then hands them to OpenVDB as a stream.
-            return detail::readVdb(readFileBytes(path));
+        default: {
+            // The module checks the bytes, then hands them to OpenVDB as a stream; they are freed
+            // once parsed, before the grid is allocated.
+            std::vector<uint8_t> bytes = readFileBytes(path);
+            return detail::readVdb(bytes, &bytes);
+        }
         }
     } catch (const Error& e) {
         const std::string what = e.what();

@@ -67,7 +67,8 @@ struct VdbModule {
                         const VdbPlacement& placement, const char* gridName, std::string* error);
     /// Reads the first bool, float or double grid of a .vdb file's bytes (in memory: checked,
     /// then handed to OpenVDB as a stream): `allocate` receives its box and returns the z-sliced
-    /// words to set (zeroed, wordsPerColumn per column).
+    /// words to set (zeroed, wordsPerColumn per column). The bytes are parsed in full before
+    /// `allocate` is called and not read after: the caller may free them there.
     bool (*readBits)(const uint8_t* data, std::size_t size, void* ctx,
                      uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn),
                      std::string* error);
@@ -75,8 +76,8 @@ struct VdbModule {
     /// bytes (checked, then read from memory, as readBits) as dense floats
     /// over its index box (the stored dimensions, else the active voxels' box), x fastest:
     /// `allocate` receives the box and returns dims[0] * dims[1] * dims[2] floats, or null to
-    /// stop (it must not throw). Rotated, sheared, mirrored and non-linear transforms and values
-    /// that are not finite floats are errors.
+    /// stop (it must not throw); the bytes are not read once it is called (as readBits). Rotated,
+    /// sheared, mirrored and non-linear transforms and values that are not finite floats are errors.
     bool (*readFloats)(const uint8_t* data, std::size_t size, const char* gridName, void* ctx,
                        float* (*allocate)(void* ctx, const VdbFloatBox& box), std::string* error);
 };

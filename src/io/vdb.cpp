@@ -32,11 +32,17 @@ void writeVdb(const VoxelGrid& grid, AtomicFile& file, const GridWriteOptions& o
         fail("cannot write '", file.targetPath().string(), "': ", error);
 }
 
-VoxelGrid readVdb(std::span<const uint8_t> bytes) {
+VoxelGrid readVdb(std::span<const uint8_t> bytes, std::vector<uint8_t>* release) {
     const VdbModule& vdb = vdbModule();
-    VoxelGrid g;
+    struct Target {
+        VoxelGrid grid;
+        std::vector<uint8_t>* release;
+    } target{{}, release};
     auto allocate = [](void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn) -> uint64_t* {
-        VoxelGrid& out = *static_cast<VoxelGrid*>(ctx);
+        Target& t = *static_cast<Target*>(ctx);
+        // The module no longer reads the bytes (module_api.hpp): let them go before the grid comes.
+        if (t.release) std::vector<uint8_t>().swap(*t.release);
+        VoxelGrid& out = t.grid;
         const Box3d world{{box.lo[0], box.lo[1], box.lo[2]}, {box.hi[0], box.hi[1], box.hi[2]}};
         out = VoxelGrid{Frame::orthographic(world, Axis::Z, box.dims[0], box.dims[1], box.dims[2]),
                         BitGrid(box.dims[0], box.dims[1], box.dims[2])};
@@ -44,8 +50,8 @@ VoxelGrid readVdb(std::span<const uint8_t> bytes) {
         return out.bits.column(0);
     };
     std::string error;
-    if (!vdb.readBits(bytes.data(), bytes.size(), &g, allocate, &error)) fail(error);
-    return g;
+    if (!vdb.readBits(bytes.data(), bytes.size(), &target, allocate, &error)) fail(error);
+    return std::move(target.grid);
 }
 
 } // namespace voxfx::detail

@@ -77,7 +77,8 @@ Volume readScalarNrrd(std::span<const uint8_t> bytes, const std::string& path, V
 Volume readRawJson(std::span<const uint8_t> bytes, const std::string& path, VolumeLoadReport& report);
 /// The float or double grid `gridName` (the first one when empty) of a .vdb file's bytes, through
 /// the voxfx_vdb module (which checks them before OpenVDB reads them from memory).
+/// `release` as for readVdb: the buffer holding `bytes`, emptied once they are parsed.
 Volume readVdbVolume(std::span<const uint8_t> bytes, const std::string& path, const std::string& gridName,
-                     VolumeLoadReport& report);
+                     VolumeLoadReport& report, std::vector<uint8_t>* release = nullptr);
 
 } // namespace voxfx::detail

@@ -261,7 +261,8 @@ Volume loadVolume(const std::string& path, const VolumeLoadOptions& options, Vol
     const std::string name = lowerName(path);
     if (name.ends_with(".vdb")) {
         r.format = VolumeFormat::Vdb;
-        return detail::readVdbVolume(detail::readVolumeFile(path), path, options.vdbGrid, r);
+        std::vector<uint8_t> bytes = detail::readVolumeFile(path);
+        return detail::readVdbVolume(bytes, path, options.vdbGrid, r, &bytes);
     }
     if (!options.vdbGrid.empty()) fail(path, ": a grid name is only for .vdb files");
     const std::vector<uint8_t> bytes = detail::readVolumeFile(path);

@@ -19,11 +19,14 @@ struct VdbVolumeTarget {
     Volume volume;
     VdbFloatBox box;
     std::exception_ptr error; ///< what stopped the allocation (rethrown after the module returns)
+    std::vector<uint8_t>* release = nullptr; ///< the file's bytes, emptied once parsed (see readVdb)
 };
 
 float* allocateVdbVolume(void* ctx, const VdbFloatBox& box) {
     auto& t = *static_cast<VdbVolumeTarget*>(ctx);
     try {
+        // The module no longer reads the bytes (module_api.hpp): let them go before the volume comes.
+        if (t.release) std::vector<uint8_t>().swap(*t.release);
         t.box = box;
         const Vec3i dims{box.dims[0], box.dims[1], box.dims[2]};
         const ScalarType type = box.isDouble ? ScalarType::Float64 : ScalarType::Float32;
@@ -42,10 +45,10 @@ float* allocateVdbVolume(void* ctx, const VdbFloatBox& box) {
 } // namespace
 
 Volume readVdbVolume(std::span<const uint8_t> bytes, const std::string& path, const std::string& gridName,
-                     VolumeLoadReport& report) {
+                     VolumeLoadReport& report, std::vector<uint8_t>* release) {
     report.fileBytes = bytes.size();
     const VdbModule& vdb = vdbModule();
-    VdbVolumeTarget target{&path, {}, {}, nullptr};
+    VdbVolumeTarget target{&path, {}, {}, nullptr, release};
     std::string error;
     const bool ok =
         vdb.readFloats(bytes.data(), bytes.size(), gridName.c_str(), &target, allocateVdbVolume, &error);

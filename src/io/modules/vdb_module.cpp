@@ -17,8 +17,10 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <streambuf>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <openvdb/io/Stream.h>
@@ -227,42 +229,73 @@ template <class GridT> void readTree(const GridT& grid, const openvdb::Coord& o,
     }
 }
 
-// An istream's buffer over bytes in memory, seekable within them.
+// An istream's buffer over read-only bytes in memory, seekable within them, that reads a few of
+// them as other values (the walker's overrides) without copying the rest: the get area is the
+// bytes up to the next override, or the one overriding byte.
 class MemoryBuffer : public std::streambuf {
 public:
-    explicit MemoryBuffer(const std::string& bytes) {
-        char* p = const_cast<char*>(bytes.data()); // read only: no put area
-        setg(p, p, p + bytes.size());
+    MemoryBuffer(std::string_view bytes, std::span<const vdbcheck::ByteOverride> overrides)
+        : bytes_(bytes), overrides_(overrides) {
+        show(0);
     }
 
 protected:
+    int_type underflow() override {
+        const uint64_t pos = position();
+        if (pos >= bytes_.size()) return traits_type::eof();
+        show(pos);
+        return traits_type::to_int_type(*gptr());
+    }
     pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode) override {
-        const off_type size = egptr() - eback();
+        const off_type size = off_type(bytes_.size());
         const off_type base = dir == std::ios_base::beg   ? 0
-                              : dir == std::ios_base::cur ? gptr() - eback()
+                              : dir == std::ios_base::cur ? off_type(position())
                                                           : size;
         if (off < -base || off > size - base) return pos_type(off_type(-1));
-        setg(eback(), eback() + (base + off), egptr());
+        show(uint64_t(base + off));
         return pos_type(base + off);
     }
     pos_type seekpos(pos_type p, std::ios_base::openmode mode) override {
         return seekoff(off_type(p), std::ios_base::beg, mode);
     }
+
+private:
+    uint64_t position() const { return start_ + uint64_t(gptr() - eback()); }
+
+    // Starts the get area at `pos`.
+    void show(uint64_t pos) {
+        start_ = pos;
+        const auto next =
+            std::lower_bound(overrides_.begin(), overrides_.end(), pos,
+                             [](const vdbcheck::ByteOverride& o, uint64_t p) { return o.at < p; });
+        if (next != overrides_.end() && next->at == pos) {
+            one_ = next->value;
+            setg(&one_, &one_, &one_ + 1);
+            return;
+        }
+        const uint64_t end = next == overrides_.end() ? bytes_.size() : next->at;
+        char* p = const_cast<char*>(bytes_.data()); // read only: no put area
+        setg(p + pos, p + pos, p + end);
+    }
+
+    std::string_view bytes_;
+    std::span<const vdbcheck::ByteOverride> overrides_;
+    uint64_t start_ = 0; // position of eback()
+    char one_ = 0;       // the overriding byte, when the get area is it
 };
 
 // Every grid of a .vdb file's bytes, read by OpenVDB after the walker checked them.
 openvdb::GridPtrVecPtr readValidatedGrids(const uint8_t* data, std::size_t size) {
     initializeOpenVdb();
     // The whole file, checked by the walker (vdb_validate.hpp) before OpenVDB reads those very
-    // bytes from memory: OpenVDB trusts every size and count in a file. (A copy: the walker
-    // neutralizes parts of it.)
-    std::string bytes(reinterpret_cast<const char*>(data), size);
-    vdbcheck::validateAndNeutralize(bytes);
+    // bytes from memory, in place: OpenVDB trusts every size and count in a file.
+    const std::string_view bytes(reinterpret_cast<const char*>(data), size);
+    const std::vector<vdbcheck::ByteOverride> overrides = vdbcheck::validate(bytes);
     openvdb::GridPtrVecPtr grids;
     try {
         // Exceptions on: a read past the end (which the walker rules out) would otherwise feed
         // OpenVDB zeros or stale bytes.
-        MemoryBuffer buffer(bytes);
+        MemoryBuffer buffer(bytes, overrides);
         std::istream in(&buffer);
         in.exceptions(std::ios::failbit | std::ios::badbit);
         openvdb::io::Stream stream(in, /*delayLoad=*/false);

@@ -398,13 +398,25 @@ private:
     std::vector<uint64_t> delayedLoad_;
 };
 
+/// A byte that OpenVDB must read as another value than the file's.
+struct ByteOverride {
+    uint64_t at;
+    char value;
+};
+
 /// Throws voxfx::Error when the bytes are not a .vdb file this walker can vouch for; otherwise
-/// renames the delayed-load metadata type ("__delayedload" -> "__xelayedload", same length) so that
-/// OpenVDB reads past it as unknown metadata instead of trusting the sizes inside it.
-inline void validateAndNeutralize(std::string& bytes) {
+/// returns, by increasing position, the bytes to read differently (the bytes themselves are left
+/// alone: the caller's buffer is read-only): the delayed-load metadata type is renamed
+/// ("__delayedload" -> "__xelayedload", same length) so that OpenVDB reads past it as unknown
+/// metadata instead of trusting the sizes inside it.
+inline std::vector<ByteOverride> validate(std::string_view bytes) {
     Walker walker(bytes);
     walker.walkFile();
-    for (const uint64_t typeName : walker.delayedLoadTypes()) bytes[typeName + 2] = 'x';
+    std::vector<ByteOverride> overrides;
+    for (const uint64_t typeName : walker.delayedLoadTypes()) overrides.push_back({typeName + 2, 'x'});
+    std::sort(overrides.begin(), overrides.end(),
+              [](const ByteOverride& a, const ByteOverride& b) { return a.at < b.at; });
+    return overrides;
 }
 
 } // namespace voxfx::detail::vdbcheck
