@@ -153,5 +153,39 @@ TEST(VoxelizeGwnTest, OnAnOpenMeshGwnFollowsTheExactWindingNumberAlongEveryAxis)
     }
 }
 
+// A lone square sheet in the middle of one 16-cell block: the winding number stays within
+// (-0.5, 0.5) everywhere, but the columns through the sheet count one crossing more behind it
+// (or, counted from the far end, in front of it) while the block's corners see none. Only the
+// curtains of the sheet's boundary edges keep those cells from being taken as inside; both
+// orientations, since the count from the far end serves the other one.
+TEST(VoxelizeGwnTest, AnOpenSheetInsideOneBlockFillsNothing) {
+    for (const bool flip : {false, true}) {
+        Mesh sheet;
+        for (const Vec3f p : {Vec3f{-0.4f, -0.4f, 0.05f}, Vec3f{0.4f, -0.4f, 0.05f}, Vec3f{0.4f, 0.4f, 0.05f},
+                              Vec3f{-0.4f, 0.4f, 0.05f}})
+            sheet.positions.push_back(p);
+        sheet.indices =
+            flip ? std::vector<uint32_t>{0, 2, 1, 0, 3, 2} : std::vector<uint32_t>{0, 1, 2, 0, 2, 3};
+        FitOptions fo;
+        fo.bounds.lo = {-1, -1, -1};
+        fo.bounds.hi = {1, 1, 1};
+        fo.dims = {16, 16, 16};
+        const Frame frame = fitFrame(computeBounds(sheet.view()), fo);
+        const VoxelGrid gwn = gwnTestRun(sheet, frame, VoxelizeMode::Solid, Fill::Gwn);
+        int64_t compared = 0, differ = 0;
+        for (int64_t y = 0; y < frame.height(); ++y)
+            for (int64_t x = 0; x < frame.width(); ++x)
+                for (int64_t z = 0; z < frame.depth(); ++z) {
+                    const double w = windingNumber(sheet.view(), frame.cellCenter(x, y, z));
+                    if (std::abs(w - 0.5) < 0.1) continue;
+                    ++compared;
+                    differ += gwn.bits.get(x, y, z) != (w >= 0.5);
+                }
+        EXPECT_GT(compared, 3500) << flip;
+        EXPECT_EQ(differ, 0) << flip;
+        EXPECT_EQ(gwn.bits.count(), 0) << flip;
+    }
+}
+
 } // namespace
 } // namespace voxfx
