@@ -1,12 +1,15 @@
 // Fill::Gwn (generalized winding number >= 0.5 at cell centres): the same solid as parity on
 // closed meshes away from the surface, and the closed solid back where a hole wider than a cell
 // lets the flood in. Oracles: the parity fill (itself checked against CGAL in
-// test_voxelize_oracle.cpp) of the closed mesh, and the conservative surface for "away from".
+// test_voxelize_oracle.cpp) of the closed mesh, the conservative surface for "away from", and
+// the exact winding number summed over every triangle (voxfx::windingNumber).
 #include <bit>
+#include <cmath>
 
 #include <gtest/gtest.h>
 
 #include "test_util.hpp"
+#include "voxfx/contains.hpp"
 #include "voxfx/voxelize.hpp"
 
 namespace voxfx {
@@ -88,6 +91,100 @@ TEST(VoxelizeGwnTest, GwnRecoversTheSolidThroughAHoleWiderThanACellWhereTheFlood
     EXPECT_LT(double(gwnDiffer), 0.02 * double(solid)) << gwnDiffer << " of " << solid;
     // The flood comes in through the hole: what is left is about the surface shell.
     EXPECT_LT(double(flood.bits.count()), 0.5 * double(solid)) << flood.bits.count() << " of " << solid;
+}
+
+// Inside surface blocks Fill::Gwn counts the columns' crossings (the winding number jumps by
+// exactly one across a triangle) and evaluates only where that cannot decide: on a closed mesh
+// that is nowhere, so every cell, on the surface too, is the winding fill's.
+TEST(VoxelizeGwnTest, OnAClosedMeshGwnEqualsTheWindingFillOnEveryCell) {
+    const Mesh meshes[] = {test::makeTorus({0.1, -0.2, 0.05}, 3, 1.1, 24, 12),
+                           test::makeOctahedron({0.3, 0.2, -0.1}, 2.0)};
+    for (const Mesh& mesh : meshes)
+        for (const Axis axis : {Axis::X, Axis::Z}) {
+            FitOptions fo;
+            fo.resolution = 24;
+            fo.marginCells = 2;
+            fo.axis = axis;
+            const Frame frame = fitFrame(computeBounds(mesh.view()), fo);
+            const VoxelGrid winding = gwnTestRun(mesh, frame, VoxelizeMode::Solid, Fill::Winding);
+            ASSERT_GT(winding.bits.count(), 500);
+            EXPECT_EQ(gwnTestRun(mesh, frame, VoxelizeMode::Solid, Fill::Gwn).bits, winding.bits);
+        }
+}
+
+// Where the surface is open the count changes also behind (or in front of) the boundary edges,
+// and near them the winding number turns fast: there the fill must evaluate. A sphere with a
+// wide hole, sliced along each axis (the hole faces the slices, or lies along the columns),
+// against the exact winding number at every centre not within 0.1 of the threshold (the fast
+// evaluator's approximation is far smaller than that).
+TEST(VoxelizeGwnTest, OnAnOpenMeshGwnFollowsTheExactWindingNumberAlongEveryAxis) {
+    const Mesh closed = test::makeUvSphere({0.3, -0.1, 0.2}, 1.0, 6, 10);
+    Mesh open;
+    open.positions = closed.positions;
+    for (std::size_t t = 0; t < closed.indices.size() / 3; ++t) {
+        bool cap = true;
+        for (int k = 0; k < 3; ++k)
+            cap &= closed.positions[closed.indices[3 * t + std::size_t(k)]].z > 0.2f + 0.4f;
+        if (!cap)
+            for (int k = 0; k < 3; ++k) open.indices.push_back(closed.indices[3 * t + std::size_t(k)]);
+    }
+    ASSERT_LT(open.indices.size(), closed.indices.size());
+    for (const Axis axis : {Axis::X, Axis::Y, Axis::Z}) {
+        FitOptions fo;
+        fo.resolution = 14;
+        fo.marginCells = 2;
+        fo.axis = axis;
+        const Frame frame = fitFrame(computeBounds(open.view()), fo);
+        const VoxelGrid gwn = gwnTestRun(open, frame, VoxelizeMode::Solid, Fill::Gwn, 1);
+        EXPECT_EQ(gwnTestRun(open, frame, VoxelizeMode::Solid, Fill::Gwn, 2).bits, gwn.bits);
+        int64_t compared = 0, inside = 0, differ = 0;
+        for (int64_t y = 0; y < frame.height(); ++y)
+            for (int64_t x = 0; x < frame.width(); ++x)
+                for (int64_t z = 0; z < frame.depth(); ++z) {
+                    const double w = windingNumber(open.view(), frame.cellCenter(x, y, z));
+                    if (std::abs(w - 0.5) < 0.1) continue;
+                    ++compared;
+                    inside += w >= 0.5;
+                    differ += gwn.bits.get(x, y, z) != (w >= 0.5);
+                }
+        EXPECT_GT(inside, 300) << toString(axis);
+        EXPECT_GT(compared, 2 * inside) << toString(axis);
+        EXPECT_EQ(differ, 0) << toString(axis);
+    }
+}
+
+// A lone square sheet in the middle of one 16-cell block: the winding number stays within
+// (-0.5, 0.5) everywhere, but the columns through the sheet count one crossing more behind it
+// (or, counted from the far end, in front of it) while the block's corners see none. Only the
+// curtains of the sheet's boundary edges keep those cells from being taken as inside; both
+// orientations, since the count from the far end serves the other one.
+TEST(VoxelizeGwnTest, AnOpenSheetInsideOneBlockFillsNothing) {
+    for (const bool flip : {false, true}) {
+        Mesh sheet;
+        for (const Vec3f p : {Vec3f{-0.4f, -0.4f, 0.05f}, Vec3f{0.4f, -0.4f, 0.05f}, Vec3f{0.4f, 0.4f, 0.05f},
+                              Vec3f{-0.4f, 0.4f, 0.05f}})
+            sheet.positions.push_back(p);
+        sheet.indices =
+            flip ? std::vector<uint32_t>{0, 2, 1, 0, 3, 2} : std::vector<uint32_t>{0, 1, 2, 0, 2, 3};
+        FitOptions fo;
+        fo.bounds.lo = {-1, -1, -1};
+        fo.bounds.hi = {1, 1, 1};
+        fo.dims = {16, 16, 16};
+        const Frame frame = fitFrame(computeBounds(sheet.view()), fo);
+        const VoxelGrid gwn = gwnTestRun(sheet, frame, VoxelizeMode::Solid, Fill::Gwn);
+        int64_t compared = 0, differ = 0;
+        for (int64_t y = 0; y < frame.height(); ++y)
+            for (int64_t x = 0; x < frame.width(); ++x)
+                for (int64_t z = 0; z < frame.depth(); ++z) {
+                    const double w = windingNumber(sheet.view(), frame.cellCenter(x, y, z));
+                    if (std::abs(w - 0.5) < 0.1) continue;
+                    ++compared;
+                    differ += gwn.bits.get(x, y, z) != (w >= 0.5);
+                }
+        EXPECT_GT(compared, 3500) << flip;
+        EXPECT_EQ(differ, 0) << flip;
+        EXPECT_EQ(gwn.bits.count(), 0) << flip;
+    }
 }
 
 } // namespace

@@ -29,8 +29,8 @@
 //   Fill::Gwn           generalized winding number >= 0.5 at the cell centre (Jacobson et al.
 //                       2013), fast approximation after Barill et al. 2018 (the evaluator of
 //                       contains()' winding method, beta 2). Closes holes wider than a cell that
-//                       let the flood in; needs consistent orientation; costs one evaluation per
-//                       cell near the surface and per uniform block elsewhere (voxfx/contains.hpp).
+//                       let the flood in; needs consistent orientation; evaluates near boundary
+//                       edges, where it is near 0.5, and a few centres per block (voxfx/contains.hpp).
 // Thread-safety: calls may run concurrently on shared const meshes (no global state); each call
 // spreads its tiles over worker threads (`threads`); results do not depend on their number.
 #pragma once

@@ -62,7 +62,7 @@ void fillDown(const uint64_t* freeBits, uint64_t* seeds, int64_t words) {
 
 namespace {
 
-// The outside flood. First one parallel pass settles what needs no neighbour (border columns,
+// The outside flood. First each band settles what needs no neighbour (border columns,
 // columns without walls, and the cells below each column's lowest wall and above its highest);
 // only free cells between those walls can still be undecided, and each column keeps the range
 // of words that hold its undecided cells (it only shrinks: a free run holding an undecided cell
@@ -93,8 +93,7 @@ public:
     }
 
     BitGrid run() {
-        seedFromColumnEnds();
-        for (bool again = true; again;) {
+        for (bool again = true, first = true; again; first = false) {
             again = false;
             for (int64_t parity = 0; parity < 2; ++parity) {
                 std::atomic<bool> marked{false};
@@ -102,6 +101,7 @@ public:
                     Scratch s(P_);
                     for (int64_t k = k0; k < k1; ++k) {
                         const int64_t b = 2 * k + parity;
+                        if (first) seedBand(b);
                         if (pending_[size_t(b)].exchange(0, std::memory_order_relaxed) && sweepBand(b, s))
                             marked.store(true, std::memory_order_relaxed);
                     }
@@ -121,42 +121,54 @@ private:
 
     int64_t band(int64_t y) const { return y / bandRows_; }
 
-    // The outside that needs no neighbour, in one parallel pass writing every word once: every
-    // free cell of a border column or of a column without walls (both ends of a column touch the
-    // grid border), and elsewhere the cells below the column's lowest wall and above its highest
-    // (free runs from the ends). Each column's outside is then a union of whole free runs, as the
-    // flood keeps it. A column whose free cells are all outside is saturated; the others are
-    // dirty (not looked at yet).
-    void seedFromColumnEnds() {
-        parallelFor(0, W_ * H_, 2048, [&](int64_t c0, int64_t c1) {
-            for (int64_t c = c0; c < c1; ++c) {
-                const uint64_t* wall = walls_.column(c);
-                uint64_t* in = inside_.column(c);
-                const int64_t x = c % W_, y = c / W_;
-                int64_t lo = 0, hi = P_ - 1;
-                while (lo < P_ && wall[lo] == 0) ++lo;
-                if (lo == P_ || x == 0 || y == 0 || x == W_ - 1 || y == H_ - 1) {
-                    for (int64_t w = 0; w < P_; ++w) in[w] = wall[w];
-                    saturated_[size_t(c)] = 1;
-                    dirty_[size_t(c)] = 0;
-                    continue;
-                }
-                while (wall[hi] == 0) --hi;
-                for (int64_t w = 0; w < lo; ++w) in[w] = 0;
-                for (int64_t w = lo; w <= hi; ++w) in[w] = ~uint64_t(0);
-                for (int64_t w = hi + 1; w < P_; ++w) in[w] = 0;
-                in[lo] &= ~((wall[lo] & (~wall[lo] + 1)) - 1);                       // below the lowest wall
-                in[hi] &= ~(~uint64_t(0) << (63 - std::countl_zero(wall[hi])) << 1); // above the highest
-                in[P_ - 1] &= last_;
-                // Free cells between the lowest and the highest wall: not decided yet.
-                uint64_t open = (~wall[lo] & in[lo]) | (~wall[hi] & in[hi]);
-                for (int64_t w = lo + 1; w < hi; ++w) open |= ~wall[w];
-                saturated_[size_t(c)] = open == 0;
-                dirty_[size_t(c)] = open != 0;
-                lo_[size_t(c)] = int32_t(lo);
-                hi_[size_t(c)] = int32_t(hi);
+    // Each band settles its rows right before its first sweep, which then finds them in cache
+    // (the grid is far larger than the caches: after a separate pass over all of it, the first
+    // sweep loaded every row back from memory). A sweep reads the row on each side of its band
+    // too, so an even band settles its rows and those two, an odd band the rest of its rows.
+    void seedBand(int64_t b) {
+        int64_t y0 = b * bandRows_, y1 = std::min(H_, y0 + bandRows_);
+        if (b % 2 == 0) {
+            y0 = std::max<int64_t>(y0 - 1, 0);
+            y1 = std::min(y1 + 1, H_);
+        } else {
+            y0 += 1;
+            if (b + 1 < bands_) y1 -= 1;
+        }
+        seedColumns(y0 * W_, y1 * W_);
+    }
+
+    // The outside that needs no neighbour, writing only the words that hold inside cells (the
+    // new grid is zero): every free cell of a border column or of a column without walls (both
+    // ends of a column touch the grid border), and elsewhere the cells below the column's lowest
+    // wall and above its highest (free runs from the ends). Each column's outside is then a union
+    // of whole free runs, as the flood keeps it. A column whose free cells are all outside is
+    // saturated; the others are dirty (not looked at yet).
+    void seedColumns(int64_t c0, int64_t c1) {
+        for (int64_t c = c0; c < c1; ++c) {
+            const uint64_t* wall = walls_.column(c);
+            uint64_t* in = inside_.column(c);
+            const int64_t x = c % W_, y = c / W_;
+            int64_t lo = 0, hi = P_ - 1;
+            while (lo < P_ && wall[lo] == 0) ++lo;
+            if (lo == P_ || x == 0 || y == 0 || x == W_ - 1 || y == H_ - 1) {
+                for (int64_t w = lo; w < P_; ++w) in[w] = wall[w];
+                saturated_[size_t(c)] = 1;
+                dirty_[size_t(c)] = 0;
+                continue;
             }
-        });
+            while (wall[hi] == 0) --hi;
+            for (int64_t w = lo; w <= hi; ++w) in[w] = ~uint64_t(0);
+            in[lo] &= ~((wall[lo] & (~wall[lo] + 1)) - 1);                       // below the lowest wall
+            in[hi] &= ~(~uint64_t(0) << (63 - std::countl_zero(wall[hi])) << 1); // above the highest
+            if (hi == P_ - 1) in[hi] &= last_;
+            // Free cells between the lowest and the highest wall: not decided yet.
+            uint64_t open = (~wall[lo] & in[lo]) | (~wall[hi] & in[hi]);
+            for (int64_t w = lo + 1; w < hi; ++w) open |= ~wall[w];
+            saturated_[size_t(c)] = open == 0;
+            dirty_[size_t(c)] = open != 0;
+            lo_[size_t(c)] = int32_t(lo);
+            hi_[size_t(c)] = int32_t(hi);
+        }
     }
 
     // Looks at a dirty column: gathers over its undecided words the free cells and the seeds

@@ -2,11 +2,15 @@
 #include "voxelize/winding_tree.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numbers>
 
+#include "voxelize/consumers.hpp"
 #include "voxfx/parallel.hpp"
+#include "voxfx/raster.hpp"
 
 namespace voxfx::detail {
 
@@ -94,27 +98,227 @@ double WindingTree::at(const Vec3d& p) const {
 
 namespace {
 
-// One tile of kGwnBlock x kGwnBlock columns, one block of kGwnBlock slices at a time: the
-// winding numbers evaluated so far in the block (NaN: not yet), and the block refinement.
+// Blocks of cells refine from kGwnBlock cells wide down to single cells.
 constexpr int64_t kGwnBlock = 16;
 
+// The columns' crossings with the surface, as the centre-sampled rasterizer finds them (the tie
+// rule of the parity fill): per column, the first slice behind each crossing and its sign (+1
+// where the winding number goes up: a front face).
+struct GwnCrossing {
+    int64_t column;
+    int32_t slice, sign;
+    bool operator<(const GwnCrossing& o) const {
+        return column != o.column ? column < o.column : (slice != o.slice ? slice < o.slice : sign < o.sign);
+    }
+};
+
+struct GwnCrossingConsumer {
+    FrameView frame;
+    std::mutex* mutex;
+    std::vector<GwnCrossing>* all;
+    struct Sink {
+        FrameView frame;
+        std::mutex* mutex;
+        std::vector<GwnCrossing>* all;
+        std::vector<GwnCrossing> local;
+        void fragment(int64_t x, int64_t y, double depth, uint32_t, bool front) {
+            const int64_t c = y * frame.width + x;
+            const int64_t s = firstSliceBehind(frame.depthToSlice(c)(depth), frame.depth);
+            local.push_back({c, int32_t(s), front ? 1 : -1}); // s = D: behind every centre
+        }
+        void finish() {
+            const std::lock_guard lock(*mutex);
+            all->insert(all->end(), local.begin(), local.end());
+        }
+    };
+    Sink tile(const Tile&) const { return {frame, mutex, all, {}}; }
+};
+
+// The edges of the mesh's boundary chain: the triangles' oriented edges that do not cancel, with
+// vertices at the same position taken as one (so a mesh split into pieces along shared positions
+// is closed there). Edges of inconsistently oriented neighbours count, as they should: the
+// winding number is not constant across their surface.
+std::vector<std::array<Vec3d, 2>> gwnBoundaryEdges(const MeshView& mesh) {
+    const std::size_t V = mesh.vertexCount;
+    std::vector<uint32_t> order(V), canon(V);
+    std::vector<Vec3d> pos(V);
+    for (std::size_t i = 0; i < V; ++i) {
+        order[i] = uint32_t(i);
+        pos[i] = mesh.vertex(i);
+    }
+    const auto less = [&](uint32_t a, uint32_t b) {
+        const Vec3d &p = pos[a], &q = pos[b];
+        return p.x != q.x ? p.x < q.x : (p.y != q.y ? p.y < q.y : (p.z != q.z ? p.z < q.z : a < b));
+    };
+    std::sort(order.begin(), order.end(), less);
+    for (std::size_t i = 0; i < V; ++i) {
+        const bool same = i > 0 && pos[order[i]].x == pos[order[i - 1]].x &&
+                          pos[order[i]].y == pos[order[i - 1]].y && pos[order[i]].z == pos[order[i - 1]].z;
+        canon[order[i]] = same ? canon[order[i - 1]] : order[i];
+    }
+    std::vector<std::pair<uint64_t, int32_t>> edges;
+    edges.reserve(3 * mesh.triangleCount);
+    for (std::size_t t = 0; t < mesh.triangleCount; ++t)
+        for (int k = 0; k < 3; ++k) {
+            const uint64_t a = canon[mesh.index(t, k)], b = canon[mesh.index(t, (k + 1) % 3)];
+            if (a != b) edges.emplace_back(a < b ? (a << 32 | b) : (b << 32 | a), a < b ? 1 : -1);
+        }
+    std::sort(edges.begin(), edges.end());
+    std::vector<std::array<Vec3d, 2>> out;
+    for (std::size_t i = 0; i < edges.size();) {
+        int32_t sum = 0;
+        std::size_t j = i;
+        for (; j < edges.size() && edges[j].first == edges[i].first; ++j) sum += edges[j].second;
+        if (sum != 0) out.push_back({pos[edges[i].first >> 32], pos[edges[i].first & 0xffffffffu]});
+        i = j;
+    }
+    return out;
+}
+
+// What the tiles share: the crossings of every column (CSR by column) and, per column, where the
+// boundary edges near it lie. A curtain is the part of a column's line behind a boundary edge:
+// only there does the count of crossings in front of a point change other than across the
+// surface (a column moving past the edge gains or loses a crossing). Both come with a margin
+// of a cell from the edges, where the winding number turns fast.
+struct GwnCrossings {
+    bool usable = false;
+    bool bothWays = false;      ///< no geometry behind the far plane either: counts from the far end too
+    std::vector<int64_t> start; ///< columnCount + 1
+    std::vector<GwnCrossing> crossings;
+    std::vector<int32_t> curtainBottom; ///< per column: the first slice a curtain may reach (D: none)
+    std::vector<int32_t> edgeTop;       ///< per column: the last slice near a boundary edge (-1: none)
+};
+
+GwnCrossings gwnCrossings(const Frame& frame, const MeshView& mesh) {
+    GwnCrossings g;
+    // Exact counts along straight columns from the grid's near end: an orthographic frame with
+    // uniform slicing, and no geometry in front of the near plane.
+    if (frame.isPerspective() || frame.slicing() != Slicing::Uniform) return g;
+    const FrameView view = frame.view();
+    const int64_t W = frame.width(), H = frame.height(), D = frame.depth();
+    g.bothWays = true;
+    for (std::size_t i = 0; i < mesh.vertexCount; ++i) {
+        const Vec3d p = frame.gridFromWorld(mesh.vertex(i));
+        const double t = view.uniform(p.z);
+        if (!(t >= 0) || !std::isfinite(t) || !std::isfinite(p.x) || !std::isfinite(p.y)) return g;
+        g.bothWays &= t <= double(D);
+    }
+    std::mutex mutex;
+    GwnCrossingConsumer consumer{view, &mutex, &g.crossings};
+    RasterOptions ro;
+    rasterize<Coverage::Center>(frame, mesh, ro, consumer);
+    std::sort(g.crossings.begin(), g.crossings.end());
+    g.start.assign(std::size_t(W * H + 1), 0);
+    for (const GwnCrossing& c : g.crossings) ++g.start[std::size_t(c.column + 1)];
+    for (std::size_t c = 0; c < std::size_t(W * H); ++c) g.start[c + 1] += g.start[c];
+    // Every column whose cell square grown by a cell a boundary edge's projection touches: its
+    // curtain from two slices in front of the edge's lowest point, and the edge up to two slices
+    // behind its highest.
+    g.curtainBottom.assign(std::size_t(W * H), int32_t(D));
+    g.edgeTop.assign(std::size_t(W * H), -1);
+    for (const auto& e : gwnBoundaryEdges(mesh)) {
+        Vec3d a = frame.gridFromWorld(e[0]), b = frame.gridFromWorld(e[1]);
+        a.z = view.uniform(a.z);
+        b.z = view.uniform(b.z);
+        const double zLow = std::min(a.z, b.z), zHigh = std::max(a.z, b.z);
+        if (!(zLow < double(D) + 2)) continue;
+        const auto bottom = int32_t(std::max<double>(0, std::floor(zLow) - 2));
+        const auto top = int32_t(std::clamp<double>(std::floor(zHigh) + 2, 0, double(D - 1)));
+        // The part of the edge over the grid's columns (grown by two cells), in steps of at most
+        // half a cell.
+        double u0 = 0, u1 = 1;
+        const double lo[2] = {-2, -2}, hi[2] = {double(W) + 2, double(H) + 2};
+        const double from[2] = {a.x, a.y}, delta[2] = {b.x - a.x, b.y - a.y};
+        for (int k = 0; k < 2; ++k) {
+            if (delta[k] == 0) {
+                if (from[k] < lo[k] || from[k] > hi[k]) u1 = -1;
+                continue;
+            }
+            const double e0 = (lo[k] - from[k]) / delta[k], e1 = (hi[k] - from[k]) / delta[k];
+            u0 = std::max(u0, std::min(e0, e1));
+            u1 = std::min(u1, std::max(e0, e1));
+        }
+        if (!(u0 <= u1)) continue;
+        const double len = std::hypot(delta[0], delta[1]) * (u1 - u0);
+        const int64_t steps = int64_t(std::ceil(len / 0.5)) + 1;
+        constexpr double m = 1.0;
+        for (int64_t i = 0; i < steps; ++i) {
+            const double t0 = u0 + (u1 - u0) * double(i) / double(steps),
+                         t1 = u0 + (u1 - u0) * double(i + 1) / double(steps);
+            const double x0 = a.x + (b.x - a.x) * t0, x1 = a.x + (b.x - a.x) * t1;
+            const double y0 = a.y + (b.y - a.y) * t0, y1 = a.y + (b.y - a.y) * t1;
+            const int64_t cx0 = std::max<int64_t>(0, int64_t(std::floor(std::min(x0, x1) - m)));
+            const int64_t cx1 = std::min<int64_t>(W - 1, int64_t(std::floor(std::max(x0, x1) + m)));
+            const int64_t cy0 = std::max<int64_t>(0, int64_t(std::floor(std::min(y0, y1) - m)));
+            const int64_t cy1 = std::min<int64_t>(H - 1, int64_t(std::floor(std::max(y0, y1) + m)));
+            for (int64_t y = cy0; y <= cy1; ++y)
+                for (int64_t x = cx0; x <= cx1; ++x) {
+                    int32_t& cb = g.curtainBottom[std::size_t(y * W + x)];
+                    cb = std::min(cb, bottom);
+                    int32_t& t = g.edgeTop[std::size_t(y * W + x)];
+                    t = std::max(t, top);
+                }
+        }
+    }
+    g.usable = true;
+    return g;
+}
+
+// One tile of kGwnBlock x kGwnBlock columns, one block of kGwnBlock slices at a time: the
+// winding numbers evaluated so far in the block (NaN: not yet), the crossing counts of the
+// tile's columns, and the block refinement.
 class GwnTile {
 public:
-    GwnTile(const Frame& frame, const WindingTree& tree, const BitGrid& surface, BitGrid& out)
-        : frame_(frame), tree_(tree), surface_(surface), out_(out),
-          cache_(size_t(kGwnBlock * kGwnBlock * kGwnBlock)) {}
+    GwnTile(const Frame& frame, const WindingTree& tree, const BitGrid& surface,
+            const GwnCrossings& crossings, BitGrid& out)
+        : frame_(frame), tree_(tree), surface_(surface), crossings_(crossings), out_(out),
+          cache_(size_t(kGwnBlock * kGwnBlock * kGwnBlock)) {
+        if (crossings_.usable) {
+            count_.resize(size_t(kGwnBlock * kGwnBlock * out_.depth()));
+            total_.resize(size_t(kGwnBlock * kGwnBlock));
+        }
+    }
 
     void run(int64_t x0, int64_t y0) {
         const int64_t x1 = std::min(x0 + kGwnBlock, out_.width()),
                       y1 = std::min(y0 + kGwnBlock, out_.height());
+        o_ = {x0, y0, 0};
+        if (crossings_.usable) countCrossings(x0, x1, y0, y1);
         for (int64_t z0 = 0; z0 < out_.depth(); z0 += kGwnBlock) {
             std::fill(cache_.begin(), cache_.end(), std::numeric_limits<float>::quiet_NaN());
-            o_ = {x0, y0, z0};
+            o_[2] = z0;
             decide(x0, x1, y0, y1, z0, std::min(z0 + kGwnBlock, out_.depth()));
         }
     }
 
 private:
+    // N: per cell of the tile, the signed count of crossings in front of its centre; per column,
+    // the count over the whole line.
+    void countCrossings(int64_t x0, int64_t x1, int64_t y0, int64_t y1) {
+        const int64_t D = out_.depth();
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = x0; x < x1; ++x) {
+                int32_t* n = &count_[size_t(((y - y0) * kGwnBlock + (x - x0)) * D)];
+                std::fill(n, n + D, 0);
+                const int64_t c = y * out_.width() + x;
+                int32_t total = 0;
+                for (int64_t i = crossings_.start[size_t(c)]; i < crossings_.start[size_t(c + 1)]; ++i) {
+                    const GwnCrossing& k = crossings_.crossings[size_t(i)];
+                    if (k.slice < D) n[k.slice] += k.sign;
+                    total += k.sign;
+                }
+                for (int64_t z = 1; z < D; ++z) n[z] += n[z - 1];
+                total_[size_t((y - y0) * kGwnBlock + (x - x0))] = total;
+            }
+    }
+    int32_t count(int64_t x, int64_t y, int64_t z) const {
+        return count_[size_t(((y - o_[1]) * kGwnBlock + (x - o_[0])) * out_.depth() + z)];
+    }
+    // Minus the count of crossings behind the centre: N less the column's total.
+    int32_t countFromFar(int64_t x, int64_t y, int64_t z) const {
+        return count(x, y, z) - total_[size_t((y - o_[1]) * kGwnBlock + (x - o_[0]))];
+    }
+
     // Sets slices [z0, z1) of a column.
     static void setSlices(uint64_t* col, int64_t z0, int64_t z1) {
         for (int64_t w = z0 >> 6; w <= (z1 - 1) >> 6; ++w) {
@@ -123,10 +327,29 @@ private:
         }
     }
 
-    bool insideAt(int64_t x, int64_t y, int64_t z) {
+    // The winding number at a cell's centre minus 0.5 (evaluated once per block).
+    float excess(int64_t x, int64_t y, int64_t z) {
         float& w = cache_[size_t(((z - o_[2]) * kGwnBlock + (y - o_[1])) * kGwnBlock + (x - o_[0]))];
         if (std::isnan(w)) w = float(tree_.at(frame_.cellCenter(x, y, z)) - 0.5);
-        return w >= 0;
+        return w;
+    }
+    bool insideAt(int64_t x, int64_t y, int64_t z) { return excess(x, y, z) >= 0; }
+
+    // Whether no curtain reaches into the block: the count N then changes only across the
+    // surface, by exactly what the winding number jumps there. The same holds for the count from
+    // the far end, whose curtains lie in front of the edges.
+    bool curtainFree(int64_t x0, int64_t x1, int64_t y0, int64_t y1, int64_t z1) const {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = x0; x < x1; ++x)
+                if (crossings_.curtainBottom[size_t(y * out_.width() + x)] < z1) return false;
+        return true;
+    }
+    bool frontCurtainFree(int64_t x0, int64_t x1, int64_t y0, int64_t y1, int64_t z0) const {
+        if (!crossings_.bothWays) return false;
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = x0; x < x1; ++x)
+                if (crossings_.edgeTop[size_t(y * out_.width() + x)] >= z0) return false;
+        return true;
     }
 
     // Whether a surface cell lies in [x0, x1) x [y0, y1) x [z0, z1) grown by `grow` cells.
@@ -149,11 +372,72 @@ private:
         return false;
     }
 
+    // Across the surface the winding number jumps by exactly the crossing's sign, so
+    // C = w - N is continuous there; off the curtains it is harmonic (zero for a closed mesh).
+    // When C stays within kGwnSlack of one integer k at the block's corners, every cell of the
+    // block is inside exactly when N + k >= 1 (w = N + C >= 0.5 with |C - k| < 0.5).
+    static constexpr double kGwnSlack = 0.4;
+    bool decideByCrossings(int64_t x0, int64_t x1, int64_t y0, int64_t y1, int64_t z0, int64_t z1) {
+        if (!crossings_.usable) return false;
+        if (curtainFree(x0, x1, y0, y1, z1))
+            return decideByCount(x0, x1, y0, y1, z0, z1,
+                                 [&](int64_t x, int64_t y, int64_t z) { return count(x, y, z); });
+        if (frontCurtainFree(x0, x1, y0, y1, z0))
+            return decideByCount(x0, x1, y0, y1, z0, z1,
+                                 [&](int64_t x, int64_t y, int64_t z) { return countFromFar(x, y, z); });
+        return false;
+    }
+    template <class Count>
+    bool decideByCount(int64_t x0, int64_t x1, int64_t y0, int64_t y1, int64_t z0, int64_t z1, Count n) {
+        double k = 0;
+        for (int c = 0; c < 8; ++c) {
+            const int64_t x = c & 1 ? x1 - 1 : x0, y = c & 2 ? y1 - 1 : y0, z = c & 4 ? z1 - 1 : z0;
+            const double rest = double(excess(x, y, z)) + 0.5 - double(n(x, y, z));
+            if (c == 0) k = std::round(rest);
+            if (!(std::abs(rest - k) < kGwnSlack)) return false;
+        }
+        const auto need = int32_t(1 - k);
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = x0; x < x1; ++x) {
+                uint64_t* col = out_.column(x, y);
+                for (int64_t z = z0; z < z1; ++z)
+                    if (n(x, y, z) >= need) col[z >> 6] |= uint64_t(1) << (z & 63);
+            }
+        return true;
+    }
+
+    // Along one column no curtain is ever crossed (curtains run along the columns), so C is
+    // continuous on cells [z0, z1] of a column away from its edges: the same test on the ends of
+    // the run, halving it until it passes, down to single cells.
+    void decideRun(int64_t x, int64_t y, int64_t z0, int64_t z1) {
+        if (z0 == z1) {
+            if (insideAt(x, y, z0)) out_.set(x, y, z0);
+            return;
+        }
+        const auto c = size_t(y * out_.width() + x);
+        if (z1 < crossings_.curtainBottom[c] || z0 > crossings_.edgeTop[c]) {
+            const double r0 = double(excess(x, y, z0)) + 0.5 - double(count(x, y, z0));
+            const double r1 = double(excess(x, y, z1)) + 0.5 - double(count(x, y, z1));
+            const double k = std::round(r0);
+            if (std::abs(r0 - k) < kGwnSlack && std::abs(r1 - k) < kGwnSlack) {
+                uint64_t* col = out_.column(x, y);
+                const auto need = int32_t(1 - k);
+                for (int64_t z = z0; z <= z1; ++z)
+                    if (count(x, y, z) >= need) col[z >> 6] |= uint64_t(1) << (z & 63);
+                return;
+            }
+        }
+        const int64_t zm = z0 + (z1 - z0) / 2;
+        decideRun(x, y, z0, zm);
+        decideRun(x, y, zm + 1, z1);
+    }
+
     void decide(int64_t x0, int64_t x1, int64_t y0, int64_t y1, int64_t z0, int64_t z1) {
         if (x1 - x0 == 1 && y1 - y0 == 1 && z1 - z0 == 1) {
             if (insideAt(x0, y0, z0)) out_.set(x0, y0, z0);
             return;
         }
+        if (decideByCrossings(x0, x1, y0, y1, z0, z1)) return;
         const bool first = insideAt(x0, y0, z0);
         bool agree = true;
         for (int k = 1; k < 8 && agree; ++k)
@@ -165,6 +449,12 @@ private:
             if (first)
                 for (int64_t y = y0; y < y1; ++y)
                     for (int64_t x = x0; x < x1; ++x) setSlices(out_.column(x, y), z0, z1);
+            return;
+        }
+        // Small blocks that a curtain crosses: column by column.
+        if (crossings_.usable && std::max(x1 - x0, y1 - y0) <= 4) {
+            for (int64_t y = y0; y < y1; ++y)
+                for (int64_t x = x0; x < x1; ++x) decideRun(x, y, z0, z1 - 1);
             return;
         }
         const int64_t xm = x0 + (x1 - x0 + 1) / 2, ym = y0 + (y1 - y0 + 1) / 2, zm = z0 + (z1 - z0 + 1) / 2;
@@ -179,21 +469,25 @@ private:
     const Frame& frame_;
     const WindingTree& tree_;
     const BitGrid& surface_;
+    const GwnCrossings& crossings_;
     BitGrid& out_;
     std::vector<float> cache_;
+    std::vector<int32_t> count_, total_;
     std::array<int64_t, 3> o_{};
 };
 
 } // namespace
 
-BitGrid gwnFillInside(const Frame& frame, const WindingTree& tree, const BitGrid& surface) {
+BitGrid gwnFillInside(const Frame& frame, const MeshView& mesh, const WindingTree& tree,
+                      const BitGrid& surface) {
     BitGrid out(frame.width(), frame.height(), frame.depth());
     if (tree.nodes.empty()) return out;
+    const GwnCrossings crossings = gwnCrossings(frame, mesh);
     const int64_t tx = (frame.width() + kGwnBlock - 1) / kGwnBlock,
                   ty = (frame.height() + kGwnBlock - 1) / kGwnBlock;
     // Tiles own whole columns, so no two threads write the same word.
     parallelFor(0, tx * ty, 1, [&](int64_t t0, int64_t t1) {
-        GwnTile tile(frame, tree, surface, out);
+        GwnTile tile(frame, tree, surface, crossings, out);
         for (int64_t t = t0; t < t1; ++t) tile.run(t % tx * kGwnBlock, t / tx * kGwnBlock);
     });
     return out;
