@@ -140,10 +140,15 @@ int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::
     std::vector<Material> materials(vs.objects.size());
     for (std::size_t o = 0; o < vs.objects.size(); ++o) {
         const VolumeSceneObject& obj = vs.objects[o];
-        if (obj.material >= 0) materials[o] = scene.materials[std::size_t(obj.material)];
+        materials[o].opacity = obj.kind == ObjectKind::Translucent ? obj.opacity : 1.0f;
+        if (obj.material >= 0) {
+            // The mesh's own material; the eye sees its coverage (opacity), whatever its tissue
+            // passes to the shadows.
+            materials[o] = scene.materials[std::size_t(obj.material)];
+            if (obj.kind != ObjectKind::Translucent) materials[o].opacity = 1;
+        }
         materials[o].name = obj.name;
         materials[o].baseColor = obj.color;
-        materials[o].opacity = obj.kind == ObjectKind::Translucent ? obj.opacity : 1.0f;
     }
     const ObjectSurfaces surfaces(vs);
     const std::vector<EmptySpace> emptySpace =
