@@ -162,7 +162,7 @@ TEST(HostileVdbTest, FloatGridVolumesHoldTilesBackgroundAndVoxels) {
     EXPECT_DOUBLE_EQ(v.spacing().z, 0.5);
 }
 
-TEST(HostileVdbTest, FloatGridVolumesRefuseRotationsHugeBoxesAndNaN) {
+TEST(HostileVdbTest, FloatGridVolumesTurnWithRotationsAndRefuseShearsHugeBoxesAndNaN) {
     TempDir dir;
     openvdb::initialize();
     auto expectVolumeError = [](const std::string& path, const std::string& cause) {
@@ -180,7 +180,19 @@ TEST(HostileVdbTest, FloatGridVolumesRefuseRotationsHugeBoxesAndNaN) {
     auto xform = openvdb::math::Transform::createLinearTransform(1.0);
     xform->postRotate(0.3, openvdb::math::Z_AXIS);
     rotated->setTransform(xform);
-    expectVolumeError(vdbHostileWriteGrid(dir, "rotated.vdb", rotated), "rotated");
+    // A rotation turns the volume: its voxel sits where OpenVDB's own transform puts index (1, 2, 3).
+    const Volume turned = loadVolume(vdbHostileWriteGrid(dir, "rotated.vdb", rotated));
+    EXPECT_FALSE(turned.axisAligned());
+    const openvdb::Vec3d w = xform->indexToWorld(openvdb::Coord(1, 2, 3));
+    const Vec3d centre = turned.voxelCenter(0, 0, 0);
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(centre[a], w[a], 1e-12);
+    EXPECT_EQ(turned.sample({w[0], w[1], w[2]}), 1.0f);
+    auto sheared = openvdb::FloatGrid::create(0.0f);
+    sheared->tree().setValue(openvdb::Coord(1, 2, 3), 1.0f);
+    auto shear = openvdb::math::Transform::createLinearTransform(1.0);
+    shear->postShear(0.4, openvdb::math::X_AXIS, openvdb::math::Y_AXIS);
+    sheared->setTransform(shear);
+    expectVolumeError(vdbHostileWriteGrid(dir, "sheared.vdb", sheared), "sheared");
     // Two voxels 2^20 apart on every axis: 2^60 voxels between them, refused before allocating.
     auto sparse = openvdb::FloatGrid::create(0.0f);
     sparse->tree().setValue(openvdb::Coord(0, 0, 0), 1.0f);

@@ -736,6 +736,27 @@ std::string write(const TempDir& dir, const std::string& name) {
 
 } // namespace vdbvol
 
+TEST(VolumeIo, VdbTurnedFloatGridKeepsEverySampleWhereItWas) {
+    // tests/fixtures/turned-float-grid.vdb (written by make_turned_float_grid.cpp next to it):
+    // index axes turned 30 degrees about z, voxel sizes (2, 1, 0.5), index (0, 0, 0) centred at
+    // (10, 0, 7), value 1 + i + 10 j + 100 k. Every voxel's centre is where the generator put it.
+    const Volume v = loadVolume(std::string(VOXFX_FIXTURES_DIR) + "/turned-float-grid.vdb");
+    ASSERT_TRUE(v.dims() == (Vec3i{3, 4, 5}));
+    EXPECT_FALSE(v.axisAligned());
+    expectVecNear(v.spacing(), {2, 1, 0.5}, 1e-12);
+    const double c = std::cos(M_PI / 6), n = std::sin(M_PI / 6);
+    const Vec3d d0{2 * c, 2 * n, 0}, d1{-n, c, 0}, d2{0, 0, 0.5}, origin{10, 0, 7};
+    for (int64_t k = 0; k < 5; ++k)
+        for (int64_t j = 0; j < 4; ++j)
+            for (int64_t i = 0; i < 3; ++i) {
+                const Vec3d world = origin + d0 * double(i) + d1 * double(j) + d2 * double(k);
+                const float want = float(1 + i + 10 * j + 100 * k);
+                expectVecNear(v.voxelCenter(i, j, k), world, 1e-9);
+                EXPECT_EQ(v.at(i, j, k), want);
+                EXPECT_NEAR(v.sample(world), want, 1e-4);
+            }
+}
+
 TEST(VolumeIo, VdbFloatGridReadsBackItsSamplesAndTransform) {
     TempDir dir;
     const std::string path = vdbvol::write(dir, "density.vdb");

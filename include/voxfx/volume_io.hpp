@@ -17,9 +17,10 @@
 //                   VolumeLoadOptions::vdbGrid; the dense box is the grid's stored dimensions
 //                   (voxfx's "voxfx_dims" metadata) or else the bounding box of its active voxels,
 //                   and every voxel there gets the grid's value (active or not: the background
-//                   where nothing is stored). The transform must be an axis-aligned scale (per axis)
-//                   and translation: index (i, j, k) is the centre of voxel (i, j, k) of that box;
-//                   rotated, sheared, mirrored and non-linear transforms are refused. Read through
+//                   where nothing is stored). The transform must be linear with orthogonal index
+//                   axes (scale per axis, rotation, mirror, translation): index (i, j, k) is the
+//                   centre of voxel (i, j, k) of that box, and a rotated grid gives a turned volume
+//                   (Volume::setAxes); sheared and non-linear transforms are refused. Read through
 //                   the voxfx_vdb module, which checks the file's structure before OpenVDB reads it.
 // Every header is checked against the bytes the file holds before anything is allocated, and a
 // NaN or infinite sample is an error: voxfx::Error names the file and what is wrong.

@@ -20,7 +20,7 @@
 namespace voxfx::detail {
 
 /// Bump when a table below changes.
-inline constexpr uint32_t kModuleAbi = 3;
+inline constexpr uint32_t kModuleAbi = 4;
 
 /// The library's parallel-for handed to a module (so that modules follow withThreads and name no
 /// thread library): calls call(body, b, e) over chunks of `grain` items covering [begin, end).
@@ -48,10 +48,12 @@ struct VdbReadBox {
 };
 
 /// What readFloats found, for the caller to allocate the volume: the index box's size, the world
-/// corner of its voxel (0, 0, 0) and the voxel size, and the grid read.
+/// corner of its voxel (0, 0, 0), the voxel size, the world directions of the index axes (unit,
+/// orthogonal: a turned grid), and the grid read.
 struct VdbFloatBox {
     int64_t dims[3] = {0, 0, 0};
     double lo[3] = {0, 0, 0}, spacing[3] = {1, 1, 1};
+    double axes[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
     std::string name, gridClass;
     bool isDouble = false;
 };
@@ -76,8 +78,9 @@ struct VdbModule {
     /// bytes (checked, then read from memory, as readBits) as dense floats
     /// over its index box (the stored dimensions, else the active voxels' box), x fastest:
     /// `allocate` receives the box and returns dims[0] * dims[1] * dims[2] floats, or null to
-    /// stop (it must not throw); the bytes are not read once it is called (as readBits). Rotated,
-    /// sheared, mirrored and non-linear transforms and values that are not finite floats are errors.
+    /// stop (it must not throw); the bytes are not read once it is called (as readBits). Rotated and
+    /// mirrored transforms give turned axes; sheared and non-linear transforms and values that are
+    /// not finite floats are errors.
     bool (*readFloats)(const uint8_t* data, std::size_t size, const char* gridName, void* ctx,
                        float* (*allocate)(void* ctx, const VdbFloatBox& box), std::string* error);
 };

@@ -35,6 +35,12 @@ float* allocateVdbVolume(void* ctx, const VdbFloatBox& box) {
         checkVolumeMemory(dims, 0, where);
         t.volume = Volume(dims, {box.lo[0], box.lo[1], box.lo[2]},
                           {box.spacing[0], box.spacing[1], box.spacing[2]}, type);
+        const Vec3d axes[3] = {{box.axes[0][0], box.axes[0][1], box.axes[0][2]},
+                               {box.axes[1][0], box.axes[1][1], box.axes[1][2]},
+                               {box.axes[2][0], box.axes[2][1], box.axes[2][2]}};
+        if (!(axes[0] == Vec3d{1, 0, 0} && axes[1] == Vec3d{0, 1, 0} && axes[2] == Vec3d{0, 0, 1})) try {
+                t.volume.setAxes(axes[0], axes[1], axes[2]);
+            } catch (const Error& e) { fail(where, ": ", e.what()); }
         return t.volume.values().data();
     } catch (...) {
         t.error = std::current_exception();

@@ -150,6 +150,32 @@ void boxTransform(const openvdb::GridBase& grid, double cell[3], double centre0[
              cell[1], ", ", cell[2], ")");
 }
 
+// Cell sizes, unit directions of the index axes and centre of voxel (0,0,0) of a linear transform
+// whose index axes are orthogonal (scale, rotation, mirror, translation): what a turned volume is.
+void turnedTransform(const openvdb::GridBase& grid, double cell[3], double axes[3][3], double centre0[3]) {
+    const openvdb::math::MapBase::ConstPtr map = grid.transform().baseMap();
+    if (!map->isLinear())
+        fail("grid '", grid.getName(), "' has a non-linear (", map->type(), ") transform; only linear ",
+             "transforms with orthogonal axes describe a voxel box");
+    const openvdb::Mat4d m = map->getAffineMap()->getMat4(); // row vectors: row r is index axis r's step
+    for (int r = 0; r < 3; ++r) {
+        cell[r] = std::sqrt(m(r, 0) * m(r, 0) + m(r, 1) * m(r, 1) + m(r, 2) * m(r, 2));
+        if (!(std::isfinite(cell[r]) && cell[r] > 0))
+            fail("grid '", grid.getName(), "' has a degenerate transform (index axis ", r, " has length ",
+                 cell[r], ")");
+        for (int c = 0; c < 3; ++c) axes[r][c] = m(r, c) / cell[r];
+        centre0[r] = m(3, r);
+        if (!std::isfinite(centre0[r])) fail("grid '", grid.getName(), "' has a non-finite translation");
+    }
+    for (int r = 0; r < 3; ++r)
+        for (int q = 0; q < r; ++q) {
+            const double d = axes[r][0] * axes[q][0] + axes[r][1] * axes[q][1] + axes[r][2] * axes[q][2];
+            if (!(std::abs(d) <= 1e-6))
+                fail("grid '", grid.getName(), "' has a sheared transform (index axes ", q, " and ", r,
+                     " are not orthogonal); only scale, rotation and translation describe a voxel box");
+        }
+}
+
 // A z-sliced target: n = index box size, words wpc per column (x, y).
 struct Target {
     int64_t nx, ny, nz, wpc;
@@ -432,15 +458,16 @@ void readFloatsImpl(const uint8_t* data, std::size_t size, const char* gridName,
         fail("grid '", base->getName(), "' is a ", base->valueType(),
              " grid; volumes are read from float or double grids");
 
-    double cell[3], centre0[3];
-    boxTransform(*base, cell, centre0);
+    VdbFloatBox out;
+    double centre0[3];
+    turnedTransform(*base, out.spacing, out.axes, centre0);
     const openvdb::CoordBBox box = indexBox(*base);
     const openvdb::Coord o = box.min();
-    VdbFloatBox out;
-    for (int a = 0; a < 3; ++a) {
-        out.dims[a] = int64_t(box.max()[a]) - o[a] + 1;
-        out.spacing[a] = cell[a];
-        out.lo[a] = centre0[a] + (double(o[a]) - 0.5) * cell[a];
+    for (int a = 0; a < 3; ++a) out.dims[a] = int64_t(box.max()[a]) - o[a] + 1;
+    // The corner of the box's voxel (0,0,0): index o - 0.5 along every axis.
+    for (int c = 0; c < 3; ++c) {
+        out.lo[c] = centre0[c];
+        for (int r = 0; r < 3; ++r) out.lo[c] += out.axes[r][c] * (double(o[r]) - 0.5) * out.spacing[r];
     }
     out.name = base->getName();
     out.gridClass = openvdb::GridBase::gridClassToString(base->getGridClass());
