@@ -5,12 +5,11 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <mutex>
 #include <numbers>
 
 #include "voxelize/consumers.hpp"
+#include "voxfx/fragment_list.hpp"
 #include "voxfx/parallel.hpp"
-#include "voxfx/raster.hpp"
 
 namespace voxfx::detail {
 
@@ -101,39 +100,6 @@ namespace {
 // Blocks of cells refine from kGwnBlock cells wide down to single cells.
 constexpr int64_t kGwnBlock = 16;
 
-// The columns' crossings with the surface, as the centre-sampled rasterizer finds them (the tie
-// rule of the parity fill): per column, the first slice behind each crossing and its sign (+1
-// where the winding number goes up: a front face).
-struct GwnCrossing {
-    int64_t column;
-    int32_t slice, sign;
-    bool operator<(const GwnCrossing& o) const {
-        return column != o.column ? column < o.column : (slice != o.slice ? slice < o.slice : sign < o.sign);
-    }
-};
-
-struct GwnCrossingConsumer {
-    FrameView frame;
-    std::mutex* mutex;
-    std::vector<GwnCrossing>* all;
-    struct Sink {
-        FrameView frame;
-        std::mutex* mutex;
-        std::vector<GwnCrossing>* all;
-        std::vector<GwnCrossing> local;
-        void fragment(int64_t x, int64_t y, double depth, uint32_t, bool front) {
-            const int64_t c = y * frame.width + x;
-            const int64_t s = firstSliceBehind(frame.depthToSlice(c)(depth), frame.depth);
-            local.push_back({c, int32_t(s), front ? 1 : -1}); // s = D: behind every centre
-        }
-        void finish() {
-            const std::lock_guard lock(*mutex);
-            all->insert(all->end(), local.begin(), local.end());
-        }
-    };
-    Sink tile(const Tile&) const { return {frame, mutex, all, {}}; }
-};
-
 // The edges of the mesh's boundary chain: the triangles' oriented edges that do not cancel, with
 // vertices at the same position taken as one (so a mesh split into pieces along shared positions
 // is closed there). Edges of inconsistently oriented neighbours count, as they should: the
@@ -182,9 +148,11 @@ std::vector<std::array<Vec3d, 2>> gwnBoundaryEdges(const MeshView& mesh) {
 // of a cell from the edges, where the winding number turns fast.
 struct GwnCrossings {
     bool usable = false;
-    bool bothWays = false;      ///< no geometry behind the far plane either: counts from the far end too
-    std::vector<int64_t> start; ///< columnCount + 1
-    std::vector<GwnCrossing> crossings;
+    bool bothWays = false; ///< no geometry behind the far plane either: counts from the far end too
+    /// The columns' crossings with the surface, as the centre-sampled rasterizer finds them (the
+    /// tie rule of the parity fill); a front fragment raises the winding number by one.
+    FragmentLists lists;
+    FrameView view;
     std::vector<int32_t> curtainBottom; ///< per column: the first slice a curtain may reach (D: none)
     std::vector<int32_t> edgeTop;       ///< per column: the last slice near a boundary edge (-1: none)
 };
@@ -203,14 +171,8 @@ GwnCrossings gwnCrossings(const Frame& frame, const MeshView& mesh) {
         if (!(t >= 0) || !std::isfinite(t) || !std::isfinite(p.x) || !std::isfinite(p.y)) return g;
         g.bothWays &= t <= double(D);
     }
-    std::mutex mutex;
-    GwnCrossingConsumer consumer{view, &mutex, &g.crossings};
-    RasterOptions ro;
-    rasterize<Coverage::Center>(frame, mesh, ro, consumer);
-    std::sort(g.crossings.begin(), g.crossings.end());
-    g.start.assign(std::size_t(W * H + 1), 0);
-    for (const GwnCrossing& c : g.crossings) ++g.start[std::size_t(c.column + 1)];
-    for (std::size_t c = 0; c < std::size_t(W * H); ++c) g.start[c + 1] += g.start[c];
+    g.lists = FragmentLists::build(frame, mesh);
+    g.view = view;
     // Every column whose cell square grown by a cell a boundary edge's projection touches: its
     // curtain from two slices in front of the edge's lowest point, and the edge up to two slices
     // behind its highest.
@@ -301,11 +263,13 @@ private:
                 int32_t* n = &count_[size_t(((y - y0) * kGwnBlock + (x - x0)) * D)];
                 std::fill(n, n + D, 0);
                 const int64_t c = y * out_.width() + x;
+                const DepthToSlice toSlice = crossings_.view.depthToSlice(c);
                 int32_t total = 0;
-                for (int64_t i = crossings_.start[size_t(c)]; i < crossings_.start[size_t(c + 1)]; ++i) {
-                    const GwnCrossing& k = crossings_.crossings[size_t(i)];
-                    if (k.slice < D) n[k.slice] += k.sign;
-                    total += k.sign;
+                for (const ListFragment& f : crossings_.lists.column(x, y)) {
+                    const int32_t sign = f.front ? 1 : -1;
+                    const int64_t slice = firstSliceBehind(toSlice(f.depth), D); // D: behind every centre
+                    if (slice < D) n[slice] += sign;
+                    total += sign;
                 }
                 for (int64_t z = 1; z < D; ++z) n[z] += n[z - 1];
                 total_[size_t((y - y0) * kGwnBlock + (x - x0))] = total;
