@@ -70,12 +70,16 @@ VoxelGrid runFill(const Mesh& m, const Frame& f, Fill fill) {
     return voxelize(m.view(), f, vo);
 }
 
-void fillAgreement(benchmark::State& state, const std::string& name, Fill fill) {
+// The named mesh (or null, the benchmark skipped: the data is missing).
+const Mesh* meshOrSkip(benchmark::State& state, const std::string& name) {
     const Mesh* m = openMesh(name);
-    if (!m) {
-        state.SkipWithError("missing data: run scripts/fetch-data.sh");
-        return;
-    }
+    if (!m) state.SkipWithError("missing data: run scripts/fetch-data.sh");
+    return m;
+}
+
+void fillAgreement(benchmark::State& state, const std::string& name, Fill fill) {
+    const Mesh* m = meshOrSkip(state, name);
+    if (!m) return;
     const Frame f = fillFrame(*m, state.range(0));
     const BitGrid& ref = reference(name, *m, f);
     VoxelGrid g;
@@ -94,11 +98,8 @@ void fillAgreement(benchmark::State& state, const std::string& name, Fill fill) 
 }
 
 void fillTime(benchmark::State& state, const std::string& name, Fill fill) {
-    const Mesh* m = openMesh(name);
-    if (!m) {
-        state.SkipWithError("missing data: run scripts/fetch-data.sh");
-        return;
-    }
+    const Mesh* m = meshOrSkip(state, name);
+    if (!m) return;
     const Frame f = fillFrame(*m, state.range(0));
     for (auto _ : state) {
         VoxelGrid g = runFill(*m, f, fill);

@@ -22,6 +22,19 @@ Frame gwnTestFrame(const Mesh& mesh, int64_t resolution) {
     return fitFrame(computeBounds(mesh.view()), fo);
 }
 
+// The mesh without its triangles whose three corners lie above height z: a cap cut off, a hole.
+Mesh gwnTestWithoutCap(const Mesh& closed, float z) {
+    Mesh open;
+    open.positions = closed.positions;
+    for (std::size_t t = 0; t < closed.indices.size() / 3; ++t) {
+        bool cap = true;
+        for (int k = 0; k < 3; ++k) cap &= closed.positions[closed.indices[3 * t + std::size_t(k)]].z > z;
+        if (!cap)
+            for (int k = 0; k < 3; ++k) open.indices.push_back(closed.indices[3 * t + std::size_t(k)]);
+    }
+    return open;
+}
+
 VoxelGrid gwnTestRun(const Mesh& mesh, const Frame& frame, VoxelizeMode mode, Fill fill, int threads = 0) {
     VoxelizeOptions o;
     o.mode = mode;
@@ -67,15 +80,7 @@ TEST(VoxelizeGwnTest, GwnRecoversTheSolidThroughAHoleWiderThanACellWhereTheFlood
     // A UV sphere 32 cells across without its top cap (the triangles above z = 0.9 r): the hole's
     // rim is 0.38 r across, about 12 cells. Parity of the closed sphere is the reference.
     const Mesh closed = test::makeUvSphere({0.3, -0.1, 0.2}, 1.0, 16, 24);
-    Mesh open;
-    open.positions = closed.positions;
-    for (std::size_t t = 0; t < closed.indices.size() / 3; ++t) {
-        bool cap = true;
-        for (int k = 0; k < 3; ++k)
-            cap &= closed.positions[closed.indices[3 * t + std::size_t(k)]].z > 0.2f + 0.9f;
-        if (!cap)
-            for (int k = 0; k < 3; ++k) open.indices.push_back(closed.indices[3 * t + std::size_t(k)]);
-    }
+    const Mesh open = gwnTestWithoutCap(closed, 0.2f + 0.9f);
     ASSERT_LT(open.indices.size(), closed.indices.size());
     const Frame frame = gwnTestFrame(closed, 32);
     const VoxelGrid reference = gwnTestRun(closed, frame, VoxelizeMode::Solid, Fill::Parity);
@@ -119,15 +124,7 @@ TEST(VoxelizeGwnTest, OnAClosedMeshGwnEqualsTheWindingFillOnEveryCell) {
 // evaluator's approximation is far smaller than that).
 TEST(VoxelizeGwnTest, OnAnOpenMeshGwnFollowsTheExactWindingNumberAlongEveryAxis) {
     const Mesh closed = test::makeUvSphere({0.3, -0.1, 0.2}, 1.0, 6, 10);
-    Mesh open;
-    open.positions = closed.positions;
-    for (std::size_t t = 0; t < closed.indices.size() / 3; ++t) {
-        bool cap = true;
-        for (int k = 0; k < 3; ++k)
-            cap &= closed.positions[closed.indices[3 * t + std::size_t(k)]].z > 0.2f + 0.4f;
-        if (!cap)
-            for (int k = 0; k < 3; ++k) open.indices.push_back(closed.indices[3 * t + std::size_t(k)]);
-    }
+    const Mesh open = gwnTestWithoutCap(closed, 0.2f + 0.4f);
     ASSERT_LT(open.indices.size(), closed.indices.size());
     for (const Axis axis : {Axis::X, Axis::Y, Axis::Z}) {
         FitOptions fo;
