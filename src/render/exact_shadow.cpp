@@ -63,12 +63,15 @@ Vec3f ExactShadow::transmittance(const Vec3d& p, const Vec3d& dir, double distan
     Vec3f v{1, 1, 1};
     Vec3d o = p;
     double left = distance, travelled = 0;
-    // Glass volumes the ray is inside: which one and where it entered (nested objects stack).
+    // Glass volumes the ray is inside: which one and where it entered (nested objects stack). One
+    // stack per thread, reused: this runs once per shadow ray, and a fresh vector would allocate
+    // on every ray that enters glass.
     struct Inside {
         uint32_t glass;
         double t;
     };
-    std::vector<Inside> inside;
+    thread_local std::vector<Inside> inside;
+    inside.clear();
     // Each crossing moves the origin to the hit; epsilon steps over the triangle just crossed.
     for (int crossings = 0; crossings < 100000; ++crossings) {
         const TriangleTracer::Hit h = tracer_->intersect(o, dir, epsilon_, left);
