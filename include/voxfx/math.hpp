@@ -14,7 +14,7 @@ namespace voxfx {
 template <class T> struct Vec3 {
     T x = 0, y = 0, z = 0;
 
-    VOXFX_HOSTDEV constexpr Vec3() = default;
+    constexpr Vec3() = default;
     VOXFX_HOSTDEV constexpr Vec3(T x_, T y_, T z_) : x(x_), y(y_), z(z_) {}
     template <class U>
     VOXFX_HOSTDEV constexpr explicit Vec3(const Vec3<U>& o) : x(T(o.x)), y(T(o.y)), z(T(o.z)) {}
@@ -46,7 +46,7 @@ template <class T> struct Vec3 {
         z *= s;
         return *this;
     }
-    VOXFX_HOSTDEV constexpr bool operator==(const Vec3& o) const = default;
+    constexpr bool operator==(const Vec3& o) const = default;
 };
 
 using Vec3f = Vec3<float>;

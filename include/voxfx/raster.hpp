@@ -133,6 +133,14 @@ struct RasterSetup {
 };
 RasterSetup prepareVertices(const Frame& frame, const MeshView& mesh);
 
+/// Calls emit(rasterTriangle) for the pieces (0-2) of the triangle with projected corners a, b, c
+/// (projectVertex): what RasterSetup::triangle does, as a kernel that a GPU back end shares.
+template <class Emit>
+VOXFX_HOSTDEV void setupTriangle(const Projection& projection, const Vec3d& a, const Vec3d& b, const Vec3d& c,
+                                 uint32_t index, double clipDepth, Emit&& emit);
+/// The vertex transform of prepareVertices for one vertex.
+VOXFX_HOSTDEV inline Vec3d projectVertex(const Projection& projection, const Vec3d& p);
+
 /// Row range [first, last] of the triangle's coverage, clamped to [0, H); empty when last < first.
 VOXFX_HOSTDEV inline void coveredRows(const RasterTriangle& tri, Coverage coverage, int64_t height,
                                       int64_t& first, int64_t& last);

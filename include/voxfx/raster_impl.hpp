@@ -10,11 +10,11 @@
 
 namespace voxfx::detail {
 
-template <class Emit> void RasterSetup::triangle(std::size_t t, Emit&& emit) const {
-    const uint32_t i0 = mesh->index(t, 0), i1 = mesh->index(t, 1), i2 = mesh->index(t, 2);
-    const Vec3d a = vertices[i0], b = vertices[i1], c = vertices[i2];
-    if (!frame.isPerspective()) {
-        RasterTriangle r{{a.x, b.x, c.x}, {a.y, b.y, c.y}, {a.z, b.z, c.z}, uint32_t(t), false};
+template <class Emit>
+VOXFX_HOSTDEV void setupTriangle(const Projection& pr, const Vec3d& a, const Vec3d& b, const Vec3d& c,
+                                 uint32_t index, double clipDepth, Emit&& emit) {
+    if (!pr.perspective) {
+        RasterTriangle r{{a.x, b.x, c.x}, {a.y, b.y, c.y}, {a.z, b.z, c.z}, index, false};
         const double det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
         r.front = det < 0; // outward normal points against +depth, towards the viewer
         emit(r);
@@ -38,7 +38,6 @@ template <class Emit> void RasterSetup::triangle(std::size_t t, Emit&& emit) con
         }
     }
     if (n < 3) return;
-    const Projection& pr = frame.projection;
     double gx[4], gy[4], gw[4];
     for (int k = 0; k < n; ++k) {
         gx[k] = pr.imageX(poly[k].x, poly[k].z);
@@ -46,16 +45,24 @@ template <class Emit> void RasterSetup::triangle(std::size_t t, Emit&& emit) con
         gw[k] = 1.0 / poly[k].z;
     }
     for (int k = 1; k + 1 < n; ++k) {
-        RasterTriangle r{{gx[0], gx[k], gx[k + 1]},
-                         {gy[0], gy[k], gy[k + 1]},
-                         {gw[0], gw[k], gw[k + 1]},
-                         uint32_t(t),
-                         false};
+        RasterTriangle r{
+            {gx[0], gx[k], gx[k + 1]}, {gy[0], gy[k], gy[k + 1]}, {gw[0], gw[k], gw[k + 1]}, index, false};
         // The camera basis (right, up, forward) is left-handed, so the facing test flips.
         const double det = (r.x[1] - r.x[0]) * (r.y[2] - r.y[0]) - (r.x[2] - r.x[0]) * (r.y[1] - r.y[0]);
         r.front = det > 0;
         emit(r);
     }
+}
+
+template <class Emit> void RasterSetup::triangle(std::size_t t, Emit&& emit) const {
+    setupTriangle(frame.projection, vertices[mesh->index(t, 0)], vertices[mesh->index(t, 1)],
+                  vertices[mesh->index(t, 2)], uint32_t(t), clipDepth, emit);
+}
+
+/// The vertex transform of prepareVertices for one vertex: grid coordinates (orthographic) or
+/// camera coordinates (perspective).
+VOXFX_HOSTDEV inline Vec3d projectVertex(const Projection& pr, const Vec3d& p) {
+    return pr.perspective ? pr.cameraFromWorld(p) : pr.gridFromWorld(p);
 }
 
 /// One edge of a triangle, stored with its endpoints in canonical (lexicographic) order so that
@@ -250,6 +257,25 @@ VOXFX_HOSTDEV void rasterizeConservative(const RasterTriangle& t, const FrameVie
                                          int64_t rowEnd, Sink& sink) {
     const bool perspective = frame.isPerspective();
     const int64_t width = frame.width;
+    // A triangle inside one column's prism, away from its sides by more than the slack (most
+    // triangles of a dense mesh): clipping would keep it whole and no edge crosses the column's
+    // sides, so the sweep below would give exactly its vertices' depth range in that one column.
+    {
+        const double xlo = std::min({t.x[0], t.x[1], t.x[2]}), xhi = std::max({t.x[0], t.x[1], t.x[2]});
+        const double ylo = std::min({t.y[0], t.y[1], t.y[2]}), yhi = std::max({t.y[0], t.y[1], t.y[2]});
+        const double cx = std::ceil(xlo - kConservativeSlack) - 1.0,
+                     cy = std::ceil(ylo - kConservativeSlack) - 1.0;
+        if (cx == std::floor(xhi + kConservativeSlack) && cy == std::floor(yhi + kConservativeSlack)) {
+            if (cy >= double(rowBegin) && cy < double(rowEnd) && cx >= 0 && cx < double(width)) {
+                const double lo = std::min({t.w[0], t.w[1], t.w[2]}), hi = std::max({t.w[0], t.w[1], t.w[2]});
+                if (perspective)
+                    sink.span(int64_t(cx), int64_t(cy), 1.0 / hi, 1.0 / lo, t.index);
+                else
+                    sink.span(int64_t(cx), int64_t(cy), lo, hi, t.index);
+            }
+            return;
+        }
+    }
     ClipPolygon tri;
     for (int k = 0; k < 3; ++k) {
         tri.x[k] = t.x[k];

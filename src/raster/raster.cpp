@@ -20,11 +20,7 @@ RasterSetup prepareVertices(const Frame& frame, const MeshView& mesh) {
     Vec3d* out = s.vertices.data();
     const Projection pr = frame.projection();
     parallelFor(0, int64_t(mesh.vertexCount), 65536, [&](int64_t b, int64_t e) {
-        if (!pr.perspective) {
-            for (int64_t i = b; i < e; ++i) out[i] = pr.gridFromWorld(mesh.vertex(size_t(i)));
-        } else {
-            for (int64_t i = b; i < e; ++i) out[i] = pr.cameraFromWorld(mesh.vertex(size_t(i)));
-        }
+        for (int64_t i = b; i < e; ++i) out[i] = projectVertex(pr, mesh.vertex(size_t(i)));
     });
     return s;
 }
