@@ -23,7 +23,7 @@ launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 
 echo "== format check"
-git ls-files '*.cpp' '*.hpp' | xargs clang-format --dry-run -Werror
+git ls-files '*.cpp' '*.hpp' '*.cu' | xargs clang-format --dry-run -Werror
 
 echo "== Release build and tests"
 # The benchmarks are programs, not tests: the test command leaves them out unless

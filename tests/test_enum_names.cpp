@@ -30,6 +30,7 @@ TEST(EnumNamesTest, EveryNameParsesBackToItsValueInAnyCase) {
     expectRoundTrip<Fill>(4, parseFill);
     expectRoundTrip<Axis>(3, parseAxis);
     expectRoundTrip<Slicing>(2, parseSlicing);
+    expectRoundTrip<Device>(3, parseDevice);
     expectRoundTrip<ShadowKind>(4, parseShadowKind);
     expectRoundTrip<MorphOp>(4, parseMorphOp);
     expectRoundTrip<MorphBorder>(3, parseMorphBorder);

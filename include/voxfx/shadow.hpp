@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "voxfx/attribute_grid.hpp"
+#include "voxfx/device.hpp"
 #include "voxfx/dsm.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/mesh.hpp"
@@ -66,6 +67,9 @@ struct ShadowOptions {
     int64_t gridResolution = 256; ///< light grids (transmittance, absorption): columns, longer side
     int64_t gridDepth = 256;      ///< light grids: slices
     Slicing slicing = Slicing::Uniform;
+    /// Where the transmittance maps' light-space voxelizations run (voxfx/device.hpp); the grids
+    /// are the same on each. Cuda without a usable GPU runs on the CPU.
+    Device device = Device::Cpu;
     /// Transmittance grids: Surface (ED06, one cell per triangle and column) or Conservative.
     VoxelizeMode voxelMode = VoxelizeMode::Surface;
     Coverage absorptionCoverage = Coverage::Center; ///< CHANG writes (see attribute_grid.hpp)
@@ -140,9 +144,11 @@ public:
     TransmittanceShadowMap() = default;
     /// Voxelizes each group (world space) into the view with `mode` (Surface or Conservative) and
     /// `slicing`. groups.size() == transmittances.size(). Throws voxfx::Error otherwise.
+    /// `device` picks where the voxelizations run (the same grids on each).
     static TransmittanceShadowMap build(const LightView& view, std::span<const MeshView> groups,
                                         std::span<const Vec3f> transmittances, VoxelizeMode mode,
-                                        Slicing slicing, Progress* progress = nullptr);
+                                        Slicing slicing, Progress* progress = nullptr,
+                                        Device device = Device::Cpu);
     /// Filled cells of channel k in p's column strictly in front of the last `skipCells` cells up to
     /// and including p's cell: popcount of slices [0, s - skipCells + 1) with s = p's slice (whole
     /// words plus a mask). Points in front of the grid count 0, behind it count the whole column.

@@ -38,6 +38,7 @@
 #include <cstdint>
 #include <string>
 
+#include "voxfx/device.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/raster.hpp"
@@ -70,6 +71,12 @@ struct VoxelizeOptions {
     Progress* progress = nullptr;
     /// The rasterizer's parallel scheme (binned tiles or direct atomic writes); same result.
     RasterPath rasterPath = RasterPath::Auto;
+    /// Where to run (voxfx/device.hpp): the CPU, the CUDA back end (else the CPU, and a note in
+    /// `deviceNote`), or Auto (the GPU when it can take the job). The grid is the same bit for bit.
+    /// The GPU runs every mode with the parity fill; the other fills run on the CPU.
+    Device device = Device::Cpu;
+    /// Receives why a Cuda or Auto request ran on the CPU; cleared when the GPU ran it. Not owned.
+    std::string* deviceNote = nullptr;
 };
 
 /// How to fit an orthographic frame to a mesh. Cells are cubes unless `dims` is given.

@@ -6,6 +6,7 @@
 // Meshes, frames, the slicemap and voxelization.
 #include "voxfx/batch.hpp"
 #include "voxfx/bitgrid.hpp"
+#include "voxfx/device.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/file_name.hpp"
 #include "voxfx/frame.hpp"

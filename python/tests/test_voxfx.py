@@ -2,6 +2,7 @@
 formats decoded here from their specifications, NumPy re-implementations of the toolkit, and the
 voxelizer's own bits for contains() at voxel centres."""
 import os
+import re
 import subprocess
 import threading
 import time
@@ -292,3 +293,23 @@ def test_gil_is_released_while_voxelizing(data_path):
     assert t1 - t0 > 0.01
     inside = [t0] + [s for s in stamps if t0 < s < t1] + [t1]
     assert max(b - a for a, b in zip(inside, inside[1:])) < 0.5 * (t1 - t0)
+
+
+def test_device_cuda_gives_the_cpu_grid_and_warns_without_a_gpu(data_path):
+    """device="cuda" voxelizes on the GPU where one is usable and gives the CPU's grid bit for bit;
+    without one (cuda_status() says why) it warns with that reason and still gives the CPU's grid."""
+    mesh = voxfx.load_mesh(data_path("meshes/elephant.off"))
+    status = voxfx.cuda_status()
+    assert set(status) == {"built", "available", "device", "reason"}
+    assert status["available"] != bool(status["reason"])
+    for mode in ("solid", "conservative", "interior"):
+        cpu = voxfx.voxelize(mesh, resolution=72, mode=mode, fill="parity")
+        if status["available"]:
+            gpu = voxfx.voxelize(mesh, resolution=72, mode=mode, fill="parity", device="cuda")
+        else:
+            with pytest.warns(RuntimeWarning, match=re.escape(status["reason"][:40])):
+                gpu = voxfx.voxelize(mesh, resolution=72, mode=mode, fill="parity", device="cuda")
+        assert gpu == cpu
+        assert np.array_equal(gpu.to_numpy(), cpu.to_numpy())
+    with pytest.raises(voxfx.Error, match="cpu, cuda, auto"):
+        voxfx.voxelize(mesh, resolution=8, device="gpu")

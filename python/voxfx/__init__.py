@@ -39,6 +39,7 @@ from ._voxfx import (  # noqa: E402
     __version__,
     closing,
     compute_density,
+    cuda_status,
     contains,
     csg,
     dilate,
@@ -107,6 +108,6 @@ GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj")
 __all__ = [
     "Density", "Error", "Grid", "Mesh", "PointClassifier", "SurfaceMesh", "GRID_FORMATS", "batch", "closing",
     "compute_density",
-    "contains", "csg", "dilate", "erode", "extract_surface", "from_numpy", "load_mesh", "morphology",
+    "contains", "cuda_status", "csg", "dilate", "erode", "extract_surface", "from_numpy", "load_mesh", "morphology",
     "opening", "read_grid", "resample_to_uniform", "reslice", "voxelize",
 ]

@@ -17,6 +17,7 @@ struct RenderArgs {
     int supersample = 0, pcf = 1, camera = 0, threads = 0;
     double exposure = 1, epsilon = 0.05;
     std::string dsmStorage = "chunked";
+    std::string device = "cpu";
     int64_t dsmResolution = 512;
     int clusters = 0;
     bool quiet = false, bilinear = false, noVolumeCulling = false, noEmptySpaceSkipping = false;
@@ -71,6 +72,10 @@ int runRender(const RenderArgs& a) {
         !a.voxelMode.empty() ? a.voxelMode : (!s.voxelMode.empty() ? s.voxelMode : "surface"));
     if (o.shadow.voxelMode != VoxelizeMode::Surface && o.shadow.voxelMode != VoxelizeMode::Conservative)
         fail("--voxel-mode must be surface or conservative for shadows");
+    o.shadow.device = parseDevice(a.device);
+    if (o.shadow.device == Device::Cuda && !cudaStatus().available && !a.quiet)
+        std::cerr << "voxfx: --device cuda: " << cudaStatus().reason
+                  << "; the light grids are voxelized on the CPU\n";
     o.shadow.pcfRadius = a.pcf;
     o.shadow.bilinear = a.bilinear;
     o.shadow.volumeCulling = o.shadow.volumeClamping = !a.noVolumeCulling;
@@ -206,6 +211,11 @@ const Command kRender{
             ->check(CLI::Range(int64_t(1), int64_t(16384)));
         app.add_option("--grid-depth", a->gridDepth, "Light grid slices (default 256)")
             ->check(CLI::Range(int64_t(1), int64_t(16384)));
+        app.add_option(
+               "--device", a->device,
+               "Where the transmittance shadows' light grids are voxelized: cpu, cuda or auto (the same "
+               "grids; see voxfx devices)")
+            ->default_val("cpu");
         app.add_option("--map-resolution", a->mapResolution, "Shadow map texels (default 2048)")
             ->check(CLI::Range(int64_t(1), int64_t(32768)));
         app.add_option("--slicing", a->slicing, "uniform | local (ED06 per-column range)");

@@ -152,7 +152,7 @@ LightShadow LightShadow::build(const Scene& scene, const Light& light, const Sha
         out.gridViews_ = makeLightViews(light, bounds, options.gridResolution, options.gridDepth);
         for (const LightView& v : out.gridViews_)
             out.transmittance_.push_back(TransmittanceShadowMap::build(
-                v, groups, transmittances, options.voxelMode, options.slicing, progress));
+                v, groups, transmittances, options.voxelMode, options.slicing, progress, options.device));
         t.voxelizeMs += msSince(t0);
         break;
     }

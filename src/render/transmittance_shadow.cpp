@@ -14,7 +14,7 @@ namespace voxfx {
 
 TransmittanceShadowMap TransmittanceShadowMap::build(const LightView& view, std::span<const MeshView> groups,
                                                      std::span<const Vec3f> transmittances, VoxelizeMode mode,
-                                                     Slicing slicing, Progress* progress) {
+                                                     Slicing slicing, Progress* progress, Device device) {
     if (groups.size() != transmittances.size())
         fail("transmittance shadow map: ", groups.size(), " groups but ", transmittances.size(),
              " transmittances");
@@ -28,6 +28,7 @@ TransmittanceShadowMap TransmittanceShadowMap::build(const LightView& view, std:
         vo.mode = mode;
         vo.slicing = slicing;
         vo.progress = progress;
+        vo.device = device;
         map.channels_.push_back({voxelize(groups[k], view.frame, vo), transmittances[k]});
         // A column holds at most D filled cells.
         const Vec3f& t = transmittances[k];

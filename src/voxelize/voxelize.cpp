@@ -140,6 +140,25 @@ VoxelGrid voxelizeImpl(const MeshView& mesh, const Frame& inFrame, const Voxeliz
     checkMemory(grids * BitGrid::requiredBytes(frame.width(), frame.height(), frame.depth()),
                 "voxelization at this resolution");
 
+    if (o.deviceNote) o.deviceNote->clear();
+    if (o.device != Device::Cpu) {
+        std::string why;
+        if (!cudaStatus().available) {
+            why = cudaStatus().reason;
+        } else if (o.mode != VoxelizeMode::Surface && o.mode != VoxelizeMode::Conservative &&
+                   o.fill != Fill::Parity) {
+            why = detail::concat("fill '", toString(o.fill), "' has no CUDA version yet (parity has)");
+        } else {
+            try {
+                CudaVoxelizer gpu;
+                gpu.setMesh(mesh);
+                gpu.voxelize(frame, o.mode);
+                return {frame, gpu.download()};
+            } catch (const Error& e) { why = e.what(); }
+        }
+        if (o.deviceNote) *o.deviceNote = detail::concat(why, "; voxelized on the CPU");
+    }
+
     switch (o.mode) {
     case VoxelizeMode::Surface:
     case VoxelizeMode::Conservative:

@@ -1,0 +1,298 @@
+// voxfx — the CUDA back end as the library sees it: probing, and a voxelizer over the module.
+#include "voxfx/device.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <utility>
+
+#include "core/enum_names.hpp"
+#include "core/module_loader.hpp"
+#include "cuda/cuda_api.hpp"
+#include "voxfx/csg.hpp"
+#include "voxfx/error.hpp"
+#include "voxfx/morphology.hpp"
+#include "voxfx/voxelize.hpp"
+
+namespace voxfx {
+
+namespace {
+
+using detail::EnumName;
+constexpr EnumName<Device> kDeviceNames[] = {
+    {"cpu", Device::Cpu}, {"cuda", Device::Cuda}, {"auto", Device::Auto}};
+
+#ifdef VOXFX_HAS_CUDA_MODULE
+constexpr bool kBuilt = true;
+#else
+constexpr bool kBuilt = false;
+#endif
+
+const detail::CudaModule& cudaModule() {
+    const auto* t = static_cast<const detail::CudaModule*>(
+        detail::loadModule("cuda", detail::kCudaModuleAbi, "for the CUDA back end"));
+    if (t->abi != detail::kCudaModuleAbi || t->size != sizeof(detail::CudaModule))
+        fail("module voxfx_cuda.so is from another voxfx build (its table does not match this library)");
+    return *t;
+}
+
+CudaStatus probe() {
+    CudaStatus s;
+    s.built = kBuilt;
+    if (!kBuilt) {
+        s.reason = "this voxfx was built without CUDA (nvcc was not found when it was configured)";
+        return s;
+    }
+    const detail::CudaModule* m = nullptr;
+    try {
+        m = &cudaModule();
+    } catch (const Error& e) {
+        s.reason = e.what();
+        return s;
+    }
+    detail::CudaDeviceInfo info;
+    std::string why;
+    if (!m->probe(&info, &why)) {
+        s.reason = why;
+        return s;
+    }
+    char text[400];
+    std::snprintf(text, sizeof(text), "%s (compute %d.%d, %.1f GiB)", info.name, info.computeMajor,
+                  info.computeMinor, double(info.memoryBytes) / double(uint64_t(1) << 30));
+    s.available = true;
+    s.device = text;
+    return s;
+}
+
+/// The context the CudaGrid operations share (made on first use), and the lock that serializes
+/// them on its stream.
+struct SharedContext {
+    const detail::CudaModule* module = nullptr;
+    void* context = nullptr;
+    std::mutex mutex;
+};
+
+SharedContext& sharedContext() {
+    static SharedContext* shared = [] {
+        const CudaStatus& s = cudaStatus();
+        if (!s.available) fail("the CUDA back end cannot run here: ", s.reason);
+        auto* c = new SharedContext; // lives as long as the process: grids may outlive main's locals
+        c->module = &cudaModule();
+        std::string error;
+        c->context = c->module->createContext(&error);
+        if (!c->context) {
+            delete c;
+            fail("CUDA: ", error);
+        }
+        return c;
+    }();
+    return *shared;
+}
+
+void check(bool ok, const std::string& error) {
+    if (!ok) fail("CUDA: ", error);
+}
+
+} // namespace
+
+const char* toString(Device d) {
+    switch (d) {
+    case Device::Cpu:
+        return "cpu";
+    case Device::Cuda:
+        return "cuda";
+    case Device::Auto:
+        return "auto";
+    }
+    return "?";
+}
+
+Device parseDevice(const std::string& name) {
+    return detail::parseEnum<Device>(name, "device", kDeviceNames);
+}
+
+const CudaStatus& cudaStatus() {
+    static const CudaStatus status = probe();
+    return status;
+}
+
+struct CudaVoxelizer::Impl {
+    const detail::CudaModule* module = nullptr;
+    void* context = nullptr;
+    int64_t width = 0, height = 0, depth = 0;
+    bool haveMesh = false, haveGrid = false;
+
+    void check(bool ok, const std::string& error) const {
+        if (!ok) fail("CUDA: ", error);
+    }
+};
+
+CudaVoxelizer::CudaVoxelizer() : impl_(std::make_unique<Impl>()) {
+    const CudaStatus& s = cudaStatus();
+    if (!s.available) fail("the CUDA back end cannot run here: ", s.reason);
+    impl_->module = &cudaModule();
+    std::string error;
+    impl_->context = impl_->module->createContext(&error);
+    if (!impl_->context) fail("CUDA: ", error);
+}
+
+CudaVoxelizer::~CudaVoxelizer() {
+    if (impl_ && impl_->context) impl_->module->destroyContext(impl_->context);
+}
+
+void CudaVoxelizer::setMesh(const MeshView& mesh) {
+    validateMesh(mesh, "mesh");
+    detail::CudaMesh m;
+    m.positions = mesh.positions;
+    m.vertexCount = mesh.vertexCount;
+    m.positionStride = mesh.positionStride;
+    m.indices = mesh.indices;
+    m.triangleCount = mesh.triangleCount;
+    std::string error;
+    impl_->check(impl_->module->setMesh(impl_->context, m, &error), error);
+    impl_->haveMesh = true;
+    impl_->haveGrid = false;
+}
+
+void CudaVoxelizer::voxelize(const Frame& frame, VoxelizeMode mode) {
+    if (!impl_->haveMesh) fail("CudaVoxelizer::voxelize: no mesh (call setMesh first)");
+    // The perspective set-up's clipping depth, as prepareVertices sets it.
+    const double clipDepth = frame.isPerspective() ? frame.nearDepth() * 1e-3 : 0.0;
+    std::string error;
+    impl_->haveGrid = false;
+    impl_->check(
+        impl_->module->voxelize(impl_->context, frame.view(), clipDepth, detail::CudaMode(int(mode)), &error),
+        error);
+    impl_->width = frame.width();
+    impl_->height = frame.height();
+    impl_->depth = frame.depth();
+    impl_->haveGrid = true;
+}
+
+BitGrid CudaVoxelizer::download() {
+    if (!impl_->haveGrid) fail("CudaVoxelizer::download: nothing voxelized yet");
+    BitGrid grid(impl_->width, impl_->height, impl_->depth);
+    std::string error;
+    impl_->check(impl_->module->download(impl_->context, grid.words(), grid.wordCount(), &error), error);
+    return grid;
+}
+
+int64_t CudaVoxelizer::count() {
+    if (!impl_->haveGrid) fail("CudaVoxelizer::count: nothing voxelized yet");
+    int64_t n = 0;
+    std::string error;
+    impl_->check(impl_->module->count(impl_->context, &n, &error), error);
+    return n;
+}
+
+CudaGrid CudaVoxelizer::grid() {
+    if (!impl_->haveGrid) fail("CudaVoxelizer::grid: nothing voxelized yet");
+    CudaGrid g(impl_->width, impl_->height, impl_->depth);
+    std::string error;
+    impl_->check(impl_->module->copyVoxelized(impl_->context, g.handle_, &error), error);
+    return g;
+}
+
+DeviceTimings CudaVoxelizer::timings() const {
+    detail::CudaTimings t;
+    impl_->module->timings(impl_->context, &t);
+    return {t.uploadMs, t.kernelMs, t.downloadMs};
+}
+
+CudaGrid::CudaGrid() = default;
+
+CudaGrid::CudaGrid(int64_t w, int64_t h, int64_t d) : w_(w), h_(h), d_(d) {
+    if (w <= 0 || h <= 0 || d <= 0) fail("a grid needs positive dimensions, got ", w, " x ", h, " x ", d);
+    SharedContext& s = sharedContext();
+    const std::lock_guard lock(s.mutex);
+    std::string error;
+    handle_ = s.module->createGrid(s.context, w, h, d, &error);
+    if (!handle_) fail("CUDA: ", error);
+}
+
+CudaGrid::CudaGrid(const BitGrid& grid) : CudaGrid(grid.width(), grid.height(), grid.depth()) {
+    SharedContext& s = sharedContext();
+    const std::lock_guard lock(s.mutex);
+    std::string error;
+    check(s.module->uploadGrid(s.context, handle_, grid.words(), &error), error);
+}
+
+CudaGrid::~CudaGrid() {
+    if (handle_) sharedContext().module->destroyGrid(handle_);
+}
+
+CudaGrid::CudaGrid(CudaGrid&& o) noexcept
+    : handle_(std::exchange(o.handle_, nullptr)), w_(o.w_), h_(o.h_), d_(o.d_), kernelMs_(o.kernelMs_) {}
+
+CudaGrid& CudaGrid::operator=(CudaGrid&& o) noexcept {
+    if (this != &o) {
+        if (handle_) sharedContext().module->destroyGrid(handle_);
+        handle_ = std::exchange(o.handle_, nullptr);
+        w_ = o.w_;
+        h_ = o.h_;
+        d_ = o.d_;
+        kernelMs_ = o.kernelMs_;
+    }
+    return *this;
+}
+
+BitGrid CudaGrid::download() const {
+    if (!handle_) return {};
+    BitGrid grid(w_, h_, d_);
+    SharedContext& s = sharedContext();
+    const std::lock_guard lock(s.mutex);
+    std::string error;
+    check(s.module->downloadGrid(s.context, handle_, grid.words(), &error), error);
+    return grid;
+}
+
+int64_t CudaGrid::count() const {
+    if (!handle_) return 0;
+    SharedContext& s = sharedContext();
+    const std::lock_guard lock(s.mutex);
+    int64_t n = 0;
+    std::string error;
+    check(s.module->countGrid(s.context, handle_, &n, &error), error);
+    return n;
+}
+
+namespace {
+double lastKernelMs(SharedContext& s) {
+    detail::CudaTimings t;
+    s.module->timings(s.context, &t);
+    return t.kernelMs;
+}
+} // namespace
+
+CudaGrid csg(const CudaGrid& a, const CudaGrid& b, CsgOp op) {
+    if (a.width() != b.width() || a.height() != b.height() || a.depth() != b.depth())
+        fail("csg: the grids differ in size (", a.width(), " x ", a.height(), " x ", a.depth(), " and ",
+             b.width(), " x ", b.height(), " x ", b.depth(), ")");
+    if (a.empty()) return {};
+    CudaGrid out(a.width(), a.height(), a.depth());
+    SharedContext& s = sharedContext();
+    const std::lock_guard lock(s.mutex);
+    std::string error;
+    check(s.module->csgGrid(s.context, a.handle_, b.handle_, int(op), out.handle_, &error), error);
+    out.kernelMs_ = lastKernelMs(s);
+    return out;
+}
+
+CudaGrid morphology(const CudaGrid& grid, MorphOp op, const MorphologyOptions& options) {
+    if (options.rx < 0 || options.ry < 0 || options.rz < 0)
+        fail("morphology radii must be >= 0, got ", options.rx, ", ", options.ry, ", ", options.rz);
+    if (grid.empty()) return {};
+    CudaGrid out(grid.width(), grid.height(), grid.depth());
+    CudaGrid scratch(grid.width(), grid.height(), grid.depth());
+    SharedContext& s = sharedContext();
+    const std::lock_guard lock(s.mutex);
+    const int64_t radii[3] = {options.rx, options.ry, options.rz};
+    std::string error;
+    check(s.module->morphologyGrid(s.context, grid.handle_, int(op), radii, int(options.border), out.handle_,
+                                   scratch.handle_, &error),
+          error);
+    out.kernelMs_ = lastKernelMs(s);
+    return out;
+}
+
+} // namespace voxfx
