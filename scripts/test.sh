@@ -20,7 +20,7 @@ label_args=()
 [ -n "$label" ] && label_args=(-L "$label")
 jobs="$(nproc)"
 launcher=()
-command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_CUDA_COMPILER_LAUNCHER=ccache)
 
 echo "== format check"
 git ls-files '*.cpp' '*.hpp' '*.cu' | xargs clang-format --dry-run -Werror
