@@ -9,74 +9,23 @@
 // grid, device to host), measured once per benchmark; Mtri/s. Cpu/<mode>/<mesh>/<N>: voxfx::voxelize
 // on every core, wall time. Without a usable GPU the Gpu rows are skipped with the reason.
 //
-// bunny1m is bunny00 subdivided twice at the midpoints (1,206,528 triangles), as
-// bench/dense-meshes.sh makes it, but built in memory so that the benchmark needs only the
-// fetched CGAL data.
+// The meshes are bench_meshes.hpp's: bunny1m is bunny00 subdivided twice at the midpoints
+// (1,206,528 triangles), built in memory when data/dense/ does not hold it.
 #include <chrono>
-#include <map>
 #include <memory>
-#include <optional>
 #include <string>
-#include <unordered_map>
 
 #include <benchmark/benchmark.h>
 
+#include "bench_meshes.hpp"
 #include "voxfx/voxfx.hpp"
 
 namespace {
 
 using namespace voxfx;
 
-/// Every triangle into four at its edges' midpoints (shared midpoints made once).
-Mesh subdivide(const Mesh& in) {
-    Mesh out;
-    out.positions = in.positions;
-    std::unordered_map<uint64_t, uint32_t> mid;
-    auto midpoint = [&](uint32_t p, uint32_t q) {
-        const uint64_t key = p < q ? (uint64_t(p) << 32 | q) : (uint64_t(q) << 32 | p);
-        const auto [it, added] = mid.emplace(key, uint32_t(out.positions.size()));
-        if (added) {
-            const Vec3f a = out.positions[p], b = out.positions[q];
-            out.positions.push_back(Vec3f((Vec3d(a) + Vec3d(b)) * 0.5));
-        }
-        return it->second;
-    };
-    for (std::size_t t = 0; t < in.triangleCount(); ++t) {
-        const uint32_t a = in.indices[3 * t], b = in.indices[3 * t + 1], c = in.indices[3 * t + 2];
-        const uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
-        for (uint32_t v : {a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca}) out.indices.push_back(v);
-    }
-    return out;
-}
-
-const Mesh* mesh(const std::string& name) {
-    static std::map<std::string, std::unique_ptr<Mesh>> cache;
-    auto it = cache.find(name);
-    if (it != cache.end()) return it->second.get();
-    const char* env = std::getenv("VOXFX_DATA_DIR");
-    const std::string dir = (env && *env ? std::string(env) : std::string(VOXFX_DATA_DIR)) + "/meshes/";
-    const std::string file = dir +
-                             (name == "bunny1m"  ? "bunny00"
-                              : name == "dragon" ? "ChineseDragon-10kv"
-                                                 : name) +
-                             ".off";
-    std::unique_ptr<Mesh> m;
-    try {
-        m = std::make_unique<Mesh>(loadMesh(file));
-    } catch (const Error&) { return nullptr; }
-    if (name == "bunny1m") *m = subdivide(subdivide(*m));
-    return cache.emplace(name, std::move(m)).first->second.get();
-}
-
-std::optional<Frame> fitted(benchmark::State& state, const Mesh* m) {
-    if (!m) {
-        state.SkipWithError("missing data: run scripts/fetch-data.sh");
-        return std::nullopt;
-    }
-    FitOptions fo;
-    fo.resolution = state.range(0);
-    return fitFrame(computeBounds(m->view()), fo);
-}
+using bench::fittedMesh;
+using bench::kModes;
 
 /// One voxelizer for the whole run: the mesh is uploaded when it changes.
 CudaVoxelizer* gpuFor(const Mesh* m) {
@@ -95,19 +44,20 @@ void gpuBench(benchmark::State& state, const std::string& name, VoxelizeMode mod
         state.SkipWithError(("no usable GPU: " + cudaStatus().reason).c_str());
         return;
     }
-    const Mesh* m = mesh(name);
-    const auto frame = fitted(state, m);
-    if (!frame) return;
+    const auto in = fittedMesh(state, name);
+    if (!in) return;
+    const Mesh* m = in->mesh;
+    const Frame& frame = in->frame;
     CudaVoxelizer* gpu = gpuFor(m);
     for (auto _ : state) {
-        gpu->voxelize(*frame, mode);
+        gpu->voxelize(frame, mode);
         state.SetIterationTime(gpu->timings().kernelMs * 1e-3);
     }
     const double uploadMs = [&] {
         gpu->setMesh(m->view()); // timed again here, so that every row reports it
         return gpu->timings().uploadMs;
     }();
-    gpu->voxelize(*frame, mode);
+    gpu->voxelize(frame, mode);
     const BitGrid grid = gpu->download();
     benchmark::DoNotOptimize(grid.words());
     state.counters["upload_ms"] = uploadMs;
@@ -118,12 +68,13 @@ void gpuBench(benchmark::State& state, const std::string& name, VoxelizeMode mod
 }
 
 void cpuBench(benchmark::State& state, const std::string& name, VoxelizeMode mode) {
-    const Mesh* m = mesh(name);
-    const auto frame = fitted(state, m);
-    if (!frame) return;
+    const auto in = fittedMesh(state, name);
+    if (!in) return;
+    const Mesh* m = in->mesh;
+    const Frame& frame = in->frame;
     VoxelizeOptions o;
     o.mode = mode;
-    for (auto _ : state) benchmark::DoNotOptimize(voxelize(m->view(), *frame, o).bits.words());
+    for (auto _ : state) benchmark::DoNotOptimize(voxelize(m->view(), frame, o).bits.words());
     state.counters["Mtri/s"] =
         benchmark::Counter(double(m->triangleCount()) * 1e-6, benchmark::Counter::kIsRate);
 }
@@ -138,16 +89,17 @@ void opBench(benchmark::State& state, const std::string& name, Op op, bool gpu) 
         state.SkipWithError(("no usable GPU: " + cudaStatus().reason).c_str());
         return;
     }
-    const Mesh* m = mesh(name);
-    const auto frame = fitted(state, m);
-    if (!frame) return;
+    const auto in = fittedMesh(state, name);
+    if (!in) return;
+    const Mesh* m = in->mesh;
+    const Frame& frame = in->frame;
     MorphologyOptions mo;
     mo.rx = mo.ry = mo.rz = 1;
     if (gpu) {
         CudaVoxelizer* v = gpuFor(m);
-        v->voxelize(*frame, VoxelizeMode::Solid);
+        v->voxelize(frame, VoxelizeMode::Solid);
         const CudaGrid solid = v->grid();
-        v->voxelize(*frame, VoxelizeMode::Conservative);
+        v->voxelize(frame, VoxelizeMode::Conservative);
         const CudaGrid shell = v->grid();
         for (auto _ : state) {
             const auto t0 = std::chrono::steady_clock::now();
@@ -171,9 +123,9 @@ void opBench(benchmark::State& state, const std::string& name, Op op, bool gpu) 
     } else {
         VoxelizeOptions vo;
         vo.mode = VoxelizeMode::Solid;
-        const BitGrid solid = voxelize(m->view(), *frame, vo).bits;
+        const BitGrid solid = voxelize(m->view(), frame, vo).bits;
         vo.mode = VoxelizeMode::Conservative;
-        const BitGrid shell = voxelize(m->view(), *frame, vo).bits;
+        const BitGrid shell = voxelize(m->view(), frame, vo).bits;
         BitGrid out, scratch;
         for (auto _ : state) {
             const auto t0 = std::chrono::steady_clock::now();
@@ -199,12 +151,7 @@ void opBench(benchmark::State& state, const std::string& name, Op op, bool gpu) 
 
 const struct Register {
     Register() {
-        const std::pair<const char*, VoxelizeMode> modes[] = {
-            {"Surface", VoxelizeMode::Surface},
-            {"Conservative", VoxelizeMode::Conservative},
-            {"Solid", VoxelizeMode::Solid},
-            {"SolidConservative", VoxelizeMode::SolidConservative},
-            {"Interior", VoxelizeMode::Interior}};
+        const auto& modes = kModes;
         for (const char* name : {"bunny00", "armadillo", "dragon", "elephant", "bunny1m"})
             for (const auto& [modeName, mode] : modes)
                 benchmark::RegisterBenchmark(

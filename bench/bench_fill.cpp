@@ -10,14 +10,13 @@
 // ref_inside (the reference's inside cells). The reference is computed once per mesh and size,
 // outside the timing.
 #include <bit>
-#include <filesystem>
 #include <map>
-#include <memory>
 #include <string>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
+#include "bench_meshes.hpp"
 #include "voxfx/contains.hpp"
 #include "voxfx/voxfx.hpp"
 
@@ -29,15 +28,6 @@ using namespace voxfx;
 const char* const kOpenMeshes[] = {"blob",      "double-torus-3-holes", "pig",   "head",
                                    "mushroom",  "elephant-with-holes",  "holes", "mech-holes-shark",
                                    "lion-head", "ChineseDragon-10kv"};
-
-const Mesh* openMesh(const std::string& name) {
-    static std::map<std::string, std::unique_ptr<Mesh>> cache;
-    auto it = cache.find(name);
-    if (it != cache.end()) return it->second.get();
-    const std::string file = std::string(VOXFX_DATA_DIR) + "/meshes/" + name + ".off";
-    if (!std::filesystem::exists(file)) return nullptr;
-    return cache.emplace(name, std::make_unique<Mesh>(loadMesh(file))).first->second.get();
-}
 
 Frame fillFrame(const Mesh& m, int64_t resolution) {
     FitOptions fo;
@@ -72,7 +62,7 @@ VoxelGrid runFill(const Mesh& m, const Frame& f, Fill fill) {
 
 // The named mesh (or null, the benchmark skipped: the data is missing).
 const Mesh* meshOrSkip(benchmark::State& state, const std::string& name) {
-    const Mesh* m = openMesh(name);
+    const Mesh* m = bench::mesh(name);
     if (!m) state.SkipWithError("missing data: run scripts/fetch-data.sh");
     return m;
 }

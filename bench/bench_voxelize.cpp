@@ -5,17 +5,13 @@
 //   ./build/bench/bench_voxelize --benchmark_filter='Solid/bunny' --benchmark_repetitions=5
 //
 // Counters: tri/s (triangles per second), voxels/s (grid cells per second), grid_MiB.
-#include <cstdlib>
 #include <cstring>
-#include <filesystem>
-#include <map>
-#include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
+#include "bench_meshes.hpp"
 #include "voxelize/fill.hpp"
 #include "voxfx/voxfx.hpp"
 
@@ -23,46 +19,9 @@ namespace {
 
 using namespace voxfx;
 
-const Mesh* mesh(const std::string& name) {
-    static std::map<std::string, std::unique_ptr<Mesh>> cache;
-    auto it = cache.find(name);
-    if (it != cache.end()) return it->second.get();
-    const std::string dir = std::string(VOXFX_DATA_DIR) + "/meshes/";
-    std::unique_ptr<Mesh> m;
-    if (name == "dragon1m" || name == "bunny1m") {
-        // About a million triangles, made by bench/dense-meshes.sh (midpoint subdivision of
-        // bunny00, closed: parity; of the Chinese dragon, open: flood).
-        // VOXFX_DENSE_DIR overrides where they are (a checkout whose data/ is shared read-only).
-        const char* denseDir = std::getenv("VOXFX_DENSE_DIR");
-        const std::string file =
-            (denseDir ? std::string(denseDir) : std::string(VOXFX_DATA_DIR) + "/dense") + "/" + name + ".off";
-        if (!std::filesystem::exists(file)) return nullptr;
-        m = std::make_unique<Mesh>(loadMesh(file));
-    } else {
-        const std::string file = dir + (name == "dragon" ? "ChineseDragon-10kv" : name) + ".off";
-        if (!std::filesystem::exists(file)) return nullptr;
-        m = std::make_unique<Mesh>(loadMesh(file));
-    }
-    return cache.emplace(name, std::move(m)).first->second.get();
-}
-
-// The preamble of the benchmarks over one mesh: the mesh `name` and a frame fitted to its bounds
-// at resolution state.range(0); nothing, with the benchmark marked skipped, when its data is missing.
-struct FittedMesh {
-    const Mesh* mesh;
-    Frame frame;
-};
-
-std::optional<FittedMesh> fittedMesh(benchmark::State& state, const std::string& name) {
-    const Mesh* m = mesh(name);
-    if (!m) {
-        state.SkipWithError("missing data: run scripts/fetch-data.sh (and bench/dense-meshes.sh for *1m)");
-        return std::nullopt;
-    }
-    FitOptions fo;
-    fo.resolution = state.range(0);
-    return FittedMesh{m, fitFrame(computeBounds(m->view()), fo)};
-}
+using bench::fittedMesh;
+using bench::kModes;
+using bench::mesh;
 
 void voxelizeBench(benchmark::State& state, const std::string& name, VoxelizeMode mode, Fill fill,
                    RasterPath path = RasterPath::Auto) {
@@ -186,12 +145,7 @@ void attributeBench(benchmark::State& state, const std::string& name, const std:
 
 struct Register {
     Register() {
-        const std::pair<const char*, VoxelizeMode> modes[] = {
-            {"Surface", VoxelizeMode::Surface},
-            {"Conservative", VoxelizeMode::Conservative},
-            {"Solid", VoxelizeMode::Solid},
-            {"SolidConservative", VoxelizeMode::SolidConservative},
-            {"Interior", VoxelizeMode::Interior}};
+        const auto& modes = kModes;
         for (const char* name : {"bunny00", "armadillo", "dragon", "dragon1m", "bunny1m"}) {
             const Fill fill = std::string(name).rfind("dragon", 0) == 0 ? Fill::Flood : Fill::Parity;
             for (const auto& [label, mode] : modes) {

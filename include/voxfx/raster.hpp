@@ -133,6 +133,13 @@ struct RasterSetup {
 };
 RasterSetup prepareVertices(const Frame& frame, const MeshView& mesh);
 
+/// The camera depth at which a perspective frame's set-up clips triangles, just in front of the
+/// eye (geometry between it and the near plane still counts: depth clamping); 0 for orthographic
+/// frames. One definition for the CPU's set-up and the CUDA back end's.
+inline double clipDepthOf(const Frame& frame) {
+    return frame.isPerspective() ? frame.nearDepth() * 1e-3 : 0.0;
+}
+
 /// Calls emit(rasterTriangle) for the pieces (0-2) of the triangle with projected corners a, b, c
 /// (projectVertex): what RasterSetup::triangle does, as a kernel that a GPU back end shares.
 template <class Emit>

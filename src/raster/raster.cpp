@@ -16,7 +16,7 @@ RasterSetup prepareVertices(const Frame& frame, const MeshView& mesh) {
     s.frame = frame.view();
     s.mesh = &mesh;
     s.vertices.resize(mesh.vertexCount);
-    if (frame.isPerspective()) s.clipDepth = frame.nearDepth() * 1e-3;
+    s.clipDepth = clipDepthOf(frame);
     Vec3d* out = s.vertices.data();
     const Projection pr = frame.projection();
     parallelFor(0, int64_t(mesh.vertexCount), 65536, [&](int64_t b, int64_t e) {

@@ -72,25 +72,33 @@ struct SharedContext {
     std::mutex mutex;
 };
 
+void check(bool ok, const std::string& error) {
+    if (!ok) fail("CUDA: ", error);
+}
+
+/// A new context on the first device, and the module it belongs to; voxfx::Error with the reason
+/// when no GPU can be used.
+void* newContext(const detail::CudaModule*& module) {
+    const CudaStatus& s = cudaStatus();
+    if (!s.available) fail("the CUDA back end cannot run here: ", s.reason);
+    module = &cudaModule();
+    std::string error;
+    void* context = module->createContext(&error);
+    check(context != nullptr, error);
+    return context;
+}
+
 SharedContext& sharedContext() {
     static SharedContext* shared = [] {
-        const CudaStatus& s = cudaStatus();
-        if (!s.available) fail("the CUDA back end cannot run here: ", s.reason);
-        auto* c = new SharedContext; // lives as long as the process: grids may outlive main's locals
-        c->module = &cudaModule();
-        std::string error;
-        c->context = c->module->createContext(&error);
-        if (!c->context) {
-            delete c;
-            fail("CUDA: ", error);
-        }
+        const detail::CudaModule* module = nullptr;
+        void* context = newContext(module);
+        // Lives as long as the process: grids may outlive main's locals.
+        auto* c = new SharedContext;
+        c->module = module;
+        c->context = context;
         return c;
     }();
     return *shared;
-}
-
-void check(bool ok, const std::string& error) {
-    if (!ok) fail("CUDA: ", error);
 }
 
 } // namespace
@@ -121,19 +129,10 @@ struct CudaVoxelizer::Impl {
     void* context = nullptr;
     int64_t width = 0, height = 0, depth = 0;
     bool haveMesh = false, haveGrid = false;
-
-    void check(bool ok, const std::string& error) const {
-        if (!ok) fail("CUDA: ", error);
-    }
 };
 
 CudaVoxelizer::CudaVoxelizer() : impl_(std::make_unique<Impl>()) {
-    const CudaStatus& s = cudaStatus();
-    if (!s.available) fail("the CUDA back end cannot run here: ", s.reason);
-    impl_->module = &cudaModule();
-    std::string error;
-    impl_->context = impl_->module->createContext(&error);
-    if (!impl_->context) fail("CUDA: ", error);
+    impl_->context = newContext(impl_->module);
 }
 
 CudaVoxelizer::~CudaVoxelizer() {
@@ -149,18 +148,17 @@ void CudaVoxelizer::setMesh(const MeshView& mesh) {
     m.indices = mesh.indices;
     m.triangleCount = mesh.triangleCount;
     std::string error;
-    impl_->check(impl_->module->setMesh(impl_->context, m, &error), error);
+    check(impl_->module->setMesh(impl_->context, m, &error), error);
     impl_->haveMesh = true;
     impl_->haveGrid = false;
 }
 
 void CudaVoxelizer::voxelize(const Frame& frame, VoxelizeMode mode) {
     if (!impl_->haveMesh) fail("CudaVoxelizer::voxelize: no mesh (call setMesh first)");
-    // The perspective set-up's clipping depth, as prepareVertices sets it.
-    const double clipDepth = frame.isPerspective() ? frame.nearDepth() * 1e-3 : 0.0;
+    const double clipDepth = detail::clipDepthOf(frame);
     std::string error;
     impl_->haveGrid = false;
-    impl_->check(
+    check(
         impl_->module->voxelize(impl_->context, frame.view(), clipDepth, detail::CudaMode(int(mode)), &error),
         error);
     impl_->width = frame.width();
@@ -173,7 +171,7 @@ BitGrid CudaVoxelizer::download() {
     if (!impl_->haveGrid) fail("CudaVoxelizer::download: nothing voxelized yet");
     BitGrid grid(impl_->width, impl_->height, impl_->depth);
     std::string error;
-    impl_->check(impl_->module->download(impl_->context, grid.words(), grid.wordCount(), &error), error);
+    check(impl_->module->download(impl_->context, grid.words(), grid.wordCount(), &error), error);
     return grid;
 }
 
@@ -181,7 +179,7 @@ int64_t CudaVoxelizer::count() {
     if (!impl_->haveGrid) fail("CudaVoxelizer::count: nothing voxelized yet");
     int64_t n = 0;
     std::string error;
-    impl_->check(impl_->module->count(impl_->context, &n, &error), error);
+    check(impl_->module->count(impl_->context, &n, &error), error);
     return n;
 }
 
@@ -189,7 +187,7 @@ CudaGrid CudaVoxelizer::grid() {
     if (!impl_->haveGrid) fail("CudaVoxelizer::grid: nothing voxelized yet");
     CudaGrid g(impl_->width, impl_->height, impl_->depth);
     std::string error;
-    impl_->check(impl_->module->copyVoxelized(impl_->context, g.handle_, &error), error);
+    check(impl_->module->copyVoxelized(impl_->context, g.handle_, &error), error);
     return g;
 }
 
