@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <openvdb/openvdb.h>
 
+#include "grid/density_kernels.hpp"
 #include "test_util.hpp"
 #include "voxfx/density.hpp"
 #include "voxfx/grid_io.hpp"
@@ -114,6 +115,49 @@ TEST(DensityTest, LargerKernelsByRepetitionMatchBlockCounts) {
     EXPECT_EQ(computeDensity(full, o).count(0, 0, 0), 32768u);
     o.level = 6;
     EXPECT_THROW(computeDensity(full, o), Error);
+}
+
+// The word kernels alone (density_kernels.hpp), called the way a device back end calls them: one
+// (output column, input word) item at a time, in reverse order, each writing only its own words,
+// with neither the AVX2 path nor the row loops of density.cpp. Every level against the naive
+// counts, on depths around multiples of 64 (the odd output word of a column's last input word).
+TEST(DensityTest, WordKernelsAloneGiveTheBlockCountsInAnyOrder) {
+    const int64_t sizes[][3] = {{1, 1, 1}, {5, 3, 63}, {3, 5, 65}, {9, 1, 129}, {2, 3, 512}, {7, 4, 1001}};
+    for (const auto& n : sizes) {
+        const BitGrid g = randomBits(n[0], n[1], n[2], 0.6, uint64_t(n[0] * 13 + n[2]));
+        DensityGrid cur(1, (n[0] + 1) / 2, (n[1] + 1) / 2, (n[2] + 1) / 2);
+        const int64_t P = g.wordsPerColumn(), Po = cur.wordsPerColumn();
+        for (int64_t item = cur.columnCount() * P - 1; item >= 0; --item) {
+            const int64_t c = item / P, k = item % P;
+            const detail::DensityColumnBlock blk(g.words(), g.width(), g.height(), P, c % cur.width(),
+                                                 c / cur.width());
+            uint64_t lo, hi;
+            detail::densityLevel1Words(blk, k, lo, hi);
+            uint64_t* o = cur.words() + c * Po;
+            o[2 * k] = lo;
+            if (2 * k + 1 < Po)
+                o[2 * k + 1] = hi;
+            else
+                EXPECT_EQ(hi, 0u) << "past the column";
+        }
+        EXPECT_TRUE(sameCounts(cur, naiveDensity(g, 1))) << n[0] << "x" << n[1] << "x" << n[2];
+        while (cur.level() < 5) {
+            DensityGrid next(cur.level() + 1, (cur.width() + 1) / 2, (cur.height() + 1) / 2,
+                             (cur.depth() + 1) / 2);
+            const int64_t Pi = cur.wordsPerColumn();
+            ASSERT_EQ(next.wordsPerColumn(), Pi);
+            const uint64_t even = detail::densityEvenLanes(cur.laneBits());
+            for (int64_t item = next.columnCount() * Pi - 1; item >= 0; --item) {
+                const int64_t c = item / Pi, k = item % Pi;
+                const detail::DensityColumnBlock blk(cur.words(), cur.width(), cur.height(), Pi,
+                                                     c % next.width(), c / next.width());
+                next.words()[c * Pi + k] = detail::densityCoarsenWord(blk, k, cur.laneBits(), even);
+            }
+            cur = std::move(next);
+            EXPECT_TRUE(sameCounts(cur, naiveDensity(g, cur.level())))
+                << n[0] << "x" << n[1] << "x" << n[2] << " level " << cur.level();
+        }
+    }
 }
 
 TEST(DensityTest, VoxelizedMeshDensityMatchesBlockCountsForAnyThreadCount) {

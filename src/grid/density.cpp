@@ -12,6 +12,7 @@
 #include <immintrin.h>
 #endif
 
+#include "grid/density_kernels.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
@@ -40,47 +41,7 @@ uint64_t DensityGrid::total() const {
 
 namespace {
 
-constexpr uint64_t kBits01 = 0x5555555555555555ull;   // bit 0 of every 2-bit lane
-constexpr uint64_t kNibble01 = 0x3333333333333333ull; // low 2 bits of every 4-bit lane
-
-// Mask of the even b-bit lanes (the low half of every 2b-bit lane), b = 4, 8, 16, 32.
-constexpr uint64_t evenLanes(int b) {
-    uint64_t m = 0;
-    for (int i = 0; i < 64; i += 2 * b) m |= ((uint64_t(1) << b) - 1) << i;
-    return m;
-}
-
-// Spreads the 8 nibbles of a 32-bit value to the low nibbles of the 8 bytes of a word:
-//   x      = n7 n6 n5 n4 n3 n2 n1 n0                       (32 bits)
-//   result = 0 n7 0 n6 0 n5 0 n4 0 n3 0 n2 0 n1 0 n0       (64 bits, one nibble per byte)
-inline uint64_t spreadNibbles(uint64_t x) {
-    x = (x | (x << 16)) & 0x0000FFFF0000FFFFull; // n7..n4 move to bits 32..47
-    x = (x | (x << 8)) & 0x00FF00FF00FF00FFull;  // one nibble pair per 16 bits
-    x = (x | (x << 4)) & 0x0F0F0F0F0F0F0F0Full;  // one nibble per byte
-    return x;
-}
-
-// The 2 x 2 columns (2X, 2Y) .. (2X+1, 2Y+1) of a grid of W x H columns of P words that feed
-// output column (X, Y). A missing neighbour column (odd W or H) reads as the first column, with
-// its words masked to zero by its `keep` mask, so the loops over words stay branch-free.
-struct ColumnBlock {
-    const uint64_t* col[4];
-    uint64_t keep[4];
-    ColumnBlock(const uint64_t* words, int64_t W, int64_t H, int64_t P, int64_t X, int64_t Y) {
-        const int64_t x0 = 2 * X, y0 = 2 * Y;
-        const bool hasX1 = x0 + 1 < W, hasY1 = y0 + 1 < H;
-        const uint64_t* c00 = words + (y0 * W + x0) * P;
-        col[0] = c00;
-        col[1] = hasX1 ? c00 + P : c00;
-        col[2] = hasY1 ? c00 + W * P : c00;
-        col[3] = hasX1 && hasY1 ? c00 + (W + 1) * P : c00;
-        keep[0] = ~uint64_t(0);
-        keep[1] = hasX1 ? ~uint64_t(0) : 0;
-        keep[2] = hasY1 ? ~uint64_t(0) : 0;
-        keep[3] = hasX1 && hasY1 ? ~uint64_t(0) : 0;
-    }
-    uint64_t word(int i, int64_t k) const { return col[i][k] & keep[i]; }
-};
+using detail::DensityColumnBlock;
 
 // Calls body(X, Y, block, out) for every output column, rows of columns per parallel task (no
 // divisions per column).
@@ -89,20 +50,21 @@ void forEachOutputColumn(const uint64_t* words, int64_t W, int64_t H, int64_t P,
                          int64_t Ho, int64_t Po, Body body) {
     parallelFor(0, Ho, std::max<int64_t>(1, 1024 / Wo), [&](int64_t first, int64_t last) {
         for (int64_t Y = first; Y < last; ++Y)
-            for (int64_t X = 0; X < Wo; ++X) body(ColumnBlock(words, W, H, P, X, Y), dst + (Y * Wo + X) * Po);
+            for (int64_t X = 0; X < Wo; ++X)
+                body(DensityColumnBlock(words, W, H, P, X, Y), dst + (Y * Wo + X) * Po);
     });
 }
 
 #ifdef __AVX2__
 // The level-1 step on four input words k .. k + 3 at a time (AVX2), for k < end in steps of four;
-// returns where it stopped. The same E and O sums as cells32; the output nibbles are then
+// returns where it stopped. The same E and O sums as densityLevel1Words; the output nibbles are then
 // interleaved with byte operations instead of spreading: output byte 2b holds cells 4b, 4b + 1
 // = E nibble 2b, O nibble 2b (A below), byte 2b + 1 holds E, O nibble 2b + 1 (B), so an output
 // word pair is the byte interleave of A and B (unpack within 128-bit lanes, then a lane permute
 // puts the four input words' outputs in order).
-int64_t level1Avx2(const ColumnBlock& blk, int64_t end, uint64_t* o) {
-    const __m256i bits01 = _mm256_set1_epi64x(int64_t(kBits01)),
-                  nib01 = _mm256_set1_epi64x(int64_t(kNibble01));
+int64_t level1Avx2(const DensityColumnBlock& blk, int64_t end, uint64_t* o) {
+    const __m256i bits01 = _mm256_set1_epi64x(int64_t(detail::kDensityBits01)),
+                  nib01 = _mm256_set1_epi64x(int64_t(detail::kDensityNibble01));
     const __m256i lowNib = _mm256_set1_epi8(0x0F), highNib = _mm256_set1_epi8(int8_t(0xF0));
     __m256i keep[4];
     for (int i = 0; i < 4; ++i) keep[i] = _mm256_set1_epi64x(int64_t(blk.keep[i]));
@@ -129,65 +91,39 @@ int64_t level1Avx2(const ColumnBlock& blk, int64_t end, uint64_t* o) {
 }
 #endif
 
-// Level 1 from bits. For one input word position of the four columns of a 2x2 column block:
-//   w            = ... s5 s4 s3 s2 s1 s0                     (one bit per fine slice)
-//   p = (w & 0101..) + ((w >> 1) & 0101..)                   2-bit lanes: s2j + s2j+1 = pair j
-//   even = p & 0011..,  odd = (p >> 2) & 0011..               4-bit lanes: pairs 2i and 2i + 1
-//   E = sum of the four columns' even, O = sum of odd         nibble i <= 8, no spill
-// and the output nibbles are E and O interleaved: cell 2i from E nibble i, 2i+1 from O nibble i.
+// Level 1 from bits (densityLevel1Words: input word k of the block gives output words 2k and
+// 2k + 1).
 void densityLevel1(const BitGrid& grid, DensityGrid& out) {
     const int64_t W = grid.width(), H = grid.height(), P = grid.wordsPerColumn();
     const int64_t Wo = out.width(), Ho = out.height(), Po = out.wordsPerColumn();
-    forEachOutputColumn(
-        grid.words(), W, H, P, out.words(), Wo, Ho, Po, [&](const ColumnBlock& blk, uint64_t* o) {
-            auto cells32 = [&](int64_t k, uint64_t& lo, uint64_t& hi) {
-                uint64_t E = 0, Od = 0;
-                for (int i = 0; i < 4; ++i) {
-                    const uint64_t w = blk.word(i, k);
-                    const uint64_t p = (w & kBits01) + ((w >> 1) & kBits01);
-                    E += p & kNibble01;
-                    Od += (p >> 2) & kNibble01;
-                }
-                lo = spreadNibbles(E & 0xFFFFFFFFull) | (spreadNibbles(Od & 0xFFFFFFFFull) << 4);
-                hi = spreadNibbles(E >> 32) | (spreadNibbles(Od >> 32) << 4);
-            };
-            // Input word k gives output words 2k and 2k + 1; only the last input word may have
-            // its second half fall beyond the column (then it is zero). A branch-free main loop
-            // lets the compiler vectorize over k.
-            const int64_t pairs = std::min(P, Po / 2);
-            int64_t k = 0;
+    forEachOutputColumn(grid.words(), W, H, P, out.words(), Wo, Ho, Po,
+                        [&](const DensityColumnBlock& blk, uint64_t* o) {
+                            // Only the last input word may have its second half fall beyond the
+                            // column (then it is zero). A branch-free main loop lets the compiler
+                            // vectorize over k.
+                            const int64_t pairs = std::min(P, Po / 2);
+                            int64_t k = 0;
 #ifdef __AVX2__
-            k = level1Avx2(blk, pairs, o);
+                            k = level1Avx2(blk, pairs, o);
 #endif
-            for (; k < pairs; ++k) cells32(k, o[2 * k], o[2 * k + 1]);
-            if (pairs < P) {
-                uint64_t lo, hi;
-                cells32(pairs, lo, hi);
-                o[2 * pairs] = lo;
-            }
-        });
+                            for (; k < pairs; ++k) detail::densityLevel1Words(blk, k, o[2 * k], o[2 * k + 1]);
+                            if (pairs < P) {
+                                uint64_t hi;
+                                detail::densityLevel1Words(blk, pairs, o[2 * pairs], hi);
+                            }
+                        });
 }
 
-// Level L+1 from level L (b-bit lanes to 2b-bit lanes). Pairs of neighbouring lanes along the
-// column add into one lane of twice the width, which keeps cell order inside the word:
-//   w = ... c3 c2 c1 c0          (b-bit lanes)
-//   (w & even) + ((w >> b) & even) = ... (c3 + c2) (c1 + c0)   (2b-bit lanes)
-// and the four columns of the 2x2 block add lane-wise (8^(L+1) < 2^(2b), no spill).
+// Level L+1 from level L (densityCoarsenWord: input word k of the block gives output word k).
 void densityCoarsen(const DensityGrid& in, DensityGrid& out) {
     const int64_t W = in.width(), H = in.height(), P = in.wordsPerColumn();
     const int64_t Wo = out.width(), Ho = out.height(), Po = out.wordsPerColumn();
     const int b = in.laneBits();
-    const uint64_t even = evenLanes(b);
+    const uint64_t even = detail::densityEvenLanes(b);
     forEachOutputColumn(in.words(), W, H, P, out.words(), Wo, Ho, Po,
-                        [&](const ColumnBlock& blk, uint64_t* o) {
-                            for (int64_t k = 0; k < P; ++k) {
-                                uint64_t sum = 0;
-                                for (int i = 0; i < 4; ++i) {
-                                    const uint64_t w = blk.word(i, k);
-                                    sum += (w & even) + ((w >> b) & even);
-                                }
-                                o[k] = sum;
-                            }
+                        [&](const DensityColumnBlock& blk, uint64_t* o) {
+                            for (int64_t k = 0; k < P; ++k)
+                                o[k] = detail::densityCoarsenWord(blk, k, b, even);
                         });
 }
 
