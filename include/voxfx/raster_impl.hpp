@@ -59,10 +59,11 @@ template <class Emit> void RasterSetup::triangle(std::size_t t, Emit&& emit) con
                   vertices[mesh->index(t, 2)], uint32_t(t), clipDepth, emit);
 }
 
-/// The vertex transform of prepareVertices for one vertex: grid coordinates (orthographic) or
-/// camera coordinates (perspective).
+/// The vertex transform of prepareVertices for one vertex: grid coordinates (orthographic; a vertex
+/// on a side of the box lands on it exactly, Projection::gridFromVertex) or camera coordinates
+/// (perspective).
 VOXFX_HOSTDEV inline Vec3d projectVertex(const Projection& pr, const Vec3d& p) {
-    return pr.perspective ? pr.cameraFromWorld(p) : pr.gridFromWorld(p);
+    return pr.perspective ? pr.cameraFromWorld(p) : pr.gridFromVertex(p);
 }
 
 /// One edge of a triangle, stored with its endpoints in canonical (lexicographic) order so that

@@ -98,6 +98,8 @@ Grid placement (the half-voxel rule other tools trip over):
   --voxel-size S: cells of edge S, ceil(extent / S) of them per axis, centred on the bounds.
   --dims NX NY NZ: the bounds split into exactly that many (possibly non-cubic) cells.
   --margin M adds M empty cells on every side (default 0: surface voxels may touch the border).
+  Mesh vertices are floats: a vertex coordinate equal to a side of the box at float precision
+  lies on that side (a face at y = -20.8600788 with --bounds -20.8600788 ... touches row 0).
 
 Modes:
   surface             ED06: one voxel per column and triangle (holes on steep triangles)

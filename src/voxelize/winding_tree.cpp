@@ -166,7 +166,7 @@ GwnCrossings gwnCrossings(const Frame& frame, const MeshView& mesh) {
     const int64_t W = frame.width(), H = frame.height(), D = frame.depth();
     g.bothWays = true;
     for (std::size_t i = 0; i < mesh.vertexCount; ++i) {
-        const Vec3d p = frame.gridFromWorld(mesh.vertex(i));
+        const Vec3d p = frame.projection().gridFromVertex(mesh.vertex(i));
         const double t = view.uniform(p.z);
         if (!(t >= 0) || !std::isfinite(t) || !std::isfinite(p.x) || !std::isfinite(p.y)) return g;
         g.bothWays &= t <= double(D);
@@ -179,7 +179,7 @@ GwnCrossings gwnCrossings(const Frame& frame, const MeshView& mesh) {
     g.curtainBottom.assign(std::size_t(W * H), int32_t(D));
     g.edgeTop.assign(std::size_t(W * H), -1);
     for (const auto& e : gwnBoundaryEdges(mesh)) {
-        Vec3d a = frame.gridFromWorld(e[0]), b = frame.gridFromWorld(e[1]);
+        Vec3d a = frame.projection().gridFromVertex(e[0]), b = frame.projection().gridFromVertex(e[1]);
         a.z = view.uniform(a.z);
         b.z = view.uniform(b.z);
         const double zLow = std::min(a.z, b.z), zHigh = std::max(a.z, b.z);
