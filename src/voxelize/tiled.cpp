@@ -19,6 +19,7 @@
 
 #include "core/bitops.hpp"
 #include "voxelize/consumers.hpp"
+#include "voxelize/winding_tree.hpp"
 #include "voxfx/raster.hpp"
 
 namespace voxfx {
@@ -81,6 +82,7 @@ struct MarkSink {
     Window window;
     bool samples; // centre fragments: their cell (surface) rather than the first slice behind
     std::vector<Mark>* out;
+    std::vector<int32_t>* totals = nullptr; // per column: the signs of every crossing (gwn)
 
     void fragment(int64_t x, int64_t y, double depth, uint32_t, bool front) {
         const int64_t c = y * frame->width + x;
@@ -91,6 +93,7 @@ struct MarkSink {
         }
         const int64_t s = firstSliceBehind(frame->depthToSlice(c)(depth), frame->depth);
         if (s < frame->depth) out->push_back({s, s, window.local(x, y), front ? 1 : -1});
+        if (totals) (*totals)[window.local(x, y)] += front ? 1 : -1; // D too: behind every centre
     }
     void span(int64_t x, int64_t y, double depthMin, double depthMax, uint32_t) {
         int64_t s0, s1;
@@ -132,7 +135,15 @@ struct Stack {
     // Carried state per column of `own`: parity (0 / 1) or winding number; how many are nonzero.
     std::vector<int32_t> carry;
     int64_t carryNonzero = 0;
-    std::vector<uint64_t> bitsWords, surfaceWords;
+    std::vector<uint64_t> bitsWords, surfaceWords, haloWords;
+    // The gwn fill: the winding number tree and boundary edges (shared), the stack's curtains and
+    // each column's count over the whole column.
+    const WindingTree* tree = nullptr;
+    const std::vector<std::array<Vec3d, 2>>* edges = nullptr;
+    const Frame* fullFrame = nullptr;
+    const MeshView* mesh = nullptr;
+    GwnCurtains curtains;
+    std::vector<int32_t> totals;
 };
 
 BitGridView viewOf(std::vector<uint64_t>& words, int64_t w, int64_t h, int64_t d) {
@@ -212,6 +223,64 @@ void carriedBrick(const Stack& st, const BitGridView& out) {
         if (st.carry[size_t(c)] != 0) setSliceRange(out.column(c), 0, out.depth - 1);
 }
 
+// The marks of brick b sorted by column (then slice), with each column's first mark.
+void sortByColumn(const Buckets& buckets, int64_t b, int64_t columns, std::vector<Mark>& sorted,
+                  std::vector<int64_t>& first) {
+    sorted.assign(buckets.begin(b), buckets.end(b));
+    std::sort(sorted.begin(), sorted.end(), [](const Mark& a, const Mark& z) {
+        return a.column != z.column ? a.column < z.column : a.s0 < z.s0;
+    });
+    first.assign(size_t(columns + 1), 0);
+    for (const Mark& m : sorted) ++first[size_t(m.column) + 1];
+    for (int64_t c = 0; c < columns; ++c) first[size_t(c + 1)] += first[size_t(c)];
+}
+
+// Gwn: the dense fill's block rule on the brick (gwnFillRegion), with the conservative surface of
+// the brick grown by a cell (from the span marks of this brick and the two around it) and the
+// counts of crossings from the carried count in front; the count then carries on.
+void gwnBrick(Stack& st, int64_t b, const GridTile& tile, const BitGridView& out) {
+    const FrameView& f = *st.frame;
+    const int64_t sx0 = std::max<int64_t>(0, tile.x0 - 1), sy0 = std::max<int64_t>(0, tile.y0 - 1),
+                  sz0 = std::max<int64_t>(0, tile.s0 - 1);
+    const int64_t sx1 = std::min(f.width, tile.x0 + tile.width + 1),
+                  sy1 = std::min(f.height, tile.y0 + tile.height + 1),
+                  sz1 = std::min(f.depth, tile.s0 + tile.depth + 1);
+    const BitGridView halo = viewOf(st.haloWords, sx1 - sx0, sy1 - sy0, sz1 - sz0);
+    const int64_t bricks = int64_t(st.spanBuckets.start.size()) - 1;
+    for (int64_t k = std::max<int64_t>(0, b - 1); k <= std::min(bricks - 1, b + 1); ++k)
+        for (const Mark* m = st.spanBuckets.begin(k); m != st.spanBuckets.end(k); ++m) {
+            const int64_t x = int64_t(m->column % uint32_t(st.outer.width)) + st.outer.x0;
+            const int64_t y = int64_t(m->column / uint32_t(st.outer.width)) + st.outer.y0;
+            const int64_t a = std::max(m->s0, sz0), z = std::min(m->s1, sz1 - 1);
+            if (x >= sx0 && x < sx1 && y >= sy0 && y < sy1 && a <= z)
+                setSliceRange(halo.column(x - sx0, y - sy0), a - sz0, z - sz0);
+        }
+    std::vector<Mark> sorted;
+    std::vector<int64_t> first;
+    sortByColumn(st.centreBuckets, b, out.columnCount(), sorted, first);
+    GwnRegion region;
+    region.x0 = tile.x0;
+    region.y0 = tile.y0;
+    region.z0 = tile.s0;
+    region.out = out;
+    region.surface = halo;
+    region.sx0 = sx0;
+    region.sy0 = sy0;
+    region.sz0 = sz0;
+    region.curtains = &st.curtains;
+    region.counts = [&](int64_t x, int64_t y, int32_t* n) {
+        const int64_t c = (y - tile.y0) * tile.width + (x - tile.x0);
+        std::fill(n, n + tile.depth, 0);
+        for (int64_t i = first[size_t(c)]; i < first[size_t(c + 1)]; ++i)
+            n[sorted[size_t(i)].s0 - tile.s0] += sorted[size_t(i)].sign;
+        n[0] += st.carry[size_t(c)];
+        for (int64_t z = 1; z < tile.depth; ++z) n[z] += n[z - 1];
+        return st.totals[size_t(c)];
+    };
+    gwnFillRegion(*st.fullFrame, *st.tree, region);
+    for (const Mark& m : sorted) st.carry[m.column] += m.sign;
+}
+
 // Combines the inside with the conservative surface (solid-conservative, interior).
 void combineSurface(const Plan& plan, const BitGridView& inside, const BitGridView& surface) {
     const int64_t n = inside.columnCount() * inside.wordsPerColumn;
@@ -228,7 +297,7 @@ bool buildBrick(Stack& st, int64_t b, GridTile& tile) {
     const bool noCentres = !plan.inside() || st.centreBuckets.empty(b);
     const int64_t columns = w * h;
     const bool carryUniform = st.carryNonzero == 0 || st.carryNonzero == columns;
-    if (noSpans && noCentres && (!plan.inside() || carryUniform)) {
+    if (noSpans && noCentres && !plan.gwn && (!plan.inside() || carryUniform)) {
         tile.uniform = true;
         tile.value = plan.inside() && st.carryNonzero == columns; // interior: no surface here
         return false;
@@ -237,7 +306,9 @@ bool buildBrick(Stack& st, int64_t b, GridTile& tile) {
     if (!plan.inside()) {
         applySpans(st, b, s0, bits);
     } else {
-        if (noCentres)
+        if (plan.gwn)
+            gwnBrick(st, b, tile, bits);
+        else if (noCentres)
             carriedBrick(st, bits);
         else if (plan.parity)
             parityBrick(st, b, s0, bits);
@@ -263,6 +334,12 @@ void rasterizeStack(Stack& st, const RasterSetup& setup, const TileBins& bins, i
     st.centres.clear();
     MarkSink spanSink{&view, st.outer, plan.samples, &st.spans};
     MarkSink centreSink{&view, st.own, false, &st.centres};
+    if (plan.gwn) {
+        st.totals.assign(size_t(st.own.width * st.own.height), 0);
+        centreSink.totals = &st.totals;
+        st.curtains = gwnCurtains(*st.fullFrame, *st.mesh, *st.edges, st.own.x0, st.own.y0, st.own.width,
+                                  st.own.height);
+    }
     const int64_t ox1 = st.outer.x0 + st.outer.width, oy1 = st.outer.y0 + st.outer.height;
     for (int64_t i = bins.offsets[size_t(stack)]; i < bins.offsets[size_t(stack) + 1]; ++i)
         setup.triangle(bins.entries[size_t(i)], [&](const RasterTriangle& rt) {
@@ -293,7 +370,6 @@ std::string wholeGridReason(const Frame& frame, const VoxelizeOptions& o) {
                               o.fill == Fill::Flood ? "the flood from the border crosses any number of tiles"
                                                     : "it slices the grid along all three axes",
                               ")");
-    if (inside && o.fill == Fill::Gwn) return "fill 'gwn' is not tiled yet";
     return {};
 }
 
@@ -305,6 +381,8 @@ void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
     const int64_t B = tiles.brickSize == 0 ? kDefaultBrick : tiles.brickSize;
     if (B <= 0 || B % 8 != 0) fail("the brick size must be a positive multiple of 8, got ", tiles.brickSize);
     const Plan plan = planOf(options);
+    if (plan.gwn && B % 16 != 0)
+        fail("fill 'gwn' needs a brick size that is a multiple of 16 (its blocks), got ", tiles.brickSize);
     withThreads(options.threads, [&] {
         const int64_t W = frame.width(), H = frame.height(), D = frame.depth();
         const detail::RasterSetup setup = detail::prepareVertices(frame, mesh);
@@ -323,13 +401,21 @@ void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
                  " columns) and bricks, but the memory budget is ", gibText(budget));
         const detail::TileBins bins = detail::binTriangles(setup, coverage, B, B, halo);
         const FrameView view = setup.frame;
+        // The gwn fill's winding number tree and boundary edges, as the dense fill builds them.
+        detail::WindingTree tree;
+        std::vector<std::array<Vec3d, 2>> edges;
+        if (plan.gwn) {
+            tree.build(mesh, 2.0);
+            edges = detail::gwnEdges(mesh);
+        }
         std::atomic<bool> stop{false};
         std::atomic<int64_t> done{0};
         std::mutex errorMutex;
         std::exception_ptr error;
         const int64_t stacks = stacksX * stacksY;
         parallelFor(0, stacks, 1, [&](int64_t sb, int64_t se) {
-            Stack st{&view, &plan, B, {}, {}, {}, {}, {}, {}, {}, 0, {}, {}};
+            Stack st{&view, &plan, B,  {}, {},    {},     {},     {},    {}, {},
+                     0,     {},    {}, {}, &tree, &edges, &frame, &mesh, {}, {}};
             for (int64_t k = sb; k < se && !stop.load(std::memory_order_relaxed); ++k) {
                 try {
                     const int64_t x0 = (k % stacksX) * B, y0 = (k / stacksX) * B;
