@@ -48,6 +48,31 @@ TEST(CliTest, VoxelizesACubeAndPrintsASummary) {
     EXPECT_NE(r.out.find("8 x 8 x 8 grid"), std::string::npos) << r.out;
 }
 
+TEST(CliTest, VdbOutputIsVoxelizedInTilesWithinTheMemoryBudget) {
+    // A cube at 2048^3: 1 GiB as a dense grid, a few tiles as a sparse one.
+    test::TempDir dir;
+    const std::string mesh = test::writeFile(dir.file("cube.off"), kCubeOff);
+    const std::string out = dir.file("cube.vdb");
+    const CliRun r = runCli(dir, "voxelize " + mesh + " -o " + out + " -r 2048 --memory 256M");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("8,589,934,592 filled voxels"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("(tiled)"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("(vdb, sparse)"), std::string::npos) << r.out;
+    EXPECT_LT(std::filesystem::file_size(out), 100000u);
+    // The whole grid does not fit the budget: --dense and a fill that needs the whole grid stop
+    // with one line saying so.
+    std::filesystem::remove(out);
+    expectCleanFailure(dir, runCli(dir, "voxelize " + mesh + " -o " + out + " -r 2048 --memory 256M --dense"),
+                       "needs 1.00 GiB", out);
+    expectCleanFailure(dir,
+                       runCli(dir, "voxelize " + mesh + " -o " + out + " -r 2048 --memory 256M --fill flood"),
+                       "fill 'flood' needs the whole grid", out);
+    expectCleanFailure(dir, runCli(dir, "voxelize " + mesh + " -o " + out + " -r 8 --memory lots"),
+                       "--memory must be bytes", out);
+    const CliRun help = runCli(dir, "voxelize --help");
+    EXPECT_NE(help.out.find("flood and vote need the"), std::string::npos) << help.out;
+}
+
 TEST(CliTest, HelpExplainsWhereVoxelCentresLie) {
     test::TempDir dir;
     const CliRun r = runCli(dir, "voxelize --help");

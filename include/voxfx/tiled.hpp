@@ -90,4 +90,11 @@ std::string wholeGridReason(const Frame& frame, const VoxelizeOptions& options);
 void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options,
                    const TileOptions& tiles, const std::function<void(const GridTile&)>& visit);
 
+/// Bytes voxelizeTiles(mesh, frame, options, tiles, ...) holds at most besides what `visit` keeps
+/// (the bins, the projected vertices, the bricks and marks of each worker thread): what a caller
+/// that keeps results (a sparse tree) subtracts from its budget. Cost: one set-up per triangle.
+/// Throws voxfx::Error for a bad brick size or mesh.
+uint64_t tileWorkingBytes(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options,
+                          const TileOptions& tiles = {});
+
 } // namespace voxfx

@@ -94,11 +94,15 @@ struct FitOptions {
     Box3d bounds; ///< empty = mesh bounds
     int64_t marginCells = 0;
     Axis axis = Axis::Z;
+    /// Refuse grids whose dense bits need more memory than is available. Off for sparse and tiled
+    /// voxelization (voxfx/sparse_grid.hpp, voxfx/tiled.hpp), which never build the dense grid.
+    bool checkDenseMemory = true;
 };
 
 /// Fits an orthographic frame to `meshBounds` as described by `options` (exactly one of
 /// resolution, voxelSize, dims must be set). Throws voxfx::Error for an empty or flat box with
-/// resolution 0, non-positive sizes, or a grid whose memory would exceed what is available.
+/// resolution 0, non-positive sizes, or (checkDenseMemory) a grid whose memory would exceed what
+/// is available.
 Frame fitFrame(const Box3d& meshBounds, const FitOptions& options);
 
 /// Voxelizes `mesh` into `frame`. Returns the grid (in `frame`, with local slicing applied when

@@ -16,6 +16,8 @@
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/raster.hpp"
+#include "voxfx/sparse_grid.hpp"
+#include "voxfx/tiled.hpp"
 #include "voxfx/voxel_grid.hpp"
 #include "voxfx/voxelize.hpp"
 

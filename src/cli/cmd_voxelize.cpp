@@ -1,4 +1,5 @@
 // voxfx voxelize MESH -o GRID — mesh to voxel grid in any mode, with the summary line.
+#include <cstdlib>
 #include <iostream>
 
 #include "cli_common.hpp"
@@ -13,27 +14,74 @@ struct VoxelizeArgs {
     VoxelizeChoiceArgs choice;
     int threads = 0;
     std::string device = "cpu";
+    std::string memory;
+    bool dense = false;
     bool quiet = false;
 };
 
-int runVoxelize(const VoxelizeArgs& a) {
-    const auto t0 = Clock::now();
-    // Everything that can be checked before the work starts is checked here, so a bad output
-    // name does not cost a voxelization.
-    const GridFormat format = gridFormatFromPath(a.output);
-    VoxelizeOptions vo = toVoxelizeOptions(a.choice);
-    vo.threads = a.threads;
-    vo.device = parseDevice(a.device);
+// --memory: the budget of every size check of the run, as VOXFX_MEMORY_LIMIT (which it sets, so
+// the library's checks and the tiles' budget all see it).
+void applyMemoryBudget(const std::string& memory) {
+    if (memory.empty()) return;
+    setenv("VOXFX_MEMORY_LIMIT", memory.c_str(), 1);
+    try {
+        availableMemoryBytes();
+    } catch (const Error&) {
+        fail("--memory must be bytes or a size with K, M, G or T (powers of 1024), got '", memory, "'");
+    }
+}
+
+// What a run produced, for the summary.
+struct VoxelizeRun {
+    Frame frame;
+    int64_t filled = 0;
+    double voxelMs = 0, writeMs = 0;
+    bool onGpu = false, sparse = false;
+};
+
+// .vdb without the dense grid: tiles straight into OpenVDB's tree (voxfx/sparse_grid.hpp).
+VoxelizeRun runSparse(const Mesh& mesh, const Frame& frame, const VoxelizeOptions& vo,
+                      const VoxelizeArgs& a) {
+    VoxelizeRun r;
+    r.sparse = true;
+    ProgressLine progress("voxelizing", !a.quiet);
+    VoxelizeOptions o = vo;
+    o.progress = &progress;
+    const auto tv = Clock::now();
+    const SparseGrid grid = voxelizeSparse(mesh.view(), frame, o);
+    r.voxelMs = msSince(tv);
+    progress.done();
+    r.frame = grid.frame();
+    r.filled = grid.count();
+    const auto tw = Clock::now();
+    GridWriteOptions wo;
+    wo.vdbFloat = a.choice.vdbFloat;
+    writeGrid(grid, a.output, wo);
+    r.writeMs = msSince(tw);
+    return r;
+}
+
+VoxelizeRun runDense(const Mesh& mesh, const Frame& frame, VoxelizeOptions vo, const VoxelizeArgs& a) {
+    VoxelizeRun r;
     std::string deviceNote;
     vo.deviceNote = &deviceNote;
-    FitOptions fo = toFitOptions(a.fit, voxelizeFitChoices());
-    fo.axis = parseAxis(a.choice.axis);
+    ProgressLine progress("voxelizing", !a.quiet);
+    vo.progress = &progress;
+    const auto tv = Clock::now();
+    const VoxelGrid grid = voxelize(mesh.view(), frame, vo);
+    r.voxelMs = msSince(tv);
+    progress.done();
+    if (!deviceNote.empty() && vo.device == Device::Cuda && !a.quiet)
+        std::cerr << "voxfx: --device cuda: " << deviceNote << "\n";
+    r.onGpu = vo.device != Device::Cpu && deviceNote.empty();
+    r.frame = grid.frame;
+    r.filled = grid.bits.count();
+    r.writeMs = writeGridOutput(grid, a.output, a.choice.vdbFloat);
+    return r;
+}
 
-    MeshLoadReport report;
-    const Mesh mesh = loadMesh(a.input, &report);
-    const double loadMs = msSince(t0);
-
-    // Parity is exact for closed meshes only: detect open ones and pick the robust fill.
+// Parity is exact for closed meshes only: detect open ones and pick the robust fill.
+void chooseFill(const VoxelizeArgs& a, const Mesh& mesh, VoxelizeOptions& vo) {
     const MeshTopology topo = analyzeTopology(mesh.view());
     const bool needsInside = vo.mode == VoxelizeMode::Solid || vo.mode == VoxelizeMode::SolidConservative ||
                              vo.mode == VoxelizeMode::Interior;
@@ -50,40 +98,51 @@ int runVoxelize(const VoxelizeArgs& a) {
                       << " is not closed; parity may fill wrong cells (try --fill flood, --fill gwn or "
                          "--fill vote)\n";
     }
+}
 
+int runVoxelize(const VoxelizeArgs& a) {
+    const auto t0 = Clock::now();
+    // Everything that can be checked before the work starts is checked here, so a bad output
+    // name does not cost a voxelization.
+    const GridFormat format = gridFormatFromPath(a.output);
+    applyMemoryBudget(a.memory);
+    VoxelizeOptions vo = toVoxelizeOptions(a.choice);
+    vo.threads = a.threads;
+    vo.device = parseDevice(a.device);
+    FitOptions fo = toFitOptions(a.fit, voxelizeFitChoices());
+    fo.axis = parseAxis(a.choice.axis);
+    // .vdb goes tile by tile into a sparse tree unless the dense grid is asked for (--dense,
+    // local slicing, a GPU device).
+    const bool sparse =
+        format == GridFormat::Vdb && !a.dense && vo.slicing == Slicing::Uniform && vo.device == Device::Cpu;
+    fo.checkDenseMemory = !sparse;
+
+    MeshLoadReport report;
+    const Mesh mesh = loadMesh(a.input, &report);
+    const double loadMs = msSince(t0);
+    chooseFill(a, mesh, vo);
     const Frame frame = fitFrame(computeBounds(mesh.view()), fo);
-    ProgressLine progress("voxelizing", !a.quiet);
-    vo.progress = &progress;
-    const auto tv = Clock::now();
-    const VoxelGrid grid = voxelize(mesh.view(), frame, vo);
-    const double voxelMs = msSince(tv);
-    progress.done();
-    if (!deviceNote.empty() && vo.device == Device::Cuda && !a.quiet)
-        std::cerr << "voxfx: --device cuda: " << deviceNote << "\n";
-    const bool onGpu = vo.device != Device::Cpu && deviceNote.empty();
-    const int64_t filled = grid.bits.count();
-
-    const auto tw = Clock::now();
-    GridWriteOptions wo;
-    wo.vdbFloat = a.choice.vdbFloat;
-    writeGrid(grid, a.output, wo);
-    const double writeMs = msSince(tw);
+    const VoxelizeRun r = sparse ? runSparse(mesh, frame, vo, a) : runDense(mesh, frame, vo, a);
 
     if (!a.quiet) {
-        const Vec3i d = grid.worldDims();
-        const Vec3d cell = grid.frame.cellSize();
+        const bool needsInside = vo.mode == VoxelizeMode::Solid ||
+                                 vo.mode == VoxelizeMode::SolidConservative ||
+                                 vo.mode == VoxelizeMode::Interior;
+        const VoxelGrid shape{r.frame, {}};
+        const Vec3i d = shape.worldDims();
+        const Vec3d cell = r.frame.cellSize();
         std::cout << a.input << ": " << withCommas(int64_t(mesh.triangleCount())) << " triangles -> " << d.x
                   << " x " << d.y << " x " << d.z << " grid (cell " << fmt(cell.x, 4);
         if (cell.y != cell.x || cell.z != cell.x)
             std::cout << " x " << fmt(cell.y, 4) << " x " << fmt(cell.z, 4);
-        std::cout << ", axis " << toString(grid.frame.axis()) << ", " << toString(vo.slicing) << " slicing), "
+        std::cout << ", axis " << toString(r.frame.axis()) << ", " << toString(vo.slicing) << " slicing), "
                   << toString(vo.mode);
         if (needsInside) std::cout << " (" << toString(vo.fill) << ")";
-        std::cout << ", " << withCommas(filled) << " filled voxels\n";
-        std::cout << "time: load " << fmtMs(loadMs) << ", voxelize " << fmtMs(voxelMs)
-                  << (onGpu ? " on " + cudaStatus().device : std::string()) << ", write " << fmtMs(writeMs)
-                  << ", total " << fmtMs(msSince(t0)) << " -> " << a.output << " (" << toString(format)
-                  << ")\n";
+        std::cout << ", " << withCommas(r.filled) << " filled voxels\n";
+        std::cout << "time: load " << fmtMs(loadMs) << ", voxelize " << fmtMs(r.voxelMs)
+                  << (r.onGpu ? " on " + cudaStatus().device : std::string()) << (r.sparse ? " (tiled)" : "")
+                  << ", write " << fmtMs(r.writeMs) << ", total " << fmtMs(msSince(t0)) << " -> " << a.output
+                  << " (" << toString(format) << (r.sparse ? ", sparse" : "") << ")\n";
     }
     return 0;
 }
@@ -118,6 +177,17 @@ Fills (how inside is decided; default auto = parity for closed meshes, flood oth
   gwn      generalized winding number >= 0.5: closes holes wider than a voxel (needs
            consistent orientation)
 
+Memory and tiles (--memory, VOXFX_MEMORY_LIMIT):
+  .vdb output is voxelized tile by tile (bricks of 128^3 cells, each column's parity carried
+  from brick to brick) straight into OpenVDB's sparse tree, never as a whole grid: memory
+  grows with the surface, not the volume (-r 16384 fits in 4 GiB). The voxels are the same
+  bit for bit. The parity, winding and gwn fills work tile by tile; flood and vote need the
+  whole grid: they voxelize it whole and convert it, and stop with an error naming the fill
+  and the memory it needs when that does not fit. Other formats, --slicing local and
+  --device cuda|auto build the whole grid too (so does --dense).
+  --memory SIZE caps what the run may use (bytes, or K, M, G, T in powers of 1024: 4G), for
+  every size check, as VOXFX_MEMORY_LIMIT does; the default is the memory available.
+
 Devices (--device; the grid is the same bit for bit on each):
   cpu      all cores (the default)
   cuda     the CUDA back end: every mode with the parity fill, mesh upload and grid download
@@ -141,6 +211,8 @@ const Command kVoxelize{
             ->check(CLI::NonNegativeNumber);
         app.add_option("--device", a->device, "Where to voxelize: cpu, cuda or auto (see below)")
             ->default_val("cpu");
+        app.add_option("--memory", a->memory, "Memory budget: bytes, or K, M, G, T (see below)");
+        app.add_flag("--dense", a->dense, "Build the whole grid first for .vdb too (the path before tiles)");
         app.add_flag("-q,--quiet", a->quiet, "No summary or progress");
         return std::function<int()>([a] { return runVoxelize(*a); });
     }};

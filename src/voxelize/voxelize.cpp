@@ -276,7 +276,8 @@ Frame fitFrame(const Box3d& meshBounds, const FitOptions& o) {
     const int cx = columnXAxis(o.axis), cy = columnYAxis(o.axis), cs = sliceAxis(o.axis);
     std::ostringstream what;
     what << "a " << dims.x << " x " << dims.y << " x " << dims.z << " grid";
-    checkMemory(BitGrid::requiredBytes(dims[cx], dims[cy], dims[cs]), what.str().c_str());
+    if (o.checkDenseMemory)
+        checkMemory(BitGrid::requiredBytes(dims[cx], dims[cy], dims[cs]), what.str().c_str());
     return Frame::orthographic(box, o.axis, dims[cx], dims[cy], dims[cs]);
 }
 
