@@ -115,9 +115,15 @@ void registerAll() {
     for (const char* mesh : {"bunny00", "bunny1m"}) {
         const std::string m = mesh;
         for (int64_t n : {512, 1024}) {
-            benchmark::RegisterBenchmark(("Dense/" + m).c_str(), Dense, m)->Arg(n)->Unit(benchmark::kMillisecond);
-            benchmark::RegisterBenchmark(("Tiles/" + m).c_str(), Tiles, m)->Arg(n)->Unit(benchmark::kMillisecond);
-            benchmark::RegisterBenchmark(("Sparse/" + m).c_str(), Sparse, m)->Arg(n)->Unit(benchmark::kMillisecond);
+            benchmark::RegisterBenchmark(("Dense/" + m).c_str(), Dense, m)
+                ->Arg(n)
+                ->Unit(benchmark::kMillisecond);
+            benchmark::RegisterBenchmark(("Tiles/" + m).c_str(), Tiles, m)
+                ->Arg(n)
+                ->Unit(benchmark::kMillisecond);
+            benchmark::RegisterBenchmark(("Sparse/" + m).c_str(), Sparse, m)
+                ->Arg(n)
+                ->Unit(benchmark::kMillisecond);
             benchmark::RegisterBenchmark(("DenseToVdb/" + m).c_str(), DenseToVdb, m)
                 ->Arg(n)
                 ->Unit(benchmark::kMillisecond);
