@@ -6,6 +6,7 @@ namespace {
 
 struct VoxelizeResult {
     GridPtr grid;
+    std::shared_ptr<SparseGrid> sparse; ///< sparse=True: the tiles' tree, no dense grid
     Fill fill;
     std::string deviceNote; ///< why a device="cuda" request ran on the CPU
 };
@@ -14,7 +15,7 @@ struct VoxelizeResult {
 /// meshes, flood otherwise), the fitted frame, the voxelization.
 VoxelizeResult voxelizeMesh(const Mesh& mesh, const FitOptions& fo, const std::string& mode,
                             const std::string& fill, const std::string& slicing, int threads,
-                            const std::string& device = "cpu") {
+                            const std::string& device = "cpu", bool sparse = false) {
     VoxelizeOptions vo;
     vo.device = parseDevice(device);
     std::string note;
@@ -31,9 +32,14 @@ VoxelizeResult voxelizeMesh(const Mesh& mesh, const FitOptions& fo, const std::s
         vo.fill = parseFill(fill);
     }
     validateMesh(mesh.view(), "mesh");
-    const Frame frame = fitFrame(computeBounds(mesh.view()), fo);
+    FitOptions fit = fo;
+    fit.checkDenseMemory = !sparse;
+    const Frame frame = fitFrame(computeBounds(mesh.view()), fit);
+    if (sparse)
+        return {nullptr, std::make_shared<SparseGrid>(voxelizeSparse(mesh.view(), frame, vo)), vo.fill,
+                vo.device == Device::Cuda ? note : std::string()};
     auto grid = std::make_shared<VoxelGrid>(voxelize(mesh.view(), frame, vo));
-    return {std::move(grid), vo.fill, vo.device == Device::Cuda ? note : std::string()};
+    return {std::move(grid), nullptr, vo.fill, vo.device == Device::Cuda ? note : std::string()};
 }
 
 } // namespace
@@ -45,44 +51,48 @@ void bindVoxelize(py::module_& m) {
            std::optional<double> voxelSize, std::optional<std::vector<int64_t>> dims,
            std::optional<std::vector<double>> bounds, int64_t margin, const std::string& mode,
            const std::string& fill, const std::string& axis, const std::string& slicing, int threads,
-           const std::string& device) {
+           const std::string& device, bool sparse) -> py::object {
             const auto mesh = meshArgument(meshOrVertices, faces);
             const FitOptions fo = fitOptions(resolution, voxelSize, dims, bounds, margin, axis);
             if (threads < 0) throw py::value_error("threads must be >= 0");
             VoxelizeResult result;
             {
                 py::gil_scoped_release release;
-                result = voxelizeMesh(mesh->mesh, fo, mode, fill, slicing, threads, device);
+                result = voxelizeMesh(mesh->mesh, fo, mode, fill, slicing, threads, device, sparse);
             }
             // device="cuda" without a usable GPU: the CPU's grid, and a RuntimeWarning saying why.
             if (!result.deviceNote.empty() &&
                 PyErr_WarnEx(PyExc_RuntimeWarning, ("device='cuda': " + result.deviceNote).c_str(), 1) != 0)
                 throw py::error_already_set();
-            return result.grid;
+            if (result.sparse) return py::cast(result.sparse);
+            return py::cast(result.grid);
         },
         py::arg("vertices"), py::arg("faces") = py::none(), py::kw_only(), py::arg("resolution") = py::none(),
         py::arg("voxel_size") = py::none(), py::arg("dims") = py::none(), py::arg("bounds") = py::none(),
         py::arg("margin") = 0, py::arg("mode") = "solid", py::arg("fill") = "auto", py::arg("axis") = "z",
         py::arg("slicing") = "uniform", py::arg("threads") = 0, py::arg("device") = "cpu",
+        py::arg("sparse") = false,
         "Voxelizes a mesh (a voxfx.Mesh, or vertices and faces arrays) like `voxfx voxelize`: resolution "
         "(default 256), voxel_size or dims; bounds (xmin ymin zmin xmax ymax zmax); mode surface | "
         "conservative | solid | solid-conservative | interior; fill auto | parity | flood | vote | winding | "
         "gwn "
         "(auto: parity for closed meshes, flood otherwise); threads 0 = all; device cpu | cuda | auto "
-        "(the same grid; cuda without a usable GPU warns and runs on the CPU; see cuda_status()).");
+        "(the same grid; cuda without a usable GPU warns and runs on the CPU; see cuda_status()). "
+        "sparse=True: a voxfx.SparseGrid voxelized tile by tile, no dense grid at any point (its "
+        "coordinates() are the (N, 3) int32 cells; the same voxels; VOXFX_MEMORY_LIMIT caps it)."),
 
-    m.def(
-        "cuda_status",
-        [] {
-            const CudaStatus& s = cudaStatus();
-            py::dict d;
-            d["built"] = s.built;
-            d["available"] = s.available;
-            d["device"] = s.device;
-            d["reason"] = s.reason;
-            return d;
-        },
-        "Whether the CUDA back end can run here: {'built', 'available', 'device', 'reason'}.");
+        m.def(
+            "cuda_status",
+            [] {
+                const CudaStatus& s = cudaStatus();
+                py::dict d;
+                d["built"] = s.built;
+                d["available"] = s.available;
+                d["device"] = s.device;
+                d["reason"] = s.reason;
+                return d;
+            },
+            "Whether the CUDA back end can run here: {'built', 'available', 'device', 'reason'}.");
 }
 
 } // namespace voxfx::python

@@ -4,6 +4,7 @@
     mesh = voxfx.load_mesh("bunny.off")            # or: vertices, faces = voxfx.load_mesh(...)
     grid = voxfx.voxelize(mesh, resolution=128)    # or: voxfx.voxelize(vertices, faces, ...)
     occ = grid.to_numpy()                          # bool array indexed [x, y, z]
+    ijk = voxfx.voxelize(mesh, resolution=4096, sparse=True).coordinates()  # (N, 3) int32, no dense grid
     grid.save("bunny.binvox")                      # .binvox .vdb .nrrd .ply .obj
     inside = voxfx.contains(mesh, points)          # exact point occupancy, (K,) bool
     report = voxfx.batch("meshes.txt", "out/", resolution=64)   # many meshes, as `voxfx batch`
@@ -35,6 +36,7 @@ from ._voxfx import (  # noqa: E402
     Grid,
     Mesh,
     PointClassifier,
+    SparseGrid,
     SurfaceMesh,
     __version__,
     closing,
@@ -50,6 +52,7 @@ from ._voxfx import (  # noqa: E402
     morphology,
     opening,
     read_grid,
+    read_sparse_grid,
     resample_to_uniform,
     reslice,
     voxelize,
