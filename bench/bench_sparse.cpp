@@ -9,7 +9,7 @@
 // on bunny00 (75K triangles) and bunny1m (1.2M, bench/bench_meshes.hpp), solid (parity), at the
 // resolution in the name. Files go to $TMPDIR (default /tmp).
 //
-//   ./build/bench/bench_sparse --benchmark_min_time=1x --benchmark_repetitions=3
+//   ./build/bench_sparse --benchmark_min_time=0.01 --benchmark_repetitions=3
 //
 // Counters: voxels_per_second (cells of the grid), filled (cells), tree_MiB (OpenVDB memUsage).
 #include <atomic>
@@ -117,23 +117,29 @@ void registerAll() {
         for (int64_t n : {512, 1024}) {
             benchmark::RegisterBenchmark(("Dense/" + m).c_str(), Dense, m)
                 ->Arg(n)
-                ->Unit(benchmark::kMillisecond);
+                ->Unit(benchmark::kMillisecond)
+                ->UseRealTime();
             benchmark::RegisterBenchmark(("Tiles/" + m).c_str(), Tiles, m)
                 ->Arg(n)
-                ->Unit(benchmark::kMillisecond);
+                ->Unit(benchmark::kMillisecond)
+                ->UseRealTime();
             benchmark::RegisterBenchmark(("Sparse/" + m).c_str(), Sparse, m)
                 ->Arg(n)
-                ->Unit(benchmark::kMillisecond);
+                ->Unit(benchmark::kMillisecond)
+                ->UseRealTime();
             benchmark::RegisterBenchmark(("DenseToVdb/" + m).c_str(), DenseToVdb, m)
                 ->Arg(n)
-                ->Unit(benchmark::kMillisecond);
+                ->Unit(benchmark::kMillisecond)
+                ->UseRealTime();
             benchmark::RegisterBenchmark(("SparseToVdb/" + m).c_str(), SparseToVdb, m)
                 ->Arg(n)
-                ->Unit(benchmark::kMillisecond);
+                ->Unit(benchmark::kMillisecond)
+                ->UseRealTime();
         }
         benchmark::RegisterBenchmark(("WriteSparse/" + m).c_str(), WriteSparse, m)
             ->Arg(2048)
-            ->Unit(benchmark::kMillisecond);
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime();
     }
 }
 

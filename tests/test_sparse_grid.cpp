@@ -264,8 +264,14 @@ TEST(SparseGridTest, BudgetsAreEnforcedWithAMessageThatSaysWhat) {
     VOXFX_REQUIRE_DATA("meshes/bunny00.off");
     const Mesh mesh = bunny();
     const Frame frame = bunnyFrame(mesh, 300, Axis::Z);
+    // What the tiles hold (reported before the first brick), and 64 KiB for the tree.
+    uint64_t working = 0;
     TileOptions t;
-    t.memoryBytes = tileWorkingBytes(mesh.view(), frame, {}) + (64 << 10); // the tiles, 64 KiB of tree
+    t.workingBytes = &working;
+    voxelizeTiles(mesh.view(), frame, {}, t, [](const GridTile&) {});
+    ASSERT_GT(working, 0u);
+    t.workingBytes = nullptr;
+    t.memoryBytes = working + (64 << 10);
     try {
         voxelizeSparse(mesh.view(), frame, {}, t);
         ADD_FAILURE() << "no error";

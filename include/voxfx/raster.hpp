@@ -55,6 +55,7 @@
 
 #include <concepts>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "voxfx/frame.hpp"
@@ -177,12 +178,11 @@ struct TileBins {
     std::vector<int64_t> offsets;  // tileCount + 1
     std::vector<uint32_t> entries; // triangle indices
 };
+/// `counted`, when given, receives the number of entries after they are counted and before they
+/// are allocated (it may throw, for a memory check).
 TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsPerTile,
-                      int64_t colsPerTile = 0, int64_t grow = 0);
-/// Entries binTriangles(setup, coverage, rowsPerTile, colsPerTile, grow) will hold, without
-/// building the bins (for a memory check first). Cost: one set-up per triangle.
-int64_t countBinEntries(const RasterSetup& setup, Coverage coverage, int64_t rowsPerTile, int64_t colsPerTile,
-                        int64_t grow);
+                      int64_t colsPerTile = 0, int64_t grow = 0,
+                      const std::function<void(int64_t entries)>& counted = {});
 
 } // namespace detail
 

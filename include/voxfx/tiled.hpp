@@ -60,6 +60,10 @@ struct TileOptions {
     /// Bytes the tiling may hold at once (bins, bricks, fragments); 0 = availableMemoryBytes()
     /// (the machine's available memory, or VOXFX_MEMORY_LIMIT when smaller).
     uint64_t memoryBytes = 0;
+    /// When given, receives the bytes the tiling holds (the bins, the projected vertices, the bricks
+    /// and fragments of every worker thread) before the first brick is visited: what a caller that
+    /// keeps results (a sparse tree) has left of its budget. Not owned.
+    uint64_t* workingBytes = nullptr;
 };
 
 /// One brick as `visit` sees it. Cell (x, y, s) of the brick is cell (x0 + x, y0 + y, s0 + s) of
@@ -89,12 +93,5 @@ std::string wholeGridReason(const Frame& frame, const VoxelizeOptions& options);
 /// + one step per uniform brick).
 void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options,
                    const TileOptions& tiles, const std::function<void(const GridTile&)>& visit);
-
-/// Bytes voxelizeTiles(mesh, frame, options, tiles, ...) holds at most besides what `visit` keeps
-/// (the bins, the projected vertices, the bricks and marks of each worker thread): what a caller
-/// that keeps results (a sparse tree) subtracts from its budget. Cost: one set-up per triangle.
-/// Throws voxfx::Error for a bad brick size or mesh.
-uint64_t tileWorkingBytes(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options,
-                          const TileOptions& tiles = {});
 
 } // namespace voxfx

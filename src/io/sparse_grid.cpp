@@ -240,9 +240,10 @@ SparseGrid voxelizeSparse(const MeshView& mesh, const Frame& frame, const Voxeli
     }
     if (options.device != Device::Cpu && options.deviceNote)
         *options.deviceNote = "tiles for a sparse grid run on the CPU";
-    // The tree may take what the tiling leaves of the budget.
-    const uint64_t working = tileWorkingBytes(mesh, frame, options, tiles);
-    const uint64_t treeBudget = budget > working ? budget - working : 0;
+    // The tree may take what the tiling leaves of the budget (known before the first brick).
+    uint64_t working = 0;
+    TileOptions t = tiles;
+    t.workingBytes = &working;
     SparseGrid out(frame);
     void* tree = const_cast<void*>(out.handle());
     const Axis axis = frame.axis();
@@ -253,21 +254,22 @@ SparseGrid voxelizeSparse(const MeshView& mesh, const Frame& frame, const Voxeli
                   rs = (frame.depth() + 4095) / 4096;
     std::vector<std::atomic<uint64_t>> regions(size_t((rx * ry * rs + 63) / 64));
     constexpr uint64_t kUpperNodeBytes = 270352 + 16;
-    voxelizeTiles(mesh, frame, options, tiles, [&](const GridTile& t) {
-        if (t.uniform && !t.value) return;
-        const int64_t region = ((t.s0 / 4096) * ry + t.y0 / 4096) * rx + t.x0 / 4096;
+    voxelizeTiles(mesh, frame, options, t, [&](const GridTile& tile) {
+        if (tile.uniform && !tile.value) return;
+        const uint64_t treeBudget = budget > working ? budget - working : 0;
+        const int64_t region = ((tile.s0 / 4096) * ry + tile.y0 / 4096) * rx + tile.x0 / 4096;
         const uint64_t bit = uint64_t(1) << (region & 63);
         if (!(regions[size_t(region >> 6)].fetch_or(bit) & bit)) treeBytes += kUpperNodeBytes;
         detail::SparseBrick b;
-        b.origin[columnXAxis(axis)] = t.x0;
-        b.origin[columnYAxis(axis)] = t.y0;
-        b.origin[sliceAxis(axis)] = t.s0;
-        b.width = t.width;
-        b.height = t.height;
-        b.depth = t.depth;
-        b.wordsPerColumn = t.bits.wordsPerColumn;
-        b.words = t.bits.words;
-        b.value = t.value;
+        b.origin[columnXAxis(axis)] = tile.x0;
+        b.origin[columnYAxis(axis)] = tile.y0;
+        b.origin[sliceAxis(axis)] = tile.s0;
+        b.width = tile.width;
+        b.height = tile.height;
+        b.depth = tile.depth;
+        b.wordsPerColumn = tile.bits.wordsPerColumn;
+        b.words = tile.bits.words;
+        b.value = tile.value;
         b.axis = int(axis);
         uint64_t bytes = 0;
         std::string error;

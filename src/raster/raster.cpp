@@ -2,6 +2,7 @@
 #include "voxfx/raster.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace voxfx::detail {
@@ -69,8 +70,10 @@ public:
             x1 = std::max(x1, int64_t(std::clamp(cl, 0.0, double(W - 1))));
         });
         if (r1 < r0 || x1 < x0) return {0, -1, 0, -1};
+        // A shift for the usual power-of-two tiles: this runs once per triangle and tiling.
         auto tile = [](int64_t v, int64_t size, int64_t count) {
-            return int32_t(std::clamp<int64_t>(v < 0 ? -1 : v / size, 0, count - 1));
+            const int64_t index = (size & (size - 1)) == 0 ? v >> std::countr_zero(uint64_t(size)) : v / size;
+            return int32_t(std::clamp<int64_t>(v < 0 ? -1 : index, 0, count - 1));
         };
         return {tile(r0 - grow_, rows_, tileRows_), tile(r1 + grow_, rows_, tileRows_),
                 tile(x0 - grow_, cols_, tileColumns_), tile(x1 + grow_, cols_, tileColumns_)};
@@ -85,24 +88,8 @@ private:
 
 } // namespace
 
-int64_t countBinEntries(const RasterSetup& setup, Coverage coverage, int64_t rowsPerTile, int64_t colsPerTile,
-                        int64_t grow) {
-    const Binner binner(setup, coverage, rowsPerTile, colsPerTile, grow);
-    const int64_t T = int64_t(setup.mesh->triangleCount);
-    const int64_t chunks = (T + kBinChunk - 1) / kBinChunk;
-    std::vector<int64_t> partial(size_t(chunks), 0);
-    parallelFor(0, chunks, 1, [&](int64_t cb, int64_t ce) {
-        for (int64_t c = cb; c < ce; ++c)
-            for (int64_t t = c * kBinChunk, e = std::min(T, t + kBinChunk); t < e; ++t)
-                partial[size_t(c)] += binner.span(t).count();
-    });
-    int64_t total = 0;
-    for (int64_t p : partial) total += p;
-    return total;
-}
-
 TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsPerTile, int64_t colsPerTile,
-                      int64_t grow) {
+                      int64_t grow, const std::function<void(int64_t entries)>& counted) {
     const Binner binner(setup, coverage, rowsPerTile, colsPerTile, grow);
     TileBins bins;
     bins.rowsPerTile = rowsPerTile;
@@ -141,6 +128,7 @@ TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsP
         }
     }
     bins.offsets[tiles] = total;
+    if (counted) counted(total);
     bins.entries.resize(size_t(total));
     // Pass 2: fill.
     parallelFor(0, chunks, 1, [&](int64_t cb, int64_t ce) {

@@ -389,19 +389,6 @@ uint64_t workingBytes(const MeshView& mesh, int64_t entries, int64_t stacks, int
 
 } // namespace detail::tiles
 
-uint64_t tileWorkingBytes(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options,
-                          const TileOptions& tiles) {
-    using namespace detail::tiles;
-    const int64_t B = tiles.brickSize == 0 ? kDefaultBrick : tiles.brickSize;
-    if (B <= 0 || B % 8 != 0) fail("the brick size must be a positive multiple of 8, got ", tiles.brickSize);
-    validateMesh(mesh, "mesh");
-    const Plan plan = planOf(options);
-    const detail::RasterSetup setup = detail::prepareVertices(frame, mesh);
-    const Coverage coverage = plan.spans ? Coverage::Conservative : Coverage::Center;
-    const int64_t entries = detail::countBinEntries(setup, coverage, B, B, plan.gwn ? 1 : 0);
-    return workingBytes(mesh, entries, ((frame.width() + B - 1) / B) * ((frame.height() + B - 1) / B), B);
-}
-
 std::string wholeGridReason(const Frame& frame, const VoxelizeOptions& o) {
     if (frame.isPerspective() || frame.isOriented()) return "tiles need an axis-aligned orthographic frame";
     if (frame.slicing() != Slicing::Uniform || o.slicing != Slicing::Uniform)
@@ -433,19 +420,22 @@ void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
         const int64_t halo = plan.gwn ? 1 : 0;
         // The bins first counted, against the budget with the vertices and a brick per thread.
         const uint64_t budget = tiles.memoryBytes ? tiles.memoryBytes : availableMemoryBytes();
-        const int64_t entries = detail::countBinEntries(setup, coverage, B, B, halo);
         const int64_t stacksX = (W + B - 1) / B, stacksY = (H + B - 1) / B, bricks = (D + B - 1) / B;
         // Every brick costs a step, uniform or not: a bound on the time (2^31 bricks of 128^3 cells
         // is a grid about 165,000 cells along every axis).
         if (double(stacksX) * double(stacksY) * double(bricks) > 0x1p31)
             fail("a ", W, " x ", H, " x ", D, " grid needs ", stacksX * stacksY * bricks, " tiles of ", B,
                  "^3 cells; tiled voxelization takes at most 2^31 of them");
-        const uint64_t need = workingBytes(mesh, entries, stacksX * stacksY, B);
-        if (need > budget)
-            fail("tiled voxelization needs ", gibText(need), " for its triangle lists (", entries,
-                 " entries over ", stacksX * stacksY, " stacks of ", B, " x ", B,
-                 " columns) and bricks, but the memory budget is ", gibText(budget));
-        const detail::TileBins bins = detail::binTriangles(setup, coverage, B, B, halo);
+        // The bins counted, then checked against the budget with the vertices and the bricks
+        // before they are filled.
+        const detail::TileBins bins = detail::binTriangles(setup, coverage, B, B, halo, [&](int64_t entries) {
+            const uint64_t need = workingBytes(mesh, entries, stacksX * stacksY, B);
+            if (need > budget)
+                fail("tiled voxelization needs ", gibText(need), " for its triangle lists (", entries,
+                     " entries over ", stacksX * stacksY, " stacks of ", B, " x ", B,
+                     " columns) and bricks, but the memory budget is ", gibText(budget));
+            if (tiles.workingBytes) *tiles.workingBytes = need;
+        });
         const FrameView view = setup.frame;
         // The gwn fill's winding number tree and boundary edges, as the dense fill builds them.
         detail::WindingTree tree;
