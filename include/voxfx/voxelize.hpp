@@ -119,14 +119,4 @@ Frame fitFrame(const Box3d& meshBounds, const FitOptions& options);
 /// still counts (depth clamping, GI08 §4). Cost: O(triangles + fragments + cells / 64).
 VoxelGrid voxelize(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options = {});
 
-/// True for the extensions readGrid reads (.binvox .vdb .nrrd, any case).
-bool isGridFile(const std::string& path);
-
-/// For tools that accept "a grid or a mesh": a grid file (isGridFile) is read with readGrid;
-/// any other file is loaded as a mesh, fitted with `fit` and voxelized with `options`. For the
-/// inside modes, Fill::Parity is replaced by Fill::Flood when the mesh is not closed, and `note`,
-/// if given, then receives a one-line explanation (else it is cleared). Throws voxfx::Error.
-VoxelGrid loadOrVoxelize(const std::string& path, const FitOptions& fit, const VoxelizeOptions& options = {},
-                         std::string* note = nullptr);
-
 } // namespace voxfx

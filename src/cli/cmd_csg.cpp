@@ -6,6 +6,7 @@
 #include "cli_common.hpp"
 #include "grid_input.hpp"
 #include "voxfx/csg.hpp"
+#include "voxfx/grid_io.hpp"
 
 namespace voxfx::cli {
 namespace {

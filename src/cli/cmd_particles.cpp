@@ -6,8 +6,10 @@
 
 #include "cli_common.hpp"
 #include "grid_input.hpp"
+#include "voxfx/grid_io.hpp"
 #include "voxfx/image_io.hpp"
 #include "voxfx/particles.hpp"
+#include "voxfx/particles_io.hpp"
 
 namespace voxfx::cli {
 namespace {

@@ -11,6 +11,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "voxfx/grid_io.hpp"
 #include "voxfx/voxel_grid.hpp"
 #include "voxfx/voxelize.hpp"
 

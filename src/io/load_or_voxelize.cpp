@@ -1,5 +1,5 @@
 // voxfx — "a grid or a mesh" input for the grid tools: read a grid file, or load, fit and
-// voxelize a mesh (I/O, so it lives in io/ although voxelize.hpp declares it).
+// voxelize a mesh (declared in grid_io.hpp).
 #include <string>
 
 #include "voxfx/error.hpp"
