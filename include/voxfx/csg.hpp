@@ -63,6 +63,9 @@ void csg(const BitGrid& a, const BitGrid& b, CsgOp op, BitGrid& out);
 /// CSG of two grids that must lie in the same frame (Frame::sameGrid: same camera, box, sizes and
 /// slicing); otherwise throws voxfx::Error saying how the frames differ. The result keeps a's frame.
 VoxelGrid csg(const VoxelGrid& a, const VoxelGrid& b, CsgOp op);
+/// a op b on the GPU (voxfx/device.hpp), bit for bit the CPU's: grids of one size (voxfx::Error
+/// otherwise); voxfx::Error when no GPU can be used.
+CudaGrid csg(const CudaGrid& a, const CudaGrid& b, CsgOp op);
 
 /// A node of a CSG expression: a mesh (leaf) or an operation over one or more nodes.
 struct CsgNode {
