@@ -96,6 +96,7 @@ struct CsgMesh {
     std::string path; ///< as named in the expression
     MeshView mesh;    ///< not owned
     Fill fill = Fill::Parity;
+    VoxelizeReport* report = nullptr; ///< receives what voxelize() decided for this mesh; not owned
 };
 
 /// Voxelizes every mesh of `node` as a solid (VoxelizeMode::Solid with each mesh's fill; other

@@ -85,9 +85,9 @@ void writeDensityNormalsNrrd(const DensityGrid& density, const Frame& fineFrame,
 bool isGridFile(const std::string& path);
 
 /// For tools that accept "a grid or a mesh": a grid file (isGridFile) is read with readGrid;
-/// any other file is loaded as a mesh, fitted with `fit` and voxelized with `options`. For the
-/// inside modes, Fill::Parity is replaced by Fill::Flood when the mesh is not closed, and `note`,
-/// if given, then receives a one-line explanation (else it is cleared). Throws voxfx::Error.
+/// any other file is loaded as a mesh, fitted with `fit` and voxelized with `options` (with
+/// Fill::Auto, voxelize() picks parity or flood). `note`, if given, receives "<path>: <why>" when
+/// Auto chose flood (VoxelizeReport::fillNote), else it is cleared. Throws voxfx::Error.
 VoxelGrid loadOrVoxelize(const std::string& path, const FitOptions& fit, const VoxelizeOptions& options = {},
                          std::string* note = nullptr);
 

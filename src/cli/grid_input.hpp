@@ -52,7 +52,6 @@ const FitChoices& voxelizeFitChoices();
 struct VoxelizeChoiceArgs {
     std::string mode = "solid", fill = "auto", axis = "z", slicing = "uniform";
     bool vdbFloat = false;
-    bool autoFill() const { return fill == "auto"; }
 };
 
 /// Adds -m/--mode, --fill, --axis, --slicing and --vdb-float.
