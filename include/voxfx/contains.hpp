@@ -70,7 +70,7 @@ struct ContainsOptions {
     /// Worker threads, 0 = all. Results are identical for every value.
     int threads = 0;
     /// Polled between the tiles of the voxelizations that build a PointClassifier and, in
-    /// contains(), between chunks of about a million points; returning false cancels (voxfx::Error).
+    /// contains(), between chunks of points (see classify()); returning false cancels (voxfx::Error).
     /// Not owned, and not kept by the PointClassifier (classify() takes its own).
     Progress* progress = nullptr;
 };
@@ -93,8 +93,9 @@ public:
     PointClassifier& operator=(PointClassifier&&) noexcept;
 
     /// out[i] = 1 when points[i] is inside, else 0. Sizes must match (voxfx::Error otherwise).
-    /// `progress`, when given, is polled between chunks of about a million points (fraction: the
-    /// share of points done); returning false cancels with voxfx::Error, `out` then partly written.
+    /// `progress`, when given, is polled between chunks of about a million points (65,536 for the
+    /// winding method; fraction: the share of points done); returning false cancels with
+    /// voxfx::Error, `out` then partly written.
     void classify(std::span<const Vec3d> points, std::span<uint8_t> out, ContainsStats* stats = nullptr,
                   Progress* progress = nullptr) const;
     /// One point (no worker threads).

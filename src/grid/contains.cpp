@@ -389,10 +389,12 @@ void PointClassifier::classify(std::span<const Vec3d> points, std::span<uint8_t>
         fail("contains: ", points.size(), " points but room for ", out.size(), " answers");
     const Impl& m = *impl_;
     std::atomic<int64_t> fromCells{0}, exactCount{0}, misses{0};
-    // With a progress object, chunks of about a million points (some tens of milliseconds) with a
-    // poll before each; else one loop.
+    // With a progress object, chunks of some tens of milliseconds with a poll before each: about
+    // a million points, 65,536 for the winding number (a tree walk per point); else one loop.
     const int64_t n = int64_t(points.size());
-    const int64_t chunk = progress ? int64_t(1) << 20 : std::max<int64_t>(n, 1);
+    const int64_t chunk = !progress                             ? std::max<int64_t>(n, 1)
+                          : m.method == ContainsMethod::Winding ? int64_t(1) << 16
+                                                                : int64_t(1) << 20;
     const auto run = [&] {
         for (int64_t c0 = 0; c0 < n; c0 += chunk) {
             if (progress && !progress->update(double(c0) / double(n))) fail("contains: cancelled");

@@ -90,7 +90,7 @@ BitGrid fillInside(const Frame& frame, const MeshView& mesh, const VoxelizeOptio
         const BitGrid walls = surface ? BitGrid() : rasterizeInto(frame, mesh, VoxelizeMode::Conservative, o);
         detail::WindingTree tree;
         tree.build(mesh, 2.0);
-        return detail::gwnFillInside(frame, mesh, tree, surface ? *surface : walls);
+        return detail::gwnFillInside(frame, mesh, tree, surface ? *surface : walls, o.progress);
     }
     case Fill::Vote: {
         requireUniformOrthographic(frame, o.fill);

@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numbers>
 
 #include "voxelize/consumers.hpp"
@@ -449,17 +451,29 @@ private:
 } // namespace
 
 BitGrid gwnFillInside(const Frame& frame, const MeshView& mesh, const WindingTree& tree,
-                      const BitGrid& surface) {
+                      const BitGrid& surface, Progress* progress) {
     BitGrid out(frame.width(), frame.height(), frame.depth());
     if (tree.nodes.empty()) return out;
     const GwnCrossings crossings = gwnCrossings(frame, mesh);
     const int64_t tx = (frame.width() + kGwnBlock - 1) / kGwnBlock,
                   ty = (frame.height() + kGwnBlock - 1) / kGwnBlock;
+    // Polled after each tile, one call at a time (as the rasterizer does); once it says stop,
+    // the remaining tiles are skipped.
+    std::atomic<bool> cancelled{false};
+    std::atomic<int64_t> done{0};
+    std::mutex progressMutex;
     // Tiles own whole columns, so no two threads write the same word.
     parallelFor(0, tx * ty, 1, [&](int64_t t0, int64_t t1) {
         GwnTile tile(frame, tree, surface, crossings, out);
-        for (int64_t t = t0; t < t1; ++t) tile.run(t % tx * kGwnBlock, t / tx * kGwnBlock);
+        for (int64_t t = t0; t < t1 && !cancelled.load(std::memory_order_relaxed); ++t) {
+            tile.run(t % tx * kGwnBlock, t / tx * kGwnBlock);
+            const int64_t d = ++done;
+            if (!progress) continue;
+            const std::lock_guard lock(progressMutex);
+            if (!progress->update(double(d) / double(tx * ty))) cancelled = true;
+        }
     });
+    if (cancelled) fail("cancelled");
     return out;
 }
 

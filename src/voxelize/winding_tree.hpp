@@ -10,6 +10,7 @@
 #include "voxfx/frame.hpp"
 #include "voxfx/math.hpp"
 #include "voxfx/mesh.hpp"
+#include "voxfx/parallel.hpp"
 
 namespace voxfx::detail {
 
@@ -54,8 +55,9 @@ private:
 /// surface). Other blocks are split, down to single cells evaluated alone. Cost ~ (cells near the
 /// boundary edges or where w is near 0.5 + blocks) x one evaluation. Needs an orthographic frame
 /// with uniform slicing and the mesh behind the near plane for the counts; otherwise only the
-/// last two rules apply. Deterministic for every thread count.
+/// last two rules apply. Deterministic for every thread count. `progress` (may be null) is polled
+/// after each tile of 16 x 16 columns; false cancels with voxfx::Error.
 BitGrid gwnFillInside(const Frame& frame, const MeshView& mesh, const WindingTree& tree,
-                      const BitGrid& surface);
+                      const BitGrid& surface, Progress* progress = nullptr);
 
 } // namespace voxfx::detail
