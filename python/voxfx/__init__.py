@@ -42,7 +42,7 @@ def _with_signature(f):
             params, result = line[len(name):], "None"
         space = {}
         try:
-            code = compile(f"def {name}{params} -> {result!r}: pass", "<voxfx>", "exec",
+            code = compile(f"def {name}{params} -> {result}: pass", "<voxfx>", "exec",
                            flags=__future__.annotations.compiler_flag, dont_inherit=True)
             exec(code, {"dtype": __import__("numpy").dtype}, space)
             call.__wrapped__ = space[name]
