@@ -15,16 +15,25 @@ namespace voxfx::python {
 // ---- interruption ---------------------------------------------------------------------------
 
 namespace {
-unsigned long gMainThread = 0;
-} // namespace
 
-void rememberMainThread() {
-    gMainThread = py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
+/// Whether this is the thread Python runs signal handlers on. Without the threading module no
+/// other Python thread was started through it, so this is the main one (and `import voxfx` need
+/// not import threading).
+bool onMainThread() {
+    static unsigned long mainThread = 0;
+    if (mainThread == 0) {
+        const py::dict modules = py::module_::import("sys").attr("modules");
+        if (!modules.contains("threading")) return true;
+        mainThread = modules["threading"].attr("main_thread")().attr("ident").cast<unsigned long>();
+    }
+    return PyThread_get_thread_ident() == mainThread;
 }
+
+} // namespace
 
 void interruptible(const std::function<void(Cancel&)>& work) {
     Cancel cancel;
-    if (PyThread_get_thread_ident() != gMainThread) {
+    if (!onMainThread()) {
         py::gil_scoped_release release;
         work(cancel);
         return;

@@ -77,9 +77,6 @@ private:
 /// work runs on the calling thread. The work must take the GIL itself for any Python call.
 void interruptible(const std::function<void(Cancel&)>& work);
 
-/// Records the main thread (called once, at import).
-void rememberMainThread();
-
 // ---- meshes ---------------------------------------------------------------------------------
 
 /// A mesh in the library's layout (float32 positions, uint32 indices), owned by Python objects.

@@ -33,7 +33,6 @@ PYBIND11_MODULE(_voxfx, m) {
             PyErr_SetObject(error.ptr(), message.ptr());
         }
     });
-    python::rememberMainThread();
 
 #define VOXFX_PYTHON_AREA(Area) python::bind##Area(m);
 #include "areas.inc"
