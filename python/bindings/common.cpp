@@ -106,14 +106,25 @@ Vec3d recentringOrigin(const double* v, std::size_t n) {
 
 } // namespace
 
+namespace {
+
+/// `obj` as an array of numbers of shape (rows, 3): TypeError for other types, ArgumentError for
+/// other shapes (`what` names it, `rows` the row count's letter).
+py::array rowsOfThree(const py::handle& obj, const std::string& what, const std::string& rows) {
+    const auto a = py::array::ensure(obj);
+    const auto kind = a ? a.dtype().kind() : 'O';
+    if (!a || (a.size() > 0 && kind != 'f' && kind != 'i' && kind != 'u'))
+        throw py::type_error(what + " must be an array of numbers of shape (" + rows + ", 3)");
+    if (a.ndim() != 2 || a.shape(1) != 3)
+        throw ArgumentError(what + " must have shape (" + rows + ", 3), got " + shapeText(a));
+    return a;
+}
+
+} // namespace
+
 std::shared_ptr<PyMesh> meshFromArrays(const py::handle& verticesObj, const py::handle& facesObj) {
     auto out = std::make_shared<PyMesh>();
-    const auto asArray = py::array::ensure(verticesObj);
-    if (!asArray || (asArray.size() > 0 && asArray.dtype().kind() != 'f' && asArray.dtype().kind() != 'i' &&
-                     asArray.dtype().kind() != 'u'))
-        throw py::type_error("vertices must be an array of numbers of shape (N, 3)");
-    if (asArray.ndim() != 2 || asArray.shape(1) != 3)
-        throw ArgumentError("vertices must have shape (N, 3), got " + shapeText(asArray));
+    const py::array asArray = rowsOfThree(verticesObj, "vertices", "N");
     const auto f = py::array::ensure(facesObj);
     if (!f) throw py::type_error("faces must be an integer array of shape (M, 3)");
     if (f.ndim() != 2 || f.shape(1) != 3)
@@ -214,12 +225,7 @@ py::array_t<int64_t> facesArray(const std::vector<uint32_t>& indices) {
 }
 
 py::array_t<double> pointsArgument(const py::object& points, const Vec3d& origin) {
-    const auto asArray = py::array::ensure(points);
-    if (!asArray || (asArray.size() > 0 && asArray.dtype().kind() != 'f' && asArray.dtype().kind() != 'i' &&
-                     asArray.dtype().kind() != 'u'))
-        throw py::type_error("points must be an array of numbers of shape (K, 3)");
-    if (asArray.ndim() != 2 || asArray.shape(1) != 3)
-        throw ArgumentError("points must be an array of shape (K, 3), got " + shapeText(asArray));
+    const py::array asArray = rowsOfThree(points, "points", "K");
     auto pts = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(asArray);
     if (origin.x == 0 && origin.y == 0 && origin.z == 0) return pts;
     py::array_t<double> moved({pts.shape(0), py::ssize_t(3)});
