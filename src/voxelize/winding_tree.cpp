@@ -159,7 +159,7 @@ struct GwnCrossings {
     std::vector<int32_t> edgeTop;       ///< per column: the last slice near a boundary edge (-1: none)
 };
 
-GwnCrossings gwnCrossings(const Frame& frame, const MeshView& mesh) {
+GwnCrossings gwnCrossings(const Frame& frame, const MeshView& mesh, Progress* progress) {
     GwnCrossings g;
     // Exact counts along straight columns from the grid's near end: an orthographic frame with
     // uniform slicing, and no geometry in front of the near plane.
@@ -173,7 +173,7 @@ GwnCrossings gwnCrossings(const Frame& frame, const MeshView& mesh) {
         if (!(t >= 0) || !std::isfinite(t) || !std::isfinite(p.x) || !std::isfinite(p.y)) return g;
         g.bothWays &= t <= double(D);
     }
-    g.lists = FragmentLists::build(frame, mesh);
+    g.lists = FragmentLists::build(frame, mesh, progress);
     g.view = view;
     // Every column whose cell square grown by a cell a boundary edge's projection touches: its
     // curtain from two slices in front of the edge's lowest point, and the edge up to two slices
@@ -454,7 +454,7 @@ BitGrid gwnFillInside(const Frame& frame, const MeshView& mesh, const WindingTre
                       const BitGrid& surface, Progress* progress) {
     BitGrid out(frame.width(), frame.height(), frame.depth());
     if (tree.nodes.empty()) return out;
-    const GwnCrossings crossings = gwnCrossings(frame, mesh);
+    const GwnCrossings crossings = gwnCrossings(frame, mesh, progress);
     const int64_t tx = (frame.width() + kGwnBlock - 1) / kGwnBlock,
                   ty = (frame.height() + kGwnBlock - 1) / kGwnBlock;
     // Polled after each tile, one call at a time (as the rasterizer does); once it says stop,
