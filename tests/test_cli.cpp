@@ -1,5 +1,6 @@
 // Tests of src/cli/: the voxfx command end to end. Bad input must exit non-zero with a one-line
 // message that says what is wrong, and leave no output file (and an existing one untouched).
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -69,8 +70,14 @@ TEST(CliTest, VdbOutputIsVoxelizedInTilesWithinTheMemoryBudget) {
                        "fill 'flood' needs the whole grid", out);
     expectCleanFailure(dir, runCli(dir, "voxelize " + mesh + " -o " + out + " -r 8 --memory lots"),
                        "--memory must be bytes", out);
+    // A budget the tiles' triangle lists do not fit: one line before anything large is allocated.
+    const CliRun tiny = runCli(dir, "voxelize " + mesh + " -o " + out + " -r 16384 --memory 64K");
+    expectCleanFailure(dir, tiny, "but the memory budget is", out);
+    EXPECT_EQ(std::count(tiny.err.begin(), tiny.err.end(), '\n'), 1) << tiny.err;
     const CliRun help = runCli(dir, "voxelize --help");
     EXPECT_NE(help.out.find("flood and vote need the"), std::string::npos) << help.out;
+    EXPECT_NE(help.out.find("the default is the memory available"), std::string::npos) << help.out;
+    EXPECT_NE(help.out.find("A size that cannot fit stops before"), std::string::npos) << help.out;
 }
 
 TEST(CliTest, HelpExplainsWhereVoxelCentresLie) {

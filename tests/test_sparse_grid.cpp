@@ -260,6 +260,29 @@ TEST(SparseGridTest, MorphologyOfTilesEqualsVoxfxBoxMorphology) {
     EXPECT_TRUE(sameCells(grown.dilate(3), {frame, dilate(dense.bits, mo)}));
 }
 
+// Fill::Auto as voxelize() decides it: parity for the closed bunny, flood (through the dense
+// grid, which fits) for an open mesh; the report says which and why.
+TEST(SparseGridTest, AutoFillGivesTheDenseGridsCells) {
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    VOXFX_REQUIRE_DATA("meshes/cube-ouvert.off");
+    for (const char* name : {"meshes/bunny00.off", "meshes/cube-ouvert.off"}) {
+        SCOPED_TRACE(name);
+        const Mesh mesh = loadMesh(test::dataPath(name));
+        const Frame frame = bunnyFrame(mesh, 41, Axis::Z);
+        VoxelizeOptions o;
+        o.fill = Fill::Auto;
+        VoxelizeReport sparseReport, denseReport;
+        o.report = &denseReport;
+        const VoxelGrid dense = voxelize(mesh.view(), frame, o);
+        o.report = &sparseReport;
+        EXPECT_TRUE(sameCells(voxelizeSparse(mesh.view(), frame, o), dense));
+        EXPECT_EQ(sparseReport.fill, denseReport.fill);
+        EXPECT_EQ(sparseReport.fillNote, denseReport.fillNote);
+        EXPECT_EQ(sparseReport.fill, analyzeTopology(mesh.view()).closed() ? Fill::Parity : Fill::Flood);
+        EXPECT_GT(dense.bits.count(), 0);
+    }
+}
+
 TEST(SparseGridTest, BudgetsAreEnforcedWithAMessageThatSaysWhat) {
     VOXFX_REQUIRE_DATA("meshes/bunny00.off");
     const Mesh mesh = bunny();

@@ -201,6 +201,58 @@ TEST(TiledTest, BricksCuttingTheMeshThroughVerticesAndFacesAlongEveryAxisEqualTh
     expectCutsThroughVerticesAndFacesEqualDense({Axis::X, Axis::Y, Axis::Z}, {8, 16, 24});
 }
 
+// Meshes oriented inward (w = -1 inside): the winding and gwn fills decide by |w| >= 1/2 on
+// the dense path; the bricks must too (the flipped bunny, and CGAL's tetrahedron, oriented inward
+// as written).
+TEST(TiledTest, InwardOrientedMeshesEqualTheDenseGrid) {
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    VOXFX_REQUIRE_DATA("meshes/tetrahedron.off");
+    for (const Mesh& mesh : {test::flippedMesh(loadData("bunny00.off")), loadData("tetrahedron.off")}) {
+        ASSERT_LT(test::meshVolume(mesh.view()), 0);
+        FitOptions fit;
+        fit.resolution = 45;
+        fit.marginCells = 1;
+        const Frame frame = fitFrame(computeBounds(mesh.view()), fit);
+        expectTiledEqualsDense(mesh, frame, {16});
+        // And the inside is there: the gwn fill's solid holds parity's, which ignores orientation.
+        VoxelizeOptions gwn;
+        gwn.fill = Fill::Gwn;
+        const Assembled a = assemble(mesh.view(), frame, gwn, 16);
+        const BitGrid parity = voxelize(mesh.view(), frame).bits;
+        EXPECT_GT(parity.count(), 0);
+        EXPECT_GE(a.bits.count(), parity.count() * 9 / 10);
+    }
+}
+
+// Fill::Auto is decided as voxelize() decides it: parity for a closed mesh (the same cells), and
+// flood for an open one, which the bricks refuse by name.
+TEST(TiledTest, AutoFillIsDecidedAsVoxelizeDecidesIt) {
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    VOXFX_REQUIRE_DATA("meshes/cube-ouvert.off");
+    const Mesh bunny = loadData("bunny00.off");
+    FitOptions fit;
+    fit.resolution = 40;
+    const Frame frame = fitFrame(computeBounds(bunny.view()), fit);
+    VoxelizeOptions o;
+    o.fill = Fill::Auto;
+    VoxelizeReport report;
+    o.report = &report;
+    const Assembled a = assemble(bunny.view(), frame, o, 16);
+    EXPECT_EQ(report.fill, Fill::Parity);
+    EXPECT_TRUE(a.bits == voxelize(bunny.view(), frame).bits);
+    EXPECT_GT(a.bits.count(), 0);
+    const Mesh open = loadData("cube-ouvert.off");
+    const Frame openFrame = fitFrame(computeBounds(open.view()), fit);
+    try {
+        voxelizeTiles(open.view(), openFrame, o, {}, [](const GridTile&) {});
+        ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("fill 'flood' needs the whole grid"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_EQ(report.fill, Fill::Flood);
+}
+
 TEST(TiledTest, TheTiledSolidMatchesCgal) {
     VOXFX_REQUIRE_DATA("meshes/bunny00.off");
     const Mesh bunny = loadData("bunny00.off");

@@ -97,6 +97,10 @@ public:
     /// available.
     std::vector<int32_t> coordinates() const;
 
+    /// Moves the grid by `offset` (world units): the frame is frame().translated(offset), the
+    /// cells keep their indices. Cost O(1).
+    void translate(const Vec3d& offset) { frame_ = frame_.translated(offset); }
+
     /// For io/: the module's handle and the tree index of cell (0, 0, 0).
     const void* handle() const { return tree_; }
     const Vec3i& treeOrigin() const { return origin_; }
@@ -113,7 +117,8 @@ private:
 
 /// Voxelizes `mesh` into `frame` as a sparse grid, tile by tile (voxfx/tiled.hpp): the dense grid
 /// is never built and memory grows with the surface. The cells are those of voxelize(mesh, frame,
-/// options) bit for bit. Fills that need the whole grid (flood, vote: wholeGridReason) voxelize
+/// options) bit for bit; Fill::Auto is decided as voxelize() decides it (resolveFill, which writes
+/// options.report). Fills that need the whole grid (flood, vote: wholeGridReason) voxelize
 /// the dense grid and convert it when it fits in tiles.memoryBytes (default: the memory
 /// available), else throw voxfx::Error naming the fill and the memory it needs; so do locally
 /// sliced requests. The tree is checked against the same budget as it grows (voxfx::Error with

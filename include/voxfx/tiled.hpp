@@ -79,11 +79,13 @@ struct GridTile {
 };
 
 /// Why `options` cannot be voxelized tile by tile in `frame` (the fill needs the whole grid, the
-/// frame is perspective, oriented or locally sliced), or an empty string when it can.
+/// frame is perspective, oriented or locally sliced), or an empty string when it can. Fill::Auto
+/// is taken as Parity: ask with resolveFill(mesh, options) for a mesh that may be open.
 std::string wholeGridReason(const Frame& frame, const VoxelizeOptions& options);
 
 /// Voxelizes `mesh` into `frame` brick by brick and calls visit(tile) once per brick (uniform
-/// ones included), as described in the file comment. options.slicing must be Uniform and
+/// ones included), as described in the file comment. Fill::Auto is decided as voxelize() decides
+/// it (resolveFill; options.report receives it). options.slicing must be Uniform and
 /// options.device is ignored (bricks run on the CPU); options.threads, progress and rasterPath
 /// apply. Validates the mesh first. Throws voxfx::Error for what wholeGridReason() names, a
 /// brick size that is not a positive multiple of 8 (16 for gwn), bins larger than the memory

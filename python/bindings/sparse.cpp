@@ -72,6 +72,7 @@ void bindSparse(py::module_& m) {
         .def("coordinates", &coordinatesArray,
              "The filled cells as an (N, 3) int32 array of (i, j, k), no dense array built (the tree's "
              "order, the same on every run); world centres: coordinates * cell_size + origin + cell_size / 2")
+        .def("indices", &coordinatesArray, "coordinates(), under voxfx.Grid.indices' name")
         .def(
             "to_grid",
             [](const SparseGrid& g) {
@@ -88,10 +89,11 @@ void bindSparse(py::module_& m) {
             py::arg("grid"), "The filled cells of a dense voxfx.Grid")
         .def(
             "save",
-            [](const SparseGrid& g, const std::string& path, bool vdbFloat, const std::string& gridName) {
+            [](const SparseGrid& g, const py::object& pathObj, bool vdbFloat, const std::string& gridName) {
                 GridWriteOptions wo;
                 wo.vdbFloat = vdbFloat;
                 wo.gridName = gridName;
+                const std::string path = pathString(pathObj);
                 py::gil_scoped_release release;
                 writeGrid(g, path, wo);
             },
@@ -125,7 +127,8 @@ void bindSparse(py::module_& m) {
 
     m.def(
         "read_sparse_grid",
-        [](const std::string& path) {
+        [](const py::object& pathObj) {
+            const std::string path = pathString(pathObj);
             py::gil_scoped_release release;
             return std::make_shared<SparseGrid>(readSparseGrid(path));
         },

@@ -36,7 +36,7 @@ struct VoxelizeRun {
     Frame frame;
     int64_t filled = 0;
     double voxelMs = 0, writeMs = 0;
-    bool onGpu = false, sparse = false;
+    bool onGpu = false, sparse = false, tiled = false;
 };
 
 // .vdb without the dense grid: tiles straight into OpenVDB's tree (voxfx/sparse_grid.hpp).
@@ -51,6 +51,10 @@ VoxelizeRun runSparse(const Mesh& mesh, const Frame& frame, const VoxelizeOption
     const SparseGrid grid = voxelizeSparse(mesh.view(), frame, o);
     r.voxelMs = msSince(tv);
     progress.done();
+    // Flood and vote (asked for, or what auto chose) went through the whole grid.
+    VoxelizeOptions chosen = o;
+    if (o.report) chosen.fill = o.report->fill;
+    r.tiled = wholeGridReason(frame, chosen).empty();
     r.frame = grid.frame();
     r.filled = grid.count();
     const auto tw = Clock::now();
@@ -80,26 +84,6 @@ VoxelizeRun runDense(const Mesh& mesh, const Frame& frame, VoxelizeOptions vo, c
     return r;
 }
 
-// Parity is exact for closed meshes only: detect open ones and pick the robust fill.
-void chooseFill(const VoxelizeArgs& a, const Mesh& mesh, VoxelizeOptions& vo) {
-    const MeshTopology topo = analyzeTopology(mesh.view());
-    const bool needsInside = vo.mode == VoxelizeMode::Solid || vo.mode == VoxelizeMode::SolidConservative ||
-                             vo.mode == VoxelizeMode::Interior;
-    if (a.choice.autoFill()) {
-        vo.fill = topo.closed() ? Fill::Parity : Fill::Flood;
-        if (needsInside && !topo.closed() && !a.quiet)
-            std::cerr << "voxfx: " << a.input << " is not closed (" << topo.boundaryEdges << " boundary, "
-                      << topo.nonManifoldEdges << " non-manifold, " << topo.misorientedEdges
-                      << " misoriented edges): using --fill flood (holes wider than a voxel let the flood "
-                         "in; --fill gwn closes them)\n";
-    } else {
-        if (needsInside && !topo.closed() && vo.fill == Fill::Parity && !a.quiet)
-            std::cerr << "voxfx: warning: " << a.input
-                      << " is not closed; parity may fill wrong cells (try --fill flood, --fill gwn or "
-                         "--fill vote)\n";
-    }
-}
-
 int runVoxelize(const VoxelizeArgs& a) {
     const auto t0 = Clock::now();
     // Everything that can be checked before the work starts is checked here, so a bad output
@@ -120,14 +104,23 @@ int runVoxelize(const VoxelizeArgs& a) {
     MeshLoadReport report;
     const Mesh mesh = loadMesh(a.input, &report);
     const double loadMs = msSince(t0);
-    chooseFill(a, mesh, vo);
+
+    // Fill::Auto is decided by voxelize() or voxelizeSparse() (reported in `decided`); an explicit
+    // parity on an open mesh gets a warning.
+    const bool needsInside = needsFill(vo.mode);
+    VoxelizeReport decided;
+    vo.report = &decided;
+    if (needsInside && vo.fill == Fill::Parity && !a.quiet && !analyzeTopology(mesh.view()).closed())
+        std::cerr << "voxfx: warning: " << a.input
+                  << " is not closed; parity may fill wrong cells (try --fill flood, --fill gwn or "
+                     "--fill vote)\n";
+
     const Frame frame = fitFrame(computeBounds(mesh.view()), fo);
     const VoxelizeRun r = sparse ? runSparse(mesh, frame, vo, a) : runDense(mesh, frame, vo, a);
+    if (!decided.fillNote.empty() && !a.quiet)
+        std::cerr << "voxfx: " << a.input << ": " << decided.fillNote << "\n";
 
     if (!a.quiet) {
-        const bool needsInside = vo.mode == VoxelizeMode::Solid ||
-                                 vo.mode == VoxelizeMode::SolidConservative ||
-                                 vo.mode == VoxelizeMode::Interior;
         const VoxelGrid shape{r.frame, {}};
         const Vec3i d = shape.worldDims();
         const Vec3d cell = r.frame.cellSize();
@@ -137,12 +130,13 @@ int runVoxelize(const VoxelizeArgs& a) {
             std::cout << " x " << fmt(cell.y, 4) << " x " << fmt(cell.z, 4);
         std::cout << ", axis " << toString(r.frame.axis()) << ", " << toString(vo.slicing) << " slicing), "
                   << toString(vo.mode);
-        if (needsInside) std::cout << " (" << toString(vo.fill) << ")";
+        if (needsInside) std::cout << " (" << toString(decided.fill) << ")";
         std::cout << ", " << withCommas(r.filled) << " filled voxels\n";
         std::cout << "time: load " << fmtMs(loadMs) << ", voxelize " << fmtMs(r.voxelMs)
-                  << (r.onGpu ? " on " + cudaStatus().device : std::string()) << (r.sparse ? " (tiled)" : "")
-                  << ", write " << fmtMs(r.writeMs) << ", total " << fmtMs(msSince(t0)) << " -> " << a.output
-                  << " (" << toString(format) << (r.sparse ? ", sparse" : "") << ")\n";
+                  << (r.onGpu ? " on " + cudaStatus().device : std::string())
+                  << (r.sparse ? (r.tiled ? " (tiled)" : " (whole grid)") : "") << ", write "
+                  << fmtMs(r.writeMs) << ", total " << fmtMs(msSince(t0)) << " -> " << a.output << " ("
+                  << toString(format) << (r.sparse ? ", sparse" : "") << ")\n";
     }
     return 0;
 }
@@ -180,13 +174,19 @@ Fills (how inside is decided; default auto = parity for closed meshes, flood oth
 Memory and tiles (--memory, VOXFX_MEMORY_LIMIT):
   .vdb output is voxelized tile by tile (bricks of 128^3 cells, each column's parity carried
   from brick to brick) straight into OpenVDB's sparse tree, never as a whole grid: memory
-  grows with the surface, not the volume (-r 16384 fits in 4 GiB). The voxels are the same
-  bit for bit. The parity, winding and gwn fills work tile by tile; flood and vote need the
-  whole grid: they voxelize it whole and convert it, and stop with an error naming the fill
-  and the memory it needs when that does not fit. Other formats, --slicing local and
-  --device cuda|auto build the whole grid too (so does --dense).
+  grows with the surface, not the volume (the bunny at -r 16384 fits in 4 GiB). The voxels are
+  the same bit for bit as the whole grid's.
+  Fills: parity, winding and gwn work tile by tile, in every mode. flood and vote need the
+  whole grid: they voxelize it whole and convert it when that fits the budget. --fill auto
+  picks flood for a mesh that is not closed, so for open meshes at large sizes give --fill gwn.
+  Other formats, --slicing local and --device cuda|auto build the whole grid too (so does
+  --dense).
   --memory SIZE caps what the run may use (bytes, or K, M, G, T in powers of 1024: 4G), for
-  every size check, as VOXFX_MEMORY_LIMIT does; the default is the memory available.
+  every size check, as VOXFX_MEMORY_LIMIT does; the default is the memory available now
+  (MemAvailable, or VOXFX_MEMORY_LIMIT when smaller). A size that cannot fit stops before
+  anything large is allocated, with one line saying what it needs and the budget: the whole
+  grid's bytes, or the tiles' triangle lists; the sparse tree is checked as it grows. No output
+  file is left behind by a run that fails.
 
 Devices (--device; the grid is the same bit for bit on each):
   cpu      all cores (the default)

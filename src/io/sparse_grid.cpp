@@ -228,8 +228,13 @@ SparseGrid sparseOfDense(const MeshView& mesh, const Frame& frame, const Voxeliz
 
 } // namespace
 
-SparseGrid voxelizeSparse(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options,
+SparseGrid voxelizeSparse(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& given,
                           const TileOptions& tiles) {
+    validateMesh(mesh, "mesh");
+    // Fill::Auto decided once, here (the report is the caller's; the calls below see the fill).
+    VoxelizeOptions options = given;
+    options.fill = resolveFill(mesh, given);
+    options.report = nullptr;
     const uint64_t budget = tiles.memoryBytes ? tiles.memoryBytes : availableMemoryBytes();
     if (options.deviceNote) options.deviceNote->clear();
     if (const std::string why = wholeGridReason(frame, options); !why.empty()) {

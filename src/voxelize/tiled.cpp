@@ -403,10 +403,12 @@ std::string wholeGridReason(const Frame& frame, const VoxelizeOptions& o) {
     return {};
 }
 
-void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options,
+void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& given,
                    const TileOptions& tiles, const std::function<void(const GridTile&)>& visit) {
     using namespace detail::tiles;
     validateMesh(mesh, "mesh");
+    VoxelizeOptions options = given;
+    options.fill = resolveFill(mesh, given);
     if (const std::string why = wholeGridReason(frame, options); !why.empty()) fail(why);
     const int64_t B = tiles.brickSize == 0 ? kDefaultBrick : tiles.brickSize;
     if (B <= 0 || B % 8 != 0) fail("the brick size must be a positive multiple of 8, got ", tiles.brickSize);
