@@ -87,18 +87,9 @@ void bindSparse(py::module_& m) {
                 return std::make_shared<SparseGrid>(SparseGrid::fromDense(g));
             },
             py::arg("grid"), "The filled cells of a dense voxfx.Grid")
-        .def(
-            "save",
-            [](const SparseGrid& g, const py::object& pathObj, bool vdbFloat, const std::string& gridName) {
-                GridWriteOptions wo;
-                wo.vdbFloat = vdbFloat;
-                wo.gridName = gridName;
-                const std::string path = pathString(pathObj);
-                py::gil_scoped_release release;
-                writeGrid(g, path, wo);
-            },
-            py::arg("path"), py::arg("vdb_float") = false, py::arg("grid_name") = "voxels",
-            "Writes .vdb from the tree (other formats through the dense grid), atomically")
+        .def("save", &saveGrid<SparseGrid>, py::arg("path"), py::arg("vdb_float") = false,
+             py::arg("grid_name") = "voxels",
+             "Writes .vdb from the tree (other formats through the dense grid), atomically")
         .def("unite", &SparseGrid::unite, py::arg("other"), py::return_value_policy::reference_internal,
              "In place: OpenVDB's topology union with a grid of the same frame")
         .def("intersect", &SparseGrid::intersect, py::arg("other"),

@@ -3,12 +3,11 @@
 #include "voxfx/sparse_grid.hpp"
 
 #include <atomic>
-#include <iomanip>
 #include <limits>
-#include <sstream>
 #include <utility>
 
 #include "io/module_api.hpp"
+#include "voxelize/memory_text.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
@@ -24,12 +23,6 @@ void checkSparse(bool ok, const std::string& error, const char* what) {
 void requireSparseFrame(const Frame& frame) {
     if (frame.isPerspective() || frame.isOriented() || frame.slicing() != Slicing::Uniform)
         fail("a sparse grid needs an axis-aligned orthographic frame with uniform slicing");
-}
-
-std::string sparseGib(uint64_t bytes) {
-    std::ostringstream s;
-    s << std::fixed << std::setprecision(2) << double(bytes) / double(uint64_t(1) << 30) << " GiB";
-    return s.str();
 }
 
 void sparseParallelFor(int64_t begin, int64_t end, int64_t grain, void* body,
@@ -221,8 +214,8 @@ SparseGrid sparseOfDense(const MeshView& mesh, const Frame& frame, const Voxeliz
     const uint64_t need = 3 * one;
     if (need > budget)
         fail(why, ": a ", frame.width(), " x ", frame.height(), " x ", frame.depth(), " grid needs ",
-             sparseGib(need), " to voxelize and convert, but the memory budget is ", sparseGib(budget),
-             " (the parity, winding and gwn fills work tile by tile)");
+             detail::memoryText(need), " to voxelize and convert, but the memory budget is ",
+             detail::memoryText(budget), " (the parity, winding and gwn fills work tile by tile)");
     return SparseGrid::fromDense(voxelize(mesh, frame, o));
 }
 
@@ -282,8 +275,9 @@ SparseGrid voxelizeSparse(const MeshView& mesh, const Frame& frame, const Voxeli
                     "cannot build the sparse grid");
         const uint64_t total = treeBytes += bytes;
         if (total > treeBudget)
-            fail("the sparse grid outgrew the memory budget (", sparseGib(budget),
-                 ", of which the tiles take ", sparseGib(working), ") at ", sparseGib(total),
+            fail("the sparse grid outgrew the memory budget (", detail::memoryText(budget),
+                 ", of which the tiles take ", detail::memoryText(working), ") at ",
+                 detail::memoryText(total),
                  " of tree; raise the budget (--memory, VOXFX_MEMORY_LIMIT) or lower the resolution");
     });
     std::string error;

@@ -20,6 +20,7 @@
 
 #include "core/bitops.hpp"
 #include "voxelize/consumers.hpp"
+#include "voxelize/memory_text.hpp"
 #include "voxelize/winding_tree.hpp"
 #include "voxfx/raster.hpp"
 
@@ -28,12 +29,6 @@ namespace voxfx {
 namespace detail::tiles {
 
 constexpr int64_t kDefaultBrick = 128;
-
-std::string gibText(uint64_t bytes) {
-    std::ostringstream s;
-    s << std::fixed << std::setprecision(2) << double(bytes) / double(uint64_t(1) << 30) << " GiB";
-    return s.str();
-}
 
 // What a brick is made of, from the mode and fill.
 struct Plan {
@@ -389,6 +384,15 @@ uint64_t workingBytes(const MeshView& mesh, int64_t entries, int64_t stacks, int
 
 } // namespace detail::tiles
 
+std::string detail::memoryText(uint64_t bytes) {
+    std::ostringstream s;
+    if (bytes >= uint64_t(1) << 30)
+        s << std::fixed << std::setprecision(2) << double(bytes) / double(uint64_t(1) << 30) << " GiB";
+    else
+        s << std::fixed << std::setprecision(1) << double(bytes) / double(uint64_t(1) << 20) << " MiB";
+    return s.str();
+}
+
 std::string wholeGridReason(const Frame& frame, const VoxelizeOptions& o) {
     if (frame.isPerspective() || frame.isOriented()) return "tiles need an axis-aligned orthographic frame";
     if (frame.slicing() != Slicing::Uniform || o.slicing != Slicing::Uniform)
@@ -433,9 +437,9 @@ void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
         const detail::TileBins bins = detail::binTriangles(setup, coverage, B, B, halo, [&](int64_t entries) {
             const uint64_t need = workingBytes(mesh, entries, stacksX * stacksY, B);
             if (need > budget)
-                fail("tiled voxelization needs ", gibText(need), " for its triangle lists (", entries,
-                     " entries over ", stacksX * stacksY, " stacks of ", B, " x ", B,
-                     " columns) and bricks, but the memory budget is ", gibText(budget));
+                fail("tiled voxelization needs ", detail::memoryText(need), " for its triangle lists (",
+                     entries, " entries over ", stacksX * stacksY, " stacks of ", B, " x ", B,
+                     " columns) and bricks, but the memory budget is ", detail::memoryText(budget));
             if (tiles.workingBytes) *tiles.workingBytes = need;
         });
         const FrameView view = setup.frame;

@@ -351,19 +351,23 @@ openvdb::CoordBBox indexBox(const openvdb::GridBase& grid) {
     return active;
 }
 
-void readBitsImpl(const uint8_t* data, std::size_t size, void* ctx,
-                  uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn)) {
+// The file's first bool, float or double grid (what readGrid reads as occupancy); level sets are
+// refused.
+openvdb::GridBase::Ptr firstOccupancyGrid(const uint8_t* data, std::size_t size) {
     const openvdb::GridPtrVecPtr grids = readValidatedGrids(data, size);
-    openvdb::GridBase::Ptr base;
     for (const auto& gp : *grids)
         if (gp && (gp->isType<openvdb::BoolGrid>() || gp->isType<openvdb::FloatGrid>() ||
                    gp->isType<openvdb::DoubleGrid>())) {
-            base = gp;
-            break;
+            if (gp->getGridClass() == openvdb::GRID_LEVEL_SET)
+                fail("grid '", gp->getName(), "' is a level set; convert it to a fog volume or a mask first");
+            return gp;
         }
-    if (!base) fail("the file holds no bool, float or double grid");
-    if (base->getGridClass() == openvdb::GRID_LEVEL_SET)
-        fail("grid '", base->getName(), "' is a level set; convert it to a fog volume or a mask first");
+    fail("the file holds no bool, float or double grid");
+}
+
+void readBitsImpl(const uint8_t* data, std::size_t size, void* ctx,
+                  uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn)) {
+    const openvdb::GridBase::Ptr base = firstOccupancyGrid(data, size);
 
     double cell[3], centre0[3];
     boxTransform(*base, cell, centre0);
@@ -869,17 +873,7 @@ void* sparseRead(const uint8_t* data, std::size_t size, VdbReadBox* box, int64_t
                  std::string* error) {
     SparseHandle* h = nullptr;
     guarded(error, [&] {
-        const openvdb::GridPtrVecPtr grids = readValidatedGrids(data, size);
-        openvdb::GridBase::Ptr base;
-        for (const auto& gp : *grids)
-            if (gp && (gp->isType<openvdb::BoolGrid>() || gp->isType<openvdb::FloatGrid>() ||
-                       gp->isType<openvdb::DoubleGrid>())) {
-                base = gp;
-                break;
-            }
-        if (!base) fail("the file holds no bool, float or double grid");
-        if (base->getGridClass() == openvdb::GRID_LEVEL_SET)
-            fail("grid '", base->getName(), "' is a level set; convert it to a fog volume or a mask first");
+        const openvdb::GridBase::Ptr base = firstOccupancyGrid(data, size);
         double cell[3], centre0[3];
         boxTransform(*base, cell, centre0);
         const openvdb::CoordBBox ibox = indexBox(*base);
