@@ -13,12 +13,13 @@
 
 #include <benchmark/benchmark.h>
 
-#include "voxfx/demo.hpp"
+#include "demo/demo_scenes.hpp"
 #include "voxfx/render.hpp"
 
 namespace {
 
 using namespace voxfx;
+using namespace voxfx::demo;
 
 const Scene& treeScene() {
     static const Scene scene = makeTreeScene();

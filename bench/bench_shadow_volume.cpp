@@ -16,13 +16,14 @@
 #include <string>
 #include <vector>
 
-#include "voxfx/demo.hpp"
+#include "demo/demo_scenes.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/shadow_volume.hpp"
 
 namespace {
 
 using namespace voxfx;
+using namespace voxfx::demo;
 using BenchClock = std::chrono::steady_clock;
 
 double benchMs(BenchClock::time_point t0) {

@@ -15,6 +15,7 @@
 #include "cgal_oracle.hpp"
 #include "render/volume_pass.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/segment_walker.hpp"
 #include "voxfx/volume_scene.hpp"
 
 namespace voxfx {

@@ -15,6 +15,8 @@
 #include "voxfx/fragment_list.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/scene_io.hpp"
+#include "voxfx/segment_walker.hpp"
 #include "voxfx/smoke.hpp"
 #include "voxfx/volume_scene.hpp"
 

@@ -6,15 +6,17 @@
 
 #include <gtest/gtest.h>
 
+#include "demo/demo_scenes.hpp"
 #include "test_util.hpp"
 #include "voxfx/attribute_grid.hpp"
-#include "voxfx/demo.hpp"
 #include "voxfx/glass.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/shadow.hpp"
 
 namespace voxfx {
 namespace {
+
+using namespace voxfx::demo;
 
 constexpr double kGlassIor = 1.5;
 

@@ -15,12 +15,15 @@
 #include <OpenEXR/ImfRgbaFile.h>
 #include <gtest/gtest.h>
 
+#include "demo/demo_scenes.hpp"
 #include "test_util.hpp"
-#include "voxfx/demo.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/scene_io.hpp"
 
 namespace voxfx {
 namespace {
+
+using namespace voxfx::demo;
 
 using test::appendQuad;
 

@@ -12,12 +12,15 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "demo/demo_scenes.hpp"
 #include "test_util.hpp"
-#include "voxfx/demo.hpp"
 #include "voxfx/scene.hpp"
+#include "voxfx/scene_io.hpp"
 
 namespace voxfx {
 namespace {
+
+using namespace voxfx::demo;
 
 using test::base64;
 

@@ -10,8 +10,8 @@
 #include <gtest/gtest.h>
 
 #include "cgal_oracle.hpp"
+#include "demo/demo_scenes.hpp"
 #include "test_util.hpp"
-#include "voxfx/demo.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/render.hpp"
@@ -19,6 +19,8 @@
 
 namespace voxfx {
 namespace {
+
+using namespace voxfx::demo;
 
 Light svPointLight(const Vec3d& p) {
     Light l;

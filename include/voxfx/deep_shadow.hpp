@@ -21,8 +21,9 @@
 #include <vector>
 
 #include "voxfx/dsm.hpp"
+#include "voxfx/light_view.hpp"
 #include "voxfx/scene.hpp"
-#include "voxfx/shadow.hpp"
+#include "voxfx/segment_walker.hpp"
 #include "voxfx/volume_scene.hpp"
 
 namespace voxfx {
@@ -96,16 +97,5 @@ private:
 /// the deep shadow map builds it: for tests and error measurements.
 std::vector<DsmNode> deepShadowTexel(const VolumeScene& scene, const LightView& view, int64_t x, int64_t y,
                                      const DeepShadowOptions& options);
-
-/// Which of a Scene's meshes volumeSceneOf turns into objects.
-enum class SceneMeshes {
-    All,     ///< every mesh: what the light sees (deep shadows)
-    Blended, ///< the meshes of blended materials (Material::blend): what the camera's G-buffer leaves out
-};
-
-/// The renderer's scene as a volume scene: the chosen meshes, each a leaf and an object (opaque, or
-/// translucent with opacity 1 - luminance(crossingTransmittance); `material` names the mesh's
-/// material), then the objects of scene.volumeScene.
-VolumeScene volumeSceneOf(const Scene& scene, SceneMeshes meshes = SceneMeshes::All);
 
 } // namespace voxfx

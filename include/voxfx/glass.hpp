@@ -99,8 +99,6 @@ bool refractDirection(const Vec3d& d, const Vec3d& n, double eta, Vec3d& out);
 /// Exact unpolarized dielectric Fresnel reflectance for cos(incidence) cosI in [0, 1] from a medium of
 /// index etaI into etaT; 1 under total internal reflection.
 double fresnelDielectric(double cosI, double etaI, double etaT);
-/// KHR_materials_volume attenuation coefficient per channel (per world unit).
-Vec3f attenuationCoefficient(const Material& m);
 /// exp(-sigma * length) per channel.
 Vec3f beerLambert(const Vec3f& sigma, double length);
 

@@ -1,7 +1,8 @@
-// voxfx — scenes: meshes with materials, lights and cameras, loaded from glTF 2.0 or a JSON wrapper.
+// voxfx — scenes: meshes with materials, lights and cameras (read from files by voxfx/scene_io.hpp).
 //
 // The scene model is independent of any file format: everything is in world space (node transforms
-// applied), units are the file's (glTF: metres), angles are radians, colours are linear RGB.
+// applied), units are the file's (glTF: metres), angles are radians, colours are linear RGB. What
+// the loaders read:
 //
 //   glTF 2.0 (.gltf, .glb)  meshes under their node transforms (a mesh used by two nodes becomes two
 //                           SceneMeshes), cameras, KHR_lights_punctual (point, spot, directional),
@@ -13,12 +14,11 @@
 //   JSON wrapper (.json)    what glTF cannot say: effect settings, grid resolution, extra meshes in
 //                           other formats (OFF, OBJ, PLY, STL ... with a transform and a material),
 //                           extra lights and cameras, meshes that only receive shadows, an
-//                           environment map. Format: see loadScene below.
+//                           environment map. Format: see loadScene (voxfx/scene_io.hpp).
 //   other mesh formats      one mesh with a default material, no lights or cameras.
 //
 // EXPERIMENTAL: the scene model will grow (textures, volumes for DSM) until the renderer issue closes.
-// Thread-safety: a Scene is a value: concurrent reads are fine. loadScene/writeGltf of different
-// paths may run concurrently; they run on the calling thread.
+// Thread-safety: a Scene is a value: concurrent reads are fine.
 #pragma once
 
 #include <cstdint>
@@ -81,6 +81,10 @@ struct Material {
     /// ExactShadow gives at normal incidence through that thickness.
     Vec3f shadowCrossingTransmittance() const;
 };
+
+/// KHR_materials_volume's attenuation coefficient of `m`: sigma = -ln(attenuationColor) /
+/// attenuationDistance per channel, per world unit (zero when the distance is infinite or not > 0).
+Vec3f attenuationCoefficient(const Material& m);
 
 /// One mesh in world space with one material.
 struct SceneMesh {
@@ -158,46 +162,6 @@ struct Scene {
     /// near <= 0. Loaders call it; call it after editing a scene by hand.
     void validate() const;
 };
-
-/// Loads a scene by extension:
-///   .gltf .glb   glTF 2.0 (see the file comment);
-///   .json        the wrapper:
-///     { "gltf": "tree.glb",                       optional, relative to the JSON file
-///       "meshes": [ { "file": "bunny.off", "name": "bunny",
-///                     "translate": [x,y,z], "scale": s or [sx,sy,sz],
-///                     "rotate": [ax,ay,az, degrees],
-///                     "material": { "name": "fur", "baseColor": [r,g,b], "opacity": 1,
-///                                   "transmission": 0, "ior": 1.5, "specular": 0.2,
-///                                   "shininess": 32 },
-///                     "castsShadow": true } ],
-///       "lights":  [ { "type": "directional|spot|point", "name": "sun", "position": [..],
-///                      "direction": [..], "target": [..] (instead of direction),
-///                      "color": [..], "intensity": 3, "innerConeDegrees": 20,
-///                      "outerConeDegrees": 30 } ],
-///       "cameras": [ { "position": [..], "target": [..], "up": [..], "fovYDegrees": 45,
-///                      "near": 0.01 } ],
-///       "receiversOnly": [ "Ground" ],             mesh names that cast no shadow
-///       "render":  { "shadows": "transmittance", "width": 1280, "height": 720,
-///                    "supersample": 2, "gridResolution": 256, "gridDepth": 256,
-///                    "shadowMapResolution": 2048, "slicing": "local",
-///                    "voxelMode": "surface", "ambient": [..], "background": [..] },
-///       "environmentMap": "sky.pfm" }
-///   anything loadMesh reads: one mesh, default material.
-/// Throws voxfx::Error naming the file for a missing or unreadable file, an unknown extension (with
-/// the allowed list), malformed JSON (with the position), unknown keys or light types, a light
-/// without a usable direction, and everything Scene::validate rejects.
-Scene loadScene(const std::string& path);
-
-/// The JSON wrapper from text, as loadScene reads it from a .json file: `path` names the text in
-/// messages and is the file its relative names are resolved against (it is not read itself).
-/// Throws voxfx::Error as loadScene does.
-Scene parseSceneJson(std::string_view json, const std::string& path);
-
-/// Writes a scene as glTF 2.0: .gltf (JSON with the buffer embedded as a base64 data URI) or .glb
-/// (binary container). Materials with their extensions, lights (KHR_lights_punctual) and cameras are
-/// written as nodes; meshes are written in world space under identity nodes. Per-vertex normals are
-/// written when present. Atomic (temporary file, then rename). Throws voxfx::Error.
-void writeGltf(const Scene& scene, const std::string& path);
 
 /// A camera looking at the whole scene from the front-above (used when a scene has no camera).
 Camera defaultCamera(const Scene& scene, double aspect);

@@ -24,11 +24,7 @@
 // towards the light) by `normalOffset` column footprints, and the grids skip the `skipCells` cells
 // ending at the point's own cell (default 1: the cell holding p, which holds p's own surface).
 //
-// Light views: spot lights get one perspective frame along their direction (field of view fitted to
-// the casters, at most twice the outer cone, at most 160 degrees); point lights six 90-degree cube
-// faces; directional lights an oriented orthographic frame (Frame::orthographic with a basis)
-// perpendicular to their direction, fitted to the casters: world-space geometry is rasterized into
-// it directly, nothing is rotated or copied.
+// Light views: voxfx/light_view.hpp.
 //
 // EXPERIMENTAL until the renderer issue closes.
 // Thread-safety: built maps are read-only: visibility and the lookups may run concurrently from
@@ -45,6 +41,7 @@
 #include "voxfx/device.hpp"
 #include "voxfx/dsm.hpp"
 #include "voxfx/frame.hpp"
+#include "voxfx/light_view.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/scene.hpp"
 #include "voxfx/voxel_grid.hpp"
@@ -90,30 +87,6 @@ struct ShadowOptions {
     int dsmClusters = 0;           ///< deep: at most this many clustered maps per light (0, 1: off)
     bool dsmSkipEmptySpace = true; ///< deep: DeepShadowOptions::skipEmptySpace
 };
-
-/// One view of a light: a frame over world space (perspective, or oriented orthographic for
-/// directional lights).
-struct LightView {
-    Frame frame;
-
-    /// Grid coordinates (gx, gy, frame depth) of a world point; for perspective views the point must
-    /// lie in front of the eye (check covers first).
-    Vec3d gridFromWorld(const Vec3d& world) const { return frame.gridFromWorld(world); }
-    /// True when p lies in front of the light (perspective) and projects into the columns.
-    bool covers(const Vec3d& world) const;
-    /// World size of one column at p (the texel footprint: constant for orthographic views, growing
-    /// with the view depth for perspective ones).
-    double columnWorldSize(const Vec3d& world) const;
-    /// World length of one frame depth unit (orthographic: a slice; perspective: 1).
-    double worldPerDepthUnit() const;
-};
-
-/// The views that cover `casterBounds` for `light`, with columns along the longer side and d slices
-/// (see the file comment for the fitting). Throws voxfx::Error for an empty or non-finite box.
-std::vector<LightView> makeLightViews(const Light& light, const Box3d& casterBounds, int64_t columns,
-                                      int64_t d);
-/// Index of the view that covers p (the cube face for point lights), or -1.
-int viewIndexFor(const std::vector<LightView>& views, const Vec3d& world);
 
 /// The standard shadow map: the nearest caster depth per texel (centre-sampled fragments of the
 /// one rasterizer), binary depth comparison with percentage-closer filtering.

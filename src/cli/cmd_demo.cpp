@@ -4,11 +4,13 @@
 #include <iostream>
 
 #include "cli_common.hpp"
-#include "voxfx/demo.hpp"
+#include "demo/demo_scenes.hpp"
 #include "voxfx/render.hpp"
 
 namespace voxfx::cli {
 namespace {
+
+using namespace voxfx::demo;
 
 struct DemoArgs {
     std::string scenes = "all", shadows = "transmittance", outDir = "docs/images", meshes = "data/meshes",

@@ -328,48 +328,4 @@ std::vector<DsmNode> deepShadowTexel(const VolumeScene& scene, const LightView& 
     return out;
 }
 
-VolumeScene volumeSceneOf(const Scene& scene, SceneMeshes meshes) {
-    VolumeScene v;
-    for (const SceneMesh& m : scene.meshes) {
-        const Material& mat = scene.materials[m.material];
-        if (meshes == SceneMeshes::Blended && !mat.blend) continue;
-        VolumeSceneObject o;
-        o.name = m.name;
-        o.material = int32_t(m.material);
-        o.shape = v.addLeaf(m.mesh);
-        o.castsShadow = m.castsShadow;
-        o.color = mat.baseColor;
-        if (mat.isOpaque()) {
-            o.kind = ObjectKind::Opaque;
-        } else {
-            const Vec3f t = mat.shadowCrossingTransmittance();
-            o.kind = ObjectKind::Translucent;
-            o.opacity = std::clamp(1.0f - (0.2126f * t.x + 0.7152f * t.y + 0.0722f * t.z), 0.0f, 1.0f);
-        }
-        v.addObject(std::move(o));
-    }
-    if (scene.volumeScene) {
-        const VolumeScene& s = *scene.volumeScene;
-        const auto leafBase = int32_t(v.leaves.size()), nodeBase = int32_t(v.nodes.size()),
-                   volumeBase = int32_t(v.volumes.size());
-        v.leaves.insert(v.leaves.end(), s.leaves.begin(), s.leaves.end());
-        for (ShapeNode n : s.nodes) {
-            if (n.op == ShapeOp::Leaf) {
-                n.leaf += leafBase;
-            } else {
-                n.a += nodeBase;
-                n.b += nodeBase;
-            }
-            v.nodes.push_back(n);
-        }
-        v.volumes.insert(v.volumes.end(), s.volumes.begin(), s.volumes.end());
-        for (VolumeSceneObject o : s.objects) {
-            o.shape += nodeBase;
-            if (o.volume >= 0) o.volume += volumeBase;
-            v.objects.push_back(std::move(o));
-        }
-    }
-    return v;
-}
-
 } // namespace voxfx

@@ -1,5 +1,6 @@
 // voxfx — loading environment maps (the image readers of io/image.cpp, then the pyramid).
-#include "voxfx/environment.hpp"
+#include "voxfx/environment_io.hpp"
+
 #include "voxfx/image.hpp"
 
 namespace voxfx {

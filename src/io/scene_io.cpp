@@ -1,5 +1,7 @@
 // voxfx — scene files: loadScene (glTF through render/scene_gltf, the JSON scene wrapper, or a
 // single mesh) and the glTF writer. The scene model itself lives in render/scene.cpp.
+#include "voxfx/scene_io.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -11,7 +13,6 @@
 #include "io/scene_gltf.hpp"
 #include "voxfx/file_name.hpp"
 #include "voxfx/mesh_io.hpp"
-#include "voxfx/scene.hpp"
 #include "voxfx/smoke.hpp"
 #include "voxfx/volume_io.hpp"
 #include "voxfx/volume_scene.hpp"

@@ -74,14 +74,6 @@ double fresnelDielectric(double cosI, double etaI, double etaT) {
     return 0.5 * (rs * rs + rp * rp);
 }
 
-Vec3f attenuationCoefficient(const Material& m) {
-    if (!std::isfinite(m.attenuationDistance) || !(m.attenuationDistance > 0)) return {};
-    Vec3f s;
-    for (int c = 0; c < 3; ++c)
-        s[c] = -std::log(std::clamp(m.attenuationColor[c], 1e-6f, 1.0f)) / m.attenuationDistance;
-    return s;
-}
-
 Vec3f beerLambert(const Vec3f& sigma, double length) {
     return {float(std::exp(-double(sigma.x) * length)), float(std::exp(-double(sigma.y) * length)),
             float(std::exp(-double(sigma.z) * length))};

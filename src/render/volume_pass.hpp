@@ -7,7 +7,7 @@
 
 #include "voxfx/fragment_list.hpp"
 #include "voxfx/render.hpp"
-#include "voxfx/volume_scene.hpp"
+#include "voxfx/segment_walker.hpp"
 
 namespace voxfx::detail {
 
