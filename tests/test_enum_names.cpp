@@ -31,7 +31,6 @@ TEST(EnumNamesTest, EveryNameParsesBackToItsValueInAnyCase) {
     expectRoundTrip<Axis>(3, parseAxis);
     expectRoundTrip<Slicing>(2, parseSlicing);
     expectRoundTrip<Device>(3, parseDevice);
-    expectRoundTrip<ShadowKind>(4, parseShadowKind);
     expectRoundTrip<MorphOp>(4, parseMorphOp);
     expectRoundTrip<MorphBorder>(3, parseMorphBorder);
     expectRoundTrip<CsgOp>(4, parseCsgOp);

@@ -55,6 +55,7 @@
 
 #include <concepts>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "voxfx/frame.hpp"
@@ -64,6 +65,10 @@
 namespace voxfx {
 
 enum class Coverage : uint8_t { Center, Conservative };
+/// "center" | "conservative".
+const char* toString(Coverage c);
+/// Parses center | conservative; throws voxfx::Error listing them otherwise.
+Coverage parseCoverage(const std::string& name);
 
 /// The parallel scheme, for consumers that offer the direct path (see above); the bits are the
 /// same either way. Auto picks direct for dense meshes. For tests and benchmarks.

@@ -26,10 +26,12 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "voxfx/math.hpp"
 #include "voxfx/mesh.hpp"
+#include "voxfx/options.hpp"
 
 namespace voxfx {
 
@@ -121,19 +123,14 @@ struct Camera {
     double farDepth = 1.0e4; ///< far plane (geometry beyond it is still drawn: the depth is exact)
 };
 
-/// What the JSON wrapper adds to a scene; zero / empty means "not given" (the caller's default).
+/// What a scene file says about how to render it: the JSON wrapper's "render" settings, by name
+/// ("shadows", "glass", and the names voxfx/render.hpp's setRenderOption takes, such as
+/// "gridResolution" or "ambient"; renderOptionsFor applies them, the techniques first), and its
+/// environment map. Nothing is given where the file says nothing: the defaults are the options
+/// structs' own.
 struct SceneSettings {
-    std::string shadows; ///< none | map | transmittance | absorption
-    int64_t width = 0, height = 0;
-    int supersample = 0;
-    int64_t gridResolution = 0; ///< light grid columns per side
-    int64_t gridDepth = 0;      ///< light grid slices
-    int64_t shadowMapResolution = 0;
-    std::string slicing;        ///< uniform | local
-    std::string voxelMode;      ///< surface | conservative
-    std::string environmentMap; ///< path of an environment map (kept for the glass renderer)
-    Vec3f ambient{-1, -1, -1};  ///< negative = not given
-    Vec3f background{-1, -1, -1};
+    std::vector<std::pair<std::string, OptionValue>> render;
+    std::string environmentMap; ///< path of an environment map (resolved against the scene file), or empty
 };
 
 struct Scene {
@@ -165,5 +162,9 @@ struct Scene {
 
 /// A camera looking at the whole scene from the front-above (used when a scene has no camera).
 Camera defaultCamera(const Scene& scene, double aspect);
+
+/// The scene's camera `index`; for a scene without cameras, index 0 is defaultCamera(scene,
+/// aspect). Throws voxfx::Error naming the cameras there are otherwise.
+Camera sceneCamera(const Scene& scene, int index, double aspect);
 
 } // namespace voxfx

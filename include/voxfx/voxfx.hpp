@@ -12,7 +12,9 @@
 #include "voxfx/image.hpp"
 #include "voxfx/math.hpp"
 #include "voxfx/mesh.hpp"
+#include "voxfx/options.hpp"
 #include "voxfx/parallel.hpp"
+#include "voxfx/text.hpp"
 #include "voxfx/volume.hpp"
 #include "voxfx/voxel_grid.hpp"
 
@@ -46,12 +48,24 @@
 #include "voxfx/dsm.hpp"
 #include "voxfx/segment_walker.hpp"
 
-// render: the renderer, its shadow techniques and glass methods, environment light.
+// render: the renderer (G-buffer, passes), its shadow techniques and glass methods, one room each,
+// environment light and the exact tracer.
+#include "voxfx/absorption_shadow.hpp"
 #include "voxfx/environment.hpp"
+#include "voxfx/exact_glass.hpp"
+#include "voxfx/exact_shadow.hpp"
+#include "voxfx/frosted_glass.hpp"
+#include "voxfx/gbuffer.hpp"
 #include "voxfx/glass.hpp"
+#include "voxfx/glass_optics.hpp"
+#include "voxfx/light_grid.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/shadow.hpp"
+#include "voxfx/shadow_map.hpp"
 #include "voxfx/shadow_volume.hpp"
+#include "voxfx/transmittance_shadow.hpp"
+#include "voxfx/triangle_tracer.hpp"
+#include "voxfx/voxel_glass.hpp"
 
 // sim: particles.
 #include "voxfx/particles.hpp"

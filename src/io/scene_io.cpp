@@ -13,6 +13,7 @@
 #include "io/scene_gltf.hpp"
 #include "voxfx/file_name.hpp"
 #include "voxfx/mesh_io.hpp"
+#include "voxfx/render.hpp"
 #include "voxfx/smoke.hpp"
 #include "voxfx/volume_io.hpp"
 #include "voxfx/volume_scene.hpp"
@@ -64,13 +65,19 @@ double num(const json& j, const char* key, double fallback, const std::string& w
     return j[key].get<double>();
 }
 
-// A count or size of the render settings: a whole number in [0, 2^31) (a double out of int64's
-// range, or NaN, would make the conversion undefined behaviour).
-int64_t settingsCount(const json& j, const char* key, const std::string& where) {
-    const double v = num(j, key, 0, where);
-    if (!(v >= 0 && v < 2147483648.0) || v != std::floor(v))
-        fail(where, ": \"", key, "\" must be a whole number in [0, 2^31), got ", v);
-    return int64_t(v);
+// A render setting's value: on/off, a whole or real number, a name, or three numbers.
+OptionValue settingValue(const json& j, const std::string& where) {
+    if (j.is_boolean()) return j.get<bool>();
+    if (j.is_number_unsigned()) { // past int64_t: a double, which the range check then refuses
+        const uint64_t u = j.get<uint64_t>();
+        return u > uint64_t(INT64_MAX) ? OptionValue(double(u)) : OptionValue(int64_t(u));
+    }
+    if (j.is_number_integer()) return j.get<int64_t>();
+    if (j.is_number()) return j.get<double>();
+    if (j.is_string()) return j.get<std::string>();
+    if (j.is_array() && j.size() == 3 && j[0].is_number() && j[1].is_number() && j[2].is_number())
+        return Vec3d{j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
+    fail(where, ": expected true or false, a number, a name or [x, y, z]");
 }
 
 // A whole number in [lo, hi] (checked before any conversion: a double out of the target type's
@@ -436,22 +443,12 @@ Scene parseWrapper(std::string_view text, const std::string& path) {
         if (doc.contains("render")) {
             const json& r = doc["render"];
             const std::string where = path + ": render";
-            allowKeys(r,
-                      {"shadows", "width", "height", "supersample", "gridResolution", "gridDepth",
-                       "shadowMapResolution", "slicing", "voxelMode", "ambient", "background"},
-                      where);
-            SceneSettings& s = scene.settings;
-            s.shadows = str(r, "shadows", where);
-            s.width = settingsCount(r, "width", where);
-            s.height = settingsCount(r, "height", where);
-            s.supersample = int(settingsCount(r, "supersample", where));
-            s.gridResolution = settingsCount(r, "gridResolution", where);
-            s.gridDepth = settingsCount(r, "gridDepth", where);
-            s.shadowMapResolution = settingsCount(r, "shadowMapResolution", where);
-            s.slicing = str(r, "slicing", where);
-            s.voxelMode = str(r, "voxelMode", where);
-            s.ambient = Vec3f(vec3Or(r, "ambient", {-1, -1, -1}, where));
-            s.background = Vec3f(vec3Or(r, "background", {-1, -1, -1}, where));
+            if (!r.is_object()) fail(where, ": expected a JSON object");
+            for (const auto& [key, value] : r.items()) {
+                const OptionValue v = settingValue(value, concat(where, ".", key));
+                checkRenderSetting(key, v, where);
+                scene.settings.render.emplace_back(key, v);
+            }
         }
         if (doc.contains("environmentMap"))
             scene.settings.environmentMap = resolve(str(doc, "environmentMap", path));

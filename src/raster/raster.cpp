@@ -4,6 +4,28 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/enum_names.hpp"
+
+namespace voxfx {
+
+const char* toString(Coverage c) {
+    switch (c) {
+    case Coverage::Center:
+        return "center";
+    case Coverage::Conservative:
+        return "conservative";
+    }
+    return "?";
+}
+
+Coverage parseCoverage(const std::string& name) {
+    static constexpr detail::EnumName<Coverage> kNames[] = {{"center", Coverage::Center},
+                                                            {"conservative", Coverage::Conservative}};
+    return detail::parseEnum<Coverage>(name, "coverage", kNames);
+}
+
+} // namespace voxfx
+
 namespace voxfx::detail {
 
 namespace {

@@ -1,12 +1,17 @@
 // voxfx — exact shadows through partial occluders: every caster triangle between a point and the
 // light multiplies the light by its crossing transmittance (Embree finds them in order); glass
 // multiplies by the Fresnel-transmitted fraction at each crossing, its tint where the ray enters and
-// Beer–Lambert over the length inside.
+// Beer–Lambert over the length inside (voxfx/exact_shadow.hpp).
+#include "voxfx/exact_shadow.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
-#include "voxfx/glass.hpp"
-#include "voxfx/shadow.hpp"
+#include "render/shadow_casters.hpp"
+#include "voxfx/glass_optics.hpp"
+#include "voxfx/text.hpp"
+#include "voxfx/triangle_tracer.hpp"
 
 namespace voxfx {
 
@@ -112,5 +117,42 @@ Vec3f ExactShadow::transmittance(const Vec3d& p, const Vec3d& dir, double distan
         for (const Inside& i : inside) v = v * beerLambert(glass_[i.glass].sigma, distance - i.t);
     return v;
 }
+
+std::span<const OptionField<ExactShadowOptions>> ExactShadowOptions::fields() { return {}; }
+
+ExactShadow::Stats& ExactShadow::Stats::operator+=(const Stats& o) {
+    triangles += o.triangles;
+    return *this;
+}
+
+std::string ExactShadow::Stats::summary() const {
+    return countText(triangles) + " caster triangles traced (Embree)";
+}
+
+ExactShadow ExactShadow::build(const Scene& scene, const Light& light, const ExactShadowOptions&, Progress*) {
+    const detail::CasterSets casters = detail::collectCasters(scene);
+    if (casters.all.indices.empty()) return {};
+    ExactShadow out = fromMaterials(casters.all.view(), casters.allMaterialIndex, scene.materials);
+    out.light_ = light;
+    return out;
+}
+
+Vec3f ExactShadow::visibility(const Vec3d& p, const Vec3d& n) const {
+    if (!tracer_) return {1, 1, 1};
+    // Towards the light from p, offset along n against self-intersection.
+    Vec3d l;
+    double distance = std::numeric_limits<double>::infinity();
+    if (light_.type == LightType::Directional) {
+        l = -normalize(light_.direction);
+    } else {
+        l = light_.position - p;
+        distance = length(l);
+        l = l / std::max(distance, 1e-300);
+    }
+    const Vec3d o = p + n * (epsilon_ * 10);
+    return transmittance(o, l, distance);
+}
+
+ExactShadow::Stats ExactShadow::stats() const { return {int64_t(mesh_.triangleCount())}; }
 
 } // namespace voxfx

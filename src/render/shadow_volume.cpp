@@ -14,6 +14,7 @@
 
 #include "voxfx/bitgrid.hpp"
 #include "voxfx/raster.hpp"
+#include "voxfx/text.hpp"
 
 namespace voxfx {
 
@@ -358,7 +359,7 @@ float ShadowVolumeMask::visibility(const Vec3d& p) const {
 }
 
 std::vector<uint8_t> shadowVolumeReceivers(const GBuffer& gbuffer, const SceneGeometry& geometry,
-                                           const Scene& scene, const Light& light) {
+                                           std::span<const Material> materials, const Light& light) {
     const int64_t W = gbuffer.frame.width(), H = gbuffer.frame.height();
     std::vector<uint8_t> out(size_t(W * H), 0);
     parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
@@ -373,7 +374,7 @@ std::vector<uint8_t> shadowVolumeReceivers(const GBuffer& gbuffer, const SceneGe
                                                          std::cos(light.outerConeAngle) - 1e-9)
                     continue;
                 out[size_t(y * W + x)] =
-                    dot(s.geometricNormal, toLight) > 0 || !scene.materials[s.material].isOpaque();
+                    dot(s.geometricNormal, toLight) > 0 || !materials[s.material].isOpaque();
             }
     });
     return out;
@@ -730,22 +731,76 @@ ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Ligh
     return out;
 }
 
-LightShadow buildVolumeShadow(const ShadowCasterSet& casters, const Scene& scene, const Light& light,
-                              const GBuffer& gbuffer, const SceneGeometry& geometry,
-                              const ShadowOptions& options, ShadowBuildTimings* timings) {
-    const auto t0 = SvClock::now();
-    ShadowVolumeOptions vo;
-    vo.cullReceivers = options.volumeCulling;
-    vo.cullOccluded = options.volumeCulling;
-    vo.clamp = options.volumeClamping;
-    const Box3d bounds = scene.bounds(false);
-    auto mask = std::make_shared<ShadowVolumeMask>(computeShadowVolumes(
-        casters, light, gbuffer, shadowVolumeReceivers(gbuffer, geometry, scene, light), bounds, vo));
-    if (timings) {
-        timings->volumeMs += svMsSince(t0);
-        timings->volumeFragments += mask->stats.fragments;
-    }
-    return LightShadow::fromVolumes(options, std::move(mask));
+std::span<const OptionField<ShadowVolumeOptions>> ShadowVolumeOptions::fields() {
+    using O = ShadowVolumeOptions;
+    static const std::vector<OptionField<O>> table = [] {
+        std::vector<OptionField<O>> t;
+        OptionField<O> all;
+        all.name = "volumeCulling";
+        all.help = "shadow volumes: ED06 culling and clamping (the same image; off: more fragments)";
+        all.type = OptionType::Flag;
+        all.store = +[](O& o, const OptionValue& v) {
+            o.cullReceivers = o.cullOccluded = o.clamp = std::get<bool>(v);
+        };
+        all.get = +[](const O& o) { return OptionValue(o.cullReceivers && o.cullOccluded && o.clamp); };
+        t.push_back(all);
+        t.push_back(flagOption<O, &O::cullReceivers>(
+            "cullReceivers", "shadow volumes: skip volumes holding no visible receiver"));
+        t.push_back(flagOption<O, &O::cullOccluded>(
+            "cullOccluded", "shadow volumes: skip casters entirely in other casters' shadow"));
+        t.push_back(flagOption<O, &O::clamp>("volumeClamping",
+                                             "shadow volumes: end each volume at its last receiver slab"));
+        t.push_back(numberOption<O, &O::mapResolution>(
+            "cullResolution", "shadow volumes: culling light views, columns along the longer side", 1,
+            16384));
+        t.push_back(numberOption<O, &O::receiverSlices>(
+            "receiverSlices", "shadow volumes: slices of the receiver slicemap", 1, 16384));
+        return t;
+    }();
+    return table;
 }
+
+ShadowVolumeStats& ShadowVolumeStats::operator+=(const ShadowVolumeStats& o) {
+    casters += o.casters;
+    culledNoReceiver += o.culledNoReceiver;
+    culledOccluded += o.culledOccluded;
+    clamped += o.clamped;
+    depthPass += o.depthPass;
+    depthFail += o.depthFail;
+    silhouetteEdges += o.silhouetteEdges;
+    volumeTriangles += o.volumeTriangles;
+    fragments += o.fragments;
+    receiversCovered = receiversCovered && o.receiversCovered;
+    cullMs += o.cullMs;
+    buildMs += o.buildMs;
+    rasterMs += o.rasterMs;
+    return *this;
+}
+
+std::string ShadowVolumeStats::summary() const {
+    return countText(fragments) + " volume fragments; " + countText(culledNoReceiver + culledOccluded) +
+           " of " + countText(casters) + " casters culled, " + countText(clamped) + " clamped; culling " +
+           msText(cullMs) + ", volumes " + msText(buildMs) + ", counting " + msText(rasterMs);
+}
+
+VolumeShadow VolumeShadow::build(const Scene& scene, const Light& light, const ShadowVolumeOptions& options,
+                                 Progress*) {
+    VolumeShadow out;
+    out.options_ = options;
+    out.casters_ = std::make_shared<const ShadowCasterSet>(ShadowCasterSet::build(scene));
+    out.light_ = light;
+    out.sceneBounds_ = scene.bounds(false);
+    out.materials_ = scene.materials;
+    return out;
+}
+
+void VolumeShadow::prepare(const GBuffer& gbuffer, const SceneGeometry& geometry) {
+    if (!casters_) return;
+    mask_ = computeShadowVolumes(*casters_, light_, gbuffer,
+                                 shadowVolumeReceivers(gbuffer, geometry, materials_, light_), sceneBounds_,
+                                 options_);
+}
+
+float VolumeShadow::visibility(const Vec3d& p, const Vec3d&) const { return mask_.visibility(p); }
 
 } // namespace voxfx

@@ -9,7 +9,7 @@
 #include <optional>
 
 #include "render/shading.hpp"
-#include "voxfx/deep_shadow.hpp"
+#include "voxfx/volume_scene.hpp"
 
 namespace voxfx::detail {
 
@@ -116,8 +116,12 @@ std::vector<std::vector<ObjectSurfaceHit>> objectSurfaceHits(const VolumeScene& 
     return out;
 }
 
-int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::vector<LightShadow>& shadows,
-                         const RenderOptions& options, std::vector<Vec3f>& shaded, Progress* progress) {
+void compositeVolumes(FrameState& frame) {
+    const GBuffer& gbuffer = frame.gbuffer;
+    const Scene& scene = frame.lit;
+    const std::vector<LightShadow>& shadows = frame.shadows;
+    const RenderOptions& options = frame.options;
+    std::vector<Vec3f>& shaded = frame.shaded;
     // What the camera draws here: the volume scene's objects, and the meshes of blended materials
     // (left out of the G-buffer) as translucent objects.
     const bool anyBlended = std::any_of(scene.meshes.begin(), scene.meshes.end(), [&](const SceneMesh& m) {
@@ -126,7 +130,7 @@ int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::
     std::optional<VolumeScene> merged;
     if (anyBlended) merged.emplace(volumeSceneOf(scene, SceneMeshes::Blended));
     const VolumeScene* chosen = merged ? &*merged : scene.volumeScene.get();
-    if (!chosen || chosen->objects.empty()) return 0;
+    if (!chosen || chosen->objects.empty()) return;
     const VolumeScene& vs = *chosen;
     double spacing = std::numeric_limits<double>::infinity();
     for (const VolumeSceneObject& o : vs.objects)
@@ -154,7 +158,7 @@ int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::
     const std::vector<EmptySpace> emptySpace =
         options.skipEmptySpace ? emptySpaceOf(vs) : std::vector<EmptySpace>(vs.objects.size());
     const Frame& f = gbuffer.frame;
-    const FragmentLists lists = FragmentLists::build(f, surfaces.flat.mesh.view(), progress);
+    const FragmentLists lists = FragmentLists::build(f, surfaces.flat.mesh.view());
     const int64_t W = f.width(), H = f.height();
     std::atomic<int64_t> samples{0};
     parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
@@ -186,7 +190,7 @@ int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::
                         s.normal = surfaces.shadingNormal(h, -perDepth);
                         const Material& m = materials[o];
                         const double a = m.opacity;
-                        color += shadePoint(s, m, scene, shadows, options, eye) * float(a * transmittance);
+                        color += shadePoint(frame, s, m, eye) * float(a * transmittance);
                         transmittance *= 1.0 - a;
                         return transmittance >= 1e-3;
                     },
@@ -216,8 +220,9 @@ int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::
                                     Vec3d toLight;
                                     const Vec3f e = lightIrradiance(scene.lights[l], p, toLight);
                                     if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
-                                    const Vec3f vis = l < shadows.size() ? shadows[l].visibility(p, {0, 0, 0})
-                                                                         : Vec3f{1, 1, 1};
+                                    const Vec3f vis = l < shadows.size()
+                                                          ? shadowVisibility(shadows[l], p, {0, 0, 0})
+                                                          : Vec3f{1, 1, 1};
                                     light += e * vis * float(1.0 / M_PI);
                                 }
                                 color += Vec3f{c.r, c.g, c.b} * light *
@@ -232,7 +237,7 @@ int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::
             }
         samples += local;
     });
-    return samples.load();
+    frame.result.volumeSamples = samples.load();
 }
 
 } // namespace voxfx::detail

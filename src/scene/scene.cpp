@@ -142,4 +142,15 @@ Camera defaultCamera(const Scene& scene, double aspect) {
     return c;
 }
 
+Camera sceneCamera(const Scene& scene, int index, double aspect) {
+    if (scene.cameras.empty()) {
+        if (index != 0) fail(scene.source, ": the scene has no cameras (camera ", index, ")");
+        return defaultCamera(scene, aspect);
+    }
+    if (index < 0 || std::size_t(index) >= scene.cameras.size())
+        fail("camera ", index, ": the scene has ", scene.cameras.size(), " cameras (0 .. ",
+             scene.cameras.size() - 1, ")");
+    return scene.cameras[std::size_t(index)];
+}
+
 } // namespace voxfx
