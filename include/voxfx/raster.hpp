@@ -58,6 +58,7 @@
 #include <string>
 #include <vector>
 
+#include "voxfx/enum_names.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/parallel.hpp"
@@ -65,7 +66,8 @@
 namespace voxfx {
 
 enum class Coverage : uint8_t { Center, Conservative };
-/// "center" | "conservative".
+inline constexpr EnumName<Coverage> kCoverageNames[] = {{"center", Coverage::Center},
+                                                        {"conservative", Coverage::Conservative}};
 const char* toString(Coverage c);
 /// Parses center | conservative; throws voxfx::Error listing them otherwise.
 Coverage parseCoverage(const std::string& name);

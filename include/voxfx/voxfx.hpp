@@ -6,6 +6,7 @@
 
 // core: math, meshes, frames, the slicemap, grids, volumes, errors, threads.
 #include "voxfx/bitgrid.hpp"
+#include "voxfx/enum_names.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/file_name.hpp"
 #include "voxfx/frame.hpp"
@@ -73,6 +74,7 @@
 // io: every function that reads or writes a file.
 #include "voxfx/environment_io.hpp"
 #include "voxfx/grid_io.hpp"
+#include "voxfx/image_io.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/scene_io.hpp"
 #include "voxfx/volume_io.hpp"

@@ -1,8 +1,8 @@
-// voxfx — loading environment maps (the image readers of io/image.cpp, then the pyramid), and the
+// voxfx — loading environment maps (the image readers of voxfx/image_io.hpp, then the pyramid), and the
 // one a scene renders under.
 #include "voxfx/environment_io.hpp"
 
-#include "voxfx/image.hpp"
+#include "voxfx/image_io.hpp"
 
 namespace voxfx {
 

@@ -4,25 +4,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/enum_names.hpp"
-
 namespace voxfx {
 
-const char* toString(Coverage c) {
-    switch (c) {
-    case Coverage::Center:
-        return "center";
-    case Coverage::Conservative:
-        return "conservative";
-    }
-    return "?";
-}
+const char* toString(Coverage c) { return enumName(c, kCoverageNames); }
 
-Coverage parseCoverage(const std::string& name) {
-    static constexpr detail::EnumName<Coverage> kNames[] = {{"center", Coverage::Center},
-                                                            {"conservative", Coverage::Conservative}};
-    return detail::parseEnum<Coverage>(name, "coverage", kNames);
-}
+Coverage parseCoverage(const std::string& name) { return parseEnum<Coverage>(name, "coverage", kCoverageNames); }
 
 } // namespace voxfx
 
