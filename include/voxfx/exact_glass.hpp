@@ -49,12 +49,10 @@ public:
     GlassPath trace(const GlassHit& hit) const { return trace(hit.eye, hit.dir, maxEvents_); }
 
 private:
-    Mesh mesh_;
     std::vector<Vec3f> normals_;
     std::vector<uint32_t> medium_;
     std::vector<GlassMedium> media_;
-    std::shared_ptr<const TriangleTracer> tracer_;
-    double epsilon_ = 1e-6;
+    std::shared_ptr<const TriangleTracer> tracer_; ///< the glass triangles
     int maxEvents_ = ExactGlassOptions{}.maxEvents;
 };
 

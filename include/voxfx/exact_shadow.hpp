@@ -74,17 +74,16 @@ public:
     /// RGB fraction of the light (the one given to build) reaching p: transmittance from p, moved 10
     /// epsilons along `n` (the unit normal turned towards the light), towards the light.
     Vec3f visibility(const Vec3d& p, const Vec3d& n) const;
-    double epsilon() const { return epsilon_; }
+    /// The tracer's step over a crossed triangle (TriangleTracer::epsilon).
+    double epsilon() const;
     Stats stats() const;
 
 private:
-    Mesh mesh_;
     std::vector<Vec3f> transmittance_;
     std::vector<uint32_t> triangleGlass_;
     std::vector<Glass> glass_;
-    std::shared_ptr<const TriangleTracer> tracer_;
-    double epsilon_ = 1e-6;
-    Light light_; ///< the light visibility looks towards (build)
+    std::shared_ptr<const TriangleTracer> tracer_; ///< the casters (null: none)
+    Light light_;                                  ///< the light visibility looks towards (build)
 };
 
 } // namespace voxfx

@@ -71,11 +71,8 @@ public:
 
 /// The interface every glass method has (see the file comment).
 template <class G>
-concept GlassMethod = requires(const G& g, const GlassInput& in, const typename G::Options& o,
-                               const GlassHit& h) {
-    { G::Options::kName } -> std::convertible_to<std::string_view>;
-    { G::Options::kSummary } -> std::convertible_to<std::string_view>;
-    { G::Options::fields() } -> std::convertible_to<std::span<const OptionField<typename G::Options>>>;
+concept GlassMethod = NamedOptions<typename G::Options> &&
+    requires(const G& g, const GlassInput& in, const typename G::Options& o, const GlassHit& h) {
     { G::build(in, o) } -> std::same_as<G>;
     { g.trace(h) } -> std::same_as<GlassPath>;
 };

@@ -14,6 +14,7 @@
 // Thread-safety: tables are immutable after static initialization; every function is pure.
 #pragma once
 
+#include <concepts>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -21,6 +22,7 @@
 #include <type_traits>
 #include <variant>
 
+#include "voxfx/enum_names.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/math.hpp"
 
@@ -30,6 +32,11 @@ namespace voxfx {
 using OptionValue = std::variant<bool, int64_t, double, std::string, Vec3d>;
 
 enum class OptionType : uint8_t { Flag, Integer, Real, Name, Triple };
+inline constexpr EnumName<OptionType> kOptionTypeNames[] = {{"on/off", OptionType::Flag},
+                                                            {"whole number", OptionType::Integer},
+                                                            {"number", OptionType::Real},
+                                                            {"name", OptionType::Name},
+                                                            {"three numbers", OptionType::Triple}};
 const char* toString(OptionType t);
 
 /// "grid-depth" from "gridDepth" (the command line's spelling).
@@ -85,6 +92,14 @@ void setOption(O& o, const OptionField<O>& f, const OptionValue& v, std::string_
     } catch (const Error& e) { detail::failOption(name, where, e.what()); }
 }
 
+/// The options of a technique front ends choose by name: its name, a line about it, its fields.
+template <class O>
+concept NamedOptions = requires {
+    { O::kName } -> std::convertible_to<std::string_view>;
+    { O::kSummary } -> std::convertible_to<std::string_view>;
+    { O::fields() } -> std::convertible_to<std::span<const OptionField<O>>>;
+};
+
 /// "name value, name value, ..." of every field of `o` (for summaries).
 template <class O> std::string optionsText(const O& o) {
     std::string out;
@@ -103,19 +118,28 @@ const OptionField<O>* findOption(std::span<const OptionField<O>> fields, std::st
     return nullptr;
 }
 
+/// A field without its accessors (the builders below add them).
+template <class O>
+OptionField<O> optionField(std::string_view name, std::string_view help, OptionType type, double lo = 0,
+                           double hi = 0, std::string_view alias = {}) {
+    OptionField<O> f;
+    f.name = name;
+    f.help = help;
+    f.type = type;
+    f.lo = lo;
+    f.hi = hi;
+    f.alias = alias;
+    return f;
+}
+
 /// A number member (integral: Integer; floating: Real) at Path, allowed in [lo, hi].
 template <class O, auto... Path>
 OptionField<O> numberOption(std::string_view name, std::string_view help, double lo, double hi,
                             std::string_view alias = {}) {
     using T = detail::OptionMemberType<O, Path...>;
     static_assert(std::is_arithmetic_v<T> && !std::is_same_v<T, bool>, "numberOption: a number member");
-    OptionField<O> f;
-    f.name = name;
-    f.help = help;
-    f.type = std::is_integral_v<T> ? OptionType::Integer : OptionType::Real;
-    f.lo = lo;
-    f.hi = hi;
-    f.alias = alias;
+    OptionField<O> f = optionField<O>(
+        name, help, std::is_integral_v<T> ? OptionType::Integer : OptionType::Real, lo, hi, alias);
     if constexpr (std::is_integral_v<T>) {
         f.store =
             +[](O& o, const OptionValue& v) { detail::optionMember<Path...>(o) = T(std::get<int64_t>(v)); };
@@ -132,11 +156,7 @@ OptionField<O> numberOption(std::string_view name, std::string_view help, double
 template <class O, auto... Path>
 OptionField<O> flagOption(std::string_view name, std::string_view help, std::string_view alias = {}) {
     static_assert(std::is_same_v<detail::OptionMemberType<O, Path...>, bool>, "flagOption: a bool member");
-    OptionField<O> f;
-    f.name = name;
-    f.help = help;
-    f.type = OptionType::Flag;
-    f.alias = alias;
+    OptionField<O> f = optionField<O>(name, help, OptionType::Flag, 0, 0, alias);
     f.store = +[](O& o, const OptionValue& v) { detail::optionMember<Path...>(o) = std::get<bool>(v); };
     f.get = +[](const O& o) { return OptionValue(bool(detail::optionMember<Path...>(o))); };
     return f;
@@ -151,12 +171,8 @@ template <class E> const char* optionName(E e) { return toString(e); }
 template <class O, auto Parse, auto Format, auto... Path>
 OptionField<O> nameOption(std::string_view name, std::string_view help, std::string_view choices,
                           std::string_view alias = {}) {
-    OptionField<O> f;
-    f.name = name;
-    f.help = help;
-    f.type = OptionType::Name;
+    OptionField<O> f = optionField<O>(name, help, OptionType::Name, 0, 0, alias);
     f.choices = choices;
-    f.alias = alias;
     f.store = +[](O& o, const OptionValue& v) {
         detail::optionMember<Path...>(o) = Parse(std::get<std::string>(v));
     };
@@ -169,13 +185,7 @@ template <class O, auto... Path>
 OptionField<O> tripleOption(std::string_view name, std::string_view help, double lo, double hi,
                             std::string_view alias = {}) {
     using T = detail::OptionMemberType<O, Path...>;
-    OptionField<O> f;
-    f.name = name;
-    f.help = help;
-    f.type = OptionType::Triple;
-    f.lo = lo;
-    f.hi = hi;
-    f.alias = alias;
+    OptionField<O> f = optionField<O>(name, help, OptionType::Triple, lo, hi, alias);
     f.store = +[](O& o, const OptionValue& v) { detail::optionMember<Path...>(o) = T(std::get<Vec3d>(v)); };
     f.get = +[](const O& o) { return OptionValue(Vec3d(detail::optionMember<Path...>(o))); };
     return f;

@@ -71,12 +71,9 @@ public:
 
 /// The interface every shadow technique has (see the file comment).
 template <class S>
-concept ShadowTechnique = requires(const S& s, const Scene& scene, const Light& light,
-                                   const typename S::Options& o, Progress* p, const Vec3d& v,
-                                   typename S::Stats& stats) {
-    { S::Options::kName } -> std::convertible_to<std::string_view>;
-    { S::Options::kSummary } -> std::convertible_to<std::string_view>;
-    { S::Options::fields() } -> std::convertible_to<std::span<const OptionField<typename S::Options>>>;
+concept ShadowTechnique = NamedOptions<typename S::Options> &&
+    requires(const S& s, const Scene& scene, const Light& light, const typename S::Options& o, Progress* p,
+             const Vec3d& v, typename S::Stats& stats) {
     { S::build(scene, light, o, p) } -> std::same_as<S>;
     {s.visibility(v, v)};
     { s.stats() } -> std::same_as<typename S::Stats>;

@@ -23,17 +23,24 @@ public:
         uint32_t triangle = 0; ///< index into the mesh given to the constructor
         double u = 0, v = 0;   ///< barycentrics of corners 1 and 2
     };
-    /// Builds the acceleration structure over `mesh` (world space). Throws voxfx::Error when the
-    /// module is missing or Embree fails.
+    /// Builds the acceleration structure over a copy of `mesh` (world space). Throws voxfx::Error
+    /// for an invalid mesh, when the module is missing or when Embree fails.
     explicit TriangleTracer(const MeshView& mesh);
     ~TriangleTracer();
     TriangleTracer(const TriangleTracer&) = delete;
     TriangleTracer& operator=(const TriangleTracer&) = delete;
     /// Nearest hit of origin + t * dir (dir unit) with t in (tNear, tFar).
     Hit intersect(const Vec3d& origin, const Vec3d& dir, double tNear, double tFar) const;
+    /// The triangles traced (the copy made at construction; Hit::triangle indexes them).
+    const Mesh& mesh() const { return mesh_; }
+    /// The step that leaves a triangle just crossed behind, for a ray continued from the hit: 1e-5
+    /// of the mesh's diagonal (at least 1e-9; 1e-6 for an empty mesh).
+    double epsilon() const { return epsilon_; }
 
 private:
     struct Impl;
+    Mesh mesh_;
+    double epsilon_ = 1e-6;
     std::unique_ptr<Impl> impl_;
 };
 

@@ -83,38 +83,29 @@ private:
     double voxel_ = 1;
 };
 
+/// A voxel glass method: the march of VoxelGlass with the options O, stopping at the first back
+/// surface when kTwoSurface.
+template <class O, bool kTwoSurface> class VoxelGlassMethod {
+public:
+    using Options = O;
+    /// Voxelizes the glass of `input` (VoxelGlass's constructor; it throws as that does).
+    static VoxelGlassMethod build(const GlassInput& input, const O& options);
+    GlassPath trace(const GlassHit& h) const {
+        return voxels_.trace(h.entry, h.normal, h.medium, h.dir, options_, kTwoSurface);
+    }
+    const VoxelGlass& voxels() const { return voxels_; }
+
+private:
+    VoxelGlassMethod(VoxelGlass voxels, const O& options) : voxels_(std::move(voxels)), options_(options) {}
+    VoxelGlass voxels_;
+    O options_;
+};
+
 /// Glass method "multi".
-class MultiGlass {
-public:
-    using Options = MultiGlassOptions;
-    static MultiGlass build(const GlassInput& input, const MultiGlassOptions& options);
-    GlassPath trace(const GlassHit& h) const {
-        return voxels_.trace(h.entry, h.normal, h.medium, h.dir, options_, false);
-    }
-    const VoxelGlass& voxels() const { return voxels_; }
-
-private:
-    MultiGlass(VoxelGlass voxels, const MultiGlassOptions& options)
-        : voxels_(std::move(voxels)), options_(options) {}
-    VoxelGlass voxels_;
-    MultiGlassOptions options_;
-};
-
+using MultiGlass = VoxelGlassMethod<MultiGlassOptions, false>;
 /// Glass method "two-surface".
-class TwoSurfaceGlass {
-public:
-    using Options = TwoSurfaceGlassOptions;
-    static TwoSurfaceGlass build(const GlassInput& input, const TwoSurfaceGlassOptions& options);
-    GlassPath trace(const GlassHit& h) const {
-        return voxels_.trace(h.entry, h.normal, h.medium, h.dir, options_, true);
-    }
-    const VoxelGlass& voxels() const { return voxels_; }
-
-private:
-    TwoSurfaceGlass(VoxelGlass voxels, const TwoSurfaceGlassOptions& options)
-        : voxels_(std::move(voxels)), options_(options) {}
-    VoxelGlass voxels_;
-    TwoSurfaceGlassOptions options_;
-};
+using TwoSurfaceGlass = VoxelGlassMethod<TwoSurfaceGlassOptions, true>;
+extern template class VoxelGlassMethod<MultiGlassOptions, false>; // render/voxel_glass.cpp
+extern template class VoxelGlassMethod<TwoSurfaceGlassOptions, true>;
 
 } // namespace voxfx

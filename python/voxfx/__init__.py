@@ -7,6 +7,7 @@
     grid.save("bunny.binvox")                      # .binvox .vdb .nrrd .ply .obj
     inside = voxfx.contains(mesh, points)          # exact point occupancy, (K,) bool
     report = voxfx.batch("meshes.txt", "out/", resolution=64)   # many meshes, as `voxfx batch`
+    image = voxfx.render("scene.json", shadows="deep", epsilon=0.02)  # (H, W, 3) float32, linear RGB
 
 Errors raise voxfx.Error (a RuntimeError) with the library's message. See also voxfx.dask for
 voxelizing a manifest of meshes on a Dask cluster.
@@ -35,6 +36,7 @@ from ._voxfx import (  # noqa: E402
     Grid,
     Mesh,
     PointClassifier,
+    Scene,
     SurfaceMesh,
     __version__,
     closing,
@@ -46,12 +48,17 @@ from ._voxfx import (  # noqa: E402
     erode,
     extract_surface,
     from_numpy,
+    glass_methods,
     load_mesh,
+    load_scene,
     morphology,
     opening,
     read_grid,
+    render,
+    render_options,
     resample_to_uniform,
     reslice,
+    shadow_kinds,
     voxelize,
 )
 
@@ -110,4 +117,5 @@ __all__ = [
     "compute_density",
     "contains", "cuda_status", "csg", "dilate", "erode", "extract_surface", "from_numpy", "load_mesh", "morphology",
     "opening", "read_grid", "resample_to_uniform", "reslice", "voxelize",
+    "Scene", "glass_methods", "load_scene", "render", "render_options", "shadow_kinds",
 ]

@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <iostream>
+#include <iterator>
 #include <memory>
 
 namespace voxfx::cli {
@@ -64,21 +65,9 @@ std::string usersText(const RenderOptionInfo& info) {
     return "(" + out + ")";
 }
 
-const char* typeName(OptionType t) {
-    switch (t) {
-    case OptionType::Integer:
-        return "INT";
-    case OptionType::Real:
-        return "NUM";
-    case OptionType::Name:
-        return "NAME";
-    case OptionType::Triple:
-        return "X,Y,Z";
-    case OptionType::Flag:
-        break;
-    }
-    return "";
-}
+// How --help shows the value an option takes, by OptionType (a flag takes none).
+constexpr const char* kTypeNames[] = {"", "INT", "NUM", "NAME", "X,Y,Z"};
+static_assert(std::size(kTypeNames) == std::size(kOptionTypeNames));
 
 const char* groupOf(const RenderOptionInfo& info) {
     for (const std::string& u : info.users)
@@ -111,7 +100,7 @@ void RenderFlags::add(CLI::App& app) {
                        given_.emplace_back(info.name, parseFlagValue(info, text));
                    },
                    help)
-                ->type_name(typeName(info.type))
+                ->type_name(kTypeNames[int(info.type)])
                 ->group(groupOf(info));
         }
     }

@@ -7,21 +7,7 @@
 
 namespace voxfx {
 
-const char* toString(OptionType t) {
-    switch (t) {
-    case OptionType::Flag:
-        return "on/off";
-    case OptionType::Integer:
-        return "whole number";
-    case OptionType::Real:
-        return "number";
-    case OptionType::Name:
-        return "name";
-    case OptionType::Triple:
-        return "three numbers";
-    }
-    return "?";
-}
+const char* toString(OptionType t) { return enumName(t, kOptionTypeNames); }
 
 namespace {
 

@@ -8,7 +8,9 @@ namespace voxfx {
 
 const char* toString(Coverage c) { return enumName(c, kCoverageNames); }
 
-Coverage parseCoverage(const std::string& name) { return parseEnum<Coverage>(name, "coverage", kCoverageNames); }
+Coverage parseCoverage(const std::string& name) {
+    return parseEnum<Coverage>(name, "coverage", kCoverageNames);
+}
 
 } // namespace voxfx
 

@@ -36,15 +36,12 @@ ExactGlass::ExactGlass(const MeshView& mesh, std::vector<Vec3f> vertexNormals,
         fail("exact glass: one normal per vertex expected");
     for (const uint32_t m : medium_)
         if (m >= media_.size()) fail("exact glass: medium index ", m, " out of range");
-    mesh_.positions.resize(mesh.vertexCount);
-    for (size_t i = 0; i < mesh.vertexCount; ++i) mesh_.positions[i] = Vec3f(mesh.vertex(i));
-    mesh_.indices.assign(mesh.indices, mesh.indices + 3 * mesh.triangleCount);
-    const Box3d box = computeBounds(mesh);
-    epsilon_ = box.empty() ? 1e-6 : std::max(1e-9, 1e-5 * length(box.extent()));
-    tracer_ = std::make_shared<const TriangleTracer>(mesh_.view());
+    tracer_ = std::make_shared<const TriangleTracer>(mesh);
 }
 
 GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents) const {
+    const Mesh& mesh = tracer_->mesh();
+    const double epsilon = tracer_->epsilon();
     GlassPath p;
     Vec3d o = origin, d = normalize(dir);
     Vec3f thr{1, 1, 1};
@@ -53,7 +50,7 @@ GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents
     int crossings = 0; // every crossing, including ignored ones: bounds the loop
     while (true) {
         const TriangleTracer::Hit h =
-            tracer_->intersect(o, d, epsilon_, std::numeric_limits<double>::infinity());
+            tracer_->intersect(o, d, epsilon, std::numeric_limits<double>::infinity());
         if (!h.hit) {
             p.exitPoint = o;
             p.exitDir = d;
@@ -61,9 +58,8 @@ GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents
             return p;
         }
         const size_t t = h.triangle;
-        const uint32_t ia = mesh_.indices[3 * t], ib = mesh_.indices[3 * t + 1],
-                       ic = mesh_.indices[3 * t + 2];
-        const Vec3d a(mesh_.positions[ia]), b(mesh_.positions[ib]), c(mesh_.positions[ic]);
+        const uint32_t ia = mesh.indices[3 * t], ib = mesh.indices[3 * t + 1], ic = mesh.indices[3 * t + 2];
+        const Vec3d a(mesh.positions[ia]), b(mesh.positions[ib]), c(mesh.positions[ic]);
         const Vec3d ng = normalize(cross(b - a, c - a)); // outward
         Vec3d n = ng;
         if (!normals_.empty()) {

@@ -31,12 +31,7 @@ ExactShadow::ExactShadow(const MeshView& casters, std::vector<Vec3f> triangleTra
             fail("exact shadows: glass index ", g, " outside the table of ", glass_.size());
     for (const Glass& g : glass_)
         if (!(g.ior >= 1 && std::isfinite(g.ior))) fail("exact shadows: glass ior must be >= 1, got ", g.ior);
-    mesh_.positions.resize(casters.vertexCount);
-    for (size_t i = 0; i < casters.vertexCount; ++i) mesh_.positions[i] = Vec3f(casters.vertex(i));
-    mesh_.indices.assign(casters.indices, casters.indices + 3 * casters.triangleCount);
-    const Box3d box = computeBounds(casters);
-    epsilon_ = box.empty() ? 1e-6 : std::max(1e-9, 1e-5 * length(box.extent()));
-    tracer_ = std::make_shared<const TriangleTracer>(mesh_.view());
+    tracer_ = std::make_shared<const TriangleTracer>(casters);
 }
 
 ExactShadow ExactShadow::fromMaterials(const MeshView& casters, std::span<const uint32_t> triangleMaterial,
@@ -65,6 +60,8 @@ ExactShadow ExactShadow::fromMaterials(const MeshView& casters, std::span<const 
 }
 
 Vec3f ExactShadow::transmittance(const Vec3d& p, const Vec3d& dir, double distance) const {
+    const Mesh& mesh = tracer_->mesh();
+    const double epsilon = tracer_->epsilon();
     Vec3f v{1, 1, 1};
     Vec3d o = p;
     double left = distance, travelled = 0;
@@ -79,7 +76,7 @@ Vec3f ExactShadow::transmittance(const Vec3d& p, const Vec3d& dir, double distan
     inside.clear();
     // Each crossing moves the origin to the hit; epsilon steps over the triangle just crossed.
     for (int crossings = 0; crossings < 100000; ++crossings) {
-        const TriangleTracer::Hit h = tracer_->intersect(o, dir, epsilon_, left);
+        const TriangleTracer::Hit h = tracer_->intersect(o, dir, epsilon, left);
         if (!h.hit) break;
         const uint32_t g = triangleGlass_.empty() ? kNotGlass : triangleGlass_[h.triangle];
         const double tHit = travelled + h.t;
@@ -87,9 +84,9 @@ Vec3f ExactShadow::transmittance(const Vec3d& p, const Vec3d& dir, double distan
             v = v * transmittance_[h.triangle];
         } else {
             const Glass& glass = glass_[g];
-            const Vec3d a = Vec3d(mesh_.positions[mesh_.indices[3 * size_t(h.triangle)]]);
-            const Vec3d b = Vec3d(mesh_.positions[mesh_.indices[3 * size_t(h.triangle) + 1]]);
-            const Vec3d c = Vec3d(mesh_.positions[mesh_.indices[3 * size_t(h.triangle) + 2]]);
+            const Vec3d a = Vec3d(mesh.positions[mesh.indices[3 * size_t(h.triangle)]]);
+            const Vec3d b = Vec3d(mesh.positions[mesh.indices[3 * size_t(h.triangle) + 1]]);
+            const Vec3d c = Vec3d(mesh.positions[mesh.indices[3 * size_t(h.triangle) + 2]]);
             const Vec3d n = normalize(cross(b - a, c - a));
             const double cosine = dot(dir, n);
             v = v * float(1 - fresnelDielectric(std::min(1.0, std::abs(cosine)), 1.0, glass.ior));
@@ -149,10 +146,14 @@ Vec3f ExactShadow::visibility(const Vec3d& p, const Vec3d& n) const {
         distance = length(l);
         l = l / std::max(distance, 1e-300);
     }
-    const Vec3d o = p + n * (epsilon_ * 10);
+    const Vec3d o = p + n * (tracer_->epsilon() * 10);
     return transmittance(o, l, distance);
 }
 
-ExactShadow::Stats ExactShadow::stats() const { return {int64_t(mesh_.triangleCount())}; }
+ExactShadow::Stats ExactShadow::stats() const {
+    return {tracer_ ? int64_t(tracer_->mesh().triangleCount()) : 0};
+}
+
+double ExactShadow::epsilon() const { return tracer_ ? tracer_->epsilon() : 1e-6; }
 
 } // namespace voxfx

@@ -84,11 +84,9 @@ std::span<const OptionField<TransmittanceShadowOptions>> TransmittanceShadowOpti
     static const std::vector<OptionField<O>> table = [] {
         std::vector<OptionField<O>> t;
         detail::appendLightGridFields(t);
-        OptionField<O> offset;
-        offset.name = "normalOffset";
-        offset.help = "lookup offset along the surface normal, in column footprints (grids and map)";
-        offset.lo = 0;
-        offset.hi = 1000;
+        OptionField<O> offset = optionField<O>(
+            "normalOffset", "lookup offset along the surface normal, in column footprints (grids and map)",
+            OptionType::Real, 0, 1000);
         offset.store = +[](O& o, const OptionValue& v) {
             o.grid.normalOffset = o.opaque.normalOffset = std::get<double>(v);
         };

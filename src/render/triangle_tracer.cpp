@@ -2,6 +2,7 @@
 // module table, loaded on first use, and TriangleTracer (voxfx/triangle_tracer.hpp).
 #include "voxfx/triangle_tracer.hpp"
 
+#include <algorithm>
 #include <limits>
 #include <string>
 #include <vector>
@@ -33,6 +34,11 @@ struct TriangleTracer::Impl {
 
 TriangleTracer::TriangleTracer(const MeshView& mesh) : impl_(std::make_unique<Impl>()) {
     validateMesh(mesh, "mesh");
+    mesh_.positions.resize(mesh.vertexCount);
+    for (size_t i = 0; i < mesh.vertexCount; ++i) mesh_.positions[i] = Vec3f(mesh.vertex(i));
+    mesh_.indices.assign(mesh.indices, mesh.indices + 3 * mesh.triangleCount);
+    const Box3d box = computeBounds(mesh);
+    epsilon_ = box.empty() ? 1e-6 : std::max(1e-9, 1e-5 * length(box.extent()));
     impl_->module = &detail::embreeModule();
     std::vector<float> positions(mesh.vertexCount * 3);
     for (size_t i = 0; i < mesh.vertexCount; ++i) {

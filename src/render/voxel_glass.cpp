@@ -30,10 +30,6 @@ template <class O> std::vector<OptionField<O>> voxelGlassFields() {
             "sceneBehind", "glass: the light leaving it comes from the opaque scene (off: the environment)")};
 }
 
-VoxelGlass voxelGlassOf(const GlassInput& input, const VoxelGlassOptions& options) {
-    return VoxelGlass(input.mesh, input.triangleMedium, input.media, options);
-}
-
 } // namespace
 
 std::span<const OptionField<MultiGlassOptions>> MultiGlassOptions::fields() {
@@ -47,13 +43,14 @@ std::span<const OptionField<TwoSurfaceGlassOptions>> TwoSurfaceGlassOptions::fie
     return table;
 }
 
-MultiGlass MultiGlass::build(const GlassInput& input, const MultiGlassOptions& options) {
-    return MultiGlass(voxelGlassOf(input, options), options);
+template <class O, bool kTwoSurface>
+VoxelGlassMethod<O, kTwoSurface> VoxelGlassMethod<O, kTwoSurface>::build(const GlassInput& input,
+                                                                         const O& options) {
+    return VoxelGlassMethod(VoxelGlass(input.mesh, input.triangleMedium, input.media, options), options);
 }
 
-TwoSurfaceGlass TwoSurfaceGlass::build(const GlassInput& input, const TwoSurfaceGlassOptions& options) {
-    return TwoSurfaceGlass(voxelGlassOf(input, options), options);
-}
+template class VoxelGlassMethod<MultiGlassOptions, false>;
+template class VoxelGlassMethod<TwoSurfaceGlassOptions, true>;
 
 VoxelGlass::VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMedium,
                        std::vector<GlassMedium> media, const VoxelGlassOptions& options)

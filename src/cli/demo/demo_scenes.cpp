@@ -14,6 +14,7 @@
 
 #include "voxfx/error.hpp"
 #include "voxfx/mesh_io.hpp"
+#include "voxfx/volume_scene.hpp"
 
 namespace voxfx::demo {
 
@@ -240,14 +241,10 @@ Scene makeTreeScene(const TreeOptions& o) {
 }
 
 void appendBox(Mesh& m, const Vec3d& lo, const Vec3d& hi) {
+    const Mesh box = boxMesh({lo, hi});
     const auto base = uint32_t(m.positions.size());
-    for (int k = 0; k < 8; ++k)
-        m.positions.push_back(
-            Vec3f(Vec3d{(k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z}));
-    static const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                         {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    for (const auto& q : quads)
-        for (const uint32_t t : {q[0], q[1], q[2], q[0], q[2], q[3]}) m.indices.push_back(base + t);
+    m.positions.insert(m.positions.end(), box.positions.begin(), box.positions.end());
+    for (const uint32_t i : box.indices) m.indices.push_back(base + i);
 }
 
 Scene makeBunnyScene(const std::string& meshesDir, int leaves, uint64_t seed) {
