@@ -68,14 +68,16 @@ public:
 
 struct BatchOptions {
     FitOptions fit;                    ///< as for voxfx voxelize (default: resolution 256)
-    VoxelizeOptions voxelize;          ///< mode, fill, slicing; its `threads` and `progress` are ignored
-    bool autoFill = true;              ///< parity for closed meshes, flood for open ones (ignores .fill)
+    VoxelizeOptions voxelize;          ///< mode, fill (default Auto), slicing; `threads`, `progress` ignored
     GridWriteOptions write;            ///< vdbFloat, grid name
     int threads = 0;                   ///< worker threads for the whole batch, 0 = all
     bool nested = false;               ///< also spread each voxelization over the workers (else 1 each)
     bool skipExisting = true;          ///< an existing output is not redone (status Skipped)
     BatchProgress* progress = nullptr; ///< not owned
-    BatchOptions() { fit.resolution = 256; }
+    BatchOptions() {
+        fit.resolution = 256;
+        voxelize.fill = Fill::Auto;
+    }
 };
 
 struct BatchSummary {
@@ -92,10 +94,6 @@ struct BatchSummary {
 /// voxfx::Error only for unusable options (e.g. no resolution, voxel size or dims). The summary
 /// lists the jobs in the order given, whatever the order they finished in.
 BatchSummary runBatch(const std::vector<BatchJob>& jobs, const BatchOptions& options);
-
-/// The inside fill `voxfx voxelize --fill auto` uses for this mesh: parity when it is closed,
-/// flood otherwise (for the surface and conservative modes the fill is unused: parity).
-Fill autoFillFor(const MeshView& mesh, VoxelizeMode mode);
 
 /// The batch report as JSON text, the one definition of its shape: {"ok", "skipped", "errors",
 /// "seconds", "ok_per_second" (okPerSecond()), "jobs": [batchResultJson of each result, in order]}.

@@ -54,25 +54,41 @@ inline constexpr EnumName<VoxelizeMode> kVoxelizeModeNames[] = {
     {"solid", VoxelizeMode::Solid},
     {"solid-conservative", VoxelizeMode::SolidConservative},
     {"interior", VoxelizeMode::Interior}};
-enum class Fill : uint8_t { Parity, Flood, Vote, Winding, Gwn };
-inline constexpr EnumName<Fill> kFillNames[] = {{"parity", Fill::Parity},
-                                                {"flood", Fill::Flood},
-                                                {"vote", Fill::Vote},
-                                                {"winding", Fill::Winding},
-                                                {"gwn", Fill::Gwn}};
+/// How the inside is decided (see the file comment); Auto: Parity for a closed mesh, Flood for
+/// any other (VoxelizeReport says which and why).
+enum class Fill : uint8_t { Parity, Flood, Vote, Winding, Gwn, Auto };
+inline constexpr EnumName<Fill> kFillNames[] = {{"auto", Fill::Auto},       {"parity", Fill::Parity},
+                                                {"flood", Fill::Flood},     {"vote", Fill::Vote},
+                                                {"winding", Fill::Winding}, {"gwn", Fill::Gwn}};
 
 const char* toString(VoxelizeMode m);
 const char* toString(Fill f);
 /// Parse a name of kVoxelizeModeNames, kFillNames, kAxisNames, kSlicingNames (any case); throw
 /// voxfx::Error listing the allowed names otherwise.
 VoxelizeMode parseVoxelizeMode(const std::string& name);
+/// True for the modes whose inside a fill decides: Solid, SolidConservative, Interior.
+bool needsFill(VoxelizeMode mode);
 Fill parseFill(const std::string& name);
 Axis parseAxis(const std::string& name);
 Slicing parseSlicing(const std::string& name);
 
+/// What voxelize() decided, for front ends to print (VoxelizeOptions::report).
+struct VoxelizeReport {
+    /// The fill that decided the inside: options.fill, or what Fill::Auto chose (Parity for the
+    /// surface modes, whose fill does not matter).
+    Fill fill = Fill::Parity;
+    /// Fill::Auto with a mode that needs a fill: the mesh's topology, from which it chose.
+    bool topologyAnalyzed = false;
+    MeshTopology topology;
+    /// Why Fill::Auto chose flood, one line without the mesh's name ("not closed (6 boundary, 0
+    /// non-manifold, 0 misoriented edges): filled by flood (...)"); empty when it chose parity.
+    std::string fillNote;
+};
+
 struct VoxelizeOptions {
     VoxelizeMode mode = VoxelizeMode::Solid;
-    /// How the inside is decided for Solid, SolidConservative and Interior.
+    /// How the inside is decided for Solid, SolidConservative and Interior. Auto costs one pass
+    /// over the edges (analyzeTopology, hashing) before the voxelization.
     Fill fill = Fill::Parity;
     /// ED06 local slicing: first records the nearest and farthest fragment of each column, then
     /// spreads the D slices over that range only (orthographic frames only for export).
@@ -89,6 +105,8 @@ struct VoxelizeOptions {
     Device device = Device::Cpu;
     /// Receives why a Cuda or Auto request ran on the CPU; cleared when the GPU ran it. Not owned.
     std::string* deviceNote = nullptr;
+    /// Receives what was decided (the fill Auto chose, and why). Not owned.
+    VoxelizeReport* report = nullptr;
 };
 
 /// How to fit an orthographic frame to a mesh. Cells are cubes unless `dims` is given.
@@ -118,15 +136,5 @@ Frame fitFrame(const Box3d& meshBounds, const FitOptions& options);
 /// Triangles outside the frame are ignored; for parity, geometry in front of the near plane
 /// still counts (depth clamping, GI08 §4). Cost: O(triangles + fragments + cells / 64).
 VoxelGrid voxelize(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options = {});
-
-/// True for the extensions readGrid reads (.binvox .vdb .nrrd, any case).
-bool isGridFile(const std::string& path);
-
-/// For tools that accept "a grid or a mesh": a grid file (isGridFile) is read with readGrid;
-/// any other file is loaded as a mesh, fitted with `fit` and voxelized with `options`. For the
-/// inside modes, Fill::Parity is replaced by Fill::Flood when the mesh is not closed, and `note`,
-/// if given, then receives a one-line explanation (else it is cleared). Throws voxfx::Error.
-VoxelGrid loadOrVoxelize(const std::string& path, const FitOptions& fit, const VoxelizeOptions& options = {},
-                         std::string* note = nullptr);
 
 } // namespace voxfx

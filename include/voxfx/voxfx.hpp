@@ -68,7 +68,8 @@
 #include "voxfx/triangle_tracer.hpp"
 #include "voxfx/voxel_glass.hpp"
 
-// sim: particles.
+// sim: particles, the moving obstacle.
+#include "voxfx/moving_obstacle.hpp"
 #include "voxfx/particles.hpp"
 
 // io: every function that reads or writes a file.
@@ -76,6 +77,7 @@
 #include "voxfx/grid_io.hpp"
 #include "voxfx/image_io.hpp"
 #include "voxfx/mesh_io.hpp"
+#include "voxfx/particles_io.hpp"
 #include "voxfx/scene_io.hpp"
 #include "voxfx/volume_io.hpp"
 

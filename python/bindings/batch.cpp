@@ -71,8 +71,7 @@ void bindBatch(py::module_& m) {
             bo.fit = fitOptions(resolution, voxelSize, dims, bounds, margin, axis);
             bo.voxelize.mode = parseVoxelizeMode(mode);
             bo.voxelize.slicing = parseSlicing(slicing);
-            bo.autoFill = fill == "auto";
-            if (!bo.autoFill) bo.voxelize.fill = parseFill(fill);
+            bo.voxelize.fill = parseFill(fill);
             bo.write.vdbFloat = vdbFloat;
             if (threads < 0) throw py::value_error("threads must be >= 0");
             bo.threads = threads;

@@ -55,11 +55,6 @@ std::vector<BatchJob> jobsFor(const std::vector<std::string>& meshes, const std:
     return jobs;
 }
 
-bool needsInsideFill(VoxelizeMode mode) {
-    return mode == VoxelizeMode::Solid || mode == VoxelizeMode::SolidConservative ||
-           mode == VoxelizeMode::Interior;
-}
-
 // One job, as `voxfx voxelize MESH -o OUTPUT` does it.
 void runBatchJob(const BatchJob& job, const BatchOptions& o, BatchResult& r) {
     const Mesh mesh = loadMesh(job.mesh);
@@ -67,7 +62,6 @@ void runBatchJob(const BatchJob& job, const BatchOptions& o, BatchResult& r) {
     VoxelizeOptions vo = o.voxelize;
     vo.progress = nullptr;
     vo.threads = o.nested ? 0 : 1;
-    if (o.autoFill) vo.fill = autoFillFor(mesh.view(), vo.mode);
     const Frame frame = fitFrame(computeBounds(mesh.view()), o.fit);
     const VoxelGrid grid = voxelize(mesh.view(), frame, vo);
     writeGrid(grid, job.output, o.write);
@@ -116,11 +110,6 @@ std::vector<BatchJob> batchJobs(const std::vector<std::string>& meshPaths, const
     std::vector<std::string> origins;
     for (size_t i = 0; i < meshPaths.size(); ++i) origins.push_back(detail::concat("mesh ", i + 1));
     return jobsFor(meshPaths, origins, outDir, format);
-}
-
-Fill autoFillFor(const MeshView& mesh, VoxelizeMode mode) {
-    if (!needsInsideFill(mode)) return Fill::Parity;
-    return analyzeTopology(mesh).closed() ? Fill::Parity : Fill::Flood;
 }
 
 BatchSummary runBatch(const std::vector<BatchJob>& jobs, const BatchOptions& options) {
