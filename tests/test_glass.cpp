@@ -464,7 +464,7 @@ TEST(GlassTest, CommandLineRendersGlassAndComparesTheVoxelMethodsWithTheExactTra
         test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + dir.file("a.png") +
                                 " --width 64 --height 48 --glass multi --glass-grid 32 --shadows exact");
     ASSERT_EQ(r.exitCode, 0) << r.err;
-    EXPECT_NE(r.out.find("glass multi (glassGrid 32"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("glass multi (glass-grid 32"), std::string::npos) << r.out;
     const Image img = readPng(dir.file("a.png"));
     EXPECT_EQ(img.width, 64);
     const auto e =

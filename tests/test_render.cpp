@@ -472,7 +472,7 @@ TEST(RenderTest, RenderCommandWritesAnImageAndPrintsPassTimings) {
         test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + out + " --width 96 --height 54");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_TRUE(std::filesystem::exists(out));
-    EXPECT_NE(r.out.find("shadows transmittance (gridResolution 64"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("shadows transmittance (grid-resolution 64"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("shadows: 3 light grids (3 channels)"), std::string::npos) << r.out; // the counters
     for (const char* pass : {"G-buffer", "shadows", "shading", "resolve"})
         EXPECT_NE(r.out.find(std::string(" ") + pass + " "), std::string::npos) << pass << "\n" << r.out;

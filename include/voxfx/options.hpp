@@ -100,12 +100,13 @@ concept NamedOptions = requires {
     { O::fields() } -> std::convertible_to<std::span<const OptionField<O>>>;
 };
 
-/// "name value, name value, ..." of every field of `o` (for summaries).
-template <class O> std::string optionsText(const O& o) {
+/// "name value, name value, ..." of every field of `o` (for summaries), the names as `spell` spells
+/// them (kebabCase, snakeCase; null: lowerCamelCase).
+template <class O> std::string optionsText(const O& o, std::string (*spell)(std::string_view) = nullptr) {
     std::string out;
     for (const OptionField<O>& f : O::fields()) {
         if (!out.empty()) out += ", ";
-        out += std::string(f.name) + " " + formatOption(f.get(o));
+        out += (spell ? spell(f.name) : std::string(f.name)) + " " + formatOption(f.get(o));
     }
     return out;
 }

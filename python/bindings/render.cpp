@@ -79,10 +79,10 @@ py::dict reportDict(const RenderOptions& o, const RenderResult& r, const Camera&
     py::dict d;
     d["camera"] = camera.name;
     d["shadows"] = std::string(shadowName(o.shadow));
-    d["shadow_options"] = std::visit([](const auto& t) { return optionsText(t); }, o.shadow);
+    d["shadow_options"] = std::visit([](const auto& t) { return optionsText(t, snakeCase); }, o.shadow);
     d["shadow_stats"] = summary(r.shadowStats);
     d["glass"] = std::string(glassName(o.glass));
-    d["glass_options"] = std::visit([](const auto& g) { return optionsText(g); }, o.glass);
+    d["glass_options"] = std::visit([](const auto& g) { return optionsText(g, snakeCase); }, o.glass);
     d["glass_pixels"] = r.glass.pixels;
     d["covered_pixels"] = r.coveredPixels;
     d["volume_samples"] = r.volumeSamples;

@@ -75,12 +75,11 @@ def test_an_unshadowed_ground_has_the_closed_form_radiance(tmp_path):
 def test_keywords_reach_the_library_as_the_command_line_flags_do(tmp_path, cli, shadows, options, flags):
     scene = write_scene(tmp_path)
     img, report = voxfx.render(scene, shadows=shadows, width=48, height=36, report=True, **options)
-    # Every keyword is in the options the technique ran with ("fixedNodes 8" for fixed_nodes=8).
+    # Every keyword is in the options the technique ran with ("fixed_nodes 8" for fixed_nodes=8).
     ran = dict(item.split(" ", 1) for item in report["shadow_options"].split(", "))
     for name, value in options.items():
-        camel = name.split("_")[0] + "".join(w.capitalize() for w in name.split("_")[1:])
         want = {True: "on", False: "off"}.get(value, value) if isinstance(value, bool) else value
-        assert ran[camel] == str(want) if not isinstance(want, float) else float(ran[camel]) == want, (name, ran)
+        assert ran[name] == str(want) if not isinstance(want, float) else float(ran[name]) == want, (name, ran)
     out = tmp_path / "cli.pfm"
     subprocess.run([cli, "render", str(scene), "-o", str(out), "--width", "48", "--height", "36", "--shadows",
                     shadows, "-q"] + flags.split(), check=True)

@@ -39,7 +39,8 @@ void printSummary(const RenderArgs& a, const Scene& scene, const Camera& camera,
               << scene.lights.size() << " light(s), camera '" << camera.name << "' -> " << o.width << " x "
               << o.height;
     if (o.supersample > 1) std::cout << " (" << o.supersample << "x" << o.supersample << " supersampled)";
-    const std::string settings = std::visit([](const auto& s) { return optionsText(s); }, o.shadow);
+    const std::string settings =
+        std::visit([](const auto& s) { return optionsText(s, kebabCase); }, o.shadow);
     std::cout << ", shadows " << shadowName(o.shadow) << (settings.empty() ? "" : " (" + settings + ")")
               << "\n";
     if (const std::string counters = summary(r.shadowStats); !counters.empty())
@@ -48,7 +49,8 @@ void printSummary(const RenderArgs& a, const Scene& scene, const Camera& camera,
     for (const PassTime& p : r.timings.passes) std::cout << " " << p.name << " " << fmtMs(p.ms) << ",";
     std::cout << " total " << fmtMs(r.timings.totalMs) << " -> " << a.output << "\n";
     if (!std::holds_alternative<NoGlassOptions>(o.glass)) {
-        const std::string glass = std::visit([](const auto& g) { return optionsText(g); }, o.glass);
+        const std::string glass =
+            std::visit([](const auto& g) { return optionsText(g, kebabCase); }, o.glass);
         std::cout << "glass " << r.glass.method << " (" << glass << "): " << withCommas(r.glass.pixels)
                   << " pixels, prepare " << fmtMs(r.glass.prepareMs) << ", trace " << fmtMs(r.glass.traceMs)
                   << "\n";
