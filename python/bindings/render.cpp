@@ -44,7 +44,8 @@ std::string usersOf(const std::string& name) {
 }
 
 /// The options of a render: the scene's own (renderOptionsFor), then the keywords. A keyword the
-/// chosen shadow technique and glass method do not have is an error naming who has it.
+/// chosen shadow technique and glass method do not have is an error naming who has it (raised as
+/// voxfx.ArgumentError by the caller).
 RenderOptions renderOptionsOf(const Scene& scene, const std::string& shadows, const std::string& glass,
                               const py::kwargs& options) {
     RenderOptions o = renderOptionsFor(scene, shadows, glass);
@@ -140,7 +141,7 @@ void bindRender(py::module_& m) {
         [](const py::object& sceneOrPath, const std::string& shadows, const std::string& glass, int camera,
            const py::object& environment, int threads, bool report, const py::kwargs& options) -> py::object {
             const ScenePtr scene = sceneArgument(sceneOrPath);
-            RenderOptions o = renderOptionsOf(*scene, shadows, glass, options);
+            RenderOptions o = asArgument([&] { return renderOptionsOf(*scene, shadows, glass, options); });
             o.threads = threads;
             const std::string env = environment.is_none() ? std::string() : pathString(environment);
             RenderResult r;

@@ -110,11 +110,11 @@ def test_every_technique_option_is_a_keyword_and_bad_ones_are_refused(tmp_path):
     assert kinds == ["none", "map", "transmittance", "absorption", "volumes", "exact", "deep"]
     assert [m for m, _ in voxfx.glass_methods()] == ["none", "exact", "multi", "two-surface", "frosted"]
     scene = write_scene(tmp_path)
-    with pytest.raises(voxfx.Error, match="unknown render option 'shininess'"):
+    with pytest.raises(voxfx.ArgumentError, match="unknown render option 'shininess'"):
         voxfx.render(scene, shininess=3)
-    with pytest.raises(voxfx.Error, match=r"grid_resolution: expected a whole number in \[1, 16384\]"):
+    with pytest.raises(voxfx.ArgumentError, match=r"grid_resolution: expected a whole number in \[1, 16384\]"):
         voxfx.render(scene, shadows="transmittance", grid_resolution=0)
-    with pytest.raises(voxfx.Error, match="is not an option of shadows map"):
+    with pytest.raises(voxfx.ArgumentError, match="is not an option of shadows map"):
         voxfx.render(scene, shadows="map", epsilon=0.1)
-    with pytest.raises(voxfx.Error, match="unknown shadow kind 'soft'"):
+    with pytest.raises(voxfx.ArgumentError, match="unknown shadow kind 'soft'"):
         voxfx.render(scene, shadows="soft")
