@@ -88,11 +88,16 @@ void RenderFlags::add(CLI::App& app) {
             info.help + " " + usersText(info) + (info.choices.empty() ? std::string() : ": " + info.choices);
         const std::string name = info.name;
         if (info.type == OptionType::Flag) {
-            std::string negated = "!--no-" + kebabCase(info.name);
+            // --no-NAME is an option of its own, out of the help (one name with "!" would print
+            // as "--no-NAME{false}"); the help line names it.
+            const std::string negated = "--no-" + kebabCase(info.name);
             app.add_flag_function(
-                   names + "," + negated,
-                   [this, name](int64_t count) { given_.emplace_back(name, OptionValue(count > 0)); }, help)
+                   names, [this, name](int64_t) { given_.emplace_back(name, OptionValue(true)); },
+                   help + " (off: " + negated + ")")
                 ->group(groupOf(info));
+            app.add_flag_function(
+                   negated, [this, name](int64_t) { given_.emplace_back(name, OptionValue(false)); }, help)
+                ->group("");
         } else {
             app.add_option_function<std::string>(
                    names,
