@@ -146,12 +146,14 @@ void bindRender(py::module_& m) {
             const std::string env = environment.is_none() ? std::string() : pathString(environment);
             RenderResult r;
             Camera cam;
-            {
-                py::gil_scoped_release release;
+            // Without the GIL; Ctrl-C cancels between tiles of a pass (KeyboardInterrupt is raised).
+            interruptible([&](Cancel& cancel) {
                 o.environment = loadSceneEnvironment(*scene, o, env);
                 cam = sceneCamera(*scene, camera, double(o.width) / double(o.height));
+                o.progress = &cancel;
                 r = render(*scene, cam, o);
-            }
+                o.progress = nullptr;
+            });
             py::array_t<float> image = imageArray(r.image);
             if (!report) return image;
             return py::make_tuple(image, reportDict(o, r, cam));

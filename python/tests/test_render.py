@@ -4,7 +4,11 @@ Oracles: a closed form (a ground quad under a sun, no shadows: ambient + albedo/
 command line's PFM output of the same options (the keywords must reach the library as the flags
 do: same pixels, bit for bit), and the options catalog (every technique's options are keywords).
 """
+import os
+import signal
 import subprocess
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -118,3 +122,27 @@ def test_every_technique_option_is_a_keyword_and_bad_ones_are_refused(tmp_path):
         voxfx.render(scene, shadows="map", epsilon=0.1)
     with pytest.raises(voxfx.ArgumentError, match="unknown shadow kind 'soft'"):
         voxfx.render(scene, shadows="soft")
+
+
+class Interrupted(Exception):
+    """What SIGINT raises here (not KeyboardInterrupt, which would stop pytest if it came late)."""
+
+
+def test_ctrl_c_stops_a_render_between_tiles(tmp_path):
+    scene = voxfx.load_scene(write_scene(tmp_path))
+    start = time.perf_counter()
+    voxfx.render(scene, shadows="exact", width=320, height=180)
+    small = time.perf_counter() - start  # 1/256 of the samples below
+    old = signal.signal(signal.SIGINT, lambda signum, frame: (_ for _ in ()).throw(Interrupted()))
+    timer = threading.Timer(0.2, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    start = time.perf_counter()
+    try:
+        with pytest.raises(Interrupted):
+            voxfx.render(scene, shadows="exact", width=1280, height=720, supersample=4)
+    finally:
+        timer.cancel()
+        timer.join()
+        signal.signal(signal.SIGINT, old)
+    # Uninterrupted, that frame takes about 256 x small (seconds); it stops at the next tile instead.
+    assert time.perf_counter() - start < 0.2 + 32 * small + 0.5
