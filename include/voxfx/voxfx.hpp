@@ -79,8 +79,8 @@
 #include "voxfx/image_io.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/particles_io.hpp"
-#include "voxfx/sparse_grid.hpp"
 #include "voxfx/scene_io.hpp"
+#include "voxfx/sparse_grid.hpp"
 #include "voxfx/volume_io.hpp"
 
 // batch: many meshes in one process.
