@@ -11,7 +11,7 @@ resolutions="${2:-128 256 512 1024}"
 out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
 data="$root/data/meshes"
-dense="$root/data/dense"
+dense="${VOXFX_DENSE_DIR:-$root/data/dense}"
 "$root/bench/dense-meshes.sh"
 echo "| mesh | file MB | mode | N | load (ms) | voxelize (ms) | write (ms) | whole command (ms) | peak RSS (MiB) |"
 echo "|---|---|---|---|---|---|---|---|---|"

@@ -4,10 +4,11 @@
 #   bunny1m.off   bunny00 subdivided twice (1,206,528 triangles, closed)
 #   dragon1m.off  the Chinese dragon subdivided three times (1,279,616 triangles, open)
 # Used by bench_voxelize and bench/cli_bench.sh; each file is made once (about 20 s each).
+# $VOXFX_DENSE_DIR, when set, is the folder instead (as bench_meshes.hpp reads it).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 data="$root/data/meshes"
-dense="$root/data/dense"
+dense="${VOXFX_DENSE_DIR:-$root/data/dense}"
 [ -s "$data/bunny00.off" ] || { echo "no CGAL data: run scripts/fetch-data.sh first" >&2; exit 1; }
 mkdir -p "$dense"
 make_mesh() { # name rounds source: written to a temporary file, renamed when complete

@@ -1,5 +1,6 @@
 // Tests of src/cli/: the voxfx command end to end. Bad input must exit non-zero with a one-line
 // message that says what is wrong, and leave no output file (and an existing one untouched).
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -46,6 +47,37 @@ TEST(CliTest, VoxelizesACubeAndPrintsASummary) {
     EXPECT_EQ(f.scale, 1.0);
     EXPECT_NE(r.out.find("512 filled voxels"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("8 x 8 x 8 grid"), std::string::npos) << r.out;
+}
+
+TEST(CliTest, VdbOutputIsVoxelizedInTilesWithinTheMemoryBudget) {
+    // A cube at 2048^3: 1 GiB as a dense grid, a few tiles as a sparse one.
+    test::TempDir dir;
+    const std::string mesh = test::writeFile(dir.file("cube.off"), kCubeOff);
+    const std::string out = dir.file("cube.vdb");
+    const CliRun r = runCli(dir, "voxelize " + mesh + " -o " + out + " -r 2048 --memory 256M");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("8,589,934,592 filled voxels"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("(tiled)"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("(vdb, sparse)"), std::string::npos) << r.out;
+    EXPECT_LT(std::filesystem::file_size(out), 100000u);
+    // The whole grid does not fit the budget: --dense and a fill that needs the whole grid stop
+    // with one line saying so.
+    std::filesystem::remove(out);
+    expectCleanFailure(dir, runCli(dir, "voxelize " + mesh + " -o " + out + " -r 2048 --memory 256M --dense"),
+                       "needs 1.00 GiB", out);
+    expectCleanFailure(dir,
+                       runCli(dir, "voxelize " + mesh + " -o " + out + " -r 2048 --memory 256M --fill flood"),
+                       "fill 'flood' needs the whole grid", out);
+    expectCleanFailure(dir, runCli(dir, "voxelize " + mesh + " -o " + out + " -r 8 --memory lots"),
+                       "--memory must be bytes", out);
+    // A budget the tiles' triangle lists do not fit: one line before anything large is allocated.
+    const CliRun tiny = runCli(dir, "voxelize " + mesh + " -o " + out + " -r 16384 --memory 64K");
+    expectCleanFailure(dir, tiny, "but the memory budget is", out);
+    EXPECT_EQ(std::count(tiny.err.begin(), tiny.err.end(), '\n'), 1) << tiny.err;
+    const CliRun help = runCli(dir, "voxelize --help");
+    EXPECT_NE(help.out.find("flood and vote need the"), std::string::npos) << help.out;
+    EXPECT_NE(help.out.find("the default is the memory available"), std::string::npos) << help.out;
+    EXPECT_NE(help.out.find("A size that cannot fit stops before"), std::string::npos) << help.out;
 }
 
 TEST(CliTest, HelpExplainsWhereVoxelCentresLie) {

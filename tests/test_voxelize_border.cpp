@@ -437,5 +437,262 @@ TEST(VoxelizeBorderTest, GearTipsOnTheSidesOfTheResolutionFitAt200AreConservativ
     }
 }
 
+// --- Sides at coordinates no float holds (#23) -------------------------------------------------
+// A mesh file and a --bounds box written in decimal: vertices that the file puts on the box's
+// side share the side's decimal value, but mesh vertices are floats and the box is doubles, so
+// the vertex can lie up to half a float step outside the box; and the far side maps to
+// (hi - lo) * (n / (hi - lo)), which can round past n. A point on the grid's side is on it:
+// the oracle is CGAL on the coordinates as written (doubles), where those vertices lie on the
+// sides exactly. Every other coordinate is a float, so voxfx and the oracle see the same mesh
+// except on the sides.
+
+// A mesh with the coordinates as the file states them, and as voxfx holds them (floats).
+struct WrittenMesh {
+    std::vector<Vec3d> points;
+    std::vector<uint32_t> indices;
+
+    Mesh asFloat() const {
+        Mesh m;
+        for (const Vec3d& p : points) m.positions.push_back(Vec3f(p));
+        m.indices = indices;
+        return m;
+    }
+    std::array<Vec3d, 3> triangle(std::size_t t) const {
+        return {points[indices[3 * t]], points[indices[3 * t + 1]], points[indices[3 * t + 2]]};
+    }
+    // The tetrahedron p0..p3 with outward counter-clockwise faces; returns the index of face 012.
+    std::size_t addTetrahedron(std::array<Vec3d, 4> p) {
+        if (dot(cross(p[1] - p[0], p[2] - p[0]), p[3] - p[0]) > 0) std::swap(p[1], p[2]);
+        const auto base = uint32_t(points.size());
+        points.insert(points.end(), p.begin(), p.end());
+        const std::size_t first = indices.size() / 3;
+        const uint32_t faces[4][3] = {{0, 1, 2}, {0, 3, 1}, {1, 3, 2}, {0, 2, 3}};
+        for (const auto& f : faces)
+            for (uint32_t v : f) indices.push_back(base + v);
+        return first;
+    }
+};
+
+// Decimal boxes that no float holds: the issue's (its prism's bounds) and a flatter one.
+const Box3d kDecimalBox{{-20.8600788, -20.8600788, -16.8600788}, {20.8600788, 20.8600788, 24.8600788}};
+const Box3d kFlatDecimalBox{{-3.14159265, 0.1, -7.77777777}, {2.71828183, 1.3, 9.99999999}};
+
+// A float near `lo + f * (hi - lo)`: what voxfx and the oracle both hold exactly.
+double floatAt(double lo, double hi, double f) { return double(float(lo + f * (hi - lo))); }
+
+// Six tetrahedra, each with a face on one side of `box` (the side's coordinate as written, the
+// face's other coordinates floats at uneven fractions of the box) and its apex inside.
+// `onSide[k]` receives the index of the triangle lying on side k = 2 * axis + upper.
+WrittenMesh facesOnEverySide(const Box3d& box, std::array<std::size_t, 6>& onSide) {
+    WrittenMesh m;
+    const double at[6][2] = {{0.21, 0.43}, {0.57, 0.19}, {0.33, 0.61},
+                             {0.12, 0.27}, {0.47, 0.52}, {0.64, 0.08}};
+    for (int axis = 0; axis < 3; ++axis)
+        for (int upper = 0; upper < 2; ++upper) {
+            const int k = 2 * axis + upper, a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+            auto point = [&](double u, double v, double depth) {
+                Vec3d q;
+                q[a1] = floatAt(box.lo[a1], box.hi[a1], at[k][0] + u);
+                q[a2] = floatAt(box.lo[a2], box.hi[a2], at[k][1] + v);
+                q[axis] = depth == 0 ? (upper ? box.hi[axis] : box.lo[axis])
+                                     : floatAt(box.lo[axis], box.hi[axis], upper ? 1 - depth : depth);
+                return q;
+            };
+            onSide[size_t(k)] = m.addTetrahedron(
+                {point(0, 0, 0), point(0.29, 0.03, 0), point(0.06, 0.31, 0), point(0.1, 0.11, 0.23)});
+        }
+    return m;
+}
+
+// The issue's prism: a triangle in the plane z = 0 extruded to z = 8, its face y = -20.8600788
+// on the grid's lower y side (parallel to the slicing axis z).
+WrittenMesh issuePrism() {
+    WrittenMesh m;
+    m.points = {{0.377839416, -20.8600788, 0},   {-0.377839416, -20.8600788, 0},
+                {-0.0358124524, -5.99989319, 0}, {0.377839416, -20.8600788, 8},
+                {-0.377839416, -20.8600788, 8},  {-0.0358124524, -5.99989319, 8}};
+    m.indices = {0, 2, 1, 3, 4, 5, 0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4, 2, 0, 3, 2, 3, 5};
+    return m;
+}
+
+// Cells whose closed box meets a triangle as written (CGAL's exact triangle/box test), and those
+// that meet one only once grown by kLeaveOutCells of a cell (left out of comparisons).
+test::ConservativeOracle writtenConservative(const WrittenMesh& mesh, const CellGeometry& g) {
+    test::ConservativeOracle o{WorldGrid(g.dims), WorldGrid(g.dims), 0};
+    for (std::size_t t = 0; t < mesh.indices.size() / 3; ++t) {
+        const std::array<Vec3d, 3> tri = mesh.triangle(t);
+        int64_t lo[3], hi[3];
+        for (int a = 0; a < 3; ++a) {
+            const double tlo = std::min({tri[0][a], tri[1][a], tri[2][a]}),
+                         thi = std::max({tri[0][a], tri[1][a], tri[2][a]});
+            lo[a] = std::max<int64_t>(0, int64_t(std::floor((tlo - g.lo[a]) / g.cell[a])) - 1);
+            hi[a] = std::min<int64_t>(g.dims[a] - 1, int64_t(std::floor((thi - g.lo[a]) / g.cell[a])) + 1);
+        }
+        for (int64_t k = lo[2]; k <= hi[2]; ++k)
+            for (int64_t j = lo[1]; j <= hi[1]; ++j)
+                for (int64_t i = lo[0]; i <= hi[0]; ++i) {
+                    if (o.cells.at(i, j, k)) continue;
+                    const int64_t idx[3] = {i, j, k};
+                    Box3d cell, grown;
+                    for (int a = 0; a < 3; ++a) {
+                        cell.lo[a] = g.lower(a, idx[a]);
+                        cell.hi[a] = g.upper(a, idx[a]);
+                        grown.lo[a] = cell.lo[a] - kLeaveOutCells * g.cell[a];
+                        grown.hi[a] = cell.hi[a] + kLeaveOutCells * g.cell[a];
+                    }
+                    if (test::oracleTriangleMeetsBox(tri, cell)) {
+                        o.cells.at(i, j, k) = 1;
+                        o.near.at(i, j, k) = 0;
+                    } else if (test::oracleTriangleMeetsBox(tri, grown)) {
+                        o.near.at(i, j, k) = 1;
+                    }
+                }
+    }
+    o.nearCount = o.near.count();
+    return o;
+}
+
+// Centre sampling of a face on a depth side (the side across the slicing axis): every column
+// whose centre lies inside the face's projection, a millionth of a cell or more from its edges
+// (exact orientation tests on the coordinates as written), has the face in its first (lower
+// side) or last (upper side) slice. Returns how many such columns there were.
+int64_t expectDepthSideFaceSampled(const VoxelGrid& g, const std::array<Vec3d, 3>& tri, bool upper) {
+    const Frame& f = g.frame;
+    const int ax = columnXAxis(f.axis()), ay = columnYAxis(f.axis());
+    const Vec3d cell = f.cellSize();
+    const int turn =
+        test::oracleOrient2d(tri[0][ax], tri[0][ay], tri[1][ax], tri[1][ay], tri[2][ax], tri[2][ay]);
+    int64_t columns = 0;
+    for (int64_t y = 0; y < f.height(); ++y)
+        for (int64_t x = 0; x < f.width(); ++x) {
+            const double cx = f.box().lo[ax] + (double(x) + 0.5) * cell[ax];
+            const double cy = f.box().lo[ay] + (double(y) + 0.5) * cell[ay];
+            bool inside = turn != 0;
+            for (int e = 0; e < 3 && inside; ++e) {
+                const Vec3d& a = tri[size_t(e)];
+                const Vec3d& b = tri[size_t((e + 1) % 3)];
+                inside = test::oracleOrient2d(a[ax], a[ay], b[ax], b[ay], cx, cy) == turn;
+                // Distance of the centre from the edge's line, in cells (of the smaller side).
+                const double dx = b[ax] - a[ax], dy = b[ay] - a[ay];
+                const double dist = std::abs(dx * (cy - a[ay]) - dy * (cx - a[ax])) / std::hypot(dx, dy);
+                inside = inside && dist > 1e-6 * std::min(cell[ax], cell[ay]);
+            }
+            if (!inside) continue;
+            ++columns;
+            const int64_t s = upper ? f.depth() - 1 : 0;
+            EXPECT_TRUE(g.bits.get(x, y, s)) << "column (" << x << ", " << y << ") lost the face on the "
+                                             << (upper ? "far" : "near") << " side";
+        }
+    return columns;
+}
+
+// Every mode and both raster paths of `written` (as floats) in `frame` against CGAL on the
+// coordinates as written; `depthFaces` lists (triangle, upper) of faces on the sides across axis
+// `axis`, for the surface mode's centre samples.
+void expectWrittenMeshMatchesCgal(const WrittenMesh& written, const Frame& frame,
+                                  const std::vector<std::pair<std::size_t, bool>>& depthFaces) {
+    const Mesh mesh = written.asFloat();
+    ASSERT_TRUE(analyzeTopology(mesh.view()).closed());
+    for (RasterPath path : kBothPaths) {
+        SCOPED_TRACE(path == RasterPath::Binned ? "binned" : "direct");
+        const VoxelGrid conservative = run(mesh, frame, VoxelizeMode::Conservative, path, Slicing::Uniform);
+        const CellGeometry geometry = CellGeometry::of(conservative);
+        const test::ConservativeOracle c = writtenConservative(written, geometry);
+        EXPECT_TRUE(same(toWorldGrid(conservative), c.cells, &c.near)) << "conservative";
+        // Centres: the floats and the coordinates as written differ by less than a float step
+        // (a ten-thousandth of a cell here), so centres farther than that from the surface are
+        // classified alike; nearer ones are left out.
+        test::SolidOracle solid = test::oracleSolid(mesh.view(), geometry);
+        test::markNearlyDegenerateCentres(mesh.view(), frame, 1e-4, solid.leftOut, true);
+        const VoxelGrid inside = run(mesh, frame, VoxelizeMode::Solid, path, Slicing::Uniform);
+        EXPECT_TRUE(same(toWorldGrid(inside), solid.inside, &solid.leftOut)) << "solid";
+        const WorldGrid leftOut = unite(c.near, solid.leftOut);
+        EXPECT_TRUE(
+            same(toWorldGrid(run(mesh, frame, VoxelizeMode::SolidConservative, path, Slicing::Uniform)),
+                 unite(solid.inside, c.cells), &leftOut))
+            << "solid-conservative";
+        EXPECT_TRUE(same(toWorldGrid(run(mesh, frame, VoxelizeMode::Interior, path, Slicing::Uniform)),
+                         minus(solid.inside, c.cells), &leftOut))
+            << "interior";
+        const VoxelGrid surface = run(mesh, frame, VoxelizeMode::Surface, path, Slicing::Uniform);
+        EXPECT_TRUE(same(unite(toWorldGrid(surface), c.cells), c.cells, &c.near))
+            << "surface outside conservative";
+        int64_t sampled = 0;
+        for (const auto& [t, upper] : depthFaces)
+            sampled += expectDepthSideFaceSampled(surface, written.triangle(t), upper);
+        // The faces span about a third of the box: seven columns across catch centres in them.
+        if (!depthFaces.empty() && frame.width() >= 7 && frame.height() >= 7) {
+            EXPECT_GT(sampled, 0) << "surface";
+        }
+    }
+}
+
+TEST(VoxelizeBorderTest, TheIssuesPrismOnADecimalSideMatchesCgalOnItsWrittenCoordinates) {
+    // --bounds -20.8600788 ... --dims 200 200 200 --mode conservative: CGAL on the file's
+    // coordinates finds the face on the lower y side in columns x = 99, 100 of row 0.
+    const WrittenMesh prism = issuePrism();
+    FitOptions fit;
+    fit.dims = {200, 200, 200};
+    fit.bounds = kDecimalBox;
+    const Frame frame = fitFrame(computeBounds(prism.asFloat().view()), fit);
+    for (RasterPath path : kBothPaths) {
+        const VoxelGrid g = run(prism.asFloat(), frame, VoxelizeMode::Conservative, path, Slicing::Uniform);
+        const test::ConservativeOracle c = writtenConservative(prism, CellGeometry::of(g));
+        EXPECT_TRUE(same(toWorldGrid(g), c.cells, &c.near));
+        for (int64_t k = 81; k <= 118; ++k)
+            EXPECT_TRUE(g.atWorldIndex(99, 0, k) && g.atWorldIndex(100, 0, k)) << k;
+    }
+    // Every mode on a smaller grid of the same box (the centres' oracle costs per cell).
+    fit.dims = {40, 40, 40};
+    expectWrittenMeshMatchesCgal(prism, fitFrame(computeBounds(prism.asFloat().view()), fit), {});
+}
+
+// Faces on all six sides of decimal boxes, sliced along every axis (so each side is once across
+// the slicing axis and twice along it), at several grid sizes.
+void expectFacesOnDecimalSidesMatch(const std::vector<Vec3i>& sizes) {
+    for (const Box3d& box : {kDecimalBox, kFlatDecimalBox}) {
+        std::array<std::size_t, 6> onSide{};
+        const WrittenMesh mesh = facesOnEverySide(box, onSide);
+        for (Axis axis : {Axis::X, Axis::Y, Axis::Z})
+            for (const Vec3i& n : sizes) {
+                SCOPED_TRACE(::testing::Message() << "box (" << box.lo.x << ", ...), " << n.x << " x " << n.y
+                                                  << " x " << n.z << " along " << toString(axis));
+                const int a = int(axis);
+                const Frame frame =
+                    Frame::orthographic(box, axis, n[columnXAxis(axis)], n[columnYAxis(axis)], n[a]);
+                expectWrittenMeshMatchesCgal(
+                    mesh, frame, {{onSide[size_t(2 * a)], false}, {onSide[size_t(2 * a + 1)], true}});
+            }
+    }
+}
+
+TEST(VoxelizeBorderTest, FacesOnEverySideOfADecimalBoxMatchCgalOnTheirWrittenCoordinates) {
+    expectFacesOnDecimalSidesMatch({{7, 9, 11}, {31, 26, 43}});
+}
+
+TEST(VoxelizeBorderTest, FacesOnEverySideOfADecimalBoxMatchCgalAtManyGridSizesSlow) {
+    expectFacesOnDecimalSidesMatch({{1, 2, 3}, {16, 13, 11}, {61, 47, 53}, {100, 100, 100}, {127, 64, 200}});
+}
+
+TEST(VoxelizeBorderTest, FarSidesOfResolutionFitsKeepTheirFacesInEveryMode) {
+    // The resolution fit makes the mesh's (float) bounds the box along the longest axis, whose far
+    // side maps to N only up to rounding; the fit's other axes are centred. Sizes where
+    // (hi - lo) * (N / (hi - lo)) rounds past N and where it does not.
+    std::array<std::size_t, 6> onSide{};
+    const WrittenMesh mesh = facesOnEverySide(kFlatDecimalBox, onSide);
+    const Mesh floats = mesh.asFloat();
+    const Box3d bounds = computeBounds(floats.view());
+    int past = 0;
+    for (int64_t n : {23, 37, 64, 97, 150}) {
+        const double ext = bounds.extent().z, scale = double(n) / ext;
+        past += ext * scale > double(n);
+        SCOPED_TRACE(::testing::Message() << "resolution " << n);
+        WrittenMesh asFitted = mesh; // the fit's box is the float bounds: the floats are as written
+        for (Vec3d& p : asFitted.points) p = Vec3d(Vec3f(p));
+        expectWrittenMeshMatchesCgal(asFitted, resolutionFit(floats, n, Axis::Z), {{onSide[5], true}});
+    }
+    EXPECT_GT(past, 0) << "no size rounds the far side past N: the test would not see the bug";
+}
+
 } // namespace
 } // namespace voxfx

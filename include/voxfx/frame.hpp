@@ -9,6 +9,8 @@
 //     and its centre is s + 0.5, so cell centres sit at half-integer grid coordinates;
 //   - perspective frames: depth is the world distance along the view direction (not z-buffer
 //     depth), so that uniform slicing is uniform in real distance (ED06 §2).
+// Mesh vertices (floats) go through Projection::gridFromVertex, which puts a vertex on a side of
+// an axis-aligned orthographic box exactly on the grid's side (0 or W, H, D).
 // Slicing maps a column's depth to a slice coordinate: slice = (depth - near_c) * scale_c, with
 // one (near, scale) for the whole frame (uniform) or one per column (local, ED06 fig. 2).
 //
@@ -81,6 +83,10 @@ struct Projection {
     Vec3d eye, right{1, 0, 0}, up{0, 1, 0}, forward{0, 0, 1};
     double tanX = 0, tanY = 0; ///< tangents of the half field of view across and up
     double halfW = 0, halfH = 0;
+    /// Axis-aligned orthographic frames: the box's sides per world axis rounded to float (the
+    /// precision of mesh vertices), and the grid's size along (axisX, axisY, axisS) = (W, H, D).
+    Vec3f sideLo, sideHi;
+    Vec3d size;
 
     VOXFX_HOSTDEV Vec3d cameraFromWorld(const Vec3d& p) const {
         const Vec3d q = p - eye;
@@ -98,6 +104,27 @@ struct Projection {
         }
         const Vec3d c = cameraFromWorld(p);
         return {imageX(c.x, c.z), imageY(c.y, c.z), c.z};
+    }
+    /// gridFromWorld for a mesh vertex of an axis-aligned orthographic frame: a coordinate that
+    /// equals a side of the box at the vertices' precision (float(p) == float(side)) lands on that
+    /// side exactly, 0 or W, H, D. Without it, the far side maps to (hi - lo) * (n / (hi - lo)),
+    /// which rounds past n in about one case of twenty, and a box side that no float holds (a
+    /// --bounds value such as -20.8600788) lies up to half a float step away from the vertex the
+    /// mesh file meant to put on it: faces on the grid's sides then fell off the grid. The
+    /// vertices move by less than a float step, each once for all its triangles, so closed meshes
+    /// stay closed. Other frames: gridFromWorld.
+    VOXFX_HOSTDEV Vec3d gridFromVertex(const Vec3d& p) const {
+        Vec3d g = gridFromWorld(p);
+        if (perspective || oriented) return g;
+        const int axes[3] = {axisX, axisY, axisS};
+        for (int k = 0; k < 3; ++k) {
+            const float v = float(p[axes[k]]);
+            if (v == sideLo[axes[k]])
+                g[k] = 0;
+            else if (v == sideHi[axes[k]])
+                g[k] = size[k];
+        }
+        return g;
     }
 };
 

@@ -64,6 +64,17 @@ void writeGrid(const VoxelGrid& grid, const std::string& path, const GridWriteOp
 /// .ply/.obj are write-only.
 VoxelGrid readGrid(const std::string& path);
 
+class SparseGrid;
+/// Writes a sparse grid (voxfx/sparse_grid.hpp): .vdb straight from its tree, the dense grid never
+/// built (same conventions as above, "voxfx_dims" = its dims; cells outside [0, dims) are kept);
+/// the other formats through toDense(), which must fit in memory. Throws voxfx::Error naming the
+/// path.
+void writeGrid(const SparseGrid& grid, const std::string& path, const GridWriteOptions& options = {});
+/// Reads a grid file as a sparse grid: .vdb without a dense grid (the same grids and checks as
+/// readGrid; the frame spans "voxfx_dims" or the filled voxels' box), .binvox and .nrrd through
+/// the dense grid. Throws voxfx::Error naming the path.
+SparseGrid readSparseGrid(const std::string& path);
+
 // ---- Density maps (voxfx/density.hpp) ----
 
 /// Writes a density map placed in the world by `fineFrame` (the frame of the grid it was computed

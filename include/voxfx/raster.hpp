@@ -55,6 +55,7 @@
 
 #include <concepts>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -159,24 +160,36 @@ VOXFX_HOSTDEV inline Vec3d projectVertex(const Projection& projection, const Vec
 VOXFX_HOSTDEV inline void coveredRows(const RasterTriangle& tri, Coverage coverage, int64_t height,
                                       int64_t& first, int64_t& last);
 
-/// Emits the centre-sampled fragments of `tri` in rows [rowBegin, rowEnd) of `frame`.
+/// Emits the centre-sampled fragments of `tri` in rows [rowBegin, rowEnd) and columns
+/// [colBegin, colEnd) of `frame` (the columns clamped to the frame: the default is all of them).
+/// A window emits exactly the fragments of the whole frame that fall in it, bit for bit.
 template <class Sink>
 VOXFX_HOSTDEV void rasterizeCenter(const RasterTriangle& tri, const FrameView& frame, int64_t rowBegin,
-                                   int64_t rowEnd, Sink& sink);
-/// Emits the conservative spans of `tri` in rows [rowBegin, rowEnd) of `frame`.
+                                   int64_t rowEnd, Sink& sink, int64_t colBegin = 0,
+                                   int64_t colEnd = INT64_MAX);
+/// Emits the conservative spans of `tri` in rows [rowBegin, rowEnd) and columns [colBegin, colEnd)
+/// of `frame`, as rasterizeCenter.
 template <class Sink>
 VOXFX_HOSTDEV void rasterizeConservative(const RasterTriangle& tri, const FrameView& frame, int64_t rowBegin,
-                                         int64_t rowEnd, Sink& sink);
+                                         int64_t rowEnd, Sink& sink, int64_t colBegin = 0,
+                                         int64_t colEnd = INT64_MAX);
 
-/// Tiling and binning: triangles (in index order) per tile of `rowsPerTile` rows.
+/// Tiling and binning: triangles (in index order) per tile of `rowsPerTile` rows and
+/// `colsPerTile` columns (0: the whole width, one tile per band of rows). Tile (row r, column c)
+/// has index r * tileColumns + c. A triangle goes to every tile whose rows and columns, grown by
+/// `grow` on each side, its coverage may reach.
 struct TileBins {
-    int64_t rowsPerTile = 1;
+    int64_t rowsPerTile = 1, colsPerTile = 1;
+    int64_t tileColumns = 1;
     int64_t tileCount = 0;
     std::vector<int64_t> offsets;  // tileCount + 1
-    std::vector<uint32_t> entries; // indices into `pieces`
-    std::vector<RasterTriangle> pieces;
+    std::vector<uint32_t> entries; // triangle indices
 };
-TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsPerTile);
+/// `counted`, when given, receives the number of entries after they are counted and before they
+/// are allocated (it may throw, for a memory check).
+TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsPerTile,
+                      int64_t colsPerTile = 0, int64_t grow = 0,
+                      const std::function<void(int64_t entries)>& counted = {});
 
 } // namespace detail
 

@@ -59,10 +59,11 @@ template <class Emit> void RasterSetup::triangle(std::size_t t, Emit&& emit) con
                   vertices[mesh->index(t, 2)], uint32_t(t), clipDepth, emit);
 }
 
-/// The vertex transform of prepareVertices for one vertex: grid coordinates (orthographic) or
-/// camera coordinates (perspective).
+/// The vertex transform of prepareVertices for one vertex: grid coordinates (orthographic; a vertex
+/// on a side of the box lands on it exactly, Projection::gridFromVertex) or camera coordinates
+/// (perspective).
 VOXFX_HOSTDEV inline Vec3d projectVertex(const Projection& pr, const Vec3d& p) {
-    return pr.perspective ? pr.cameraFromWorld(p) : pr.gridFromWorld(p);
+    return pr.perspective ? pr.cameraFromWorld(p) : pr.gridFromVertex(p);
 }
 
 /// One edge of a triangle, stored with its endpoints in canonical (lexicographic) order so that
@@ -92,14 +93,14 @@ struct CanonicalEdge {
 
 template <class Sink>
 VOXFX_HOSTDEV void rasterizeCenter(const RasterTriangle& t, const FrameView& frame, int64_t rowBegin,
-                                   int64_t rowEnd, Sink& sink) {
+                                   int64_t rowEnd, Sink& sink, int64_t colBegin, int64_t colEnd) {
     const bool perspective = frame.isPerspective();
-    const int64_t width = frame.width;
+    const int64_t width = std::min(frame.width, colEnd);
     // Columns whose centre lies in the bounding box. The box corners are vertex coordinates and
     // x - 0.5 is exact for grid-sized values, so the range is exact: no margin needed.
     const double bxlo = std::min({t.x[0], t.x[1], t.x[2]}), bxhi = std::max({t.x[0], t.x[1], t.x[2]});
-    if (!(bxhi >= 0.5 && bxlo <= double(width) - 0.5)) return;
-    const int64_t bx0 = std::max<int64_t>(0, int64_t(std::ceil(bxlo - 0.5)));
+    if (!(bxhi >= double(colBegin) + 0.5 && bxlo <= double(width) - 0.5)) return;
+    const int64_t bx0 = std::max<int64_t>(colBegin, int64_t(std::ceil(bxlo - 0.5)));
     const int64_t bx1 = std::min<int64_t>(width - 1, int64_t(std::floor(bxhi - 0.5)));
     if (bx0 > bx1) return;
 
@@ -254,9 +255,9 @@ VOXFX_HOSTDEV inline void coveredRows(const RasterTriangle& t, Coverage coverage
 
 template <class Sink>
 VOXFX_HOSTDEV void rasterizeConservative(const RasterTriangle& t, const FrameView& frame, int64_t rowBegin,
-                                         int64_t rowEnd, Sink& sink) {
+                                         int64_t rowEnd, Sink& sink, int64_t colBegin, int64_t colEnd) {
     const bool perspective = frame.isPerspective();
-    const int64_t width = frame.width;
+    const int64_t width = std::min(frame.width, colEnd);
     // A triangle inside one column's prism, away from its sides by more than the slack (most
     // triangles of a dense mesh): clipping would keep it whole and no edge crosses the column's
     // sides, so the sweep below would give exactly its vertices' depth range in that one column.
@@ -266,7 +267,8 @@ VOXFX_HOSTDEV void rasterizeConservative(const RasterTriangle& t, const FrameVie
         const double cx = std::ceil(xlo - kConservativeSlack) - 1.0,
                      cy = std::ceil(ylo - kConservativeSlack) - 1.0;
         if (cx == std::floor(xhi + kConservativeSlack) && cy == std::floor(yhi + kConservativeSlack)) {
-            if (cy >= double(rowBegin) && cy < double(rowEnd) && cx >= 0 && cx < double(width)) {
+            if (cy >= double(rowBegin) && cy < double(rowEnd) && cx >= double(colBegin) &&
+                cx < double(width)) {
                 const double lo = std::min({t.w[0], t.w[1], t.w[2]}), hi = std::max({t.w[0], t.w[1], t.w[2]});
                 if (perspective)
                     sink.span(int64_t(cx), int64_t(cy), 1.0 / hi, 1.0 / lo, t.index);
@@ -295,8 +297,9 @@ VOXFX_HOSTDEV void rasterizeConservative(const RasterTriangle& t, const FrameVie
             xmin = std::min(xmin, row.x[k]);
             xmax = std::max(xmax, row.x[k]);
         }
-        const int64_t xb = std::max<int64_t>(0, int64_t(std::ceil(xmin - kConservativeSlack)) - 1);
+        const int64_t xb = std::max<int64_t>(colBegin, int64_t(std::ceil(xmin - kConservativeSlack)) - 1);
         const int64_t xe = std::min<int64_t>(width - 1, int64_t(std::floor(xmax + kConservativeSlack)));
+        if (xb > xe) continue;
         // Sweep the columns: the polygon's depth range inside column x is attained where its
         // boundary crosses the lines X = x and X = x + 1, or at its vertices in between (vertices
         // within the slack of a line count on both sides).
@@ -330,20 +333,21 @@ namespace voxfx {
 
 namespace detail {
 
-/// Rasterizes one piece over rows [y0, y1) of the frame with the options' coverage rule (the
-/// caller has checked that the sink supports it).
+/// Rasterizes one piece over rows [y0, y1) (and columns [x0, x1)) of the frame with the options'
+/// coverage rule (the caller has checked that the sink supports it).
 template <class Sink>
 VOXFX_HOSTDEV void rasterizePiece(const RasterTriangle& rt, Coverage coverage, const FrameView& frame,
-                                  int64_t y0, int64_t y1, Sink& sink) {
+                                  int64_t y0, int64_t y1, Sink& sink, int64_t x0 = 0,
+                                  int64_t x1 = INT64_MAX) {
     int64_t first, last;
     coveredRows(rt, coverage, frame.height, first, last);
     first = std::max(first, y0);
     last = std::min(last, y1 - 1);
     if (first > last) return;
     if (coverage == Coverage::Center) {
-        if constexpr (CenterSink<Sink>) rasterizeCenter(rt, frame, first, last + 1, sink);
+        if constexpr (CenterSink<Sink>) rasterizeCenter(rt, frame, first, last + 1, sink, x0, x1);
     } else {
-        if constexpr (ConservativeSink<Sink>) rasterizeConservative(rt, frame, first, last + 1, sink);
+        if constexpr (ConservativeSink<Sink>) rasterizeConservative(rt, frame, first, last + 1, sink, x0, x1);
     }
 }
 

@@ -128,12 +128,21 @@ struct FitOptions {
     Box3d bounds;      ///< empty = mesh bounds
     int64_t marginCells = 0;
     Axis axis = Axis::Z;
+    /// Refuse grids whose dense bits need more memory than is available. Off for sparse and tiled
+    /// voxelization (voxfx/sparse_grid.hpp, voxfx/tiled.hpp), which never build the dense grid.
+    bool checkDenseMemory = true;
 };
 
 /// Fits an orthographic frame to `meshBounds` as described by `options` (exactly one of
 /// resolution, voxelSize, dims must be set). Throws voxfx::Error for an empty or flat box with
-/// resolution 0, non-positive sizes, or a grid whose memory would exceed what is available.
+/// resolution 0, non-positive sizes, or (checkDenseMemory) a grid whose memory would exceed what
+/// is available.
 Frame fitFrame(const Box3d& meshBounds, const FitOptions& options);
+
+/// The fill voxelize() (and voxelizeTiles, voxelizeSparse) use for `options`: options.fill, or
+/// for Fill::Auto Parity when the mesh is closed or the mode needs no fill, else Flood (one pass
+/// over the edges). Writes *options.report when given.
+Fill resolveFill(const MeshView& mesh, const VoxelizeOptions& options);
 
 /// Voxelizes `mesh` into `frame`. Returns the grid (in `frame`, with local slicing applied when
 /// requested). Validates the mesh first (voxfx::Error on bad indices or non-finite vertices).

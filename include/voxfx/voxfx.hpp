@@ -27,6 +27,7 @@
 #include "voxfx/attribute_grid.hpp"
 #include "voxfx/contains.hpp"
 #include "voxfx/device.hpp"
+#include "voxfx/tiled.hpp"
 #include "voxfx/voxelize.hpp"
 
 // grid: the bit-grid toolkit (GI08): density, normals, morphology, CSG, queries, meshing, smoke.
@@ -79,6 +80,7 @@
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/particles_io.hpp"
 #include "voxfx/scene_io.hpp"
+#include "voxfx/sparse_grid.hpp"
 #include "voxfx/volume_io.hpp"
 
 // batch: many meshes in one process.

@@ -133,4 +133,15 @@ py::str utf8Text(const std::string& s);
 /// types, ArgumentError for a NUL byte (the C library would open the path up to it: another file).
 std::string pathString(const py::handle& p);
 
+/// Grid.save and SparseGrid.save: writeGrid with the GIL released (by extension, atomically).
+template <class G>
+void saveGrid(const G& grid, const py::object& pathObj, bool vdbFloat, const std::string& gridName) {
+    GridWriteOptions wo;
+    wo.vdbFloat = vdbFloat;
+    wo.gridName = gridName;
+    const std::string path = pathString(pathObj);
+    py::gil_scoped_release release;
+    writeGrid(grid, path, wo);
+}
+
 } // namespace voxfx::python

@@ -353,18 +353,9 @@ void bindGrid(py::module_& m) {
                  return filledVolume(g);
              })
         .def("to_numpy", &toNumpy, "Occupancy as a bool array indexed [x, y, z]")
-        .def(
-            "save",
-            [](const VoxelGrid& g, const py::object& pathObj, bool vdbFloat, const std::string& gridName) {
-                GridWriteOptions wo;
-                wo.vdbFloat = vdbFloat;
-                wo.gridName = gridName;
-                const std::string path = pathString(pathObj);
-                py::gil_scoped_release release;
-                writeGrid(g, path, wo);
-            },
-            py::arg("path"), py::arg("vdb_float") = false, py::arg("grid_name") = "voxels",
-            "Writes .binvox .vdb .nrrd .ply .obj (by extension, atomically), as `voxfx voxelize` does")
+        .def("save", &saveGrid<VoxelGrid>, py::arg("path"), py::arg("vdb_float") = false,
+             py::arg("grid_name") = "voxels",
+             "Writes .binvox .vdb .nrrd .ply .obj (by extension, atomically), as `voxfx voxelize` does")
         .def("copy", [](const VoxelGrid& g) { return std::make_shared<VoxelGrid>(g); })
         .def("__copy__", [](const VoxelGrid& g) { return std::make_shared<VoxelGrid>(g); })
         .def("__deepcopy__",

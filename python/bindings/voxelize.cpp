@@ -7,11 +7,13 @@ namespace {
 struct VoxelizeRequest {
     std::string mode, fill, slicing, device;
     int threads = 0;
+    bool sparse = false;
 };
 
 struct VoxelizeResult {
     GridPtr grid;
-    std::string deviceNote; ///< why a device="cuda" request ran on the CPU
+    std::shared_ptr<SparseGrid> sparse; ///< sparse=True: the tiles' tree, no dense grid
+    std::string deviceNote;             ///< why a device="cuda" request ran on the CPU
 };
 
 /// What `voxfx voxelize` does between loading and writing: the voxelization into `frame` (in the
@@ -28,8 +30,11 @@ VoxelizeResult voxelizeMesh(const Mesh& mesh, const Frame& frame, const Voxelize
     vo.threads = r.threads;
     vo.progress = progress;
     vo.fill = parseFill(r.fill); // Fill::Auto: voxelize() decides, as the CLI's does
+    if (r.sparse)
+        return {nullptr, std::make_shared<SparseGrid>(voxelizeSparse(mesh.view(), frame, vo)),
+                vo.device == Device::Cuda ? note : std::string()};
     auto grid = std::make_shared<VoxelGrid>(voxelize(mesh.view(), frame, vo));
-    return {std::move(grid), vo.device == Device::Cuda ? note : std::string()};
+    return {std::move(grid), nullptr, vo.device == Device::Cuda ? note : std::string()};
 }
 
 /// The frame in the mesh's own coordinates: like's (moved by -origin), or fitted to the mesh.
@@ -78,7 +83,7 @@ void bindVoxelize(py::module_& m) {
            std::optional<double> voxelSize, std::optional<std::vector<int64_t>> dims,
            const py::object& bounds, int64_t margin, bool cube, int64_t padding, const py::object& like,
            const std::string& mode, const std::string& fill, const std::string& axis,
-           const std::string& slicing, int threads, const std::string& device) {
+           const std::string& slicing, int threads, const std::string& device, bool sparse) -> py::object {
             const auto mesh = meshArgument(meshObj, faces);
             if (!like.is_none() &&
                 (resolution || voxelSize || dims || !bounds.is_none() || margin || cube || padding))
@@ -87,17 +92,21 @@ void bindVoxelize(py::module_& m) {
                     "bounds, margin, cube or padding with it");
             const FitOptions fo = fitOptions(resolution, voxelSize, dims, bounds, margin, axis, cube);
             if (threads < 0) throw ArgumentError("threads must be >= 0");
-            const VoxelizeRequest request{mode, fill, slicing, device, threads};
+            const VoxelizeRequest request{mode, fill, slicing, device, threads, sparse};
             asArgument([&] {
                 parseVoxelizeMode(mode), parseSlicing(slicing), parseDevice(device);
                 parseFill(fill);
             });
-            const Frame frame = voxelizeFrame(*mesh, fo, like, padding);
+            FitOptions fit = fo;
+            fit.checkDenseMemory = !sparse; // a sparse grid is checked against the budget as it grows
+            const Frame frame = voxelizeFrame(*mesh, fit, like, padding);
             if (like.is_none()) warnIfStretched(frame, dims);
             VoxelizeResult result;
             interruptible(
                 [&](Cancel& cancel) { result = voxelizeMesh(mesh->mesh, frame, request, &cancel); });
-            if (mesh->shifted()) {
+            if (mesh->shifted() && result.sparse) {
+                result.sparse->translate(mesh->origin);
+            } else if (mesh->shifted()) {
                 VoxelGrid& g = *result.grid;
                 g.frame = g.frame.translated(mesh->origin);
             }
@@ -105,13 +114,15 @@ void bindVoxelize(py::module_& m) {
             if (!result.deviceNote.empty() &&
                 PyErr_WarnEx(PyExc_RuntimeWarning, ("device='cuda': " + result.deviceNote).c_str(), 1) != 0)
                 throw py::error_already_set();
-            return result.grid;
+            if (result.sparse) return py::cast(result.sparse);
+            return py::cast(result.grid);
         },
         py::arg("mesh"), py::arg("faces") = py::none(), py::kw_only(), py::arg("resolution") = py::none(),
         py::arg("voxel_size") = py::none(), py::arg("dims") = py::none(), py::arg("bounds") = py::none(),
         py::arg("margin") = 0, py::arg("cube") = false, py::arg("padding") = 0, py::arg("like") = py::none(),
         py::arg("mode") = "solid", py::arg("fill") = "auto", py::arg("axis") = "z",
         py::arg("slicing") = "uniform", py::arg("threads") = 0, py::arg("device") = "cpu",
+        py::arg("sparse") = false,
         "Voxelizes a mesh like `voxfx voxelize`. mesh: a voxfx.Mesh, an object with .vertices and .faces "
         "(trimesh; Open3D's .triangles; meshio's .points and .cells_dict), a (vertices, faces) pair, or "
         "vertices with faces=. The grid: resolution (cells along the longest side, default 256), voxel_size "
@@ -121,7 +132,10 @@ void bindVoxelize(py::module_& m) {
         "Grid.bounds' (lo, hi)); like=grid: that grid's frame exactly. mode surface | conservative | solid "
         "| solid-conservative | interior; fill auto | parity | flood | vote | winding | gwn (auto: parity "
         "for closed meshes, flood otherwise); threads 0 = all; device cpu | cuda | auto (the same grid; "
-        "cuda without a usable GPU warns and runs on the CPU; see cuda_status()). Ctrl-C stops it.");
+        "cuda without a usable GPU warns and runs on the CPU; see cuda_status()). sparse=True: a "
+        "voxfx.SparseGrid voxelized tile by tile, no dense grid at any point (the same voxels; its "
+        "coordinates() are the (N, 3) int32 cells; VOXFX_MEMORY_LIMIT caps it; like= takes no sparse "
+        "grid). Ctrl-C stops it.");
 
     m.def(
         "cuda_status",

@@ -5,6 +5,7 @@
     grid = voxfx.voxelize(mesh, resolution=64, cube=True, padding=2)   # a 64^3 grid, never stretched
     occ = grid.to_numpy()                          # bool array indexed [x, y, z]
     ijk = grid.indices()                           # (N, 3) int32 filled cells, no dense array
+    ijk = voxfx.voxelize(mesh, resolution=4096, sparse=True).coordinates()  # the same, no dense grid
     grid.save("bunny.binvox")                      # .binvox .vdb .nrrd .ply .obj
     inside = voxfx.contains(mesh, points)          # exact point occupancy, (K,) bool
     report = voxfx.batch("meshes.txt", "out/", resolution=64)   # many meshes, as `voxfx batch`
@@ -18,7 +19,8 @@ command line.
 import __future__
 
 from . import _voxfx
-from ._voxfx import ArgumentError, Density, Error, Grid, Mesh, PointClassifier, Scene, SurfaceMesh, __version__
+from ._voxfx import (ArgumentError, Density, Error, Grid, Mesh, PointClassifier, Scene, SparseGrid, SurfaceMesh,
+                     __version__)
 
 # The I/O modules (voxfx_vdb.so, ...) lie next to _voxfx (the library looks there): nothing is
 # set in os.environ.
@@ -55,7 +57,7 @@ def _with_signature(f):
 _FUNCTIONS = [
     "closing", "compute_density", "contains", "csg", "cuda_status", "dilate", "erode", "extract_surface",
     "from_numpy", "load_mesh", "morphology", "opening", "read_grid", "resample_to_uniform", "reslice", "voxelize",
-    "batch_jobs", "glass_methods", "load_scene", "render", "render_options", "shadow_kinds",
+    "batch_jobs", "glass_methods", "load_scene", "read_sparse_grid", "render", "render_options", "shadow_kinds",
 ]
 for _name in _FUNCTIONS:
     globals()[_name] = _with_signature(getattr(_voxfx, _name))
@@ -112,6 +114,6 @@ if hasattr(_batch, "__wrapped__"):
 #: File extension of each grid format that Grid.save writes.
 GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj")
 
-__all__ = ["ArgumentError", "Density", "Error", "Grid", "Mesh", "PointClassifier", "Scene", "SurfaceMesh",
-           "GRID_FORMATS",
+__all__ = ["ArgumentError", "Density", "Error", "Grid", "Mesh", "PointClassifier", "Scene", "SparseGrid",
+           "SurfaceMesh", "GRID_FORMATS",
            "batch", *sorted(_FUNCTIONS)]

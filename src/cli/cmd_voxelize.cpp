@@ -1,4 +1,5 @@
 // voxfx voxelize MESH -o GRID — mesh to voxel grid in any mode, with the summary line.
+#include <cstdlib>
 #include <iostream>
 
 #include "cli_common.hpp"
@@ -13,28 +14,99 @@ struct VoxelizeArgs {
     VoxelizeChoiceArgs choice;
     int threads = 0;
     std::string device = "cpu";
+    std::string memory;
+    bool dense = false;
     bool quiet = false;
 };
+
+// --memory: the budget of every size check of the run, as VOXFX_MEMORY_LIMIT (which it sets, so
+// the library's checks and the tiles' budget all see it).
+void applyMemoryBudget(const std::string& memory) {
+    if (memory.empty()) return;
+    setenv("VOXFX_MEMORY_LIMIT", memory.c_str(), 1);
+    try {
+        availableMemoryBytes();
+    } catch (const Error&) {
+        fail("--memory must be bytes or a size with K, M, G or T (powers of 1024), got '", memory, "'");
+    }
+}
+
+// What a run produced, for the summary.
+struct VoxelizeRun {
+    Frame frame;
+    int64_t filled = 0;
+    double voxelMs = 0, writeMs = 0;
+    bool onGpu = false, sparse = false, tiled = false;
+};
+
+// .vdb without the dense grid: tiles straight into OpenVDB's tree (voxfx/sparse_grid.hpp).
+VoxelizeRun runSparse(const Mesh& mesh, const Frame& frame, const VoxelizeOptions& vo,
+                      const VoxelizeArgs& a) {
+    VoxelizeRun r;
+    r.sparse = true;
+    ProgressLine progress("voxelizing", !a.quiet);
+    VoxelizeOptions o = vo;
+    o.progress = &progress;
+    const auto tv = Clock::now();
+    const SparseGrid grid = voxelizeSparse(mesh.view(), frame, o);
+    r.voxelMs = msSince(tv);
+    progress.done();
+    // Flood and vote (asked for, or what auto chose) went through the whole grid.
+    VoxelizeOptions chosen = o;
+    if (o.report) chosen.fill = o.report->fill;
+    r.tiled = wholeGridReason(frame, chosen).empty();
+    r.frame = grid.frame();
+    r.filled = grid.count();
+    const auto tw = Clock::now();
+    GridWriteOptions wo;
+    wo.vdbFloat = a.choice.vdbFloat;
+    writeGrid(grid, a.output, wo);
+    r.writeMs = msSince(tw);
+    return r;
+}
+
+VoxelizeRun runDense(const Mesh& mesh, const Frame& frame, VoxelizeOptions vo, const VoxelizeArgs& a) {
+    VoxelizeRun r;
+    std::string deviceNote;
+    vo.deviceNote = &deviceNote;
+    ProgressLine progress("voxelizing", !a.quiet);
+    vo.progress = &progress;
+    const auto tv = Clock::now();
+    const VoxelGrid grid = voxelize(mesh.view(), frame, vo);
+    r.voxelMs = msSince(tv);
+    progress.done();
+    if (!deviceNote.empty() && vo.device == Device::Cuda && !a.quiet)
+        std::cerr << "voxfx: --device cuda: " << deviceNote << "\n";
+    r.onGpu = vo.device != Device::Cpu && deviceNote.empty();
+    r.frame = grid.frame;
+    r.filled = grid.bits.count();
+    r.writeMs = writeGridOutput(grid, a.output, a.choice.vdbFloat);
+    return r;
+}
 
 int runVoxelize(const VoxelizeArgs& a) {
     const auto t0 = Clock::now();
     // Everything that can be checked before the work starts is checked here, so a bad output
     // name does not cost a voxelization.
     const GridFormat format = gridFormatFromPath(a.output);
+    applyMemoryBudget(a.memory);
     VoxelizeOptions vo = toVoxelizeOptions(a.choice);
     vo.threads = a.threads;
     vo.device = parseDevice(a.device);
-    std::string deviceNote;
-    vo.deviceNote = &deviceNote;
     FitOptions fo = toFitOptions(a.fit, voxelizeFitChoices());
     fo.axis = parseAxis(a.choice.axis);
+    // .vdb goes tile by tile into a sparse tree unless the dense grid is asked for (--dense,
+    // local slicing, a GPU device).
+    const bool sparse =
+        format == GridFormat::Vdb && !a.dense && vo.slicing == Slicing::Uniform && vo.device == Device::Cpu;
+    fo.checkDenseMemory = !sparse;
 
     MeshLoadReport report;
     const Mesh mesh = loadMesh(a.input, &report);
     const double loadMs = msSince(t0);
 
-    // Fill::Auto is decided by voxelize() (reported in `decided`); an explicit parity on an open
-    // mesh gets a warning.
+    // Fill::Auto is decided by voxelize() or voxelizeSparse() (reported in `decided`); an explicit
+    // parity on an open mesh gets a warning.
     const bool needsInside = needsFill(vo.mode);
     VoxelizeReport decided;
     vo.report = &decided;
@@ -44,40 +116,27 @@ int runVoxelize(const VoxelizeArgs& a) {
                      "--fill vote)\n";
 
     const Frame frame = fitFrame(computeBounds(mesh.view()), fo);
-    ProgressLine progress("voxelizing", !a.quiet);
-    vo.progress = &progress;
-    const auto tv = Clock::now();
-    const VoxelGrid grid = voxelize(mesh.view(), frame, vo);
-    const double voxelMs = msSince(tv);
-    progress.done();
+    const VoxelizeRun r = sparse ? runSparse(mesh, frame, vo, a) : runDense(mesh, frame, vo, a);
     if (!decided.fillNote.empty() && !a.quiet)
         std::cerr << "voxfx: " << a.input << ": " << decided.fillNote << "\n";
-    if (!deviceNote.empty() && vo.device == Device::Cuda && !a.quiet)
-        std::cerr << "voxfx: --device cuda: " << deviceNote << "\n";
-    const bool onGpu = vo.device != Device::Cpu && deviceNote.empty();
-    const int64_t filled = grid.bits.count();
-
-    const auto tw = Clock::now();
-    GridWriteOptions wo;
-    wo.vdbFloat = a.choice.vdbFloat;
-    writeGrid(grid, a.output, wo);
-    const double writeMs = msSince(tw);
 
     if (!a.quiet) {
-        const Vec3i d = grid.worldDims();
-        const Vec3d cell = grid.frame.cellSize();
+        const VoxelGrid shape{r.frame, {}};
+        const Vec3i d = shape.worldDims();
+        const Vec3d cell = r.frame.cellSize();
         std::cout << a.input << ": " << withCommas(int64_t(mesh.triangleCount())) << " triangles -> " << d.x
                   << " x " << d.y << " x " << d.z << " grid (cell " << fmt(cell.x, 4);
         if (cell.y != cell.x || cell.z != cell.x)
             std::cout << " x " << fmt(cell.y, 4) << " x " << fmt(cell.z, 4);
-        std::cout << ", axis " << toString(grid.frame.axis()) << ", " << toString(vo.slicing) << " slicing), "
+        std::cout << ", axis " << toString(r.frame.axis()) << ", " << toString(vo.slicing) << " slicing), "
                   << toString(vo.mode);
         if (needsInside) std::cout << " (" << toString(decided.fill) << ")";
-        std::cout << ", " << withCommas(filled) << " filled voxels\n";
-        std::cout << "time: load " << fmtMs(loadMs) << ", voxelize " << fmtMs(voxelMs)
-                  << (onGpu ? " on " + cudaStatus().device : std::string()) << ", write " << fmtMs(writeMs)
-                  << ", total " << fmtMs(msSince(t0)) << " -> " << a.output << " (" << toString(format)
-                  << ")\n";
+        std::cout << ", " << withCommas(r.filled) << " filled voxels\n";
+        std::cout << "time: load " << fmtMs(loadMs) << ", voxelize " << fmtMs(r.voxelMs)
+                  << (r.onGpu ? " on " + cudaStatus().device : std::string())
+                  << (r.sparse ? (r.tiled ? " (tiled)" : " (whole grid)") : "") << ", write "
+                  << fmtMs(r.writeMs) << ", total " << fmtMs(msSince(t0)) << " -> " << a.output << " ("
+                  << toString(format) << (r.sparse ? ", sparse" : "") << ")\n";
     }
     return 0;
 }
@@ -92,6 +151,8 @@ Grid placement (the half-voxel rule other tools trip over):
   --voxel-size S: cells of edge S, ceil(extent / S) of them per axis, centred on the bounds.
   --dims NX NY NZ: the bounds split into exactly that many (possibly non-cubic) cells.
   --margin M adds M empty cells on every side (default 0: surface voxels may touch the border).
+  Mesh vertices are floats: a vertex coordinate equal to a side of the box at float precision
+  lies on that side (a face at y = -20.8600788 with --bounds -20.8600788 ... touches row 0).
 
 Modes:
   surface             ED06: one voxel per column and triangle (holes on steep triangles)
@@ -109,6 +170,23 @@ Fills (how inside is decided; default auto = parity for closed meshes, flood oth
            orientation)
   gwn      generalized winding number >= 0.5: closes holes wider than a voxel (needs
            consistent orientation)
+
+Memory and tiles (--memory, VOXFX_MEMORY_LIMIT):
+  .vdb output is voxelized tile by tile (bricks of 128^3 cells, each column's parity carried
+  from brick to brick) straight into OpenVDB's sparse tree, never as a whole grid: memory
+  grows with the surface, not the volume (the bunny at -r 16384 fits in 4 GiB). The voxels are
+  the same bit for bit as the whole grid's.
+  Fills: parity, winding and gwn work tile by tile, in every mode. flood and vote need the
+  whole grid: they voxelize it whole and convert it when that fits the budget. --fill auto
+  picks flood for a mesh that is not closed, so for open meshes at large sizes give --fill gwn.
+  Other formats, --slicing local and --device cuda|auto build the whole grid too (so does
+  --dense).
+  --memory SIZE caps what the run may use (bytes, or K, M, G, T in powers of 1024: 4G), for
+  every size check, as VOXFX_MEMORY_LIMIT does; the default is the memory available now
+  (MemAvailable, or VOXFX_MEMORY_LIMIT when smaller). A size that cannot fit stops before
+  anything large is allocated, with one line saying what it needs and the budget: the whole
+  grid's bytes, or the tiles' triangle lists; the sparse tree is checked as it grows. No output
+  file is left behind by a run that fails.
 
 Devices (--device; the grid is the same bit for bit on each):
   cpu      all cores (the default)
@@ -133,6 +211,8 @@ const Command kVoxelize{
             ->check(CLI::NonNegativeNumber);
         app.add_option("--device", a->device, "Where to voxelize: cpu, cuda or auto (see below)")
             ->default_val("cpu");
+        app.add_option("--memory", a->memory, "Memory budget: bytes, or K, M, G, T (see below)");
+        app.add_flag("--dense", a->dense, "Build the whole grid first for .vdb too (the path before tiles)");
         app.add_flag("-q,--quiet", a->quiet, "No summary or progress");
         return std::function<int()>([a] { return runVoxelize(*a); });
     }};

@@ -53,6 +53,9 @@ Frame Frame::orthographic(const Box3d& box, Axis axis, int64_t w, int64_t h, int
     pr.axisS = cs;
     pr.origin = box.lo;
     pr.scale = {double(w) / ext[cx], double(h) / ext[cy], double(d) / ext[cs]};
+    pr.sideLo = Vec3f(box.lo);
+    pr.sideHi = Vec3f(box.hi);
+    pr.size = {double(w), double(h), double(d)};
     return f;
 }
 

@@ -12,6 +12,7 @@
 
 #include "core/atomic_file.hpp"
 #include "voxfx/grid_io.hpp"
+#include "voxfx/sparse_grid.hpp"
 
 namespace voxfx::detail {
 
@@ -28,6 +29,11 @@ void writeVdb(const VoxelGrid& grid, AtomicFile& file, const GridWriteOptions& o
 /// OpenVDB has parsed them, before the grid is allocated, so the file and the grid are not both
 /// held at the peak.
 VoxelGrid readVdb(std::span<const uint8_t> bytes, std::vector<uint8_t>* release = nullptr);
+
+/// The sparse grid's tree as a .vdb (no dense grid), through the temporary file's path.
+void writeSparseVdb(const SparseGrid& grid, AtomicFile& file, const GridWriteOptions& options);
+/// A .vdb file's bytes as a sparse grid (checked and read as readVdb).
+SparseGrid readSparseVdb(std::span<const uint8_t> bytes);
 
 void writeNrrd(const VoxelGrid& grid, std::ostream& out);
 VoxelGrid readNrrd(std::span<const uint8_t> bytes);

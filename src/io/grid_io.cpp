@@ -113,4 +113,26 @@ VoxelGrid readGrid(const std::string& path) {
     } catch (const std::bad_alloc&) { fail("cannot read '", path, "': out of memory"); }
 }
 
+void writeGrid(const SparseGrid& grid, const std::string& path, const GridWriteOptions& options) {
+    const GridFormat format = gridFormatFromPath(path);
+    if (format != GridFormat::Vdb) {
+        writeGrid(grid.toDense(), path, options);
+        return;
+    }
+    detail::AtomicFile file(path);
+    detail::writeSparseVdb(grid, file, options);
+    file.commit();
+}
+
+SparseGrid readSparseGrid(const std::string& path) {
+    if (gridFormatFromPath(path) != GridFormat::Vdb) return SparseGrid::fromDense(readGrid(path));
+    try {
+        return detail::readSparseVdb(readFileBytes(path));
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        if (what.find(path) != std::string::npos) throw;
+        fail("cannot read '", path, "': ", what);
+    } catch (const std::bad_alloc&) { fail("cannot read '", path, "': out of memory"); }
+}
+
 } // namespace voxfx

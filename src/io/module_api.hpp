@@ -20,7 +20,7 @@
 namespace voxfx::detail {
 
 /// Bump when a table below changes.
-inline constexpr uint32_t kModuleAbi = 4;
+inline constexpr uint32_t kModuleAbi = 5;
 
 /// The library's parallel-for handed to a module (so that modules follow withThreads and name no
 /// thread library): calls call(body, b, e) over chunks of `grain` items covering [begin, end).
@@ -58,6 +58,22 @@ struct VdbFloatBox {
     bool isDouble = false;
 };
 
+/// One brick of a tiled voxelization for a sparse grid (voxfx/sparse_grid.hpp): cells
+/// [origin, origin + size) of the world-axis index space (i, j, k), in the slicemap layout of a
+/// frame sliced along world axis `axis` (columns along axis + 1 and axis + 2, slices along axis):
+/// `width` x `height` columns of `depth` bits, wordsPerColumn words each. Null words: every cell
+/// holds `value`. The origin is a multiple of 8 along every axis.
+struct SparseBrick {
+    int64_t origin[3] = {0, 0, 0};
+    int64_t width = 0, height = 0, depth = 0, wordsPerColumn = 0;
+    const uint64_t* words = nullptr;
+    bool value = false;
+    int axis = 2;
+};
+
+/// Topology operations of sparse grids (sparseCombine).
+enum class SparseOp : int { Union = 0, Intersection = 1, Difference = 2 };
+
 struct VdbModule {
     uint32_t abi;
     uint32_t size; ///< sizeof(VdbModule) as the module was built
@@ -83,6 +99,50 @@ struct VdbModule {
     /// not finite floats are errors.
     bool (*readFloats)(const uint8_t* data, std::size_t size, const char* gridName, void* ctx,
                        float* (*allocate)(void* ctx, const VdbFloatBox& box), std::string* error);
+
+    // ---- Sparse bool grids (voxfx/sparse_grid.hpp): an openvdb::BoolGrid the module owns, whose
+    // active voxels (value true) are the filled cells, indexed (i, j, k) along world x, y, z. A
+    // handle is used by one thread at a time, except sparseAddBrick (see there).
+
+    /// A new empty grid; null (and *error) on failure.
+    void* (*sparseCreate)(std::string* error);
+    void (*sparseDestroy)(void* grid);
+    void* (*sparseCopy)(const void* grid, std::string* error);
+    /// Adds one brick's filled cells (bricks are disjoint). May be called from several threads at
+    /// once on one grid: the leaves are built on the calling thread and inserted under the
+    /// handle's lock. *bytes receives an estimate of the memory the tree grew by.
+    bool (*sparseAddBrick)(void* grid, const SparseBrick& brick, uint64_t* bytes, std::string* error);
+    /// After the last brick: merges uniform nodes into tiles (prune).
+    bool (*sparseFinish)(void* grid, std::string* error);
+    /// Adds the filled cells of a z-sliced dense grid whose cell (0, 0, 0) is index (0, 0, 0).
+    bool (*sparseFromBits)(void* grid, const VdbBits& bits, ParallelFor parallelFor, std::string* error);
+    /// Sets the bits of the index box [origin, origin + (nx, ny, nz)) into a zeroed z-sliced grid.
+    bool (*sparseToBits)(const void* grid, const int64_t origin[3], int64_t nx, int64_t ny, int64_t nz,
+                         int64_t wordsPerColumn, uint64_t* words, std::string* error);
+    int64_t (*sparseCount)(const void* grid);
+    /// The index box of the filled cells (inclusive); false when there is none.
+    bool (*sparseBounds)(const void* grid, int64_t lo[3], int64_t hi[3]);
+    uint64_t (*sparseMemory)(const void* grid);
+    bool (*sparseGet)(const void* grid, const int64_t ijk[3]);
+    /// a = a op b (OpenVDB's topology union, intersection, difference).
+    bool (*sparseCombine)(void* a, const void* b, SparseOp op, std::string* error);
+    /// OpenVDB's dilateActiveValues / erodeActiveValues: `iterations` steps over `neighbours`
+    /// (6 face, 18 face and edge, 26 face, edge and vertex neighbours).
+    bool (*sparseMorphology)(void* grid, bool erode, int iterations, int neighbours, std::string* error);
+    /// The filled cells' indices minus `origin`, three int32 per cell in the tree's order
+    /// (leaves, then tiles), into `out` (room for `count` cells: sparseCount).
+    bool (*sparseCoordinates)(const void* grid, const int64_t origin[3], int32_t* out, int64_t count,
+                              std::string* error);
+    /// Writes the grid as a BoolGrid (or FloatGrid fog volume) with writeBits' conventions; index
+    /// `origin` is the placement's voxel (0, 0, 0) and `dims` go in "voxfx_dims".
+    bool (*sparseWrite)(const char* path, const void* grid, const int64_t origin[3],
+                        const VdbPlacement& placement, const int64_t dims[3], const char* gridName,
+                        bool asFloat, std::string* error);
+    /// Reads the first bool, float or double grid of a .vdb file's bytes (checked as readBits) as a
+    /// sparse grid of its filled voxels (active; for scalars also > 0); `box` receives its index
+    /// box (dims and world box, as readBits) and `origin` the index of the box's first cell.
+    void* (*sparseRead)(const uint8_t* data, std::size_t size, VdbReadBox* box, int64_t origin[3],
+                        std::string* error);
 };
 
 // ---- voxfx_assimp: Assimp (glTF 2.0 and the long tail) ----------------------------------------

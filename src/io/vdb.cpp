@@ -32,6 +32,33 @@ void writeVdb(const VoxelGrid& grid, AtomicFile& file, const GridWriteOptions& o
         fail("cannot write '", file.targetPath().string(), "': ", error);
 }
 
+void writeSparseVdb(const SparseGrid& grid, AtomicFile& file, const GridWriteOptions& options) {
+    const Vec3i d = grid.dims();
+    const int64_t dims[3] = {d.x, d.y, d.z};
+    const int64_t origin[3] = {grid.treeOrigin().x, grid.treeOrigin().y, grid.treeOrigin().z};
+    std::string error;
+    if (!grid.handle()) fail("cannot write '", file.targetPath().string(), "': the sparse grid has no frame");
+    if (!vdbModule().sparseWrite(file.tempPath().c_str(), grid.handle(), origin, placementOf(grid.frame()),
+                                 dims, options.gridName.c_str(), options.vdbFloat, &error))
+        fail("cannot write '", file.targetPath().string(), "': ", error);
+}
+
+SparseGrid readSparseVdb(std::span<const uint8_t> bytes) {
+    VdbReadBox box;
+    int64_t origin[3] = {0, 0, 0};
+    std::string error;
+    void* tree = vdbModule().sparseRead(bytes.data(), bytes.size(), &box, origin, &error);
+    if (!tree) fail(error);
+    const Box3d world{{box.lo[0], box.lo[1], box.lo[2]}, {box.hi[0], box.hi[1], box.hi[2]}};
+    try {
+        return SparseGrid::adopt(Frame::orthographic(world, Axis::Z, box.dims[0], box.dims[1], box.dims[2]),
+                                 tree, {origin[0], origin[1], origin[2]});
+    } catch (...) {
+        vdbModule().sparseDestroy(tree);
+        throw;
+    }
+}
+
 VoxelGrid readVdb(std::span<const uint8_t> bytes, std::vector<uint8_t>* release) {
     const VdbModule& vdb = vdbModule();
     struct Target {

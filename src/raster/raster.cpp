@@ -2,6 +2,7 @@
 #include "voxfx/raster.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace voxfx {
@@ -35,49 +36,93 @@ RasterSetup prepareVertices(const Frame& frame, const MeshView& mesh) {
     return s;
 }
 
-TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsPerTile) {
-    const int64_t H = setup.frame.height;
-    const double W = double(setup.frame.width);
+namespace {
+
+// The tiles of one triangle: rows [r0, r1] and columns [c0, c1] of the tiling (empty when r1 < r0).
+struct TileSpan {
+    int32_t r0, r1, c0, c1;
+    int64_t count() const { return r1 < r0 ? 0 : int64_t(r1 - r0 + 1) * int64_t(c1 - c0 + 1); }
+};
+
+class Binner {
+public:
+    Binner(const RasterSetup& setup, Coverage coverage, int64_t rowsPerTile, int64_t colsPerTile,
+           int64_t grow)
+        : setup_(setup), center_(coverage == Coverage::Center), coverage_(coverage), grow_(grow),
+          rows_(rowsPerTile), cols_(colsPerTile > 0 ? colsPerTile : std::max<int64_t>(1, setup.frame.width)),
+          tileRows_((setup.frame.height + rows_ - 1) / rows_),
+          tileColumns_((setup.frame.width + cols_ - 1) / cols_) {}
+
+    int64_t tileRows() const { return tileRows_; }
+    int64_t tileColumns() const { return tileColumns_; }
+    int64_t cols() const { return cols_; }
+
+    // Tile range of triangle t (union over its pieces). Centre coverage also drops triangles
+    // whose bounding box holds no column centre (same exact arithmetic as rasterizeCenter): on
+    // dense meshes (a million triangles at 512^3) most triangles are smaller than a cell and
+    // never reach a tile.
+    TileSpan span(int64_t t) const {
+        const int64_t H = setup_.frame.height, W = setup_.frame.width;
+        int64_t r0 = H, r1 = -1, x0 = W, x1 = -1;
+        setup_.triangle(size_t(t), [&](const RasterTriangle& r) {
+            const double xlo = std::min({r.x[0], r.x[1], r.x[2]}), xhi = std::max({r.x[0], r.x[1], r.x[2]});
+            if (!(xhi >= -1.0 && xlo <= double(W) + 1.0)) return; // entirely left or right of the columns
+            if (center_ && std::ceil(xlo - 0.5) > std::floor(xhi - 0.5)) return;
+            int64_t f, l;
+            coveredRows(r, coverage_, H, f, l);
+            if (f > l) return;
+            // Columns as coveredRows finds rows (clamped in floating point first).
+            const double cf = center_ ? std::ceil(xlo - 0.5) : std::ceil(xlo - kConservativeSlack) - 1.0;
+            const double cl = center_ ? std::floor(xhi - 0.5) : std::floor(xhi + kConservativeSlack);
+            r0 = std::min(r0, f);
+            r1 = std::max(r1, l);
+            x0 = std::min(x0, int64_t(std::clamp(cf, 0.0, double(W - 1))));
+            x1 = std::max(x1, int64_t(std::clamp(cl, 0.0, double(W - 1))));
+        });
+        if (r1 < r0 || x1 < x0) return {0, -1, 0, -1};
+        // A shift for the usual power-of-two tiles: this runs once per triangle and tiling.
+        auto tile = [](int64_t v, int64_t size, int64_t count) {
+            const int64_t index = (size & (size - 1)) == 0 ? v >> std::countr_zero(uint64_t(size)) : v / size;
+            return int32_t(std::clamp<int64_t>(v < 0 ? -1 : index, 0, count - 1));
+        };
+        return {tile(r0 - grow_, rows_, tileRows_), tile(r1 + grow_, rows_, tileRows_),
+                tile(x0 - grow_, cols_, tileColumns_), tile(x1 + grow_, cols_, tileColumns_)};
+    }
+
+private:
+    const RasterSetup& setup_;
+    bool center_;
+    Coverage coverage_;
+    int64_t grow_, rows_, cols_, tileRows_, tileColumns_;
+};
+
+} // namespace
+
+TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsPerTile, int64_t colsPerTile,
+                      int64_t grow, const std::function<void(int64_t entries)>& counted) {
+    const Binner binner(setup, coverage, rowsPerTile, colsPerTile, grow);
     TileBins bins;
     bins.rowsPerTile = rowsPerTile;
-    bins.tileCount = (H + rowsPerTile - 1) / rowsPerTile;
+    bins.colsPerTile = binner.cols();
+    bins.tileColumns = binner.tileColumns();
+    bins.tileCount = binner.tileRows() * binner.tileColumns();
     const int64_t T = int64_t(setup.mesh->triangleCount);
     const int64_t chunks = (T + kBinChunk - 1) / kBinChunk;
     const auto tiles = size_t(bins.tileCount);
-
-    // Tile range [first, last] of triangle t (union over its pieces); empty when last < first.
-    // Centre coverage also drops triangles whose bounding box holds no column centre (same exact
-    // arithmetic as rasterizeCenter): on dense meshes (a million triangles at 512^3) most
-    // triangles are smaller than a cell and never reach a tile.
-    const bool center = coverage == Coverage::Center;
-    auto tileRange = [&](int64_t t, int64_t& first, int64_t& last) {
-        first = bins.tileCount;
-        last = -1;
-        setup.triangle(size_t(t), [&](const RasterTriangle& r) {
-            const double xlo = std::min({r.x[0], r.x[1], r.x[2]}), xhi = std::max({r.x[0], r.x[1], r.x[2]});
-            if (!(xhi >= -1.0 && xlo <= W + 1.0)) return; // entirely left or right of the columns
-            if (center && std::ceil(xlo - 0.5) > std::floor(xhi - 0.5)) return;
-            int64_t r0, r1;
-            coveredRows(r, coverage, H, r0, r1);
-            if (r0 > r1) return;
-            first = std::min(first, r0 / rowsPerTile);
-            last = std::max(last, r1 / rowsPerTile);
-        });
-    };
+    const int64_t TC = bins.tileColumns;
 
     // Pass 1: each triangle's tile range (set up once, kept for pass 2) and counts per
     // (chunk, tile).
-    std::vector<int32_t> ranges(size_t(2 * T));
+    std::vector<TileSpan> spans(static_cast<size_t>(T));
     std::vector<int64_t> counts(size_t(chunks) * tiles, 0);
     parallelFor(0, chunks, 1, [&](int64_t cb, int64_t ce) {
         for (int64_t c = cb; c < ce; ++c) {
             int64_t* row = counts.data() + size_t(c) * tiles;
             for (int64_t t = c * kBinChunk, e = std::min(T, t + kBinChunk); t < e; ++t) {
-                int64_t f, l;
-                tileRange(t, f, l);
-                ranges[size_t(2 * t)] = int32_t(f);
-                ranges[size_t(2 * t + 1)] = int32_t(l);
-                for (int64_t k = f; k <= l; ++k) ++row[k];
+                const TileSpan sp = binner.span(t);
+                spans[size_t(t)] = sp;
+                for (int64_t r = sp.r0; r <= sp.r1; ++r)
+                    for (int64_t k = sp.c0; k <= sp.c1; ++k) ++row[r * TC + k];
             }
         }
     });
@@ -93,14 +138,18 @@ TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsP
         }
     }
     bins.offsets[tiles] = total;
+    if (counted) counted(total);
     bins.entries.resize(size_t(total));
     // Pass 2: fill.
     parallelFor(0, chunks, 1, [&](int64_t cb, int64_t ce) {
         for (int64_t c = cb; c < ce; ++c) {
             int64_t* cur = cursor.data() + size_t(c) * tiles;
-            for (int64_t t = c * kBinChunk, e = std::min(T, t + kBinChunk); t < e; ++t)
-                for (int64_t k = ranges[size_t(2 * t)]; k <= ranges[size_t(2 * t + 1)]; ++k)
-                    bins.entries[size_t(cur[k]++)] = uint32_t(t);
+            for (int64_t t = c * kBinChunk, e = std::min(T, t + kBinChunk); t < e; ++t) {
+                const TileSpan sp = spans[size_t(t)];
+                for (int64_t r = sp.r0; r <= sp.r1; ++r)
+                    for (int64_t k = sp.c0; k <= sp.c1; ++k)
+                        bins.entries[size_t(cur[r * TC + k]++)] = uint32_t(t);
+            }
         }
     });
     return bins;

@@ -91,7 +91,7 @@ BitGrid fillInside(const Frame& frame, const MeshView& mesh, const VoxelizeOptio
         return detail::majority(votes[0].bits, votes[1].bits, votes[2].bits);
     }
     case Fill::Auto:
-        break; // chooseFill replaced it before
+        break; // resolveFill replaced it before
     }
     VOXFX_CHECK(false);
     return {};
@@ -164,9 +164,11 @@ VoxelGrid voxelizeImpl(const MeshView& mesh, const Frame& inFrame, const Voxeliz
     return {};
 }
 
+} // namespace
+
 // Fill::Auto, decided once for every front end: parity is exact for a closed mesh; on an open
 // one it fills wrong cells, and flood is robust to holes narrower than a voxel.
-Fill chooseFill(const MeshView& mesh, const VoxelizeOptions& o) {
+Fill resolveFill(const MeshView& mesh, const VoxelizeOptions& o) {
     VoxelizeReport r;
     r.fill = o.fill;
     if (o.fill == Fill::Auto) {
@@ -187,8 +189,6 @@ Fill chooseFill(const MeshView& mesh, const VoxelizeOptions& o) {
     if (o.report) *o.report = r;
     return r.fill;
 }
-
-} // namespace
 
 const char* toString(VoxelizeMode m) { return enumName(m, kVoxelizeModeNames); }
 
@@ -263,14 +263,15 @@ Frame fitFrame(const Box3d& meshBounds, const FitOptions& o) {
     const int cx = columnXAxis(o.axis), cy = columnYAxis(o.axis), cs = sliceAxis(o.axis);
     std::ostringstream what;
     what << "a " << dims.x << " x " << dims.y << " x " << dims.z << " grid";
-    checkMemory(BitGrid::requiredBytes(dims[cx], dims[cy], dims[cs]), what.str().c_str());
+    if (o.checkDenseMemory)
+        checkMemory(BitGrid::requiredBytes(dims[cx], dims[cy], dims[cs]), what.str().c_str());
     return Frame::orthographic(box, o.axis, dims[cx], dims[cy], dims[cs]);
 }
 
 VoxelGrid voxelize(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options) {
     validateMesh(mesh, "mesh");
     VoxelizeOptions o = options;
-    o.fill = chooseFill(mesh, options);
+    o.fill = resolveFill(mesh, options);
     if (frame.isPerspective() && (o.fill == Fill::Flood || o.fill == Fill::Vote) && needsFill(o.mode))
         fail("fill '", toString(o.fill), "' needs an orthographic frame");
     VoxelGrid result;

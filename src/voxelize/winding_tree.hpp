@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "voxfx/bitgrid.hpp"
@@ -59,5 +60,42 @@ private:
 /// after each tile of 16 x 16 columns; false cancels with voxfx::Error.
 BitGrid gwnFillInside(const Frame& frame, const MeshView& mesh, const WindingTree& tree,
                       const BitGrid& surface, Progress* progress = nullptr);
+
+/// The boundary edges of `mesh` (triangle edges that do not cancel, vertices at one position
+/// merged): where the winding number is not constant across the surface.
+std::vector<std::array<Vec3d, 2>> gwnEdges(const MeshView& mesh);
+
+/// Per column of the window [x0, x0 + width) x [y0, y0 + height) of `frame`: the first slice a
+/// curtain behind a boundary edge may reach (D: none) and the last slice near a boundary edge
+/// (-1: none), exactly the whole grid's values there. `usable` when the counts of crossings along
+/// the columns are exact (orthographic, uniform, no vertex in front of the near plane);
+/// `bothWays` when no vertex lies behind the far plane either.
+struct GwnCurtains {
+    bool usable = false, bothWays = false;
+    int64_t x0 = 0, y0 = 0, width = 0, height = 0;
+    std::vector<int32_t> curtainBottom, edgeTop;
+};
+GwnCurtains gwnCurtains(const Frame& frame, const MeshView& mesh,
+                        const std::vector<std::array<Vec3d, 2>>& edges, int64_t x0, int64_t y0, int64_t width,
+                        int64_t height);
+
+/// The cells the gwn fill decides and what it reads there: the whole grid (gwnFillInside) or one
+/// brick of a tiled voxelization (voxfx/tiled.hpp). Coordinates are the frame's.
+struct GwnRegion {
+    int64_t x0 = 0, y0 = 0, z0 = 0; ///< the region's first cell (a multiple of 16 along every axis)
+    BitGridView out;                ///< the region's cells, zeroed: the inside cells are set
+    /// The conservative surface over the region grown by a cell on every side (clipped to the
+    /// grid), whose first cell is (sx0, sy0, sz0).
+    BitGridView surface;
+    int64_t sx0 = 0, sy0 = 0, sz0 = 0;
+    const GwnCurtains* curtains = nullptr; ///< over the region's columns
+    /// counts(x, y, n) fills n[0 .. out.depth) with the signed count of crossings in front of
+    /// the centres of cells (x, y, z0 ..) of the column and returns the count over the whole
+    /// column (used only when curtains->usable).
+    std::function<int32_t(int64_t x, int64_t y, int32_t* n)> counts;
+};
+/// Fill::Gwn over one region, as gwnFillInside over the whole grid (the same blocks of 16 cells,
+/// so a region's bits are the whole grid's there). Runs on the calling thread.
+void gwnFillRegion(const Frame& frame, const WindingTree& tree, const GwnRegion& region);
 
 } // namespace voxfx::detail
