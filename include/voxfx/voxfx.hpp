@@ -16,6 +16,7 @@
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/raster.hpp"
+#include "voxfx/threshold.hpp"
 #include "voxfx/voxel_grid.hpp"
 #include "voxfx/voxelize.hpp"
 

@@ -1,8 +1,10 @@
-// voxfx voxelize MESH -o GRID — mesh to voxel grid in any mode, with the summary line.
+// voxfx voxelize MESH -o GRID — mesh to voxel grid in any mode, with the summary line; a volume
+// with --threshold T becomes a bit grid on its own lattice (voxelize_volume.cpp).
 #include <iostream>
 
 #include "cli_common.hpp"
 #include "grid_input.hpp"
+#include "voxelize_volume.hpp"
 
 namespace voxfx::cli {
 namespace {
@@ -14,9 +16,16 @@ struct VoxelizeArgs {
     int threads = 0;
     std::string device = "cpu";
     bool quiet = false;
+    bool volume = false; ///< --threshold given: the input is a volume
+    double threshold = 0;
 };
 
 int runVoxelize(const VoxelizeArgs& a) {
+    if (a.volume) {
+        refuseMeshOnlyOptions(a.fit, a.choice, a.device);
+        return runVoxelizeVolume(
+            {a.input, a.output, a.threshold, a.choice.axis, a.choice.vdbFloat, a.threads, a.quiet});
+    }
     const auto t0 = Clock::now();
     // Everything that can be checked before the work starts is checked here, so a bad output
     // name does not cost a voxelization.
@@ -117,6 +126,11 @@ Devices (--device; the grid is the same bit for bit on each):
            the CPU. `voxfx devices` shows whether a GPU is usable.
   auto     the GPU when it can take the job, else the CPU without a word
 
+Volumes (--threshold T): the input is a scalar volume (.inr .inr.gz .nrrd .nhdr .json .vdb, any
+  scalar type) and the grid is its own lattice, voxel for voxel, placed where the volume is: a
+  cell is filled where its sample is >= T (GI08's bit grids of scans, for density, morph, csg
+  and mesh). The fitting options, --mode, --fill, --slicing and --device do not apply.
+
 Formats (by extension): .binvox .vdb (BoolGrid "voxels", or float with --vdb-float)
   .nrrd (uint8) .ply/.obj (mesh of the filled voxels' exposed faces). Written atomically.)";
 
@@ -124,7 +138,9 @@ const Command kVoxelize{
     "voxelize", "Voxelize a mesh into a grid file (.binvox .vdb .nrrd .ply .obj)", [](CLI::App& app) {
         app.footer(kVoxelizeHelp);
         auto a = std::make_shared<VoxelizeArgs>();
-        app.add_option("MESH", a->input, "Mesh file (off, obj, ply, stl, gltf, glb, ...)")->required();
+        app.add_option("MESH", a->input,
+                       "Mesh file (off, obj, ply, stl, gltf, glb, ...), or a volume with --threshold")
+            ->required();
         app.add_option("-o,--output", a->output, "Output grid: .binvox .vdb .nrrd .ply .obj")->required();
         addFitOptions(app, a->fit, voxelizeFitChoices());
         addVoxelizeChoiceOptions(app, a->choice);
@@ -134,7 +150,13 @@ const Command kVoxelize{
         app.add_option("--device", a->device, "Where to voxelize: cpu, cuda or auto (see below)")
             ->default_val("cpu");
         app.add_flag("-q,--quiet", a->quiet, "No summary or progress");
-        return std::function<int()>([a] { return runVoxelize(*a); });
+        CLI::Option* threshold =
+            app.add_option("--threshold", a->threshold,
+                           "The input is a volume: fill the cells whose sample is >= this value (see below)");
+        return std::function<int()>([a, threshold] {
+            a->volume = threshold->count() > 0;
+            return runVoxelize(*a);
+        });
     }};
 
 } // namespace
