@@ -25,6 +25,7 @@
 #include "voxfx/dda.hpp"
 #include "voxfx/density.hpp"
 #include "voxfx/grid_query.hpp"
+#include "voxfx/intersection_volume.hpp"
 #include "voxfx/morphology.hpp"
 #include "voxfx/moving_obstacle.hpp"
 #include "voxfx/particles.hpp"

@@ -36,6 +36,7 @@ from ._voxfx import (  # noqa: E402
     Mesh,
     PointClassifier,
     SurfaceMesh,
+    VolumeEstimate,
     __version__,
     closing,
     compute_density,
@@ -46,6 +47,7 @@ from ._voxfx import (  # noqa: E402
     erode,
     extract_surface,
     from_numpy,
+    intersection_volume,
     load_mesh,
     morphology,
     opening,
@@ -106,8 +108,9 @@ batch.__doc__ = _batch.__doc__ + (
 GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj")
 
 __all__ = [
-    "Density", "Error", "Grid", "Mesh", "PointClassifier", "SurfaceMesh", "GRID_FORMATS", "batch", "closing",
-    "compute_density",
-    "contains", "cuda_status", "csg", "dilate", "erode", "extract_surface", "from_numpy", "load_mesh", "morphology",
+    "Density", "Error", "Grid", "Mesh", "PointClassifier", "SurfaceMesh", "VolumeEstimate", "GRID_FORMATS", "batch",
+    "closing", "compute_density",
+    "contains", "cuda_status", "csg", "dilate", "erode", "extract_surface", "from_numpy", "intersection_volume",
+    "load_mesh", "morphology",
     "opening", "read_grid", "resample_to_uniform", "reslice", "voxelize",
 ]

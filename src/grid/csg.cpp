@@ -474,6 +474,52 @@ BitGrid evaluateCsg(const CsgNode& node, const std::function<BitGrid(const std::
     return acc;
 }
 
+CsgBounds voxelizeCsgBounds(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options,
+                            BitGrid* solid) {
+    VoxelizeOptions vo = options;
+    vo.mode = VoxelizeMode::Solid;
+    vo.slicing = Slicing::Uniform;
+    CsgBounds b{voxelize(mesh, frame, vo).bits, {}};
+    vo.mode = VoxelizeMode::Conservative;
+    vo.report = nullptr; // the solid pass reported the fill
+    const BitGrid surface = voxelize(mesh, frame, vo).bits;
+    b.upper = csg(b.lower, surface, CsgOp::Union);
+    if (solid) *solid = b.lower;
+    csgInPlace(b.lower, surface, CsgOp::Difference);
+    return b;
+}
+
+CsgBounds evaluateCsgBounds(const CsgNode& node, const std::function<CsgBounds(const std::string&)>& leaf) {
+    if (node.isMesh) return leaf(node.mesh);
+    if (node.args.empty()) fail("CSG operation ", toString(node.op), " without arguments");
+    CsgBounds acc = evaluateCsgBounds(node.args[0], leaf);
+    for (size_t i = 1; i < node.args.size(); ++i) {
+        const CsgBounds b = evaluateCsgBounds(node.args[i], leaf);
+        switch (node.op) {
+        case CsgOp::Union:
+        case CsgOp::Intersection:
+            csgInPlace(acc.lower, b.lower, node.op);
+            csgInPlace(acc.upper, b.upper, node.op);
+            break;
+        case CsgOp::Difference:
+            csgInPlace(acc.lower, b.upper, CsgOp::Difference);
+            csgInPlace(acc.upper, b.lower, CsgOp::Difference);
+            break;
+        case CsgOp::Xor: {
+            // Surely inside: one surely in and the other surely out. Possibly inside: possibly in
+            // either, unless surely in both.
+            BitGrid lower = csg(acc.lower, b.upper, CsgOp::Difference);
+            csgInPlace(lower, csg(b.lower, acc.upper, CsgOp::Difference), CsgOp::Union);
+            csgInPlace(acc.upper, b.upper, CsgOp::Union);
+            csgInPlace(acc.upper, csg(acc.lower, b.lower, CsgOp::Intersection), CsgOp::Difference);
+            acc.lower = std::move(lower);
+            break;
+        }
+        }
+    }
+    return acc;
+}
+
 VoxelGrid voxelizeCsg(const CsgNode& node, const std::vector<CsgMesh>& meshes, const FitOptions& fit,
                       const VoxelizeOptions& voxelize) {
     const std::vector<std::string> names = csgMeshes(node);
