@@ -52,6 +52,31 @@ ParityCheck againstRayParity(const Mesh& mesh, const VoxelGrid& g, Centres centr
     return r;
 }
 
+TEST(VoxelizeTest, CubeFitGivesAnNCubedGridOfCubicCellsCentredOnTheBounds) {
+    const Box3d bounds{{1, -2, 0.5}, {4, -1.5, 1.5}}; // extents 3, 0.5, 1
+    FitOptions fo;
+    fo.resolution = 12;
+    fo.cube = true;
+    for (const int64_t margin : {0, 2}) {
+        fo.marginCells = margin;
+        const Frame f = fitFrame(bounds, fo);
+        const int64_t n = 12 + 2 * margin;
+        EXPECT_EQ(f.width(), n);
+        EXPECT_EQ(f.height(), n);
+        EXPECT_EQ(f.depth(), n);
+        const Vec3d cell = f.cellSize();
+        for (int a = 0; a < 3; ++a) {
+            EXPECT_DOUBLE_EQ(cell[a], 3.0 / 12);
+            EXPECT_DOUBLE_EQ(f.box().lo[a] + f.box().hi[a], bounds.lo[a] + bounds.hi[a]); // centred
+        }
+        // The longest axis is filled exactly, less the margins.
+        EXPECT_DOUBLE_EQ(f.box().lo.x + double(margin) * cell.x, 1.0);
+    }
+    fo.resolution = 0;
+    fo.voxelSize = 0.5;
+    EXPECT_THROW(fitFrame(bounds, fo), Error);
+}
+
 TEST(VoxelizeTest, BoxInsideCellsGivesHandCountedVoxels) {
     // Faces at 1.3 and 8.7: centres 1.5 .. 8.5 inside (8 per axis); the surface touches cells
     // 1 .. 8 along each axis, so the conservative shell is 8^3 - 6^3.

@@ -26,10 +26,11 @@
 //                       holes and bad triangles (an error must fool two of three axes), costs 3×.
 //   Fill::Winding       nonzero winding number from per-column sorted front/back fragments: the
 //                       union of overlapping closed parts (needs consistent orientation).
-//   Fill::Gwn           generalized winding number >= 0.5 at the cell centre (Jacobson et al.
+//   Fill::Gwn           generalized winding number |w| >= 0.5 at the cell centre (Jacobson et al.
 //                       2013), fast approximation after Barill et al. 2018 (the evaluator of
 //                       contains()' winding method, beta 2). Closes holes wider than a cell that
-//                       let the flood in; needs consistent orientation; evaluates near boundary
+//                       let the flood in; needs orientation consistent within each closed part,
+//                       outward or inward (as contains()' winding method); evaluates near boundary
 //                       edges, where it is near 0.5, and a few centres per block (voxfx/contains.hpp).
 // Thread-safety: calls may run concurrently on shared const meshes (no global state); each call
 // spreads its tiles over worker threads (`threads`); results do not depend on their number.
@@ -113,6 +114,8 @@ struct VoxelizeOptions {
 ///   resolution N: the longest extent of the bounds gets N cells; other axes get
 ///                 ceil(extent / cell) cells (at least 1); the grid is centred on the bounds.
 ///   voxelSize S:  cubic cells of edge S; dims = ceil(extent / S), grid centred on the bounds.
+///   cube:         with resolution N: N cells along every axis, of the longest extent's size
+///                 (cubic), the bounds centred: an N x N x N grid, never stretched.
 ///   dims (W,H,D): world-axis cell counts (x, y, z), cells fill the bounds exactly (non-cubic).
 ///   bounds:       box to fit instead of the mesh bounds (e.g. shared by several meshes).
 /// Margin: `marginCells` empty cells are added on every side (default 0; cell centres then sit
@@ -121,7 +124,8 @@ struct FitOptions {
     int64_t resolution = 0;
     double voxelSize = 0;
     Vec3i dims{0, 0, 0};
-    Box3d bounds; ///< empty = mesh bounds
+    bool cube = false; ///< with resolution: resolution^3 cubic cells (see above)
+    Box3d bounds;      ///< empty = mesh bounds
     int64_t marginCells = 0;
     Axis axis = Axis::Z;
 };

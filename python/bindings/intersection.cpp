@@ -13,20 +13,35 @@ Mat4d affineArgument(const py::object& obj, const char* name) {
     if (obj.is_none()) return t;
     const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(obj);
     if (!a || a.ndim() != 2 || a.shape(1) != 4 || (a.shape(0) != 3 && a.shape(0) != 4))
-        throw py::value_error(std::string(name) + " must be an array of shape (4, 4) or (3, 4)");
+        throw ArgumentError(std::string(name) + " must be an array of shape (4, 4) or (3, 4)");
     for (py::ssize_t i = 0; i < a.shape(0); ++i)
         for (py::ssize_t j = 0; j < 4; ++j) t.m[i][j] = a.at(i, j);
     if (a.shape(0) == 4 && !(t.m[3][0] == 0 && t.m[3][1] == 0 && t.m[3][2] == 0 && t.m[3][3] == 1))
-        throw py::value_error(std::string(name) + " must be affine: last row (0, 0, 0, 1)");
+        throw ArgumentError(std::string(name) + " must be affine: last row (0, 0, 0, 1)");
     return t;
 }
 
 VoxelizeOptions fillOptions(const std::string& fill, int threads) {
-    if (threads < 0) throw py::value_error("threads must be >= 0");
+    if (threads < 0) throw ArgumentError("threads must be >= 0");
     VoxelizeOptions vo;
-    vo.fill = parseFill(fill);
+    vo.fill = asArgument([&] { return parseFill(fill); });
     vo.threads = threads;
     return vo;
+}
+
+/// The map from a mesh's stored positions to world: `transform` after the mesh's origin (float64
+/// input recentred by meshArgument).
+Mat4d placement(const PyMesh& mesh, const Mat4d& transform) {
+    Mat4d shift;
+    for (int a = 0; a < 3; ++a) shift.m[a][3] = mesh.origin[a];
+    return transform * shift;
+}
+
+/// Runs f(cancel) without the GIL, stopping at Ctrl-C (interruptible).
+template <class F> VolumeEstimate estimate(F&& f) {
+    VolumeEstimate e;
+    interruptible([&](Cancel& cancel) { e = f(cancel); });
+    return e;
 }
 
 } // namespace
@@ -53,27 +68,32 @@ void bindIntersection(py::module_& m) {
             const VoxelizeOptions vo = fillOptions(fill, threads);
             if (py::isinstance<VoxelGrid>(a) && py::isinstance<VoxelGrid>(b)) {
                 if (!transform.is_none() || !transformB.is_none())
-                    throw py::value_error("two grids share one frame: no transform applies");
+                    throw ArgumentError("two grids share one frame: no transform applies");
                 const auto& ga = a.cast<const VoxelGrid&>();
                 const auto& gb = b.cast<const VoxelGrid&>();
-                py::gil_scoped_release release;
-                return intersectionVolume(ga, gb);
+                return estimate([&](Cancel&) { return intersectionVolume(ga, gb); });
             }
             if (py::isinstance<VoxelGrid>(a)) {
                 if (!transformB.is_none())
-                    throw py::value_error("grid and mesh: the mesh's map is `transform`");
+                    throw ArgumentError("grid and mesh: the mesh's map is `transform`");
                 const auto& g = a.cast<const VoxelGrid&>();
                 const auto mesh = meshArgument(b, py::none());
-                const Mat4d t = affineArgument(transform, "transform");
-                py::gil_scoped_release release;
-                return intersectionVolume(g, mesh->mesh.view(), t, vo);
+                const Mat4d t = placement(*mesh, affineArgument(transform, "transform"));
+                return estimate([&](Cancel& cancel) {
+                    VoxelizeOptions o = vo;
+                    o.progress = &cancel;
+                    return intersectionVolume(g, mesh->mesh.view(), t, o);
+                });
             }
             const auto ma = meshArgument(a, py::none()), mb = meshArgument(b, py::none());
-            const Mat4d ta = affineArgument(transform, "transform"),
-                        tb = affineArgument(transformB, "transform_b");
-            const FitOptions fo = fitOptions(resolution, voxelSize, std::nullopt, std::nullopt, 0, "z");
-            py::gil_scoped_release release;
-            return intersectionVolume(ma->mesh.view(), ta, mb->mesh.view(), tb, fo, vo);
+            const Mat4d ta = placement(*ma, affineArgument(transform, "transform")),
+                        tb = placement(*mb, affineArgument(transformB, "transform_b"));
+            const FitOptions fo = fitOptions(resolution, voxelSize, std::nullopt, py::none(), 0, "z");
+            return estimate([&](Cancel& cancel) {
+                VoxelizeOptions o = vo;
+                o.progress = &cancel;
+                return intersectionVolume(ma->mesh.view(), ta, mb->mesh.view(), tb, fo, o);
+            });
         },
         py::arg("a"), py::arg("b"), py::kw_only(), py::arg("transform") = py::none(),
         py::arg("transform_b") = py::none(), py::arg("resolution") = py::none(),

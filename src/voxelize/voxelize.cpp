@@ -81,7 +81,7 @@ BitGrid fillInside(const Frame& frame, const MeshView& mesh, const VoxelizeOptio
         const BitGrid walls = surface ? BitGrid() : rasterizeInto(frame, mesh, VoxelizeMode::Conservative, o);
         detail::WindingTree tree;
         tree.build(mesh, 2.0);
-        return detail::gwnFillInside(frame, mesh, tree, surface ? *surface : walls);
+        return detail::gwnFillInside(frame, mesh, tree, surface ? *surface : walls, o.progress);
     }
     case Fill::Vote: {
         requireUniformOrthographic(frame, o.fill);
@@ -223,6 +223,7 @@ Frame fitFrame(const Box3d& meshBounds, const FitOptions& o) {
     const int given = (o.resolution > 0) + (o.voxelSize > 0) + (o.dims.x > 0 || o.dims.y > 0 || o.dims.z > 0);
     if (given != 1) fail("give exactly one of resolution, voxel size or dims");
     if (o.marginCells < 0) fail("the margin must be >= 0 cells, got ", o.marginCells);
+    if (o.cube && o.resolution <= 0) fail("a cube grid needs a resolution");
     const Vec3d ext = bounds.extent();
     Vec3i dims;
     Vec3d cell;
@@ -247,7 +248,7 @@ Frame fitFrame(const Box3d& meshBounds, const FitOptions& o) {
         for (int a = 0; a < 3; ++a) {
             // Cells along the axis; the longest axis of a resolution fit gets exactly N (the tiny
             // tolerance keeps rounding from adding a cell there).
-            const double n = std::ceil(ext[a] / size * (1.0 - 1e-12));
+            const double n = o.cube ? double(o.resolution) : std::ceil(ext[a] / size * (1.0 - 1e-12));
             if (n > 1e9)
                 fail("the grid would need ", n, " cells along ", toString(Axis(a)),
                      "; use a larger voxel size");
