@@ -109,10 +109,8 @@ struct Register {
                 benchmark::RegisterBenchmark(
                     (std::string(baseline ? "SliceBySlice/" : "SinglePass/") + name).c_str(),
                     [=](benchmark::State& s) { solidBench(s, name, baseline); })
-                    ->Arg(128)
-                    ->Arg(256)
-                    ->Arg(512)
-                    ->Arg(1024)
+                    ->RangeMultiplier(2)
+                    ->Range(128, 1024)
                     ->Unit(benchmark::kMillisecond)
                     ->UseRealTime();
     }
