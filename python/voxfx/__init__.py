@@ -8,6 +8,7 @@
     grid.save("bunny.binvox")                      # .binvox .vdb .nrrd .ply .obj
     inside = voxfx.contains(mesh, points)          # exact point occupancy, (K,) bool
     report = voxfx.batch("meshes.txt", "out/", resolution=64)   # many meshes, as `voxfx batch`
+    image = voxfx.render("scene.json", shadows="deep", epsilon=0.02)  # (H, W, 3) float32, linear RGB
 
 Errors raise voxfx.Error (a RuntimeError) with the library's message, bad arguments
 voxfx.ArgumentError (also a ValueError). Long calls release the GIL and stop at Ctrl-C. See also
@@ -17,8 +18,8 @@ command line.
 import __future__
 
 from . import _voxfx
-from ._voxfx import (ArgumentError, Density, Error, Grid, Mesh, PointClassifier, SurfaceMesh, VolumeEstimate,
-                     __version__)
+from ._voxfx import (ArgumentError, Density, Error, Grid, Mesh, PointClassifier, Scene, SurfaceMesh,
+                     VolumeEstimate, __version__)
 
 # The I/O modules (voxfx_vdb.so, ...) lie next to _voxfx (the library looks there): nothing is
 # set in os.environ.
@@ -55,7 +56,7 @@ def _with_signature(f):
 _FUNCTIONS = [
     "closing", "compute_density", "contains", "csg", "cuda_status", "dilate", "erode", "extract_surface",
     "from_numpy", "intersection_volume", "load_mesh", "morphology", "opening", "read_grid", "resample_to_uniform",
-    "reslice", "voxelize", "batch_jobs",
+    "reslice", "voxelize", "batch_jobs", "glass_methods", "load_scene", "render", "render_options", "shadow_kinds",
 ]
 for _name in _FUNCTIONS:
     globals()[_name] = _with_signature(getattr(_voxfx, _name))
@@ -112,5 +113,6 @@ if hasattr(_batch, "__wrapped__"):
 #: File extension of each grid format that Grid.save writes.
 GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj")
 
-__all__ = ["ArgumentError", "Density", "Error", "Grid", "Mesh", "PointClassifier", "SurfaceMesh", "VolumeEstimate",
-           "GRID_FORMATS", "batch", *sorted(_FUNCTIONS)]
+__all__ = ["ArgumentError", "Density", "Error", "Grid", "Mesh", "PointClassifier", "Scene", "SurfaceMesh",
+           "VolumeEstimate", "GRID_FORMATS",
+           "batch", *sorted(_FUNCTIONS)]

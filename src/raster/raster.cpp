@@ -5,6 +5,16 @@
 #include <cmath>
 #include <limits>
 
+namespace voxfx {
+
+const char* toString(Coverage c) { return enumName(c, kCoverageNames); }
+
+Coverage parseCoverage(const std::string& name) {
+    return parseEnum<Coverage>(name, "coverage", kCoverageNames);
+}
+
+} // namespace voxfx
+
 namespace voxfx::detail {
 
 namespace {
