@@ -227,6 +227,13 @@ void markNearlyDegenerateCentres(const MeshView& mesh, const Frame& frame, doubl
 /// manifold. Decides points lying exactly on the surface by the tie rule of voxfx/contains.hpp.
 std::vector<int> sideOfClosedMeshPerturbed(const MeshView& mesh, const std::vector<Vec3d>& points);
 
+/// The exact volume of the intersection of the solids of two closed meshes (each a closed,
+/// consistently oriented, self-intersection-free surface that bounds a volume, positions as
+/// stored): CGAL::Polygon_mesh_processing::corefine_and_compute_intersection with exact
+/// constructions (Exact_predicates_exact_constructions_kernel), then PMP::volume of the result,
+/// rounded to double only at the end. NaN when an input fails those conditions or CGAL refuses.
+double oracleIntersectionVolume(const MeshView& a, const MeshView& b);
+
 /// CGAL::orientation on the double inputs: 1 left turn (counter-clockwise), -1 right turn, 0
 /// collinear.
 int oracleOrient2d(double ax, double ay, double bx, double by, double cx, double cy);

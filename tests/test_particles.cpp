@@ -126,6 +126,182 @@ TEST(ParticlesTest, BounceOnAFlatFloorReflectsTheNormalVelocity) {
     EXPECT_FLOAT_EQ(ps.vz[1], -1.0f);
 }
 
+// --- Slanted and curved surfaces against the analytic reflection (GI08 §7) ------------------
+//
+// One bounce per particle, gravity off (the path of a step is then the straight line the closed
+// forms use), restitution e and no friction: the analytic velocity after the bounce is
+// v - (1 + e) (v . n) n with n the true surface normal at the true contact point Q, the crossing
+// of the path with the true surface. The simulator stops the particle where its path enters the
+// first filled cell and reflects about the density normal there. Tolerances:
+//  - contact point: the stop S lies on the face between the last free cell (centre outside) and
+//    the filled one (centre inside), so a segment from either centre to S crosses the surface
+//    within the distance between them, sqrt(3)/2 h (h the cell size): |d(S)| < sqrt(3)/2 h for
+//    a plane's signed distance d; the particle then sits at most 1e-3 h per axis inside the free
+//    cell (particles.cpp's inset). Along a path at angle theta to the normal that is
+//    |S - Q| <= (sqrt(3)/2 + sqrt(3) 1e-3) h / cos(theta) + sqrt(3) 1e-3 h.
+//  - direction: v - (1 + e) (v . n') n' differs from v - (1 + e) (v . n) n by
+//    (1 + e) |(n' n'^T - n n^T) v| <= (1 + e) |v| sin(delta) for normals delta apart (the two
+//    projections differ by sin(delta) in norm). delta is the density normal's error:
+//    kPlaneNormalDegrees on a plane (measured below over 48 planes at the finest kernel, level 1:
+//    the 2 x 2 x 2 blocks' counts are small integers, so a shallow staircase turns the gradient
+//    by up to about 20 degrees), plus, on a sphere of radius R, the turn of the true normal
+//    between Q and S, |S - Q| / (R - |S - Q|), plus the kernel's reach on a curved surface, the
+//    2 x 2 x 2 density cells differenced over two cells each way: 4 h / R.
+
+// The density normal of a centre-sampled plane, level 1, is within this of the true normal
+// (measured over the planes of PlaneDensityNormalIsWithinItsMeasuredBound: at most 19.35 degrees).
+constexpr double kPlaneNormalDegrees = 20.0;
+
+// Half the world of a unit-cell grid [0, 64]^3 is solid below the plane through `point` with
+// unit normal `n`: a slab 24 cells thick and 200 wide, cut by the grid.
+Mesh makeSlabBelowPlane(const Vec3d& point, const Vec3d& n) {
+    const Vec3d t1 = normalize(std::abs(n.x) < 0.9 ? cross(n, Vec3d{1, 0, 0}) : cross(n, Vec3d{0, 1, 0}));
+    const Vec3d t2 = cross(n, t1); // (t1, t2, n) right-handed
+    Mesh local = test::makeBox({-100, -100, -24}, {100, 100, 0});
+    for (Vec3f& p : local.positions) {
+        const Vec3d q(p);
+        p = Vec3f(point + t1 * q.x + t2 * q.y + n * q.z);
+    }
+    return local;
+}
+
+Vec3d tiltedNormal(double tiltDegrees, double azimuthDegrees) {
+    const double a = tiltDegrees * M_PI / 180, b = azimuthDegrees * M_PI / 180;
+    return {std::sin(a) * std::cos(b), std::sin(a) * std::sin(b), std::cos(a)};
+}
+
+double angleDegrees(const Vec3d& a, const Vec3d& b) {
+    return std::acos(std::clamp(dot(normalize(a), normalize(b)), -1.0, 1.0)) * 180 / M_PI;
+}
+
+VoxelGrid slabGrid(const Mesh& m, int64_t n = 64) {
+    return voxelize(m.view(),
+                    Frame::orthographic({{0, 0, 0}, {double(n), double(n), double(n)}}, Axis::Z, n, n, n));
+}
+
+TEST(ParticlesTest, PlaneDensityNormalIsWithinItsMeasuredBound) {
+    // The bound the bounce tests rely on: at points of the plane away from the grid's sides,
+    // the collider's normal against the plane's, over tilts up to 75 degrees and 8 azimuths.
+    double worst = 0;
+    for (const double tilt : {0.0, 10.0, 22.5, 35.0, 45.0, 60.0})
+        for (const double azimuth : {0.0, 17.0, 45.0, 72.0, 101.0, 160.0, 215.0, 300.0}) {
+            const Vec3d n = tiltedNormal(tilt, azimuth);
+            const Vec3d c{32.3, 31.8, 32.1};
+            const ParticleCollider collider(slabGrid(makeSlabBelowPlane(c, n)));
+            for (const Vec3d off :
+                 {Vec3d{0, 0, 0}, Vec3d{7.3, -5.1, 0}, Vec3d{-9.4, 8.2, 0}, Vec3d{4.4, 11.9, 0}}) {
+                // A point on the plane, moved along it.
+                Vec3d p = c + off;
+                p -= n * dot(p - c, n);
+                worst = std::max(worst, angleDegrees(collider.normalAt(p), n));
+            }
+        }
+    std::cout << "[ particles ] plane density normal: worst " << worst << " degrees\n";
+    EXPECT_LE(worst, kPlaneNormalDegrees);
+    EXPECT_GT(worst, 0.5); // the staircase is visible: the bound is not vacuous
+}
+
+struct Bounce {
+    double contactError = 0, contactBound = 0; // |S - Q| and its bound, world units
+    double velocityError = 0, velocityBound = 0;
+    double turnDegrees = 0; // angle between the velocity after the bounce and the analytic one
+};
+
+// One particle from `start` with velocity `v` (gravity off) over one step of `dt` against the
+// collider; the analytic contact `q`, normal `n` there, and the bound on the normal's error.
+Bounce bounceOnce(const ParticleCollider& collider, const Vec3d& start, const Vec3d& v, double dt, double e,
+                  const Vec3d& q, const Vec3d& n, double normalErrorRadians, double h) {
+    Particles ps;
+    ps.push(Vec3f(start), Vec3f(v));
+    ParticleOptions o;
+    o.gravity = {0, 0, 0};
+    o.dt = dt;
+    o.restitution = e;
+    o.friction = 0;
+    const StepStats stats = stepParticles(ps, collider, o);
+    EXPECT_EQ(stats.bounces, 1) << "from (" << start.x << ", " << start.y << ", " << start.z << ")";
+    Bounce b;
+    const double cosTheta = std::abs(dot(normalize(v), n));
+    b.contactError = length(Vec3d(ps.position(0)) - q);
+    b.contactBound =
+        ((std::sqrt(3.0) / 2 + std::sqrt(3.0) * 1e-3) / cosTheta + std::sqrt(3.0) * 1e-3 + 1e-4) * h;
+    const Vec3d expected = v - n * ((1 + e) * dot(v, n));
+    b.velocityError = length(Vec3d(ps.velocity(0)) - expected);
+    b.velocityBound =
+        (1 + e) * length(v) * std::sin(std::min(normalErrorRadians, M_PI / 2)) + 1e-5 * length(v);
+    b.turnDegrees = angleDegrees(Vec3d(ps.velocity(0)), expected);
+    return b;
+}
+
+TEST(ParticlesTest, BallDroppedOnAnInclinedPlaneBouncesAboutThePlaneNormal) {
+    // A ball falling straight down onto planes tilted by 15-60 degrees: it must touch the plane
+    // where the vertical line meets it, and leave along the mirror image of its fall (2 x tilt
+    // from the vertical for e = 1), within the tolerances above.
+    const double delta = kPlaneNormalDegrees * M_PI / 180;
+    int bounces = 0;
+    for (const double tilt : {15.0, 30.0, 45.0, 60.0})
+        for (const double azimuth : {20.0, 135.0, 250.0}) {
+            const Vec3d n = tiltedNormal(tilt, azimuth), c{32.2, 31.9, 32.4};
+            const ParticleCollider collider(slabGrid(makeSlabBelowPlane(c, n)));
+            for (const double e : {1.0, 0.5})
+                for (const Vec3d off :
+                     {Vec3d{0.3, 0.1, 0}, Vec3d{-6.7, 4.9, 0}, Vec3d{8.1, 7.3, 0}, Vec3d{3.3, -9.6, 0}}) {
+                    // Q on the plane above (x, y); the ball starts 3 cells above it, falls 6 per step.
+                    const Vec3d xy = c + off;
+                    const Vec3d q{xy.x, xy.y, c.z - (n.x * (xy.x - c.x) + n.y * (xy.y - c.y)) / n.z};
+                    const Bounce b =
+                        bounceOnce(collider, q + Vec3d{0, 0, 3}, {0, 0, -60}, 0.1, e, q, n, delta, 1.0);
+                    EXPECT_LE(b.contactError, b.contactBound) << "tilt " << tilt << " azimuth " << azimuth;
+                    EXPECT_LE(b.velocityError, b.velocityBound) << "tilt " << tilt << " azimuth " << azimuth;
+                    ++bounces;
+                }
+        }
+    EXPECT_EQ(bounces, 96);
+}
+
+TEST(ParticlesTest, ParticleStreamOntoASphereReflectsAboutTheSphereNormal) {
+    // A vertical stream onto a sphere of radius 20 cells (a UV sphere of 96 x 192 quads: its
+    // facets stay within R (1 - cos(pi / 96)) = 0.011 cells of the sphere, added to the contact
+    // bound), offsets up to 0.8 R from the axis (incidence up to 53 degrees). At twice the
+    // resolution the same stream must still meet its (halved) bounds.
+    for (const int64_t cells : {64, 128}) {
+        const double h = 64.0 / double(cells), R = 20;
+        const Vec3d centre{32.1, 31.7, 30.2};
+        const Mesh sphere = test::makeUvSphere(centre, R, 96, 192);
+        const ParticleCollider collider(voxelize(
+            sphere.view(), Frame::orthographic({{0, 0, 0}, {64, 64, 64}}, Axis::Z, cells, cells, cells)));
+        double worstContact = 0, worstVelocity = 0;
+        int bounces = 0;
+        for (int i = -4; i <= 4; ++i)
+            for (int j = -4; j <= 4; ++j) {
+                const double dx = 0.2 * R * i + 0.37, dy = 0.2 * R * j - 0.21;
+                if (dx * dx + dy * dy > 0.64 * R * R) continue;
+                const Vec3d q = centre + Vec3d{dx, dy, std::sqrt(R * R - dx * dx - dy * dy)};
+                const Vec3d n = (q - centre) / R;
+                const double tessellation = R * (1 - std::cos(M_PI / 96));
+                // The contact's bound first, then the normal's: the true normal turns by at
+                // most |S - Q| / (R - |S - Q|) between the contact and the stop.
+                const double cosTheta = n.z;
+                const double contact =
+                    ((std::sqrt(3.0) / 2 + std::sqrt(3.0) * 1e-3) / cosTheta + std::sqrt(3.0) * 1e-3) * h +
+                    tessellation / cosTheta;
+                const double delta = kPlaneNormalDegrees * M_PI / 180 + contact / (R - contact) + 4 * h / R;
+                Bounce b =
+                    bounceOnce(collider, q + Vec3d{0, 0, 3 * h}, {0, 0, -60 * h}, 0.1, 1.0, q, n, delta, h);
+                b.contactBound += tessellation / cosTheta;
+                EXPECT_LE(b.contactError, b.contactBound) << "offset " << dx << ", " << dy << " at " << cells;
+                EXPECT_LE(b.velocityError, b.velocityBound)
+                    << "offset " << dx << ", " << dy << " at " << cells;
+                worstContact = std::max(worstContact, b.contactError / h);
+                worstVelocity = std::max(worstVelocity, b.turnDegrees);
+                ++bounces;
+            }
+        EXPECT_GE(bounces, 40);
+        std::cout << "[ particles ] sphere at " << cells << "^3: worst contact " << worstContact
+                  << " cells, worst reflection " << worstVelocity << " degrees\n";
+    }
+}
+
 TEST(ParticlesTest, MovingObstaclePushesParticlesOut) {
     VoxelGrid g{Frame::orthographic({{0, 0, 0}, {16, 16, 16}}, Axis::Z, 16, 16, 16), BitGrid(16, 16, 16)};
     ParticleCollider collider(g);

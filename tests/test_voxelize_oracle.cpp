@@ -309,6 +309,179 @@ TEST(VoxelizeOracleTest, SolidAndConservativeMatchCgalWhenTheGridCutsThroughTheM
     }
 }
 
+// --- Perspective frames whose near plane cuts the mesh (GI08 §5, depth clamping) -------------
+
+// A perspective frame as its parameters, and the centre of its cell (x, y, s) computed from them
+// alone (not through Frame::cellCenter or gridFromWorld): forward = target - eye normalized,
+// right = forward x up normalized, up' = right x forward (Frame::perspective's basis); column
+// (x, y) is the ray through the pixel centre, whose view-plane offsets at unit depth are
+// ((x + 0.5) / W * 2 - 1) tan(fovX / 2) and ((y + 0.5) / H * 2 - 1) tan(fovY / 2) with
+// tan(fovX / 2) = tan(fovY / 2) W / H (square pixels); slices are uniform in view depth between
+// near and far, so cell s is centred at depth near + (s + 0.5) (far - near) / D.
+struct PerspectiveCase {
+    std::string what;
+    Vec3d eye, target, up;
+    double fovY;
+    int64_t W, H, D;
+    double nearDepth, farDepth;
+
+    Frame frame() const { return Frame::perspective(eye, target, up, fovY, W, H, nearDepth, farDepth, D); }
+    Vec3d centre(int64_t x, int64_t y, int64_t s) const {
+        const Vec3d f = normalize(target - eye);
+        const Vec3d r = normalize(cross(f, up));
+        const Vec3d u = cross(r, f);
+        const double ty = std::tan(0.5 * fovY), tx = ty * double(W) / double(H);
+        const double ox = ((double(x) + 0.5) / double(W) * 2 - 1) * tx;
+        const double oy = ((double(y) + 0.5) / double(H) * 2 - 1) * ty;
+        const double depth = nearDepth + (double(s) + 0.5) * (farDepth - nearDepth) / double(D);
+        return eye + (f + r * ox + u * oy) * depth;
+    }
+};
+
+// Solid voxelization in `c`'s frame against CGAL::Side_of_triangle_mesh at the centres computed
+// from the frame's parameters. A centre that CGAL finds on the surface is left out; so is a
+// mismatch whose centre lies within 1e-9 of the mesh size of the surface along its column's ray
+// (CGAL's exact segment test): the rasterizer decides "the crossing is in front of the centre"
+// in rounded camera coordinates, so a centre that close may fall either way. Returns the
+// mismatches; `inside` receives the centres CGAL finds inside.
+int64_t perspectiveMismatches(const Mesh& mesh, const PerspectiveCase& c, int64_t& inside) {
+    const VoxelGrid g = run(mesh, c.frame(), VoxelizeMode::Solid);
+    std::vector<Vec3d> centres;
+    for (int64_t y = 0; y < c.H; ++y)
+        for (int64_t x = 0; x < c.W; ++x)
+            for (int64_t s = 0; s < c.D; ++s) centres.push_back(c.centre(x, y, s));
+    const std::vector<int> side = test::sideOfClosedMesh(mesh.view(), centres);
+    EXPECT_EQ(side.size(), centres.size());
+    const double eps = 1e-9 * length(computeBounds(mesh.view()).extent());
+    std::vector<Vec3d> from, to;
+    std::string examples;
+    inside = 0;
+    std::size_t i = 0;
+    for (int64_t y = 0; y < c.H; ++y)
+        for (int64_t x = 0; x < c.W; ++x)
+            for (int64_t s = 0; s < c.D; ++s, ++i) {
+                if (i >= side.size() || side[i] == 0) continue;
+                inside += side[i] > 0;
+                if ((side[i] > 0) == g.bits.get(x, y, s)) continue;
+                const Vec3d ray = normalize(centres[i] - c.eye);
+                from.push_back(centres[i] - ray * eps);
+                to.push_back(centres[i] + ray * eps);
+                if (from.size() <= 6)
+                    examples += " (" + std::to_string(x) + ", " + std::to_string(y) + ", " +
+                                std::to_string(s) + (side[i] > 0 ? ") missing" : ") extra");
+            }
+    int64_t wrong = 0;
+    for (const uint8_t nearSurface : test::oracleSegmentsHitMesh(mesh.view(), from, to))
+        wrong += !nearSurface;
+    if (wrong > 0) ADD_FAILURE() << c.what << ": " << wrong << " cells differ from CGAL:" << examples;
+    return wrong;
+}
+
+// The view depths of the mesh's vertices from `eye` along `forward` (unit).
+std::pair<double, double> depthRange(const Mesh& mesh, const Vec3d& eye, const Vec3d& forward) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (const Vec3f& p : mesh.positions) {
+        const double z = dot(Vec3d(p) - eye, forward);
+        lo = std::min(lo, z);
+        hi = std::max(hi, z);
+    }
+    return {lo, hi};
+}
+
+TEST(VoxelizeOracleTest, PerspectiveSolidMatchesCgalWhenTheNearPlaneCutsTheMesh) {
+    // The eye outside the mesh, the near plane a quarter, half and three quarters of the way
+    // through it: the parts between the eye and the near plane still flip their columns (GI08's
+    // depth clamping), so the cells behind them stay inside.
+    struct View {
+        const char* mesh;
+        Vec3d direction; // from the mesh's centre towards the eye
+        Vec3d up;
+    };
+    for (const View& v :
+         {View{"bunny00", {0.6, -0.9, 0.5}, {0, 0, 1}}, View{"armadillo", {-0.3, 0.2, -1}, {0, 1, 0}},
+          View{"knot1", {1, 0.4, 0.7}, {0, 0, 1}}, View{"elephant", {0.2, 1, -0.4}, {1, 0, 0}}}) {
+        LOAD_CLOSED_MESH(mesh, v.mesh);
+        const Box3d b = computeBounds(mesh.view());
+        const double radius = 0.5 * length(b.extent());
+        const Vec3d eye = b.center() + normalize(v.direction) * (1.6 * radius);
+        const auto [zmin, zmax] = depthRange(mesh, eye, normalize(b.center() - eye));
+        for (const double cut : {0.25, 0.5, 0.75}) {
+            PerspectiveCase c{std::string(v.mesh) + ", near plane " + std::to_string(cut) + " of the way in",
+                              eye,
+                              b.center(),
+                              v.up,
+                              1.0,
+                              36,
+                              30,
+                              48,
+                              zmin + cut * (zmax - zmin),
+                              zmax * 1.01};
+            int64_t inside = 0;
+            EXPECT_EQ(perspectiveMismatches(mesh, c, inside), 0) << c.what;
+            EXPECT_GT(inside, 100)
+                << c.what; // the cut leaves a part of the solid in the frame (174 at least)
+        }
+    }
+}
+
+TEST(VoxelizeOracleTest, PerspectiveSolidMatchesCgalWithTheEyeAgainstOrInsideTheMesh) {
+    // The two places depth clamping must still reach: an eye a hair (1e-5 of the mesh size) in
+    // front of a face, looking into the mesh, whose rays enter the solid almost at once; and an
+    // eye inside the solid, whose rays start inside. The near plane lies deep inside the mesh.
+    for (const char* name : {"bunny00", "armadillo"}) {
+        LOAD_CLOSED_MESH(mesh, name);
+        const Box3d b = computeBounds(mesh.view());
+        const double radius = 0.5 * length(b.extent());
+        // The eye against the face of the largest triangle, outside along its normal.
+        std::size_t largest = 0;
+        double area = 0;
+        for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
+            const MeshView v = mesh.view();
+            const double a = length(cross(v.vertex(v.index(t, 1)) - v.vertex(v.index(t, 0)),
+                                          v.vertex(v.index(t, 2)) - v.vertex(v.index(t, 0))));
+            if (a > area) {
+                area = a;
+                largest = t;
+            }
+        }
+        const MeshView v = mesh.view();
+        const Vec3d p0 = v.vertex(v.index(largest, 0)), p1 = v.vertex(v.index(largest, 1)),
+                    p2 = v.vertex(v.index(largest, 2));
+        const Vec3d normal = normalize(cross(p1 - p0, p2 - p0)), centroid = (p0 + p1 + p2) / 3.0;
+        const Vec3d against = centroid + normal * (1e-5 * radius);
+        // An inside point: the first of a few candidates along the bounds' diagonal that CGAL
+        // puts inside.
+        std::vector<Vec3d> candidates;
+        for (const double f : {0.5, 0.45, 0.55, 0.4, 0.6, 0.35, 0.65})
+            candidates.push_back(b.lo + b.extent() * f);
+        const std::vector<int> side = test::sideOfClosedMesh(mesh.view(), {against});
+        ASSERT_EQ(side.size(), 1u);
+        ASSERT_EQ(side[0], -1) << name << ": the eye against the face must be outside";
+        const std::vector<int> candidateSide = test::sideOfClosedMesh(mesh.view(), candidates);
+        const auto inside = std::find(candidateSide.begin(), candidateSide.end(), 1);
+        ASSERT_NE(inside, candidateSide.end()) << name << ": no inside point on the diagonal";
+        const Vec3d within = candidates[std::size_t(inside - candidateSide.begin())];
+        const Vec3d up = std::abs(normal.z) < 0.9 ? Vec3d{0, 0, 1} : Vec3d{1, 0, 0};
+        for (const PerspectiveCase& c :
+             {PerspectiveCase{std::string(name) + ", eye 1e-5 in front of a face", against, against - normal,
+                              up, 1.2, 36, 30, 48, 0.2 * radius, 1.5 * radius},
+              PerspectiveCase{std::string(name) + ", eye inside",
+                              within,
+                              within + Vec3d{0.3, -0.5, 0.2},
+                              {0, 0, 1},
+                              1.2,
+                              36,
+                              30,
+                              48,
+                              0.1 * radius,
+                              1.2 * radius}}) {
+            int64_t insideCount = 0;
+            EXPECT_EQ(perspectiveMismatches(mesh, c, insideCount), 0) << c.what;
+            EXPECT_GT(insideCount, 500) << c.what;
+        }
+    }
+}
+
 // --- Properties that need no oracle ---------------------------------------------------------
 
 TEST(VoxelizeOracleTest, ModesSatisfyTheirSetIdentities) {

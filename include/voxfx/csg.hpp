@@ -91,6 +91,30 @@ std::vector<std::string> csgMeshes(const CsgNode& node);
 /// once per occurrence; at most (tree depth + 1) grids are alive at a time.
 BitGrid evaluateCsg(const CsgNode& node, const std::function<BitGrid(const std::string&)>& leaf);
 
+/// What a cell-centre grid can be trusted for, per cell: `lower` holds the cells that lie wholly
+/// inside a solid, `upper` the cells that meet its closure, so the solid's cell-centre grid lies
+/// between them and only the cells of upper & ~lower (those a surface passes through) can hold
+/// a part of the solid that their centre misrepresents. For a closed mesh voxelized in a frame:
+/// lower = VoxelizeMode::Interior, upper = VoxelizeMode::SolidConservative (voxelizeCsgBounds);
+/// for a grid taken as the union of its cells: lower = upper = its bits.
+struct CsgBounds {
+    BitGrid lower, upper;
+};
+
+/// The bounds of a mesh's solid in `frame`: one solid (options.fill; mode and slicing ignored)
+/// and one conservative pass, lower = solid & ~conservative, upper = solid | conservative. The
+/// solid pass's grid goes to `solid` when given. Throws as voxelize() does.
+CsgBounds voxelizeCsgBounds(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options = {},
+                            BitGrid* solid = nullptr);
+
+/// Propagates cell bounds through an expression, as evaluateCsg propagates grids: union and
+/// intersection act on both bounds alike; difference a - b gives (lower_a & ~upper_b,
+/// upper_a & ~lower_b); xor is inside surely where one operand is surely inside and the other
+/// surely outside, and possibly wherever it is not surely outside. The result bounds the
+/// expression's cell-centre grid (evaluateCsg of the leaves' solids) and its exact solid alike.
+/// Throws voxfx::Error when the leaves' grids differ in size.
+CsgBounds evaluateCsgBounds(const CsgNode& node, const std::function<CsgBounds(const std::string&)>& leaf);
+
 /// A mesh of a CSG expression and how its inside is decided.
 struct CsgMesh {
     std::string path; ///< as named in the expression

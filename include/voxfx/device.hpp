@@ -68,7 +68,8 @@ public:
     CudaVoxelizer(const CudaVoxelizer&) = delete;
     CudaVoxelizer& operator=(const CudaVoxelizer&) = delete;
 
-    /// Validates (validateMesh) and uploads the mesh; the view need not outlive the call.
+    /// Validates (validateMesh) and uploads the mesh; the view need not outlive the call (a host
+    /// copy is kept: perspective frames clip by the eye's distance to it, as the CPU does).
     void setMesh(const MeshView& mesh);
     /// Voxelizes the mesh into `frame` on the GPU (parity fill for the inside modes); the grid
     /// stays there until download(). Throws voxfx::Error (GPU out of memory, driver errors).

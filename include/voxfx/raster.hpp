@@ -84,6 +84,12 @@ struct RasterOptions {
     int64_t rowsPerTile = 0;
     /// Polled between tiles; returning false cancels with voxfx::Error. Not owned.
     Progress* progress = nullptr;
+    /// Perspective frames: fragments along each column's whole line through the eye, not only in
+    /// front of it, as orthographic frames have (what parity and winding need: GI08 §5's count is
+    /// exact for an eye inside the solid too). Geometry behind the eye gives fragments of negative
+    /// depth, in front of every slice; geometry at the eye is seen down to the clearance of
+    /// clipDepthOf. Consumers that keep depths (near/far ranges, G-buffers) leave it off.
+    bool fullLine = false;
 };
 
 /// The rows a tile covers: tile `index` of the frame's tiling holds rows [y0, y1).
@@ -130,7 +136,8 @@ struct RasterTriangle {
 };
 
 /// Calls emit(rasterTriangle) for the pieces of mesh triangle t in the frame's grid space (one for
-/// orthographic frames; perspective frames clip at a plane just in front of the eye, giving 0–2).
+/// orthographic frames; perspective frames clip at a plane just in front of the eye, giving 0–2,
+/// and with a full line at one just behind it too, 0-4).
 /// `vertices` holds the vertices projected by the frame's Projection (prepareVertices).
 struct RasterSetup {
     FrameView frame;
@@ -139,7 +146,8 @@ struct RasterSetup {
     double clipDepth = 0;
     template <class Emit> void triangle(std::size_t t, Emit&& emit) const;
 };
-RasterSetup prepareVertices(const Frame& frame, const MeshView& mesh);
+/// The set-up of rasterize(): vertices projected, clipDepthOf(frame, mesh, fullLine).
+RasterSetup prepareVertices(const Frame& frame, const MeshView& mesh, bool fullLine = false);
 
 /// The camera depth at which a perspective frame's set-up clips triangles, just in front of the
 /// eye (geometry between it and the near plane still counts: depth clamping); 0 for orthographic
@@ -148,8 +156,18 @@ inline double clipDepthOf(const Frame& frame) {
     return frame.isPerspective() ? frame.nearDepth() * 1e-3 : 0.0;
 }
 
-/// Calls emit(rasterTriangle) for the pieces (0-2) of the triangle with projected corners a, b, c
+/// The same for `mesh`, and with `fullLine` (RasterOptions::fullLine) the negative of a clearance
+/// c: pieces at depth >= c and <= -c are rasterized. c is 1e-3 near unless the mesh comes closer
+/// to the eye: then half the distance from the eye to the nearest triangle's bounding box over
+/// sqrt(1 + tanX^2 + tanY^2), so that no point of the mesh on any column's line lies within c of
+/// the eye plane; at least 1e-9 near (a mesh through the eye itself is not resolved). Cost:
+/// O(triangles), parallel, deterministic.
+double clipDepthOf(const Frame& frame, const MeshView& mesh, bool fullLine);
+
+/// Calls emit(rasterTriangle) for the pieces of the triangle with projected corners a, b, c
 /// (projectVertex): what RasterSetup::triangle does, as a kernel that a GPU back end shares.
+/// Perspective: the part at camera depth >= |clipDepth| (0-2 pieces) and, when clipDepth < 0,
+/// the part at depth <= clipDepth (0-2 more: fragments of negative depth).
 template <class Emit>
 VOXFX_HOSTDEV void setupTriangle(const Projection& projection, const Vec3d& a, const Vec3d& b, const Vec3d& c,
                                  uint32_t index, double clipDepth, Emit&& emit);

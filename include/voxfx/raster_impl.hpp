@@ -10,30 +10,27 @@
 
 namespace voxfx::detail {
 
+/// The pieces of a perspective triangle (camera coordinates `in`) on one side of the eye: the part
+/// with side * depth >= clip (side +1: in front of the eye; -1: behind it), fanned into
+/// triangles and projected onto the image plane through the eye. An edge's clip point is
+/// interpolated from its kept end towards the other, so the two triangles sharing the edge get
+/// it bit for bit (no crack and no double count along the seam).
 template <class Emit>
-VOXFX_HOSTDEV void setupTriangle(const Projection& pr, const Vec3d& a, const Vec3d& b, const Vec3d& c,
-                                 uint32_t index, double clipDepth, Emit&& emit) {
-    if (!pr.perspective) {
-        RasterTriangle r{{a.x, b.x, c.x}, {a.y, b.y, c.y}, {a.z, b.z, c.z}, index, false};
-        const double det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
-        r.front = det < 0; // outward normal points against +depth, towards the viewer
-        emit(r);
-        return;
-    }
-    // Perspective: clip in camera space against forward >= clipDepth (geometry between the eye
-    // and the near plane still counts: depth clamping), then project the pieces.
+VOXFX_HOSTDEV void emitPerspectivePieces(const Projection& pr, const Vec3d* in, uint32_t index, double clip,
+                                         double side, Emit& emit) {
     Vec3d poly[4];
     int n = 0;
-    const Vec3d in[3] = {a, b, c};
     for (int k = 0; k < 3; ++k) {
         const Vec3d& p = in[k];
         const Vec3d& q = in[(k + 1) % 3];
-        const bool pin = p.z >= clipDepth, qin = q.z >= clipDepth;
+        const bool pin = side * p.z >= clip, qin = side * q.z >= clip;
         if (pin) poly[n++] = p;
         if (pin != qin) {
-            const double s = (clipDepth - p.z) / (q.z - p.z);
-            Vec3d x = p + (q - p) * s;
-            x.z = clipDepth;
+            const Vec3d& kept = pin ? p : q;
+            const Vec3d& cut = pin ? q : p;
+            const double s = (side * clip - kept.z) / (cut.z - kept.z);
+            Vec3d x = kept + (cut - kept) * s;
+            x.z = side * clip;
             poly[n++] = x;
         }
     }
@@ -47,11 +44,32 @@ VOXFX_HOSTDEV void setupTriangle(const Projection& pr, const Vec3d& a, const Vec
     for (int k = 1; k + 1 < n; ++k) {
         RasterTriangle r{
             {gx[0], gx[k], gx[k + 1]}, {gy[0], gy[k], gy[k + 1]}, {gw[0], gw[k], gw[k + 1]}, index, false};
-        // The camera basis (right, up, forward) is left-handed, so the facing test flips.
+        // The camera basis (right, up, forward) is left-handed, so the facing test flips. Behind
+        // the eye the projection reverses the image's orientation and the line's direction
+        // alike: `front` still means the normal points against the column's direction.
         const double det = (r.x[1] - r.x[0]) * (r.y[2] - r.y[0]) - (r.x[2] - r.x[0]) * (r.y[1] - r.y[0]);
         r.front = det > 0;
         emit(r);
     }
+}
+
+template <class Emit>
+VOXFX_HOSTDEV void setupTriangle(const Projection& pr, const Vec3d& a, const Vec3d& b, const Vec3d& c,
+                                 uint32_t index, double clipDepth, Emit&& emit) {
+    if (!pr.perspective) {
+        RasterTriangle r{{a.x, b.x, c.x}, {a.y, b.y, c.y}, {a.z, b.z, c.z}, index, false};
+        const double det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+        r.front = det < 0; // outward normal points against +depth, towards the viewer
+        emit(r);
+        return;
+    }
+    // Perspective: clip in camera space against depth >= |clipDepth| (geometry between the eye
+    // and the near plane still counts: depth clamping), then project the pieces; a negative
+    // clipDepth adds the pieces at depth <= clipDepth, behind the eye (see clipDepthOf).
+    const Vec3d in[3] = {a, b, c};
+    const double clip = clipDepth < 0 ? -clipDepth : clipDepth;
+    emitPerspectivePieces(pr, in, index, clip, 1.0, emit);
+    if (clipDepth < 0) emitPerspectivePieces(pr, in, index, clip, -1.0, emit);
 }
 
 template <class Emit> void RasterSetup::triangle(std::size_t t, Emit&& emit) const {
@@ -382,7 +400,7 @@ void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& op
     auto tileAt = [&](int64_t index) {
         return Tile{index, index * rowsPerTile, std::min(H, (index + 1) * rowsPerTile)};
     };
-    const detail::RasterSetup setup = detail::prepareVertices(frame, mesh);
+    const detail::RasterSetup setup = detail::prepareVertices(frame, mesh, options.fullLine);
     const FrameView& view = setup.frame;
 
     std::atomic<bool> cancelled{false};

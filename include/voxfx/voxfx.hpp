@@ -27,6 +27,7 @@
 #include "voxfx/attribute_grid.hpp"
 #include "voxfx/contains.hpp"
 #include "voxfx/device.hpp"
+#include "voxfx/threshold.hpp"
 #include "voxfx/tiled.hpp"
 #include "voxfx/voxelize.hpp"
 
@@ -35,6 +36,7 @@
 #include "voxfx/dda.hpp"
 #include "voxfx/density.hpp"
 #include "voxfx/grid_query.hpp"
+#include "voxfx/intersection_volume.hpp"
 #include "voxfx/morphology.hpp"
 #include "voxfx/smoke.hpp"
 #include "voxfx/surface_mesh.hpp"

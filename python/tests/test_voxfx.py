@@ -317,3 +317,35 @@ def test_device_cuda_gives_the_cpu_grid_and_warns_without_a_gpu(data_path):
         assert np.array_equal(gpu.to_numpy(), cpu.to_numpy())
     with pytest.raises(voxfx.Error, match="cpu, cuda, auto"):
         voxfx.voxelize(mesh, resolution=8, device="gpu")
+
+
+def _box(lo, hi):
+    """A closed box mesh, outward-facing triangles, as (vertices, faces) arrays."""
+    v = np.array([[x, y, z] for z in (lo[2], hi[2]) for y in (lo[1], hi[1]) for x in (lo[0], hi[0])], np.float64)
+    quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    return v, np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))], np.int64)
+
+
+def test_intersection_volume_of_placed_boxes_holds_the_closed_form_within_its_bound():
+    # [0, 3] x [0, 2] x [0, 1.5] against a 2.2 x 1.1 x 0.9 box turned a quarter about z and moved to
+    # [1.9, 3] x [0.7, 2.9] x [0.4, 1.3]: 1.1 x 1.3 x 0.9 in common (a closed form).
+    a, b = _box((0, 0, 0), (3, 2, 1.5)), _box((0, 0, 0), (2.2, 1.1, 0.9))
+    turn = np.array([[0, -1, 0, 3.0], [1, 0, 0, 0.7], [0, 0, 1, 0.4]])
+    exact = 1.1 * 1.3 * 0.9
+    bounds = []
+    for resolution in (32, 128):
+        e = voxfx.intersection_volume(a, b, transform_b=turn, resolution=resolution)
+        assert isinstance(e, voxfx.VolumeEstimate)
+        assert abs(e.volume - exact) <= e.error_bound
+        assert e.lower_volume <= exact <= e.upper_volume
+        bounds.append(e.error_bound)
+    assert bounds[1] < bounds[0] / 3
+    # Grids of one frame: their common cells, exactly (a NumPy count is the oracle).
+    ga = voxfx.voxelize(*a, bounds=(-1, -1, -1, 4, 4, 4), dims=(20, 20, 20))
+    gb = voxfx.voxelize(*_box((1.9, 0.7, 0.4), (3.1, 2.9, 1.3)), like=ga)
+    e = voxfx.intersection_volume(ga, gb)
+    common = np.count_nonzero(ga.to_numpy() & gb.to_numpy())
+    assert e.cells == common and e.error_bound == 0
+    assert e.volume == pytest.approx(common * 0.25 ** 3)
+    with pytest.raises(voxfx.ArgumentError):
+        voxfx.intersection_volume(a, b, transform=np.eye(3))

@@ -20,7 +20,7 @@ import __future__
 
 from . import _voxfx
 from ._voxfx import (ArgumentError, Density, Error, Grid, Mesh, PointClassifier, Scene, SparseGrid, SurfaceMesh,
-                     __version__)
+                     VolumeEstimate, __version__)
 
 # The I/O modules (voxfx_vdb.so, ...) lie next to _voxfx (the library looks there): nothing is
 # set in os.environ.
@@ -56,8 +56,9 @@ def _with_signature(f):
 
 _FUNCTIONS = [
     "closing", "compute_density", "contains", "csg", "cuda_status", "dilate", "erode", "extract_surface",
-    "from_numpy", "load_mesh", "morphology", "opening", "read_grid", "resample_to_uniform", "reslice", "voxelize",
-    "batch_jobs", "glass_methods", "load_scene", "read_sparse_grid", "render", "render_options", "shadow_kinds",
+    "from_numpy", "intersection_volume", "load_mesh", "morphology", "opening", "read_grid", "resample_to_uniform",
+    "reslice", "voxelize", "batch_jobs", "glass_methods", "load_scene", "read_sparse_grid", "render", "render_options",
+    "shadow_kinds",
 ]
 for _name in _FUNCTIONS:
     globals()[_name] = _with_signature(getattr(_voxfx, _name))
@@ -115,5 +116,5 @@ if hasattr(_batch, "__wrapped__"):
 GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj")
 
 __all__ = ["ArgumentError", "Density", "Error", "Grid", "Mesh", "PointClassifier", "Scene", "SparseGrid",
-           "SurfaceMesh", "GRID_FORMATS",
+           "SurfaceMesh", "VolumeEstimate", "GRID_FORMATS",
            "batch", *sorted(_FUNCTIONS)]

@@ -1,9 +1,11 @@
-// voxfx voxelize MESH -o GRID — mesh to voxel grid in any mode, with the summary line.
+// voxfx voxelize MESH -o GRID — mesh to voxel grid in any mode, with the summary line; a volume
+// with --threshold T becomes a bit grid on its own lattice (voxelize_volume.cpp).
 #include <cstdlib>
 #include <iostream>
 
 #include "cli_common.hpp"
 #include "grid_input.hpp"
+#include "voxelize_volume.hpp"
 
 namespace voxfx::cli {
 namespace {
@@ -17,6 +19,8 @@ struct VoxelizeArgs {
     std::string memory;
     bool dense = false;
     bool quiet = false;
+    bool volume = false; ///< --threshold given: the input is a volume
+    double threshold = 0;
 };
 
 // --memory: the budget of every size check of the run, as VOXFX_MEMORY_LIMIT (which it sets, so
@@ -85,6 +89,11 @@ VoxelizeRun runDense(const Mesh& mesh, const Frame& frame, VoxelizeOptions vo, c
 }
 
 int runVoxelize(const VoxelizeArgs& a) {
+    if (a.volume) {
+        refuseMeshOnlyOptions(a.fit, a.choice, a.device);
+        return runVoxelizeVolume(
+            {a.input, a.output, a.threshold, a.choice.axis, a.choice.vdbFloat, a.threads, a.quiet});
+    }
     const auto t0 = Clock::now();
     // Everything that can be checked before the work starts is checked here, so a bad output
     // name does not cost a voxelization.
@@ -195,6 +204,11 @@ Devices (--device; the grid is the same bit for bit on each):
            the CPU. `voxfx devices` shows whether a GPU is usable.
   auto     the GPU when it can take the job, else the CPU without a word
 
+Volumes (--threshold T): the input is a scalar volume (.inr .inr.gz .nrrd .nhdr .json .vdb, any
+  scalar type) and the grid is its own lattice, voxel for voxel, placed where the volume is: a
+  cell is filled where its sample is >= T (GI08's bit grids of scans, for density, morph, csg
+  and mesh). The fitting options, --mode, --fill, --slicing and --device do not apply.
+
 Formats (by extension): .binvox .vdb (BoolGrid "voxels", or float with --vdb-float)
   .nrrd (uint8) .ply/.obj (mesh of the filled voxels' exposed faces). Written atomically.)";
 
@@ -202,7 +216,9 @@ const Command kVoxelize{
     "voxelize", "Voxelize a mesh into a grid file (.binvox .vdb .nrrd .ply .obj)", [](CLI::App& app) {
         app.footer(kVoxelizeHelp);
         auto a = std::make_shared<VoxelizeArgs>();
-        app.add_option("MESH", a->input, "Mesh file (off, obj, ply, stl, gltf, glb, ...)")->required();
+        app.add_option("MESH", a->input,
+                       "Mesh file (off, obj, ply, stl, gltf, glb, ...), or a volume with --threshold")
+            ->required();
         app.add_option("-o,--output", a->output, "Output grid: .binvox .vdb .nrrd .ply .obj")->required();
         addFitOptions(app, a->fit, voxelizeFitChoices());
         addVoxelizeChoiceOptions(app, a->choice);
@@ -214,7 +230,13 @@ const Command kVoxelize{
         app.add_option("--memory", a->memory, "Memory budget: bytes, or K, M, G, T (see below)");
         app.add_flag("--dense", a->dense, "Build the whole grid first for .vdb too (the path before tiles)");
         app.add_flag("-q,--quiet", a->quiet, "No summary or progress");
-        return std::function<int()>([a] { return runVoxelize(*a); });
+        CLI::Option* threshold =
+            app.add_option("--threshold", a->threshold,
+                           "The input is a volume: fill the cells whose sample is >= this value (see below)");
+        return std::function<int()>([a, threshold] {
+            a->volume = threshold->count() > 0;
+            return runVoxelize(*a);
+        });
     }};
 
 } // namespace

@@ -463,15 +463,70 @@ std::vector<std::string> csgMeshes(const CsgNode& node) {
     return out;
 }
 
-BitGrid evaluateCsg(const CsgNode& node, const std::function<BitGrid(const std::string&)>& leaf) {
+namespace {
+
+// Evaluates the expression bottom-up, left to right: leaf(name) for a mesh, combine(acc, next,
+// op) folding each operation's arguments into the first's value. At most (tree depth + 1)
+// values are alive at a time.
+template <class T, class Leaf, class Combine>
+T foldCsg(const CsgNode& node, const Leaf& leaf, const Combine& combine) {
     if (node.isMesh) return leaf(node.mesh);
     if (node.args.empty()) fail("CSG operation ", toString(node.op), " without arguments");
-    BitGrid acc = evaluateCsg(node.args[0], leaf);
-    for (size_t i = 1; i < node.args.size(); ++i) {
-        const BitGrid next = evaluateCsg(node.args[i], leaf);
-        csgInPlace(acc, next, node.op);
-    }
+    T acc = foldCsg<T>(node.args[0], leaf, combine);
+    for (size_t i = 1; i < node.args.size(); ++i)
+        combine(acc, foldCsg<T>(node.args[i], leaf, combine), node.op);
     return acc;
+}
+
+// Bounds through one operation (see evaluateCsgBounds in csg.hpp).
+void combineBounds(CsgBounds& acc, const CsgBounds& b, CsgOp op) {
+    switch (op) {
+    case CsgOp::Union:
+    case CsgOp::Intersection:
+        csgInPlace(acc.lower, b.lower, op);
+        csgInPlace(acc.upper, b.upper, op);
+        break;
+    case CsgOp::Difference:
+        csgInPlace(acc.lower, b.upper, CsgOp::Difference);
+        csgInPlace(acc.upper, b.lower, CsgOp::Difference);
+        break;
+    case CsgOp::Xor: {
+        // Surely inside: one surely in and the other surely out. Possibly inside: possibly in
+        // either, unless surely in both.
+        BitGrid lower = csg(acc.lower, b.upper, CsgOp::Difference);
+        csgInPlace(lower, csg(b.lower, acc.upper, CsgOp::Difference), CsgOp::Union);
+        csgInPlace(acc.upper, b.upper, CsgOp::Union);
+        csgInPlace(acc.upper, csg(acc.lower, b.lower, CsgOp::Intersection), CsgOp::Difference);
+        acc.lower = std::move(lower);
+        break;
+    }
+    }
+}
+
+} // namespace
+
+BitGrid evaluateCsg(const CsgNode& node, const std::function<BitGrid(const std::string&)>& leaf) {
+    return foldCsg<BitGrid>(node, leaf,
+                            [](BitGrid& acc, const BitGrid& next, CsgOp op) { csgInPlace(acc, next, op); });
+}
+
+CsgBounds voxelizeCsgBounds(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options,
+                            BitGrid* solid) {
+    VoxelizeOptions vo = options;
+    vo.mode = VoxelizeMode::Solid;
+    vo.slicing = Slicing::Uniform;
+    CsgBounds b{voxelize(mesh, frame, vo).bits, {}};
+    vo.mode = VoxelizeMode::Conservative;
+    vo.report = nullptr; // the solid pass reported the fill
+    const BitGrid surface = voxelize(mesh, frame, vo).bits;
+    b.upper = csg(b.lower, surface, CsgOp::Union);
+    if (solid) *solid = b.lower;
+    csgInPlace(b.lower, surface, CsgOp::Difference);
+    return b;
+}
+
+CsgBounds evaluateCsgBounds(const CsgNode& node, const std::function<CsgBounds(const std::string&)>& leaf) {
+    return foldCsg<CsgBounds>(node, leaf, combineBounds);
 }
 
 VoxelGrid voxelizeCsg(const CsgNode& node, const std::vector<CsgMesh>& meshes, const FitOptions& fit,

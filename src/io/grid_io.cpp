@@ -61,6 +61,9 @@ void writeGrid(const VoxelGrid& grid, const std::string& path, const GridWriteOp
     if (f.isPerspective())
         fail("cannot write '", path, "': ", toString(format),
              " needs an orthographic grid, this one is perspective (re-voxelize with an orthographic frame)");
+    if (f.isOriented())
+        fail("cannot write '", path, "': ", toString(format),
+             " holds axis-aligned grids, this one is oriented (e.g. a turned volume's lattice)");
     if (f.columnCount() == 0 || grid.bits.width() != f.width() || grid.bits.height() != f.height() ||
         grid.bits.depth() != f.depth())
         fail("cannot write '", path, "': the grid's bits (", grid.bits.width(), " x ", grid.bits.height(),

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 
 namespace voxfx {
 
@@ -22,12 +23,45 @@ namespace {
 constexpr int64_t kBinChunk = 16384;
 } // namespace
 
-RasterSetup prepareVertices(const Frame& frame, const MeshView& mesh) {
+double clipDepthOf(const Frame& frame, const MeshView& mesh, bool fullLine) {
+    if (!frame.isPerspective() || !fullLine) return clipDepthOf(frame);
+    // The squared distance from the eye to the nearest triangle's bounding box: a lower bound of
+    // its distance to the mesh (the minimum does not depend on the order of the chunks).
+    const Vec3d eye = frame.eye();
+    const double inf = std::numeric_limits<double>::infinity();
+    const double nearest2 = parallelReduce(
+        int64_t(0), int64_t(mesh.triangleCount), int64_t(16384), inf,
+        [&](int64_t b, int64_t e) {
+            double m = inf;
+            for (int64_t t = b; t < e; ++t) {
+                const Vec3d p = mesh.vertex(mesh.index(size_t(t), 0)),
+                            q = mesh.vertex(mesh.index(size_t(t), 1)),
+                            r = mesh.vertex(mesh.index(size_t(t), 2));
+                double d2 = 0;
+                for (int a = 0; a < 3; ++a) {
+                    const double lo = std::min({p[a], q[a], r[a]}), hi = std::max({p[a], q[a], r[a]});
+                    const double d = eye[a] < lo ? lo - eye[a] : (eye[a] > hi ? eye[a] - hi : 0.0);
+                    d2 += d * d;
+                }
+                m = std::min(m, d2);
+            }
+            return m;
+        },
+        [](double x, double y) { return std::min(x, y); });
+    // A point on a column's line at camera depth z lies within |z| sqrt(1 + tanX^2 + tanY^2) of
+    // the eye.
+    const Projection& pr = frame.projection();
+    const double spread = std::sqrt(1.0 + pr.tanX * pr.tanX + pr.tanY * pr.tanY);
+    const double standard = clipDepthOf(frame);
+    return -std::clamp(0.5 * std::sqrt(nearest2) / spread, frame.nearDepth() * 1e-9, standard);
+}
+
+RasterSetup prepareVertices(const Frame& frame, const MeshView& mesh, bool fullLine) {
     RasterSetup s;
     s.frame = frame.view();
     s.mesh = &mesh;
     s.vertices.resize(mesh.vertexCount);
-    s.clipDepth = clipDepthOf(frame);
+    s.clipDepth = clipDepthOf(frame, mesh, fullLine);
     Vec3d* out = s.vertices.data();
     const Projection pr = frame.projection();
     parallelFor(0, int64_t(mesh.vertexCount), 65536, [&](int64_t b, int64_t e) {

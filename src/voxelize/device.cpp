@@ -115,6 +115,7 @@ struct CudaVoxelizer::Impl {
     void* context = nullptr;
     int64_t width = 0, height = 0, depth = 0;
     bool haveMesh = false, haveGrid = false;
+    Mesh host; // the mesh's copy for the eye's clearance in perspective frames (clipDepthOf)
 };
 
 CudaVoxelizer::CudaVoxelizer() : impl_(std::make_unique<Impl>()) {
@@ -135,6 +136,9 @@ void CudaVoxelizer::setMesh(const MeshView& mesh) {
     m.triangleCount = mesh.triangleCount;
     std::string error;
     checkCuda(impl_->module->setMesh(impl_->context, m, &error), error);
+    impl_->host.positions.resize(mesh.vertexCount);
+    for (std::size_t i = 0; i < mesh.vertexCount; ++i) impl_->host.positions[i] = Vec3f(mesh.vertex(i));
+    impl_->host.indices.assign(mesh.indices, mesh.indices + 3 * mesh.triangleCount);
     impl_->haveMesh = true;
     impl_->haveGrid = false;
 }
@@ -148,7 +152,8 @@ static_assert(int(VoxelizeMode::Surface) == int(detail::CudaMode::Surface) &&
 
 void CudaVoxelizer::voxelize(const Frame& frame, VoxelizeMode mode) {
     if (!impl_->haveMesh) fail("CudaVoxelizer::voxelize: no mesh (call setMesh first)");
-    const double clipDepth = detail::clipDepthOf(frame);
+    // Clipped as the CPU clips the passes of this mode (voxelize.cpp's passOptions).
+    const double clipDepth = detail::clipDepthOf(frame, impl_->host.view(), needsFill(mode));
     std::string error;
     impl_->haveGrid = false;
     checkCuda(

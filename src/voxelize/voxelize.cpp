@@ -17,11 +17,20 @@ namespace voxfx {
 
 namespace {
 
-BitGrid rasterizeInto(const Frame& frame, const MeshView& mesh, VoxelizeMode kind, const VoxelizeOptions& o) {
-    BitGrid grid(frame.width(), frame.height(), frame.depth());
+// Every pass of a voxelization that needs the inside sees each column's whole line in a
+// perspective frame (RasterOptions::fullLine: parity and winding count crossings behind the eye
+// too), so that its passes clip alike, as the CUDA back end's do (CudaVoxelizer::voxelize).
+RasterOptions passOptions(const VoxelizeOptions& o) {
     RasterOptions ro;
     ro.progress = o.progress;
     ro.path = o.rasterPath;
+    ro.fullLine = needsFill(o.mode);
+    return ro;
+}
+
+BitGrid rasterizeInto(const Frame& frame, const MeshView& mesh, VoxelizeMode kind, const VoxelizeOptions& o) {
+    BitGrid grid(frame.width(), frame.height(), frame.depth());
+    const RasterOptions ro = passOptions(o);
     switch (kind) {
     case VoxelizeMode::Surface: {
         detail::SurfaceConsumer c{frame.view(), grid.view()};
@@ -47,9 +56,7 @@ void requireUniformOrthographic(const Frame& frame, Fill fill) {
 // Inside cells by the requested fill. Flood includes the surface cells.
 BitGrid fillInside(const Frame& frame, const MeshView& mesh, const VoxelizeOptions& o,
                    const BitGrid* surface) {
-    RasterOptions ro;
-    ro.progress = o.progress;
-    ro.path = o.rasterPath;
+    const RasterOptions ro = passOptions(o);
     switch (o.fill) {
     case Fill::Parity: {
         BitGrid grid(frame.width(), frame.height(), frame.depth());
