@@ -22,6 +22,7 @@
 // The bit-grid toolkit (GI08): density, normals, morphology, CSG, queries, particles, meshing.
 #include "voxfx/csg.hpp"
 #include "voxfx/dda.hpp"
+#include "voxfx/distance.hpp"
 #include "voxfx/density.hpp"
 #include "voxfx/grid_query.hpp"
 #include "voxfx/morphology.hpp"
