@@ -174,7 +174,7 @@ TEST(Distance, HierarchyChangesNothingAgainstBruteForce) {
 TEST(Distance, SameAnswersForEveryThreadCount) {
     VOXFX_REQUIRE_DATA("meshes/bunny00.off");
     const Mesh mesh = loadMesh(test::dataPath("meshes/bunny00.off"));
-    const std::vector<Vec3d> pts = distanceQueryPoints(mesh.view(), 40000, 3);
+    const std::vector<Vec3d> pts = distanceQueryPoints(mesh.view(), 16000, 3);
     const ClosestPointQuery query(mesh.view());
     std::vector<ClosestPoint> one(pts.size()), all(pts.size());
     DistanceOptions o;

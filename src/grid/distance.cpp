@@ -2,6 +2,7 @@
 // the one hierarchy of grid/triangle_bvh.hpp, signed by the inside tests of voxfx/contains.hpp.
 #include "voxfx/distance.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <mutex>
@@ -22,23 +23,85 @@ constexpr detail::EnumName<SignMethod> kSignMethodNames[] = {{"auto", SignMethod
 
 // Points per task: enough to hide the task overhead, few enough to balance and report progress.
 constexpr int64_t kChunk = 2048;
+// Points sorted together along the Morton curve (bounds the memory of the ordering).
+constexpr int64_t kBlock = int64_t(1) << 20;
+
+/// The 21 low bits of x spread to every third bit (bit i to bit 3i).
+uint64_t spreadBits(uint64_t x) {
+    x &= 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffULL;
+    x = (x | x << 16) & 0x1f0000ff0000ffULL;
+    x = (x | x << 8) & 0x100f00f00f00f00fULL;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+    x = (x | x << 2) & 0x1249249249249249ULL;
+    return x;
+}
+
+/// Point indices [begin, end) in Morton order of their position in `box` (points outside clamped
+/// to it, non-finite ones last): consecutive queries then walk the same part of the tree, which is
+/// in cache, and each starts from its predecessor's answer. The order is fixed by the points alone.
+std::vector<std::pair<uint64_t, uint32_t>> mortonOrder(std::span<const Vec3d> points, int64_t begin,
+                                                       int64_t end, const Box3d& box) {
+    std::vector<std::pair<uint64_t, uint32_t>> keys(std::size_t(end - begin));
+    const Vec3d e = box.extent();
+    parallelFor(begin, end, 16384, [&](int64_t b, int64_t f) {
+        for (int64_t i = b; i < f; ++i) {
+            const Vec3d& p = points[std::size_t(i)];
+            uint64_t key = ~uint64_t(0);
+            if (isFinite(p)) {
+                key = 0;
+                for (int a = 0; a < 3; ++a) {
+                    const double t = e[a] > 0 ? std::clamp((p[a] - box.lo[a]) / e[a], 0.0, 1.0) : 0.0;
+                    key |= spreadBits(uint64_t(t * 2097151.0)) << a;
+                }
+            }
+            keys[std::size_t(i - begin)] = {key, uint32_t(i - begin)};
+        }
+    });
+    std::sort(keys.begin(), keys.end());
+    return keys;
+}
 
 // Runs body(b, e) over chunks of [0, n) on up to `threads` workers, reporting progress between
 // chunks; voxfx::Error "cancelled" when the progress object says stop.
-template <class Body> void forPointChunks(int64_t n, int threads, Progress* progress, Body&& body) {
+// Answers every point with query(index, hint) -> hit, in Morton order within blocks of kBlock
+// points, each chunk of kChunk points on one worker, the hint being the previous point's answer;
+// `store(index, hit)` writes the answer. Progress between chunks; voxfx::Error "cancelled" when
+// the progress object says stop.
+template <class Store>
+void forPoints(const detail::TriangleBvh& bvh, std::span<const Vec3d> points, int threads, Progress* progress,
+               Store&& store) {
     std::atomic<bool> cancelled{false};
     std::atomic<int64_t> done{0};
     std::mutex progressMutex;
+    const auto n = int64_t(points.size());
     const int64_t chunks = (n + kChunk - 1) / kChunk;
+    // The points' order is taken in the mesh's box grown by half its size: farther points are
+    // clamped to it (they are few, and far from everything anyway).
+    Box3d box = bvh.bounds();
+    const Vec3d grow = box.extent() * 0.5;
+    box.lo -= grow;
+    box.hi += grow;
     withThreads(threads, [&] {
-        parallelFor(0, n, kChunk, [&](int64_t b, int64_t e) {
-            if (cancelled.load(std::memory_order_relaxed)) return;
-            body(b, e);
-            const int64_t d = ++done;
-            if (!progress) return;
-            std::lock_guard<std::mutex> lock(progressMutex);
-            if (!progress->update(double(d) / double(chunks))) cancelled = true;
-        });
+        for (int64_t block = 0; block < n && !cancelled; block += kBlock) {
+            const int64_t blockEnd = std::min(n, block + kBlock);
+            const auto order = mortonOrder(points, block, blockEnd, box);
+            parallelFor(0, blockEnd - block, kChunk, [&](int64_t b, int64_t e) {
+                if (cancelled.load(std::memory_order_relaxed)) return;
+                uint32_t hint = UINT32_MAX;
+                for (int64_t k = b; k < e; ++k) {
+                    const int64_t i = block + order[std::size_t(k)].second;
+                    const detail::NearestHit hit =
+                        bvh.nearest(points[std::size_t(i)], std::numeric_limits<double>::infinity(), hint);
+                    if (hit.face >= 0) hint = hit.index;
+                    store(i, hit);
+                }
+                const int64_t d = ++done;
+                if (!progress) return;
+                std::lock_guard<std::mutex> lock(progressMutex);
+                if (!progress->update(double(d) / double(chunks))) cancelled = true;
+            });
+        }
     });
     if (cancelled) fail("cancelled");
 }
@@ -73,39 +136,39 @@ ClosestPointQuery& ClosestPointQuery::operator=(ClosestPointQuery&&) noexcept = 
 
 std::size_t ClosestPointQuery::triangleCount() const { return bvh_->triangleCount(); }
 
-ClosestPoint ClosestPointQuery::closest(const Vec3d& p) const {
+namespace {
+ClosestPoint closestOf(const detail::TriangleBvh& bvh, const detail::NearestHit& hit) {
     ClosestPoint out;
-    const detail::NearestHit hit = bvh_->nearest(p);
     if (hit.face < 0) return out;
     out.face = hit.face;
     out.distance = std::sqrt(hit.distance2);
     out.barycentric = {1.0 - hit.u - hit.v, hit.u, hit.v};
     // The triangle as the kernel saw it: corner a plus the weighted edges.
-    const detail::DistanceTriangle& t = bvh_->triangle(hit.index);
+    const detail::DistanceTriangle t = bvh.triangle(hit.index);
     out.point = t.a + t.ab * hit.u + t.ac * hit.v;
     return out;
 }
+} // namespace
+
+ClosestPoint ClosestPointQuery::closest(const Vec3d& p) const { return closestOf(*bvh_, bvh_->nearest(p)); }
 
 void ClosestPointQuery::closest(std::span<const Vec3d> points, std::span<ClosestPoint> out,
                                 const DistanceOptions& options) const {
     if (points.size() != out.size())
         fail("closest points: ", points.size(), " points but room for ", out.size(), " answers");
-    forPointChunks(int64_t(points.size()), options.threads, options.progress, [&](int64_t b, int64_t e) {
-        for (int64_t i = b; i < e; ++i) out[std::size_t(i)] = closest(points[std::size_t(i)]);
-    });
+    forPoints(*bvh_, points, options.threads, options.progress,
+              [&](int64_t i, const detail::NearestHit& hit) { out[std::size_t(i)] = closestOf(*bvh_, hit); });
 }
 
 void ClosestPointQuery::distance(std::span<const Vec3d> points, std::span<double> out,
                                  const DistanceOptions& options) const {
     if (points.size() != out.size())
         fail("distances: ", points.size(), " points but room for ", out.size(), " answers");
-    forPointChunks(int64_t(points.size()), options.threads, options.progress, [&](int64_t b, int64_t e) {
-        for (int64_t i = b; i < e; ++i) {
-            const detail::NearestHit hit = bvh_->nearest(points[std::size_t(i)]);
-            out[std::size_t(i)] =
-                hit.face < 0 ? std::numeric_limits<double>::quiet_NaN() : std::sqrt(hit.distance2);
-        }
-    });
+    forPoints(*bvh_, points, options.threads, options.progress,
+              [&](int64_t i, const detail::NearestHit& hit) {
+                  out[std::size_t(i)] =
+                      hit.face < 0 ? std::numeric_limits<double>::quiet_NaN() : std::sqrt(hit.distance2);
+              });
 }
 
 std::vector<ClosestPoint> closestPoints(const MeshView& mesh, std::span<const Vec3d> points,

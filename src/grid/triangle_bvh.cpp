@@ -43,34 +43,12 @@ double pruneLimit(double best2, double diagonal) {
 
 } // namespace
 
-DistanceTriangle prepareTriangle(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-    DistanceTriangle t;
-    t.a = a;
-    t.ab = b - a;
-    t.ac = c - a;
-    t.bc = c - b;
-    t.n = cross(t.ab, t.ac);
-    t.nab = cross(t.n, t.ab);
-    t.nac = cross(t.ac, t.n);
-    t.nn = dot(t.n, t.n);
-    // A triangle whose normal is zero (or underflows) is its three segments.
-    t.invNn = t.nn > 0 && std::isfinite(t.nn) ? 1.0 / t.nn : 0.0;
-    if (t.invNn == 0) t.nn = 0;
-    const auto inv = [](const Vec3d& e) {
-        const double l = dot(e, e);
-        return l > 0 ? 1.0 / l : 0.0;
-    };
-    t.invAb = inv(t.ab);
-    t.invAc = inv(t.ac);
-    t.invBc = inv(t.bc);
-    return t;
-}
-
 TriangleBvh::TriangleBvh(const MeshView& mesh) {
     const auto n = uint32_t(mesh.triangleCount);
     if (mesh.triangleCount > std::size_t(UINT32_MAX) / 2) fail("too many triangles for the distance query");
     std::vector<float> boxes(6 * std::size_t(n));
     std::vector<Vec3d> centroid(n);
+    Box3d bounds;
     for (uint32_t t = 0; t < n; ++t) {
         const Vec3d a = mesh.vertex(mesh.index(t, 0)), b = mesh.vertex(mesh.index(t, 1)),
                     c = mesh.vertex(mesh.index(t, 2));
@@ -80,25 +58,24 @@ TriangleBvh::TriangleBvh(const MeshView& mesh) {
             boxes[6 * std::size_t(t) + 3 + k] = float(hi[k]);
         }
         centroid[t] = (lo + hi) * 0.5;
-        bounds_.extend(lo);
-        bounds_.extend(hi);
+        bounds.extend(lo);
+        bounds.extend(hi);
     }
-    diagonal_ = n ? length(bounds_.extent()) : 0.0;
+    diagonal_ = n ? length(bounds.extent()) : 0.0;
     std::vector<uint32_t> order(n);
     std::iota(order.begin(), order.end(), 0u);
     if (n) {
-        nodes_.reserve(std::size_t(n) * 2 / kMaxLeaf + 16);
-        build(order, centroid, 0, n, boxes, 0);
+        nodes_.reserve(std::size_t(n) / 2 + 16);
+        root_ = build(order, centroid, 0, n, boxes, 0);
     }
-    triangles_.resize(n);
     faces_ = order;
-    boxes_.resize(boxes.size());
-    for (uint32_t i = 0; i < n; ++i) {
-        const uint32_t t = order[i];
-        triangles_[i] = prepareTriangle(mesh.vertex(mesh.index(t, 0)), mesh.vertex(mesh.index(t, 1)),
-                                        mesh.vertex(mesh.index(t, 2)));
-        std::copy_n(&boxes[6 * std::size_t(t)], 6, &boxes_[6 * std::size_t(i)]);
-    }
+    corners_.resize(9 * std::size_t(n));
+    for (uint32_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) {
+            const Vec3d v = mesh.vertex(mesh.index(order[i], k));
+            for (int j = 0; j < 3; ++j)
+                corners_[9 * std::size_t(i) + 3 * std::size_t(k) + std::size_t(j)] = float(v[j]);
+        }
 }
 
 // Where to split the triangles [begin, end) of `order` (a position strictly inside), or `begin`
@@ -169,75 +146,102 @@ uint32_t TriangleBvh::split(std::vector<uint32_t>& order, const std::vector<Vec3
     return mid;
 }
 
-uint32_t TriangleBvh::build(std::vector<uint32_t>& order, const std::vector<Vec3d>& centroid, uint32_t begin,
-                            uint32_t end, const std::vector<float>& boxes, int depth) {
+BvhRef TriangleBvh::build(std::vector<uint32_t>& order, const std::vector<Vec3d>& centroid, uint32_t begin,
+                          uint32_t end, const std::vector<float>& boxes, int depth) {
+    BvhRef out;
+    for (uint32_t i = begin; i < end; ++i) out.box.extend(boxOf(boxes, order[i]));
+    const uint32_t mid = split(order, centroid, begin, end, boxes, out.box, depth);
+    if (mid == begin) {
+        out.ref = begin;
+        out.count = end - begin;
+        return out;
+    }
     const auto index = uint32_t(nodes_.size());
     nodes_.push_back({});
-    Box3d box;
-    for (uint32_t i = begin; i < end; ++i) box.extend(boxOf(boxes, order[i]));
-    BvhNode node;
-    for (int k = 0; k < 3; ++k) {
-        node.lo[k] = float(box.lo[k]); // exact: float corners
-        node.hi[k] = float(box.hi[k]);
+    const BvhRef children[2] = {build(order, centroid, begin, mid, boxes, depth + 1),
+                                build(order, centroid, mid, end, boxes, depth + 1)};
+    BvhNode& node = nodes_[index];
+    for (int c = 0; c < 2; ++c) {
+        for (int k = 0; k < 3; ++k) {
+            node.lo[c][k] = float(children[c].box.lo[k]); // exact: float corners
+            node.hi[c][k] = float(children[c].box.hi[k]);
+        }
+        node.ref[c] = children[c].ref;
+        node.count[c] = children[c].count;
     }
-    const uint32_t mid = split(order, centroid, begin, end, boxes, box, depth);
-    if (mid == begin) {
-        node.first = begin;
-        node.count = end - begin;
-    } else {
-        build(order, centroid, begin, mid, boxes, depth + 1);
-        node.first = build(order, centroid, mid, end, boxes, depth + 1);
-        node.count = 0;
-    }
-    nodes_[index] = node;
-    return index;
+    out.ref = index;
+    out.count = 0;
+    return out;
 }
 
-NearestHit TriangleBvh::nearest(const Vec3d& p, double maxDistance2) const {
+double TriangleBvh::triangleBoxDistance2(uint32_t i, const Vec3d& p) const {
+    const float* c = &corners_[9 * std::size_t(i)];
+    double s = 0;
+    for (int k = 0; k < 3; ++k) {
+        const double lo = std::min({c[k], c[3 + k], c[6 + k]}), hi = std::max({c[k], c[3 + k], c[6 + k]});
+        const double d = std::max({lo - p[k], 0.0, p[k] - hi});
+        s += d * d;
+    }
+    return s;
+}
+
+NearestHit TriangleBvh::nearest(const Vec3d& p, double maxDistance2, uint32_t hint) const {
     NearestHit hit;
-    if (nodes_.empty() || !isFinite(p)) return hit;
+    if (faces_.empty() || !isFinite(p)) return hit;
     hit.distance2 = maxDistance2;
     uint32_t bestTri = UINT32_MAX;
     double limit = pruneLimit(hit.distance2, diagonal_);
+    // A good first guess (the answer of a nearby point) tightens the pruning from the start; the
+    // tree is then searched as usual, so the answer is the same with or without it.
+    if (hint < faces_.size()) {
+        double u, v;
+        const double d2 = triangleDistance2(triangle(hint), p, u, v);
+        if (d2 <= hit.distance2) {
+            hit.distance2 = d2;
+            hit.u = u;
+            hit.v = v;
+            bestTri = hint;
+            limit = pruneLimit(d2, diagonal_);
+        }
+    }
+    const auto visitLeaf = [&](uint32_t first, uint32_t count) {
+        for (uint32_t i = first; i < first + count; ++i) {
+            if (triangleBoxDistance2(i, p) > limit) continue;
+            double u, v;
+            const double d2 = triangleDistance2(triangle(i), p, u, v);
+            // Ties go to the smallest face index, whatever order the tree visits them in.
+            if (d2 < hit.distance2 ||
+                (d2 == hit.distance2 && (bestTri == UINT32_MAX || faces_[i] < faces_[bestTri]))) {
+                hit.distance2 = d2;
+                hit.u = u;
+                hit.v = v;
+                bestTri = i;
+                limit = pruneLimit(d2, diagonal_);
+            }
+        }
+    };
     struct Entry {
-        uint32_t node;
+        uint32_t ref, count;
         double lb;
     };
     Entry stack[kStackSize];
     int sp = 0;
-    stack[sp++] = {0, boxDistance2(nodes_[0].lo, nodes_[0].hi, p)};
+    stack[sp++] = {root_.ref, root_.count, 0.0};
     while (sp > 0) {
-        const Entry e = stack[--sp];
+        Entry e = stack[--sp];
         if (e.lb > limit) continue;
-        uint32_t ni = e.node;
-        for (;;) {
-            const BvhNode& node = nodes_[ni];
-            if (node.count) {
-                for (uint32_t i = node.first; i < node.first + node.count; ++i) {
-                    double u, v;
-                    const double d2 = triangleDistance2(triangles_[i], p, u, v);
-                    // Ties go to the smallest face index, whatever order the tree visits them in.
-                    if (d2 < hit.distance2 ||
-                        (d2 == hit.distance2 && (bestTri == UINT32_MAX || faces_[i] < faces_[bestTri]))) {
-                        hit.distance2 = d2;
-                        hit.u = u;
-                        hit.v = v;
-                        bestTri = i;
-                        limit = pruneLimit(d2, diagonal_);
-                    }
-                }
-                break;
-            }
-            const uint32_t l = ni + 1, r = node.first;
-            const double dl = boxDistance2(nodes_[l].lo, nodes_[l].hi, p);
-            const double dr = boxDistance2(nodes_[r].lo, nodes_[r].hi, p);
-            const bool leftFirst = dl <= dr;
-            const uint32_t nearNode = leftFirst ? l : r, farNode = leftFirst ? r : l;
-            const double nearLb = leftFirst ? dl : dr, farLb = leftFirst ? dr : dl;
-            if (farLb <= limit) stack[sp++] = {farNode, farLb};
-            if (nearLb > limit) break;
-            ni = nearNode;
+        while (!e.count) {
+            const BvhNode& node = nodes_[e.ref];
+            const double d0 = boxDistance2(node.lo[0], node.hi[0], p),
+                         d1 = boxDistance2(node.lo[1], node.hi[1], p);
+            const int nearChild = d1 < d0 ? 1 : 0;
+            const Entry nearE{node.ref[nearChild], node.count[nearChild], nearChild ? d1 : d0};
+            const Entry farE{node.ref[1 - nearChild], node.count[1 - nearChild], nearChild ? d0 : d1};
+            if (farE.lb <= limit) stack[sp++] = farE;
+            if (nearE.lb > limit) break;
+            e = nearE;
         }
+        if (e.count && e.lb <= limit) visitLeaf(e.ref, e.count);
     }
     if (bestTri != UINT32_MAX) {
         hit.face = faces_[bestTri];
@@ -247,22 +251,35 @@ NearestHit TriangleBvh::nearest(const Vec3d& p, double maxDistance2) const {
 }
 
 void TriangleBvh::gather(const Vec3d& lo, const Vec3d& hi, double radius, std::vector<uint32_t>& out) const {
-    if (nodes_.empty()) return;
+    if (faces_.empty()) return;
     const double r2 = radius * radius;
+    const auto visitLeaf = [&](uint32_t first, uint32_t count) {
+        for (uint32_t i = first; i < first + count; ++i) {
+            const float* c = &corners_[9 * std::size_t(i)];
+            float tlo[3], thi[3];
+            for (int k = 0; k < 3; ++k) {
+                tlo[k] = std::min({c[k], c[3 + k], c[6 + k]});
+                thi[k] = std::max({c[k], c[3 + k], c[6 + k]});
+            }
+            if (boxBoxDistance2(tlo, thi, lo, hi) <= r2) out.push_back(i);
+        }
+    };
+    if (root_.count) {
+        visitLeaf(root_.ref, root_.count);
+        return;
+    }
     uint32_t stack[kStackSize];
     int sp = 0;
-    stack[sp++] = 0;
+    stack[sp++] = root_.ref;
     while (sp > 0) {
         const BvhNode& node = nodes_[stack[--sp]];
-        if (boxBoxDistance2(node.lo, node.hi, lo, hi) > r2) continue;
-        if (node.count) {
-            for (uint32_t i = node.first; i < node.first + node.count; ++i)
-                if (boxBoxDistance2(boxLo(i), boxHi(i), lo, hi) <= r2) out.push_back(i);
-            continue;
+        for (int c = 0; c < 2; ++c) {
+            if (boxBoxDistance2(node.lo[c], node.hi[c], lo, hi) > r2) continue;
+            if (node.count[c])
+                visitLeaf(node.ref[c], node.count[c]);
+            else
+                stack[sp++] = node.ref[c];
         }
-        // Right first on the stack, so the left subtree (lower indices) comes out first.
-        stack[sp++] = node.first;
-        stack[sp++] = uint32_t(&node - nodes_.data()) + 1;
     }
 }
 
