@@ -23,6 +23,7 @@
 #include "voxfx/csg.hpp"
 #include "voxfx/dda.hpp"
 #include "voxfx/distance.hpp"
+#include "voxfx/sdf.hpp"
 #include "voxfx/density.hpp"
 #include "voxfx/grid_query.hpp"
 #include "voxfx/morphology.hpp"
