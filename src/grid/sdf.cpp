@@ -81,51 +81,125 @@ struct SdfParams {
 namespace {
 
 constexpr int kLeafDim = 8;
-// Candidate sets larger than this split a full-grid block into eight.
-constexpr std::size_t kSplitCandidates = 48;
+// A cube with more candidates than this splits into eight (down to cubes of kSmallestSplit / 2):
+// smaller lists per voxel against the cost of making them (measured on the bunny, 75K and 1.2M
+// triangles, at 256^3 and 512^3).
+constexpr std::size_t kSplitCandidates = 64;
+constexpr int kSmallestSplit = 2;
 
-/// The triangles a block gathered, prepared once for all its voxels.
+/// The triangles a block gathered, prepared once for all its voxels (the root list), or a part of
+/// a parent list (indices into the root's prepared triangles); the boxes in structure-of-arrays
+/// form, so that the per-voxel box test runs four candidates per instruction.
 struct Candidates {
-    std::vector<uint32_t> index; ///< tree order
-    std::vector<DistanceTriangle> tris;
-    std::vector<float> lo, hi; ///< boxes, 3 floats each
+    std::vector<uint32_t> index; ///< root: tree order (filled by TriangleBvh::gather); part: root slots
+    std::vector<DistanceTriangle> prepared; ///< root only
+    const DistanceTriangle* tris = nullptr; ///< the root's prepared triangles
+    std::vector<uint32_t> slot;             ///< candidate -> index into tris
+    std::vector<double> lox, loy, loz, hix, hiy, hiz;
+    std::vector<double> lb; ///< scratch: squared box distances to the current point
 
+    std::size_t size() const { return slot.size(); }
+    void resizeBoxes(std::size_t n) {
+        for (std::vector<double>* v : {&lox, &loy, &loz, &hix, &hiy, &hiz, &lb}) v->resize(n);
+    }
+    /// The root list: triangles and boxes of `index`.
     void prepare(const TriangleBvh& bvh) {
-        tris.resize(index.size());
-        lo.resize(3 * index.size());
-        hi.resize(3 * index.size());
-        for (std::size_t c = 0; c < index.size(); ++c) {
-            tris[c] = bvh.triangle(index[c]);
-            for (int k = 0; k < 3; ++k) {
-                const float a = float(bvh.corner(index[c], 0)[k]), b = float(bvh.corner(index[c], 1)[k]),
-                            d = float(bvh.corner(index[c], 2)[k]);
-                lo[3 * c + std::size_t(k)] = std::min({a, b, d});
-                hi[3 * c + std::size_t(k)] = std::max({a, b, d});
+        const std::size_t n = index.size();
+        prepared.resize(n);
+        slot.resize(n);
+        resizeBoxes(n);
+        for (std::size_t c = 0; c < n; ++c) {
+            prepared[c] = bvh.triangle(index[c]);
+            slot[c] = uint32_t(c);
+            const Vec3d a = bvh.corner(index[c], 0), b = bvh.corner(index[c], 1), d = bvh.corner(index[c], 2);
+            const Vec3d lo = min(min(a, b), d), hi = max(max(a, b), d);
+            lox[c] = lo.x;
+            loy[c] = lo.y;
+            loz[c] = lo.z;
+            hix[c] = hi.x;
+            hiy[c] = hi.y;
+            hiz[c] = hi.z;
+        }
+        tris = prepared.data();
+    }
+    /// The candidates of `from` whose box lies within `radius` of the box [lo, hi].
+    void subset(Candidates& from, const Vec3d& lo, const Vec3d& hi, double radius) {
+        tris = from.tris;
+        const std::size_t m = from.size();
+        // Box-to-box distances in one vectorized pass (into the parent's scratch), then the copy.
+        {
+            const double *__restrict x0 = from.lox.data(), *__restrict y0 = from.loy.data(),
+                         *__restrict z0 = from.loz.data();
+            const double *__restrict x1 = from.hix.data(), *__restrict y1 = from.hiy.data(),
+                         *__restrict z1 = from.hiz.data();
+            double* __restrict out = from.lb.data();
+            for (std::size_t c = 0; c < m; ++c) {
+                double dx = x0[c] - hi.x > lo.x - x1[c] ? x0[c] - hi.x : lo.x - x1[c];
+                double dy = y0[c] - hi.y > lo.y - y1[c] ? y0[c] - hi.y : lo.y - y1[c];
+                double dz = z0[c] - hi.z > lo.z - z1[c] ? z0[c] - hi.z : lo.z - z1[c];
+                dx = dx > 0 ? dx : 0;
+                dy = dy > 0 ? dy : 0;
+                dz = dz > 0 ? dz : 0;
+                out[c] = dx * dx + dy * dy + dz * dz;
             }
         }
+        slot.resize(m);
+        resizeBoxes(m);
+        const double r2 = radius * radius;
+        std::size_t n = 0;
+        for (std::size_t c = 0; c < m; ++c) {
+            if (from.lb[c] > r2) continue;
+            slot[n] = from.slot[c];
+            lox[n] = from.lox[c];
+            loy[n] = from.loy[c];
+            loz[n] = from.loz[c];
+            hix[n] = from.hix[c];
+            hiy[n] = from.hiy[c];
+            hiz[n] = from.hiz[c];
+            ++n;
+        }
+        slot.resize(n);
     }
     /// The smallest squared distance from p to the candidates below `cap2`, or cap2 when none is
-    /// nearer; `hint` (a candidate, or -1) is tried first and receives the nearest one.
-    double nearest2(const Vec3d& p, double cap2, int& hint) const {
+    /// nearer; `hint` (a slot of the root list, or -1) is tried first and receives the nearest one.
+    double nearest2(const Vec3d& p, double cap2, int& hint) {
+        const std::size_t n = size();
+        // Box distances first, in one pass the compiler vectorizes; then the kernel where a box
+        // is nearer than the best so far.
+        const double* __restrict x0 = lox.data(), * __restrict y0 = loy.data(), * __restrict z0 = loz.data();
+        const double* __restrict x1 = hix.data(), * __restrict y1 = hiy.data(), * __restrict z1 = hiz.data();
+        double* __restrict out = lb.data();
+        const double px = p.x, py = p.y, pz = p.z;
+        for (std::size_t c = 0; c < n; ++c) {
+            const double ax = x0[c] - px, bx = px - x1[c], ay = y0[c] - py, by = py - y1[c];
+            const double az = z0[c] - pz, bz = pz - z1[c];
+            double dx = ax > bx ? ax : bx, dy = ay > by ? ay : by, dz = az > bz ? az : bz;
+            dx = dx > 0 ? dx : 0;
+            dy = dy > 0 ? dy : 0;
+            dz = dz > 0 ? dz : 0;
+            out[c] = dx * dx + dy * dy + dz * dz;
+        }
         double best = cap2;
-        int bestC = -1;
+        int bestSlot = -1;
         double u, v;
+        // The hint (a slot of the root list) need not be in this part: any triangle's distance
+        // bounds the minimum from above, and the part holds every triangle that can attain it.
         if (hint >= 0) {
-            const double d2 = triangleDistance2(tris[std::size_t(hint)], p, u, v);
+            const double d2 = triangleDistance2(tris[hint], p, u, v);
             if (d2 < best) {
                 best = d2;
-                bestC = hint;
+                bestSlot = hint;
             }
         }
-        for (std::size_t c = 0; c < tris.size(); ++c) {
-            if (boxDistance2(&lo[3 * c], &hi[3 * c], p) >= best) continue;
-            const double d2 = triangleDistance2(tris[c], p, u, v);
+        for (std::size_t c = 0; c < n; ++c) {
+            if (lb[c] >= best) continue;
+            const double d2 = triangleDistance2(tris[slot[c]], p, u, v);
             if (d2 < best) {
                 best = d2;
-                bestC = int(c);
+                bestSlot = int(slot[c]);
             }
         }
-        if (bestC >= 0) hint = bestC;
+        if (bestSlot >= 0) hint = bestSlot;
         return best;
     }
 };
@@ -141,7 +215,7 @@ public:
         blocks_ = {(p_.dims.x + 7) / 8, (p_.dims.y + 7) / 8, (p_.dims.z + 7) / 8};
     }
 
-    /// Processes every layer of blocks within [slab.z0, slab.z1).
+    /// Processes every layer of blocks within [slab.z0, slab.z1), 64 slices at a time.
     void consume(const SdfSlab& slab);
     std::vector<SdfLeaf> takeLeaves() { return std::move(leaves_); }
     std::vector<SdfInsideRun> takeInsideRuns() { return std::move(runs_); }
@@ -151,17 +225,17 @@ private:
         std::vector<SdfLeaf> leaves;
         std::vector<SdfInsideRun> runs;
     };
-    void layer(const SdfSlab& slab, int64_t bz);
-    void candidateBytes(const SdfSlab& slab, int64_t z0, std::vector<uint8_t>& solid,
-                        std::vector<uint8_t>& mask) const;
-    void blockRow(int64_t by, int64_t bz, const std::vector<uint8_t>& solid, const std::vector<uint8_t>& mask,
-                  Row& row) const;
-    bool bandBlock(SdfLeaf& leaf, const std::array<uint64_t, 8>& mask, const std::array<uint64_t, 8>& inside,
-                   const std::array<uint64_t, 8>& valid) const;
-    void fullBlock(SdfLeaf& leaf, const std::array<uint64_t, 8>& inside,
-                   const std::array<uint64_t, 8>& valid) const;
-    void fullBox(SdfLeaf& leaf, const Vec3i& b, int size, const Candidates* parent,
-                 const std::array<uint64_t, 8>& inside, const std::array<uint64_t, 8>& valid) const;
+    void chunk(const SdfSlab& slab, int64_t z0);
+    void candidateWords(const SdfSlab& slab, int64_t z0, std::vector<uint64_t>& solid,
+                        std::vector<uint64_t>& mask) const;
+    void blockRow(int64_t by, int64_t bz, int shift, const std::vector<uint64_t>& solid,
+                  const std::vector<uint64_t>& mask, Row& row) const;
+    using Bits = std::array<uint64_t, 8>; ///< one bit per voxel of a block, OpenVDB's leaf order
+    /// Candidate lists per depth of the cube recursion (8^3, 4^3, 2^3, 1), reused block after block.
+    using Scratch = std::array<Candidates, 4>;
+    bool solveBlock(SdfLeaf& leaf, const Bits& todo, const Bits& inside, Scratch& scratch) const;
+    void solveCube(SdfLeaf& leaf, const Vec3i& b, int size, int depth, Scratch& scratch, const Bits& todo,
+                   const Bits& inside, bool& any, int& hint) const;
     Vec3d centre(int64_t i, int64_t j, int64_t k) const {
         return {p_.lo.x + (double(i) + 0.5) * p_.cell.x, p_.lo.y + (double(j) + 0.5) * p_.cell.y,
                 p_.lo.z + (double(k) + 0.5) * p_.cell.z};
@@ -181,73 +255,55 @@ private:
 };
 
 void SdfBuilder::consume(const SdfSlab& slab) {
-    for (int64_t bz = slab.z0 / kLeafDim; bz * kLeafDim < slab.z1; ++bz) {
-        layer(slab, bz);
-        if (progress_ &&
-            !progress_->update(double(std::min(p_.dims.z, (bz + 1) * kLeafDim)) / double(p_.dims.z)))
-            fail("cancelled");
-    }
+    for (int64_t z0 = slab.z0; z0 < slab.z1; z0 += 64) chunk(slab, z0);
 }
 
-// Per column of the layer starting at slice z0: the solid bits of its 8 slices (one byte) and
-// the candidate bits (surface dilated by kz along the column, then by kx, ky across columns).
-void SdfBuilder::candidateBytes(const SdfSlab& slab, int64_t z0, std::vector<uint8_t>& solid,
-                                std::vector<uint8_t>& mask) const {
+// Per column, for the 64 slices from z0 (8 layers of blocks, bit s = slice z0 + s): the solid bits
+// and the candidate bits (surface dilated by kz along the column, then by kx, ky across columns).
+void SdfBuilder::candidateWords(const SdfSlab& slab, int64_t z0, std::vector<uint64_t>& solid,
+                                std::vector<uint64_t>& mask) const {
     const int64_t W = p_.dims.x, H = p_.dims.y, kx = p_.dilation.x, ky = p_.dilation.y, kz = p_.dilation.z;
-    const int nz = int(std::min<int64_t>(kLeafDim, p_.dims.z - z0));
-    std::vector<uint8_t> along(std::size_t(W * H)), across(std::size_t(W * H));
+    const int n = int(std::min<int64_t>(64, p_.dims.z - z0));
+    const uint64_t keep = n == 64 ? ~uint64_t(0) : (uint64_t(1) << n) - 1;
+    // Surface bits of column (x, y) (grown columns included) dilated along z.
+    const auto along = [&](int64_t x, int64_t y) {
+        uint64_t d = 0;
+        for (int64_t s = -kz; s <= kz; ++s) d |= slab.surface.window(x, y, z0 + s, 64);
+        return d & keep;
+    };
+    std::vector<uint64_t> z(std::size_t(W * H)), xy(std::size_t(W * H));
     parallelFor(0, H, 8, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
                 const std::size_t c = std::size_t(y * W + x);
-                solid[c] = uint8_t(slab.solid.window(x, y, z0, nz));
-                if (p_.full) continue;
-                uint8_t a = 0;
-                // The surface grid's columns are offset by (kx, ky): read the grown columns too.
-                if (8 + 2 * kz <= 64) {
-                    const uint64_t w = slab.surface.window(x, y, z0 - kz, int(8 + 2 * kz));
-                    uint64_t d = 0;
-                    for (int64_t s = 0; s <= 2 * kz; ++s) d |= w >> s;
-                    a = uint8_t(d & ((1u << nz) - 1));
-                } else {
-                    for (int j = 0; j < nz; ++j)
-                        if (slab.surface.any(x, y, z0 + j - kz, z0 + j + kz + 1)) a |= uint8_t(1u << j);
-                }
-                along[c] = a;
+                solid[c] = slab.solid.window(x, y, z0, 64) & keep;
+                if (!p_.full) z[c] = along(x, y);
             }
     });
     if (p_.full) return;
     // The grown margins of the surface grid (columns -kx .. -1 and W .. W + kx - 1, likewise y)
     // hold surface outside the grid that is still within the band of its border voxels.
-    const auto grown = [&](int64_t x, int64_t y) -> uint8_t {
-        if (x >= 0 && x < W && y >= 0 && y < H) return along[std::size_t(y * W + x)];
-        uint64_t w = slab.surface.window(x, y, z0 - kz, int(std::min<int64_t>(64, 8 + 2 * kz)));
-        uint64_t d = 0;
-        for (int64_t s = 0; s <= 2 * kz && s < 64; ++s) d |= w >> s;
-        if (8 + 2 * kz > 64)
-            for (int j = 0; j < 8; ++j)
-                if (slab.surface.any(x, y, z0 + j - kz, z0 + j + kz + 1)) d |= uint64_t(1) << j;
-        return uint8_t(d & 0xFF);
+    const auto zAt = [&](int64_t x, int64_t y) {
+        return x >= 0 && x < W && y >= 0 && y < H ? z[std::size_t(y * W + x)] : along(x, y);
     };
     parallelFor(0, H, 8, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y) {
+        for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
-                uint8_t a = 0;
-                for (int64_t dx = -kx; dx <= kx; ++dx) a |= grown(x + dx, y);
-                across[std::size_t(y * W + x)] = a;
+                uint64_t a = 0;
+                for (int64_t dx = -kx; dx <= kx; ++dx) a |= zAt(x + dx, y);
+                xy[std::size_t(y * W + x)] = a;
             }
-        }
     });
     parallelFor(0, H, 8, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
-                uint8_t a = 0;
+                uint64_t a = 0;
                 for (int64_t dy = -ky; dy <= ky; ++dy) {
                     const int64_t yy = y + dy;
                     if (yy >= 0 && yy < H) {
-                        a |= across[std::size_t(yy * W + x)];
+                        a |= xy[std::size_t(yy * W + x)];
                     } else {
-                        for (int64_t dx = -kx; dx <= kx; ++dx) a |= grown(x + dx, yy);
+                        for (int64_t dx = -kx; dx <= kx; ++dx) a |= zAt(x + dx, yy);
                     }
                 }
                 mask[std::size_t(y * W + x)] = a;
@@ -255,29 +311,36 @@ void SdfBuilder::candidateBytes(const SdfSlab& slab, int64_t z0, std::vector<uin
     });
 }
 
-void SdfBuilder::layer(const SdfSlab& slab, int64_t bz) {
+void SdfBuilder::chunk(const SdfSlab& slab, int64_t z0) {
     const int64_t W = p_.dims.x, H = p_.dims.y;
-    std::vector<uint8_t> solid(std::size_t(W * H)), mask(std::size_t(W * H));
-    candidateBytes(slab, bz * kLeafDim, solid, mask);
-    std::vector<Row> rows(std::size_t(blocks_.y));
-    parallelFor(0, blocks_.y, 1, [&](int64_t b, int64_t e) {
-        for (int64_t by = b; by < e; ++by) blockRow(by, bz, solid, mask, rows[std::size_t(by)]);
-    });
-    for (Row& r : rows) {
-        for (SdfLeaf& l : r.leaves) leaves_.push_back(std::move(l));
-        runs_.insert(runs_.end(), r.runs.begin(), r.runs.end());
+    std::vector<uint64_t> solid(std::size_t(W * H)), mask(std::size_t(W * H));
+    candidateWords(slab, z0, solid, mask);
+    for (int64_t bz = z0 / kLeafDim; bz * kLeafDim < std::min(z0 + 64, slab.z1); ++bz) {
+        std::vector<Row> rows(std::size_t(blocks_.y));
+        const int shift = int(bz * kLeafDim - z0);
+        parallelFor(0, blocks_.y, 1, [&](int64_t b, int64_t e) {
+            for (int64_t by = b; by < e; ++by) blockRow(by, bz, shift, solid, mask, rows[std::size_t(by)]);
+        });
+        for (Row& r : rows) {
+            for (SdfLeaf& l : r.leaves) leaves_.push_back(std::move(l));
+            runs_.insert(runs_.end(), r.runs.begin(), r.runs.end());
+        }
+        if (progress_ &&
+            !progress_->update(double(std::min(p_.dims.z, (bz + 1) * kLeafDim)) / double(p_.dims.z)))
+            fail("cancelled");
     }
 }
 
 // The blocks (0 .. bx, by, bz): each becomes a leaf (band voxels, or signs that differ), a run of
 // inside blocks, or nothing (outside, the background).
-void SdfBuilder::blockRow(int64_t by, int64_t bz, const std::vector<uint8_t>& solid,
-                          const std::vector<uint8_t>& mask, Row& row) const {
+void SdfBuilder::blockRow(int64_t by, int64_t bz, int shift, const std::vector<uint64_t>& solid,
+                          const std::vector<uint64_t>& mask, Row& row) const {
     const int64_t W = p_.dims.x, H = p_.dims.y, D = p_.dims.z;
     SdfLeaf leaf;
+    Scratch scratch;
     for (int64_t bx = 0; bx < blocks_.x; ++bx) {
         // Word i is column x = 8 bx + i, byte j of it column y = 8 by + j: OpenVDB's leaf order.
-        std::array<uint64_t, 8> m{}, in{}, valid{};
+        Bits m{}, in{}, valid{};
         const int nz = int(std::min<int64_t>(kLeafDim, D - bz * kLeafDim));
         const uint8_t zValid = uint8_t((1u << nz) - 1);
         for (int i = 0; i < kLeafDim; ++i) {
@@ -287,8 +350,8 @@ void SdfBuilder::blockRow(int64_t by, int64_t bz, const std::vector<uint8_t>& so
                 const int64_t y = by * kLeafDim + j;
                 if (y >= H) break;
                 const std::size_t c = std::size_t(y * W + x);
-                m[std::size_t(i)] |= uint64_t(mask[c]) << (8 * j);
-                in[std::size_t(i)] |= uint64_t(solid[c]) << (8 * j);
+                m[std::size_t(i)] |= ((mask[c] >> shift) & 0xFF) << (8 * j);
+                in[std::size_t(i)] |= ((solid[c] >> shift) & 0xFF) << (8 * j);
                 valid[std::size_t(i)] |= uint64_t(zValid) << (8 * j);
             }
         }
@@ -299,14 +362,17 @@ void SdfBuilder::blockRow(int64_t by, int64_t bz, const std::vector<uint8_t>& so
         }
         leaf.origin = {bx * kLeafDim, by * kLeafDim, bz * kLeafDim};
         leaf.active.fill(0);
-        bool keep;
-        if (p_.full) {
-            fullBlock(leaf, in, valid);
-            keep = true;
-        } else {
-            keep = bandBlock(leaf, m, in, valid);
-        }
-        if (keep) {
+        Bits todo;
+        for (int i = 0; i < 8; ++i)
+            todo[std::size_t(i)] = (p_.full ? ~uint64_t(0) : m[std::size_t(i)]) & valid[std::size_t(i)];
+        bool active = false;
+        if (todo != Bits{}) active = solveBlock(leaf, todo, in, scratch);
+        if (active || (anyInside && !allInside)) {
+            // Band voxels, or signs that differ (a gwn fill's inside ending at a hole) or a block
+            // cut by the grid's border: a leaf, so that every voxel keeps its value and sign.
+            if (!active)
+                for (int n = 0; n < 512; ++n)
+                    setValue(leaf, n, 0, false, (in[std::size_t(n >> 6)] >> (n & 63)) & 1);
             row.leaves.push_back(leaf);
         } else if (allInside) {
             // Blocks wholly in the grid and inside: runs of tiles at -background.
@@ -314,115 +380,84 @@ void SdfBuilder::blockRow(int64_t by, int64_t bz, const std::vector<uint8_t>& so
                 ++row.runs.back().x1;
             else
                 row.runs.push_back({int32_t(bx), int32_t(bx + 1), int32_t(by), int32_t(bz)});
-        } else if (anyInside) {
-            // Signs that differ without band voxels (a gwn fill's inside ending at a hole): a leaf
-            // of inactive values, so that every voxel keeps its sign.
-            for (int n = 0; n < 512; ++n)
-                setValue(leaf, n, 0, false, (in[std::size_t(n >> 6)] >> (n & 63)) & 1);
-            row.leaves.push_back(leaf);
         }
     }
 }
 
-// A band block: the candidate voxels take the distance to the triangles gathered within the band
-// width of them, when below it. Returns whether the block has an active voxel.
-bool SdfBuilder::bandBlock(SdfLeaf& leaf, const std::array<uint64_t, 8>& mask,
-                           const std::array<uint64_t, 8>& inside,
-                           const std::array<uint64_t, 8>& valid) const {
-    // The box of the candidate voxels' centres.
-    int lo[3] = {8, 8, 8}, hi[3] = {-1, -1, -1};
-    for (int i = 0; i < 8; ++i) {
-        const uint64_t w = mask[std::size_t(i)] & valid[std::size_t(i)];
-        if (!w) continue;
-        lo[0] = std::min(lo[0], i);
-        hi[0] = std::max(hi[0], i);
-        for (int j = 0; j < 8; ++j) {
-            const auto b = uint8_t(w >> (8 * j));
-            if (!b) continue;
-            lo[1] = std::min(lo[1], j);
-            hi[1] = std::max(hi[1], j);
-            lo[2] = std::min(lo[2], std::countr_zero(b));
-            hi[2] = std::max(hi[2], 7 - std::countl_zero(b));
-        }
-    }
-    if (hi[0] < 0) return false;
-    const Vec3i o = leaf.origin;
-    Candidates cand;
-    bvh_.gather(centre(o.x + lo[0], o.y + lo[1], o.z + lo[2]), centre(o.x + hi[0], o.y + hi[1], o.z + hi[2]),
-                p_.width, cand.index);
-    if (cand.index.empty()) return false;
-    cand.prepare(bvh_);
-    const double cap2 = p_.width * p_.width;
+// A block's voxels to compute (band: the candidates; full: all in the grid): each takes the
+// distance to the triangles gathered within the band width of them (band), or to those that can
+// be nearest to a voxel of the block (full); the others the background with their sign. Returns
+// whether a voxel is active.
+bool SdfBuilder::solveBlock(SdfLeaf& leaf, const Bits& todo, const Bits& inside, Scratch& scratch) const {
+    for (int n = 0; n < 512; ++n) setValue(leaf, n, 0, false, (inside[std::size_t(n >> 6)] >> (n & 63)) & 1);
     bool any = false;
     int hint = -1;
-    for (int n = 0; n < 512; ++n) {
-        const std::size_t w = std::size_t(n >> 6);
-        const uint64_t bit = uint64_t(1) << (n & 63);
-        const bool in = inside[w] & bit;
-        double d2 = cap2;
-        if (mask[w] & valid[w] & bit)
-            d2 = cand.nearest2(centre(o.x + (n >> 6), o.y + ((n >> 3) & 7), o.z + (n & 7)), cap2, hint);
-        const bool active = d2 < cap2;
-        any = any || active;
-        setValue(leaf, n, d2, active, in);
-    }
-    return any || (inside != std::array<uint64_t, 8>{} && inside != valid);
+    solveCube(leaf, {0, 0, 0}, kLeafDim, 0, scratch, todo, inside, any, hint);
+    return any;
 }
 
-void SdfBuilder::fullBlock(SdfLeaf& leaf, const std::array<uint64_t, 8>& inside,
-                           const std::array<uint64_t, 8>& valid) const {
-    for (int n = 0; n < 512; ++n) leaf.values[std::size_t(n)] = float(p_.width);
-    fullBox(leaf, {0, 0, 0}, kLeafDim, nullptr, inside, valid);
-}
-
-// Every voxel of the cube [b, b + size)^3 of the leaf: the triangles that can be nearest to one of
-// them lie within d + h of the cube (d: the distance at its centre, h: its half diagonal); while
-// they are many, the cube splits into eight.
-void SdfBuilder::fullBox(SdfLeaf& leaf, const Vec3i& b, int size, const Candidates* parent,
-                         const std::array<uint64_t, 8>& inside, const std::array<uint64_t, 8>& valid) const {
+// The voxels of `todo` in the cube [b, b + size)^3 of the leaf. The triangles that matter lie
+// within a radius of the box of those voxels' centres: the band width, or (full) d + h, d the
+// distance at the box's centre and h its half diagonal, since d(v) <= d + |v - centre|. While they
+// are many, the cube splits into eight, each keeping the part of the list within its own radius.
+void SdfBuilder::solveCube(SdfLeaf& leaf, const Vec3i& b, int size, int depth, Scratch& scratch,
+                           const Bits& todo, const Bits& inside, bool& any, int& hint) const {
+    Candidates* parent = depth ? &scratch[std::size_t(depth - 1)] : nullptr;
+    // The box of the cube's voxels to compute.
+    int lo[3] = {8, 8, 8}, hi[3] = {-1, -1, -1};
+    const uint64_t zBits = ((uint64_t(1) << size) - 1) << b.z;
+    for (int64_t i = b.x; i < b.x + size; ++i)
+        for (int64_t j = b.y; j < b.y + size; ++j) {
+            const uint64_t bits = (todo[std::size_t(i)] >> (8 * j)) & zBits;
+            if (!bits) continue;
+            lo[0] = std::min(lo[0], int(i));
+            hi[0] = std::max(hi[0], int(i));
+            lo[1] = std::min(lo[1], int(j));
+            hi[1] = std::max(hi[1], int(j));
+            lo[2] = std::min(lo[2], std::countr_zero(bits));
+            hi[2] = std::max(hi[2], 63 - std::countl_zero(bits));
+        }
+    if (hi[0] < 0) return;
     const Vec3i o = leaf.origin;
-    const Vec3i first = o + b, last = o + b + Vec3i{size - 1, size - 1, size - 1};
-    if (first.x >= p_.dims.x || first.y >= p_.dims.y || first.z >= p_.dims.z) return;
-    const Vec3d lo = centre(first.x, first.y, first.z), hi = centre(last.x, last.y, last.z);
-    const Vec3d mid = (lo + hi) * 0.5;
-    const double h = length(hi - lo) * 0.5;
-    double d;
-    if (parent) {
-        int hint = -1;
-        d = std::sqrt(parent->nearest2(mid, std::numeric_limits<double>::infinity(), hint));
-    } else {
-        d = std::sqrt(bvh_.nearest(mid).distance2);
+    const Vec3d boxLo = centre(o.x + lo[0], o.y + lo[1], o.z + lo[2]);
+    const Vec3d boxHi = centre(o.x + hi[0], o.y + hi[1], o.z + hi[2]);
+    double radius = p_.width;
+    if (p_.full) {
+        const Vec3d mid = (boxLo + boxHi) * 0.5;
+        int midHint = hint;
+        const double d =
+            std::sqrt(parent ? parent->nearest2(mid, std::numeric_limits<double>::infinity(), midHint)
+                             : bvh_.nearest(mid).distance2);
+        // Rounding of d, h and the box distances stays far below this relative slack.
+        radius = (d + length(boxHi - boxLo) * 0.5) * (1 + 1e-12) + 1e-300;
     }
-    // Rounding of d, h and the box distances stays far below this relative slack.
-    const double radius = (d + h) * (1 + 1e-12) + 1e-300;
-    Candidates cand;
+    Candidates& cand = scratch[std::size_t(depth)];
     if (parent) {
-        for (std::size_t c = 0; c < parent->index.size(); ++c)
-            if (boxBoxDistance2(&parent->lo[3 * c], &parent->hi[3 * c], lo, hi) <= radius * radius)
-                cand.index.push_back(parent->index[c]);
+        cand.subset(*parent, boxLo, boxHi, radius);
     } else {
-        bvh_.gather(lo, hi, radius, cand.index);
-    }
-    if (cand.index.size() > kSplitCandidates && size > 1) {
+        cand.index.clear();
+        bvh_.gather(boxLo, boxHi, radius, cand.index);
         cand.prepare(bvh_);
+    }
+    if (!cand.size()) return;
+    if (cand.size() > kSplitCandidates && size > kSmallestSplit) {
         const int half = size / 2;
-        for (int dz = 0; dz < 2; ++dz)
-            for (int dy = 0; dy < 2; ++dy)
-                for (int dx = 0; dx < 2; ++dx)
-                    fullBox(leaf, b + Vec3i{dx * half, dy * half, dz * half}, half, &cand, inside, valid);
+        for (int q = 0; q < 8; ++q)
+            solveCube(leaf, b + Vec3i{(q & 1) * half, ((q >> 1) & 1) * half, (q >> 2) * half}, half,
+                      depth + 1, scratch, todo, inside, any, hint);
         return;
     }
-    cand.prepare(bvh_);
-    int hint = -1;
-    for (int64_t i = b.x; i < b.x + size; ++i)
-        for (int64_t j = b.y; j < b.y + size; ++j)
-            for (int64_t k = b.z; k < b.z + size; ++k) {
+    const double cap2 = p_.full ? std::numeric_limits<double>::infinity() : p_.width * p_.width;
+    for (int64_t i = lo[0]; i <= hi[0]; ++i)
+        for (int64_t j = lo[1]; j <= hi[1]; ++j)
+            for (int64_t k = lo[2]; k <= hi[2]; ++k) {
                 const int n = int((i << 6) | (j << 3) | k);
                 const std::size_t w = std::size_t(n >> 6);
                 const uint64_t bit = uint64_t(1) << (n & 63);
-                if (!(valid[w] & bit)) continue;
-                const double d2 = cand.nearest2(centre(o.x + i, o.y + j, o.z + k),
-                                                std::numeric_limits<double>::infinity(), hint);
+                if (!(todo[w] & bit)) continue;
+                const double d2 = cand.nearest2(centre(o.x + i, o.y + j, o.z + k), cap2, hint);
+                if (d2 >= cap2) continue;
+                any = true;
                 setValue(leaf, n, d2, true, inside[w] & bit);
             }
 }

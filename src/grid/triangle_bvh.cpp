@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "voxfx/error.hpp"
+#include "voxfx/parallel.hpp"
 
 namespace voxfx::detail {
 
@@ -66,7 +67,8 @@ TriangleBvh::TriangleBvh(const MeshView& mesh) {
     std::iota(order.begin(), order.end(), 0u);
     if (n) {
         nodes_.reserve(std::size_t(n) / 2 + 16);
-        root_ = build(order, centroid, 0, n, boxes, 0);
+        BuildState st{order, centroid, boxes, {}, 0};
+        buildAll(st, n);
     }
     faces_ = order;
     corners_.resize(9 * std::size_t(n));
@@ -146,32 +148,87 @@ uint32_t TriangleBvh::split(std::vector<uint32_t>& order, const std::vector<Vec3
     return mid;
 }
 
-BvhRef TriangleBvh::build(std::vector<uint32_t>& order, const std::vector<Vec3d>& centroid, uint32_t begin,
-                          uint32_t end, const std::vector<float>& boxes, int depth) {
+BvhRef TriangleBvh::build(BuildState& st, std::vector<BvhNode>& nodes, uint32_t begin, uint32_t end,
+                          int depth, bool top) const {
     BvhRef out;
-    for (uint32_t i = begin; i < end; ++i) out.box.extend(boxOf(boxes, order[i]));
-    const uint32_t mid = split(order, centroid, begin, end, boxes, out.box, depth);
+    // Ranges below the cut-off are built later, in parallel: a placeholder for now.
+    if (top && end - begin <= st.cutoff) {
+        out.ref = uint32_t(st.pending.size());
+        out.count = kPendingCount;
+        st.pending.push_back({begin, end, depth});
+        return out;
+    }
+    for (uint32_t i = begin; i < end; ++i) out.box.extend(boxOf(st.boxes, st.order[i]));
+    const uint32_t mid = split(st.order, st.centroid, begin, end, st.boxes, out.box, depth);
     if (mid == begin) {
         out.ref = begin;
         out.count = end - begin;
         return out;
     }
-    const auto index = uint32_t(nodes_.size());
-    nodes_.push_back({});
-    const BvhRef children[2] = {build(order, centroid, begin, mid, boxes, depth + 1),
-                                build(order, centroid, mid, end, boxes, depth + 1)};
-    BvhNode& node = nodes_[index];
-    for (int c = 0; c < 2; ++c) {
-        for (int k = 0; k < 3; ++k) {
-            node.lo[c][k] = float(children[c].box.lo[k]); // exact: float corners
-            node.hi[c][k] = float(children[c].box.hi[k]);
-        }
-        node.ref[c] = children[c].ref;
-        node.count[c] = children[c].count;
-    }
+    const auto index = uint32_t(nodes.size());
+    nodes.push_back({});
+    const BvhRef children[2] = {build(st, nodes, begin, mid, depth + 1, top),
+                                build(st, nodes, mid, end, depth + 1, top)};
+    BvhNode& node = nodes[index];
+    for (int c = 0; c < 2; ++c) setChild(node, c, children[c]);
     out.ref = index;
     out.count = 0;
     return out;
+}
+
+void TriangleBvh::setChild(BvhNode& node, int c, const BvhRef& child) {
+    for (int k = 0; k < 3; ++k) {
+        node.lo[c][k] = float(child.box.lo[k]); // exact: float corners
+        node.hi[c][k] = float(child.box.hi[k]);
+    }
+    node.ref[c] = child.ref;
+    node.count[c] = child.count;
+}
+
+// The top of the tree serially down to ranges of about n / 64 triangles, those subtrees in
+// parallel (each into its own nodes), then the subtrees appended in a fixed order and linked. The
+// tree is the serial build's (every split is a function of its range), numbered differently.
+void TriangleBvh::buildAll(BuildState& st, uint32_t n) {
+    st.cutoff = std::max<uint32_t>(4096, n / 64);
+    root_ = build(st, nodes_, 0, n, 0, true);
+    std::vector<std::vector<BvhNode>> parts(st.pending.size());
+    std::vector<BvhRef> roots(st.pending.size());
+    parallelFor(0, int64_t(st.pending.size()), 1, [&](int64_t b, int64_t e) {
+        for (int64_t i = b; i < e; ++i) {
+            const Pending& pd = st.pending[std::size_t(i)];
+            roots[std::size_t(i)] = build(st, parts[std::size_t(i)], pd.begin, pd.end, pd.depth, false);
+        }
+    });
+    std::vector<uint32_t> base(parts.size());
+    for (std::size_t i = 0; i < parts.size(); ++i) {
+        base[i] = uint32_t(nodes_.size());
+        for (BvhNode node : parts[i]) {
+            for (int c = 0; c < 2; ++c)
+                if (!node.count[c]) node.ref[c] += base[i];
+            nodes_.push_back(node);
+        }
+    }
+    const auto link = [&](const BvhRef& placeholder) {
+        BvhRef r = roots[placeholder.ref];
+        if (!r.count) r.ref += base[placeholder.ref];
+        return r;
+    };
+    if (root_.count == kPendingCount) root_ = link(root_);
+    for (std::size_t i = 0; i < nodes_.size(); ++i)
+        for (int c = 0; c < 2; ++c)
+            if (nodes_[i].count[c] == kPendingCount) {
+                BvhRef placeholder;
+                placeholder.ref = nodes_[i].ref[c];
+                const BvhRef r = link(placeholder);
+                BvhNode& node = nodes_[i];
+                node.ref[c] = r.ref;
+                node.count[c] = r.count;
+                // The box was unknown when the placeholder was made.
+                for (int k = 0; k < 3; ++k) {
+                    node.lo[c][k] = float(r.box.lo[k]);
+                    node.hi[c][k] = float(r.box.hi[k]);
+                }
+            }
 }
 
 double TriangleBvh::triangleBoxDistance2(uint32_t i, const Vec3d& p) const {

@@ -20,7 +20,7 @@
 // split by the surface area heuristic over 16 bins of the centroids, at most 4 triangles a leaf;
 // each node holds both children's boxes (one cache line per visit), the triangles are stored as
 // their float corners in tree order (36 bytes each: queries are bound by memory, not arithmetic).
-// Built serially, deterministically.
+// Built in parallel below the top levels; the tree does not depend on the thread count.
 // Queries descend the nearer child first and skip a child whose box lies farther than the best
 // distance found (with a relative slack of 2^-40, so a triangle at the same computed distance is
 // never skipped: ties go to the smallest face index, independent of the tree's shape).
@@ -199,8 +199,22 @@ public:
     uint32_t face(uint32_t i) const { return faces_[i]; }
 
 private:
-    BvhRef build(std::vector<uint32_t>& order, const std::vector<Vec3d>& centroid, uint32_t begin,
-                 uint32_t end, const std::vector<float>& boxes, int depth);
+    struct Pending {
+        uint32_t begin, end;
+        int depth;
+    };
+    struct BuildState {
+        std::vector<uint32_t>& order; ///< permuted in place: disjoint ranges per subtree
+        const std::vector<Vec3d>& centroid;
+        const std::vector<float>& boxes;
+        std::vector<Pending> pending;
+        uint32_t cutoff;
+    };
+    static constexpr uint32_t kPendingCount = UINT32_MAX; ///< BvhRef::count of a placeholder
+    void buildAll(BuildState& st, uint32_t n);
+    BvhRef build(BuildState& st, std::vector<BvhNode>& nodes, uint32_t begin, uint32_t end, int depth,
+                 bool top) const;
+    static void setChild(BvhNode& node, int c, const BvhRef& child);
     uint32_t split(std::vector<uint32_t>& order, const std::vector<Vec3d>& centroid, uint32_t begin,
                    uint32_t end, const std::vector<float>& boxes, const Box3d& box, int depth) const;
     /// Squared distance from p to the box of triangle i (from its corners).
