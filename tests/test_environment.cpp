@@ -10,7 +10,7 @@
 
 #include "test_util.hpp"
 #include "voxfx/environment.hpp"
-#include "voxfx/image.hpp"
+#include "voxfx/image_io.hpp"
 
 namespace voxfx {
 namespace {

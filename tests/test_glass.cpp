@@ -10,6 +10,7 @@
 #include "voxfx/attribute_grid.hpp"
 #include "voxfx/demo.hpp"
 #include "voxfx/glass.hpp"
+#include "voxfx/image_io.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/shadow.hpp"
 

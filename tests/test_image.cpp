@@ -13,7 +13,7 @@
 #include <png.h>
 
 #include "test_util.hpp"
-#include "voxfx/image.hpp"
+#include "voxfx/image_io.hpp"
 
 namespace voxfx {
 namespace {

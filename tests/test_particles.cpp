@@ -11,6 +11,7 @@
 
 #include "test_util.hpp"
 #include "voxfx/grid_io.hpp"
+#include "voxfx/image_io.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/particles.hpp"
 #include "voxfx/voxelize.hpp"

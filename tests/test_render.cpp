@@ -17,6 +17,7 @@
 
 #include "test_util.hpp"
 #include "voxfx/demo.hpp"
+#include "voxfx/image_io.hpp"
 #include "voxfx/render.hpp"
 
 namespace voxfx {

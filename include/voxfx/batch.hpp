@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "voxfx/enum_names.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/voxelize.hpp"
 
@@ -45,7 +46,9 @@ std::vector<BatchJob> batchJobs(const std::vector<std::string>& meshPaths, const
                                 GridFormat format);
 
 enum class BatchStatus : uint8_t { Ok, Skipped, Error };
-const char* toString(BatchStatus s); ///< "ok", "skipped", "error"
+inline constexpr EnumName<BatchStatus> kBatchStatusNames[] = {
+    {"ok", BatchStatus::Ok}, {"skipped", BatchStatus::Skipped}, {"error", BatchStatus::Error}};
+const char* toString(BatchStatus s);
 
 struct BatchResult {
     std::string mesh, output;

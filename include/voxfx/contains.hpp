@@ -42,12 +42,16 @@
 #include <string>
 #include <vector>
 
+#include "voxfx/enum_names.hpp"
 #include "voxfx/math.hpp"
 #include "voxfx/mesh.hpp"
 
 namespace voxfx {
 
 enum class ContainsMethod : uint8_t { Parity, Winding, Flood };
+inline constexpr EnumName<ContainsMethod> kContainsMethodNames[] = {{"parity", ContainsMethod::Parity},
+                                                                    {"winding", ContainsMethod::Winding},
+                                                                    {"flood", ContainsMethod::Flood}};
 const char* toString(ContainsMethod m);
 /// Parses "parity", "winding", "flood"; throws voxfx::Error listing them otherwise.
 ContainsMethod parseContainsMethod(const std::string& name);

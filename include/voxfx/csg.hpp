@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "voxfx/bitgrid.hpp"
+#include "voxfx/enum_names.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/voxel_grid.hpp"
 #include "voxfx/voxelize.hpp"
@@ -36,6 +37,15 @@
 namespace voxfx {
 
 enum class CsgOp : uint8_t { Union, Intersection, Difference, Xor };
+inline constexpr EnumName<CsgOp> kCsgOpNames[] = {{"union", CsgOp::Union},
+                                                  {"intersection", CsgOp::Intersection},
+                                                  {"difference", CsgOp::Difference},
+                                                  {"xor", CsgOp::Xor},
+                                                  {"or", CsgOp::Union, true},
+                                                  {"and", CsgOp::Intersection, true},
+                                                  {"minus", CsgOp::Difference, true},
+                                                  {"sub", CsgOp::Difference, true},
+                                                  {"symmetric-difference", CsgOp::Xor, true}};
 
 const char* toString(CsgOp op);
 /// "union", "intersection", "difference", "xor" (and the aliases or, and, minus, sub);

@@ -21,6 +21,7 @@
 #include <string>
 
 #include "voxfx/bitgrid.hpp"
+#include "voxfx/enum_names.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/mesh.hpp"
 
@@ -35,6 +36,8 @@ class CudaGrid;
 /// Cpu: always the CPU. Cuda: the GPU, else the CPU with a note saying why. Auto: the GPU when
 /// one can take the job, else the CPU without a note.
 enum class Device : uint8_t { Cpu, Cuda, Auto };
+inline constexpr EnumName<Device> kDeviceNames[] = {
+    {"cpu", Device::Cpu}, {"cuda", Device::Cuda}, {"auto", Device::Auto}};
 const char* toString(Device d);
 /// Parses "cpu", "cuda", "auto"; throws voxfx::Error listing them otherwise.
 Device parseDevice(const std::string& name);

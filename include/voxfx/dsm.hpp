@@ -35,6 +35,7 @@
 #include <variant>
 #include <vector>
 
+#include "voxfx/enum_names.hpp"
 #include "voxfx/math.hpp"
 
 namespace voxfx {
@@ -306,6 +307,8 @@ private:
 };
 
 enum class DsmStorage : uint8_t { Fixed, Chunked };
+inline constexpr EnumName<DsmStorage> kDsmStorageNames[] = {{"fixed", DsmStorage::Fixed},
+                                                            {"chunked", DsmStorage::Chunked}};
 const char* toString(DsmStorage s);
 /// Parses fixed | chunked (any case); throws voxfx::Error listing them otherwise.
 DsmStorage parseDsmStorage(const std::string& name);

@@ -53,6 +53,7 @@
 
 #include "voxfx/attribute_grid.hpp"
 #include "voxfx/bitgrid.hpp"
+#include "voxfx/enum_names.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/image.hpp"
 #include "voxfx/math.hpp"
@@ -63,6 +64,11 @@
 namespace voxfx {
 
 enum class GlassKind : uint8_t { None, Exact, Multi, TwoSurface, Frosted };
+inline constexpr EnumName<GlassKind> kGlassKindNames[] = {{"none", GlassKind::None},
+                                                          {"exact", GlassKind::Exact},
+                                                          {"multi", GlassKind::Multi},
+                                                          {"two-surface", GlassKind::TwoSurface},
+                                                          {"frosted", GlassKind::Frosted}};
 const char* toString(GlassKind k);
 /// Parses none | exact | multi | two-surface | frosted; throws voxfx::Error listing them otherwise.
 GlassKind parseGlassKind(const std::string& name);

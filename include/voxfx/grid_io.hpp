@@ -28,11 +28,17 @@
 
 #include <string>
 
+#include "voxfx/enum_names.hpp"
 #include "voxfx/voxel_grid.hpp"
 
 namespace voxfx {
 
 enum class GridFormat : uint8_t { Binvox, Vdb, Nrrd, Ply, Obj };
+inline constexpr EnumName<GridFormat> kGridFormatNames[] = {{"binvox", GridFormat::Binvox},
+                                                            {"vdb", GridFormat::Vdb},
+                                                            {"nrrd", GridFormat::Nrrd},
+                                                            {"ply", GridFormat::Ply},
+                                                            {"obj", GridFormat::Obj}};
 
 /// Format from the file extension; throws voxfx::Error listing the allowed extensions.
 GridFormat gridFormatFromPath(const std::string& path);

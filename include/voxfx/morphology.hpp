@@ -24,13 +24,20 @@
 #include <string>
 
 #include "voxfx/bitgrid.hpp"
+#include "voxfx/enum_names.hpp"
 #include "voxfx/math.hpp"
 #include "voxfx/voxel_grid.hpp"
 
 namespace voxfx {
 
 enum class MorphOp : uint8_t { Erode, Dilate, Open, Close };
+inline constexpr EnumName<MorphOp> kMorphOpNames[] = {
+    {"erode", MorphOp::Erode},        {"dilate", MorphOp::Dilate},       {"open", MorphOp::Open},
+    {"close", MorphOp::Close},        {"erosion", MorphOp::Erode, true}, {"dilation", MorphOp::Dilate, true},
+    {"opening", MorphOp::Open, true}, {"closing", MorphOp::Close, true}};
 enum class MorphBorder : uint8_t { Neutral, Empty, Filled };
+inline constexpr EnumName<MorphBorder> kMorphBorderNames[] = {
+    {"neutral", MorphBorder::Neutral}, {"empty", MorphBorder::Empty}, {"filled", MorphBorder::Filled}};
 
 const char* toString(MorphOp op);
 const char* toString(MorphBorder border);

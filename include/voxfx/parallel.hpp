@@ -1,12 +1,14 @@
-// voxfx — the one parallel-for of the library (wraps TBB; nothing else names TBB).
+// voxfx — the one parallel-for and the one reduction of the library (wrap TBB; nothing else names
+// TBB).
 //
-// Results never depend on the thread count: bodies own disjoint output ranges, and reductions
-// combine per-chunk values in a fixed order.
-// Thread-safety: parallelFor and withThreads may be called from several threads and nest; the
-// body must only write ranges it owns.
+// Results never depend on the thread count: bodies own disjoint output ranges, and parallelReduce
+// combines per-chunk values in chunk order.
+// Thread-safety: parallelFor, parallelReduce and withThreads may be called from several threads
+// and nest; the body must only write ranges it owns.
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <type_traits>
@@ -44,6 +46,34 @@ template <class Body> void parallelFor(int64_t begin, int64_t end, int64_t grain
             (*c.body)(b, std::min(c.end, b + c.grain));
         }
     });
+}
+
+/// Fixed-order reduction: splits [begin, end) into chunks at multiples of `grain` from `begin` (as
+/// parallelFor does), computes v_k = body(b_k, e_k) for every chunk k in parallel, and returns
+/// combine(...combine(combine(identity, v_0), v_1)..., v_last) with the chunks in order. The
+/// chunking and the order of the combination do not depend on the thread count, so neither does
+/// the result, floating-point sums included. T must be default-constructible and small: partial
+/// values are kept on the stack, kReduceBlock chunks at a time (no allocation). combine(T, T) -> T
+/// runs on the calling thread. A range of one chunk runs serially.
+inline constexpr int64_t kReduceBlock = 256;
+template <class T, class Body, class Combine>
+T parallelReduce(int64_t begin, int64_t end, int64_t grain, T identity, Body&& body, Combine&& combine) {
+    if (end <= begin) return identity;
+    grain = std::max<int64_t>(grain, 1);
+    const int64_t chunks = (end - begin + grain - 1) / grain;
+    T result = std::move(identity);
+    std::array<T, size_t(kReduceBlock)> partial{};
+    for (int64_t c0 = 0; c0 < chunks; c0 += kReduceBlock) {
+        const int64_t c1 = std::min(chunks, c0 + kReduceBlock);
+        parallelFor(c0, c1, 1, [&](int64_t cb, int64_t ce) {
+            for (int64_t c = cb; c < ce; ++c) {
+                const int64_t b = begin + c * grain;
+                partial[size_t(c - c0)] = body(b, std::min(end, b + grain));
+            }
+        });
+        for (int64_t c = c0; c < c1; ++c) result = combine(std::move(result), partial[size_t(c - c0)]);
+    }
+    return result;
 }
 
 /// Runs f with at most `threads` worker threads (0 = all hardware threads).

@@ -28,6 +28,7 @@
 #include <string_view>
 #include <vector>
 
+#include "voxfx/enum_names.hpp"
 #include "voxfx/math.hpp"
 #include "voxfx/mesh.hpp"
 
@@ -36,6 +37,8 @@ namespace voxfx {
 struct VolumeScene; // voxfx/volume_scene.hpp
 
 enum class LightType : uint8_t { Directional, Spot, Point };
+inline constexpr EnumName<LightType> kLightTypeNames[] = {
+    {"directional", LightType::Directional}, {"spot", LightType::Spot}, {"point", LightType::Point}};
 const char* toString(LightType t);
 
 /// A surface material. Partial occluders (leaves, glass) are surfaces that let a fraction of the

@@ -44,6 +44,7 @@
 #include "voxfx/attribute_grid.hpp"
 #include "voxfx/device.hpp"
 #include "voxfx/dsm.hpp"
+#include "voxfx/enum_names.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/scene.hpp"
@@ -53,6 +54,13 @@
 namespace voxfx {
 
 enum class ShadowKind : uint8_t { None, Map, Transmittance, Absorption, Volumes, Exact, Deep };
+inline constexpr EnumName<ShadowKind> kShadowKindNames[] = {{"none", ShadowKind::None},
+                                                            {"map", ShadowKind::Map},
+                                                            {"transmittance", ShadowKind::Transmittance},
+                                                            {"absorption", ShadowKind::Absorption},
+                                                            {"volumes", ShadowKind::Volumes},
+                                                            {"exact", ShadowKind::Exact},
+                                                            {"deep", ShadowKind::Deep}};
 const char* toString(ShadowKind k);
 /// Parses none | map | transmittance | absorption | volumes | exact | deep; throws voxfx::Error
 /// listing them otherwise.

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "voxfx/density.hpp"
+#include "voxfx/enum_names.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/voxel_grid.hpp"
 
@@ -44,6 +45,8 @@ struct SurfaceMesh {
 };
 
 enum class SurfaceSource : uint8_t { Density, Occupancy };
+inline constexpr EnumName<SurfaceSource> kSurfaceSourceNames[] = {{"density", SurfaceSource::Density},
+                                                                  {"occupancy", SurfaceSource::Occupancy}};
 const char* toString(SurfaceSource s);
 /// "density" or "occupancy"; throws voxfx::Error otherwise.
 SurfaceSource parseSurfaceSource(const std::string& name);

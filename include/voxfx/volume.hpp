@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "voxfx/enum_names.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/math.hpp"
 #include "voxfx/mesh.hpp"
@@ -24,6 +25,10 @@ namespace voxfx {
 
 /// Scalar type of the samples a volume file stored.
 enum class ScalarType : uint8_t { UInt8, Int8, UInt16, Int16, UInt32, Int32, Float32, Float64 };
+inline constexpr EnumName<ScalarType> kScalarTypeNames[] = {
+    {"uint8", ScalarType::UInt8},     {"int8", ScalarType::Int8},      {"uint16", ScalarType::UInt16},
+    {"int16", ScalarType::Int16},     {"uint32", ScalarType::UInt32},  {"int32", ScalarType::Int32},
+    {"float32", ScalarType::Float32}, {"float64", ScalarType::Float64}};
 
 const char* toString(ScalarType t);
 /// Bytes per sample of the type.

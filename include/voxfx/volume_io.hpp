@@ -29,6 +29,7 @@
 #include <cstdint>
 #include <string>
 
+#include "voxfx/enum_names.hpp"
 #include "voxfx/transfer_function.hpp"
 #include "voxfx/volume.hpp"
 
@@ -36,6 +37,10 @@ namespace voxfx {
 
 /// File format of a volume.
 enum class VolumeFormat : uint8_t { Inr, Nrrd, RawJson, Vdb };
+inline constexpr EnumName<VolumeFormat> kVolumeFormatNames[] = {{"inr", VolumeFormat::Inr},
+                                                                {"nrrd", VolumeFormat::Nrrd},
+                                                                {"raw+json", VolumeFormat::RawJson},
+                                                                {"vdb", VolumeFormat::Vdb}};
 const char* toString(VolumeFormat f);
 
 /// What loadVolume found besides the volume.

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "voxfx/enum_names.hpp"
 #include "voxfx/fragment_list.hpp"
 #include "voxfx/math.hpp"
 #include "voxfx/mesh.hpp"
@@ -35,6 +36,10 @@
 namespace voxfx {
 
 enum class ShapeOp : uint8_t { Leaf, Union, Intersection, Difference };
+inline constexpr EnumName<ShapeOp> kShapeOpNames[] = {{"leaf", ShapeOp::Leaf},
+                                                      {"union", ShapeOp::Union},
+                                                      {"intersection", ShapeOp::Intersection},
+                                                      {"difference", ShapeOp::Difference}};
 const char* toString(ShapeOp op);
 
 /// A node of the shape graph: a leaf (index into VolumeScene::leaves) or a Boolean of two nodes
@@ -46,6 +51,8 @@ struct ShapeNode {
 };
 
 enum class ObjectKind : uint8_t { Opaque, Translucent, Volume };
+inline constexpr EnumName<ObjectKind> kObjectKindNames[] = {
+    {"opaque", ObjectKind::Opaque}, {"translucent", ObjectKind::Translucent}, {"volume", ObjectKind::Volume}};
 const char* toString(ObjectKind k);
 
 struct VolumeSceneObject {

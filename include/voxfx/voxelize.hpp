@@ -39,6 +39,7 @@
 #include <string>
 
 #include "voxfx/device.hpp"
+#include "voxfx/enum_names.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/raster.hpp"
@@ -47,12 +48,23 @@
 namespace voxfx {
 
 enum class VoxelizeMode : uint8_t { Surface, Conservative, Solid, SolidConservative, Interior };
+inline constexpr EnumName<VoxelizeMode> kVoxelizeModeNames[] = {
+    {"surface", VoxelizeMode::Surface},
+    {"conservative", VoxelizeMode::Conservative},
+    {"solid", VoxelizeMode::Solid},
+    {"solid-conservative", VoxelizeMode::SolidConservative},
+    {"interior", VoxelizeMode::Interior}};
 enum class Fill : uint8_t { Parity, Flood, Vote, Winding, Gwn };
+inline constexpr EnumName<Fill> kFillNames[] = {{"parity", Fill::Parity},
+                                                {"flood", Fill::Flood},
+                                                {"vote", Fill::Vote},
+                                                {"winding", Fill::Winding},
+                                                {"gwn", Fill::Gwn}};
 
 const char* toString(VoxelizeMode m);
 const char* toString(Fill f);
-/// Parses "surface", "conservative", "solid", "solid-conservative", "interior"; throws voxfx::Error
-/// listing the allowed values otherwise.
+/// Parse a name of kVoxelizeModeNames, kFillNames, kAxisNames, kSlicingNames (any case); throw
+/// voxfx::Error listing the allowed names otherwise.
 VoxelizeMode parseVoxelizeMode(const std::string& name);
 Fill parseFill(const std::string& name);
 Axis parseAxis(const std::string& name);

@@ -34,6 +34,7 @@
 #include "voxfx/attribute_grid.hpp"
 #include "voxfx/demo.hpp"
 #include "voxfx/image.hpp"
+#include "voxfx/image_io.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/scene.hpp"
 #include "voxfx/shadow.hpp"

@@ -91,17 +91,7 @@ const char* gridFormatExtension(GridFormat format) {
     return "";
 }
 
-const char* toString(BatchStatus s) {
-    switch (s) {
-    case BatchStatus::Ok:
-        return "ok";
-    case BatchStatus::Skipped:
-        return "skipped";
-    case BatchStatus::Error:
-        return "error";
-    }
-    return "?";
-}
+const char* toString(BatchStatus s) { return enumName(s, kBatchStatusNames); }
 
 std::vector<BatchJob> readBatchManifest(const std::string& manifestPath, const std::string& outDir,
                                         GridFormat format) {

@@ -130,9 +130,13 @@ const Command kBatch{
         auto a = std::make_shared<BatchArgs>();
         app.add_option("MANIFEST", a->manifest, "Text file: one mesh path per line")->required();
         app.add_option("-o,--output", a->outDir, "Output folder (created if missing)")->required();
-        app.add_option("--format", a->format, "binvox | vdb | nrrd | ply | obj")
+        app.add_option("--format", a->format, enumNameList<GridFormat>(kGridFormatNames, " | "))
             ->default_val("binvox")
-            ->check(CLI::IsMember({"binvox", "vdb", "nrrd", "ply", "obj"}));
+            ->check(CLI::IsMember([] {
+                std::vector<std::string> names;
+                for (const EnumName<GridFormat>& n : kGridFormatNames) names.push_back(n.name);
+                return names;
+            }()));
         addFitOptions(app, a->fit, voxelizeFitChoices());
         addVoxelizeChoiceOptions(app, a->choice);
         app.add_option("-j,--threads", a->threads, "Worker threads, 0 = all (outputs are identical)")

@@ -5,6 +5,7 @@
 
 #include "cli_common.hpp"
 #include "voxfx/demo.hpp"
+#include "voxfx/image_io.hpp"
 #include "voxfx/render.hpp"
 
 namespace voxfx::cli {

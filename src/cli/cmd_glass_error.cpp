@@ -6,7 +6,7 @@
 
 #include "cli_common.hpp"
 #include "voxfx/environment.hpp"
-#include "voxfx/image.hpp"
+#include "voxfx/image_io.hpp"
 #include "voxfx/render.hpp"
 
 namespace voxfx::cli {

@@ -53,19 +53,20 @@ Ambiguous faces are resolved with the asymptotic decider, consistently between n
 cubes: the mesh is watertight (every edge shared by two triangles) and oriented outwards.
 Vertex normals come from the field's gradient. Output: .ply (binary, with normals) or .obj.)";
 
-const Command kMesh{"mesh", "Surface mesh of a grid or mesh by marching cubes -> .ply / .obj",
-                    [](CLI::App& app) {
-                        app.footer(kMeshHelp);
-                        auto a = std::make_shared<MeshArgs>();
-                        app.add_option("-o,--output", a->output, "Surface mesh: .ply or .obj")->required();
-                        app.add_option("--source", a->source, "density | occupancy")->default_val("density");
-                        app.add_option("-l,--level", a->level, "Density level, kernel 2^level (1..5)")
-                            ->check(CLI::Range(1, 5))
-                            ->default_val(1);
-                        app.add_option("--iso", a->iso, "Iso value in (0, 1)")->default_val(0.5f);
-                        addGridInputOptions(app, a->in);
-                        return std::function<int()>([a] { return runMesh(*a); });
-                    }};
+const Command kMesh{
+    "mesh", "Surface mesh of a grid or mesh by marching cubes -> .ply / .obj", [](CLI::App& app) {
+        app.footer(kMeshHelp);
+        auto a = std::make_shared<MeshArgs>();
+        app.add_option("-o,--output", a->output, "Surface mesh: .ply or .obj")->required();
+        app.add_option("--source", a->source, enumNameList<SurfaceSource>(kSurfaceSourceNames, " | "))
+            ->default_val("density");
+        app.add_option("-l,--level", a->level, "Density level, kernel 2^level (1..5)")
+            ->check(CLI::Range(1, 5))
+            ->default_val(1);
+        app.add_option("--iso", a->iso, "Iso value in (0, 1)")->default_val(0.5f);
+        addGridInputOptions(app, a->in);
+        return std::function<int()>([a] { return runMesh(*a); });
+    }};
 
 } // namespace
 } // namespace voxfx::cli

@@ -66,7 +66,7 @@ const Command kMorph{
         app.footer(kMorphHelp);
         auto a = std::make_shared<MorphArgs>();
         app.add_option("-o,--output", a->output, "Output grid: .binvox .vdb .nrrd .ply .obj")->required();
-        app.add_option("--op", a->op, "erode | dilate | open | close")->default_val("close");
+        app.add_option("--op", a->op, enumNameList<MorphOp>(kMorphOpNames, " | "))->default_val("close");
         auto* r = app.add_option("--radius", a->radius, "Box half-size in cells on every axis (default 1)")
                       ->check(CLI::NonNegativeNumber)
                       ->default_val(1);
@@ -74,7 +74,8 @@ const Command kMorph{
                        ->expected(3)
                        ->check(CLI::NonNegativeNumber);
         r->excludes(rs);
-        app.add_option("--border", a->border, "neutral | empty | filled")->default_val("neutral");
+        app.add_option("--border", a->border, enumNameList<MorphBorder>(kMorphBorderNames, " | "))
+            ->default_val("neutral");
         app.add_flag("--vdb-float", a->vdbFloat, "Write a FloatGrid instead of a BoolGrid");
         addGridInputOptions(app, a->in, "Mesh input: empty cells on every side (default: largest radius)");
         return std::function<int()>([a] { return runMorph(*a); });

@@ -6,7 +6,7 @@
 
 #include "cli_common.hpp"
 #include "grid_input.hpp"
-#include "voxfx/image.hpp"
+#include "voxfx/image_io.hpp"
 #include "voxfx/particles.hpp"
 
 namespace voxfx::cli {

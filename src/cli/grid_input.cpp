@@ -74,7 +74,7 @@ const FitChoices& voxelizeFitChoices() {
 }
 
 void addVoxelizeChoiceOptions(CLI::App& app, VoxelizeChoiceArgs& args) {
-    app.add_option("-m,--mode", args.mode, "surface | conservative | solid | solid-conservative | interior")
+    app.add_option("-m,--mode", args.mode, enumNameList<VoxelizeMode>(kVoxelizeModeNames, " | "))
         ->default_val("solid");
     app.add_option("--fill", args.fill, "auto | parity | flood | vote | winding | gwn")->default_val("auto");
     app.add_option("--axis", args.axis, "Slicing axis x | y | z (the result is the same voxels)")

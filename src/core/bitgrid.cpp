@@ -148,21 +148,15 @@ void BitGrid::clear() {
 }
 
 int64_t BitGrid::count() const {
-    const int64_t n = wordCount();
-    const int64_t chunks = (n + kWordsPerChunk - 1) / kWordsPerChunk;
-    std::vector<int64_t> partial(size_t(std::max<int64_t>(chunks, 0)), 0);
     const uint64_t* w = words_.get();
-    parallelFor(0, chunks, 1, [&](int64_t cb, int64_t ce) {
-        for (int64_t c = cb; c < ce; ++c) {
+    return parallelReduce(
+        0, wordCount(), kWordsPerChunk, int64_t(0),
+        [w](int64_t b, int64_t e) {
             int64_t s = 0;
-            for (int64_t i = c * kWordsPerChunk, e = std::min(n, i + kWordsPerChunk); i < e; ++i)
-                s += std::popcount(w[i]);
-            partial[size_t(c)] = s;
-        }
-    });
-    int64_t total = 0;
-    for (int64_t s : partial) total += s;
-    return total;
+            for (int64_t i = b; i < e; ++i) s += std::popcount(w[i]);
+            return s;
+        },
+        std::plus<>());
 }
 
 bool BitGrid::operator==(const BitGrid& o) const {

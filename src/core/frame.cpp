@@ -4,8 +4,8 @@
 
 namespace voxfx {
 
-const char* toString(Axis a) { return a == Axis::X ? "x" : (a == Axis::Y ? "y" : "z"); }
-const char* toString(Slicing s) { return s == Slicing::Uniform ? "uniform" : "local"; }
+const char* toString(Axis a) { return enumName(a, kAxisNames); }
+const char* toString(Slicing s) { return enumName(s, kSlicingNames); }
 
 Frame Frame::withCamera(bool perspective, Axis axis, int64_t w, int64_t h, int64_t d, const Vec3d& eye,
                         const Vec3d& right, const Vec3d& up, const Vec3d& forward, double nearDepth,

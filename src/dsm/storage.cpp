@@ -6,7 +6,6 @@
 #include <cmath>
 #include <limits>
 
-#include "core/enum_names.hpp"
 #include "voxfx/dsm.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/parallel.hpp"
@@ -228,20 +227,10 @@ std::vector<DsmNode> DsmChunked::texel(int64_t x, int64_t y) const {
     return out;
 }
 
-const char* toString(DsmStorage s) {
-    switch (s) {
-    case DsmStorage::Fixed:
-        return "fixed";
-    case DsmStorage::Chunked:
-        return "chunked";
-    }
-    return "?";
-}
+const char* toString(DsmStorage s) { return enumName(s, kDsmStorageNames); }
 
 DsmStorage parseDsmStorage(const std::string& name) {
-    static constexpr detail::EnumName<DsmStorage> kNames[] = {{"fixed", DsmStorage::Fixed},
-                                                              {"chunked", DsmStorage::Chunked}};
-    return detail::parseEnum<DsmStorage>(name, "deep shadow map storage", kNames);
+    return parseEnum<DsmStorage>(name, "deep shadow map storage", kDsmStorageNames);
 }
 
 DeepShadowMap DeepShadowMap::build(int64_t width, int64_t height, const DsmTexelFunction& texel,

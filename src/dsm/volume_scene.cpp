@@ -10,31 +10,9 @@
 
 namespace voxfx {
 
-const char* toString(ShapeOp op) {
-    switch (op) {
-    case ShapeOp::Leaf:
-        return "leaf";
-    case ShapeOp::Union:
-        return "union";
-    case ShapeOp::Intersection:
-        return "intersection";
-    case ShapeOp::Difference:
-        return "difference";
-    }
-    return "?";
-}
+const char* toString(ShapeOp op) { return enumName(op, kShapeOpNames); }
 
-const char* toString(ObjectKind k) {
-    switch (k) {
-    case ObjectKind::Opaque:
-        return "opaque";
-    case ObjectKind::Translucent:
-        return "translucent";
-    case ObjectKind::Volume:
-        return "volume";
-    }
-    return "?";
-}
+const char* toString(ObjectKind k) { return enumName(k, kObjectKindNames); }
 
 int32_t VolumeScene::addLeaf(Mesh mesh) {
     leaves.push_back(std::move(mesh));

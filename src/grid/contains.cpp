@@ -8,7 +8,6 @@
 #include <initializer_list>
 #include <numbers>
 
-#include "core/enum_names.hpp"
 #include "voxelize/winding_tree.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/parallel.hpp"
@@ -17,10 +16,6 @@
 namespace voxfx {
 
 namespace {
-
-constexpr detail::EnumName<ContainsMethod> kContainsMethodNames[] = {{"parity", ContainsMethod::Parity},
-                                                                     {"winding", ContainsMethod::Winding},
-                                                                     {"flood", ContainsMethod::Flood}};
 
 // ---- exact arithmetic: Shewchuk's filters, then expansions (sums of non-overlapping doubles) ----
 
@@ -171,20 +166,10 @@ int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
 
 } // namespace exact
 
-const char* toString(ContainsMethod m) {
-    switch (m) {
-    case ContainsMethod::Parity:
-        return "parity";
-    case ContainsMethod::Winding:
-        return "winding";
-    case ContainsMethod::Flood:
-        return "flood";
-    }
-    return "?";
-}
+const char* toString(ContainsMethod m) { return enumName(m, kContainsMethodNames); }
 
 ContainsMethod parseContainsMethod(const std::string& name) {
-    return detail::parseEnum<ContainsMethod>(name, "contains method", kContainsMethodNames);
+    return parseEnum<ContainsMethod>(name, "contains method", kContainsMethodNames);
 }
 
 int64_t defaultContainsResolution(std::size_t triangles, std::size_t points) {

@@ -14,47 +14,22 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/enum_names.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
 
-const char* toString(CsgOp op) {
-    switch (op) {
-    case CsgOp::Union:
-        return "union";
-    case CsgOp::Intersection:
-        return "intersection";
-    case CsgOp::Difference:
-        return "difference";
-    case CsgOp::Xor:
-        return "xor";
-    }
-    return "unknown";
-}
+const char* toString(CsgOp op) { return enumName(op, kCsgOpNames); }
 
 namespace {
-constexpr detail::EnumName<CsgOp> kOpNames[] = {{"union", CsgOp::Union},
-                                                {"intersection", CsgOp::Intersection},
-                                                {"difference", CsgOp::Difference},
-                                                {"xor", CsgOp::Xor},
-                                                {"or", CsgOp::Union, true},
-                                                {"and", CsgOp::Intersection, true},
-                                                {"minus", CsgOp::Difference, true},
-                                                {"sub", CsgOp::Difference, true},
-                                                {"symmetric-difference", CsgOp::Xor, true}};
-
 bool lookupCsgOp(std::string_view name, CsgOp& op) {
-    const std::optional<CsgOp> found = detail::findEnum<CsgOp>(name, kOpNames);
+    const std::optional<CsgOp> found = findEnum<CsgOp>(name, kCsgOpNames);
     if (found) op = *found;
     return found.has_value();
 }
-const std::string kAllowedOps = detail::enumNameList<CsgOp>(kOpNames);
+const std::string kAllowedOps = enumNameList<CsgOp>(kCsgOpNames);
 } // namespace
 
-CsgOp parseCsgOp(const std::string& name) {
-    return detail::parseEnum<CsgOp>(name, "CSG operation", kOpNames);
-}
+CsgOp parseCsgOp(const std::string& name) { return parseEnum<CsgOp>(name, "CSG operation", kCsgOpNames); }
 
 namespace {
 

@@ -42,26 +42,30 @@ double filledVolume(const VoxelGrid& grid) {
         fail("volume: the grid's bits (", bits.width(), " x ", bits.height(), " x ", bits.depth(),
              ") do not match its frame (", f.width(), " x ", f.height(), " x ", f.depth(), ")");
     const int64_t columns = bits.columnCount(), P = bits.wordsPerColumn(), D = bits.depth();
-    // Per-chunk partial sums, added in chunk order: the result does not depend on the thread count.
+    // Fixed-order sums (parallelReduce): the result does not depend on the thread count.
     const int64_t grain = 4096;
-    std::vector<double> partial(size_t((columns + grain - 1) / grain), 0.0);
     if (!f.isPerspective()) {
         const Vec3d cell = f.cellSize();
-        const double cellVolume = cell.x * cell.y * cell.z;
-        if (f.slicing() == Slicing::Uniform) return double(bits.count()) * cellVolume;
+        if (f.slicing() == Slicing::Uniform) return double(bits.count()) * (cell.x * cell.y * cell.z);
         // Local slicing: a column's D slices span 1 / scale uniform slices each.
-        parallelFor(0, columns, grain, [&](int64_t b, int64_t e) {
-            double sum = 0;
-            for (int64_t c = b; c < e; ++c)
-                sum += double(countColumnRange(bits.column(c), D, 0, D)) / f.depthToSlice(c).scale;
-            partial[size_t(b / grain)] = sum;
-        });
-    } else {
-        // Footprint of one pixel at view depth 1: its area scales with depth squared, so the
-        // cell between depths z0 and z1 holds area1 * (z1^3 - z0^3) / 3.
-        const Vec3d o = f.worldFromGrid({0, 0, 1});
-        const double area1 = length(f.worldFromGrid({1, 0, 1}) - o) * length(f.worldFromGrid({0, 1, 1}) - o);
-        parallelFor(0, columns, grain, [&](int64_t b, int64_t e) {
+        const double total = parallelReduce(
+            0, columns, grain, 0.0,
+            [&](int64_t b, int64_t e) {
+                double sum = 0;
+                for (int64_t c = b; c < e; ++c)
+                    sum += double(countColumnRange(bits.column(c), D, 0, D)) / f.depthToSlice(c).scale;
+                return sum;
+            },
+            std::plus<>());
+        return total * cell.x * cell.y * cell.z;
+    }
+    // Footprint of one pixel at view depth 1: its area scales with depth squared, so the
+    // cell between depths z0 and z1 holds area1 * (z1^3 - z0^3) / 3.
+    const Vec3d o = f.worldFromGrid({0, 0, 1});
+    const double area1 = length(f.worldFromGrid({1, 0, 1}) - o) * length(f.worldFromGrid({0, 1, 1}) - o);
+    return parallelReduce(
+        0, columns, grain, 0.0,
+        [&](int64_t b, int64_t e) {
             double sum = 0;
             for (int64_t c = b; c < e; ++c) {
                 const DepthToSlice m = f.depthToSlice(c);
@@ -73,16 +77,9 @@ double filledVolume(const VoxelGrid& grid) {
                         sum += (z1 * z1 * z1 - z0 * z0 * z0) / 3.0;
                     }
             }
-            partial[size_t(b / grain)] = sum * area1;
-        });
-        double total = 0;
-        for (double p : partial) total += p;
-        return total;
-    }
-    double total = 0;
-    for (double p : partial) total += p;
-    const Vec3d cell = f.cellSize();
-    return total * cell.x * cell.y * cell.z;
+            return sum * area1;
+        },
+        std::plus<>());
 }
 
 namespace {

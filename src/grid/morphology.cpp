@@ -12,50 +12,20 @@
 #include <type_traits>
 #include <vector>
 
-#include "core/enum_names.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
 
-const char* toString(MorphOp op) {
-    switch (op) {
-    case MorphOp::Erode:
-        return "erode";
-    case MorphOp::Dilate:
-        return "dilate";
-    case MorphOp::Open:
-        return "open";
-    case MorphOp::Close:
-        return "close";
-    }
-    return "unknown";
-}
+const char* toString(MorphOp op) { return enumName(op, kMorphOpNames); }
 
-const char* toString(MorphBorder border) {
-    switch (border) {
-    case MorphBorder::Neutral:
-        return "neutral";
-    case MorphBorder::Empty:
-        return "empty";
-    case MorphBorder::Filled:
-        return "filled";
-    }
-    return "unknown";
-}
+const char* toString(MorphBorder border) { return enumName(border, kMorphBorderNames); }
 
 MorphOp parseMorphOp(const std::string& name) {
-    static constexpr detail::EnumName<MorphOp> kNames[] = {
-        {"erode", MorphOp::Erode},         {"dilate", MorphOp::Dilate},
-        {"open", MorphOp::Open},           {"close", MorphOp::Close},
-        {"erosion", MorphOp::Erode, true}, {"dilation", MorphOp::Dilate, true},
-        {"opening", MorphOp::Open, true},  {"closing", MorphOp::Close, true}};
-    return detail::parseEnum<MorphOp>(name, "morphology operation", kNames);
+    return parseEnum<MorphOp>(name, "morphology operation", kMorphOpNames);
 }
 
 MorphBorder parseMorphBorder(const std::string& name) {
-    static constexpr detail::EnumName<MorphBorder> kNames[] = {
-        {"neutral", MorphBorder::Neutral}, {"empty", MorphBorder::Empty}, {"filled", MorphBorder::Filled}};
-    return detail::parseEnum<MorphBorder>(name, "morphology border", kNames);
+    return parseEnum<MorphBorder>(name, "morphology border", kMorphBorderNames);
 }
 
 namespace {

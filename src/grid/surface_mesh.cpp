@@ -13,17 +13,14 @@
 #include <filesystem>
 #include <functional>
 
-#include "core/enum_names.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
 
-const char* toString(SurfaceSource s) { return s == SurfaceSource::Density ? "density" : "occupancy"; }
+const char* toString(SurfaceSource s) { return enumName(s, kSurfaceSourceNames); }
 
 SurfaceSource parseSurfaceSource(const std::string& name) {
-    static constexpr detail::EnumName<SurfaceSource> kNames[] = {{"density", SurfaceSource::Density},
-                                                                 {"occupancy", SurfaceSource::Occupancy}};
-    return detail::parseEnum<SurfaceSource>(name, "surface source", kNames);
+    return parseEnum<SurfaceSource>(name, "surface source", kSurfaceSourceNames);
 }
 
 namespace {

@@ -1,6 +1,6 @@
 // voxfx — loading environment maps (the image readers of io/image.cpp, then the pyramid).
 #include "voxfx/environment.hpp"
-#include "voxfx/image.hpp"
+#include "voxfx/image_io.hpp"
 
 namespace voxfx {
 

@@ -53,21 +53,7 @@ GridFormat gridFormatFromPath(const std::string& path) {
     fail("'", path, "': unknown voxel grid extension '", ext, "' (allowed: ", kAllowedExtensions, ")");
 }
 
-const char* toString(GridFormat f) {
-    switch (f) {
-    case GridFormat::Binvox:
-        return "binvox";
-    case GridFormat::Vdb:
-        return "vdb";
-    case GridFormat::Nrrd:
-        return "nrrd";
-    case GridFormat::Ply:
-        return "ply";
-    case GridFormat::Obj:
-        return "obj";
-    }
-    return "unknown";
-}
+const char* toString(GridFormat f) { return enumName(f, kGridFormatNames); }
 
 void writeGrid(const VoxelGrid& grid, const std::string& path, const GridWriteOptions& options) {
     const GridFormat format = gridFormatFromPath(path);

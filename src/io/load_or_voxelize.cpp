@@ -2,7 +2,6 @@
 // voxelize a mesh (I/O, so it lives in io/ although voxelize.hpp declares it).
 #include <string>
 
-#include "core/enum_names.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/file_name.hpp"
 #include "voxfx/grid_io.hpp"

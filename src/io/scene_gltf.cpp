@@ -17,7 +17,6 @@
 #include <map>
 #include <sstream>
 
-#include "core/enum_names.hpp"
 #include "io/module_api.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/file_name.hpp"
@@ -27,9 +26,7 @@ namespace voxfx::detail {
 using nlohmann::json;
 
 LightType parseLightType(const std::string& type, const std::string& where) {
-    static constexpr EnumName<LightType> kNames[] = {
-        {"directional", LightType::Directional}, {"spot", LightType::Spot}, {"point", LightType::Point}};
-    return parseEnum<LightType>(type, "light type", kNames, where);
+    return parseEnum<LightType>(type, "light type", kLightTypeNames, where);
 }
 
 std::string readTextFile(const std::string& path, const char* what) {

@@ -225,19 +225,7 @@ void flipAxis(Volume& volume, int axis) {
 
 } // namespace detail
 
-const char* toString(VolumeFormat f) {
-    switch (f) {
-    case VolumeFormat::Inr:
-        return "inr";
-    case VolumeFormat::Nrrd:
-        return "nrrd";
-    case VolumeFormat::RawJson:
-        return "raw+json";
-    case VolumeFormat::Vdb:
-        return "vdb";
-    }
-    return "unknown";
-}
+const char* toString(VolumeFormat f) { return enumName(f, kVolumeFormatNames); }
 
 namespace {
 

@@ -25,27 +25,10 @@ const EmbreeModule& embreeModule() {
 }
 } // namespace detail
 
-const char* toString(GlassKind k) {
-    switch (k) {
-    case GlassKind::None:
-        return "none";
-    case GlassKind::Exact:
-        return "exact";
-    case GlassKind::Multi:
-        return "multi";
-    case GlassKind::TwoSurface:
-        return "two-surface";
-    case GlassKind::Frosted:
-        return "frosted";
-    }
-    return "?";
-}
+const char* toString(GlassKind k) { return enumName(k, kGlassKindNames); }
 
 GlassKind parseGlassKind(const std::string& name) {
-    for (const GlassKind k :
-         {GlassKind::None, GlassKind::Exact, GlassKind::Multi, GlassKind::TwoSurface, GlassKind::Frosted})
-        if (name == toString(k)) return k;
-    fail("unknown glass method '", name, "' (allowed: none, exact, multi, two-surface, frosted)");
+    return parseEnum<GlassKind>(name, "glass method", kGlassKindNames);
 }
 
 GlassKind defaultGlassKind(const Scene& scene) {

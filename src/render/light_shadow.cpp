@@ -7,7 +7,6 @@
 #include <limits>
 #include <map>
 
-#include "core/enum_names.hpp"
 #include "voxfx/deep_shadow.hpp"
 #include "voxfx/shadow.hpp"
 #include "voxfx/shadow_volume.hpp"
@@ -54,35 +53,10 @@ Box3d boundsOf(const Mesh& m) { return computeBounds(m.view()); }
 
 } // namespace
 
-const char* toString(ShadowKind k) {
-    switch (k) {
-    case ShadowKind::None:
-        return "none";
-    case ShadowKind::Map:
-        return "map";
-    case ShadowKind::Transmittance:
-        return "transmittance";
-    case ShadowKind::Absorption:
-        return "absorption";
-    case ShadowKind::Volumes:
-        return "volumes";
-    case ShadowKind::Exact:
-        return "exact";
-    case ShadowKind::Deep:
-        return "deep";
-    }
-    return "?";
-}
+const char* toString(ShadowKind k) { return enumName(k, kShadowKindNames); }
 
 ShadowKind parseShadowKind(const std::string& name) {
-    static constexpr detail::EnumName<ShadowKind> kNames[] = {{"none", ShadowKind::None},
-                                                              {"map", ShadowKind::Map},
-                                                              {"transmittance", ShadowKind::Transmittance},
-                                                              {"absorption", ShadowKind::Absorption},
-                                                              {"volumes", ShadowKind::Volumes},
-                                                              {"exact", ShadowKind::Exact},
-                                                              {"deep", ShadowKind::Deep}};
-    return detail::parseEnum<ShadowKind>(name, "shadow kind", kNames);
+    return parseEnum<ShadowKind>(name, "shadow kind", kShadowKindNames);
 }
 
 float absorptionPerCrossing(const Material& m, float opaqueAbsorption) {

@@ -11,17 +11,7 @@ namespace voxfx {
 
 using detail::concat;
 
-const char* toString(LightType t) {
-    switch (t) {
-    case LightType::Directional:
-        return "directional";
-    case LightType::Spot:
-        return "spot";
-    case LightType::Point:
-        return "point";
-    }
-    return "?";
-}
+const char* toString(LightType t) { return enumName(t, kLightTypeNames); }
 
 Vec3f Material::crossingTransmittance() const {
     const float a = std::clamp(opacity, 0.0f, 1.0f), t = std::clamp(transmission, 0.0f, 1.0f);

@@ -338,42 +338,36 @@ StepStats stepParticles(Particles& ps, const ParticleCollider& collider, const P
                    o.gravity,     o.dt,
                    o.restitution, o.friction,
                    o.boxWalls,    1.0 / double(collider.density().kernel())};
-    // Per-chunk counters in a fixed slot per chunk: the totals do not depend on the thread count.
+    // Per-chunk counters combined in chunk order (parallelReduce, no allocation): the totals do
+    // not depend on the thread count.
     constexpr int64_t kGrain = 8192;
-    const int64_t chunks = (int64_t(n) + kGrain - 1) / kGrain;
     StepStats total;
-    // Small fixed-size counter blocks per batch of chunks keep the step free of allocation.
-    constexpr int64_t kBatch = 1024;
-    for (int64_t c0 = 0; c0 < chunks; c0 += kBatch) {
-        const int64_t c1 = std::min(chunks, c0 + kBatch);
-        int64_t bounces[kBatch] = {}, pushed[kBatch] = {}, stuck[kBatch] = {};
-        withThreads(o.threads, [&] {
-            parallelFor(
-                c0 * kGrain, std::min<int64_t>(int64_t(n), c1 * kGrain), kGrain, [&](int64_t b, int64_t e) {
-                    const int64_t slot = b / kGrain - c0;
-                    int64_t hits = 0, pu = 0, st = 0;
-                    // Grid words are fetched at random places: ask for the word of a particle a few
-                    // iterations ahead so the cache misses overlap.
-                    constexpr int64_t kAhead = 12;
-                    for (int64_t i = b; i < e; ++i) {
-                        if (i + kAhead < e) {
-                            const auto a = size_t(i + kAhead);
-                            k.prefetch(ps.px[a], ps.py[a], ps.pz[a]);
-                        }
-                        const auto u = size_t(i);
-                        hits += k.step(ps.px[u], ps.py[u], ps.pz[u], ps.vx[u], ps.vy[u], ps.vz[u], pu, st);
+    withThreads(o.threads, [&] {
+        total = parallelReduce(
+            0, int64_t(n), kGrain, StepStats{},
+            [&](int64_t b, int64_t e) {
+                StepStats s;
+                // Grid words are fetched at random places: ask for the word of a particle a few
+                // iterations ahead so the cache misses overlap.
+                constexpr int64_t kAhead = 12;
+                for (int64_t i = b; i < e; ++i) {
+                    if (i + kAhead < e) {
+                        const auto a = size_t(i + kAhead);
+                        k.prefetch(ps.px[a], ps.py[a], ps.pz[a]);
                     }
-                    bounces[slot] = hits;
-                    pushed[slot] = pu;
-                    stuck[slot] = st;
-                });
-        });
-        for (int64_t s = 0; s < c1 - c0; ++s) {
-            total.bounces += bounces[s];
-            total.pushedOut += pushed[s];
-            total.stuck += stuck[s];
-        }
-    }
+                    const auto u = size_t(i);
+                    s.bounces += k.step(ps.px[u], ps.py[u], ps.pz[u], ps.vx[u], ps.vy[u], ps.vz[u],
+                                        s.pushedOut, s.stuck);
+                }
+                return s;
+            },
+            [](StepStats a, const StepStats& b) {
+                a.bounces += b.bounces;
+                a.pushedOut += b.pushedOut;
+                a.stuck += b.stuck;
+                return a;
+            });
+    });
     return total;
 }
 

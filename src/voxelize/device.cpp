@@ -6,7 +6,6 @@
 #include <mutex>
 #include <utility>
 
-#include "core/enum_names.hpp"
 #include "core/module_loader.hpp"
 #include "cuda/cuda_api.hpp"
 #include "voxfx/csg.hpp"
@@ -17,10 +16,6 @@
 namespace voxfx {
 
 namespace {
-
-using detail::EnumName;
-constexpr EnumName<Device> kDeviceNames[] = {
-    {"cpu", Device::Cpu}, {"cuda", Device::Cuda}, {"auto", Device::Auto}};
 
 #ifdef VOXFX_HAS_CUDA_MODULE
 constexpr bool kBuilt = true;
@@ -103,21 +98,9 @@ SharedContext& sharedContext() {
 
 } // namespace
 
-const char* toString(Device d) {
-    switch (d) {
-    case Device::Cpu:
-        return "cpu";
-    case Device::Cuda:
-        return "cuda";
-    case Device::Auto:
-        return "auto";
-    }
-    return "?";
-}
+const char* toString(Device d) { return enumName(d, kDeviceNames); }
 
-Device parseDevice(const std::string& name) {
-    return detail::parseEnum<Device>(name, "device", kDeviceNames);
-}
+Device parseDevice(const std::string& name) { return parseEnum<Device>(name, "device", kDeviceNames); }
 
 const CudaStatus& cudaStatus() {
     static const CudaStatus status = probe();

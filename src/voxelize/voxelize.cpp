@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <limits>
 
-#include "core/enum_names.hpp"
 #include "voxelize/consumers.hpp"
 #include "voxelize/fill.hpp"
 #include "voxelize/winding_tree.hpp"
@@ -17,21 +16,6 @@
 namespace voxfx {
 
 namespace {
-
-using detail::EnumName;
-
-constexpr EnumName<VoxelizeMode> kModeNames[] = {{"surface", VoxelizeMode::Surface},
-                                                 {"conservative", VoxelizeMode::Conservative},
-                                                 {"solid", VoxelizeMode::Solid},
-                                                 {"solid-conservative", VoxelizeMode::SolidConservative},
-                                                 {"interior", VoxelizeMode::Interior}};
-constexpr EnumName<Fill> kFillNames[] = {{"parity", Fill::Parity},
-                                         {"flood", Fill::Flood},
-                                         {"vote", Fill::Vote},
-                                         {"winding", Fill::Winding},
-                                         {"gwn", Fill::Gwn}};
-constexpr EnumName<Axis> kAxisNames[] = {{"x", Axis::X}, {"y", Axis::Y}, {"z", Axis::Z}};
-constexpr EnumName<Slicing> kSlicingNames[] = {{"uniform", Slicing::Uniform}, {"local", Slicing::Local}};
 
 BitGrid rasterizeInto(const Frame& frame, const MeshView& mesh, VoxelizeMode kind, const VoxelizeOptions& o) {
     BitGrid grid(frame.width(), frame.height(), frame.depth());
@@ -179,49 +163,19 @@ VoxelGrid voxelizeImpl(const MeshView& mesh, const Frame& inFrame, const Voxeliz
 
 } // namespace
 
-const char* toString(VoxelizeMode m) {
-    switch (m) {
-    case VoxelizeMode::Surface:
-        return "surface";
-    case VoxelizeMode::Conservative:
-        return "conservative";
-    case VoxelizeMode::Solid:
-        return "solid";
-    case VoxelizeMode::SolidConservative:
-        return "solid-conservative";
-    case VoxelizeMode::Interior:
-        return "interior";
-    }
-    return "?";
-}
+const char* toString(VoxelizeMode m) { return enumName(m, kVoxelizeModeNames); }
 
-const char* toString(Fill f) {
-    switch (f) {
-    case Fill::Parity:
-        return "parity";
-    case Fill::Flood:
-        return "flood";
-    case Fill::Vote:
-        return "vote";
-    case Fill::Winding:
-        return "winding";
-    case Fill::Gwn:
-        return "gwn";
-    }
-    return "?";
-}
+const char* toString(Fill f) { return enumName(f, kFillNames); }
 
 VoxelizeMode parseVoxelizeMode(const std::string& name) {
-    return detail::parseEnum<VoxelizeMode>(name, "voxelization mode", kModeNames);
+    return parseEnum<VoxelizeMode>(name, "voxelization mode", kVoxelizeModeNames);
 }
 
-Fill parseFill(const std::string& name) { return detail::parseEnum<Fill>(name, "fill", kFillNames); }
+Fill parseFill(const std::string& name) { return parseEnum<Fill>(name, "fill", kFillNames); }
 
-Axis parseAxis(const std::string& name) { return detail::parseEnum<Axis>(name, "axis", kAxisNames); }
+Axis parseAxis(const std::string& name) { return parseEnum<Axis>(name, "axis", kAxisNames); }
 
-Slicing parseSlicing(const std::string& name) {
-    return detail::parseEnum<Slicing>(name, "slicing", kSlicingNames);
-}
+Slicing parseSlicing(const std::string& name) { return parseEnum<Slicing>(name, "slicing", kSlicingNames); }
 
 Frame fitFrame(const Box3d& meshBounds, const FitOptions& o) {
     const Box3d bounds = o.bounds.empty() ? meshBounds : o.bounds;

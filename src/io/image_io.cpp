@@ -1,5 +1,6 @@
-// voxfx — PNG (libpng), PFM and OpenEXR image files (OpenEXR through the voxfx_exr module).
-#include "voxfx/image.hpp"
+// voxfx — PNG (libpng), PFM, Radiance HDR and OpenEXR image files (OpenEXR through the voxfx_exr
+// module).
+#include "voxfx/image_io.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -19,16 +20,6 @@
 #include "voxfx/file_name.hpp"
 
 namespace voxfx {
-
-float linearToSrgb(float v) {
-    v = std::clamp(v, 0.0f, 1.0f);
-    return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
-}
-
-float srgbToLinear(float v) {
-    v = std::clamp(v, 0.0f, 1.0f);
-    return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
-}
 
 namespace {
 void pngWrite(png_structp png, png_bytep data, png_size_t length) {

@@ -1,0 +1,77 @@
+// Density maps: voxfx.Density and compute_density.
+#include <cstring>
+
+#include "common.hpp"
+
+namespace voxfx::python {
+namespace {
+
+// ---- density --------------------------------------------------------------------------------
+
+/// A density map of a grid sliced along Z (so its cells are in world order), with the fine
+/// frame it was computed from.
+struct PyDensity {
+    DensityGrid density;
+    Frame fine;
+};
+
+} // namespace
+
+void bindDensity(py::module_& m) {
+    py::class_<PyDensity, std::shared_ptr<PyDensity>>(m, "Density",
+                                                      "A density map: filled fine cells per 2^level block")
+        .def_property_readonly("level", [](const PyDensity& d) { return d.density.level(); })
+        .def_property_readonly("dims",
+                               [](const PyDensity& d) {
+                                   return py::make_tuple(d.density.width(), d.density.height(),
+                                                         d.density.depth());
+                               })
+        .def_property_readonly("origin", [](const PyDensity& d) { return vec3(d.fine.box().lo); })
+        .def_property_readonly(
+            "cell_size",
+            [](const PyDensity& d) { return vec3(densityFrame(d.fine, d.density.level()).cellSize()); })
+        .def("total", [](const PyDensity& d) { return d.density.total(); })
+        .def(
+            "occupancy",
+            [](const PyDensity& d) {
+                const DensityGrid& g = d.density;
+                // Cell order (y * W + x) * D + z of a Z-sliced map, returned indexed [x, y, z].
+                py::array_t<float> out(
+                    {py::ssize_t(g.width()), py::ssize_t(g.height()), py::ssize_t(g.depth())});
+                float* o = out.mutable_data();
+                py::gil_scoped_release release;
+                const std::vector<float> f = occupancyField(g);
+                const int64_t w = g.width(), h = g.height(), dd = g.depth();
+                for (int64_t x = 0; x < w; ++x)
+                    for (int64_t y = 0; y < h; ++y)
+                        std::memcpy(o + (x * h + y) * dd, f.data() + (y * w + x) * dd,
+                                    std::size_t(dd) * sizeof(float));
+                return out;
+            },
+            "Occupancy (count / 8^level) as a float32 array indexed [x, y, z]")
+        .def(
+            "save",
+            [](const PyDensity& d, const std::string& path) {
+                py::gil_scoped_release release;
+                writeDensity(d.density, d.fine, path);
+            },
+            py::arg("path"), "Writes .nrrd (uint8/16 counts) or .vdb (FloatGrid \"density\")");
+    m.def(
+        "compute_density",
+        [](const VoxelGrid& g, int level, int threads) {
+            requireOrthographic(g, "compute_density");
+            auto out = std::make_shared<PyDensity>();
+            DensityOptions o;
+            o.level = level;
+            o.threads = threads;
+            py::gil_scoped_release release;
+            const VoxelGrid z = uniformZ(g);
+            out->density = computeDensity(z.bits, o);
+            out->fine = z.frame;
+            return out;
+        },
+        py::arg("grid"), py::arg("level") = 1, py::kw_only(), py::arg("threads") = 0,
+        "Density map at kernel 2^level (level 1..5), computed on the grid sliced along z");
+}
+
+} // namespace voxfx::python

@@ -1,0 +1,32 @@
+// voxfx Python module (voxfx._voxfx): meshes, voxelization, grids as NumPy arrays, the grid
+// toolkit and exact point occupancy, over the public C++ API only. This file makes the module,
+// its exception type and translator; each area of the library binds itself in its own file, in
+// the order areas.inc lists them.
+#include <exception>
+
+#include "common.hpp"
+
+namespace py = pybind11;
+using namespace voxfx;
+
+PYBIND11_MODULE(_voxfx, m) {
+    m.doc() = "voxfx: voxelization of triangle meshes into bit grids (slicemaps), with NumPy arrays";
+    static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
+    error.attr("__module__") = "voxfx";
+    py::register_exception_translator([](std::exception_ptr p) {
+        try {
+            if (p) std::rethrow_exception(p);
+        } catch (const Error& e) {
+            // Messages quote file contents, which need not be UTF-8: invalid bytes are replaced
+            // (PyErr_SetString would raise UnicodeDecodeError instead of voxfx.Error).
+            const py::str message = python::utf8Text(e.what());
+            PyErr_SetObject(error.ptr(), message.ptr());
+        }
+    });
+
+#define VOXFX_PYTHON_AREA(Area) python::bind##Area(m);
+#include "areas.inc"
+#undef VOXFX_PYTHON_AREA
+
+    m.attr("__version__") = "0.1.0";
+}
