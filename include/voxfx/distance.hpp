@@ -39,6 +39,7 @@
 #include <string>
 #include <vector>
 
+#include "voxfx/enum_names.hpp"
 #include "voxfx/math.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/parallel.hpp"
@@ -107,6 +108,10 @@ std::vector<ClosestPoint> closestPoints(const MeshView& mesh, std::span<const Ve
 ///            meaning; needs a consistent orientation.
 ///   Auto     Parity when the mesh is closed (voxfx::analyzeTopology), Winding otherwise.
 enum class SignMethod : uint8_t { Auto, Parity, Winding };
+inline constexpr EnumName<SignMethod> kSignMethodNames[] = {{"auto", SignMethod::Auto},
+                                                            {"parity", SignMethod::Parity},
+                                                            {"winding", SignMethod::Winding},
+                                                            {"gwn", SignMethod::Winding, true}};
 const char* toString(SignMethod m);
 /// Parses "auto", "parity", "winding"; throws voxfx::Error listing them otherwise.
 SignMethod parseSignMethod(const std::string& name);

@@ -24,6 +24,7 @@
 #include "voxfx/dda.hpp"
 #include "voxfx/distance.hpp"
 #include "voxfx/sdf.hpp"
+#include "voxfx/sdf_io.hpp"
 #include "voxfx/density.hpp"
 #include "voxfx/grid_query.hpp"
 #include "voxfx/morphology.hpp"

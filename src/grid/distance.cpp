@@ -7,7 +7,6 @@
 #include <cmath>
 #include <mutex>
 
-#include "core/enum_names.hpp"
 #include "grid/triangle_bvh.hpp"
 #include "voxfx/contains.hpp"
 #include "voxfx/error.hpp"
@@ -15,11 +14,6 @@
 namespace voxfx {
 
 namespace {
-
-constexpr detail::EnumName<SignMethod> kSignMethodNames[] = {{"auto", SignMethod::Auto},
-                                                             {"parity", SignMethod::Parity},
-                                                             {"winding", SignMethod::Winding},
-                                                             {"gwn", SignMethod::Winding, true}};
 
 // Points per task: enough to hide the task overhead, few enough to balance and report progress.
 constexpr int64_t kChunk = 2048;
@@ -108,20 +102,10 @@ void forPoints(const detail::TriangleBvh& bvh, std::span<const Vec3d> points, in
 
 } // namespace
 
-const char* toString(SignMethod m) {
-    switch (m) {
-    case SignMethod::Auto:
-        return "auto";
-    case SignMethod::Parity:
-        return "parity";
-    case SignMethod::Winding:
-        return "winding";
-    }
-    return "?";
-}
+const char* toString(SignMethod m) { return enumName(m, kSignMethodNames); }
 
 SignMethod parseSignMethod(const std::string& name) {
-    return detail::parseEnum<SignMethod>(name, "sign method", kSignMethodNames);
+    return parseEnum<SignMethod>(name, "sign method", kSignMethodNames);
 }
 
 ClosestPointQuery::ClosestPointQuery(const MeshView& mesh) {
