@@ -6,6 +6,8 @@
     occ = grid.to_numpy()                          # bool array indexed [x, y, z]
     grid.save("bunny.binvox")                      # .binvox .vdb .nrrd .ply .obj
     inside = voxfx.contains(mesh, points)          # exact point occupancy, (K,) bool
+    d = voxfx.signed_distance(mesh, points)        # exact distance, negative inside, (K,) float64
+    field = voxfx.sdf(mesh, resolution=128)        # narrow-band signed distance field
     report = voxfx.batch("meshes.txt", "out/", resolution=64)   # many meshes, as `voxfx batch`
 
 Errors raise voxfx.Error (a RuntimeError) with the library's message. See also voxfx.dask for
@@ -30,15 +32,18 @@ _add_module_dir()
 
 from ._voxfx import batch as _batch  # noqa: E402
 from ._voxfx import (  # noqa: E402
+    ClosestPoints,
     Density,
     Error,
     Grid,
     Mesh,
     PointClassifier,
+    SignedDistanceField,
     SurfaceMesh,
     __version__,
     closing,
     compute_density,
+    closest_points,
     cuda_status,
     contains,
     csg,
@@ -52,6 +57,8 @@ from ._voxfx import (  # noqa: E402
     read_grid,
     resample_to_uniform,
     reslice,
+    sdf,
+    signed_distance,
     voxelize,
 )
 
@@ -106,8 +113,8 @@ batch.__doc__ = _batch.__doc__ + (
 GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj")
 
 __all__ = [
-    "Density", "Error", "Grid", "Mesh", "PointClassifier", "SurfaceMesh", "GRID_FORMATS", "batch", "closing",
-    "compute_density",
+    "ClosestPoints", "Density", "Error", "Grid", "Mesh", "PointClassifier", "SignedDistanceField", "SurfaceMesh",
+    "GRID_FORMATS", "batch", "closest_points", "closing", "compute_density",
     "contains", "cuda_status", "csg", "dilate", "erode", "extract_surface", "from_numpy", "load_mesh", "morphology",
-    "opening", "read_grid", "resample_to_uniform", "reslice", "voxelize",
+    "opening", "read_grid", "resample_to_uniform", "reslice", "sdf", "signed_distance", "voxelize",
 ]
