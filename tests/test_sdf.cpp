@@ -228,6 +228,34 @@ TEST(Sdf, SameFieldForEveryThreadCountAndSlicingAxis) {
     ASSERT_EQ(one.insideRuns.size(), all.insideRuns.size());
 }
 
+TEST(Sdf, SameFieldForEveryBrickSize) {
+    // Bricks that cut the mesh anywhere (8 voxels, 24, 64) give the field of one brick, bit for bit.
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    const Mesh mesh = loadMesh(test::dataPath("meshes/bunny00.off"));
+    for (const bool full : {false, true}) {
+        const Frame frame = sdfFrame(mesh.view(), full ? 36 : 90, 3);
+        SdfOptions o;
+        o.full = full;
+        o.brickSize = 1024;
+        const SignedDistanceField one = signedDistanceField(mesh.view(), frame, o);
+        for (const int64_t b : {int64_t(8), full ? int64_t(16) : int64_t(24), int64_t(64)}) {
+            o.brickSize = b;
+            const SignedDistanceField f = signedDistanceField(mesh.view(), frame, o);
+            ASSERT_EQ(f.leaves.size(), one.leaves.size()) << b;
+            for (std::size_t l = 0; l < f.leaves.size(); ++l) {
+                ASSERT_EQ(f.leaves[l].origin, one.leaves[l].origin) << b;
+                ASSERT_EQ(f.leaves[l].active, one.leaves[l].active) << b;
+                ASSERT_EQ(0, std::memcmp(f.leaves[l].values.data(), one.leaves[l].values.data(), 2048)) << b;
+            }
+            ASSERT_EQ(f.insideRuns.size(), one.insideRuns.size()) << b;
+            for (std::size_t r = 0; r < f.insideRuns.size(); ++r)
+                ASSERT_EQ(0, std::memcmp(&f.insideRuns[r], &one.insideRuns[r], sizeof(SdfInsideRun))) << b;
+        }
+        o.brickSize = 12;
+        EXPECT_THROW(signedDistanceField(mesh.view(), frame, o), Error);
+    }
+}
+
 TEST(Sdf, ValuesAreTheClosestPointDistancesRoundedToFloat) {
     // One closest-point query serves both: the field's values are closestPoints()' distances.
     VOXFX_REQUIRE_DATA("meshes/elephant.off");

@@ -26,11 +26,12 @@
 // (within d + its half diagonal) and splits itself into smaller blocks while that set is large
 // (far from concave surfaces many triangles are nearly equidistant). Cost grows with the volume.
 //
-// Tiles: the field is built slab by slab along z (SdfBuilder in src/grid/sdf.cpp consumes the
-// solid bits and the conservative surface bits of consecutive slice ranges and keeps only the few
-// slices its dilation needs), so that a tiled voxelizer can feed it in bounded memory. Today the
-// whole grid is one tile: peak memory ~ two bit grids (solid and surface, N^3 / 4 bytes) plus the
-// result.
+// Bricks: the field is built brick by brick (SdfOptions::brickSize voxels a side, in parallel): a
+// brick takes its solid bits and the conservative surface of the triangles within the band of it,
+// voxelized in the brick grown by the dilation, so no surface grid of the whole mesh is made and
+// bricks far from the surface cost a look at their solid bits. A tiled voxelizer can hand its
+// bricks to the same per-brick code; today the solid bits come from one dense solid voxelization:
+// peak memory ~ N^3 / 8 bytes for it, plus the result (the band's leaves, 2 KiB per 8^3 block).
 // Thread-safety: pure functions; blocks of a layer are spread over worker threads, one owner per
 // block, so the result does not depend on the thread count. A SignedDistanceField is a value.
 #pragma once
@@ -57,9 +58,13 @@ struct SdfOptions {
     /// The inside test behind the sign (Fill::Parity, Gwn, Flood, Vote, Winding). Empty: parity
     /// for closed meshes (voxfx::analyzeTopology), gwn otherwise.
     std::optional<Fill> fill;
+    /// Edge of the bricks the grid is processed in, in voxels (a positive multiple of 8): each
+    /// brick voxelizes the surface of its own triangles, and bricks run in parallel. Results are
+    /// identical for every value; memory per brick in flight ~ (brickSize + 2 band)^3 / 8 bytes.
+    int64_t brickSize = 128;
     /// Worker threads, 0 = all. Results are identical for every value.
     int threads = 0;
-    /// Polled between layers of blocks; may cancel (voxfx::Error "cancelled"). Not owned.
+    /// Polled between bricks; may cancel (voxfx::Error "cancelled"). Not owned.
     Progress* progress = nullptr;
 };
 
@@ -103,9 +108,10 @@ struct SignedDistanceField {
 /// The signed distance field of `mesh` on the voxel centres of `frame` (orthographic, axis-aligned,
 /// any slicing axis: the result is sliced along z). Validates the mesh (voxfx::Error on bad
 /// indices or non-finite vertices; a mesh without triangles gives an all-outside field); throws
-/// voxfx::Error for a perspective or oriented frame, bandVoxels < 1 or not finite, or too little
-/// memory. Cost: two voxelizations (solid and conservative) plus, per band voxel, the distance to
-/// the few triangles its block gathered; see the file comment.
+/// voxfx::Error for a perspective or oriented frame, bandVoxels < 1 or not finite, a brick size
+/// that is not a positive multiple of 8, or too little memory. Cost: two voxelizations (solid and
+/// conservative) plus, per band voxel, the distance to the few triangles its block gathered; see the file
+/// comment.
 SignedDistanceField signedDistanceField(const MeshView& mesh, const Frame& frame,
                                         const SdfOptions& options = {});
 

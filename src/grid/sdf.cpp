@@ -35,6 +35,9 @@ struct SlabBits {
     int64_t width = 0, wordsPerColumn = 0;
     int64_t firstSlice = 0, slices = 0;
     int64_t x0 = 0, y0 = 0;
+    /// No words: every bit of the slab is `value` (a uniform tile of a tiled voxelization).
+    bool uniform = false;
+    bool value = false;
 
     const uint64_t* column(int64_t x, int64_t y) const {
         return words + ((y + y0) * width + x + x0) * wordsPerColumn;
@@ -42,9 +45,15 @@ struct SlabBits {
     /// Bits [lo, lo + n) (grid slices, n <= 64) of column (x, y), bit 0 = slice lo; slices outside
     /// the slab read as 0.
     uint64_t window(int64_t x, int64_t y, int64_t lo, int n) const {
+        const int64_t b = std::max(lo, firstSlice), e = std::min(lo + n, firstSlice + slices);
+        if (uniform || !words) {
+            // A uniform slab is all `value`; a slab without words (and not uniform) is empty.
+            if (!uniform || !value || b >= e) return 0;
+            const uint64_t ones = e - b == 64 ? ~uint64_t(0) : (uint64_t(1) << (e - b)) - 1;
+            return ones << (b - lo);
+        }
         const uint64_t* col = column(x, y);
         uint64_t out = 0;
-        const int64_t b = std::max(lo, firstSlice), e = std::min(lo + n, firstSlice + slices);
         for (int64_t s = b; s < e;) {
             const int64_t local = s - firstSlice, w = local >> 6, bit = local & 63;
             const int64_t take = std::min<int64_t>(64 - bit, e - s);
@@ -63,17 +72,27 @@ struct SlabBits {
     }
 };
 
-/// One slab (see SdfBuilder::consume).
-struct SdfSlab {
-    int64_t z0 = 0, z1 = 0; ///< slices [z0, z1); z0 a multiple of 8, z1 too or the depth
-    SlabBits solid;         ///< covers [z0, z1)
-    SlabBits surface;       ///< covers [z0 - kz, z1 + kz) (clipped to the surface grid)
+/// One tile of the grid (see SdfBuilder::tile): the voxels [lo, hi) (lo a multiple of 8 on every
+/// axis, hi too or the grid's size), their solid bits, and the conservative surface bits of the
+/// tile grown by the dilation (kx, ky, kz) on every side (surface outside the grid included), both
+/// addressed by the grid's own column and slice indices.
+struct SdfTile {
+    Vec3i lo, hi;
+    SlabBits solid;
+    SlabBits surface; ///< empty (no words, not uniform): no surface near the tile
+};
+
+/// What a tile made: its leaves and inside runs, each in (z, y, x) order.
+struct SdfPiece {
+    std::vector<SdfLeaf> leaves;
+    std::vector<SdfInsideRun> runs;
 };
 
 struct SdfParams {
-    Vec3i dims;       ///< voxels along x, y, z
-    Vec3d lo, cell;   ///< voxel (i, j, k) centre: lo + (i + 0.5) * cell
-    double width = 0; ///< band width W (background)
+    Vec3i dims;          ///< voxels along x, y, z
+    Vec3d lo, cell;      ///< voxel (i, j, k) centre: lo + (i + 0.5) * cell
+    double width = 0;    ///< band width W (background)
+    int64_t brick = 128; ///< brick edge (SdfOptions::brickSize)
     bool full = false;
     Vec3i dilation; ///< kx, ky, kz
 };
@@ -206,33 +225,30 @@ struct Candidates {
 
 } // namespace
 
-/// Builds a signed distance field from slabs (see the file comment). Slabs must arrive in
-/// order of z, each starting where the previous ended.
+/// Builds a signed distance field tile by tile (see the file comment). Immutable: tiles may be
+/// processed on several threads at once, each writing its own piece.
 class SdfBuilder {
 public:
-    SdfBuilder(const SdfParams& params, const TriangleBvh& bvh, Progress* progress)
-        : p_(params), bvh_(bvh), progress_(progress) {
-        blocks_ = {(p_.dims.x + 7) / 8, (p_.dims.y + 7) / 8, (p_.dims.z + 7) / 8};
-    }
+    SdfBuilder(const SdfParams& params, const TriangleBvh& bvh) : p_(params), bvh_(bvh) {}
 
-    /// Processes every layer of blocks within [slab.z0, slab.z1), 64 slices at a time.
-    void consume(const SdfSlab& slab);
-    std::vector<SdfLeaf> takeLeaves() { return std::move(leaves_); }
-    std::vector<SdfInsideRun> takeInsideRuns() { return std::move(runs_); }
+    /// The blocks of `t`, 64 slices at a time, into `out`.
+    void tile(const SdfTile& t, SdfPiece& out) const;
 
 private:
-    struct Row {
-        std::vector<SdfLeaf> leaves;
-        std::vector<SdfInsideRun> runs;
-    };
-    void chunk(const SdfSlab& slab, int64_t z0);
-    void candidateWords(const SdfSlab& slab, int64_t z0, std::vector<uint64_t>& solid,
-                        std::vector<uint64_t>& mask) const;
-    void blockRow(int64_t by, int64_t bz, int shift, const std::vector<uint64_t>& solid,
-                  const std::vector<uint64_t>& mask, Row& row) const;
     using Bits = std::array<uint64_t, 8>; ///< one bit per voxel of a block, OpenVDB's leaf order
     /// Candidate lists per depth of the cube recursion (8^3, 4^3, 2^3, 1), reused block after block.
     using Scratch = std::array<Candidates, 4>;
+    /// Per column of a tile, 64 slices: solid bits and candidate bits (see candidateWords).
+    struct Words {
+        Vec3i lo, hi;
+        int64_t z0 = 0;
+        std::vector<uint64_t> solid, mask;
+        std::size_t at(int64_t x, int64_t y) const {
+            return std::size_t((y - lo.y) * (hi.x - lo.x) + x - lo.x);
+        }
+    };
+    void candidateWords(const SdfTile& t, Words& w) const;
+    void blockRow(int64_t by, int64_t bz, const Words& w, SdfPiece& row) const;
     bool solveBlock(SdfLeaf& leaf, const Bits& todo, const Bits& inside, Scratch& scratch) const;
     void solveCube(SdfLeaf& leaf, const Vec3i& b, int size, int depth, Scratch& scratch, const Bits& todo,
                    const Bits& inside, bool& any, int& hint) const;
@@ -248,97 +264,83 @@ private:
 
     SdfParams p_;
     const TriangleBvh& bvh_;
-    Progress* progress_;
-    Vec3i blocks_;
-    std::vector<SdfLeaf> leaves_;
-    std::vector<SdfInsideRun> runs_;
 };
 
-void SdfBuilder::consume(const SdfSlab& slab) {
-    for (int64_t z0 = slab.z0; z0 < slab.z1; z0 += 64) chunk(slab, z0);
-}
-
-// Per column, for the 64 slices from z0 (8 layers of blocks, bit s = slice z0 + s): the solid bits
-// and the candidate bits (surface dilated by kz along the column, then by kx, ky across columns).
-void SdfBuilder::candidateWords(const SdfSlab& slab, int64_t z0, std::vector<uint64_t>& solid,
-                                std::vector<uint64_t>& mask) const {
-    const int64_t W = p_.dims.x, H = p_.dims.y, kx = p_.dilation.x, ky = p_.dilation.y, kz = p_.dilation.z;
-    const int n = int(std::min<int64_t>(64, p_.dims.z - z0));
+// Per column of the tile, for the 64 slices from w.z0 (8 layers of blocks, bit s = slice z0 + s):
+// the solid bits and the candidate bits (surface dilated by kz along the column, then by kx, ky
+// across columns, reading the surface's grown columns around the tile).
+void SdfBuilder::candidateWords(const SdfTile& t, Words& w) const {
+    const int64_t kx = p_.dilation.x, ky = p_.dilation.y, kz = p_.dilation.z, z0 = w.z0;
+    const int64_t nx = t.hi.x - t.lo.x, ny = t.hi.y - t.lo.y;
+    const int n = int(std::min<int64_t>(64, t.hi.z - z0));
     const uint64_t keep = n == 64 ? ~uint64_t(0) : (uint64_t(1) << n) - 1;
-    // Surface bits of column (x, y) (grown columns included) dilated along z.
-    const auto along = [&](int64_t x, int64_t y) {
-        uint64_t d = 0;
-        for (int64_t s = -kz; s <= kz; ++s) d |= slab.surface.window(x, y, z0 + s, 64);
-        return d & keep;
-    };
-    std::vector<uint64_t> z(std::size_t(W * H)), xy(std::size_t(W * H));
-    parallelFor(0, H, 8, [&](int64_t y0, int64_t y1) {
+    w.solid.assign(std::size_t(nx * ny), 0);
+    w.mask.assign(std::size_t(nx * ny), 0);
+    parallelFor(t.lo.y, t.hi.y, 8, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = 0; x < W; ++x) {
-                const std::size_t c = std::size_t(y * W + x);
-                solid[c] = slab.solid.window(x, y, z0, 64) & keep;
-                if (!p_.full) z[c] = along(x, y);
+            for (int64_t x = t.lo.x; x < t.hi.x; ++x)
+                w.solid[w.at(x, y)] = t.solid.window(x, y, z0, 64) & keep;
+    });
+    if (p_.full || (!t.surface.words && !t.surface.uniform)) return;
+    // Surface bits of column (x, y), dilated along z, for the tile's columns grown by (kx, ky).
+    const int64_t gx = nx + 2 * kx, gy = ny + 2 * ky;
+    std::vector<uint64_t> along(std::size_t(gx * gy)), xy(std::size_t(nx * gy));
+    parallelFor(0, gy, 8, [&](int64_t r0, int64_t r1) {
+        for (int64_t r = r0; r < r1; ++r)
+            for (int64_t c = 0; c < gx; ++c) {
+                uint64_t d = 0;
+                for (int64_t s = -kz; s <= kz; ++s)
+                    d |= t.surface.window(t.lo.x - kx + c, t.lo.y - ky + r, z0 + s, 64);
+                along[std::size_t(r * gx + c)] = d & keep;
             }
     });
-    if (p_.full) return;
-    // The grown margins of the surface grid (columns -kx .. -1 and W .. W + kx - 1, likewise y)
-    // hold surface outside the grid that is still within the band of its border voxels.
-    const auto zAt = [&](int64_t x, int64_t y) {
-        return x >= 0 && x < W && y >= 0 && y < H ? z[std::size_t(y * W + x)] : along(x, y);
-    };
-    parallelFor(0, H, 8, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = 0; x < W; ++x) {
+    parallelFor(0, gy, 8, [&](int64_t r0, int64_t r1) {
+        for (int64_t r = r0; r < r1; ++r)
+            for (int64_t c = 0; c < nx; ++c) {
                 uint64_t a = 0;
-                for (int64_t dx = -kx; dx <= kx; ++dx) a |= zAt(x + dx, y);
-                xy[std::size_t(y * W + x)] = a;
+                for (int64_t dx = 0; dx <= 2 * kx; ++dx) a |= along[std::size_t(r * gx + c + dx)];
+                xy[std::size_t(r * nx + c)] = a;
             }
     });
-    parallelFor(0, H, 8, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = 0; x < W; ++x) {
+    parallelFor(0, ny, 8, [&](int64_t r0, int64_t r1) {
+        for (int64_t r = r0; r < r1; ++r)
+            for (int64_t c = 0; c < nx; ++c) {
                 uint64_t a = 0;
-                for (int64_t dy = -ky; dy <= ky; ++dy) {
-                    const int64_t yy = y + dy;
-                    if (yy >= 0 && yy < H) {
-                        a |= xy[std::size_t(yy * W + x)];
-                    } else {
-                        for (int64_t dx = -kx; dx <= kx; ++dx) a |= zAt(x + dx, yy);
-                    }
-                }
-                mask[std::size_t(y * W + x)] = a;
+                for (int64_t dy = 0; dy <= 2 * ky; ++dy) a |= xy[std::size_t((r + dy) * nx + c)];
+                w.mask[std::size_t(r * nx + c)] = a;
             }
     });
 }
 
-void SdfBuilder::chunk(const SdfSlab& slab, int64_t z0) {
-    const int64_t W = p_.dims.x, H = p_.dims.y;
-    std::vector<uint64_t> solid(std::size_t(W * H)), mask(std::size_t(W * H));
-    candidateWords(slab, z0, solid, mask);
-    for (int64_t bz = z0 / kLeafDim; bz * kLeafDim < std::min(z0 + 64, slab.z1); ++bz) {
-        std::vector<Row> rows(std::size_t(blocks_.y));
-        const int shift = int(bz * kLeafDim - z0);
-        parallelFor(0, blocks_.y, 1, [&](int64_t b, int64_t e) {
-            for (int64_t by = b; by < e; ++by) blockRow(by, bz, shift, solid, mask, rows[std::size_t(by)]);
-        });
-        for (Row& r : rows) {
-            for (SdfLeaf& l : r.leaves) leaves_.push_back(std::move(l));
-            runs_.insert(runs_.end(), r.runs.begin(), r.runs.end());
+void SdfBuilder::tile(const SdfTile& t, SdfPiece& out) const {
+    Words w;
+    w.lo = t.lo;
+    w.hi = t.hi;
+    const int64_t rows = (t.hi.y - t.lo.y + kLeafDim - 1) / kLeafDim;
+    for (w.z0 = t.lo.z; w.z0 < t.hi.z; w.z0 += 64) {
+        candidateWords(t, w);
+        for (int64_t bz = w.z0 / kLeafDim; bz * kLeafDim < std::min(w.z0 + 64, t.hi.z); ++bz) {
+            std::vector<SdfPiece> pieces{std::size_t(rows)};
+            parallelFor(0, rows, 1, [&](int64_t b, int64_t e) {
+                for (int64_t r = b; r < e; ++r)
+                    blockRow(t.lo.y / kLeafDim + r, bz, w, pieces[std::size_t(r)]);
+            });
+            for (SdfPiece& piece : pieces) {
+                for (SdfLeaf& l : piece.leaves) out.leaves.push_back(std::move(l));
+                out.runs.insert(out.runs.end(), piece.runs.begin(), piece.runs.end());
+            }
         }
-        if (progress_ &&
-            !progress_->update(double(std::min(p_.dims.z, (bz + 1) * kLeafDim)) / double(p_.dims.z)))
-            fail("cancelled");
     }
 }
 
-// The blocks (0 .. bx, by, bz): each becomes a leaf (band voxels, or signs that differ), a run of
-// inside blocks, or nothing (outside, the background).
-void SdfBuilder::blockRow(int64_t by, int64_t bz, int shift, const std::vector<uint64_t>& solid,
-                          const std::vector<uint64_t>& mask, Row& row) const {
+// The tile's blocks (bx, by, bz) along x: each becomes a leaf (band voxels, or signs that differ),
+// a run of inside blocks, or nothing (outside, the background).
+void SdfBuilder::blockRow(int64_t by, int64_t bz, const Words& w, SdfPiece& row) const {
     const int64_t W = p_.dims.x, H = p_.dims.y, D = p_.dims.z;
+    const int shift = int(bz * kLeafDim - w.z0);
     SdfLeaf leaf;
     Scratch scratch;
-    for (int64_t bx = 0; bx < blocks_.x; ++bx) {
+    for (int64_t bx = w.lo.x / kLeafDim; bx * kLeafDim < w.hi.x; ++bx) {
         // Word i is column x = 8 bx + i, byte j of it column y = 8 by + j: OpenVDB's leaf order.
         Bits m{}, in{}, valid{};
         const int nz = int(std::min<int64_t>(kLeafDim, D - bz * kLeafDim));
@@ -349,9 +351,9 @@ void SdfBuilder::blockRow(int64_t by, int64_t bz, int shift, const std::vector<u
             for (int j = 0; j < kLeafDim; ++j) {
                 const int64_t y = by * kLeafDim + j;
                 if (y >= H) break;
-                const std::size_t c = std::size_t(y * W + x);
-                m[std::size_t(i)] |= ((mask[c] >> shift) & 0xFF) << (8 * j);
-                in[std::size_t(i)] |= ((solid[c] >> shift) & 0xFF) << (8 * j);
+                const std::size_t c = w.at(x, y);
+                m[std::size_t(i)] |= ((w.mask[c] >> shift) & 0xFF) << (8 * j);
+                in[std::size_t(i)] |= ((w.solid[c] >> shift) & 0xFF) << (8 * j);
                 valid[std::size_t(i)] |= uint64_t(zValid) << (8 * j);
             }
         }
@@ -462,6 +464,86 @@ void SdfBuilder::solveCube(SdfLeaf& leaf, const Vec3i& b, int size, int depth, S
             }
 }
 
+// The conservative surface of the triangles within the band of tile [lo, hi), in the tile grown by
+// the dilation on every side (surface outside the grid included): those triangles are the ones
+// that can be nearest to a band voxel of the tile (their boxes lie within the band width of it).
+VoxelGrid tileSurface(const SdfParams& p, const TriangleBvh& bvh, const Vec3i& lo, const Vec3i& hi) {
+    const auto centreOf = [&](const Vec3i& i) { return p.lo + p.cell * (Vec3d(i) + Vec3d{0.5, 0.5, 0.5}); };
+    std::vector<uint32_t> near;
+    bvh.gather(centreOf(lo), centreOf(hi - Vec3i{1, 1, 1}), p.width * (1 + 1e-9), near);
+    if (near.empty()) return {};
+    Mesh part;
+    part.positions.reserve(3 * near.size());
+    for (const uint32_t t : near)
+        for (int k = 0; k < 3; ++k) {
+            part.indices.push_back(uint32_t(part.positions.size()));
+            part.positions.push_back(Vec3f(bvh.corner(t, k))); // exact: the corners are floats
+        }
+    const Vec3i glo = lo - p.dilation, ghi = hi + p.dilation, gd = ghi - glo;
+    const Box3d box{p.lo + p.cell * Vec3d(glo), p.lo + p.cell * Vec3d(ghi)};
+    VoxelizeOptions co;
+    co.mode = VoxelizeMode::Conservative;
+    return voxelize(part.view(), Frame::orthographic(box, Axis::Z, gd.x, gd.y, gd.z), co);
+}
+
+// The whole grid in bricks of p.brick^3 voxels, on worker threads (one owner per brick), each with
+// the solid bits of `solid` and the surface of its own triangles; the pieces joined in (z, y, x)
+// order. A tiled voxelization can hand its bricks to the same per-brick code.
+std::pair<std::vector<SdfLeaf>, std::vector<SdfInsideRun>>
+sdfTiles(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& builder, const SlabBits& solid,
+         Progress* progress) {
+    const int64_t brick = p.brick;
+    const Vec3i n{(p.dims.x + brick - 1) / brick, (p.dims.y + brick - 1) / brick,
+                  (p.dims.z + brick - 1) / brick};
+    const int64_t count = n.x * n.y * n.z;
+    std::vector<SdfPiece> pieces{std::size_t(count)};
+    std::atomic<bool> cancelled{false};
+    std::atomic<int64_t> done{0};
+    std::mutex progressMutex;
+    parallelFor(0, count, 1, [&](int64_t b, int64_t e) {
+        for (int64_t i = b; i < e && !cancelled; ++i) {
+            SdfTile t;
+            t.lo = Vec3i{i % n.x, (i / n.x) % n.y, i / (n.x * n.y)} * brick;
+            t.hi = min(t.lo + Vec3i{brick, brick, brick}, p.dims);
+            t.solid = solid;
+            VoxelGrid surface;
+            if (!p.full) surface = tileSurface(p, bvh, t.lo, t.hi);
+            if (!surface.bits.empty())
+                t.surface = {surface.bits.words(),  surface.bits.width(), surface.bits.wordsPerColumn(),
+                             t.lo.z - p.dilation.z, surface.bits.depth(), p.dilation.x - t.lo.x,
+                             p.dilation.y - t.lo.y};
+            builder.tile(t, pieces[std::size_t(i)]);
+            const int64_t d = ++done;
+            if (!progress) continue;
+            std::lock_guard<std::mutex> lock(progressMutex);
+            if (!progress->update(double(d) / double(count))) cancelled = true;
+        }
+    });
+    if (cancelled) fail("cancelled");
+    std::vector<SdfLeaf> leaves;
+    std::vector<SdfInsideRun> runs;
+    for (SdfPiece& piece : pieces) {
+        for (SdfLeaf& l : piece.leaves) leaves.push_back(std::move(l));
+        runs.insert(runs.end(), piece.runs.begin(), piece.runs.end());
+    }
+    const auto zyx = [](const Vec3i& a, const Vec3i& b) {
+        return a.z != b.z ? a.z < b.z : (a.y != b.y ? a.y < b.y : a.x < b.x);
+    };
+    std::sort(leaves.begin(), leaves.end(),
+              [&](const SdfLeaf& a, const SdfLeaf& b) { return zyx(a.origin, b.origin); });
+    std::sort(runs.begin(), runs.end(), [&](const SdfInsideRun& a, const SdfInsideRun& b) {
+        return zyx({a.x0, a.y, a.z}, {b.x0, b.y, b.z});
+    });
+    // Runs that meet at a brick's side become one.
+    std::vector<SdfInsideRun> merged;
+    for (const SdfInsideRun& r : runs)
+        if (!merged.empty() && merged.back().z == r.z && merged.back().y == r.y && merged.back().x1 == r.x0)
+            merged.back().x1 = r.x1;
+        else
+            merged.push_back(r);
+    return {std::move(leaves), std::move(merged)};
+}
+
 } // namespace detail
 
 // ---- the field ---------------------------------------------------------------------------------
@@ -544,6 +626,9 @@ SignedDistanceField signedDistanceField(const MeshView& mesh, const Frame& frame
         fail("signed distance fields need an axis-aligned orthographic frame");
     if (!options.full && !(options.bandVoxels >= 1 && std::isfinite(options.bandVoxels)))
         fail("signed distance field: the band must be at least 1 voxel wide, got ", options.bandVoxels);
+    if (options.brickSize < 8 || options.brickSize % 8)
+        fail("signed distance field: the brick size must be a positive multiple of 8, got ",
+             options.brickSize);
     // World-axis dimensions, sliced along z.
     Vec3i dims;
     dims[columnXAxis(frame.axis())] = frame.width();
@@ -564,6 +649,7 @@ SignedDistanceField signedDistanceField(const MeshView& mesh, const Frame& frame
     p.cell = cell;
     p.width = f.background;
     p.full = options.full;
+    p.brick = options.brickSize;
     // A centre closer than W to the surface is within ceil(W / cell + 1/2) - 1 cells of the
     // conservative cell holding its nearest point (the relative 1e-9 absorbs rounding).
     for (int a = 0; a < 3 && !options.full; ++a)
@@ -574,31 +660,13 @@ SignedDistanceField signedDistanceField(const MeshView& mesh, const Frame& frame
         vo.mode = VoxelizeMode::Solid;
         vo.fill = f.fill;
         const VoxelGrid solid = voxelize(mesh, f.frame, vo);
-        // The surface in a frame grown by the dilation on every side: surface just outside the
-        // grid still puts the border voxels in the band.
-        VoxelGrid surface;
-        if (!options.full) {
-            Box3d grown = f.frame.box();
-            grown.lo -= cell * Vec3d(p.dilation);
-            grown.hi += cell * Vec3d(p.dilation);
-            const Vec3i gd = dims + p.dilation * 2;
-            VoxelizeOptions co;
-            co.mode = VoxelizeMode::Conservative;
-            surface = voxelize(mesh, Frame::orthographic(grown, Axis::Z, gd.x, gd.y, gd.z), co);
-        }
         const detail::TriangleBvh bvh(mesh);
-        detail::SdfBuilder builder(p, bvh, options.progress);
-        detail::SdfSlab slab;
-        slab.z0 = 0;
-        slab.z1 = dims.z;
-        slab.solid = {solid.bits.words(), dims.x, solid.bits.wordsPerColumn(), 0, dims.z, 0, 0};
-        if (!options.full)
-            slab.surface = {surface.bits.words(), surface.bits.width(), surface.bits.wordsPerColumn(),
-                            -p.dilation.z,        surface.bits.depth(), p.dilation.x,
-                            p.dilation.y};
-        builder.consume(slab);
-        f.leaves = builder.takeLeaves();
-        f.insideRuns = builder.takeInsideRuns();
+        const detail::SdfBuilder builder(p, bvh);
+        const detail::SlabBits solidBits{
+            solid.bits.words(), dims.x, solid.bits.wordsPerColumn(), 0, dims.z, 0, 0};
+        const auto [leaves, runs] = detail::sdfTiles(p, bvh, builder, solidBits, options.progress);
+        f.leaves = std::move(leaves);
+        f.insideRuns = std::move(runs);
     };
     withThreads(options.threads, run);
     return f;
