@@ -1,6 +1,7 @@
 // Tests of src/batch/ and `voxfx batch`: outputs byte-identical to one `voxfx voxelize` process per
 // mesh (the oracle: the single-file command, run separately), restart, bad meshes recorded without
 // stopping the others, duplicate stems refused before any work, a report that parses as JSON.
+#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -252,6 +253,85 @@ TEST(BatchTest, ManifestPathsAreRelativeToItsFolderAndCommentsAreIgnored) {
     ASSERT_EQ(jobs.size(), 1u);
     EXPECT_TRUE(fs::equivalent(jobs[0].mesh, dir.file("cube.off")));
     EXPECT_EQ(fs::path(jobs[0].output), fs::path(dir.file("out")) / "cube.vdb");
+}
+
+// What is not a manifest says so, before any work: a folder, a mesh file, a binary file, a NUL
+// byte in a path (the C library would open the path up to the NUL: another file).
+TEST(BatchTest, WhatIsNotAManifestIsRefusedSayingWhy) {
+    test::TempDir dir;
+    const std::string mesh = test::writeFile(dir.file("cube.off"), kBatchCubeOff);
+    fs::create_directories(dir.file("meshes"));
+    const std::string binary = test::writeFile(dir.file("list.txt"), std::string("cube.off\nab\0c\n", 14));
+    const std::string out = dir.file("out");
+    const auto message = [&](const std::string& manifest) {
+        try {
+            readBatchManifest(manifest, out, GridFormat::Binvox);
+        } catch (const Error& e) { return std::string(e.what()); }
+        return std::string("no error");
+    };
+    EXPECT_NE(message(dir.file("meshes")).find("is a folder"), std::string::npos)
+        << message(dir.file("meshes"));
+    EXPECT_NE(message(mesh).find("is a mesh file (.off)"), std::string::npos) << message(mesh);
+    EXPECT_NE(message(binary).find("line 2 holds a NUL byte"), std::string::npos) << message(binary);
+    EXPECT_NE(message(mesh + std::string("\0.txt", 5)).find("NUL byte"), std::string::npos);
+    try {
+        batchJobs({mesh, std::string("x\0y.off", 7)}, out, GridFormat::Binvox);
+        ADD_FAILURE() << "a NUL byte in a mesh path was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("mesh 2: the mesh path holds a NUL byte"), std::string::npos)
+            << e.what();
+    }
+    // The command prints the one line and exits 1, writing nothing.
+    for (const std::string& manifest : {dir.file("meshes"), mesh, binary}) {
+        const test::CommandRun r = test::runVoxfx(dir, "batch " + manifest + " -o " + out + " -r 8");
+        EXPECT_EQ(r.exitCode, 1) << manifest;
+        EXPECT_NE(r.err.find(message(manifest)), std::string::npos) << r.err;
+    }
+    EXPECT_FALSE(fs::exists(out + "/cube.binvox"));
+}
+
+// BatchOptions::cancel: polled before each mesh; once it says stop, no mesh starts and runBatch
+// throws. One worker, so the order is fixed: the poll after the second mesh stops the batch.
+TEST(BatchTest, CancelStopsBetweenMeshesAndThrows) {
+    test::TempDir dir;
+    std::vector<std::string> meshes;
+    for (int i = 0; i < 6; ++i)
+        meshes.push_back(test::writeFile(dir.file(detail::concat("c", i, ".off")), kBatchCubeOff));
+    struct StopAfterTwo final : Progress, BatchProgress {
+        std::atomic<int64_t> finished{0}, polls{0};
+        bool update(double) override {
+            ++polls;
+            return finished < 2;
+        }
+        void jobDone(const BatchResult&, int64_t, int64_t) override { ++finished; }
+    } stop;
+    BatchOptions bo;
+    bo.fit.resolution = 8;
+    bo.threads = 1;
+    bo.cancel = &stop;
+    bo.progress = &stop;
+    const std::string out = dir.file("out");
+    try {
+        runBatch(batchJobs(meshes, out, GridFormat::Binvox), bo);
+        ADD_FAILURE() << "the batch was not cancelled";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("batch cancelled after 2 of 6 meshes"), std::string::npos)
+            << e.what();
+    }
+    int64_t written = 0;
+    for (const auto& e : fs::directory_iterator(out)) written += e.path().extension() == ".binvox";
+    EXPECT_EQ(written, 2);
+    EXPECT_EQ(stop.finished, 2);
+    EXPECT_GE(stop.polls, 3);
+    // A cancel object that never stops changes nothing: every mesh, skipping the two written.
+    struct Never final : Progress {
+        bool update(double) override { return true; }
+    } never;
+    bo.cancel = &never;
+    bo.progress = nullptr;
+    const BatchSummary s = runBatch(batchJobs(meshes, out, GridFormat::Binvox), bo);
+    EXPECT_EQ(s.ok, 4);
+    EXPECT_EQ(s.skipped, 2);
 }
 
 TEST(BatchTest, HelpStatesTheExitStatus) {

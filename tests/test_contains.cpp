@@ -204,6 +204,36 @@ TEST(Contains, WindingAndFloodOnAClosedMeshAgreeWithCgal) {
     EXPECT_LT(floodExtra, int64_t(pts.size()) / 10);
 }
 
+// Three of CGAL's closed meshes are oriented inward throughout (negative signed volume), and a
+// flipped bunny is too: the winding number is -1 inside them, which |w| >= 0.5 takes as inside.
+// Oracle: CGAL::Side_of_triangle_mesh, which counts ray crossings and ignores orientation.
+TEST(Contains, WindingFindsTheInsideOfMeshesOrientedInward) {
+    for (const char* name :
+         {"meshes/beam.off", "meshes/tetrahedron.off", "meshes/ellipe0.003.off", "meshes/bunny00.off"}) {
+        VOXFX_REQUIRE_DATA(name);
+        Mesh mesh = loadMesh(test::dataPath(name));
+        if (test::meshVolume(mesh.view()) > 0) mesh = test::flippedMesh(mesh);
+        ASSERT_LT(test::meshVolume(mesh.view()), 0) << name;
+        const std::vector<Vec3d> pts = containsRandomPoints(mesh.view(), 2000, 13);
+        const std::vector<int> side = test::sideOfClosedMesh(mesh.view(), pts);
+        ASSERT_EQ(side.size(), pts.size()) << name << " is not a closed manifold";
+        ContainsOptions o;
+        o.method = ContainsMethod::Winding;
+        const std::vector<uint8_t> got = contains(mesh.view(), pts, o);
+        const PointClassifier classifier(mesh.view(), o);
+        int64_t inside = 0, wrong = 0, wrongOne = 0;
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+            if (side[i] == 0) continue;
+            inside += side[i] > 0;
+            wrong += bool(got[i]) != (side[i] > 0);
+            wrongOne += classifier.inside(pts[i]) != (side[i] > 0);
+        }
+        EXPECT_GT(inside, 100) << name;
+        EXPECT_EQ(wrong, 0) << name;
+        EXPECT_EQ(wrongOne, 0) << name;
+    }
+}
+
 TEST(Contains, WindingNumberOfAnOpenMeshIsFractionalNearItsHole) {
     // A unit box with its top face removed: the winding number at the centre is 1 minus the top
     // face's share (1/6 of the full sphere, by symmetry), so still inside at 0.5.
@@ -256,6 +286,39 @@ TEST(Contains, FastWindingNumbersStayCloseToTheExactSum) {
             EXPECT_LE(worst, previous) << name << " beta " << beta;
             previous = worst;
         }
+    }
+}
+
+// ContainsOptions::progress and classify()'s: polled between chunks of points and while the
+// classifier is built; false cancels with an Error, true changes nothing.
+TEST(Contains, ProgressIsPolledAndCancels) {
+    const Mesh mesh = test::makeTorus({0, 0, 0}, 3, 1, 24, 12);
+    const std::vector<Vec3d> pts = containsRandomPoints(mesh.view(), (1 << 20) + 5000, 3);
+    struct Count final : Progress {
+        int64_t calls = 0, allow = 0;
+        bool update(double) override { return ++calls <= allow; }
+    };
+    for (const ContainsMethod method : {ContainsMethod::Parity, ContainsMethod::Winding}) {
+        ContainsOptions o;
+        o.method = method;
+        o.resolution = 32;
+        const std::vector<uint8_t> plain = contains(mesh.view(), pts, o);
+        Count yes;
+        yes.allow = 1000000;
+        o.progress = &yes;
+        EXPECT_EQ(contains(mesh.view(), pts, o), plain);
+        EXPECT_GE(yes.calls, 2); // two chunks of points at least
+        Count no;
+        o.progress = &no;
+        EXPECT_THROW(contains(mesh.view(), pts, o), Error);
+        EXPECT_EQ(no.calls, 1);
+        o.progress = nullptr;
+        const PointClassifier classifier(mesh.view(), o);
+        std::vector<uint8_t> out(pts.size());
+        Count second;
+        second.allow = 1;
+        EXPECT_THROW(classifier.classify(pts, out, nullptr, &second), Error);
+        EXPECT_EQ(second.calls, 2);
     }
 }
 

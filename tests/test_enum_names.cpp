@@ -189,7 +189,7 @@ TEST(EnumNamesTest, UnknownNamesSayWhereWhatAndTheChoices) {
         parseFill("");
         FAIL() << "no error";
     } catch (const Error& e) {
-        EXPECT_STREQ(e.what(), "unknown fill '' (allowed: parity, flood, vote, winding, gwn)");
+        EXPECT_STREQ(e.what(), "unknown fill '' (allowed: auto, parity, flood, vote, winding, gwn)");
     }
     try {
         parseGlassKind("opal");

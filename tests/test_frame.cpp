@@ -363,5 +363,32 @@ TEST(FrameTest, RasterizerThroughAnOrientedFrameMatchesTheAxisAlignedFrameOnARot
     EXPECT_LE(diff, 4) << "of " << aligned.bits.count();
 }
 
+TEST(FrameTest, TranslatedMovesTheBoxAndKeepsTheGrid) {
+    Frame f = Frame::orthographic({{-0.15, -0.2, -0.1}, {0.15, 0.2, 0.3}}, Axis::Y, 8, 5, 12);
+    const Vec3d offset{5e6, -3, 0.5};
+    const Frame t = f.translated(offset);
+    EXPECT_EQ(t.axis(), Axis::Y);
+    EXPECT_EQ(t.width(), 8);
+    EXPECT_EQ(t.height(), 5);
+    EXPECT_EQ(t.depth(), 12);
+    EXPECT_EQ(t.box().lo, f.box().lo + offset);
+    EXPECT_EQ(t.box().hi, f.box().hi + offset);
+    // Grid coordinates of moved points are the same up to the rounding of the moved box.
+    for (const Vec3d p : {Vec3d{0.01, 0.02, 0.03}, Vec3d{-0.14, 0.19, 0.29}}) {
+        const Vec3d a = f.gridFromWorld(p), b = t.gridFromWorld(p + offset);
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(a[k], b[k], 1e-6);
+    }
+    // Local slicing tables are in grid units: they carry over unchanged.
+    std::vector<double> nearD(std::size_t(f.columnCount()), 1.0), farD(std::size_t(f.columnCount()), 7.0);
+    f.setLocalSlicing(nearD, farD);
+    const Frame tl = f.translated(offset);
+    EXPECT_EQ(tl.slicing(), Slicing::Local);
+    EXPECT_EQ(tl.depthToSlice(3).near, f.depthToSlice(3).near);
+    EXPECT_EQ(tl.depthToSlice(3).scale, f.depthToSlice(3).scale);
+    EXPECT_THROW(Frame::perspective({0, 0, -5}, {0, 0, 0}, {0, 1, 0}, 0.5, 8, 8, 1, 10, 8).translated(offset),
+                 Error);
+    EXPECT_THROW(f.translated({std::nan(""), 0, 0}), Error);
+}
+
 } // namespace
 } // namespace voxfx

@@ -3,6 +3,7 @@
 // frustum volumes and hand-counted cells.
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -140,6 +141,69 @@ TEST(GridQueryTest, QueriesMatchTheReferencesOnAVoxelizedMesh) {
     }
     EXPECT_GT(checked, 30);
     EXPECT_GT(hitSolid, 5);
+}
+
+// filledCellIndices / filledCellCenters against the definition: every (i, j, k) in i, j, k order
+// with atWorldIndex set, centres lo + (index + 0.5) * cell; every slicing axis, depths around a
+// word, any thread count. filledAt against atWorldIndex of the floored grid coordinates.
+TEST(GridQueryTest, FilledCellsAndLookupsMatchTheCellByCellDefinition) {
+    const Box3d box{{-1.5, 0.25, 3}, {2.5, 1.25, 7}};
+    for (const Axis axis : {Axis::X, Axis::Y, Axis::Z})
+        for (const Vec3i dims : {Vec3i{5, 7, 63}, Vec3i{9, 3, 65}, Vec3i{64, 2, 1}}) {
+            const VoxelGrid g = test::randomVoxelGrid(box, axis, dims, 0.3, uint64_t(dims.x * 7 + int(axis)));
+            std::vector<int32_t> expected;
+            std::vector<double> centres;
+            const Vec3d cell = g.frame.cellSize();
+            for (int64_t i = 0; i < dims.x; ++i)
+                for (int64_t j = 0; j < dims.y; ++j)
+                    for (int64_t k = 0; k < dims.z; ++k)
+                        if (g.atWorldIndex(i, j, k)) {
+                            const int64_t ijk[3] = {i, j, k};
+                            for (int a = 0; a < 3; ++a) {
+                                expected.push_back(int32_t(ijk[a]));
+                                centres.push_back(box.lo[a] + (double(ijk[a]) + 0.5) * cell[a]);
+                            }
+                        }
+            ASSERT_EQ(int64_t(expected.size()), 3 * g.bits.count());
+            for (const int threads : {1, 3}) {
+                std::vector<int32_t> got(expected.size());
+                filledCellIndices(g, got, threads);
+                EXPECT_EQ(got, expected) << toString(axis) << " " << threads;
+                std::vector<double> c(expected.size());
+                filledCellCenters(g, c, threads);
+                EXPECT_EQ(c, centres) << toString(axis);
+            }
+            std::vector<float> cf(expected.size());
+            filledCellCenters(g, cf);
+            for (std::size_t n = 0; n < cf.size(); ++n) ASSERT_EQ(cf[n], float(centres[n]));
+            std::vector<int32_t> small(expected.size() + 3);
+            EXPECT_THROW(filledCellIndices(g, small), Error);
+
+            std::mt19937_64 rng(5);
+            std::uniform_real_distribution<double> u(-0.2, 1.2);
+            std::vector<Vec3d> pts;
+            for (int n = 0; n < 4000; ++n)
+                pts.push_back(box.lo + Vec3d{u(rng) * box.extent().x, u(rng) * box.extent().y,
+                                             u(rng) * box.extent().z});
+            pts.push_back(box.lo);                 // a corner: cell (0, 0, 0)
+            pts.push_back(box.hi);                 // the far corner: outside
+            pts.push_back({std::nan(""), 0.5, 4}); // not finite: outside
+            std::vector<uint8_t> at(pts.size());
+            filledAt(g, pts, at, 2);
+            for (std::size_t n = 0; n < pts.size(); ++n) {
+                Vec3i idx;
+                bool in = true;
+                for (int a = 0; a < 3; ++a) {
+                    const double q = std::floor((pts[n][a] - box.lo[a]) / cell[a]);
+                    in = in && q >= 0 && q < double(dims[a]);
+                    idx[a] = in ? int64_t(q) : 0;
+                }
+                ASSERT_EQ(bool(at[n]), in && g.atWorldIndex(idx.x, idx.y, idx.z)) << n;
+            }
+            EXPECT_EQ(at[pts.size() - 3], g.atWorldIndex(0, 0, 0));
+            EXPECT_EQ(at[pts.size() - 2], 0);
+            EXPECT_EQ(at[pts.size() - 1], 0);
+        }
 }
 
 TEST(GridQueryTest, SegmentTraversalHandCases) {

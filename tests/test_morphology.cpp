@@ -102,6 +102,31 @@ TEST(MorphologyTest, ErosionAndDilationMatchTheBoxScanOnRandomGrids) {
     EXPECT_EQ(cases, 6 * 13 * 3);
 }
 
+TEST(MorphologyTest, RadiiBeyondTheGridActLikeTheGridSizeInTimeAndMemory) {
+    // A radius of the grid's size reaches every cell of the line and one beyond each end, so any
+    // larger one gives the box scan's result for that size. Along depth the radius was not
+    // clamped: 2^50 slices asked for petabytes of scratch (std::bad_alloc) and 10^8 took seconds.
+    const BitGrid g = randomBits(5, 4, 70, 0.1, 17);
+    for (const MorphBorder border : {MorphBorder::Neutral, MorphBorder::Empty, MorphBorder::Filled})
+        for (const int64_t huge : {int64_t(1) << 50, int64_t(100000000)}) {
+            MorphologyOptions o;
+            o.border = border;
+            o.rx = 1;
+            o.ry = 0;
+            o.rz = huge;
+            MorphologyOptions atSize = o;
+            atSize.rz = g.depth();
+            ASSERT_EQ(dilate(g, o), naiveMorph(g, false, atSize)) << toString(border) << " rz " << huge;
+            ASSERT_EQ(erode(g, o), naiveMorph(g, true, atSize)) << toString(border) << " rz " << huge;
+            o.rz = 2;
+            o.rx = o.ry = huge;
+            atSize = o;
+            atSize.rx = g.width();
+            atSize.ry = g.height();
+            ASSERT_EQ(dilate(g, o), naiveMorph(g, false, atSize)) << toString(border) << " rx ry " << huge;
+        }
+}
+
 TEST(MorphologyTest, ClosingContainsAndOpeningIsContainedInVoxelizedMeshes) {
     for (const char* name : {"bunny00", "knot1"}) {
         VOXFX_REQUIRE_DATA(std::string("meshes/") + name + ".off");

@@ -14,6 +14,7 @@
 #include "voxfx/image_io.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/particles.hpp"
+#include "voxfx/particles_io.hpp"
 #include "voxfx/voxelize.hpp"
 
 namespace voxfx {

@@ -322,6 +322,13 @@ inline Mesh makeUvSphere(const Vec3d& center, double radius, int rings, int segm
 
 /// Exact enclosed volume of a closed, consistently oriented mesh (divergence theorem: the sum of
 /// signed tetrahedra from the origin), in double. Positive for outward orientation.
+/// The mesh with every triangle's corner order reversed: its orientation flipped.
+inline Mesh flippedMesh(Mesh mesh) {
+    for (std::size_t t = 0; t + 2 < mesh.indices.size(); t += 3)
+        std::swap(mesh.indices[t + 1], mesh.indices[t + 2]);
+    return mesh;
+}
+
 inline double meshVolume(const MeshView& mesh) {
     double v = 0;
     for (std::size_t t = 0; t < mesh.triangleCount; ++t) {

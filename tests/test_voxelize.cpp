@@ -52,6 +52,31 @@ ParityCheck againstRayParity(const Mesh& mesh, const VoxelGrid& g, Centres centr
     return r;
 }
 
+TEST(VoxelizeTest, CubeFitGivesAnNCubedGridOfCubicCellsCentredOnTheBounds) {
+    const Box3d bounds{{1, -2, 0.5}, {4, -1.5, 1.5}}; // extents 3, 0.5, 1
+    FitOptions fo;
+    fo.resolution = 12;
+    fo.cube = true;
+    for (const int64_t margin : {0, 2}) {
+        fo.marginCells = margin;
+        const Frame f = fitFrame(bounds, fo);
+        const int64_t n = 12 + 2 * margin;
+        EXPECT_EQ(f.width(), n);
+        EXPECT_EQ(f.height(), n);
+        EXPECT_EQ(f.depth(), n);
+        const Vec3d cell = f.cellSize();
+        for (int a = 0; a < 3; ++a) {
+            EXPECT_DOUBLE_EQ(cell[a], 3.0 / 12);
+            EXPECT_DOUBLE_EQ(f.box().lo[a] + f.box().hi[a], bounds.lo[a] + bounds.hi[a]); // centred
+        }
+        // The longest axis is filled exactly, less the margins.
+        EXPECT_DOUBLE_EQ(f.box().lo.x + double(margin) * cell.x, 1.0);
+    }
+    fo.resolution = 0;
+    fo.voxelSize = 0.5;
+    EXPECT_THROW(fitFrame(bounds, fo), Error);
+}
+
 TEST(VoxelizeTest, BoxInsideCellsGivesHandCountedVoxels) {
     // Faces at 1.3 and 8.7: centres 1.5 .. 8.5 inside (8 per axis); the surface touches cells
     // 1 .. 8 along each axis, so the conservative shell is 8^3 - 6^3.
@@ -282,25 +307,42 @@ TEST(VoxelizeTest, LocalSlicingSpendsAllSlicesOnEachColumnsGeometry) {
     EXPECT_GT(r.inside, 1000);
 }
 
-TEST(VoxelizeTest, RobustFillsRecoverTheSolidOfAMeshWithASmallHole) {
-    // A finely tessellated torus (triangles ~0.3 cells) with one triangle removed: the hole is
-    // narrower than a cell, so the conservative surface still seals it and flood fill recovers
-    // the closed torus's solid-conservative cells (CGAL: centres inside, or closed box touching
-    // the closed torus); the vote outvotes the one bad column per axis and recovers its solid
-    // (brute-force ray parity at the centres).
-    const Mesh closed = test::makeTorus({8.1, 7.9, 8.05}, 5.0, 2.2, 96, 48);
-    Mesh holey = closed;
-    holey.indices.erase(holey.indices.begin() + 3 * 1000, holey.indices.begin() + 3 * 1001);
+// A finely tessellated torus (triangles ~0.3 cells), the same with one triangle removed (a hole
+// narrower than a cell), and CGAL's solid-conservative cells of the closed one (centres inside,
+// or closed box touching it) with the cells too close to call.
+struct HoleyTorus {
+    Mesh closed, holey;
+    test::WorldGrid solidCons, ignore;
+    bool oracleClosed = false;
+};
+
+HoleyTorus holeyTorus() {
+    HoleyTorus t;
+    t.closed = test::makeTorus({8.1, 7.9, 8.05}, 5.0, 2.2, 96, 48);
+    t.holey = t.closed;
+    t.holey.indices.erase(t.holey.indices.begin() + 3 * 1000, t.holey.indices.begin() + 3 * 1001);
     const VoxelGrid probe{unitFrame(), {}};
     const test::CellGeometry g = test::CellGeometry::of(probe);
-    const test::SolidOracle inside = test::oracleSolid(closed.view(), g);
-    ASSERT_TRUE(inside.closed);
-    const test::ConservativeOracle touching = test::oracleConservative(closed.view(), g, 2e-9);
-    test::WorldGrid solidCons = inside.inside, ignore = touching.near;
-    for (size_t c = 0; c < solidCons.cells.size(); ++c) {
-        solidCons.cells[c] |= touching.cells.cells[c];
-        ignore.cells[c] |= inside.leftOut.cells[c] && !touching.cells.cells[c];
+    const test::SolidOracle inside = test::oracleSolid(t.closed.view(), g);
+    t.oracleClosed = inside.closed;
+    const test::ConservativeOracle touching = test::oracleConservative(t.closed.view(), g, 2e-9);
+    t.solidCons = inside.inside;
+    t.ignore = touching.near;
+    for (size_t c = 0; c < t.solidCons.cells.size(); ++c) {
+        t.solidCons.cells[c] |= touching.cells.cells[c];
+        t.ignore.cells[c] |= inside.leftOut.cells[c] && !touching.cells.cells[c];
     }
+    return t;
+}
+
+TEST(VoxelizeTest, RobustFillsRecoverTheSolidOfAMeshWithASmallHole) {
+    // The hole of holeyTorus() is narrower than a cell, so the conservative surface still seals
+    // it and flood fill recovers the closed torus's solid-conservative cells; the vote outvotes
+    // the one bad column per axis and recovers its solid (brute-force ray parity at the centres).
+    const HoleyTorus t = holeyTorus();
+    ASSERT_TRUE(t.oracleClosed);
+    const Mesh &closed = t.closed, &holey = t.holey;
+    const test::WorldGrid &solidCons = t.solidCons, &ignore = t.ignore;
     VoxelizeOptions o;
     o.mode = VoxelizeMode::SolidConservative;
     o.fill = Fill::Flood;
@@ -316,6 +358,38 @@ TEST(VoxelizeTest, RobustFillsRecoverTheSolidOfAMeshWithASmallHole) {
         againstRayParity(closed, voxelize(holey.view(), unitFrame(), o), Centres::WorldIndex);
     EXPECT_EQ(r.mismatches, 0) << "vote";
     EXPECT_GT(r.inside, 100);
+}
+
+TEST(VoxelizeTest, AutoFillIsParityForAClosedMeshAndFloodForAnOpenOneAndSaysWhy) {
+    // holeyTorus(): removing one triangle leaves its three edges used once each (3 boundary
+    // edges). Auto must give CGAL's solid-conservative cells of the closed torus for both (parity
+    // on the closed one, flood on the holey one), and report so.
+    const HoleyTorus torus = holeyTorus();
+    ASSERT_TRUE(torus.oracleClosed);
+    VoxelizeReport report;
+    VoxelizeOptions o{.mode = VoxelizeMode::SolidConservative, .fill = Fill::Auto, .report = &report};
+    test::GridDiff d = test::compareGrids(test::toWorldGrid(voxelize(torus.holey.view(), unitFrame(), o)),
+                                          torus.solidCons, &torus.ignore);
+    EXPECT_TRUE(d.equal()) << "holey: " << d;
+    EXPECT_EQ(report.fill, Fill::Flood);
+    EXPECT_TRUE(report.topologyAnalyzed);
+    EXPECT_EQ(report.topology.boundaryEdges, 3u);
+    EXPECT_EQ(report.fillNote.rfind(
+                  "not closed (3 boundary, 0 non-manifold, 0 misoriented edges): filled by flood", 0),
+              0u)
+        << report.fillNote;
+
+    d = test::compareGrids(test::toWorldGrid(voxelize(torus.closed.view(), unitFrame(), o)), torus.solidCons,
+                           &torus.ignore);
+    EXPECT_TRUE(d.equal()) << "closed: " << d;
+    EXPECT_EQ(report.fill, Fill::Parity);
+    EXPECT_TRUE(report.fillNote.empty()) << report.fillNote;
+
+    // A surface mode needs no fill: nothing is analyzed.
+    o.mode = VoxelizeMode::Surface;
+    voxelize(torus.holey.view(), unitFrame(), o);
+    EXPECT_EQ(report.fill, Fill::Parity);
+    EXPECT_FALSE(report.topologyAnalyzed);
 }
 
 TEST(VoxelizeTest, WindingGivesTheUnionAndParityTheSymmetricDifferenceOfOverlaps) {

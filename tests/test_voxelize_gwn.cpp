@@ -1,15 +1,19 @@
-// Fill::Gwn (generalized winding number >= 0.5 at cell centres): the same solid as parity on
-// closed meshes away from the surface, and the closed solid back where a hole wider than a cell
-// lets the flood in. Oracles: the parity fill (itself checked against CGAL in
+// Fill::Gwn (generalized winding number |w| >= 0.5 at cell centres): the same solid as parity on
+// closed meshes away from the surface, oriented outward or inward, and the closed solid back
+// where a hole wider than a cell lets the flood in. Oracles: the parity fill (itself checked against CGAL in
 // test_voxelize_oracle.cpp) of the closed mesh, the conservative surface for "away from", and
 // the exact winding number summed over every triangle (voxfx::windingNumber).
 #include <bit>
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "test_util.hpp"
 #include "voxfx/contains.hpp"
+#include "voxfx/mesh_io.hpp"
 #include "voxfx/voxelize.hpp"
 
 namespace voxfx {
@@ -76,6 +80,39 @@ TEST(VoxelizeGwnTest, OnAClosedMeshGwnEqualsParityAwayFromTheSurface) {
     }
 }
 
+// CGAL's beam, tetrahedron and ellipe0.003 are oriented inward throughout, as is a flipped bunny
+// and a flipped torus: w = -1 inside, and the fill must still be parity's (which ignores
+// orientation) away from the surface. Before |w| it was empty.
+TEST(VoxelizeGwnTest, OnMeshesOrientedInwardGwnEqualsParityAwayFromTheSurface) {
+    std::vector<std::pair<std::string, Mesh>> meshes;
+    for (const char* name :
+         {"meshes/beam.off", "meshes/tetrahedron.off", "meshes/ellipe0.003.off", "meshes/bunny00.off"}) {
+        VOXFX_REQUIRE_DATA(name);
+        meshes.emplace_back(name, loadMesh(test::dataPath(name)));
+    }
+    meshes.emplace_back("torus", test::makeTorus({0.1, -0.2, 0.05}, 3, 1.1, 24, 12));
+    for (auto& [name, mesh] : meshes) {
+        if (test::meshVolume(mesh.view()) > 0) mesh = test::flippedMesh(mesh);
+        ASSERT_LT(test::meshVolume(mesh.view()), 0) << name;
+        const Frame frame = gwnTestFrame(mesh, 32);
+        const VoxelGrid parity = gwnTestRun(mesh, frame, VoxelizeMode::Solid, Fill::Parity);
+        const VoxelGrid gwn = gwnTestRun(mesh, frame, VoxelizeMode::Solid, Fill::Gwn);
+        const VoxelGrid surface = gwnTestRun(mesh, frame, VoxelizeMode::Conservative, Fill::Parity);
+        int64_t insideCount = 0, differ = 0;
+        for (int64_t y = 0; y < frame.height(); ++y)
+            for (int64_t x = 0; x < frame.width(); ++x)
+                for (int64_t z = 0; z < frame.depth(); ++z) {
+                    if (surface.bits.get(x, y, z)) continue;
+                    insideCount += parity.bits.get(x, y, z);
+                    differ += parity.bits.get(x, y, z) != gwn.bits.get(x, y, z);
+                }
+        EXPECT_GT(insideCount, 100) << name;
+        EXPECT_EQ(differ, 0) << name;
+        // The winding fill (nonzero crossing count) agrees on every cell, as on outward meshes.
+        EXPECT_EQ(gwnTestRun(mesh, frame, VoxelizeMode::Solid, Fill::Winding).bits, gwn.bits) << name;
+    }
+}
+
 TEST(VoxelizeGwnTest, GwnRecoversTheSolidThroughAHoleWiderThanACellWhereTheFloodLeaks) {
     // A UV sphere 32 cells across without its top cap (the triangles above z = 0.9 r): the hole's
     // rim is 0.38 r across, about 12 cells. Parity of the closed sphere is the reference.
@@ -138,7 +175,7 @@ TEST(VoxelizeGwnTest, OnAnOpenMeshGwnFollowsTheExactWindingNumberAlongEveryAxis)
         for (int64_t y = 0; y < frame.height(); ++y)
             for (int64_t x = 0; x < frame.width(); ++x)
                 for (int64_t z = 0; z < frame.depth(); ++z) {
-                    const double w = windingNumber(open.view(), frame.cellCenter(x, y, z));
+                    const double w = std::abs(windingNumber(open.view(), frame.cellCenter(x, y, z)));
                     if (std::abs(w - 0.5) < 0.1) continue;
                     ++compared;
                     inside += w >= 0.5;
@@ -173,7 +210,7 @@ TEST(VoxelizeGwnTest, AnOpenSheetInsideOneBlockFillsNothing) {
         for (int64_t y = 0; y < frame.height(); ++y)
             for (int64_t x = 0; x < frame.width(); ++x)
                 for (int64_t z = 0; z < frame.depth(); ++z) {
-                    const double w = windingNumber(sheet.view(), frame.cellCenter(x, y, z));
+                    const double w = std::abs(windingNumber(sheet.view(), frame.cellCenter(x, y, z)));
                     if (std::abs(w - 0.5) < 0.1) continue;
                     ++compared;
                     differ += gwn.bits.get(x, y, z) != (w >= 0.5);

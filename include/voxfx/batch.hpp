@@ -35,13 +35,14 @@ const char* gridFormatExtension(GridFormat format);
 /// Reads a manifest: one mesh path per line, relative to the manifest's folder (absolute paths
 /// stay); '#' starts a comment line, blank lines and surrounding whitespace are ignored. Each job
 /// writes `outDir`/<mesh file stem><extension of `format`>. Throws voxfx::Error naming the
-/// manifest for an unreadable file and, before any work, for two meshes with the same stem
-/// (their outputs would collide), naming both lines.
+/// manifest for an unreadable file, a folder, a mesh file (.off .obj .ply .stl .gltf .glb) given
+/// as the manifest, a NUL byte in a path or a line (a binary file), and, before any work, for two
+/// meshes with the same stem (their outputs would collide), naming both lines.
 std::vector<BatchJob> readBatchManifest(const std::string& manifestPath, const std::string& outDir,
                                         GridFormat format);
 
 /// The jobs for a list of mesh paths (used as given), with the same output naming and the same
-/// duplicate-stem check as readBatchManifest.
+/// duplicate-stem and NUL-byte checks as readBatchManifest.
 std::vector<BatchJob> batchJobs(const std::vector<std::string>& meshPaths, const std::string& outDir,
                                 GridFormat format);
 
@@ -68,14 +69,22 @@ public:
 
 struct BatchOptions {
     FitOptions fit;                    ///< as for voxfx voxelize (default: resolution 256)
-    VoxelizeOptions voxelize;          ///< mode, fill, slicing; its `threads` and `progress` are ignored
-    bool autoFill = true;              ///< parity for closed meshes, flood for open ones (ignores .fill)
+    VoxelizeOptions voxelize;          ///< mode, fill (default Auto), slicing; `threads`, `progress` ignored
     GridWriteOptions write;            ///< vdbFloat, grid name
     int threads = 0;                   ///< worker threads for the whole batch, 0 = all
     bool nested = false;               ///< also spread each voxelization over the workers (else 1 each)
     bool skipExisting = true;          ///< an existing output is not redone (status Skipped)
     BatchProgress* progress = nullptr; ///< not owned
-    BatchOptions() { fit.resolution = 256; }
+    /// Cancellation (not owned): polled before each mesh and between the tiles of each
+    /// voxelization, from worker threads and possibly from several at once (update() must be
+    /// thread-safe), with the share of jobs finished. Once it returns false no mesh starts, the
+    /// voxelizations under way stop, and runBatch throws voxfx::Error when the workers are done;
+    /// outputs already written stay (a rerun skips them), the report is not made.
+    Progress* cancel = nullptr;
+    BatchOptions() {
+        fit.resolution = 256;
+        voxelize.fill = Fill::Auto;
+    }
 };
 
 struct BatchSummary {
@@ -92,10 +101,6 @@ struct BatchSummary {
 /// voxfx::Error only for unusable options (e.g. no resolution, voxel size or dims). The summary
 /// lists the jobs in the order given, whatever the order they finished in.
 BatchSummary runBatch(const std::vector<BatchJob>& jobs, const BatchOptions& options);
-
-/// The inside fill `voxfx voxelize --fill auto` uses for this mesh: parity when it is closed,
-/// flood otherwise (for the surface and conservative modes the fill is unused: parity).
-Fill autoFillFor(const MeshView& mesh, VoxelizeMode mode);
 
 /// The batch report as JSON text, the one definition of its shape: {"ok", "skipped", "errors",
 /// "seconds", "ok_per_second" (okPerSecond()), "jobs": [batchResultJson of each result, in order]}.

@@ -22,10 +22,13 @@
 //            (points in surface cells) * (triangles per column).
 //   Winding  the generalized winding number (Jacobson et al. 2013): the sum of the signed solid
 //            angles of the triangles seen from the point (Van Oosterom-Strackee), / 4 pi,
-//            inside when >= 0.5. Robust to holes and self-intersections; needs consistent
-//            orientation. Fast approximation after Barill et al. 2018: a bounding-volume
-//            hierarchy over the triangles, far clusters replaced by their dipole (area-weighted
-//            normal at the area-weighted centroid), near ones summed exactly (windingBeta; 0
+//            inside when |w| >= 0.5. Robust to holes and self-intersections; needs orientation
+//            consistent within each closed part, either way: a mesh oriented inward has w = -1
+//            inside (three of CGAL's closed meshes are), and a hollow part's inner shell, oriented
+//            against its outer one, still leaves the cavity at w = 0. (Orienting each connected
+//            part by its signed volume instead would fill such cavities.) Fast approximation after Barill et
+//            al. 2018: a bounding-volume hierarchy over the triangles, far clusters replaced by their dipole
+//            (area-weighted normal at the area-weighted centroid), near ones summed exactly (windingBeta; 0
 //            sums every triangle, cost points * triangles).
 //   Flood    cells the flood from the grid border cannot reach through the conservative
 //            surface (Fill::Flood), at the grid resolution: robust to holes narrower than a
@@ -45,6 +48,7 @@
 #include "voxfx/enum_names.hpp"
 #include "voxfx/math.hpp"
 #include "voxfx/mesh.hpp"
+#include "voxfx/parallel.hpp"
 
 namespace voxfx {
 
@@ -69,6 +73,10 @@ struct ContainsOptions {
     double windingBeta = 3.0;
     /// Worker threads, 0 = all. Results are identical for every value.
     int threads = 0;
+    /// Polled between the tiles of the voxelizations that build a PointClassifier and, in
+    /// contains(), between chunks of points (see classify()); returning false cancels (voxfx::Error).
+    /// Not owned, and not kept by the PointClassifier (classify() takes its own).
+    Progress* progress = nullptr;
 };
 
 /// Counters of the last classify() call, for tests and benchmarks.
@@ -89,8 +97,11 @@ public:
     PointClassifier& operator=(PointClassifier&&) noexcept;
 
     /// out[i] = 1 when points[i] is inside, else 0. Sizes must match (voxfx::Error otherwise).
-    void classify(std::span<const Vec3d> points, std::span<uint8_t> out,
-                  ContainsStats* stats = nullptr) const;
+    /// `progress`, when given, is polled between chunks of about a million points (65,536 for the
+    /// winding method; fraction: the share of points done); returning false cancels with
+    /// voxfx::Error, `out` then partly written.
+    void classify(std::span<const Vec3d> points, std::span<uint8_t> out, ContainsStats* stats = nullptr,
+                  Progress* progress = nullptr) const;
     /// One point (no worker threads).
     bool inside(const Vec3d& p) const;
     /// The acceleration grid's resolution (cells along the longest side).

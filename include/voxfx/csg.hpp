@@ -63,6 +63,9 @@ void csg(const BitGrid& a, const BitGrid& b, CsgOp op, BitGrid& out);
 /// CSG of two grids that must lie in the same frame (Frame::sameGrid: same camera, box, sizes and
 /// slicing); otherwise throws voxfx::Error saying how the frames differ. The result keeps a's frame.
 VoxelGrid csg(const VoxelGrid& a, const VoxelGrid& b, CsgOp op);
+/// a op b on the GPU (voxfx/device.hpp), bit for bit the CPU's: grids of one size (voxfx::Error
+/// otherwise); voxfx::Error when no GPU can be used.
+CudaGrid csg(const CudaGrid& a, const CudaGrid& b, CsgOp op);
 
 /// A node of a CSG expression: a mesh (leaf) or an operation over one or more nodes.
 struct CsgNode {
@@ -93,6 +96,7 @@ struct CsgMesh {
     std::string path; ///< as named in the expression
     MeshView mesh;    ///< not owned
     Fill fill = Fill::Parity;
+    VoxelizeReport* report = nullptr; ///< receives what voxelize() decided for this mesh; not owned
 };
 
 /// Voxelizes every mesh of `node` as a solid (VoxelizeMode::Solid with each mesh's fill; other

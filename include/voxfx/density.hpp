@@ -170,17 +170,4 @@ Frame densityFrame(const Frame& fine, int level);
 /// inverse transpose), then normalized. Zero stays zero.
 Vec3d worldFromGridNormal(const Frame& frame, const Vec3d& gridNormal);
 
-/// Writes a density map placed in the world by `fineFrame` (the frame of the grid it was computed
-/// from; orthographic and uniform), by extension:
-///   .nrrd  counts as uchar (levels 1-2) or ushort (levels 3-5), x fastest in world axes,
-///          "space origin" = centre of density cell (0, 0, 0), directions = density cell sizes;
-///   .vdb   a FloatGrid "density" (fog volume) holding the occupancy count / 8^L, active where
-///          the count is nonzero, index (i, j, k) at the density cell's centre.
-/// Atomic (temporary file, then rename). Throws voxfx::Error for other extensions or I/O errors.
-void writeDensity(const DensityGrid& density, const Frame& fineFrame, const std::string& path);
-
-/// Writes the outward normals of every density cell as a NRRD of 3-vectors of float (world
-/// directions, x fastest; zero where the gradient vanishes), placed like writeDensity's .nrrd.
-void writeDensityNormalsNrrd(const DensityGrid& density, const Frame& fineFrame, const std::string& path);
-
 } // namespace voxfx

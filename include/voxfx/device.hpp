@@ -28,10 +28,10 @@
 namespace voxfx {
 
 enum class VoxelizeMode : uint8_t;
-enum class CsgOp : uint8_t;
-enum class MorphOp : uint8_t;
-struct MorphologyOptions;
 class CudaGrid;
+namespace detail {
+struct CudaGridAccess;
+}
 
 /// Cpu: always the CPU. Cuda: the GPU, else the CPU with a note saying why. Auto: the GPU when
 /// one can take the job, else the CPU without a note.
@@ -87,7 +87,8 @@ private:
 };
 
 /// A BitGrid in GPU memory (the same layout), for chains of the toolkit's operations without
-/// transfers between them. The operations below give the CPU's results bit for bit. Calls have
+/// transfers between them: csg (csg.hpp), morphology (morphology.hpp) and count give the CPU's
+/// results bit for bit. Calls have
 /// finished on the GPU when they return; a CudaGrid may be used from one thread at a time.
 class CudaGrid {
 public:
@@ -114,16 +115,10 @@ public:
 
 private:
     friend class CudaVoxelizer;
-    friend CudaGrid csg(const CudaGrid&, const CudaGrid&, CsgOp);
-    friend CudaGrid morphology(const CudaGrid&, MorphOp, const MorphologyOptions&);
+    friend struct detail::CudaGridAccess; // the grid layer's operations (csg.hpp, morphology.hpp)
     void* handle_ = nullptr;
     int64_t w_ = 0, h_ = 0, d_ = 0;
     double kernelMs_ = 0;
 };
-
-/// csg.hpp's csg on the GPU: grids of one size (voxfx::Error otherwise).
-CudaGrid csg(const CudaGrid& a, const CudaGrid& b, CsgOp op);
-/// morphology.hpp's morphology on the GPU (options.threads is ignored).
-CudaGrid morphology(const CudaGrid& grid, MorphOp op, const MorphologyOptions& options);
 
 } // namespace voxfx

@@ -186,6 +186,13 @@ public:
     DepthToSlice depthToSlice(int64_t column) const {
         return local_.empty() ? uniform_ : local_[static_cast<std::size_t>(column)];
     }
+    /// The same grid moved by `offset` (world units): an axis-aligned orthographic frame whose box
+    /// is box() + offset, with the same dimensions, axis and slicing (local slicing tables are
+    /// in grid units, so they carry over). For meshes kept near the origin for precision and
+    /// placed far from it (the Python module's float64 input). Cell sizes are recomputed from
+    /// the moved box, so they may differ from cellSize() in the last bits. Throws voxfx::Error
+    /// for perspective or oriented frames and non-finite offsets.
+    Frame translated(const Vec3d& offset) const;
     /// True when both frames describe the same grid (same camera, dimensions and slicing).
     bool sameGrid(const Frame& o) const;
 

@@ -1,5 +1,6 @@
 // voxfx — reading and writing voxel grids: binvox, OpenVDB (.vdb), NRRD (.nrrd), and a mesh of
-// the filled voxels (.ply, .obj) to look at in any mesh viewer.
+// the filled voxels (.ply, .obj) to look at in any mesh viewer; writing density maps (NRRD, VDB);
+// and the grid tools' input, "a grid file or a mesh to voxelize" (loadOrVoxelize).
 //
 // World placement: every format carries the grid's world box so tools line voxels up with the
 // source mesh. Voxel (i, j, k) (indices along world x, y, z) covers
@@ -28,8 +29,10 @@
 
 #include <string>
 
+#include "voxfx/density.hpp"
 #include "voxfx/enum_names.hpp"
 #include "voxfx/voxel_grid.hpp"
+#include "voxfx/voxelize.hpp"
 
 namespace voxfx {
 
@@ -60,5 +63,32 @@ void writeGrid(const VoxelGrid& grid, const std::string& path, const GridWriteOp
 /// diagonal space directions, read as world coordinates whatever the named space.
 /// .ply/.obj are write-only.
 VoxelGrid readGrid(const std::string& path);
+
+// ---- Density maps (voxfx/density.hpp) ----
+
+/// Writes a density map placed in the world by `fineFrame` (the frame of the grid it was computed
+/// from; orthographic and uniform), by extension:
+///   .nrrd  counts as uchar (levels 1-2) or ushort (levels 3-5), x fastest in world axes,
+///          "space origin" = centre of density cell (0, 0, 0), directions = density cell sizes;
+///   .vdb   a FloatGrid "density" (fog volume) holding the occupancy count / 8^L, active where
+///          the count is nonzero, index (i, j, k) at the density cell's centre.
+/// Atomic (temporary file, then rename). Throws voxfx::Error for other extensions or I/O errors.
+void writeDensity(const DensityGrid& density, const Frame& fineFrame, const std::string& path);
+
+/// Writes the outward normals of every density cell as a NRRD of 3-vectors of float (world
+/// directions, x fastest; zero where the gradient vanishes), placed like writeDensity's .nrrd.
+void writeDensityNormalsNrrd(const DensityGrid& density, const Frame& fineFrame, const std::string& path);
+
+// ---- A grid or a mesh ----
+
+/// True for the extensions readGrid reads (.binvox .vdb .nrrd, any case).
+bool isGridFile(const std::string& path);
+
+/// For tools that accept "a grid or a mesh": a grid file (isGridFile) is read with readGrid;
+/// any other file is loaded as a mesh, fitted with `fit` and voxelized with `options` (with
+/// Fill::Auto, voxelize() picks parity or flood). `note`, if given, receives "<path>: <why>" when
+/// Auto chose flood (VoxelizeReport::fillNote), else it is cleared. Throws voxfx::Error.
+VoxelGrid loadOrVoxelize(const std::string& path, const FitOptions& fit, const VoxelizeOptions& options = {},
+                         std::string* note = nullptr);
 
 } // namespace voxfx

@@ -6,11 +6,13 @@
 // sliced grid: cell (x, y, s) is the box [x, x+1) x [y, y+1) x [s, s+1), so the whole grid is
 // [0, W] x [0, H] x [0, D]. World coordinates go through Frame::gridFromWorld. For perspective
 // frames a column already is a ray from the light or eye, so countColumnRange is the lookup.
-// Thread-safety: every query is read-only and may run concurrently on one grid; filledVolume
-// uses worker threads, the per-column and per-segment lookups run on the calling thread.
+// Thread-safety: every query is read-only and may run concurrently on one grid; filledVolume,
+// filledCellIndices, filledCellCenters and filledAt use worker threads, the per-column and
+// per-segment lookups run on the calling thread.
 #pragma once
 
 #include <cstdint>
+#include <span>
 
 #include "voxfx/bitgrid.hpp"
 #include "voxfx/math.hpp"
@@ -36,6 +38,29 @@ int64_t countColumnRange(const uint64_t* words, int64_t depth, int64_t s0, int64
 ///                                  / (3 W H).
 /// Cost: one pass of popcounts over the grid (perspective: per filled cell). Empty grid: 0.
 double filledVolume(const VoxelGrid& grid);
+
+/// World-axis indices (i, j, k) (cells along x, y, z) of every filled cell of an axis-aligned
+/// orthographic, uniformly sliced grid, in the order of i, then j, then k: the C order of an
+/// array indexed [x, y, z], as numpy.argwhere lists them. Cell n goes to out[3n], out[3n + 1],
+/// out[3n + 2]; `out` holds exactly 3 * grid.bits.count() values (sizes before data: count
+/// first). Cost: one popcount pass and one pass over the filled cells' words, over worker
+/// threads (`threads`, 0 = all; the result does not depend on it); a grid sliced along x or y is
+/// resliced along z first (one transpose pass, a copy of the grid). No dense array. Throws
+/// voxfx::Error for perspective, oriented or locally sliced grids, more than 2^31 - 1 cells along
+/// an axis, or a size mismatch.
+void filledCellIndices(const VoxelGrid& grid, std::span<int32_t> out, int threads = 0);
+
+/// World-space centres of the same cells in the same order: box.lo + (index + 0.5) * cellSize()
+/// per axis, computed in double (then rounded once for float). Same cost, sizes and errors.
+void filledCellCenters(const VoxelGrid& grid, std::span<double> out, int threads = 0);
+void filledCellCenters(const VoxelGrid& grid, std::span<float> out, int threads = 0);
+
+/// out[i] = 1 when the cell holding points[i] is filled: cells are half-open (a point on the
+/// face between two cells belongs to the one above), points outside the grid or not finite give
+/// 0. Any orthographic, axis-aligned grid (uniform or local slicing). Sizes must match. Cost:
+/// one lookup per point, over worker threads. Throws voxfx::Error for perspective or oriented
+/// grids or a size mismatch.
+void filledAt(const VoxelGrid& grid, std::span<const Vec3d> points, std::span<uint8_t> out, int threads = 0);
 
 /// What a segment crosses. Lengths are in the units of the space the segment was given in.
 struct SegmentHits {

@@ -1,4 +1,5 @@
-// voxfx — loading triangle meshes: OFF, OBJ, PLY, STL, glTF 2.0 (.gltf/.glb) and what Assimp reads.
+// voxfx — loading triangle meshes: OFF, OBJ, PLY, STL, glTF 2.0 (.gltf/.glb) and what Assimp reads;
+// writing the surface meshes that marching cubes extracts (voxfx/surface_mesh.hpp).
 // Thread-safety: loads of different (or the same) files may run concurrently and writes of
 // different paths too; readers run on the calling thread.
 #pragma once
@@ -7,6 +8,7 @@
 #include <string>
 
 #include "voxfx/mesh.hpp"
+#include "voxfx/surface_mesh.hpp"
 
 namespace voxfx {
 
@@ -24,5 +26,9 @@ struct MeshLoadReport {
 /// malformed or truncated content (with the line or byte offset where known), NaN/Inf
 /// coordinates, out-of-range indices, and a file without any triangle.
 Mesh loadMesh(const std::string& path, MeshLoadReport* report = nullptr);
+
+/// Writes the mesh by extension: .ply (binary little-endian, positions and normals, triangles
+/// as uchar-counted int lists) or .obj (v, vn and f a//a lines). Atomic. Throws voxfx::Error.
+void writeSurfaceMesh(const SurfaceMesh& mesh, const std::string& path);
 
 } // namespace voxfx

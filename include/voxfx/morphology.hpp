@@ -24,6 +24,7 @@
 #include <string>
 
 #include "voxfx/bitgrid.hpp"
+#include "voxfx/device.hpp"
 #include "voxfx/enum_names.hpp"
 #include "voxfx/math.hpp"
 #include "voxfx/voxel_grid.hpp"
@@ -88,5 +89,9 @@ inline BitGrid closing(const BitGrid& g, const MorphologyOptions& o = {}) {
 /// frame's slicing axis); options.rx/ry/rz are ignored. The frame is kept.
 VoxelGrid morphology(const VoxelGrid& grid, MorphOp op, const Vec3i& worldRadii,
                      const MorphologyOptions& options = {});
+
+/// morphology on the GPU (voxfx/device.hpp), bit for bit the CPU's (options.threads is ignored);
+/// voxfx::Error when no GPU can be used.
+CudaGrid morphology(const CudaGrid& grid, MorphOp op, const MorphologyOptions& options);
 
 } // namespace voxfx

@@ -115,10 +115,6 @@ void sortParticles(Particles& particles, const ParticleCollider& collider);
 /// Total mechanical energy per unit mass, sum over particles of 1/2 |v|^2 - gravity . p (double).
 double particleEnergy(const Particles& particles, const Vec3d& gravity);
 
-/// Writes positions (and velocities) by extension: .ply (binary little-endian vertices with
-/// x y z vx vy vz floats) or .csv (header "x,y,z,vx,vy,vz"). Atomic. Throws voxfx::Error.
-void writeParticles(const Particles& particles, const std::string& path);
-
 struct ParticleImageOptions {
     int64_t width = 800;         ///< image width in pixels; the height follows the grid's aspect ratio
     float particleRadius = 1.5f; ///< in pixels

@@ -38,7 +38,6 @@
 
 #include <array>
 #include <cstdint>
-#include <optional>
 #include <vector>
 
 #include "voxfx/frame.hpp"
@@ -55,9 +54,10 @@ struct SdfOptions {
     /// Every voxel active and exact (see the file comment); the background is then the length
     /// of the grid's diagonal, more than any distance in it.
     bool full = false;
-    /// The inside test behind the sign (Fill::Parity, Gwn, Flood, Vote, Winding). Empty: parity
-    /// for closed meshes (voxfx::analyzeTopology), gwn otherwise.
-    std::optional<Fill> fill;
+    /// The inside test behind the sign (Fill::Parity, Gwn, Flood, Vote, Winding). Auto: parity for
+    /// closed meshes (voxfx::analyzeTopology), gwn otherwise (not flood, as voxelize()'s Auto: the
+    /// distance is exact, and the gwn inside closes holes without a voxel's tolerance).
+    Fill fill = Fill::Auto;
     /// Edge of the bricks the grid is processed in, in voxels (a positive multiple of 8): each
     /// brick voxelizes the surface of its own triangles, and bricks run in parallel. Results are
     /// identical for every value; memory per brick in flight ~ (brickSize + 2 band)^3 / 8 bytes.

@@ -71,8 +71,4 @@ SurfaceMesh extractSurface(const VoxelGrid& grid, const SurfaceOptions& options 
 /// Marching cubes over an already computed density map of a grid in `fineFrame`.
 SurfaceMesh extractSurface(const DensityGrid& density, const Frame& fineFrame, float iso = 0.5f);
 
-/// Writes the mesh by extension: .ply (binary little-endian, positions and normals, triangles
-/// as uchar-counted int lists) or .obj (v, vn and f a//a lines). Atomic. Throws voxfx::Error.
-void writeSurfaceMesh(const SurfaceMesh& mesh, const std::string& path);
-
 } // namespace voxfx

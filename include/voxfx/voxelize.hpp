@@ -26,10 +26,11 @@
 //                       holes and bad triangles (an error must fool two of three axes), costs 3×.
 //   Fill::Winding       nonzero winding number from per-column sorted front/back fragments: the
 //                       union of overlapping closed parts (needs consistent orientation).
-//   Fill::Gwn           generalized winding number >= 0.5 at the cell centre (Jacobson et al.
+//   Fill::Gwn           generalized winding number |w| >= 0.5 at the cell centre (Jacobson et al.
 //                       2013), fast approximation after Barill et al. 2018 (the evaluator of
 //                       contains()' winding method, beta 2). Closes holes wider than a cell that
-//                       let the flood in; needs consistent orientation; evaluates near boundary
+//                       let the flood in; needs orientation consistent within each closed part,
+//                       outward or inward (as contains()' winding method); evaluates near boundary
 //                       edges, where it is near 0.5, and a few centres per block (voxfx/contains.hpp).
 // Thread-safety: calls may run concurrently on shared const meshes (no global state); each call
 // spreads its tiles over worker threads (`threads`); results do not depend on their number.
@@ -54,25 +55,41 @@ inline constexpr EnumName<VoxelizeMode> kVoxelizeModeNames[] = {
     {"solid", VoxelizeMode::Solid},
     {"solid-conservative", VoxelizeMode::SolidConservative},
     {"interior", VoxelizeMode::Interior}};
-enum class Fill : uint8_t { Parity, Flood, Vote, Winding, Gwn };
-inline constexpr EnumName<Fill> kFillNames[] = {{"parity", Fill::Parity},
-                                                {"flood", Fill::Flood},
-                                                {"vote", Fill::Vote},
-                                                {"winding", Fill::Winding},
-                                                {"gwn", Fill::Gwn}};
+/// How the inside is decided (see the file comment); Auto: Parity for a closed mesh, Flood for
+/// any other (VoxelizeReport says which and why).
+enum class Fill : uint8_t { Parity, Flood, Vote, Winding, Gwn, Auto };
+inline constexpr EnumName<Fill> kFillNames[] = {{"auto", Fill::Auto},       {"parity", Fill::Parity},
+                                                {"flood", Fill::Flood},     {"vote", Fill::Vote},
+                                                {"winding", Fill::Winding}, {"gwn", Fill::Gwn}};
 
 const char* toString(VoxelizeMode m);
 const char* toString(Fill f);
 /// Parse a name of kVoxelizeModeNames, kFillNames, kAxisNames, kSlicingNames (any case); throw
 /// voxfx::Error listing the allowed names otherwise.
 VoxelizeMode parseVoxelizeMode(const std::string& name);
+/// True for the modes whose inside a fill decides: Solid, SolidConservative, Interior.
+bool needsFill(VoxelizeMode mode);
 Fill parseFill(const std::string& name);
 Axis parseAxis(const std::string& name);
 Slicing parseSlicing(const std::string& name);
 
+/// What voxelize() decided, for front ends to print (VoxelizeOptions::report).
+struct VoxelizeReport {
+    /// The fill that decided the inside: options.fill, or what Fill::Auto chose (Parity for the
+    /// surface modes, whose fill does not matter).
+    Fill fill = Fill::Parity;
+    /// Fill::Auto with a mode that needs a fill: the mesh's topology, from which it chose.
+    bool topologyAnalyzed = false;
+    MeshTopology topology;
+    /// Why Fill::Auto chose flood, one line without the mesh's name ("not closed (6 boundary, 0
+    /// non-manifold, 0 misoriented edges): filled by flood (...)"); empty when it chose parity.
+    std::string fillNote;
+};
+
 struct VoxelizeOptions {
     VoxelizeMode mode = VoxelizeMode::Solid;
-    /// How the inside is decided for Solid, SolidConservative and Interior.
+    /// How the inside is decided for Solid, SolidConservative and Interior. Auto costs one pass
+    /// over the edges (analyzeTopology, hashing) before the voxelization.
     Fill fill = Fill::Parity;
     /// ED06 local slicing: first records the nearest and farthest fragment of each column, then
     /// spreads the D slices over that range only (orthographic frames only for export).
@@ -89,12 +106,16 @@ struct VoxelizeOptions {
     Device device = Device::Cpu;
     /// Receives why a Cuda or Auto request ran on the CPU; cleared when the GPU ran it. Not owned.
     std::string* deviceNote = nullptr;
+    /// Receives what was decided (the fill Auto chose, and why). Not owned.
+    VoxelizeReport* report = nullptr;
 };
 
 /// How to fit an orthographic frame to a mesh. Cells are cubes unless `dims` is given.
 ///   resolution N: the longest extent of the bounds gets N cells; other axes get
 ///                 ceil(extent / cell) cells (at least 1); the grid is centred on the bounds.
 ///   voxelSize S:  cubic cells of edge S; dims = ceil(extent / S), grid centred on the bounds.
+///   cube:         with resolution N: N cells along every axis, of the longest extent's size
+///                 (cubic), the bounds centred: an N x N x N grid, never stretched.
 ///   dims (W,H,D): world-axis cell counts (x, y, z), cells fill the bounds exactly (non-cubic).
 ///   bounds:       box to fit instead of the mesh bounds (e.g. shared by several meshes).
 /// Margin: `marginCells` empty cells are added on every side (default 0; cell centres then sit
@@ -103,7 +124,8 @@ struct FitOptions {
     int64_t resolution = 0;
     double voxelSize = 0;
     Vec3i dims{0, 0, 0};
-    Box3d bounds; ///< empty = mesh bounds
+    bool cube = false; ///< with resolution: resolution^3 cubic cells (see above)
+    Box3d bounds;      ///< empty = mesh bounds
     int64_t marginCells = 0;
     Axis axis = Axis::Z;
 };
@@ -118,15 +140,5 @@ Frame fitFrame(const Box3d& meshBounds, const FitOptions& options);
 /// Triangles outside the frame are ignored; for parity, geometry in front of the near plane
 /// still counts (depth clamping, GI08 §4). Cost: O(triangles + fragments + cells / 64).
 VoxelGrid voxelize(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options = {});
-
-/// True for the extensions readGrid reads (.binvox .vdb .nrrd, any case).
-bool isGridFile(const std::string& path);
-
-/// For tools that accept "a grid or a mesh": a grid file (isGridFile) is read with readGrid;
-/// any other file is loaded as a mesh, fitted with `fit` and voxelized with `options`. For the
-/// inside modes, Fill::Parity is replaced by Fill::Flood when the mesh is not closed, and `note`,
-/// if given, then receives a one-line explanation (else it is cleared). Throws voxfx::Error.
-VoxelGrid loadOrVoxelize(const std::string& path, const FitOptions& fit, const VoxelizeOptions& options = {},
-                         std::string* note = nullptr);
 
 } // namespace voxfx

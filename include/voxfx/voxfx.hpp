@@ -28,7 +28,9 @@
 #include "voxfx/density.hpp"
 #include "voxfx/grid_query.hpp"
 #include "voxfx/morphology.hpp"
+#include "voxfx/moving_obstacle.hpp"
 #include "voxfx/particles.hpp"
+#include "voxfx/particles_io.hpp"
 #include "voxfx/surface_mesh.hpp"
 
 // Rendering: scenes, images, shadows (ED06 transmittance, CHANG absorption).

@@ -15,25 +15,32 @@ py::object batchJsonObject(const std::string& text) {
 
 /// The batch's grid format from an extension, with or without its dot.
 GridFormat batchGridFormat(const std::string& format) {
-    return gridFormatFromPath("x" + (format.starts_with(".") ? format : "." + format));
+    return asArgument(
+        [&] { return gridFormatFromPath("x" + (format.starts_with(".") ? format : "." + format)); });
 }
 
-/// The jobs of a batch argument: a manifest path (str or os.PathLike) or an iterable of mesh paths.
+/// The jobs of a batch argument: a manifest path (str, bytes or os.PathLike) or an iterable of mesh
+/// paths. What is not a manifest (a folder, a mesh file, a binary file) is an ArgumentError.
 std::vector<BatchJob> batchJobsArgument(const py::object& manifestOrList, const std::string& outDir,
                                         GridFormat format) {
-    if (py::isinstance<py::str>(manifestOrList) || py::hasattr(manifestOrList, "__fspath__")) {
+    if (py::isinstance<py::str>(manifestOrList) || py::isinstance<py::bytes>(manifestOrList) ||
+        py::hasattr(manifestOrList, "__fspath__")) {
         const std::string manifest = pathString(manifestOrList);
-        py::gil_scoped_release release;
-        return readBatchManifest(manifest, outDir, format);
+        return asArgument([&] {
+            py::gil_scoped_release release;
+            return readBatchManifest(manifest, outDir, format);
+        });
     }
+    if (!py::hasattr(manifestOrList, "__iter__"))
+        throw py::type_error("meshes must be a manifest path or an iterable of mesh paths");
     std::vector<std::string> meshes;
     for (const py::handle p : manifestOrList) meshes.push_back(pathString(p));
-    return batchJobs(meshes, outDir, format);
+    return asArgument([&] { return batchJobs(meshes, outDir, format); });
 }
 
 /// Calls a Python callable per finished job, from the worker thread that finished it (runBatch
-/// serializes the calls), holding the GIL for the call only. The first exception it raises stops
-/// further calls (the meshes go on) and is raised again when the batch is over.
+/// serializes the calls), holding the GIL for the call only. The first exception it raises
+/// cancels the batch (no further mesh starts) and is raised when the workers are done.
 class PyBatchProgress : public BatchProgress {
 public:
     explicit PyBatchProgress(py::object fn) : fn_(std::move(fn)) {}
@@ -42,14 +49,20 @@ public:
         py::gil_scoped_acquire gil;
         try {
             fn_(batchJsonObject(batchResultJson(r)), done, total);
-        } catch (...) { error_ = std::current_exception(); }
+        } catch (...) {
+            error_ = std::current_exception();
+            if (cancel_) cancel_->request();
+        }
     }
+    void setCancel(Cancel* cancel) { cancel_ = cancel; }
+    bool failed() const { return bool(error_); }
     void raiseIfFailed() const {
         if (error_) std::rethrow_exception(error_);
     }
 
 private:
     py::object fn_;
+    Cancel* cancel_ = nullptr;
     std::exception_ptr error_;
 };
 
@@ -61,20 +74,21 @@ void bindBatch(py::module_& m) {
         "batch",
         [](const py::object& manifestOrList, const py::object& outDirObj, const std::string& format,
            std::optional<int64_t> resolution, std::optional<double> voxelSize,
-           std::optional<std::vector<int64_t>> dims, std::optional<std::vector<double>> bounds,
-           int64_t margin, const std::string& mode, const std::string& fill, const std::string& axis,
+           std::optional<std::vector<int64_t>> dims, const py::object& bounds, int64_t margin,
+           const std::string& mode, const std::string& fill, const std::string& axis,
            const std::string& slicing, bool vdbFloat, int threads, bool nested, bool skipExisting,
            const py::object& report, const py::object& progress) {
             const std::string outDir = pathString(outDirObj);
             const GridFormat gridFormat = batchGridFormat(format);
             BatchOptions bo;
             bo.fit = fitOptions(resolution, voxelSize, dims, bounds, margin, axis);
-            bo.voxelize.mode = parseVoxelizeMode(mode);
-            bo.voxelize.slicing = parseSlicing(slicing);
-            bo.autoFill = fill == "auto";
-            if (!bo.autoFill) bo.voxelize.fill = parseFill(fill);
+            asArgument([&] {
+                bo.voxelize.mode = parseVoxelizeMode(mode);
+                bo.voxelize.slicing = parseSlicing(slicing);
+                bo.voxelize.fill = parseFill(fill);
+            });
             bo.write.vdbFloat = vdbFloat;
-            if (threads < 0) throw py::value_error("threads must be >= 0");
+            if (threads < 0) throw ArgumentError("threads must be >= 0");
             bo.threads = threads;
             bo.nested = nested;
             bo.skipExisting = skipExisting;
@@ -91,14 +105,22 @@ void bindBatch(py::module_& m) {
                     throw py::type_error("progress must be callable as progress(job, done, total), or None");
                 bo.progress = &pyProgress.emplace(progress);
             }
+            // Ctrl-C, or an exception from progress, stops the batch between meshes (and the
+            // voxelizations under way between tiles); that exception is raised.
             BatchSummary summary;
-            {
-                py::gil_scoped_release release;
-                std::error_code ec;
-                std::filesystem::create_directories(outDir, ec);
-                if (ec) fail("cannot create output folder '", outDir, "': ", ec.message());
-                summary = runBatch(jobs, bo);
-                if (!reportPath.empty()) writeBatchReport(summary, reportPath);
+            try {
+                interruptible([&](Cancel& cancel) {
+                    bo.cancel = &cancel;
+                    if (pyProgress) pyProgress->setCancel(&cancel);
+                    std::error_code ec;
+                    std::filesystem::create_directories(outDir, ec);
+                    if (ec) fail("cannot create output folder '", outDir, "': ", ec.message());
+                    summary = runBatch(jobs, bo);
+                    if (!reportPath.empty()) writeBatchReport(summary, reportPath);
+                });
+            } catch (const Error&) {
+                if (pyProgress && pyProgress->failed()) pyProgress->raiseIfFailed();
+                throw;
             }
             if (pyProgress) pyProgress->raiseIfFailed();
             return batchJsonObject(batchReportJson(summary, -1));
@@ -118,7 +140,8 @@ void bindBatch(py::module_& m) {
         "progress(job, done, total) after each mesh, from a worker thread. Returns the report as a dict: "
         "ok, skipped, errors, seconds, ok_per_second (meshes written per second; failed ones are not in "
         "it) and jobs, a list of {mesh, output, status ('ok', 'skipped', 'error'), error, triangles, ms} "
-        "in the order given. The GIL is released while meshes are processed.");
+        "in the order given. The GIL is released while meshes are processed; Ctrl-C, or an exception from "
+        "progress, stops the batch between meshes (outputs written stay) and is raised.");
 
     m.def(
         "batch_jobs",

@@ -4,19 +4,25 @@
 //
 // Conventions:
 //   - Arrays in and out are NumPy arrays. Vertices are (N, 3) floating point; the library holds
-//     positions as float32, so float64 input is rounded to float32 once (a mesh loaded with
-//     load_mesh round-trips exactly). Faces are (M, 3) integers, checked by the library.
+//     positions as float32. float32 input, and float64 input whose values float32 holds exactly,
+//     is kept as is; other float64 input far from the origin (farther than twice its extent) is
+//     recentred in double first, the offset kept in PyMesh::origin and carried into the grids'
+//     frames and the points of queries, so a small mesh far away keeps its shape.
 //   - Grid.to_numpy() is a bool array indexed [x, y, z] (world axes), whatever the slicing axis.
-//   - Grid.words is the slicemap's packed 64-bit words without a copy: shape (H, W, P) for
-//     columns (x, y) of the frame and P = ceil(D / 64) words per column; the array keeps the
-//     grid alive.
-//   - voxfx::Error becomes voxfx.Error (a RuntimeError) with the library's message; the GIL is
-//     released while the library works.
+//   - Grid.words is the slicemap's packed 64-bit words without a copy, read-only: shape (H, W, P)
+//     for columns (x, y) of the frame and P = ceil(D / 64) words per column; the array keeps the
+//     grid alive. Grid.set_words writes them (a copy, padding bits cleared).
+//   - voxfx::Error becomes voxfx.Error (a RuntimeError) with the library's message; a bad
+//     argument (a name, a size, a path) voxfx.ArgumentError, which is also a ValueError. Long
+//     calls release the GIL and, on the main thread, stop at Ctrl-C (interruptible()).
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -37,23 +43,68 @@ namespace py = pybind11;
 
 using GridPtr = std::shared_ptr<VoxelGrid>;
 
+// ---- errors and interruption ----------------------------------------------------------------
+
+/// A bad argument: raised in Python as voxfx.ArgumentError (a voxfx.Error and a ValueError).
+struct ArgumentError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+/// Runs f, turning a voxfx::Error it throws (the library's parsers and checks of arguments) into
+/// an ArgumentError with the same message.
+template <class F> auto asArgument(F&& f) -> decltype(f()) {
+    try {
+        return f();
+    } catch (const Error& e) { throw ArgumentError(e.what()); }
+}
+
+/// The cancellation the library polls (Progress): set by Ctrl-C or by a Python callback that
+/// raised. Thread-safe.
+class Cancel final : public Progress {
+public:
+    bool update(double) override { return !stop_.load(std::memory_order_relaxed); }
+    void request() { stop_ = true; }
+    bool requested() const { return stop_; }
+
+private:
+    std::atomic<bool> stop_{false};
+};
+
+/// Runs work(cancel) without the GIL. On the main thread (where Python runs signal handlers) it
+/// runs on a helper thread while this one checks for signals every 20 ms; a signal handler that
+/// raises (KeyboardInterrupt at Ctrl-C) requests the cancel, waits for the work to stop at the
+/// library's next poll, and that exception is raised instead of the work's result. Elsewhere the
+/// work runs on the calling thread. The work must take the GIL itself for any Python call.
+void interruptible(const std::function<void(Cancel&)>& work);
+
 // ---- meshes ---------------------------------------------------------------------------------
 
 /// A mesh in the library's layout (float32 positions, uint32 indices), owned by Python objects.
+/// World position = origin + position (origin zero unless float64 input was recentred).
 struct PyMesh {
     Mesh mesh;
+    Vec3d origin{0, 0, 0};
     std::string source = "mesh";
+    bool shifted() const { return origin.x != 0 || origin.y != 0 || origin.z != 0; }
 };
 
-/// Converts (vertices, faces) arrays into a library mesh: float32 positions, uint32 indices.
-/// Shapes and index signs are checked here, the rest (range, finite) by validateMesh.
+/// Converts (vertices, faces) arrays into a library mesh (see the conventions above). Shapes,
+/// dtypes and index signs are checked here (TypeError, ArgumentError), the rest (range, finite)
+/// by validateMesh.
 std::shared_ptr<PyMesh> meshFromArrays(const py::handle& verticesObj, const py::handle& facesObj);
 
-/// A mesh argument: a voxfx.Mesh (used as is) or a vertices array with `faces`.
-std::shared_ptr<PyMesh> meshArgument(const py::object& meshOrVertices, const py::object& faces);
+/// A mesh argument: a voxfx.Mesh (used as is); an object with .vertices and .faces (trimesh, a
+/// voxfx.SurfaceMesh) or .triangles (Open3D), or .points and .cells_dict (meshio: its triangles,
+/// quads split in two); a (vertices, faces) pair; or a vertices array with `faces`.
+std::shared_ptr<PyMesh> meshArgument(const py::object& mesh, const py::object& faces);
 
-py::array_t<double> verticesArray(const Mesh& m);
+/// World positions (origin + position) as an (N, 3) float64 array.
+py::array_t<double> verticesArray(const Mesh& m, const Vec3d& origin = {0, 0, 0});
 py::array_t<int64_t> facesArray(const std::vector<uint32_t>& indices);
+
+/// (K, 3) points as doubles, moved by -origin (a copy then); TypeError/ArgumentError otherwise.
+/// The array keeps the data alive.
+py::array_t<double> pointsArgument(const py::object& points, const Vec3d& origin = {0, 0, 0});
 
 // ---- grids ----------------------------------------------------------------------------------
 
@@ -68,17 +119,18 @@ VoxelGrid uniformZ(const VoxelGrid& g);
 // ---- options and text -----------------------------------------------------------------------
 
 /// The frame fitting of voxelize and batch: at most one of resolution, voxel size and dims
-/// (none: resolution 256, the command line's default), bounds, margin, slicing axis.
+/// (none: resolution 256, the command line's default), bounds (six numbers, or the (lo, hi) pair
+/// that Grid.bounds gives), margin, slicing axis, cube (resolution^3 cubic cells).
 FitOptions fitOptions(const std::optional<int64_t>& resolution, const std::optional<double>& voxelSize,
-                      const std::optional<std::vector<int64_t>>& dims,
-                      const std::optional<std::vector<double>>& bounds, int64_t margin,
-                      const std::string& axis);
+                      const std::optional<std::vector<int64_t>>& dims, const py::object& bounds,
+                      int64_t margin, const std::string& axis, bool cube = false);
 
 /// A Python str from bytes that should be UTF-8 (messages quote file contents, which need not be):
 /// invalid bytes become U+FFFD, as in the JSON report.
 py::str utf8Text(const std::string& s);
 
-/// A path argument: str or os.PathLike.
+/// A path argument: str, bytes or os.PathLike (os.fspath, then os.fsdecode). TypeError for other
+/// types, ArgumentError for a NUL byte (the C library would open the path up to it: another file).
 std::string pathString(const py::handle& p);
 
 } // namespace voxfx::python

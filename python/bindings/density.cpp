@@ -51,7 +51,8 @@ void bindDensity(py::module_& m) {
             "Occupancy (count / 8^level) as a float32 array indexed [x, y, z]")
         .def(
             "save",
-            [](const PyDensity& d, const std::string& path) {
+            [](const PyDensity& d, const py::object& pathObj) {
+                const std::string path = pathString(pathObj);
                 py::gil_scoped_release release;
                 writeDensity(d.density, d.fine, path);
             },

@@ -18,110 +18,107 @@ namespace {
 
 using SdfPtr = std::shared_ptr<SignedDistanceField>;
 
-/// Points as a (K, 3) float64 C-ordered array (converted when needed).
-py::array_t<double, py::array::c_style | py::array::forcecast> pointsArray(const py::object& points) {
-    auto pts = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(points);
-    if (!pts || pts.ndim() != 2 || pts.shape(1) != 3)
-        throw py::value_error("points must be an array of shape (K, 3)");
-    return pts;
-}
-
-std::span<const Vec3d> pointSpan(const py::array_t<double, py::array::c_style | py::array::forcecast>& pts) {
-    return {reinterpret_cast<const Vec3d*>(pts.data()), std::size_t(pts.shape(0))};
-}
-
-/// f(mesh, points) after the (vertices, faces, points) / (mesh, points) argument dance of contains().
-template <class F>
-auto withMeshAndPoints(const py::object& meshOrVertices, const py::object& faces, const py::object& points,
-                       F&& f) {
+/// f(mesh, points in the mesh's coordinates) after the (mesh, points) / (vertices, faces, points)
+/// argument dance of contains().
+template <class F> auto withMeshAndPoints(const py::object& meshObj, const py::object& faces,
+                                          const py::object& points, const char* name, F&& f) {
     py::object facesArg = faces, pointsArg = points;
-    if (py::isinstance<PyMesh>(meshOrVertices) && pointsArg.is_none()) std::swap(facesArg, pointsArg);
-    if (pointsArg.is_none()) throw py::type_error("points are missing: pass a (K, 3) array");
-    const auto mesh = meshArgument(meshOrVertices, facesArg);
-    return f(mesh, pointsArray(pointsArg));
+    if (pointsArg.is_none()) std::swap(facesArg, pointsArg);
+    if (pointsArg.is_none()) throw py::type_error(std::string(name) + " needs points: " + name + "(mesh, points)");
+    const auto mesh = meshArgument(meshObj, facesArg);
+    const py::array_t<double> pts = pointsArgument(pointsArg, mesh->origin);
+    const std::span<const Vec3d> p(reinterpret_cast<const Vec3d*>(pts.data()), std::size_t(pts.shape(0)));
+    return f(*mesh, p);
 }
 
 void checkThreads(int threads) {
-    if (threads < 0) throw py::value_error("threads must be >= 0");
+    if (threads < 0) throw ArgumentError("threads must be >= 0");
 }
 
-py::object closestPoints(const py::object& meshOrVertices, const py::object& faces, const py::object& points,
-                         int threads) {
+py::object closestPoints(const py::object& meshObj, const py::object& faces, const py::object& points, int threads) {
     checkThreads(threads);
-    return withMeshAndPoints(
-        meshOrVertices, faces, points, [&](const std::shared_ptr<PyMesh>& mesh, const auto& pts) {
-            const std::span<const Vec3d> p = pointSpan(pts);
-            const py::ssize_t n = py::ssize_t(p.size());
-            py::array_t<double> point({n, py::ssize_t(3)}), bary({n, py::ssize_t(3)}), distance(n);
-            py::array_t<int64_t> face(n);
-            {
-                py::gil_scoped_release release;
-                const ClosestPointQuery query(mesh->mesh.view());
-                std::vector<ClosestPoint> out(p.size());
-                DistanceOptions o;
-                o.threads = threads;
-                query.closest(p, out, o);
-                double* pp = point.mutable_data();
-                double* bp = bary.mutable_data();
-                double* dp = distance.mutable_data();
-                int64_t* fp = face.mutable_data();
-                for (std::size_t i = 0; i < out.size(); ++i) {
-                    for (int k = 0; k < 3; ++k) {
-                        pp[3 * i + std::size_t(k)] = out[i].point[k];
-                        bp[3 * i + std::size_t(k)] = out[i].barycentric[k];
-                    }
-                    dp[i] = out[i].distance;
-                    fp[i] = out[i].face;
+    return withMeshAndPoints(meshObj, faces, points, "closest_points", [&](const PyMesh& mesh, std::span<const Vec3d> p) {
+        const py::ssize_t n = py::ssize_t(p.size());
+        py::array_t<double> point({n, py::ssize_t(3)}), bary({n, py::ssize_t(3)}), distance(n);
+        py::array_t<int64_t> face(n);
+        double* pp = point.mutable_data();
+        double* bp = bary.mutable_data();
+        double* dp = distance.mutable_data();
+        int64_t* fp = face.mutable_data();
+        interruptible([&](Cancel& cancel) {
+            const ClosestPointQuery query(mesh.mesh.view());
+            std::vector<ClosestPoint> out(p.size());
+            DistanceOptions o;
+            o.threads = threads;
+            o.progress = &cancel;
+            query.closest(p, out, o);
+            // Points back in world coordinates (the mesh's origin, when it was recentred).
+            for (std::size_t i = 0; i < out.size(); ++i) {
+                for (int k = 0; k < 3; ++k) {
+                    pp[3 * i + std::size_t(k)] = out[i].point[k] + mesh.origin[k];
+                    bp[3 * i + std::size_t(k)] = out[i].barycentric[k];
                 }
+                dp[i] = out[i].distance;
+                fp[i] = out[i].face;
             }
-            const py::object type = py::module_::import("voxfx._voxfx").attr("ClosestPoints");
-            return type(point, face, bary, distance);
         });
+        const py::object type = py::module_::import("voxfx._voxfx").attr("ClosestPoints");
+        return type(point, face, bary, distance);
+    });
 }
 
-py::array_t<double> signedDistances(const py::object& meshOrVertices, const py::object& faces,
-                                    const py::object& points, const std::string& sign, int threads,
-                                    double windingBeta) {
+py::array_t<double> signedDistances(const py::object& meshObj, const py::object& faces, const py::object& points,
+                                    const std::string& sign, int threads, double windingBeta) {
     checkThreads(threads);
-    if (!(windingBeta >= 0)) throw py::value_error("winding_beta must be >= 0");
+    if (!(windingBeta >= 0)) throw ArgumentError("winding_beta must be >= 0");
     SignedDistanceOptions o;
-    o.sign = parseSignMethod(sign);
+    o.sign = asArgument([&] { return parseSignMethod(sign); });
     o.threads = threads;
     o.windingBeta = windingBeta;
-    return withMeshAndPoints(meshOrVertices, faces, points,
-                             [&](const std::shared_ptr<PyMesh>& mesh, const auto& pts) {
-                                 const std::span<const Vec3d> p = pointSpan(pts);
-                                 py::array_t<double> out(py::ssize_t(p.size()));
-                                 double* d = out.mutable_data();
-                                 py::gil_scoped_release release;
-                                 signedDistance(mesh->mesh.view(), p, std::span<double>(d, p.size()), o);
-                                 return out;
-                             });
+    return withMeshAndPoints(meshObj, faces, points, "signed_distance", [&](const PyMesh& mesh, std::span<const Vec3d> p) {
+        py::array_t<double> out(py::ssize_t(p.size()));
+        double* d = out.mutable_data();
+        interruptible([&](Cancel& cancel) {
+            SignedDistanceOptions so = o;
+            so.progress = &cancel;
+            signedDistance(mesh.mesh.view(), p, std::span<double>(d, p.size()), so);
+        });
+        return out;
+    });
 }
 
-SdfPtr makeSdf(const py::object& meshOrVertices, const py::object& faces, std::optional<int64_t> resolution,
-               std::optional<double> voxelSize, std::optional<std::vector<double>> bounds,
-               std::optional<int64_t> margin, const std::variant<double, std::string>& band,
-               const std::string& fill, int threads) {
+SdfPtr makeSdf(const py::object& meshObj, const py::object& faces, std::optional<int64_t> resolution,
+               std::optional<double> voxelSize, const py::object& bounds, std::optional<int64_t> margin, bool cube,
+               const std::variant<double, std::string>& band, const std::string& fill, int threads) {
     checkThreads(threads);
     SdfOptions o;
     o.threads = threads;
     if (const auto* s = std::get_if<std::string>(&band)) {
-        if (*s != "full") throw py::value_error("band must be a width in voxels (>= 1) or 'full'");
+        if (*s != "full") throw ArgumentError("band must be a width in voxels (>= 1) or 'full', got '" + *s + "'");
         o.full = true;
     } else {
         o.bandVoxels = std::get<double>(band);
         if (!(o.bandVoxels >= 1) || !std::isfinite(o.bandVoxels))
-            throw py::value_error("band must be a width in voxels (>= 1) or 'full'");
+            throw ArgumentError("band must be a width in voxels (>= 1) or 'full'");
     }
-    if (fill != "auto") o.fill = parseFill(fill);
+    o.fill = asArgument([&] { return parseFill(fill); });
     // The margin defaults to the band rounded up, so the band outside the mesh is not cut.
     const int64_t m = margin.value_or(o.full ? 0 : int64_t(std::ceil(o.bandVoxels)));
-    const FitOptions fo = fitOptions(resolution, voxelSize, std::nullopt, bounds, m, "z");
-    const auto mesh = meshArgument(meshOrVertices, faces);
-    py::gil_scoped_release release;
-    const Frame frame = fitFrame(computeBounds(mesh->mesh.view()), fo);
-    return std::make_shared<SignedDistanceField>(signedDistanceField(mesh->mesh.view(), frame, o));
+    FitOptions fo = fitOptions(resolution, voxelSize, std::nullopt, bounds, m, "z", cube);
+    const auto mesh = meshArgument(meshObj, faces);
+    if (!fo.bounds.empty() && mesh->shifted()) {
+        fo.bounds.lo = fo.bounds.lo - mesh->origin;
+        fo.bounds.hi = fo.bounds.hi - mesh->origin;
+    }
+    asArgument([&] { validateMesh(mesh->mesh.view(), "mesh"); });
+    SdfPtr out;
+    interruptible([&](Cancel& cancel) {
+        const Frame frame = fitFrame(computeBounds(mesh->mesh.view()), fo);
+        o.progress = &cancel;
+        out = std::make_shared<SignedDistanceField>(signedDistanceField(mesh->mesh.view(), frame, o));
+    });
+    if (mesh->shifted()) out->frame = out->frame.translated(mesh->origin);
+    return out;
 }
 
 /// 4 x 4 matrix mapping (i, j, k, 1) to the centre of voxel (i, j, k).
@@ -182,8 +179,9 @@ void bindDistance(py::module_& m) {
         "The point of the mesh nearest to each of the (K, 3) points: ClosestPoints(point, face, barycentric, "
         "distance). Exact: the distance to the triangles of the float vertices, in double precision (a few "
         "ulps); ties go to the smallest face index. Non-finite points get NaN and face -1. Called as "
-        "closest_points(mesh, points) or closest_points(vertices, faces, points); the GIL is released.");
-    m.def("signed_distance", &signedDistances, py::arg("vertices"), py::arg("faces") = py::none(),
+        "closest_points(mesh, points) or closest_points(vertices, faces, points); the GIL is released, "
+          "Ctrl-C stops it.");
+    m.def("signed_distance", &signedDistances, py::arg("mesh"), py::arg("faces") = py::none(),
           py::arg("points") = py::none(), py::kw_only(), py::arg("sign") = "auto", py::arg("threads") = 0,
           py::arg("winding_beta") = 3.0,
           "(K,) float64: the distance from each point to the mesh, negative inside. sign: auto (parity for "
@@ -221,7 +219,9 @@ void bindDistance(py::module_& m) {
              "voxels")
         .def(
             "value",
-            [](const SignedDistanceField& f, int64_t i, int64_t j, int64_t k) { return f.value(i, j, k); },
+            [](const SignedDistanceField& f, int64_t i, int64_t j, int64_t k) {
+                return asArgument([&] { return f.value(i, j, k); });
+            },
             py::arg("i"), py::arg("j"), py::arg("k"))
         .def(
             "save",
@@ -244,12 +244,13 @@ void bindDistance(py::module_& m) {
           py::arg("resolution") = py::none(), py::arg("voxel_size") = py::none(),
           py::arg("bounds") = py::none(), py::arg("margin") = py::none(), py::arg("band") = 3.0,
           py::arg("fill") = "auto", py::arg("threads") = 0,
-          "The signed distance field of a mesh on the voxel centres of a grid fitted like voxelize() "
-          "(resolution, default 256, or voxel_size; bounds; margin, default the band rounded up): exact "
+          "The signed distance field of a mesh (any mesh voxelize accepts) on the voxel centres of a grid "
+          "fitted like voxelize() (resolution, default 256, or voxel_size; bounds; cube=True for "
+          "resolution^3 cubic cells; margin, default the band rounded up): exact "
           "distances where they are below band voxels (band='full': everywhere), negative where "
           "voxelize(mode='solid', fill=...) fills the voxel (fill auto: parity for closed meshes, gwn "
           "otherwise). Returns a SignedDistanceField: .to_numpy() dense, .active() the band as indices and "
-          "values, .affine, .save(). The GIL is released.");
+          "values, .affine, .save(). The GIL is released; Ctrl-C stops it.");
 }
 
 } // namespace voxfx::python

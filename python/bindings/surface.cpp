@@ -31,7 +31,8 @@ void bindSurface(py::module_& m) {
              })
         .def(
             "save",
-            [](const SurfaceMesh& s, const std::string& path) {
+            [](const SurfaceMesh& s, const py::object& pathObj) {
+                const std::string path = pathString(pathObj);
                 py::gil_scoped_release release;
                 writeSurfaceMesh(s, path);
             },
@@ -40,7 +41,7 @@ void bindSurface(py::module_& m) {
         "extract_surface",
         [](const VoxelGrid& g, const std::string& source, int level, float iso, int threads) {
             SurfaceOptions so;
-            so.source = parseSurfaceSource(source);
+            so.source = asArgument([&] { return parseSurfaceSource(source); });
             so.level = level;
             so.iso = iso;
             so.threads = threads;

@@ -6,13 +6,17 @@ namespace {
 
 /// The world radii of a morphology: one number for all axes or three.
 Vec3i radii(const py::object& r) {
+    Vec3i out;
     if (py::isinstance<py::int_>(r)) {
         const int64_t v = r.cast<int64_t>();
-        return {v, v, v};
+        out = {v, v, v};
+    } else {
+        const auto v = r.cast<std::vector<int64_t>>();
+        if (v.size() != 3) throw ArgumentError("radius needs one value or three (along x, y, z)");
+        out = {v[0], v[1], v[2]};
     }
-    const auto v = r.cast<std::vector<int64_t>>();
-    if (v.size() != 3) throw py::value_error("radius needs one value or three (along x, y, z)");
-    return {v[0], v[1], v[2]};
+    if (out.x < 0 || out.y < 0 || out.z < 0) throw ArgumentError("morphology radii must be >= 0");
+    return out;
 }
 
 } // namespace
@@ -22,7 +26,7 @@ void bindToolkit(py::module_& m) {
     m.def(
         "reslice",
         [](const VoxelGrid& g, const std::string& axis) {
-            const Axis a = parseAxis(axis);
+            const Axis a = asArgument([&] { return parseAxis(axis); });
             py::gil_scoped_release release;
             return std::make_shared<VoxelGrid>(reslice(g, a));
         },
@@ -38,9 +42,9 @@ void bindToolkit(py::module_& m) {
         "morphology",
         [](const VoxelGrid& g, const std::string& op, const py::object& radius, const std::string& border,
            int threads) {
-            const MorphOp o = parseMorphOp(op);
+            const MorphOp o = asArgument([&] { return parseMorphOp(op); });
             MorphologyOptions mo;
-            mo.border = parseMorphBorder(border);
+            mo.border = asArgument([&] { return parseMorphBorder(border); });
             mo.threads = threads;
             const Vec3i r = radii(radius);
             py::gil_scoped_release release;
@@ -58,10 +62,10 @@ void bindToolkit(py::module_& m) {
             name.c_str(),
             [op](const VoxelGrid& g, const py::object& radius, const std::string& border, int threads) {
                 MorphologyOptions mo;
-                mo.border = parseMorphBorder(border);
+                mo.border = asArgument([&] { return parseMorphBorder(border); });
                 mo.threads = threads;
                 const Vec3i r = radii(radius);
-                const MorphOp o = parseMorphOp(op);
+                const MorphOp o = asArgument([&] { return parseMorphOp(op); });
                 py::gil_scoped_release release;
                 return std::make_shared<VoxelGrid>(morphology(g, o, r, mo));
             },
@@ -71,7 +75,7 @@ void bindToolkit(py::module_& m) {
     m.def(
         "csg",
         [](const VoxelGrid& a, const VoxelGrid& b, const std::string& op) {
-            const CsgOp o = parseCsgOp(op);
+            const CsgOp o = asArgument([&] { return parseCsgOp(op); });
             py::gil_scoped_release release;
             return std::make_shared<VoxelGrid>(csg(a, b, o));
         },

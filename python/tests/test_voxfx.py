@@ -141,14 +141,18 @@ def test_words_are_the_grid_without_a_copy(data_path):
     # Decode the documented layout: slice s of column (x, y) is bit s % 64 of word s // 64.
     bits = np.unpackbits(words.view(np.uint8).reshape(h, w, -1), axis=2, bitorder="little")[:, :, :d]
     np.testing.assert_array_equal(bits.transpose(1, 0, 2).astype(bool), grid.to_numpy())
-    # Writes go to the grid, and the array keeps the grid alive after the last reference goes.
-    words[:] = 0
-    assert grid.count() == 0
+    # The array is the grid's memory, read-only: set_words writes (a copy); the array keeps the
+    # grid alive after the last reference goes.
+    assert not words.flags.writeable
+    grid.set_words(np.zeros_like(words))
+    assert grid.count() == 0 and int(words.sum()) == 0
+    one = np.zeros_like(words)
+    one[0, 0, 0] = 1
+    grid.set_words(one)
     words2 = grid.words
     del grid, words
     import gc
     gc.collect()
-    words2[0, 0, 0] = 1
     assert int(words2.sum()) == 1
 
 

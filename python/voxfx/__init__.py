@@ -1,67 +1,67 @@
 """voxfx: voxelization of triangle meshes into bit grids, with NumPy arrays.
 
     import voxfx
-    mesh = voxfx.load_mesh("bunny.off")            # or: vertices, faces = voxfx.load_mesh(...)
-    grid = voxfx.voxelize(mesh, resolution=128)    # or: voxfx.voxelize(vertices, faces, ...)
+    mesh = voxfx.load_mesh("bunny.off")            # or any mesh object: trimesh, Open3D, meshio, (V, F)
+    grid = voxfx.voxelize(mesh, resolution=64, cube=True, padding=2)   # a 64^3 grid, never stretched
     occ = grid.to_numpy()                          # bool array indexed [x, y, z]
+    ijk = grid.indices()                           # (N, 3) int32 filled cells, no dense array
     grid.save("bunny.binvox")                      # .binvox .vdb .nrrd .ply .obj
     inside = voxfx.contains(mesh, points)          # exact point occupancy, (K,) bool
     d = voxfx.signed_distance(mesh, points)        # exact distance, negative inside, (K,) float64
     field = voxfx.sdf(mesh, resolution=128)        # narrow-band signed distance field
     report = voxfx.batch("meshes.txt", "out/", resolution=64)   # many meshes, as `voxfx batch`
 
-Errors raise voxfx.Error (a RuntimeError) with the library's message. See also voxfx.dask for
-voxelizing a manifest of meshes on a Dask cluster.
+Errors raise voxfx.Error (a RuntimeError) with the library's message, bad arguments
+voxfx.ArgumentError (also a ValueError). Long calls release the GIL and stop at Ctrl-C. See also
+voxfx.dask for voxelizing a manifest of meshes on a Dask cluster, and `python -m voxfx` for the
+command line.
 """
-import os as _os
+import __future__
 
-from . import _paths
+from . import _voxfx
+from ._voxfx import ArgumentError, Density, Error, Grid, Mesh, PointClassifier, SurfaceMesh, __version__
+from ._voxfx import ClosestPoints, SignedDistanceField
 
-
-def _add_module_dir():
-    # The I/O modules (voxfx_vdb.so, voxfx_assimp.so, voxfx_exr.so) are loaded on first use;
-    # tell the loader where this copy of the package finds them (after any user setting).
-    d = _os.path.normpath(_os.path.join(_os.path.dirname(__file__), _paths.MODULE_DIR))
-    if _os.path.isdir(d):
-        current = _os.environ.get("VOXFX_MODULE_PATH", "")
-        if d not in current.split(":"):
-            _os.environ["VOXFX_MODULE_PATH"] = current + ":" + d if current else d
+# The I/O modules (voxfx_vdb.so, ...) lie next to _voxfx (the library looks there): nothing is
+# set in os.environ.
 
 
-_add_module_dir()
+def _with_signature(f):
+    """A Python function calling the extension's function f, with f's parameters for
+    inspect.signature (through __wrapped__, a function compiled from the signature line pybind11
+    writes at the top of f's docstring; annotations stay text)."""
+    line = (f.__doc__ or "").split("\n", 1)[0]
+    name = f.__name__
 
-from ._voxfx import batch as _batch  # noqa: E402
-from ._voxfx import (  # noqa: E402
-    ClosestPoints,
-    Density,
-    Error,
-    Grid,
-    Mesh,
-    PointClassifier,
-    SignedDistanceField,
-    SurfaceMesh,
-    __version__,
-    closing,
-    compute_density,
-    closest_points,
-    cuda_status,
-    contains,
-    csg,
-    dilate,
-    erode,
-    extract_surface,
-    from_numpy,
-    load_mesh,
-    morphology,
-    opening,
-    read_grid,
-    resample_to_uniform,
-    reslice,
-    sdf,
-    signed_distance,
-    voxelize,
-)
+    def call(*args, **kwargs):
+        return f(*args, **kwargs)
 
+    call.__name__ = call.__qualname__ = name
+    call.__module__ = __name__
+    call.__doc__ = f.__doc__
+    if line.startswith(name + "("):
+        params, arrow, result = line[len(name):].rpartition(" -> ")
+        if not arrow:
+            params, result = line[len(name):], "None"
+        space = {}
+        try:
+            code = compile(f"def {name}{params} -> {result}: pass", "<voxfx>", "exec",
+                           flags=__future__.annotations.compiler_flag, dont_inherit=True)
+            exec(code, {"dtype": __import__("numpy").dtype}, space)
+            call.__wrapped__ = space[name]
+        except (SyntaxError, NameError, TypeError):
+            pass
+    return call
+
+
+_FUNCTIONS = [
+    "closing", "compute_density", "contains", "csg", "cuda_status", "dilate", "erode", "extract_surface",
+    "from_numpy", "load_mesh", "morphology", "opening", "read_grid", "resample_to_uniform", "reslice", "voxelize",
+    "batch_jobs", "closest_points", "signed_distance", "sdf",
+]
+for _name in _FUNCTIONS:
+    globals()[_name] = _with_signature(getattr(_voxfx, _name))
+_batch = _with_signature(_voxfx.batch)
 
 
 class _ProgressLine:
@@ -105,16 +105,14 @@ def batch(meshes, out_dir, *, progress=None, **options):
     return _batch(meshes, out_dir, progress=progress, **options)
 
 
-batch.__doc__ = _batch.__doc__ + (
+batch.__doc__ = _voxfx.batch.__doc__ + (
     "\n\nprogress=True prints done/total, failures, rate and ETA on sys.stderr; a callable is called as "
     "progress(job, done, total).")
+if hasattr(_batch, "__wrapped__"):
+    batch.__wrapped__ = _batch.__wrapped__
 
 #: File extension of each grid format that Grid.save writes.
 GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj")
 
-__all__ = [
-    "ClosestPoints", "Density", "Error", "Grid", "Mesh", "PointClassifier", "SignedDistanceField", "SurfaceMesh",
-    "GRID_FORMATS", "batch", "closest_points", "closing", "compute_density",
-    "contains", "cuda_status", "csg", "dilate", "erode", "extract_surface", "from_numpy", "load_mesh", "morphology",
-    "opening", "read_grid", "resample_to_uniform", "reslice", "sdf", "signed_distance", "voxelize",
-]
+__all__ = ["ArgumentError", "ClosestPoints", "Density", "Error", "Grid", "Mesh", "PointClassifier",
+           "SignedDistanceField", "SurfaceMesh", "GRID_FORMATS", "batch", *sorted(_FUNCTIONS)]

@@ -2,7 +2,9 @@
 #include "voxfx/batch.hpp"
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -14,6 +16,7 @@
 
 #include "core/atomic_file.hpp"
 #include "voxfx/error.hpp"
+#include "voxfx/file_name.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/parallel.hpp"
 
@@ -39,10 +42,13 @@ std::string trimmed(const std::string& s) {
 // The jobs for `meshes`, each with where it came from (for the duplicate message).
 std::vector<BatchJob> jobsFor(const std::vector<std::string>& meshes, const std::vector<std::string>& origins,
                               const std::string& outDir, GridFormat format) {
+    if (outDir.find('\0') != std::string::npos) fail("batch: the output folder's name holds a NUL byte");
     std::vector<BatchJob> jobs;
     jobs.reserve(meshes.size());
     std::map<std::string, size_t> byStem;
     for (size_t i = 0; i < meshes.size(); ++i) {
+        // The C library would open the path up to the NUL: another file than the one named.
+        if (meshes[i].find('\0') != std::string::npos) fail(origins[i], ": the mesh path holds a NUL byte");
         const std::string stem = fs::path(meshes[i]).stem().string();
         if (stem.empty()) fail(origins[i], ": '", meshes[i], "' has no file name");
         const auto [it, fresh] = byStem.emplace(stem, i);
@@ -55,19 +61,50 @@ std::vector<BatchJob> jobsFor(const std::vector<std::string>& meshes, const std:
     return jobs;
 }
 
-bool needsInsideFill(VoxelizeMode mode) {
-    return mode == VoxelizeMode::Solid || mode == VoxelizeMode::SolidConservative ||
-           mode == VoxelizeMode::Interior;
+// BatchOptions::cancel as every poll sees it: once it said stop, stop for good. Each
+// voxelization polls it with the batch's fraction rather than its own.
+class BatchCancel final : public Progress {
+public:
+    BatchCancel(Progress* user, int64_t total) : user_(user), total_(std::max<int64_t>(total, 1)) {}
+    bool update(double) override {
+        if (stop_.load(std::memory_order_relaxed)) return false;
+        if (user_ && !user_->update(double(done_.load(std::memory_order_relaxed)) / double(total_)))
+            stop_ = true;
+        return !stop_;
+    }
+    bool stopped() const { return stop_; }
+    void jobFinished() { ++done_; }
+
+private:
+    Progress* user_;
+    int64_t total_;
+    std::atomic<int64_t> done_{0};
+    std::atomic<bool> stop_{false};
+};
+
+// A manifest that is none: a folder, or a mesh file given where the list of them belongs.
+void checkManifestPath(const std::string& manifestPath) {
+    if (manifestPath.find('\0') != std::string::npos) fail("batch: the manifest's path holds a NUL byte");
+    std::error_code ec;
+    if (fs::is_directory(manifestPath, ec))
+        fail("batch: '", manifestPath,
+             "' is a folder; a manifest is a text file with one mesh path per line (relative to its "
+             "folder), or give the list of meshes");
+    const std::string ext = fileExtension(manifestPath);
+    for (const char* mesh : {".off", ".obj", ".ply", ".stl", ".gltf", ".glb"})
+        if (ext == mesh)
+            fail("batch: '", manifestPath, "' is a mesh file (", ext,
+                 "), not a manifest; for one mesh give a list of it, or a text file with one mesh path "
+                 "per line");
 }
 
 // One job, as `voxfx voxelize MESH -o OUTPUT` does it.
-void runBatchJob(const BatchJob& job, const BatchOptions& o, BatchResult& r) {
+void runBatchJob(const BatchJob& job, const BatchOptions& o, BatchCancel& cancel, BatchResult& r) {
     const Mesh mesh = loadMesh(job.mesh);
     r.triangles = int64_t(mesh.triangleCount());
     VoxelizeOptions vo = o.voxelize;
-    vo.progress = nullptr;
+    vo.progress = o.cancel ? &cancel : nullptr;
     vo.threads = o.nested ? 0 : 1;
-    if (o.autoFill) vo.fill = autoFillFor(mesh.view(), vo.mode);
     const Frame frame = fitFrame(computeBounds(mesh.view()), o.fit);
     const VoxelGrid grid = voxelize(mesh.view(), frame, vo);
     writeGrid(grid, job.output, o.write);
@@ -95,19 +132,23 @@ const char* toString(BatchStatus s) { return enumName(s, kBatchStatusNames); }
 
 std::vector<BatchJob> readBatchManifest(const std::string& manifestPath, const std::string& outDir,
                                         GridFormat format) {
+    checkManifestPath(manifestPath);
     std::ifstream in(manifestPath);
-    if (!in) fail("cannot read manifest '", manifestPath, "'");
+    if (!in) fail("cannot read manifest '", manifestPath, "': ", std::strerror(errno));
     const fs::path base = fs::path(manifestPath).parent_path();
     std::vector<std::string> meshes, origins;
     std::string line;
     for (int64_t number = 1; std::getline(in, line); ++number) {
+        if (line.find('\0') != std::string::npos)
+            fail("manifest '", manifestPath, "' line ", number,
+                 " holds a NUL byte: not a text file of mesh paths (a binary mesh?)");
         const std::string entry = trimmed(line);
         if (entry.empty() || entry[0] == '#') continue;
         const fs::path p(entry);
         meshes.push_back(p.is_absolute() ? p.string() : (base / p).string());
         origins.push_back(detail::concat(manifestPath, " line ", number));
     }
-    if (in.bad()) fail("error reading manifest '", manifestPath, "'");
+    if (in.bad()) fail("error reading manifest '", manifestPath, "': ", std::strerror(errno));
     return jobsFor(meshes, origins, outDir, format);
 }
 
@@ -116,11 +157,6 @@ std::vector<BatchJob> batchJobs(const std::vector<std::string>& meshPaths, const
     std::vector<std::string> origins;
     for (size_t i = 0; i < meshPaths.size(); ++i) origins.push_back(detail::concat("mesh ", i + 1));
     return jobsFor(meshPaths, origins, outDir, format);
-}
-
-Fill autoFillFor(const MeshView& mesh, VoxelizeMode mode) {
-    if (!needsInsideFill(mode)) return Fill::Parity;
-    return analyzeTopology(mesh).closed() ? Fill::Parity : Fill::Flood;
 }
 
 BatchSummary runBatch(const std::vector<BatchJob>& jobs, const BatchOptions& options) {
@@ -142,6 +178,7 @@ BatchSummary runBatch(const std::vector<BatchJob>& jobs, const BatchOptions& opt
     std::mutex progressMutex;
     int64_t done = 0;
     const int64_t total = int64_t(jobs.size());
+    BatchCancel cancel(options.cancel, total);
     withThreads(options.threads, [&] {
         // One job per task: meshes differ wildly in cost, so the scheduler balances them.
         parallelFor(0, total, 1, [&](int64_t b, int64_t e) {
@@ -150,13 +187,14 @@ BatchSummary runBatch(const std::vector<BatchJob>& jobs, const BatchOptions& opt
                 BatchResult& r = summary.results[size_t(i)];
                 r.mesh = job.mesh;
                 r.output = job.output;
+                if (options.cancel && !cancel.update(0)) continue;
                 const auto tj = BatchClock::now();
                 std::error_code ec;
                 if (options.skipExisting && fs::exists(job.output, ec)) {
                     r.status = BatchStatus::Skipped;
                 } else {
                     try {
-                        runBatchJob(job, options, r);
+                        runBatchJob(job, options, cancel, r);
                         r.status = BatchStatus::Ok;
                     } catch (const std::bad_alloc&) {
                         r.status = BatchStatus::Error;
@@ -167,12 +205,18 @@ BatchSummary runBatch(const std::vector<BatchJob>& jobs, const BatchOptions& opt
                     }
                 }
                 r.ms = batchMsSince(tj);
+                cancel.jobFinished();
+                // A job that cancelling cut short is not reported: the batch throws instead.
+                if (cancel.stopped() && r.status == BatchStatus::Error) continue;
                 const std::lock_guard lock(progressMutex);
                 ++done;
                 if (options.progress) options.progress->jobDone(r, done, total);
             }
         });
     });
+    if (cancel.stopped())
+        fail("batch cancelled after ", done, " of ", total,
+             " meshes (the outputs written stay, and a rerun skips them)");
     for (const BatchResult& r : summary.results) {
         summary.ok += r.status == BatchStatus::Ok;
         summary.skipped += r.status == BatchStatus::Skipped;

@@ -73,7 +73,6 @@ int runBatchCommand(const BatchArgs& a) {
     const GridFormat format = gridFormatFromPath("x." + a.format);
     BatchOptions bo;
     bo.voxelize = toVoxelizeOptions(a.choice);
-    bo.autoFill = a.choice.autoFill();
     bo.fit = toFitOptions(a.fit, voxelizeFitChoices());
     bo.fit.axis = parseAxis(a.choice.axis);
     bo.write.vdbFloat = a.choice.vdbFloat;

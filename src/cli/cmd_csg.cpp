@@ -6,6 +6,7 @@
 #include "cli_common.hpp"
 #include "grid_input.hpp"
 #include "voxfx/csg.hpp"
+#include "voxfx/grid_io.hpp"
 
 namespace voxfx::cli {
 namespace {
@@ -27,8 +28,7 @@ int runCsg(const CsgArgs& a) {
     const auto t0 = Clock::now();
     const GridFormat format = gridFormatFromPath(a.output);
     const CsgNode root = parseCsgExpression(a.expression);
-    const bool autoFill = a.fill == "auto";
-    const Fill fixedFill = autoFill ? Fill::Parity : parseFill(a.fill);
+    const Fill fill = parseFill(a.fill);
 
     // Every leaf is loaded once: grid files (.binvox .vdb .nrrd) as grids, anything else as a
     // mesh; open meshes get the flood fill unless a fill is forced.
@@ -49,20 +49,12 @@ int runCsg(const CsgArgs& a) {
             continue;
         }
         const Mesh& mesh = meshes.emplace(path, loadMesh(path)).first->second;
-        Fill fill = fixedFill;
-        if (autoFill) {
-            const MeshTopology topo = analyzeTopology(mesh.view());
-            if (!topo.closed()) {
-                fill = Fill::Flood;
-                if (!a.quiet)
-                    std::cerr << "voxfx: " << path << " is not closed (" << topo.boundaryEdges
-                              << " boundary, " << topo.nonManifoldEdges
-                              << " non-manifold edges): using --fill flood for it\n";
-            }
-        }
-        list.push_back({path, mesh.view(), fill});
+        list.push_back({path, mesh.view(), fill, nullptr});
     }
     const double loadMs = msSince(t0);
+    // What voxelize() decides per mesh (Fill::Auto: flood for an open one), printed below.
+    std::vector<VoxelizeReport> reports(list.size());
+    for (size_t i = 0; i < list.size(); ++i) list[i].report = &reports[i];
 
     const FitOptions fit = toFitOptions(a.fit, kCsgFit);
     VoxelizeOptions vo;
@@ -80,10 +72,14 @@ int runCsg(const CsgArgs& a) {
                 *std::find_if(list.begin(), list.end(), [&](const CsgMesh& x) { return x.path == path; });
             VoxelizeOptions mv = vo;
             mv.fill = m.fill;
+            mv.report = m.report;
             return std::move(voxelize(m.mesh, grid.frame, mv).bits);
         });
     }
     const double csgMs = msSince(tv);
+    for (size_t i = 0; i < list.size(); ++i)
+        if (!reports[i].fillNote.empty() && !a.quiet)
+            std::cerr << "voxfx: " << list[i].path << ": " << reports[i].fillNote << "\n";
     const double writeMs = writeGridOutput(grid, a.output, a.vdbFloat);
     if (!a.quiet) {
         const Vec3i d = grid.worldDims();

@@ -5,6 +5,7 @@
 #include "cli_common.hpp"
 #include "grid_input.hpp"
 #include "voxfx/density.hpp"
+#include "voxfx/grid_io.hpp"
 
 namespace voxfx::cli {
 namespace {

@@ -3,6 +3,8 @@
 
 #include "cli_common.hpp"
 #include "grid_input.hpp"
+#include "voxfx/grid_io.hpp"
+#include "voxfx/mesh_io.hpp"
 #include "voxfx/surface_mesh.hpp"
 
 namespace voxfx::cli {

@@ -3,11 +3,16 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 
 #include "cli_common.hpp"
 #include "grid_input.hpp"
+#include "voxfx/grid_io.hpp"
 #include "voxfx/image_io.hpp"
+#include "voxfx/mesh_io.hpp"
+#include "voxfx/moving_obstacle.hpp"
 #include "voxfx/particles.hpp"
+#include "voxfx/particles_io.hpp"
 
 namespace voxfx::cli {
 namespace {
@@ -41,15 +46,6 @@ void checkPattern(const std::string& pattern) {
         fail("output pattern '", pattern, "' must hold exactly one %d (e.g. frames/p_%04d.ply)");
 }
 
-// Rotates `src` about the vertical axis through `centre` by `angle` radians into `dst` (same size).
-void rotateMesh(const Mesh& src, const Vec3d& centre, double angle, Mesh& dst) {
-    const double c = std::cos(angle), s = std::sin(angle);
-    for (size_t i = 0; i < src.positions.size(); ++i) {
-        const Vec3d p = Vec3d(src.positions[i]) - centre;
-        dst.positions[i] = Vec3f(centre + Vec3d{c * p.x - s * p.y, s * p.x + c * p.y, p.z});
-    }
-}
-
 int runParticles(const ParticleArgs& a) {
     const auto t0 = Clock::now();
     if (!a.output.empty()) checkPattern(a.output);
@@ -63,28 +59,16 @@ int runParticles(const ParticleArgs& a) {
     po.boxWalls = a.walls;
     po.threads = a.in.threads;
 
-    VoxelizeOptions vo;
-    vo.threads = a.in.threads;
-    Mesh moving, rotated;
-    Vec3d centre;
-    Frame movingFrame;
+    // A mesh input with --rotate is a moving obstacle, re-voxelized every step (sim/).
+    std::unique_ptr<MovingObstacle> obstacle;
     VoxelGrid grid;
     if (a.rotate != 0) {
-        // A moving mesh: the frame must hold it at every angle, so it is fitted to the box of its
-        // bounding cylinder about the vertical axis.
-        moving = loadMesh(a.in.path);
-        const Box3d b = computeBounds(moving.view());
-        centre = b.center();
-        double r = 0;
-        for (const Vec3f& p : moving.positions)
-            r = std::max(r, std::hypot(double(p.x) - centre.x, double(p.y) - centre.y));
-        Box3d cyl{{centre.x - r, centre.y - r, b.lo.z}, {centre.x + r, centre.y + r, b.hi.z}};
-        const FitOptions fit = toFitOptions(a.in.fit, a.in.choices);
-        movingFrame = fitFrame(cyl, fit);
-        rotated = moving;
-        const MeshTopology topo = analyzeTopology(moving.view());
-        vo.fill = topo.closed() ? Fill::Parity : Fill::Flood;
-        grid = voxelize(moving.view(), movingFrame, vo);
+        VoxelizeOptions vo = MovingObstacle::autoSolid();
+        vo.threads = a.in.threads;
+        obstacle = std::make_unique<MovingObstacle>(loadMesh(a.in.path),
+                                                    ObstacleMotion{.spinDegreesPerStep = a.rotate}, a.steps,
+                                                    toFitOptions(a.in.fit, a.in.choices), vo);
+        grid = obstacle->voxelizeAt(0);
     } else {
         grid = loadGridInput(a.in, /*uniform=*/true);
     }
@@ -109,10 +93,9 @@ int runParticles(const ParticleArgs& a) {
     };
     if (!a.output.empty() && a.every > 0) writeFrame(0);
     for (int64_t step = 1; step <= a.steps; ++step) {
-        if (a.rotate != 0) {
+        if (obstacle) {
             const auto tv = Clock::now();
-            rotateMesh(moving, centre, double(step) * a.rotate * M_PI / 180.0, rotated);
-            collider.update(std::move(voxelize(rotated.view(), movingFrame, vo).bits));
+            collider.update(std::move(obstacle->voxelizeAt(step).bits));
             voxelMs += msSince(tv);
         }
         const auto ts = Clock::now();

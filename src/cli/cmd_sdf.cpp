@@ -57,7 +57,7 @@ int runSdf(const SdfArgs& a) {
     const SdfFormat format = sdfFormatFromPath(a.output);
     SdfOptions so = parseBand(a.band);
     so.threads = a.threads;
-    if (a.fill != "auto") so.fill = parseFill(a.fill);
+    so.fill = parseFill(a.fill);
     const int64_t margin =
         a.fit.margin >= 0 ? a.fit.margin : (so.full ? 0 : int64_t(std::ceil(so.bandVoxels)));
     const FitOptions fo = toFitOptions(a.fit, sdfFitChoices(), margin);

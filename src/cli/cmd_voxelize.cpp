@@ -33,23 +33,15 @@ int runVoxelize(const VoxelizeArgs& a) {
     const Mesh mesh = loadMesh(a.input, &report);
     const double loadMs = msSince(t0);
 
-    // Parity is exact for closed meshes only: detect open ones and pick the robust fill.
-    const MeshTopology topo = analyzeTopology(mesh.view());
-    const bool needsInside = vo.mode == VoxelizeMode::Solid || vo.mode == VoxelizeMode::SolidConservative ||
-                             vo.mode == VoxelizeMode::Interior;
-    if (a.choice.autoFill()) {
-        vo.fill = topo.closed() ? Fill::Parity : Fill::Flood;
-        if (needsInside && !topo.closed() && !a.quiet)
-            std::cerr << "voxfx: " << a.input << " is not closed (" << topo.boundaryEdges << " boundary, "
-                      << topo.nonManifoldEdges << " non-manifold, " << topo.misorientedEdges
-                      << " misoriented edges): using --fill flood (holes wider than a voxel let the flood "
-                         "in; --fill gwn closes them)\n";
-    } else {
-        if (needsInside && !topo.closed() && vo.fill == Fill::Parity && !a.quiet)
-            std::cerr << "voxfx: warning: " << a.input
-                      << " is not closed; parity may fill wrong cells (try --fill flood, --fill gwn or "
-                         "--fill vote)\n";
-    }
+    // Fill::Auto is decided by voxelize() (reported in `decided`); an explicit parity on an open
+    // mesh gets a warning.
+    const bool needsInside = needsFill(vo.mode);
+    VoxelizeReport decided;
+    vo.report = &decided;
+    if (needsInside && vo.fill == Fill::Parity && !a.quiet && !analyzeTopology(mesh.view()).closed())
+        std::cerr << "voxfx: warning: " << a.input
+                  << " is not closed; parity may fill wrong cells (try --fill flood, --fill gwn or "
+                     "--fill vote)\n";
 
     const Frame frame = fitFrame(computeBounds(mesh.view()), fo);
     ProgressLine progress("voxelizing", !a.quiet);
@@ -58,6 +50,8 @@ int runVoxelize(const VoxelizeArgs& a) {
     const VoxelGrid grid = voxelize(mesh.view(), frame, vo);
     const double voxelMs = msSince(tv);
     progress.done();
+    if (!decided.fillNote.empty() && !a.quiet)
+        std::cerr << "voxfx: " << a.input << ": " << decided.fillNote << "\n";
     if (!deviceNote.empty() && vo.device == Device::Cuda && !a.quiet)
         std::cerr << "voxfx: --device cuda: " << deviceNote << "\n";
     const bool onGpu = vo.device != Device::Cpu && deviceNote.empty();
@@ -78,7 +72,7 @@ int runVoxelize(const VoxelizeArgs& a) {
             std::cout << " x " << fmt(cell.y, 4) << " x " << fmt(cell.z, 4);
         std::cout << ", axis " << toString(grid.frame.axis()) << ", " << toString(vo.slicing) << " slicing), "
                   << toString(vo.mode);
-        if (needsInside) std::cout << " (" << toString(vo.fill) << ")";
+        if (needsInside) std::cout << " (" << toString(decided.fill) << ")";
         std::cout << ", " << withCommas(filled) << " filled voxels\n";
         std::cout << "time: load " << fmtMs(loadMs) << ", voxelize " << fmtMs(voxelMs)
                   << (onGpu ? " on " + cudaStatus().device : std::string()) << ", write " << fmtMs(writeMs)

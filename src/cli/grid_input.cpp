@@ -76,7 +76,7 @@ const FitChoices& voxelizeFitChoices() {
 void addVoxelizeChoiceOptions(CLI::App& app, VoxelizeChoiceArgs& args) {
     app.add_option("-m,--mode", args.mode, enumNameList<VoxelizeMode>(kVoxelizeModeNames, " | "))
         ->default_val("solid");
-    app.add_option("--fill", args.fill, "auto | parity | flood | vote | winding | gwn")->default_val("auto");
+    app.add_option("--fill", args.fill, enumNameList<Fill>(kFillNames, " | "))->default_val("auto");
     app.add_option("--axis", args.axis, "Slicing axis x | y | z (the result is the same voxels)")
         ->default_val("z");
     app.add_option("--slicing", args.slicing,
@@ -90,7 +90,7 @@ VoxelizeOptions toVoxelizeOptions(const VoxelizeChoiceArgs& args) {
     VoxelizeOptions vo;
     vo.mode = parseVoxelizeMode(args.mode);
     vo.slicing = parseSlicing(args.slicing);
-    if (!args.autoFill()) vo.fill = parseFill(args.fill);
+    vo.fill = parseFill(args.fill);
     return vo;
 }
 
@@ -108,6 +108,7 @@ VoxelGrid loadGridInput(const GridInput& in, bool uniform, int64_t margin) {
     const FitOptions fit = toFitOptions(in.fit, in.choices, margin);
     VoxelizeOptions vo;
     vo.threads = in.threads;
+    vo.fill = Fill::Auto;
     std::string note;
     VoxelGrid grid = loadOrVoxelize(in.path, fit, vo, &note);
     if (!note.empty() && !in.quiet) std::cerr << "voxfx: " << note << "\n";

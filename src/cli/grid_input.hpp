@@ -11,6 +11,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "voxfx/grid_io.hpp"
 #include "voxfx/voxel_grid.hpp"
 #include "voxfx/voxelize.hpp"
 
@@ -51,7 +52,6 @@ const FitChoices& voxelizeFitChoices();
 struct VoxelizeChoiceArgs {
     std::string mode = "solid", fill = "auto", axis = "z", slicing = "uniform";
     bool vdbFloat = false;
-    bool autoFill() const { return fill == "auto"; }
 };
 
 /// Adds -m/--mode, --fill, --axis, --slicing and --vdb-float.

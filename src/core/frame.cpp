@@ -161,6 +161,17 @@ void Frame::setLocalSlicing(const std::vector<double>& nearPerColumn,
     }
 }
 
+Frame Frame::translated(const Vec3d& offset) const {
+    if (perspective_ || projection_.oriented) fail("only axis-aligned orthographic frames can be translated");
+    if (!isFinite(offset)) fail("the translation of a frame must be finite");
+    Box3d moved = box_;
+    moved.lo = moved.lo + offset;
+    moved.hi = moved.hi + offset;
+    Frame f = orthographic(moved, axis_, w_, h_, d_);
+    f.local_ = local_;
+    return f;
+}
+
 bool Frame::sameGrid(const Frame& o) const {
     if (perspective_ != o.perspective_ || w_ != o.w_ || h_ != o.h_ || d_ != o.d_ || axis_ != o.axis_)
         return false;

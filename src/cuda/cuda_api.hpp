@@ -22,7 +22,7 @@
 namespace voxfx::detail {
 
 /// Bump when the table changes.
-inline constexpr uint32_t kCudaModuleAbi = 1;
+inline constexpr uint32_t kCudaModuleAbi = 2;
 
 struct CudaDeviceInfo {
     char name[256] = {};
@@ -48,8 +48,18 @@ struct CudaMesh {
     std::size_t triangleCount = 0;
 };
 
+// The library's enums as they cross the module boundary: the same values, spelled out here because
+// the module uses no voxfx header above frame.hpp. The library casts its enums to these and
+// static_asserts every value where it does (voxelize/device.cpp, grid/cuda_grid_ops.cpp), so a
+// reordering on either side stops the build.
 /// The voxelization modes, with VoxelizeMode's values (parity fill for the inside ones).
 enum class CudaMode : int { Surface = 0, Conservative = 1, Solid = 2, SolidConservative = 3, Interior = 4 };
+/// CsgOp's values.
+enum class CudaCsgOp : int { Union = 0, Intersection = 1, Difference = 2, Xor = 3 };
+/// MorphOp's values.
+enum class CudaMorphOp : int { Erode = 0, Dilate = 1, Open = 2, Close = 3 };
+/// MorphBorder's values.
+enum class CudaMorphBorder : int { Neutral = 0, Empty = 1, Filled = 2 };
 
 struct CudaModule {
     uint32_t abi;
@@ -85,14 +95,12 @@ struct CudaModule {
     bool (*downloadGrid)(void* context, const void* grid, uint64_t* words, std::string* error);
     /// The set bits of a grid.
     bool (*countGrid)(void* context, const void* grid, int64_t* count, std::string* error);
-    /// out = a op b, with CsgOp's values (union, intersection, difference, xor); grids of one
-    /// size; out may be a or b.
-    bool (*csgGrid)(void* context, const void* a, const void* b, int op, void* out, std::string* error);
-    /// out = op(in) with MorphOp's values (erode, dilate, open, close), box radii (column x,
-    /// column y, slices) and MorphBorder's values (neutral, empty, filled); `scratch` holds the
-    /// passes between. in, out and scratch are distinct grids of one size.
-    bool (*morphologyGrid)(void* context, const void* in, int op, const int64_t radii[3], int border,
-                           void* out, void* scratch, std::string* error);
+    /// out = a op b; grids of one size; out may be a or b.
+    bool (*csgGrid)(void* context, const void* a, const void* b, CudaCsgOp op, void* out, std::string* error);
+    /// out = op(in) with box radii (column x, column y, slices) and the border rule; `scratch`
+    /// holds the passes between. in, out and scratch are distinct grids of one size.
+    bool (*morphologyGrid)(void* context, const void* in, CudaMorphOp op, const int64_t radii[3],
+                           CudaMorphBorder border, void* out, void* scratch, std::string* error);
     /// Copies the context's last voxelization into `grid` (of its size).
     bool (*copyVoxelized)(void* context, void* grid, std::string* error);
 };

@@ -551,15 +551,18 @@ bool countGrid(void* handle, const void* grid, int64_t* result, std::string* err
     return countWords(*static_cast<Context*>(handle), g.words, g.wordCount(), result, error);
 }
 
-__global__ void csgKernel(const uint64_t* a, const uint64_t* b, uint64_t* out, int64_t words, int op) {
+__global__ void csgKernel(const uint64_t* a, const uint64_t* b, uint64_t* out, int64_t words, CudaCsgOp op) {
     const int64_t stride = int64_t(gridDim.x) * blockDim.x;
     for (int64_t i = int64_t(blockIdx.x) * blockDim.x + threadIdx.x; i < words; i += stride) {
         const uint64_t x = a[i], y = b[i];
-        out[i] = op == 0 ? (x | y) : op == 1 ? (x & y) : op == 2 ? (x & ~y) : (x ^ y);
+        out[i] = op == CudaCsgOp::Union          ? (x | y)
+                 : op == CudaCsgOp::Intersection ? (x & y)
+                 : op == CudaCsgOp::Difference   ? (x & ~y)
+                                                 : (x ^ y);
     }
 }
 
-bool csgGrid(void* handle, const void* a, const void* b, int op, void* out, std::string* error) {
+bool csgGrid(void* handle, const void* a, const void* b, CudaCsgOp op, void* out, std::string* error) {
     Context& c = *static_cast<Context*>(handle);
     const Grid &ga = *static_cast<const Grid*>(a), &gb = *static_cast<const Grid*>(b);
     Grid& go = *static_cast<Grid*>(out);
@@ -616,24 +619,25 @@ __global__ void morphPassKernel(BitGridView in, BitGridView out, int axis, int64
     }
 }
 
-bool morphologyGrid(void* handle, const void* inGrid, int op, const int64_t radii[3], int border,
-                    void* outGrid, void* scratchGrid, std::string* error) {
+bool morphologyGrid(void* handle, const void* inGrid, CudaMorphOp op, const int64_t radii[3],
+                    CudaMorphBorder border, void* outGrid, void* scratchGrid, std::string* error) {
     Context& c = *static_cast<Context*>(handle);
     const Grid& in = *static_cast<const Grid*>(inGrid);
     Grid& out = *static_cast<Grid*>(outGrid);
     Grid& scratch = *static_cast<Grid*>(scratchGrid);
     VOXFX_CUDA_TRY(cudaSetDevice(c.device));
     VOXFX_CUDA_TRY(cudaEventRecord(c.start, c.stream));
-    // MorphOp: erode, dilate, open (erode then dilate), close (dilate then erode).
+    // Erode, dilate, open (erode then dilate), close (dilate then erode), in CudaMorphOp's order.
     const bool steps[4][2] = {{true, true}, {false, false}, {true, false}, {false, true}};
-    const int stepCount = op >= 2 ? 2 : 1;
+    const int stepCount = op == CudaMorphOp::Open || op == CudaMorphOp::Close ? 2 : 1;
     const int64_t dims[3] = {in.view.width, in.view.height, in.view.depth};
     const Grid* src = &in;
     const unsigned blocks = unsigned(c.multiprocessors * 32);
     for (int step = 0; step < stepCount; ++step) {
-        const bool isAnd = steps[op][step];
-        // MorphBorder: neutral (the operation's identity), empty, filled.
-        const bool fillBit = border == 2 || (border == 0 && isAnd);
+        const bool isAnd = steps[int(op)][step];
+        // Neutral is the operation's identity: filled for an AND pass, empty for an OR pass.
+        const bool fillBit =
+            border == CudaMorphBorder::Filled || (border == CudaMorphBorder::Neutral && isAnd);
         const uint64_t fill = fillBit ? ~uint64_t(0) : 0;
         for (int axis = 0; axis < 3; ++axis) {
             // A window wider than the grid sees the same cells (and the fill) as one as wide.

@@ -308,6 +308,7 @@ PointClassifier::PointClassifier(const MeshView& meshView, const ContainsOptions
     m.frame = fitFrame(bounds, fo);
     VoxelizeOptions vo;
     vo.threads = options.threads;
+    vo.progress = options.progress;
     vo.mode = VoxelizeMode::Conservative;
     m.surface = voxelize(mv, m.frame, vo).bits;
     if (m.method == ContainsMethod::Flood) {
@@ -367,48 +368,57 @@ int64_t PointClassifier::resolution() const {
     return std::max({m.frame.width(), m.frame.height(), m.frame.depth()}) - 2;
 }
 
-void PointClassifier::classify(std::span<const Vec3d> points, std::span<uint8_t> out,
-                               ContainsStats* stats) const {
+void PointClassifier::classify(std::span<const Vec3d> points, std::span<uint8_t> out, ContainsStats* stats,
+                               Progress* progress) const {
     if (points.size() != out.size())
         fail("contains: ", points.size(), " points but room for ", out.size(), " answers");
     const Impl& m = *impl_;
     std::atomic<int64_t> fromCells{0}, exactCount{0}, misses{0};
+    // With a progress object, chunks of some tens of milliseconds with a poll before each: about
+    // a million points, 65,536 for the winding number (a tree walk per point); else one loop.
+    const int64_t n = int64_t(points.size());
+    const int64_t chunk = !progress                             ? std::max<int64_t>(n, 1)
+                          : m.method == ContainsMethod::Winding ? int64_t(1) << 16
+                                                                : int64_t(1) << 20;
     const auto run = [&] {
-        parallelFor(0, int64_t(points.size()), 4096, [&](int64_t b, int64_t e) {
-            int64_t cells = 0, exacts = 0;
-            const int64_t missesBefore = tContainsFilterMisses;
-            for (int64_t i = b; i < e; ++i) {
-                const Vec3d& p = points[std::size_t(i)];
-                uint8_t answer = 0;
-                if (m.emptyMesh) {
-                } else if (m.method == ContainsMethod::Winding) {
-                    ++exacts;
-                    answer = isFinite(p) && m.winding.at(p) >= 0.5 ? 1 : 0;
-                } else {
-                    const Vec3d g = m.frame.gridFromWorld(p);
-                    const int64_t W = m.frame.width(), H = m.frame.height(), D = m.frame.depth();
-                    if (g.x >= 0 && g.x < double(W) && g.y >= 0 && g.y < double(H) && g.z >= 0 &&
-                        g.z < double(D)) {
-                        const int64_t x = std::min<int64_t>(int64_t(g.x), W - 1),
-                                      y = std::min<int64_t>(int64_t(g.y), H - 1),
-                                      z = std::min<int64_t>(int64_t(g.z), D - 1);
-                        if (m.method == ContainsMethod::Flood || !m.surface.get(x, y, z)) {
-                            ++cells;
-                            answer = m.solid.get(x, y, z) ? 1 : 0;
-                        } else {
-                            ++exacts;
-                            answer = m.parityExact(p, y * W + x) ? 1 : 0;
-                        }
+        for (int64_t c0 = 0; c0 < n; c0 += chunk) {
+            if (progress && !progress->update(double(c0) / double(n))) fail("contains: cancelled");
+            parallelFor(c0, std::min(n, c0 + chunk), 4096, [&](int64_t b, int64_t e) {
+                int64_t cells = 0, exacts = 0;
+                const int64_t missesBefore = tContainsFilterMisses;
+                for (int64_t i = b; i < e; ++i) {
+                    const Vec3d& p = points[std::size_t(i)];
+                    uint8_t answer = 0;
+                    if (m.emptyMesh) {
+                    } else if (m.method == ContainsMethod::Winding) {
+                        ++exacts;
+                        answer = isFinite(p) && std::abs(m.winding.at(p)) >= 0.5 ? 1 : 0;
                     } else {
-                        ++cells; // outside the grid, which holds the mesh with a cell to spare
+                        const Vec3d g = m.frame.gridFromWorld(p);
+                        const int64_t W = m.frame.width(), H = m.frame.height(), D = m.frame.depth();
+                        if (g.x >= 0 && g.x < double(W) && g.y >= 0 && g.y < double(H) && g.z >= 0 &&
+                            g.z < double(D)) {
+                            const int64_t x = std::min<int64_t>(int64_t(g.x), W - 1),
+                                          y = std::min<int64_t>(int64_t(g.y), H - 1),
+                                          z = std::min<int64_t>(int64_t(g.z), D - 1);
+                            if (m.method == ContainsMethod::Flood || !m.surface.get(x, y, z)) {
+                                ++cells;
+                                answer = m.solid.get(x, y, z) ? 1 : 0;
+                            } else {
+                                ++exacts;
+                                answer = m.parityExact(p, y * W + x) ? 1 : 0;
+                            }
+                        } else {
+                            ++cells; // outside the grid, which holds the mesh with a cell to spare
+                        }
                     }
+                    out[std::size_t(i)] = answer;
                 }
-                out[std::size_t(i)] = answer;
-            }
-            fromCells += cells;
-            exactCount += exacts;
-            misses += tContainsFilterMisses - missesBefore;
-        });
+                fromCells += cells;
+                exactCount += exacts;
+                misses += tContainsFilterMisses - missesBefore;
+            });
+        }
     };
     withThreads(m.threads, run);
     if (stats) {
@@ -422,7 +432,7 @@ void PointClassifier::classify(std::span<const Vec3d> points, std::span<uint8_t>
 bool PointClassifier::inside(const Vec3d& p) const {
     const Impl& m = *impl_;
     if (m.emptyMesh) return false;
-    if (m.method == ContainsMethod::Winding) return isFinite(p) && m.winding.at(p) >= 0.5;
+    if (m.method == ContainsMethod::Winding) return isFinite(p) && std::abs(m.winding.at(p)) >= 0.5;
     const Vec3d g = m.frame.gridFromWorld(p);
     const int64_t W = m.frame.width(), H = m.frame.height(), D = m.frame.depth();
     if (!(g.x >= 0 && g.x < double(W) && g.y >= 0 && g.y < double(H) && g.z >= 0 && g.z < double(D)))
@@ -438,7 +448,7 @@ void contains(const MeshView& mesh, std::span<const Vec3d> points, std::span<uin
     ContainsOptions o = options;
     if (o.resolution == 0) o.resolution = defaultContainsResolution(mesh.triangleCount, points.size());
     const PointClassifier classifier(mesh, o);
-    classifier.classify(points, out);
+    classifier.classify(points, out, nullptr, o.progress);
 }
 
 std::vector<uint8_t> contains(const MeshView& mesh, std::span<const Vec3d> points,

@@ -495,6 +495,7 @@ VoxelGrid voxelizeCsg(const CsgNode& node, const std::vector<CsgMesh>& meshes, c
         VoxelizeOptions vo = voxelize;
         vo.mode = VoxelizeMode::Solid;
         vo.fill = m.fill;
+        vo.report = m.report;
         vo.slicing = Slicing::Uniform;
         return std::move(voxfx::voxelize(m.mesh, frame, vo).bits);
     });

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <mutex>
 
+#include "grid/progress_range.hpp"
 #include "grid/triangle_bvh.hpp"
 #include "voxfx/contains.hpp"
 #include "voxfx/error.hpp"
@@ -172,15 +173,18 @@ void signedDistance(const MeshView& mesh, std::span<const Vec3d> points, std::sp
     if (method == SignMethod::Auto)
         method = analyzeTopology(mesh).closed() ? SignMethod::Parity : SignMethod::Winding;
     if (options.used) *options.used = method;
+    // The distances, then the inside test, as one progress.
+    detail::ProgressRange distanceProgress(options.progress, 0.0, 0.7), insideProgress(options.progress, 0.7, 1.0);
     DistanceOptions distanceOptions;
     distanceOptions.threads = options.threads;
-    distanceOptions.progress = options.progress;
+    distanceOptions.progress = distanceProgress.get();
     query.distance(points, out, distanceOptions);
 
     ContainsOptions co;
     co.method = method == SignMethod::Parity ? ContainsMethod::Parity : ContainsMethod::Winding;
     co.windingBeta = options.windingBeta;
     co.threads = options.threads;
+    co.progress = insideProgress.get();
     std::vector<uint8_t> inside(points.size());
     contains(mesh, points, inside, co);
     for (std::size_t i = 0; i < out.size(); ++i)

@@ -14,6 +14,104 @@
 
 namespace voxfx {
 
+namespace {
+
+// Calls emit(n, i, j, k) for the n-th filled cell in the order of i, then j, then k (world axes)
+// of an axis-aligned, uniformly sliced grid: counts per i (a popcount pass over the columns
+// (i, j) of a grid sliced along z), prefix sums, then each i fills its own range of n.
+template <class Emit>
+void forEachFilledCell(const VoxelGrid& grid, std::size_t values, int threads, Emit emit) {
+    const Frame& f = grid.frame;
+    if (f.isPerspective() || f.isOriented() || f.slicing() != Slicing::Uniform)
+        fail("filled cells need an axis-aligned orthographic grid with uniform slicing (resample a locally "
+             "sliced one first)");
+    const Vec3i dims = grid.worldDims();
+    for (int a = 0; a < 3; ++a)
+        if (dims[a] > int64_t(std::numeric_limits<int32_t>::max()))
+            fail("filled cells: ", dims[a], " cells along ", toString(Axis(a)), " do not fit 32-bit indices");
+    const VoxelGrid resliced = f.axis() == Axis::Z ? VoxelGrid{} : reslice(grid, Axis::Z);
+    const BitGrid& bits = f.axis() == Axis::Z ? grid.bits : resliced.bits;
+    const int64_t W = bits.width(), H = bits.height(), P = bits.wordsPerColumn();
+    withThreads(threads, [&] {
+        std::vector<int64_t> start(std::size_t(W) + 1, 0);
+        parallelFor(0, W, 1, [&](int64_t b, int64_t e) {
+            for (int64_t x = b; x < e; ++x) {
+                int64_t n = 0;
+                for (int64_t y = 0; y < H; ++y) {
+                    const uint64_t* col = bits.column(x, y);
+                    for (int64_t w = 0; w < P; ++w) n += std::popcount(col[w]);
+                }
+                start[std::size_t(x) + 1] = n;
+            }
+        });
+        for (std::size_t x = 1; x < start.size(); ++x) start[x] += start[x - 1];
+        if (values != 3 * std::size_t(start.back()))
+            fail("filled cells: room for ", values, " values, but ", start.back(), " cells need ",
+                 3 * start.back());
+        parallelFor(0, W, 1, [&](int64_t b, int64_t e) {
+            for (int64_t x = b; x < e; ++x) {
+                int64_t n = start[std::size_t(x)];
+                for (int64_t y = 0; y < H; ++y) {
+                    const uint64_t* col = bits.column(x, y);
+                    for (int64_t w = 0; w < P; ++w)
+                        for (uint64_t word = col[w]; word; word &= word - 1)
+                            emit(n++, x, y, w * 64 + std::countr_zero(word));
+                }
+            }
+        });
+    });
+}
+
+template <class T> void filledCellCentersAs(const VoxelGrid& grid, std::span<T> out, int threads) {
+    const Vec3d lo = grid.frame.box().lo, cell = grid.frame.cellSize();
+    forEachFilledCell(grid, out.size(), threads, [&](int64_t n, int64_t i, int64_t j, int64_t k) {
+        T* o = out.data() + 3 * n;
+        o[0] = T(lo.x + (double(i) + 0.5) * cell.x);
+        o[1] = T(lo.y + (double(j) + 0.5) * cell.y);
+        o[2] = T(lo.z + (double(k) + 0.5) * cell.z);
+    });
+}
+
+} // namespace
+
+void filledCellIndices(const VoxelGrid& grid, std::span<int32_t> out, int threads) {
+    forEachFilledCell(grid, out.size(), threads, [&](int64_t n, int64_t i, int64_t j, int64_t k) {
+        int32_t* o = out.data() + 3 * n;
+        o[0] = int32_t(i);
+        o[1] = int32_t(j);
+        o[2] = int32_t(k);
+    });
+}
+
+void filledCellCenters(const VoxelGrid& grid, std::span<double> out, int threads) {
+    filledCellCentersAs(grid, out, threads);
+}
+void filledCellCenters(const VoxelGrid& grid, std::span<float> out, int threads) {
+    filledCellCentersAs(grid, out, threads);
+}
+
+void filledAt(const VoxelGrid& grid, std::span<const Vec3d> points, std::span<uint8_t> out, int threads) {
+    const Frame& f = grid.frame;
+    if (f.isPerspective() || f.isOriented()) fail("filledAt needs an axis-aligned orthographic grid");
+    if (points.size() != out.size()) fail("filledAt: ", points.size(), " points but room for ", out.size());
+    const int64_t W = f.width(), H = f.height(), D = f.depth();
+    withThreads(threads, [&] {
+        parallelFor(0, int64_t(points.size()), 4096, [&](int64_t b, int64_t e) {
+            for (int64_t i = b; i < e; ++i) {
+                const Vec3d g = f.gridFromWorld(points[std::size_t(i)]);
+                uint8_t answer = 0;
+                // Comparisons first: NaN fails them all, and no out-of-range double is converted.
+                if (g.x >= 0 && g.x < double(W) && g.y >= 0 && g.y < double(H)) {
+                    const auto x = int64_t(g.x), y = int64_t(g.y);
+                    const double s = f.depthToSlice(y * W + x)(g.z);
+                    if (s >= 0 && s < double(D)) answer = grid.bits.get(x, y, int64_t(s)) ? 1 : 0;
+                }
+                out[std::size_t(i)] = answer;
+            }
+        });
+    });
+}
+
 int64_t countColumnRange(const uint64_t* words, int64_t depth, int64_t s0, int64_t s1) {
     s0 = std::max<int64_t>(s0, 0);
     s1 = std::min<int64_t>(s1, depth);

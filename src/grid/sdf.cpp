@@ -20,6 +20,7 @@
 #include <cmath>
 #include <mutex>
 
+#include "grid/progress_range.hpp"
 #include "grid/triangle_bvh.hpp"
 #include "voxfx/error.hpp"
 
@@ -637,7 +638,8 @@ SignedDistanceField signedDistanceField(const MeshView& mesh, const Frame& frame
     SignedDistanceField f;
     f.frame = Frame::orthographic(frame.box(), Axis::Z, dims.x, dims.y, dims.z);
     f.full = options.full;
-    f.fill = options.fill ? *options.fill : (analyzeTopology(mesh).closed() ? Fill::Parity : Fill::Gwn);
+    f.fill = options.fill != Fill::Auto ? options.fill
+                                        : (analyzeTopology(mesh).closed() ? Fill::Parity : Fill::Gwn);
     const Vec3d cell = f.frame.cellSize();
     const double maxCell = std::max({cell.x, cell.y, cell.z});
     f.bandVoxels = options.full ? 0.0 : options.bandVoxels;
@@ -659,6 +661,9 @@ SignedDistanceField signedDistanceField(const MeshView& mesh, const Frame& frame
         VoxelizeOptions vo;
         vo.mode = VoxelizeMode::Solid;
         vo.fill = f.fill;
+        // The solid voxelization is quick next to the distances: a tenth of the progress.
+        detail::ProgressRange solidProgress(options.progress, 0.0, 0.1), brickProgress(options.progress, 0.1, 1.0);
+        vo.progress = solidProgress.get();
         const VoxelGrid solid = voxelize(mesh, f.frame, vo);
         const detail::TriangleBvh bvh(mesh);
         const detail::SdfBuilder builder(p, bvh);

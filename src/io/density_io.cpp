@@ -11,6 +11,7 @@
 #include "io/module_api.hpp"
 #include "voxfx/density.hpp"
 #include "voxfx/file_name.hpp"
+#include "voxfx/grid_io.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {

@@ -1,5 +1,5 @@
 // voxfx — "a grid or a mesh" input for the grid tools: read a grid file, or load, fit and
-// voxelize a mesh (I/O, so it lives in io/ although voxelize.hpp declares it).
+// voxelize a mesh (declared in grid_io.hpp).
 #include <string>
 
 #include "voxfx/error.hpp"
@@ -20,19 +20,12 @@ VoxelGrid loadOrVoxelize(const std::string& path, const FitOptions& fit, const V
     if (note) note->clear();
     if (isGridFile(path)) return readGrid(path);
     const Mesh mesh = loadMesh(path);
+    VoxelizeReport report;
     VoxelizeOptions vo = options;
-    const bool needsInside = vo.mode == VoxelizeMode::Solid || vo.mode == VoxelizeMode::SolidConservative ||
-                             vo.mode == VoxelizeMode::Interior;
-    if (needsInside && vo.fill == Fill::Parity) {
-        const MeshTopology topo = analyzeTopology(mesh.view());
-        if (!topo.closed()) {
-            vo.fill = Fill::Flood;
-            if (note)
-                *note = detail::concat(path, " is not closed (", topo.boundaryEdges, " boundary, ",
-                                       topo.nonManifoldEdges, " non-manifold edges): filled by flood");
-        }
-    }
-    return voxelize(mesh.view(), fitFrame(computeBounds(mesh.view()), fit), vo);
+    if (!vo.report) vo.report = &report;
+    VoxelGrid grid = voxelize(mesh.view(), fitFrame(computeBounds(mesh.view()), fit), vo);
+    if (note && !vo.report->fillNote.empty()) *note = detail::concat(path, ": ", vo.report->fillNote);
+    return grid;
 }
 
 } // namespace voxfx

@@ -1,5 +1,7 @@
 // voxfx — writing particle sets (.ply binary little endian, .csv); the simulation lives in
 // sim/particles.cpp.
+#include "voxfx/particles_io.hpp"
+
 #include <cstdio>
 
 #include "core/atomic_file.hpp"

@@ -7,6 +7,7 @@
 #include "core/atomic_file.hpp"
 #include "io/ply_header.hpp"
 #include "voxfx/file_name.hpp"
+#include "voxfx/mesh_io.hpp"
 #include "voxfx/surface_mesh.hpp"
 
 namespace voxfx {

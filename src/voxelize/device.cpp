@@ -8,9 +8,8 @@
 
 #include "core/module_loader.hpp"
 #include "cuda/cuda_api.hpp"
-#include "voxfx/csg.hpp"
+#include "voxelize/cuda_context.hpp"
 #include "voxfx/error.hpp"
-#include "voxfx/morphology.hpp"
 #include "voxfx/voxelize.hpp"
 
 namespace voxfx {
@@ -59,17 +58,7 @@ CudaStatus probe() {
     return s;
 }
 
-/// The context the CudaGrid operations share (made on first use), and the lock that serializes
-/// them on its stream.
-struct SharedContext {
-    const detail::CudaModule* module = nullptr;
-    void* context = nullptr;
-    std::mutex mutex;
-};
-
-void check(bool ok, const std::string& error) {
-    if (!ok) fail("CUDA: ", error);
-}
+using detail::checkCuda;
 
 /// A new context on the first device, and the module it belongs to; voxfx::Error with the reason
 /// when no GPU can be used.
@@ -79,16 +68,24 @@ void* newContext(const detail::CudaModule*& module) {
     module = &cudaModule();
     std::string error;
     void* context = module->createContext(&error);
-    check(context != nullptr, error);
+    checkCuda(context != nullptr, error);
     return context;
 }
 
-SharedContext& sharedContext() {
-    static SharedContext* shared = [] {
-        const detail::CudaModule* module = nullptr;
+} // namespace
+
+namespace detail {
+
+void checkCuda(bool ok, const std::string& error) {
+    if (!ok) fail("CUDA: ", error);
+}
+
+CudaSharedContext& cudaSharedContext() {
+    static CudaSharedContext* shared = [] {
+        const CudaModule* module = nullptr;
         void* context = newContext(module);
         // Lives as long as the process: grids may outlive main's locals.
-        auto* c = new SharedContext;
+        auto* c = new CudaSharedContext;
         c->module = module;
         c->context = context;
         return c;
@@ -96,7 +93,13 @@ SharedContext& sharedContext() {
     return *shared;
 }
 
-} // namespace
+double lastCudaKernelMs(CudaSharedContext& s) {
+    CudaTimings t;
+    s.module->timings(s.context, &t);
+    return t.kernelMs;
+}
+
+} // namespace detail
 
 const char* toString(Device d) { return enumName(d, kDeviceNames); }
 
@@ -131,17 +134,24 @@ void CudaVoxelizer::setMesh(const MeshView& mesh) {
     m.indices = mesh.indices;
     m.triangleCount = mesh.triangleCount;
     std::string error;
-    check(impl_->module->setMesh(impl_->context, m, &error), error);
+    checkCuda(impl_->module->setMesh(impl_->context, m, &error), error);
     impl_->haveMesh = true;
     impl_->haveGrid = false;
 }
+
+// VoxelizeMode crosses the module boundary as CudaMode: the values must agree.
+static_assert(int(VoxelizeMode::Surface) == int(detail::CudaMode::Surface) &&
+              int(VoxelizeMode::Conservative) == int(detail::CudaMode::Conservative) &&
+              int(VoxelizeMode::Solid) == int(detail::CudaMode::Solid) &&
+              int(VoxelizeMode::SolidConservative) == int(detail::CudaMode::SolidConservative) &&
+              int(VoxelizeMode::Interior) == int(detail::CudaMode::Interior));
 
 void CudaVoxelizer::voxelize(const Frame& frame, VoxelizeMode mode) {
     if (!impl_->haveMesh) fail("CudaVoxelizer::voxelize: no mesh (call setMesh first)");
     const double clipDepth = detail::clipDepthOf(frame);
     std::string error;
     impl_->haveGrid = false;
-    check(
+    checkCuda(
         impl_->module->voxelize(impl_->context, frame.view(), clipDepth, detail::CudaMode(int(mode)), &error),
         error);
     impl_->width = frame.width();
@@ -154,7 +164,7 @@ BitGrid CudaVoxelizer::download() {
     if (!impl_->haveGrid) fail("CudaVoxelizer::download: nothing voxelized yet");
     BitGrid grid(impl_->width, impl_->height, impl_->depth);
     std::string error;
-    check(impl_->module->download(impl_->context, grid.words(), grid.wordCount(), &error), error);
+    checkCuda(impl_->module->download(impl_->context, grid.words(), grid.wordCount(), &error), error);
     return grid;
 }
 
@@ -162,7 +172,7 @@ int64_t CudaVoxelizer::count() {
     if (!impl_->haveGrid) fail("CudaVoxelizer::count: nothing voxelized yet");
     int64_t n = 0;
     std::string error;
-    check(impl_->module->count(impl_->context, &n, &error), error);
+    checkCuda(impl_->module->count(impl_->context, &n, &error), error);
     return n;
 }
 
@@ -170,7 +180,7 @@ CudaGrid CudaVoxelizer::grid() {
     if (!impl_->haveGrid) fail("CudaVoxelizer::grid: nothing voxelized yet");
     CudaGrid g(impl_->width, impl_->height, impl_->depth);
     std::string error;
-    check(impl_->module->copyVoxelized(impl_->context, g.handle_, &error), error);
+    checkCuda(impl_->module->copyVoxelized(impl_->context, g.handle_, &error), error);
     return g;
 }
 
@@ -184,7 +194,7 @@ CudaGrid::CudaGrid() = default;
 
 CudaGrid::CudaGrid(int64_t w, int64_t h, int64_t d) : w_(w), h_(h), d_(d) {
     if (w <= 0 || h <= 0 || d <= 0) fail("a grid needs positive dimensions, got ", w, " x ", h, " x ", d);
-    SharedContext& s = sharedContext();
+    detail::CudaSharedContext& s = detail::cudaSharedContext();
     const std::lock_guard lock(s.mutex);
     std::string error;
     handle_ = s.module->createGrid(s.context, w, h, d, &error);
@@ -192,14 +202,14 @@ CudaGrid::CudaGrid(int64_t w, int64_t h, int64_t d) : w_(w), h_(h), d_(d) {
 }
 
 CudaGrid::CudaGrid(const BitGrid& grid) : CudaGrid(grid.width(), grid.height(), grid.depth()) {
-    SharedContext& s = sharedContext();
+    detail::CudaSharedContext& s = detail::cudaSharedContext();
     const std::lock_guard lock(s.mutex);
     std::string error;
-    check(s.module->uploadGrid(s.context, handle_, grid.words(), &error), error);
+    checkCuda(s.module->uploadGrid(s.context, handle_, grid.words(), &error), error);
 }
 
 CudaGrid::~CudaGrid() {
-    if (handle_) sharedContext().module->destroyGrid(handle_);
+    if (handle_) detail::cudaSharedContext().module->destroyGrid(handle_);
 }
 
 CudaGrid::CudaGrid(CudaGrid&& o) noexcept
@@ -207,7 +217,7 @@ CudaGrid::CudaGrid(CudaGrid&& o) noexcept
 
 CudaGrid& CudaGrid::operator=(CudaGrid&& o) noexcept {
     if (this != &o) {
-        if (handle_) sharedContext().module->destroyGrid(handle_);
+        if (handle_) detail::cudaSharedContext().module->destroyGrid(handle_);
         handle_ = std::exchange(o.handle_, nullptr);
         w_ = o.w_;
         h_ = o.h_;
@@ -220,60 +230,21 @@ CudaGrid& CudaGrid::operator=(CudaGrid&& o) noexcept {
 BitGrid CudaGrid::download() const {
     if (!handle_) return {};
     BitGrid grid(w_, h_, d_);
-    SharedContext& s = sharedContext();
+    detail::CudaSharedContext& s = detail::cudaSharedContext();
     const std::lock_guard lock(s.mutex);
     std::string error;
-    check(s.module->downloadGrid(s.context, handle_, grid.words(), &error), error);
+    checkCuda(s.module->downloadGrid(s.context, handle_, grid.words(), &error), error);
     return grid;
 }
 
 int64_t CudaGrid::count() const {
     if (!handle_) return 0;
-    SharedContext& s = sharedContext();
+    detail::CudaSharedContext& s = detail::cudaSharedContext();
     const std::lock_guard lock(s.mutex);
     int64_t n = 0;
     std::string error;
-    check(s.module->countGrid(s.context, handle_, &n, &error), error);
+    checkCuda(s.module->countGrid(s.context, handle_, &n, &error), error);
     return n;
-}
-
-namespace {
-double lastKernelMs(SharedContext& s) {
-    detail::CudaTimings t;
-    s.module->timings(s.context, &t);
-    return t.kernelMs;
-}
-} // namespace
-
-CudaGrid csg(const CudaGrid& a, const CudaGrid& b, CsgOp op) {
-    if (a.width() != b.width() || a.height() != b.height() || a.depth() != b.depth())
-        fail("csg: the grids differ in size (", a.width(), " x ", a.height(), " x ", a.depth(), " and ",
-             b.width(), " x ", b.height(), " x ", b.depth(), ")");
-    if (a.empty()) return {};
-    CudaGrid out(a.width(), a.height(), a.depth());
-    SharedContext& s = sharedContext();
-    const std::lock_guard lock(s.mutex);
-    std::string error;
-    check(s.module->csgGrid(s.context, a.handle_, b.handle_, int(op), out.handle_, &error), error);
-    out.kernelMs_ = lastKernelMs(s);
-    return out;
-}
-
-CudaGrid morphology(const CudaGrid& grid, MorphOp op, const MorphologyOptions& options) {
-    if (options.rx < 0 || options.ry < 0 || options.rz < 0)
-        fail("morphology radii must be >= 0, got ", options.rx, ", ", options.ry, ", ", options.rz);
-    if (grid.empty()) return {};
-    CudaGrid out(grid.width(), grid.height(), grid.depth());
-    CudaGrid scratch(grid.width(), grid.height(), grid.depth());
-    SharedContext& s = sharedContext();
-    const std::lock_guard lock(s.mutex);
-    const int64_t radii[3] = {options.rx, options.ry, options.rz};
-    std::string error;
-    check(s.module->morphologyGrid(s.context, grid.handle_, int(op), radii, int(options.border), out.handle_,
-                                   scratch.handle_, &error),
-          error);
-    out.kernelMs_ = lastKernelMs(s);
-    return out;
 }
 
 } // namespace voxfx

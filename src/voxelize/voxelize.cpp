@@ -74,13 +74,14 @@ BitGrid fillInside(const Frame& frame, const MeshView& mesh, const VoxelizeOptio
         const BitGrid walls = surface ? BitGrid() : rasterizeInto(frame, mesh, VoxelizeMode::Conservative, o);
         detail::WindingTree tree;
         tree.build(mesh, 2.0);
-        return detail::gwnFillInside(frame, mesh, tree, surface ? *surface : walls);
+        return detail::gwnFillInside(frame, mesh, tree, surface ? *surface : walls, o.progress);
     }
     case Fill::Vote: {
         requireUniformOrthographic(frame, o.fill);
         VoxelizeOptions parity = o;
         parity.fill = Fill::Parity;
         parity.mode = VoxelizeMode::Solid;
+        parity.report = nullptr; // the caller's report says "vote", not the three parities
         const VoxelGrid votes[3] = {
             {frame, fillInside(frame, mesh, parity, nullptr)},
             reslice(voxelize(mesh, detail::reframe(frame, Axis((int(frame.axis()) + 1) % 3)), parity),
@@ -89,6 +90,8 @@ BitGrid fillInside(const Frame& frame, const MeshView& mesh, const VoxelizeOptio
                     frame.axis())};
         return detail::majority(votes[0].bits, votes[1].bits, votes[2].bits);
     }
+    case Fill::Auto:
+        break; // chooseFill replaced it before
     }
     VOXFX_CHECK(false);
     return {};
@@ -161,9 +164,38 @@ VoxelGrid voxelizeImpl(const MeshView& mesh, const Frame& inFrame, const Voxeliz
     return {};
 }
 
+// Fill::Auto, decided once for every front end: parity is exact for a closed mesh; on an open
+// one it fills wrong cells, and flood is robust to holes narrower than a voxel.
+Fill chooseFill(const MeshView& mesh, const VoxelizeOptions& o) {
+    VoxelizeReport r;
+    r.fill = o.fill;
+    if (o.fill == Fill::Auto) {
+        r.fill = Fill::Parity;
+        if (needsFill(o.mode)) {
+            r.topology = analyzeTopology(mesh);
+            r.topologyAnalyzed = true;
+            if (!r.topology.closed()) {
+                r.fill = Fill::Flood;
+                r.fillNote = detail::concat("not closed (", r.topology.boundaryEdges, " boundary, ",
+                                            r.topology.nonManifoldEdges, " non-manifold, ",
+                                            r.topology.misorientedEdges,
+                                            " misoriented edges): filled by flood (holes wider than a voxel "
+                                            "let the flood in; the gwn fill closes them)");
+            }
+        }
+    }
+    if (o.report) *o.report = r;
+    return r.fill;
+}
+
 } // namespace
 
 const char* toString(VoxelizeMode m) { return enumName(m, kVoxelizeModeNames); }
+
+bool needsFill(VoxelizeMode mode) {
+    return mode == VoxelizeMode::Solid || mode == VoxelizeMode::SolidConservative ||
+           mode == VoxelizeMode::Interior;
+}
 
 const char* toString(Fill f) { return enumName(f, kFillNames); }
 
@@ -184,6 +216,7 @@ Frame fitFrame(const Box3d& meshBounds, const FitOptions& o) {
     const int given = (o.resolution > 0) + (o.voxelSize > 0) + (o.dims.x > 0 || o.dims.y > 0 || o.dims.z > 0);
     if (given != 1) fail("give exactly one of resolution, voxel size or dims");
     if (o.marginCells < 0) fail("the margin must be >= 0 cells, got ", o.marginCells);
+    if (o.cube && o.resolution <= 0) fail("a cube grid needs a resolution");
     const Vec3d ext = bounds.extent();
     Vec3i dims;
     Vec3d cell;
@@ -208,7 +241,7 @@ Frame fitFrame(const Box3d& meshBounds, const FitOptions& o) {
         for (int a = 0; a < 3; ++a) {
             // Cells along the axis; the longest axis of a resolution fit gets exactly N (the tiny
             // tolerance keeps rounding from adding a cell there).
-            const double n = std::ceil(ext[a] / size * (1.0 - 1e-12));
+            const double n = o.cube ? double(o.resolution) : std::ceil(ext[a] / size * (1.0 - 1e-12));
             if (n > 1e9)
                 fail("the grid would need ", n, " cells along ", toString(Axis(a)),
                      "; use a larger voxel size");
@@ -236,11 +269,12 @@ Frame fitFrame(const Box3d& meshBounds, const FitOptions& o) {
 
 VoxelGrid voxelize(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options) {
     validateMesh(mesh, "mesh");
-    if (frame.isPerspective() && (options.fill == Fill::Flood || options.fill == Fill::Vote) &&
-        options.mode != VoxelizeMode::Surface && options.mode != VoxelizeMode::Conservative)
-        fail("fill '", toString(options.fill), "' needs an orthographic frame");
+    VoxelizeOptions o = options;
+    o.fill = chooseFill(mesh, options);
+    if (frame.isPerspective() && (o.fill == Fill::Flood || o.fill == Fill::Vote) && needsFill(o.mode))
+        fail("fill '", toString(o.fill), "' needs an orthographic frame");
     VoxelGrid result;
-    withThreads(options.threads, [&] { result = voxelizeImpl(mesh, frame, options); });
+    withThreads(o.threads, [&] { result = voxelizeImpl(mesh, frame, o); });
     return result;
 }
 

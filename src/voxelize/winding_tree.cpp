@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numbers>
 
 #include "voxelize/consumers.hpp"
@@ -157,7 +159,7 @@ struct GwnCrossings {
     std::vector<int32_t> edgeTop;       ///< per column: the last slice near a boundary edge (-1: none)
 };
 
-GwnCrossings gwnCrossings(const Frame& frame, const MeshView& mesh) {
+GwnCrossings gwnCrossings(const Frame& frame, const MeshView& mesh, Progress* progress) {
     GwnCrossings g;
     // Exact counts along straight columns from the grid's near end: an orthographic frame with
     // uniform slicing, and no geometry in front of the near plane.
@@ -171,7 +173,7 @@ GwnCrossings gwnCrossings(const Frame& frame, const MeshView& mesh) {
         if (!(t >= 0) || !std::isfinite(t) || !std::isfinite(p.x) || !std::isfinite(p.y)) return g;
         g.bothWays &= t <= double(D);
     }
-    g.lists = FragmentLists::build(frame, mesh);
+    g.lists = FragmentLists::build(frame, mesh, progress);
     g.view = view;
     // Every column whose cell square grown by a cell a boundary edge's projection touches: its
     // curtain from two slices in front of the edge's lowest point, and the edge up to two slices
@@ -291,13 +293,19 @@ private:
         }
     }
 
-    // The winding number at a cell's centre minus 0.5 (evaluated once per block).
-    float excess(int64_t x, int64_t y, int64_t z) {
+    // The winding number at a cell's centre (evaluated once per block).
+    float winding(int64_t x, int64_t y, int64_t z) {
         float& w = cache_[size_t(((z - o_[2]) * kGwnBlock + (y - o_[1])) * kGwnBlock + (x - o_[0]))];
-        if (std::isnan(w)) w = float(tree_.at(frame_.cellCenter(x, y, z)) - 0.5);
+        if (std::isnan(w)) w = float(tree_.at(frame_.cellCenter(x, y, z)));
         return w;
     }
-    bool insideAt(int64_t x, int64_t y, int64_t z) { return excess(x, y, z) >= 0; }
+    // Which side of the threshold |w| = 0.5 a centre lies on: 1 (w >= 0.5), -1 (w <= -0.5, inside
+    // a mesh oriented inward), 0 outside.
+    int side(int64_t x, int64_t y, int64_t z) {
+        const float w = winding(x, y, z);
+        return w >= 0.5f ? 1 : w <= -0.5f ? -1 : 0;
+    }
+    bool insideAt(int64_t x, int64_t y, int64_t z) { return side(x, y, z) != 0; }
 
     // Whether no curtain reaches into the block: the count N then changes only across the
     // surface, by exactly what the winding number jumps there. The same holds for the count from
@@ -339,7 +347,7 @@ private:
     // Across the surface the winding number jumps by exactly the crossing's sign, so
     // C = w - N is continuous there; off the curtains it is harmonic (zero for a closed mesh).
     // When C stays within kGwnSlack of one integer k at the block's corners, every cell of the
-    // block is inside exactly when N + k >= 1 (w = N + C >= 0.5 with |C - k| < 0.5).
+    // block is inside exactly when N + k != 0 (|w| >= 0.5 for w = N + C with |C - k| < 0.5).
     static constexpr double kGwnSlack = 0.4;
     bool decideByCrossings(int64_t x0, int64_t x1, int64_t y0, int64_t y1, int64_t z0, int64_t z1) {
         if (!crossings_.usable) return false;
@@ -356,16 +364,16 @@ private:
         double k = 0;
         for (int c = 0; c < 8; ++c) {
             const int64_t x = c & 1 ? x1 - 1 : x0, y = c & 2 ? y1 - 1 : y0, z = c & 4 ? z1 - 1 : z0;
-            const double rest = double(excess(x, y, z)) + 0.5 - double(n(x, y, z));
+            const double rest = double(winding(x, y, z)) - double(n(x, y, z));
             if (c == 0) k = std::round(rest);
             if (!(std::abs(rest - k) < kGwnSlack)) return false;
         }
-        const auto need = int32_t(1 - k);
+        const auto outside = int32_t(-k); // N + k == 0
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = x0; x < x1; ++x) {
                 uint64_t* col = out_.column(x, y);
                 for (int64_t z = z0; z < z1; ++z)
-                    if (n(x, y, z) >= need) col[z >> 6] |= uint64_t(1) << (z & 63);
+                    if (n(x, y, z) != outside) col[z >> 6] |= uint64_t(1) << (z & 63);
             }
         return true;
     }
@@ -380,14 +388,14 @@ private:
         }
         const auto c = size_t(y * out_.width() + x);
         if (z1 < crossings_.curtainBottom[c] || z0 > crossings_.edgeTop[c]) {
-            const double r0 = double(excess(x, y, z0)) + 0.5 - double(count(x, y, z0));
-            const double r1 = double(excess(x, y, z1)) + 0.5 - double(count(x, y, z1));
+            const double r0 = double(winding(x, y, z0)) - double(count(x, y, z0));
+            const double r1 = double(winding(x, y, z1)) - double(count(x, y, z1));
             const double k = std::round(r0);
             if (std::abs(r0 - k) < kGwnSlack && std::abs(r1 - k) < kGwnSlack) {
                 uint64_t* col = out_.column(x, y);
-                const auto need = int32_t(1 - k);
+                const auto outside = int32_t(-k);
                 for (int64_t z = z0; z <= z1; ++z)
-                    if (count(x, y, z) >= need) col[z >> 6] |= uint64_t(1) << (z & 63);
+                    if (count(x, y, z) != outside) col[z >> 6] |= uint64_t(1) << (z & 63);
                 return;
             }
         }
@@ -402,15 +410,15 @@ private:
             return;
         }
         if (decideByCrossings(x0, x1, y0, y1, z0, z1)) return;
-        const bool first = insideAt(x0, y0, z0);
+        const int first = side(x0, y0, z0);
         bool agree = true;
         for (int k = 1; k < 8 && agree; ++k)
-            agree = insideAt(k & 1 ? x1 - 1 : x0, k & 2 ? y1 - 1 : y0, k & 4 ? z1 - 1 : z0) == first;
+            agree = side(k & 1 ? x1 - 1 : x0, k & 2 ? y1 - 1 : y0, k & 4 ? z1 - 1 : z0) == first;
         // Blocks of 8 cells and more keep a cell of margin from the surface; smaller ones only
         // need none inside (near the surface, most cells lie in such blocks).
         const int64_t grow = std::max({x1 - x0, y1 - y0, z1 - z0}) >= 8 ? 1 : 0;
         if (agree && !surfaceNear(x0, x1, y0, y1, z0, z1, grow)) {
-            if (first)
+            if (first != 0)
                 for (int64_t y = y0; y < y1; ++y)
                     for (int64_t x = x0; x < x1; ++x) setSlices(out_.column(x, y), z0, z1);
             return;
@@ -443,17 +451,29 @@ private:
 } // namespace
 
 BitGrid gwnFillInside(const Frame& frame, const MeshView& mesh, const WindingTree& tree,
-                      const BitGrid& surface) {
+                      const BitGrid& surface, Progress* progress) {
     BitGrid out(frame.width(), frame.height(), frame.depth());
     if (tree.nodes.empty()) return out;
-    const GwnCrossings crossings = gwnCrossings(frame, mesh);
+    const GwnCrossings crossings = gwnCrossings(frame, mesh, progress);
     const int64_t tx = (frame.width() + kGwnBlock - 1) / kGwnBlock,
                   ty = (frame.height() + kGwnBlock - 1) / kGwnBlock;
+    // Polled after each tile, one call at a time (as the rasterizer does); once it says stop,
+    // the remaining tiles are skipped.
+    std::atomic<bool> cancelled{false};
+    std::atomic<int64_t> done{0};
+    std::mutex progressMutex;
     // Tiles own whole columns, so no two threads write the same word.
     parallelFor(0, tx * ty, 1, [&](int64_t t0, int64_t t1) {
         GwnTile tile(frame, tree, surface, crossings, out);
-        for (int64_t t = t0; t < t1; ++t) tile.run(t % tx * kGwnBlock, t / tx * kGwnBlock);
+        for (int64_t t = t0; t < t1 && !cancelled.load(std::memory_order_relaxed); ++t) {
+            tile.run(t % tx * kGwnBlock, t / tx * kGwnBlock);
+            const int64_t d = ++done;
+            if (!progress) continue;
+            const std::lock_guard lock(progressMutex);
+            if (!progress->update(double(d) / double(tx * ty))) cancelled = true;
+        }
     });
+    if (cancelled) fail("cancelled");
     return out;
 }
 

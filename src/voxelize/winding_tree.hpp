@@ -10,6 +10,7 @@
 #include "voxfx/frame.hpp"
 #include "voxfx/math.hpp"
 #include "voxfx/mesh.hpp"
+#include "voxfx/parallel.hpp"
 
 namespace voxfx::detail {
 
@@ -40,7 +41,7 @@ private:
                   std::vector<uint32_t>& order, uint32_t begin, uint32_t end);
 };
 
-/// Fill::Gwn: the cells whose centre has a winding number >= 0.5 (`tree` built from `mesh`;
+/// Fill::Gwn: the cells whose centre has a winding number |w| >= 0.5 (`tree` built from `mesh`;
 /// `surface` its conservative surface in `frame`). Not every centre is evaluated: blocks of cells
 /// (16, 8, 4, 2 cells wide) are decided from their eight corner cells. Across the surface the
 /// winding number w jumps by exactly the sign of the crossing, so C = w - N, with N the signed
@@ -48,14 +49,15 @@ private:
 /// continuous there and harmonic off the "curtains" behind the boundary edges (or, counting from
 /// the far end, in front of them); zero on a closed mesh. A block that no curtain reaches, kept a
 /// cell or two from every boundary edge, whose corners' C lie within 0.4 of one integer k, takes
-/// N + k >= 1 for every cell. Blocks a curtain crosses go column by column (no curtain is crossed
+/// N + k != 0 for every cell. Blocks a curtain crosses go column by column (no curtain is crossed
 /// along a column) with the same test on runs of cells; blocks with no surface cell in or next to
 /// them take their corners' answer when those agree (the winding number is smooth away from the
 /// surface). Other blocks are split, down to single cells evaluated alone. Cost ~ (cells near the
 /// boundary edges or where w is near 0.5 + blocks) x one evaluation. Needs an orthographic frame
 /// with uniform slicing and the mesh behind the near plane for the counts; otherwise only the
-/// last two rules apply. Deterministic for every thread count.
+/// last two rules apply. Deterministic for every thread count. `progress` (may be null) is polled
+/// after each tile of 16 x 16 columns; false cancels with voxfx::Error.
 BitGrid gwnFillInside(const Frame& frame, const MeshView& mesh, const WindingTree& tree,
-                      const BitGrid& surface);
+                      const BitGrid& surface, Progress* progress = nullptr);
 
 } // namespace voxfx::detail
