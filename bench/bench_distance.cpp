@@ -246,7 +246,7 @@ void closestBuild(benchmark::State& state, const std::string& mesh, const std::s
 }
 
 const bool registered = [] {
-    for (const char* mesh : {"bunny00", "armadillo", "bunny1m"}) {
+    for (const char* mesh : {"bunny00", "armadillo", "dragon", "bunny1m"}) {
         for (const char* method : {"voxfx", "voxfx_unsorted", "embree", "cgal"}) {
             if (std::string(method) != "voxfx_unsorted")
                 benchmark::RegisterBenchmark((std::string("ClosestBuild/") + mesh + "/" + method).c_str(),

@@ -15,9 +15,9 @@
 //                against CGAL's AABB tree on 20,000 of the voxels (cgal_diff: the largest
 //                difference, in voxels; it should be ~1e-12 or below)
 //   sign_err     active voxels whose sign differs from voxfx's solid voxelization (parity, the
-//                exact inside test)
+//                exact inside test, for closed meshes; gwn for open ones, as the field's Auto fill)
 //   missing      voxels closer than the band width to the surface (exactly) that are not active
-// Meshes: bunny00 (75K triangles), armadillo (52K), bunny1m (1.2M, bench_meshes.hpp). Frames:
+// Meshes: bunny00 (75K triangles), armadillo (52K), dragon (ChineseDragon-10kv, 20K, open), bunny1m (1.2M, bench_meshes.hpp). Frames:
 // resolution R along the longest side, 3 cells of margin, cubic cells; OpenVDB gets the transform
 // that maps index (i, j, k) to voxfx's voxel centre lo + (i + 0.5) * cell.
 #include <chrono>
@@ -131,6 +131,7 @@ int child(const std::string& method, const std::string& mesh, int64_t resolution
     query.distance(centres, exact);
     VoxelizeOptions vo;
     vo.mode = VoxelizeMode::Solid;
+    vo.fill = analyzeTopology(m->view()).closed() ? Fill::Parity : Fill::Gwn; // the SDF's Auto
     const Frame frameZ =
         Frame::orthographic(frame.box(), Axis::Z, frame.width(), frame.height(), frame.depth());
     const VoxelGrid solid = voxelize(m->view(), frameZ, vo);
@@ -212,7 +213,7 @@ void sdfBench(benchmark::State& state, const std::string& mesh, const std::strin
 int main(int argc, char** argv) {
     gSelf = argv[0];
     if (argc == 5 && std::string(argv[1]) == "--child") return child(argv[2], argv[3], std::stoll(argv[4]));
-    for (const char* mesh : {"bunny00", "armadillo", "bunny1m"})
+    for (const char* mesh : {"bunny00", "armadillo", "dragon", "bunny1m"})
         for (const char* method : {"voxfx", "openvdb"})
             benchmark::RegisterBenchmark((std::string("Sdf/") + mesh + "/" + method).c_str(), sdfBench, mesh,
                                          method)

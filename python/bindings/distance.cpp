@@ -20,11 +20,13 @@ using SdfPtr = std::shared_ptr<SignedDistanceField>;
 
 /// f(mesh, points in the mesh's coordinates) after the (mesh, points) / (vertices, faces, points)
 /// argument dance of contains().
-template <class F> auto withMeshAndPoints(const py::object& meshObj, const py::object& faces,
-                                          const py::object& points, const char* name, F&& f) {
+template <class F>
+auto withMeshAndPoints(const py::object& meshObj, const py::object& faces, const py::object& points,
+                       const char* name, F&& f) {
     py::object facesArg = faces, pointsArg = points;
     if (pointsArg.is_none()) std::swap(facesArg, pointsArg);
-    if (pointsArg.is_none()) throw py::type_error(std::string(name) + " needs points: " + name + "(mesh, points)");
+    if (pointsArg.is_none())
+        throw py::type_error(std::string(name) + " needs points: " + name + "(mesh, points)");
     const auto mesh = meshArgument(meshObj, facesArg);
     const py::array_t<double> pts = pointsArgument(pointsArg, mesh->origin);
     const std::span<const Vec3d> p(reinterpret_cast<const Vec3d*>(pts.data()), std::size_t(pts.shape(0)));
@@ -35,66 +37,72 @@ void checkThreads(int threads) {
     if (threads < 0) throw ArgumentError("threads must be >= 0");
 }
 
-py::object closestPoints(const py::object& meshObj, const py::object& faces, const py::object& points, int threads) {
+py::object closestPoints(const py::object& meshObj, const py::object& faces, const py::object& points,
+                         int threads) {
     checkThreads(threads);
-    return withMeshAndPoints(meshObj, faces, points, "closest_points", [&](const PyMesh& mesh, std::span<const Vec3d> p) {
-        const py::ssize_t n = py::ssize_t(p.size());
-        py::array_t<double> point({n, py::ssize_t(3)}), bary({n, py::ssize_t(3)}), distance(n);
-        py::array_t<int64_t> face(n);
-        double* pp = point.mutable_data();
-        double* bp = bary.mutable_data();
-        double* dp = distance.mutable_data();
-        int64_t* fp = face.mutable_data();
-        interruptible([&](Cancel& cancel) {
-            const ClosestPointQuery query(mesh.mesh.view());
-            std::vector<ClosestPoint> out(p.size());
-            DistanceOptions o;
-            o.threads = threads;
-            o.progress = &cancel;
-            query.closest(p, out, o);
-            // Points back in world coordinates (the mesh's origin, when it was recentred).
-            for (std::size_t i = 0; i < out.size(); ++i) {
-                for (int k = 0; k < 3; ++k) {
-                    pp[3 * i + std::size_t(k)] = out[i].point[k] + mesh.origin[k];
-                    bp[3 * i + std::size_t(k)] = out[i].barycentric[k];
+    return withMeshAndPoints(
+        meshObj, faces, points, "closest_points", [&](const PyMesh& mesh, std::span<const Vec3d> p) {
+            const py::ssize_t n = py::ssize_t(p.size());
+            py::array_t<double> point({n, py::ssize_t(3)}), bary({n, py::ssize_t(3)}), distance(n);
+            py::array_t<int64_t> face(n);
+            double* pp = point.mutable_data();
+            double* bp = bary.mutable_data();
+            double* dp = distance.mutable_data();
+            int64_t* fp = face.mutable_data();
+            interruptible([&](Cancel& cancel) {
+                const ClosestPointQuery query(mesh.mesh.view());
+                std::vector<ClosestPoint> out(p.size());
+                DistanceOptions o;
+                o.threads = threads;
+                o.progress = &cancel;
+                query.closest(p, out, o);
+                // Points back in world coordinates (the mesh's origin, when it was recentred).
+                for (std::size_t i = 0; i < out.size(); ++i) {
+                    for (int k = 0; k < 3; ++k) {
+                        pp[3 * i + std::size_t(k)] = out[i].point[k] + mesh.origin[k];
+                        bp[3 * i + std::size_t(k)] = out[i].barycentric[k];
+                    }
+                    dp[i] = out[i].distance;
+                    fp[i] = out[i].face;
                 }
-                dp[i] = out[i].distance;
-                fp[i] = out[i].face;
-            }
+            });
+            const py::object type = py::module_::import("voxfx._voxfx").attr("ClosestPoints");
+            return type(point, face, bary, distance);
         });
-        const py::object type = py::module_::import("voxfx._voxfx").attr("ClosestPoints");
-        return type(point, face, bary, distance);
-    });
 }
 
-py::array_t<double> signedDistances(const py::object& meshObj, const py::object& faces, const py::object& points,
-                                    const std::string& sign, int threads, double windingBeta) {
+py::array_t<double> signedDistances(const py::object& meshObj, const py::object& faces,
+                                    const py::object& points, const std::string& sign, int threads,
+                                    double windingBeta) {
     checkThreads(threads);
     if (!(windingBeta >= 0)) throw ArgumentError("winding_beta must be >= 0");
     SignedDistanceOptions o;
     o.sign = asArgument([&] { return parseSignMethod(sign); });
     o.threads = threads;
     o.windingBeta = windingBeta;
-    return withMeshAndPoints(meshObj, faces, points, "signed_distance", [&](const PyMesh& mesh, std::span<const Vec3d> p) {
-        py::array_t<double> out(py::ssize_t(p.size()));
-        double* d = out.mutable_data();
-        interruptible([&](Cancel& cancel) {
-            SignedDistanceOptions so = o;
-            so.progress = &cancel;
-            signedDistance(mesh.mesh.view(), p, std::span<double>(d, p.size()), so);
-        });
-        return out;
-    });
+    return withMeshAndPoints(meshObj, faces, points, "signed_distance",
+                             [&](const PyMesh& mesh, std::span<const Vec3d> p) {
+                                 py::array_t<double> out(py::ssize_t(p.size()));
+                                 double* d = out.mutable_data();
+                                 interruptible([&](Cancel& cancel) {
+                                     SignedDistanceOptions so = o;
+                                     so.progress = &cancel;
+                                     signedDistance(mesh.mesh.view(), p, std::span<double>(d, p.size()), so);
+                                 });
+                                 return out;
+                             });
 }
 
 SdfPtr makeSdf(const py::object& meshObj, const py::object& faces, std::optional<int64_t> resolution,
-               std::optional<double> voxelSize, const py::object& bounds, std::optional<int64_t> margin, bool cube,
-               const std::variant<double, std::string>& band, const std::string& fill, int threads) {
+               std::optional<double> voxelSize, const py::object& bounds, std::optional<int64_t> margin,
+               bool cube, const std::variant<double, std::string>& band, const std::string& fill,
+               int threads) {
     checkThreads(threads);
     SdfOptions o;
     o.threads = threads;
     if (const auto* s = std::get_if<std::string>(&band)) {
-        if (*s != "full") throw ArgumentError("band must be a width in voxels (>= 1) or 'full', got '" + *s + "'");
+        if (*s != "full")
+            throw ArgumentError("band must be a width in voxels (>= 1) or 'full', got '" + *s + "'");
         o.full = true;
     } else {
         o.bandVoxels = std::get<double>(band);
@@ -174,13 +182,13 @@ void bindDistance(py::module_& m) {
         "closest_points() result: point (K, 3) float64 on the mesh, face (K,) int64 (-1 for a non-finite "
         "query), barycentric (K, 3) float64 weights of the face's corners 0, 1, 2, distance (K,) float64";
     m.def(
-        "closest_points", &closestPoints, py::arg("vertices"), py::arg("faces") = py::none(),
+        "closest_points", &closestPoints, py::arg("mesh"), py::arg("faces") = py::none(),
         py::arg("points") = py::none(), py::kw_only(), py::arg("threads") = 0,
         "The point of the mesh nearest to each of the (K, 3) points: ClosestPoints(point, face, barycentric, "
         "distance). Exact: the distance to the triangles of the float vertices, in double precision (a few "
         "ulps); ties go to the smallest face index. Non-finite points get NaN and face -1. Called as "
         "closest_points(mesh, points) or closest_points(vertices, faces, points); the GIL is released, "
-          "Ctrl-C stops it.");
+        "Ctrl-C stops it.");
     m.def("signed_distance", &signedDistances, py::arg("mesh"), py::arg("faces") = py::none(),
           py::arg("points") = py::none(), py::kw_only(), py::arg("sign") = "auto", py::arg("threads") = 0,
           py::arg("winding_beta") = 3.0,
@@ -240,10 +248,10 @@ void bindDistance(py::module_& m) {
             s << ", sign from " << toString(f.fill) << ", " << f.activeCount() << " active>";
             return s.str();
         });
-    m.def("sdf", &makeSdf, py::arg("vertices"), py::arg("faces") = py::none(), py::kw_only(),
+    m.def("sdf", &makeSdf, py::arg("mesh"), py::arg("faces") = py::none(), py::kw_only(),
           py::arg("resolution") = py::none(), py::arg("voxel_size") = py::none(),
-          py::arg("bounds") = py::none(), py::arg("margin") = py::none(), py::arg("band") = 3.0,
-          py::arg("fill") = "auto", py::arg("threads") = 0,
+          py::arg("bounds") = py::none(), py::arg("margin") = py::none(), py::arg("cube") = false,
+          py::arg("band") = 3.0, py::arg("fill") = "auto", py::arg("threads") = 0,
           "The signed distance field of a mesh (any mesh voxelize accepts) on the voxel centres of a grid "
           "fitted like voxelize() (resolution, default 256, or voxel_size; bounds; cube=True for "
           "resolution^3 cubic cells; margin, default the band rounded up): exact "
