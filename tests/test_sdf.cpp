@@ -271,6 +271,39 @@ TEST(Sdf, ValuesAreTheClosestPointDistancesRoundedToFloat) {
     for (std::size_t a = 0; a < pts.size(); ++a) ASSERT_EQ(std::abs(vals[a]), float(cp[a].distance)) << a;
 }
 
+TEST(Sdf, ProgressGrowsToOneAndCancels) {
+    // One line for the whole operation: fractions in [0, 1] that only grow and end at 1 (the solid
+    // voxelization's tenth first, then the bricks); a false from the callback stops the work.
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    const Mesh mesh = loadMesh(test::dataPath("meshes/bunny00.off"));
+    const Frame frame = sdfFrame(mesh.view(), 64, 3);
+    struct Recorder final : Progress {
+        std::vector<double> seen;
+        std::size_t stopAfter = std::numeric_limits<std::size_t>::max();
+        bool update(double f) override {
+            seen.push_back(f);
+            return seen.size() < stopAfter;
+        }
+    };
+    for (const int threads : {1, 0}) {
+        Recorder r;
+        SdfOptions o;
+        o.brickSize = 16; // 64 bricks
+        o.threads = threads;
+        o.progress = &r;
+        (void)signedDistanceField(mesh.view(), frame, o);
+        ASSERT_GE(r.seen.size(), 64u);
+        EXPECT_GE(r.seen.front(), 0.0);
+        EXPECT_TRUE(std::is_sorted(r.seen.begin(), r.seen.end())) << threads;
+        EXPECT_DOUBLE_EQ(r.seen.back(), 1.0);
+        Recorder stop;
+        stop.stopAfter = r.seen.size() / 2;
+        o.progress = &stop;
+        EXPECT_THROW(signedDistanceField(mesh.view(), frame, o), Error);
+        EXPECT_LT(stop.seen.size(), r.seen.size());
+    }
+}
+
 TEST(Sdf, BadInputIsAnError) {
     const Mesh box = test::makeBox({0, 0, 0}, {1, 1, 1});
     const Frame frame = sdfFrame(box.view(), 16, 2);

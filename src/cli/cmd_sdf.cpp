@@ -108,14 +108,25 @@ What the values are:
   voxel is negative exactly when that command fills it (-0 for a centre on the surface that
   the tie rule puts inside).
 
+Units and sign:
+  Values are lengths in the mesh's own units (those of its coordinates), not voxels: divide by
+  the cell edge (the summary's "cell") for voxels. Negative inside, positive outside, zero on the
+  surface: OpenVDB's level-set convention, so the 0 isosurface is the mesh (e.g. ParaView's
+  Contour at 0 on the .nrrd).
+
 The band (--band W, default 3 voxels, as OpenVDB's level sets):
   Voxels closer than W voxels to the surface are active and hold their exact distance; every
   other voxel holds +W or -W (in world units: the .vdb background). Only voxels near the
   surface are computed (the conservative surface dilated by the band), so the time grows with
   the surface, not with the grid. --band full computes every voxel exactly, however far (each
   block of 8^3 voxels gathers the triangles that can be nearest to it): the time grows with the
-  grid. Meshes that are not closed get their sign from the generalized winding number
-  (--fill gwn; --fill picks another: parity, gwn, winding, flood, vote).
+  grid; its background is the grid's diagonal. --margin defaults to the band rounded up (0 with
+  full), so the band outside the mesh's bounds is not cut off.
+
+The sign (--fill, default auto):
+  auto is parity (the exact crossing count) for closed meshes and gwn (generalized winding
+  number >= 1/2) for meshes with holes, boundary or non-manifold edges; --fill picks another:
+  parity, gwn, winding, flood, vote (see `voxfx voxelize --help`).
 
 Formats (by extension; written atomically):
   .vdb   OpenVDB FloatGrid "sdf", class level set, background = band width: sparse, opens in
@@ -123,7 +134,8 @@ Formats (by extension; written atomically):
   .nrrd  dense float32 with the placement (space origin = centre of voxel 0,0,0)
   .npy   dense float32, shape (nx, ny, nz), indexed [i, j, k]: numpy.load(); the placement is
          the summary line's "voxel (0, 0, 0) centred at" and cell.
-  Dense files hold every voxel (4 bytes each): for grids that fit in memory.)";
+  Dense files hold every voxel (4 bytes each): for grids that fit in memory.
+  Nothing is written on an error; a progress line shows on a terminal for runs over 0.3 s.)";
 
 const Command kSdf{
     "sdf", "Signed distance field of a mesh (.vdb level set, .nrrd, .npy)", [](CLI::App& app) {

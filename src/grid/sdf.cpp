@@ -499,7 +499,7 @@ sdfTiles(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& builder, 
     const int64_t count = n.x * n.y * n.z;
     std::vector<SdfPiece> pieces{std::size_t(count)};
     std::atomic<bool> cancelled{false};
-    std::atomic<int64_t> done{0};
+    int64_t done = 0; // bricks finished, under progressMutex
     std::mutex progressMutex;
     parallelFor(0, count, 1, [&](int64_t b, int64_t e) {
         for (int64_t i = b; i < e && !cancelled; ++i) {
@@ -514,10 +514,10 @@ sdfTiles(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& builder, 
                              t.lo.z - p.dilation.z, surface.bits.depth(), p.dilation.x - t.lo.x,
                              p.dilation.y - t.lo.y};
             builder.tile(t, pieces[std::size_t(i)]);
-            const int64_t d = ++done;
             if (!progress) continue;
+            // Counted under the lock, so the fractions reported only grow.
             std::lock_guard<std::mutex> lock(progressMutex);
-            if (!progress->update(double(d) / double(count))) cancelled = true;
+            if (!progress->update(double(++done) / double(count))) cancelled = true;
         }
     });
     if (cancelled) fail("cancelled");
@@ -662,14 +662,15 @@ SignedDistanceField signedDistanceField(const MeshView& mesh, const Frame& frame
         vo.mode = VoxelizeMode::Solid;
         vo.fill = f.fill;
         // The solid voxelization is quick next to the distances: a tenth of the progress.
-        detail::ProgressRange solidProgress(options.progress, 0.0, 0.1), brickProgress(options.progress, 0.1, 1.0);
+        detail::ProgressRange solidProgress(options.progress, 0.0, 0.1),
+            brickProgress(options.progress, 0.1, 1.0);
         vo.progress = solidProgress.get();
         const VoxelGrid solid = voxelize(mesh, f.frame, vo);
         const detail::TriangleBvh bvh(mesh);
         const detail::SdfBuilder builder(p, bvh);
         const detail::SlabBits solidBits{
             solid.bits.words(), dims.x, solid.bits.wordsPerColumn(), 0, dims.z, 0, 0};
-        const auto [leaves, runs] = detail::sdfTiles(p, bvh, builder, solidBits, options.progress);
+        const auto [leaves, runs] = detail::sdfTiles(p, bvh, builder, solidBits, brickProgress.get());
         f.leaves = std::move(leaves);
         f.insideRuns = std::move(runs);
     };
