@@ -17,9 +17,9 @@
 //   sign_err     active voxels whose sign differs from voxfx's solid voxelization (parity, the
 //                exact inside test, for closed meshes; gwn for open ones, as the field's Auto fill)
 //   missing      voxels closer than the band width to the surface (exactly) that are not active
-// Meshes: bunny00 (75K triangles), armadillo (52K), dragon (ChineseDragon-10kv, 20K, open), bunny1m (1.2M, bench_meshes.hpp). Frames:
-// resolution R along the longest side, 3 cells of margin, cubic cells; OpenVDB gets the transform
-// that maps index (i, j, k) to voxfx's voxel centre lo + (i + 0.5) * cell.
+// Meshes: bunny00 (75K triangles), armadillo (52K), dragon (ChineseDragon-10kv, 20K, open), bunny1m (1.2M,
+// bench_meshes.hpp). Frames: resolution R along the longest side, 3 cells of margin, cubic cells; OpenVDB
+// gets the transform that maps index (i, j, k) to voxfx's voxel centre lo + (i + 0.5) * cell.
 #include <chrono>
 #include <cstdio>
 #include <cstring>

@@ -22,15 +22,15 @@
 // The bit-grid toolkit (GI08): density, normals, morphology, CSG, queries, particles, meshing.
 #include "voxfx/csg.hpp"
 #include "voxfx/dda.hpp"
-#include "voxfx/distance.hpp"
-#include "voxfx/sdf.hpp"
-#include "voxfx/sdf_io.hpp"
 #include "voxfx/density.hpp"
+#include "voxfx/distance.hpp"
 #include "voxfx/grid_query.hpp"
 #include "voxfx/morphology.hpp"
 #include "voxfx/moving_obstacle.hpp"
 #include "voxfx/particles.hpp"
 #include "voxfx/particles_io.hpp"
+#include "voxfx/sdf.hpp"
+#include "voxfx/sdf_io.hpp"
 #include "voxfx/surface_mesh.hpp"
 
 // Rendering: scenes, images, shadows (ED06 transmittance, CHANG absorption).

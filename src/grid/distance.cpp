@@ -57,8 +57,6 @@ std::vector<std::pair<uint64_t, uint32_t>> mortonOrder(std::span<const Vec3d> po
     return keys;
 }
 
-// Runs body(b, e) over chunks of [0, n) on up to `threads` workers, reporting progress between
-// chunks; voxfx::Error "cancelled" when the progress object says stop.
 // Answers every point with query(index, hint) -> hit, in Morton order within blocks of kBlock
 // points, each chunk of kChunk points on one worker, the hint being the previous point's answer;
 // `store(index, hit)` writes the answer. Progress between chunks; voxfx::Error "cancelled" when
@@ -174,7 +172,8 @@ void signedDistance(const MeshView& mesh, std::span<const Vec3d> points, std::sp
         method = analyzeTopology(mesh).closed() ? SignMethod::Parity : SignMethod::Winding;
     if (options.used) *options.used = method;
     // The distances, then the inside test, as one progress.
-    detail::ProgressRange distanceProgress(options.progress, 0.0, 0.7), insideProgress(options.progress, 0.7, 1.0);
+    detail::ProgressRange distanceProgress(options.progress, 0.0, 0.7),
+        insideProgress(options.progress, 0.7, 1.0);
     DistanceOptions distanceOptions;
     distanceOptions.threads = options.threads;
     distanceOptions.progress = distanceProgress.get();

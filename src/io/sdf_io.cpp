@@ -60,7 +60,7 @@ void writeSdfNrrd(const SignedDistanceField& f, const std::vector<float>& values
         << "# Complete NRRD file format specification at:\n"
         << "# http://teem.sourceforge.net/nrrd/format.html\n"
         << "# voxfx signed distance field: world units, negative inside, |value| <= "
-        << formatDouble(f.background) << " (the band width)\n"
+        << formatDouble(f.background) << (f.full ? " (the grid's diagonal)\n" : " (the band width)\n")
         << "type: float\n"
         << "dimension: 3\n"
         << "space: right-anterior-superior\n"
