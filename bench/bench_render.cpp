@@ -13,12 +13,13 @@
 
 #include <benchmark/benchmark.h>
 
-#include "voxfx/demo.hpp"
+#include "demo/demo_scenes.hpp"
 #include "voxfx/render.hpp"
 
 namespace {
 
 using namespace voxfx;
+using namespace voxfx::demo;
 
 const Scene& treeScene() {
     static const Scene scene = makeTreeScene();
@@ -36,34 +37,32 @@ void warmUp(const RenderOptions& o) {
     benchmark::DoNotOptimize(r.image.pixels.data());
 }
 
-void frame(benchmark::State& state, ShadowKind kind) {
+void frame(benchmark::State& state, const char* kind) {
     const Scene& scene = treeScene();
     RenderOptions o;
     o.width = 1280;
     o.height = 720;
-    o.shadow.kind = kind;
+    o.shadow = shadowOptionsNamed(kind);
     warmUp(o);
-    RenderTimings sum;
+    double gbuffer = 0, shadows = 0, shading = 0;
     for (auto _ : state) {
         const RenderResult r = render(scene, scene.cameras[0], o);
         benchmark::DoNotOptimize(r.image.pixels.data());
-        sum.gbufferMs += r.timings.gbufferMs;
-        sum.shadowMapMs += r.timings.shadowMapMs;
-        sum.lightVoxelizeMs += r.timings.lightVoxelizeMs;
-        sum.shadingMs += r.timings.shadingMs;
+        gbuffer += r.timings.ms("G-buffer");
+        shadows += r.timings.ms("shadows");
+        shading += r.timings.ms("shading");
     }
     const double n = double(state.iterations());
-    state.counters["gbuffer_ms"] = sum.gbufferMs / n;
-    state.counters["shadowmap_ms"] = sum.shadowMapMs / n;
-    state.counters["voxelize_ms"] = sum.lightVoxelizeMs / n;
-    state.counters["shading_ms"] = sum.shadingMs / n;
-    state.SetLabel(std::to_string(scene.triangleCount()) + " triangles, 1280x720, " + toString(kind));
+    state.counters["gbuffer_ms"] = gbuffer / n;
+    state.counters["shadows_ms"] = shadows / n;
+    state.counters["shading_ms"] = shading / n;
+    state.SetLabel(std::to_string(scene.triangleCount()) + " triangles, 1280x720, " + kind);
 }
 
-void BM_FrameNone(benchmark::State& s) { frame(s, ShadowKind::None); }
-void BM_FrameMap(benchmark::State& s) { frame(s, ShadowKind::Map); }
-void BM_FrameTransmittance(benchmark::State& s) { frame(s, ShadowKind::Transmittance); }
-void BM_FrameAbsorption(benchmark::State& s) { frame(s, ShadowKind::Absorption); }
+void BM_FrameNone(benchmark::State& s) { frame(s, "none"); }
+void BM_FrameMap(benchmark::State& s) { frame(s, "map"); }
+void BM_FrameTransmittance(benchmark::State& s) { frame(s, "transmittance"); }
+void BM_FrameAbsorption(benchmark::State& s) { frame(s, "absorption"); }
 BENCHMARK(BM_FrameNone)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_FrameMap)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_FrameTransmittance)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -79,17 +78,17 @@ void BM_FrameRatioTransmittanceOverMap(benchmark::State& state) {
     o.width = 1280;
     o.height = 720;
     RenderOptions map = o, tr = o;
-    map.shadow.kind = ShadowKind::Map;
-    tr.shadow.kind = ShadowKind::Transmittance;
+    map.shadow = ShadowMapOptions{};
+    tr.shadow = TransmittanceShadowOptions{};
     warmUp(map);
-    RenderTimings sm, st;
+    struct Sum {
+        double total = 0, shadows = 0, shading = 0;
+    } sm, st;
     bool mapFirst = true;
-    auto add = [](RenderTimings& to, const RenderTimings& t) {
-        to.totalMs += t.totalMs;
-        to.gbufferMs += t.gbufferMs;
-        to.shadowMapMs += t.shadowMapMs;
-        to.lightVoxelizeMs += t.lightVoxelizeMs;
-        to.shadingMs += t.shadingMs;
+    auto add = [](Sum& to, const RenderTimings& t) {
+        to.total += t.totalMs;
+        to.shadows += t.ms("shadows");
+        to.shading += t.ms("shading");
     };
     for (auto _ : state) {
         for (int k = 0; k < 2; ++k) {
@@ -101,35 +100,35 @@ void BM_FrameRatioTransmittanceOverMap(benchmark::State& state) {
         mapFirst = !mapFirst;
     }
     const double n = double(state.iterations());
-    state.counters["map_ms"] = sm.totalMs / n;
-    state.counters["tr_ms"] = st.totalMs / n;
-    state.counters["tr/map"] = st.totalMs / sm.totalMs;
-    state.counters["map_shadow_ms"] = sm.shadowMapMs / n;
-    state.counters["map_shading_ms"] = sm.shadingMs / n;
-    state.counters["tr_voxelize_ms"] = st.lightVoxelizeMs / n;
-    state.counters["tr_trunkmap_ms"] = st.shadowMapMs / n;
-    state.counters["tr_shading_ms"] = st.shadingMs / n;
+    state.counters["map_ms"] = sm.total / n;
+    state.counters["tr_ms"] = st.total / n;
+    state.counters["tr/map"] = st.total / sm.total;
+    state.counters["map_shadow_ms"] = sm.shadows / n;
+    state.counters["map_shading_ms"] = sm.shading / n;
+    state.counters["tr_shadow_ms"] = st.shadows / n; // the trunk's map and the leaves' grids
+    state.counters["tr_shading_ms"] = st.shading / n;
     state.SetLabel(std::to_string(scene.triangleCount()) + " triangles, 1280x720, transmittance / map");
 }
 BENCHMARK(BM_FrameRatioTransmittanceOverMap)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 // One light's shadow data alone, grid (or map) resolution N.
-void build(benchmark::State& state, ShadowKind kind) {
+void build(benchmark::State& state, const char* kind) {
     const Scene& scene = treeScene();
-    ShadowOptions o;
-    o.kind = kind;
-    o.gridResolution = o.gridDepth = o.mapResolution = state.range(0);
+    RenderOptions o;
+    o.shadow = shadowOptionsNamed(kind);
+    for (const char* name : {"gridResolution", "gridDepth", "mapResolution"})
+        setRenderOption(o, name, int64_t(state.range(0)));
     for (auto _ : state) {
-        const LightShadow shadow = LightShadow::build(scene, scene.lights[0], o);
+        const LightShadow shadow = buildLightShadow(scene, scene.lights[0], o.shadow);
         benchmark::DoNotOptimize(&shadow);
     }
     state.counters["tri/s"] = benchmark::Counter(double(scene.triangleCount()) * double(state.iterations()),
                                                  benchmark::Counter::kIsRate);
 }
 
-void BM_BuildMap(benchmark::State& s) { build(s, ShadowKind::Map); }
-void BM_BuildTransmittance(benchmark::State& s) { build(s, ShadowKind::Transmittance); }
-void BM_BuildAbsorption(benchmark::State& s) { build(s, ShadowKind::Absorption); }
+void BM_BuildMap(benchmark::State& s) { build(s, "map"); }
+void BM_BuildTransmittance(benchmark::State& s) { build(s, "transmittance"); }
+void BM_BuildAbsorption(benchmark::State& s) { build(s, "absorption"); }
 BENCHMARK(BM_BuildMap)->Arg(1024)->Arg(2048)->Arg(4096)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_BuildTransmittance)->Arg(128)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_BuildAbsorption)->Arg(128)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();

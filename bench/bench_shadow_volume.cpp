@@ -16,13 +16,14 @@
 #include <string>
 #include <vector>
 
-#include "voxfx/demo.hpp"
+#include "demo/demo_scenes.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/shadow_volume.hpp"
 
 namespace {
 
 using namespace voxfx;
+using namespace voxfx::demo;
 using BenchClock = std::chrono::steady_clock;
 
 double benchMs(BenchClock::time_point t0) {
@@ -188,7 +189,8 @@ void runScene(const BenchRow& row, int64_t width, int64_t height) {
     const ShadowCasterSet casters = ShadowCasterSet::build(scene);
     const double adjacencyMs = benchMs(t0);
     for (const Light& light : scene.lights) {
-        const std::vector<uint8_t> receivers = shadowVolumeReceivers(gbuffer, geometry, scene, light);
+        const std::vector<uint8_t> receivers =
+            shadowVolumeReceivers(gbuffer, geometry, scene.materials, light);
         ShadowVolumeOptions none, cull, both;
         none.cullReceivers = none.cullOccluded = none.clamp = false;
         cull.clamp = false;
@@ -222,12 +224,12 @@ void runScene(const BenchRow& row, int64_t width, int64_t height) {
     RenderOptions o;
     o.width = width;
     o.height = height;
-    o.shadow.kind = ShadowKind::Volumes;
     double frame[2];
     int64_t imageDiff = 0;
     Image images[2];
     for (int k = 0; k < 2; ++k) {
-        o.shadow.volumeCulling = o.shadow.volumeClamping = k == 1;
+        o.shadow = ShadowVolumeOptions{};
+        setRenderOption(o, "volumeCulling", k == 1);
         const RenderResult r = render(scene, camera, o);
         frame[k] = r.timings.totalMs;
         images[k] = r.image;

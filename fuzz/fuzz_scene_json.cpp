@@ -2,7 +2,7 @@
 // The text is named by a path in a folder that does not exist, so the relative file names it
 // holds are never found (absolute names still are, which is what a hostile file can do too).
 #include "fuzz_target.hpp"
-#include "voxfx/scene.hpp"
+#include "voxfx/scene_io.hpp"
 
 VOXFX_FUZZ_TARGET(scene_json) {
     voxfx::fuzz::expectCleanError([&] {

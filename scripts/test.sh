@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The test job on a fresh Debian 12 machine: install dependencies, fetch the test data, build
-# and run the fast test suite in Release, check that an installed voxfx can be consumed with
-# find_package, then build and run the suite again under AddressSanitizer and
-# UndefinedBehaviorSanitizer. Set VOXFX_TEST_LABEL=slow (or "") to include the long cases.
+# and run the fast test suite in Release (the Python suite included), and check that an installed
+# voxfx can be consumed with find_package. Set VOXFX_TEST_LABEL=slow (or "") to include the long
+# cases. The same suite under AddressSanitizer and UndefinedBehaviorSanitizer is
+# scripts/sanitize.sh, which CI runs after this.
 #
 # Every build option the job relies on is set explicitly: build/ may have been configured by
 # scripts/run.sh (no tests, no benchmarks), and the CMake cache would keep that. ctest fails
@@ -43,21 +44,4 @@ if [ -x scripts/check-install.sh ]; then
   scripts/check-install.sh build
 fi
 
-echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests (clang)"
-# Clang builds this pass: its instrumented code generation costs about two thirds of GCC's
-# (src/grid/morphology.cpp at -O1 -g1 with ASan and UBSan: 5.7 s of CPU against 8.6 s), and a
-# second compiler checks what GCC lets through. No benchmarks or examples here: they add build
-# time and no test. -O1 with line tables (-g1) still gives sanitizer reports file:line.
-# Warnings are errors in the Release pass only. No Python module: a sanitized extension cannot
-# load into an uninstrumented interpreter.
-CC=clang CXX=clang++ cmake -S . -B build-sanitize -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DVOXFX_WERROR=OFF \
-  -DVOXFX_SANITIZE=ON -DVOXFX_BUILD_CLI=ON -DVOXFX_BUILD_TESTS=ON -DVOXFX_BUILD_BENCH=OFF \
-  -DVOXFX_BUILD_EXAMPLES=OFF -DVOXFX_BUILD_PYTHON=OFF >/dev/null
-cmake --build build-sanitize -j "$jobs"
-# intercept_tls_get_addr=0: LeakSanitizer 14 crashes ("Tracer caught signal 11") reading a bogus
-# dynamic-TLS range of Embree's TBB worker threads under glibc 2.36; static TLS, stacks, globals
-# and the heap are still scanned.
-ASAN_OPTIONS=detect_leaks=1:intercept_tls_get_addr=0 UBSAN_OPTIONS=print_stacktrace=1 \
-  ctest --test-dir build-sanitize --no-tests=error --output-on-failure -j "$jobs" "${label_args[@]}"
 echo "== all tests passed in $((SECONDS - start)) s"

@@ -15,6 +15,7 @@
 #include "cgal_oracle.hpp"
 #include "render/volume_pass.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/segment_walker.hpp"
 #include "voxfx/volume_scene.hpp"
 
 namespace voxfx {
@@ -213,7 +214,7 @@ TEST(BooleanRenderTest, RenderedPixelsAreTheSurfacesAlphaCompositedInDepthOrder)
     RenderOptions o;
     o.width = 64;
     o.height = 48;
-    o.shadow.kind = ShadowKind::None;
+    o.shadow = NoShadowOptions{};
     o.defaultLights = false;
     o.ambient = {1, 1, 1}; // no lights: a surface's radiance is its colour
     o.background = {0.1f, 0.2f, 0.3f};

@@ -15,6 +15,8 @@
 #include "voxfx/fragment_list.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/scene_io.hpp"
+#include "voxfx/segment_walker.hpp"
 #include "voxfx/smoke.hpp"
 #include "voxfx/volume_scene.hpp"
 
@@ -436,7 +438,7 @@ TEST(DeepShadowTest, PointLightsUseSixFacesAndLookupsFollowThem) {
         if (ref < 0) continue;
         ++n;
         // Bilinear lookups blur one texel: count the points whose value is off by more than a step.
-        wrong += std::abs(deep.visibility(p) - ref) > 0.26;
+        wrong += std::abs(deep.visibility(p, {0, 0, 0}, 0, 0) - ref) > 0.26;
     }
     ASSERT_GT(n, 1500);
     EXPECT_LT(double(wrong) / double(n), 0.05);
@@ -531,8 +533,8 @@ TEST(DeepShadowClusterTest, ClusteredMapsAgreeWithTheReferenceOnASparseScene) {
         const Vec3d p{side + 0.45 * u(rng), 0.45 * u(rng), -0.8};
         const double ref = dsmrReferenceTransmittance(s, l.position, p, 1.0);
         if (ref < 0) continue;
-        errSingle += std::abs(single.visibility(p) - ref);
-        errClustered += std::abs(clustered.visibility(p) - ref);
+        errSingle += std::abs(single.visibility(p, {0, 0, 0}, 0, 0) - ref);
+        errClustered += std::abs(clustered.visibility(p, {0, 0, 0}, 0, 0) - ref);
         ++n;
     }
     ASSERT_GT(n, 1400);
@@ -540,7 +542,7 @@ TEST(DeepShadowClusterTest, ClusteredMapsAgreeWithTheReferenceOnASparseScene) {
     EXPECT_LT(errClustered, errSingle);
 }
 
-// ---- the renderer: ShadowKind::Deep, volumes in the scene, ray casting, the scene file ----------
+// ---- the renderer: shadows "deep", volumes in the scene, ray casting, the scene file ----------
 
 Scene dsmrGroundAndSmoke(bool withVolume) {
     Scene s;
@@ -575,12 +577,11 @@ Scene dsmrGroundAndSmoke(bool withVolume) {
 
 TEST(DeepShadowRenderTest, LightShadowDeepSeesSceneVolumesAndMatchesTheReference) {
     const Scene s = dsmrGroundAndSmoke(true);
-    ShadowOptions so;
-    so.kind = ShadowKind::Deep;
-    so.dsmResolution = 64;
-    so.dsmEpsilon = 0.01;
-    const LightShadow ls = LightShadow::build(s, s.lights[0], so);
-    ASSERT_NE(ls.deepShadow(), nullptr);
+    DeepShadowOptions so;
+    so.resolution = 64;
+    so.epsilon = 0.01;
+    const LightShadow ls = buildLightShadow(s, s.lights[0], so);
+    ASSERT_FALSE(std::get<DeepShadow>(ls).maps().empty());
     const VolumeScene vs = volumeSceneOf(s);
     int64_t n = 0, shadowed = 0;
     double err = 0;
@@ -589,21 +590,21 @@ TEST(DeepShadowRenderTest, LightShadowDeepSeesSceneVolumesAndMatchesTheReference
             const Vec3d p{x, 0, z};
             const double ref = dsmrReferenceTransmittance(vs, p + Vec3d{0, 10, 0}, p, 0.01);
             if (ref < 0) continue;
-            err += std::abs(double(ls.visibility(p, {0, 0, 0}).x) - ref);
+            err += std::abs(double(shadowVisibility(ls, p, {0, 0, 0}).x) - ref);
             shadowed += ref < 0.9;
             ++n;
         }
     ASSERT_GT(n, 700);
     EXPECT_GT(shadowed, 100);
     EXPECT_LT(err / double(n), 0.03);
-    EXPECT_EQ(ls.visibility({3.5, 0, 3.5}, {0, 1, 0}).x, 1.0f);
+    EXPECT_EQ(shadowVisibility(ls, {3.5, 0, 3.5}, {0, 1, 0}).x, 1.0f);
 }
 
 TEST(DeepShadowRenderTest, RayCastingCompositesVolumesOverTheImageAndOnlyThere) {
     RenderOptions o;
     o.width = 64;
     o.height = 48;
-    o.shadow.kind = ShadowKind::None; // the smoke's shadow on the ground is tested above
+    o.shadow = NoShadowOptions{}; // the smoke's shadow on the ground is tested above
     o.background = {0, 0, 0};
     const RenderResult with = render(dsmrGroundAndSmoke(true), dsmrGroundAndSmoke(true).cameras[0], o);
     const RenderResult without = render(dsmrGroundAndSmoke(false), dsmrGroundAndSmoke(false).cameras[0], o);
@@ -686,13 +687,15 @@ TEST(DeepShadowEmptySpaceTest, SkippedSamplesAreTransparentAndSkippingChangesNoP
     RenderOptions o;
     o.width = 48;
     o.height = 36;
-    o.shadow.kind = ShadowKind::Deep;
-    o.shadow.dsmResolution = 48;
+    DeepShadowOptions deep;
+    deep.resolution = 48;
+    o.shadow = deep;
     const RenderResult skipping = render(scene, scene.cameras[0], o);
-    o.skipEmptySpace = o.shadow.dsmSkipEmptySpace = false;
+    setRenderOption(o, "emptySpaceSkipping", false); // the camera's ray casting and the deep shadows
     const RenderResult sampling = render(scene, scene.cameras[0], o);
     EXPECT_LT(skipping.volumeSamples, sampling.volumeSamples);
-    EXPECT_EQ(skipping.deepShadowStats.nodes, sampling.deepShadowStats.nodes);
+    EXPECT_EQ(std::get<DeepShadowStats>(skipping.shadowStats).nodes,
+              std::get<DeepShadowStats>(sampling.shadowStats).nodes);
     EXPECT_EQ(skipping.image.pixels, sampling.image.pixels);
 }
 
@@ -855,7 +858,7 @@ TEST(DeepShadowSlowTest, ErrorAgainstTheDenseReferenceAsEpsilonAndResolutionVary
             const DeepShadow d = DeepShadow::build(s, light, opt);
             double sum = 0, worst = 0;
             for (std::size_t i = 0; i < points.size(); ++i) {
-                const double e = std::abs(d.visibility(points[i]) - refs[i]);
+                const double e = std::abs(d.visibility(points[i], {0, 0, 0}, 0, 0) - refs[i]);
                 sum += e;
                 worst = std::max(worst, e);
             }

@@ -28,6 +28,7 @@
 #include "voxfx/glass.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/morphology.hpp"
+#include "voxfx/raster.hpp"
 #include "voxfx/scene.hpp"
 #include "voxfx/sdf_io.hpp"
 #include "voxfx/shadow.hpp"
@@ -99,8 +100,7 @@ TEST(EnumNamesTest, EveryEnumeratorHasOneNameThatParsesBackInAnyCase) {
     expectOneNamePerValue<Axis>(kAxisNames, parseAxis);
     expectOneNamePerValue<Slicing>(kSlicingNames, parseSlicing);
     expectOneNamePerValue<Device>(kDeviceNames, parseDevice);
-    expectOneNamePerValue<ShadowKind>(kShadowKindNames, parseShadowKind);
-    expectOneNamePerValue<GlassKind>(kGlassKindNames, parseGlassKind);
+    expectOneNamePerValue<Coverage>(kCoverageNames, parseCoverage);
     expectOneNamePerValue<DsmStorage>(kDsmStorageNames, parseDsmStorage);
     expectOneNamePerValue<MorphOp>(kMorphOpNames, parseMorphOp);
     expectOneNamePerValue<MorphBorder>(kMorphBorderNames, parseMorphBorder);
@@ -192,7 +192,7 @@ TEST(EnumNamesTest, UnknownNamesSayWhereWhatAndTheChoices) {
         EXPECT_STREQ(e.what(), "unknown fill '' (allowed: auto, parity, flood, vote, winding, gwn)");
     }
     try {
-        parseGlassKind("opal");
+        glassOptionsNamed("opal");
         FAIL() << "no error";
     } catch (const Error& e) {
         EXPECT_STREQ(e.what(),

@@ -10,6 +10,7 @@
 
 #include "test_util.hpp"
 #include "voxfx/environment.hpp"
+#include "voxfx/environment_io.hpp"
 #include "voxfx/image_io.hpp"
 
 namespace voxfx {

@@ -6,9 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include "demo/demo_scenes.hpp"
 #include "test_util.hpp"
 #include "voxfx/attribute_grid.hpp"
-#include "voxfx/demo.hpp"
 #include "voxfx/glass.hpp"
 #include "voxfx/image_io.hpp"
 #include "voxfx/render.hpp"
@@ -16,6 +16,8 @@
 
 namespace voxfx {
 namespace {
+
+using namespace voxfx::demo;
 
 constexpr double kGlassIor = 1.5;
 
@@ -155,22 +157,22 @@ TEST(GlassTest, VoxelMarchThroughASlabExitsParallelLikeTheExactTracer) {
     GlassMedium medium;
     medium.ior = float(kGlassIor);
     medium.sigma = {float(sigma), float(sigma), float(sigma)};
-    GlassOptions o;
+    VoxelGlassOptions o;
     o.gridResolution = 64;
-    for (const GlassKind kind : {GlassKind::Multi, GlassKind::TwoSurface}) {
-        o.kind = kind;
+    for (const bool twoSurface : {false, true}) {
+        const char* kind = twoSurface ? "two-surface" : "multi";
         VoxelGlass glass(slab.view(), std::vector<uint32_t>(slab.triangleCount(), 0), {medium}, o);
         const double a = 0.4;
         const Vec3d d = glassDirAt(a);
-        const GlassPath p = glass.trace({0.05, 0.02, h / 2}, {0, 0, 1}, 0, d, o);
+        const GlassPath p = glass.trace({0.05, 0.02, h / 2}, {0, 0, 1}, 0, d, o, twoSurface);
         ASSERT_TRUE(p.hit);
-        EXPECT_EQ(p.events, 2) << toString(kind);
-        EXPECT_NEAR(length(p.exitDir - d), 0, 1e-6) << toString(kind);
+        EXPECT_EQ(p.events, 2) << kind;
+        EXPECT_NEAR(length(p.exitDir - d), 0, 1e-6) << kind;
         const double tt = std::asin(std::sin(a) / kGlassIor), L = h / std::cos(tt);
         const double want = (1 - fresnelDielectric(std::cos(a), 1, kGlassIor)) *
                             (1 - fresnelDielectric(std::cos(tt), kGlassIor, 1)) * std::exp(-sigma * L);
         // The exit is placed mid-voxel: the length is right to about a voxel.
-        EXPECT_NEAR(p.throughput.x, want, want * sigma * 2 * glass.voxelSize()) << toString(kind);
+        EXPECT_NEAR(p.throughput.x, want, want * sigma * 2 * glass.voxelSize()) << kind;
     }
 }
 
@@ -183,17 +185,15 @@ TEST(GlassTest, MultipleRefractionSeesThroughTwoSlabsWhereTwoSurfaceStopsAfterOn
     GlassMedium medium;
     medium.ior = float(kGlassIor);
     medium.sigma = {1, 1, 1};
-    GlassOptions o;
+    VoxelGlassOptions o;
     o.gridResolution = 64;
     const Vec3d d = glassDirAt(0.3);
-    o.kind = GlassKind::Multi;
     VoxelGlass glass(two.view(), std::vector<uint32_t>(two.triangleCount(), 0), {medium}, o);
-    const GlassPath multi = glass.trace({0, 0, 0.8}, {0, 0, 1}, 0, d, o);
+    const GlassPath multi = glass.trace({0, 0, 0.8}, {0, 0, 1}, 0, d, o, false);
     EXPECT_EQ(multi.events, 4);
     EXPECT_NEAR(length(multi.exitDir - d), 0, 1e-6);
     EXPECT_LT(multi.exitPoint.z, -0.5);
-    o.kind = GlassKind::TwoSurface;
-    const GlassPath two2 = glass.trace({0, 0, 0.8}, {0, 0, 1}, 0, d, o);
+    const GlassPath two2 = glass.trace({0, 0, 0.8}, {0, 0, 1}, 0, d, o, true);
     EXPECT_EQ(two2.events, 2);
     EXPECT_GT(two2.exitPoint.z, 0.4);
     EXPECT_GT(two2.throughput.x, multi.throughput.x);
@@ -329,29 +329,27 @@ TEST(GlassTest, GlassBallCastsAColouredShadowUnderExactShadows) {
     // The sun straight above the glass ball of glassTestScene (radius 0.7): the ground point under
     // its centre sees the light through a diameter (1.4 units) at nearly normal incidence, so the
     // light left is tint (1 - 0.04)^2 exp(-sigma * 1.4), sigma = -ln(attenuationColor) (distance 1). Off to
-    // the side the light is not dimmed. defaultGlassKind renders such a scene as glass.
+    // the side the light is not dimmed. defaultGlass renders such a scene as glass.
     const Scene s = glassTestScene();
-    EXPECT_EQ(defaultGlassKind(s), GlassKind::Exact);
+    EXPECT_TRUE(std::holds_alternative<ExactGlassOptions>(defaultGlass(s)));
     Light sun;
     sun.type = LightType::Directional;
     sun.direction = {0, -1, 0};
-    ShadowOptions o;
-    o.kind = ShadowKind::Exact;
-    const LightShadow shadow = LightShadow::build(s, sun, o);
+    const LightShadow shadow = buildLightShadow(s, sun, ExactShadowOptions{});
     // Just off the axis (a UV sphere's pole is a vertex): chord 2 sqrt(0.49 - 0.0034), incidence 3
     // degrees from normal (F changes by under 1e-4).
-    const Vec3f under = shadow.visibility({0.05, 0, 0.03}, {0, 1, 0});
+    const Vec3f under = shadowVisibility(shadow, {0.05, 0, 0.03}, {0, 1, 0});
     // The tint (the base colour, 0.8 by default) once where the light enters.
     const Vec3f tint = s.materials[1].baseColor;
     const double fresnel = 0.96 * 0.96, chord = 2 * std::sqrt(0.49 - 0.0034);
     EXPECT_NEAR(under.x, tint.x * fresnel * std::exp(std::log(0.5) * chord), 0.005);
     EXPECT_NEAR(under.y, tint.y * fresnel * std::exp(std::log(0.9) * chord), 0.005);
     EXPECT_NEAR(under.z, tint.z * fresnel * std::exp(std::log(0.6) * chord), 0.005);
-    const Vec3f beside = shadow.visibility({1.2, 0, 0}, {0, 1, 0});
+    const Vec3f beside = shadowVisibility(shadow, {1.2, 0, 0}, {0, 1, 0});
     EXPECT_EQ(beside, (Vec3f{1, 1, 1}));
     Scene plain = s;
     plain.materials[1].transmission = 0;
-    EXPECT_EQ(defaultGlassKind(plain), GlassKind::None);
+    EXPECT_TRUE(std::holds_alternative<NoGlassOptions>(defaultGlass(plain)));
 }
 
 TEST(GlassTest, CrossingCountingShadowsPassWhatExactShadowsPassThroughGlass) {
@@ -368,20 +366,18 @@ TEST(GlassTest, CrossingCountingShadowsPassWhatExactShadowsPassThroughGlass) {
     sun.direction = {0, -1, 0};
     auto luminance = [](const Vec3f& v) { return 0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z; };
     const Vec3d under{0.05, 0, 0.03};
-    ShadowOptions o;
-    o.kind = ShadowKind::Exact;
-    const Vec3f exact = LightShadow::build(s, sun, o).visibility(under, {0, 1, 0});
+    const Vec3f exact = shadowVisibility(buildLightShadow(s, sun, ExactShadowOptions{}), under, {0, 1, 0});
     const Vec3f tint = s.materials[1].crossingTransmittance();
-    for (const ShadowKind kind : {ShadowKind::Transmittance, ShadowKind::Absorption, ShadowKind::Deep}) {
-        o.kind = kind;
-        o.gridResolution = 64;
-        o.gridDepth = 64;
-        o.dsmResolution = 64;
-        o.dsmEpsilon = 0;
-        const Vec3f v = LightShadow::build(s, sun, o).visibility(under, {0, 1, 0});
-        EXPECT_NEAR(luminance(v), luminance(exact), 0.03) << toString(kind);
-        EXPECT_GT(std::abs(luminance(v) - luminance(tint * tint)), 0.1) << toString(kind);
-        if (kind == ShadowKind::Transmittance) { // RGB: the attenuation's colour too
+    for (const std::string_view kind : {"transmittance", "absorption", "deep"}) {
+        RenderOptions o;
+        setRenderOption(o, "shadows", std::string(kind));
+        for (const char* name : {"gridResolution", "gridDepth", "dsmResolution"})
+            setRenderOption(o, name, int64_t(64));
+        setRenderOption(o, "epsilon", 0.0);
+        const Vec3f v = shadowVisibility(buildLightShadow(s, sun, o.shadow), under, {0, 1, 0});
+        EXPECT_NEAR(luminance(v), luminance(exact), 0.03) << kind;
+        EXPECT_GT(std::abs(luminance(v) - luminance(tint * tint)), 0.1) << kind;
+        if (kind == "transmittance") { // RGB: the attenuation's colour too
             for (int c = 0; c < 3; ++c) EXPECT_NEAR(v[c], exact[c], 0.03) << c;
         }
     }
@@ -389,7 +385,7 @@ TEST(GlassTest, CrossingCountingShadowsPassWhatExactShadowsPassThroughGlass) {
     TreeOptions t;
     t.leaves = 50;
     const Scene tree = makeTreeScene(t);
-    EXPECT_EQ(defaultGlassKind(tree), GlassKind::None);
+    EXPECT_TRUE(std::holds_alternative<NoGlassOptions>(defaultGlass(tree)));
     for (const Material& m : tree.materials)
         if (m.transmission > 0) {
             EXPECT_FALSE(m.isGlass()) << m.name;
@@ -402,14 +398,15 @@ TEST(GlassTest, VoxelGlassRendersCloseToTheExactTracerAndDeterministically) {
     RenderOptions o;
     o.width = 96;
     o.height = 72;
-    o.shadow.kind = ShadowKind::None;
-    o.glass.kind = GlassKind::Exact;
+    o.shadow = NoShadowOptions{};
+    o.glass = ExactGlassOptions{};
     const RenderResult exact = render(s, s.cameras[0], o);
     int64_t glassPixels = 0;
     for (const uint8_t m : exact.glassMask) glassPixels += m;
     EXPECT_GT(glassPixels, 500);
-    o.glass.kind = GlassKind::Multi;
-    o.glass.gridResolution = 64;
+    MultiGlassOptions multiOptions;
+    multiOptions.gridResolution = 64;
+    o.glass = multiOptions;
     const RenderResult multi = render(s, s.cameras[0], o);
     const ImageError e = imageError(multi.image, exact.image, exact.glassMask);
     EXPECT_LT(e.mae, 0.06);
@@ -417,7 +414,7 @@ TEST(GlassTest, VoxelGlassRendersCloseToTheExactTracerAndDeterministically) {
     o.threads = 1;
     EXPECT_EQ(render(s, s.cameras[0], o).image.pixels, multi.image.pixels);
     // Glass off: the mask is empty, and the sphere is shaded like a surface.
-    o.glass.kind = GlassKind::None;
+    o.glass = NoGlassOptions{};
     EXPECT_TRUE(render(s, s.cameras[0], o).glassMask.empty());
 }
 
@@ -429,7 +426,7 @@ TEST(GlassTest, ASceneWithoutLightsIsLitByTheDefaultSunAndSkyAmbient) {
     o.height = 48;
     o.ambient = {0, 0, 0};
     o.background = {0, 0, 0};
-    o.shadow.kind = ShadowKind::None;
+    o.shadow = NoShadowOptions{};
     o.defaultLights = false;
     const RenderResult dark = render(s, s.cameras[0], o);
     for (const Vec3f& p : dark.image.pixels) EXPECT_EQ(p, (Vec3f{0, 0, 0}));
@@ -467,7 +464,7 @@ TEST(GlassTest, CommandLineRendersGlassAndComparesTheVoxelMethodsWithTheExactTra
         test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + dir.file("a.png") +
                                 " --width 64 --height 48 --glass multi --glass-grid 32 --shadows exact");
     ASSERT_EQ(r.exitCode, 0) << r.err;
-    EXPECT_NE(r.out.find("glass multi (grid 32)"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("glass multi (glass-grid 32"), std::string::npos) << r.out;
     const Image img = readPng(dir.file("a.png"));
     EXPECT_EQ(img.width, 64);
     const auto e =
@@ -492,8 +489,7 @@ TEST(GlassTest, FrostedThicknessCountsInsideCellsOfTheFrontAndBackSlicemaps) {
     GlassMedium medium;
     medium.ior = float(kGlassIor);
     medium.sigma = {0.5f, 0.5f, 0.5f};
-    GlassOptions o;
-    o.kind = GlassKind::Frosted;
+    FrostedGlassOptions o;
     o.gridResolution = 128;
     FrostedGlass glass(m.view(), std::vector<uint32_t>(m.triangleCount(), 0), {medium}, camera, o);
     const double slice = (glass.frame().farDepth() - glass.frame().nearDepth()) / 128;
@@ -511,11 +507,11 @@ TEST(GlassTest, FrostedThicknessCountsInsideCellsOfTheFrontAndBackSlicemaps) {
     };
     const Vec3d sheetFront{2.0, 0.1, 0.001}, sheetBack{2.0, 0.1, 0.0};
     EXPECT_EQ(glass.insideCells(sheetFront), sliceOf(sheetFront) == sliceOf(sheetBack) ? 1 : 2);
-    const GlassPath p = glass.trace(onSlab, {0, 0, 1}, 0, ray, o);
+    const GlassPath p = glass.trace(onSlab, {0, 0, 1}, 0, ray);
     const double F = fresnelDielectric(-ray.z, 1, kGlassIor);
     EXPECT_NEAR(p.throughput.x, (1 - F) * (1 - F) * std::exp(-0.5 * glass.thickness(onSlab)), 1e-5);
     EXPECT_GT(p.blurAngle, 0);
-    EXPECT_LT(p.blurAngle, o.frostedBlur);
+    EXPECT_LT(p.blurAngle, o.blur);
 }
 
 TEST(GlassTest, ImageErrorIsTheMeanAbsoluteAndPsnrOverTheMask) {
@@ -528,8 +524,8 @@ TEST(GlassTest, ImageErrorIsTheMeanAbsoluteAndPsnrOverTheMask) {
     EXPECT_NEAR(e.mae, 0.2 / 3, 1e-6);
     EXPECT_NEAR(e.psnr, 10 * std::log10(1 / (0.02 / 3)), 1e-4);
     EXPECT_THROW(imageError(a, b, {1}), Error);
-    EXPECT_EQ(parseGlassKind("two-surface"), GlassKind::TwoSurface);
-    EXPECT_THROW(parseGlassKind("frosty"), Error);
+    EXPECT_TRUE(std::holds_alternative<TwoSurfaceGlassOptions>(glassOptionsNamed("two-surface")));
+    EXPECT_THROW(glassOptionsNamed("frosty"), Error);
 }
 
 } // namespace

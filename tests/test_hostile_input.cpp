@@ -15,7 +15,7 @@
 #include "voxfx/error.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/mesh_io.hpp"
-#include "voxfx/scene.hpp"
+#include "voxfx/scene_io.hpp"
 #include "voxfx/transfer_function.hpp"
 #include "voxfx/volume_io.hpp"
 

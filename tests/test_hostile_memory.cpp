@@ -28,7 +28,7 @@ extern "C" std::size_t __sanitizer_get_current_allocated_bytes();
 #include "voxfx/error.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/mesh_io.hpp"
-#include "voxfx/scene.hpp"
+#include "voxfx/scene_io.hpp"
 #include "voxfx/volume_io.hpp"
 
 namespace voxfx {

@@ -16,7 +16,7 @@
 #include "io/module_api.hpp"
 #include "test_util.hpp"
 #include "voxfx/mesh_io.hpp"
-#include "voxfx/scene.hpp"
+#include "voxfx/scene_io.hpp"
 
 namespace voxfx {
 namespace {

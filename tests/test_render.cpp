@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <set>
 #include <sstream>
@@ -15,13 +16,16 @@
 #include <OpenEXR/ImfRgbaFile.h>
 #include <gtest/gtest.h>
 
+#include "demo/demo_scenes.hpp"
 #include "test_util.hpp"
-#include "voxfx/demo.hpp"
 #include "voxfx/image_io.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/scene_io.hpp"
 
 namespace voxfx {
 namespace {
+
+using namespace voxfx::demo;
 
 using test::appendQuad;
 
@@ -51,14 +55,14 @@ Scene groundScene() {
     return s;
 }
 
-RenderOptions smallOptions(ShadowKind kind = ShadowKind::None, int64_t w = 160, int64_t h = 120) {
+RenderOptions smallOptions(std::string_view kind = "none", int64_t w = 160, int64_t h = 120) {
     RenderOptions o;
     o.width = w;
     o.height = h;
-    o.shadow.kind = kind;
-    o.shadow.gridResolution = 128;
-    o.shadow.gridDepth = 128;
-    o.shadow.mapResolution = 512;
+    o.shadow = shadowOptionsNamed(kind);
+    setRenderOption(o, "gridResolution", int64_t(128)); // where the technique has it
+    setRenderOption(o, "gridDepth", int64_t(128));
+    setRenderOption(o, "mapResolution", int64_t(512));
     o.ambient = {0.1f, 0.1f, 0.1f};
     o.background = {0, 0, 0};
     return o;
@@ -189,20 +193,18 @@ TEST(RenderTest, ShadowsInTheImageAreAmbientOrTransmittedLight) {
     const auto [lx, ly] = pixelOf(s.cameras[0], 160, 120, {1.5, 0, 0});
     const auto [ox, oy] = pixelOf(s.cameras[0], 160, 120, {0, 0, 1.5});
     struct Case {
-        ShadowKind kind;
+        std::string_view kind;
         float underLeaf;
     };
-    for (const Case c :
-         {Case{ShadowKind::Map, ambient}, Case{ShadowKind::Transmittance, ambient + 0.5f * direct},
-          Case{ShadowKind::None, ambient + direct}}) {
+    for (const Case c : {Case{"map", ambient}, Case{"transmittance", ambient + 0.5f * direct},
+                         Case{"none", ambient + direct}}) {
         const RenderResult r = render(s, s.cameras[0], smallOptions(c.kind));
-        EXPECT_NEAR(r.image.at(bx, by).y, c.kind == ShadowKind::None ? ambient + direct : ambient, 1e-4f)
-            << toString(c.kind);
-        EXPECT_NEAR(r.image.at(lx, ly).y, c.underLeaf, 1e-4f) << toString(c.kind);
-        EXPECT_NEAR(r.image.at(ox, oy).y, ambient + direct, 1e-4f) << toString(c.kind);
+        EXPECT_NEAR(r.image.at(bx, by).y, c.kind == "none" ? ambient + direct : ambient, 1e-4f) << c.kind;
+        EXPECT_NEAR(r.image.at(lx, ly).y, c.underLeaf, 1e-4f) << c.kind;
+        EXPECT_NEAR(r.image.at(ox, oy).y, ambient + direct, 1e-4f) << c.kind;
     }
     // Absorption: the opaque box absorbs 8 per crossing (two crossings: e^-16), the leaf -ln 0.5.
-    const RenderResult a = render(s, s.cameras[0], smallOptions(ShadowKind::Absorption));
+    const RenderResult a = render(s, s.cameras[0], smallOptions("absorption"));
     EXPECT_NEAR(a.image.at(bx, by).y, ambient, 1e-4f);
     EXPECT_NEAR(a.image.at(lx, ly).y, ambient + 0.5f * direct, 1e-4f);
 }
@@ -228,7 +230,7 @@ TEST(RenderTest, BlendedMeshIsSeenThroughAndAMaskedOneIsNot) {
         s.meshes.push_back(q);
         return s;
     };
-    const RenderOptions o = smallOptions(ShadowKind::None, 96, 72);
+    const RenderOptions o = smallOptions("none", 96, 72);
     const Scene bare = groundScene();
     const Image ground = render(bare, bare.cameras[0], o).image;
     const Scene opaqueQuad = withQuad(false, 1, {0.5f, 0.5f, 0.5f});
@@ -266,7 +268,7 @@ TEST(RenderTest, SupersamplingIsABoxFilterOfTheFineImage) {
     TreeOptions t;
     t.leaves = 300;
     const Scene s = makeTreeScene(t);
-    RenderOptions fine = smallOptions(ShadowKind::Transmittance, 96, 54), coarse = fine;
+    RenderOptions fine = smallOptions("transmittance", 96, 54), coarse = fine;
     fine.width = 192;
     fine.height = 108;
     coarse.supersample = 2;
@@ -300,14 +302,14 @@ TEST(RenderTest, OutputDoesNotDependOnThreadCount) {
     spot.intensity = 30;
     s.lights.push_back(lamp);
     s.lights.push_back(spot);
-    for (const ShadowKind kind : {ShadowKind::Map, ShadowKind::Transmittance, ShadowKind::Absorption}) {
+    for (const std::string_view kind : {"map", "transmittance", "absorption"}) {
         RenderOptions o = smallOptions(kind, 120, 68);
         o.supersample = 2;
         o.threads = 1;
         const Image a = render(s, s.cameras[0], o).image;
         o.threads = 2;
         const Image b = render(s, s.cameras[0], o).image;
-        EXPECT_TRUE(a.pixels == b.pixels) << toString(kind);
+        EXPECT_TRUE(a.pixels == b.pixels) << kind;
     }
 }
 
@@ -335,18 +337,17 @@ TEST(RenderTest, ShadowKindsOrderOnFoliage) {
     TreeOptions t;
     t.leaves = 1500;
     const Scene s = makeTreeScene(t);
-    const RenderOptions o = smallOptions(ShadowKind::None, 160, 90);
-    double mean[4];
-    for (const ShadowKind kind :
-         {ShadowKind::None, ShadowKind::Map, ShadowKind::Transmittance, ShadowKind::Absorption}) {
+    const RenderOptions o = smallOptions("none", 160, 90);
+    std::map<std::string_view, double> mean;
+    for (const std::string_view kind : {"none", "map", "transmittance", "absorption"}) {
         RenderOptions k = o;
-        k.shadow.kind = kind;
-        mean[int(kind)] = groundMean(s, render(s, s.cameras[0], k).image, k, 0);
+        k.shadow = smallOptions(kind).shadow;
+        mean[kind] = groundMean(s, render(s, s.cameras[0], k).image, k, 0);
     }
-    EXPECT_LT(mean[int(ShadowKind::Map)], mean[int(ShadowKind::Transmittance)]);
-    EXPECT_LT(mean[int(ShadowKind::Map)], mean[int(ShadowKind::Absorption)]);
-    EXPECT_LT(mean[int(ShadowKind::Transmittance)], mean[int(ShadowKind::None)]);
-    EXPECT_LT(mean[int(ShadowKind::Absorption)], mean[int(ShadowKind::None)]);
+    EXPECT_LT(mean["map"], mean["transmittance"]);
+    EXPECT_LT(mean["map"], mean["absorption"]);
+    EXPECT_LT(mean["transmittance"], mean["none"]);
+    EXPECT_LT(mean["absorption"], mean["none"]);
 }
 
 TEST(RenderTest, MoreLeavesNeverBrightenTheGround) {
@@ -375,7 +376,7 @@ TEST(RenderTest, MoreLeavesNeverBrightenTheGround) {
     }
     ASSERT_TRUE(base.bounds(true) == more.bounds(true));
     const SceneGeometry ga = flattenScene(base), gb = flattenScene(more);
-    for (const ShadowKind kind : {ShadowKind::Transmittance, ShadowKind::Absorption, ShadowKind::Map}) {
+    for (const std::string_view kind : {"transmittance", "absorption", "map"}) {
         const RenderOptions o = smallOptions(kind, 160, 90);
         const Image a = render(base, base.cameras[0], o).image, b = render(more, more.cameras[0], o).image;
         const GBuffer gba = renderGBuffer(ga, cameraFrame(base.cameras[0], 160, 90));
@@ -388,8 +389,7 @@ TEST(RenderTest, MoreLeavesNeverBrightenTheGround) {
                 if (ga.triangleMesh[gba.triangle[i]] != 0 || gb.triangleMesh[gbb.triangle[i]] != 0) continue;
                 ++compared;
                 for (int c = 0; c < 3; ++c)
-                    ASSERT_LE(b.at(x, 89 - y)[c], a.at(x, 89 - y)[c] + 1e-6f)
-                        << toString(kind) << " " << x << " " << y;
+                    ASSERT_LE(b.at(x, 89 - y)[c], a.at(x, 89 - y)[c] + 1e-6f) << kind << " " << x << " " << y;
             }
         EXPECT_GT(compared, 3000);
     }
@@ -472,9 +472,10 @@ TEST(RenderTest, RenderCommandWritesAnImageAndPrintsPassTimings) {
         test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + out + " --width 96 --height 54");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_TRUE(std::filesystem::exists(out));
-    EXPECT_NE(r.out.find("shadows transmittance (grid 64"), std::string::npos) << r.out;
-    EXPECT_NE(r.out.find("voxelization from light"), std::string::npos) << r.out;
-    EXPECT_NE(r.out.find("shading"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("shadows transmittance (grid-resolution 64"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("shadows: 3 light grids (3 channels)"), std::string::npos) << r.out; // the counters
+    for (const char* pass : {"G-buffer", "shadows", "shading", "resolve"})
+        EXPECT_NE(r.out.find(std::string(" ") + pass + " "), std::string::npos) << pass << "\n" << r.out;
     const Image img = readPng(out);
     EXPECT_EQ(img.width, 96);
     EXPECT_EQ(img.height, 54);
@@ -541,9 +542,9 @@ TEST(RenderTest, RenderCommandWritesAnImageAndPrintsPassTimings) {
 }
 
 TEST(RenderTest, DemoCommandRendersTheTreeWithEveryShadowKindOfAll) {
-    // `demo --shadows all` writes one image per kind its --help lists for "all" (and the scene, and
-    // its timings), and every shadow kind left out of that list refuses the tree scene when
-    // rendered here through the library.
+    // `demo --shadows all` renders every shadow kind its --help lists for "all" (every kind the
+    // library has): one image per kind, or a line saying the kind refused the scene, and each kind
+    // that refused the tree refuses it rendered here through the library too.
     test::TempDir dir;
     const test::CommandRun help = test::runVoxfx(dir, "demo --help");
     const std::size_t open = help.out.find("all ("), close = help.out.find(')', open);
@@ -552,7 +553,9 @@ TEST(RenderTest, DemoCommandRendersTheTreeWithEveryShadowKindOfAll) {
     std::stringstream list(help.out.substr(open + 5, close - open - 5));
     for (std::string name; std::getline(list, name, ',');)
         listed.insert(name.substr(name.find_first_not_of(' ')));
-    EXPECT_TRUE(listed.count("exact") && listed.count("deep")) << help.out; // what "all" used to leave out
+    std::set<std::string> every;
+    for (const std::string_view n : shadowNames()) every.insert(std::string(n));
+    EXPECT_EQ(listed, every) << help.out;
 
     const std::filesystem::path out = dir.path() / "images";
     const test::CommandRun r =
@@ -561,22 +564,23 @@ TEST(RenderTest, DemoCommandRendersTheTreeWithEveryShadowKindOfAll) {
                                 out.string() + " --write-scenes " + dir.path().string());
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_TRUE(std::filesystem::exists(dir.file("tree.glb")));
-    EXPECT_NE(r.out.find("voxelization from light"), std::string::npos) << r.out;
-    std::set<std::string> written, expected;
+    EXPECT_NE(r.out.find("G-buffer"), std::string::npos) << r.out; // the passes' timings
+    std::set<std::string> written, expected, refused;
     for (const auto& e : std::filesystem::directory_iterator(out))
         written.insert(e.path().filename().string());
-    for (const std::string& k : listed) expected.insert("tree-" + k + ".png");
+    for (const std::string& k : listed) {
+        if (r.out.find("  " + k + ": refused: ") != std::string::npos)
+            refused.insert(k);
+        else
+            expected.insert("tree-" + k + ".png");
+    }
     EXPECT_EQ(written, expected);
+    EXPECT_EQ(refused, std::set<std::string>{"volumes"}) << r.out; // the leaves are open casters
 
     const Scene tree = makeDemoScene("tree", "");
-    for (int k = 0; k <= int(ShadowKind::Deep); ++k) {
-        if (listed.count(toString(ShadowKind(k)))) continue;
-        RenderOptions o;
-        o.width = 4;
-        o.height = 2;
-        o.supersample = 1;
-        o.shadow.kind = ShadowKind(k);
-        EXPECT_THROW(render(tree, tree.cameras.at(0), o), Error) << toString(ShadowKind(k));
+    for (const std::string& k : refused) {
+        RenderOptions o = smallOptions(k, 4, 2);
+        EXPECT_THROW(render(tree, tree.cameras.at(0), o), Error) << k;
     }
 }
 

@@ -12,12 +12,16 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "demo/demo_scenes.hpp"
 #include "test_util.hpp"
-#include "voxfx/demo.hpp"
+#include "voxfx/render.hpp"
 #include "voxfx/scene.hpp"
+#include "voxfx/scene_io.hpp"
 
 namespace voxfx {
 namespace {
+
+using namespace voxfx::demo;
 
 using test::base64;
 
@@ -356,11 +360,25 @@ TEST(SceneTest, JsonWrapperAddsMeshesLightsCamerasAndSettings) {
     ASSERT_EQ(s.cameras.size(), 2u); // the wrapper's camera first, then the glTF's
     expectVec(s.cameras[0].position, {0, 2, 6});
     EXPECT_NEAR(s.cameras[0].fovY, 40 * M_PI / 180, 1e-12);
-    EXPECT_EQ(s.settings.shadows, "transmittance");
-    EXPECT_EQ(s.settings.width, 320);
-    EXPECT_EQ(s.settings.gridResolution, 128);
-    EXPECT_EQ(s.settings.slicing, "local");
+    ASSERT_EQ(s.settings.render.size(), 5u); // as the file gives them
+    const auto shadows = std::find_if(s.settings.render.begin(), s.settings.render.end(),
+                                      [](const auto& setting) { return setting.first == "shadows"; });
+    ASSERT_NE(shadows, s.settings.render.end());
+    EXPECT_EQ(std::get<std::string>(shadows->second), "transmittance");
     EXPECT_EQ(s.settings.environmentMap, (dir.path() / "sky.pfm").string());
+    // Applied by the library: the scene's technique and its settings over the defaults.
+    const RenderOptions o = renderOptionsFor(s);
+    EXPECT_EQ(o.width, 320);
+    EXPECT_EQ(o.height, 200);
+    ASSERT_TRUE(std::holds_alternative<TransmittanceShadowOptions>(o.shadow));
+    EXPECT_EQ(std::get<TransmittanceShadowOptions>(o.shadow).grid.resolution, 128);
+    EXPECT_EQ(std::get<TransmittanceShadowOptions>(o.shadow).grid.slicing, Slicing::Local);
+    EXPECT_EQ(std::get<TransmittanceShadowOptions>(o.shadow).grid.depth, LightGridOptions{}.depth);
+    // A technique a front end asks for wins; the scene's settings still apply where it has them.
+    const RenderOptions m = renderOptionsFor(s, "map");
+    EXPECT_TRUE(std::holds_alternative<ShadowMapOptions>(m.shadow));
+    EXPECT_EQ(m.width, 320);
+    EXPECT_TRUE(std::holds_alternative<ExactGlassOptions>(m.glass)); // the glTF's glass
 }
 
 TEST(SceneTest, MaterialCrossingTransmittanceIsHandDerived) {

@@ -10,8 +10,8 @@
 #include <gtest/gtest.h>
 
 #include "cgal_oracle.hpp"
+#include "demo/demo_scenes.hpp"
 #include "test_util.hpp"
-#include "voxfx/demo.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/render.hpp"
@@ -19,6 +19,8 @@
 
 namespace voxfx {
 namespace {
+
+using namespace voxfx::demo;
 
 Light svPointLight(const Vec3d& p) {
     Light l;
@@ -242,7 +244,7 @@ TEST(ShadowVolumeTest, ShadowEqualsRayTracedHardShadowExceptAtSilhouettePixels) 
         for (const Light& light : lights) {
             SCOPED_TRACE(light.name + (&camera == &cameras[0] ? ", outside" : ", inside"));
             const std::vector<uint8_t> receivers =
-                shadowVolumeReceivers(f.gbuffer, f.geometry, f.scene, light);
+                shadowVolumeReceivers(f.gbuffer, f.geometry, f.scene.materials, light);
             const ShadowVolumeMask mask = computeShadowVolumes(casters, light, f.gbuffer, receivers,
                                                                f.scene.bounds(), svOptions(false, false));
             const SvComparison c = svCompare(f, receivers, mask.shadowed, svRayTraced(f, light));
@@ -270,7 +272,8 @@ TEST(ShadowVolumeTest, CullingAndClampingKeepTheShadowPixelForPixel) {
     for (const Light& light :
          {svPointLight({0.5, 5, 1.5}), svSpotLight({-1.5, 5.5, 2}, {0, 0, 0}), svSun({0.3, -1, 0.2})}) {
         SCOPED_TRACE(light.name);
-        const std::vector<uint8_t> receivers = shadowVolumeReceivers(f.gbuffer, f.geometry, f.scene, light);
+        const std::vector<uint8_t> receivers =
+            shadowVolumeReceivers(f.gbuffer, f.geometry, f.scene.materials, light);
         const ShadowVolumeMask plain = computeShadowVolumes(casters, light, f.gbuffer, receivers,
                                                             f.scene.bounds(), svOptions(false, false));
         const ShadowVolumeMask culled = computeShadowVolumes(casters, light, f.gbuffer, receivers,
@@ -316,12 +319,11 @@ TEST(ShadowVolumeTest, RendererDrawsVolumeShadowsAndCullingDoesNotChangeTheImage
     RenderOptions o;
     o.width = 80;
     o.height = 60;
-    o.shadow.kind = ShadowKind::Volumes;
+    o.shadow = ShadowVolumeOptions{};
     const RenderResult with = render(scene, scene.cameras[0], o);
-    o.shadow.volumeCulling = false;
-    o.shadow.volumeClamping = false;
+    setRenderOption(o, "volumeCulling", false);
     const RenderResult without = render(scene, scene.cameras[0], o);
-    o.shadow.kind = ShadowKind::None;
+    o.shadow = NoShadowOptions{};
     const RenderResult none = render(scene, scene.cameras[0], o);
     int64_t differ = 0, darker = 0;
     for (int64_t y = 0; y < 60; ++y)
@@ -331,11 +333,12 @@ TEST(ShadowVolumeTest, RendererDrawsVolumeShadowsAndCullingDoesNotChangeTheImage
         }
     EXPECT_EQ(differ, 0);
     EXPECT_GT(darker, 50);
-    EXPECT_GT(without.shadowVolumeFragments, with.shadowVolumeFragments);
-    EXPECT_EQ(parseShadowKind("volumes"), ShadowKind::Volumes);
-    // LightShadow::build cannot count without a G-buffer: it says so.
-    EXPECT_THROW(LightShadow::build(scene, scene.lights[0], o.shadow = ShadowOptions{ShadowKind::Volumes}),
-                 Error);
+    EXPECT_GT(std::get<ShadowVolumeStats>(without.shadowStats).fragments,
+              std::get<ShadowVolumeStats>(with.shadowStats).fragments);
+    EXPECT_TRUE(std::holds_alternative<ShadowVolumeOptions>(shadowOptionsNamed("volumes")));
+    // Built but not prepared with a G-buffer (what the renderer does), nothing is counted: lit.
+    const LightShadow unprepared = buildLightShadow(scene, scene.lights[0], ShadowVolumeOptions{});
+    EXPECT_EQ(shadowVisibility(unprepared, {0, 0, 0}, {0, 1, 0}), (Vec3f{1, 1, 1}));
 }
 
 // CGAL meshes as casters over a ground plane: exact against the ray tracer, unchanged by culling.
@@ -355,7 +358,8 @@ TEST(ShadowVolumeTest, CgalMeshCastersMatchRayTracingAndCulling) {
     const SvFixture f = svFixture(std::move(scene), svCamera({0.5, 4.0, 6.5}, {0, 0.6, 0.5}), 72, 54);
     const ShadowCasterSet casters = ShadowCasterSet::build(f.scene);
     const Light light = svPointLight({-2.0, 4.5, 3.5});
-    const std::vector<uint8_t> receivers = shadowVolumeReceivers(f.gbuffer, f.geometry, f.scene, light);
+    const std::vector<uint8_t> receivers =
+        shadowVolumeReceivers(f.gbuffer, f.geometry, f.scene.materials, light);
     const ShadowVolumeMask plain =
         computeShadowVolumes(casters, light, f.gbuffer, receivers, f.scene.bounds(), svOptions(false, false));
     const ShadowVolumeMask both =
@@ -377,16 +381,18 @@ void svExpectDemoUnchangedByCulling(Scene scene) {
     RenderOptions o;
     o.width = 96;
     o.height = 54;
-    o.shadow.kind = ShadowKind::Volumes;
+    o.shadow = ShadowVolumeOptions{};
     const RenderResult with = render(scene, camera, o);
-    o.shadow.volumeCulling = o.shadow.volumeClamping = false;
+    setRenderOption(o, "volumeCulling", false);
     const RenderResult without = render(scene, camera, o);
     int64_t differ = 0;
     for (int64_t y = 0; y < o.height; ++y)
         for (int64_t x = 0; x < o.width; ++x) differ += !(with.image.at(x, y) == without.image.at(x, y));
     EXPECT_EQ(differ, 0);
-    EXPECT_GT(without.shadowVolumeFragments, 0);
-    EXPECT_LE(with.shadowVolumeFragments, without.shadowVolumeFragments);
+    const int64_t withFragments = std::get<ShadowVolumeStats>(with.shadowStats).fragments;
+    const int64_t withoutFragments = std::get<ShadowVolumeStats>(without.shadowStats).fragments;
+    EXPECT_GT(withoutFragments, 0);
+    EXPECT_LE(withFragments, withoutFragments);
 }
 
 TEST(ShadowVolumeTest, FoliageFreeTreeDemoRendersTheSameWithAndWithoutCulling) {

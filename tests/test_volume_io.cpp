@@ -20,7 +20,7 @@
 #include "io/module_api.hpp"
 #include "test_util.hpp"
 #include "voxfx/grid_io.hpp"
-#include "voxfx/scene.hpp"
+#include "voxfx/scene_io.hpp"
 #include "voxfx/volume_io.hpp"
 #include "voxfx/volume_scene.hpp"
 

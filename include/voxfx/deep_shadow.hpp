@@ -1,4 +1,5 @@
-// voxfx — deep shadow maps of mixed polygon and volume scenes (Bornik et al. 2012 §4): per light
+// voxfx — deep shadow maps of mixed polygon and volume scenes (Bornik et al. 2012 §4), shadow
+// technique "deep" (voxfx/shadow.hpp): per light
 // view (LightView: spot one perspective frame, point six cube faces, directional one orthographic
 // frame) the scene's boundary triangles are rasterized into fragment lists (FragmentLists); every
 // texel walks its list front to back (SegmentWalker): crossings of opaque and translucent objects
@@ -18,16 +19,27 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "voxfx/dsm.hpp"
+#include "voxfx/light_view.hpp"
+#include "voxfx/options.hpp"
+#include "voxfx/parallel.hpp"
 #include "voxfx/scene.hpp"
-#include "voxfx/shadow.hpp"
+#include "voxfx/segment_walker.hpp"
 #include "voxfx/volume_scene.hpp"
 
 namespace voxfx {
 
 struct DeepShadowOptions {
+    static constexpr std::string_view kName = "deep";
+    static constexpr std::string_view kSummary =
+        "deep shadow maps (Bornik et al.): per texel an epsilon-compressed visibility function over "
+        "all fragments from the light; translucent surfaces are steps, volume objects attenuate "
+        "continuously";
     int64_t resolution = 512; ///< texels along the longer side of each view
     double epsilon = 0.05;    ///< compression tolerance (0: every node kept)
     DsmStorage storage = DsmStorage::Chunked;
@@ -41,8 +53,15 @@ struct DeepShadowOptions {
     /// light view's side) share a cluster.
     double clusterThreshold = 0.2;
     /// Volume bricks the transfer function leaves transparent are not sampled (EmptySpace in
-    /// voxfx/volume_scene.hpp); the map is the same either way, only faster.
+    /// voxfx/segment_walker.hpp); the map is the same either way, only faster.
     bool skipEmptySpace = true;
+    /// Lookups by DeepShadow::visibility(p, n): offset along the normal, in texel footprints at p.
+    double normalOffset = 1.0;
+    /// Lookups by DeepShadow::visibility(p, n): depth bias, in texel footprints at p.
+    double depthBias = 1.0;
+    /// dsmResolution, epsilon, dsmStorage, fixedNodes, dsmStep, termination, clusters,
+    /// clusterThreshold, emptySpaceSkipping, normalOffset, depthBias.
+    static std::span<const OptionField<DeepShadowOptions>> fields();
 };
 
 /// The paper's clustering heuristic on boxes (any 2D extent, e.g. light-space projected boxes):
@@ -61,9 +80,22 @@ struct DeepShadowTimings {
     double buildMs = 0;     ///< walking the texels, compressing, storing
 };
 
+/// Node and memory statistics of the maps (summed over views and lights; maxNodes and maxEpsilon:
+/// the largest), their storage and build times.
+struct DeepShadowStats : DsmStats {
+    DsmStorage storage = DsmStorage::Chunked;
+    DeepShadowTimings timings;
+    DeepShadowStats& operator+=(const DeepShadowStats& o);
+    /// "T texels, nodes per texel mean M max X, B MiB chunked (fixed layout sized by the worst
+    /// texel: F MiB)"; empty without texels.
+    std::string summary() const;
+};
+
 class DeepShadow {
 public:
-    DeepShadow() = default;
+    using Options = DeepShadowOptions;
+    using Stats = DeepShadowStats;
+    DeepShadow() = default; ///< no maps: visibility 1
     /// One deep shadow map per view of `light` fitted to the casters' bounds (all objects with
     /// castsShadow). Throws voxfx::Error for an invalid scene or options, or when progress cancels.
     static DeepShadow build(const VolumeScene& scene, const Light& light, const DeepShadowOptions& options,
@@ -71,18 +103,23 @@ public:
     /// The same with given views (a fitted frustum per cluster, tests).
     static DeepShadow build(const VolumeScene& scene, std::vector<LightView> views,
                             const DeepShadowOptions& options, Progress* progress = nullptr);
+    /// The renderer's scene (volumeSceneOf: every mesh, then its volume scene). No maps (visibility
+    /// 1) when nothing casts: no caster triangle and no volume scene.
+    static DeepShadow build(const Scene& scene, const Light& light, const DeepShadowOptions& options,
+                            Progress* progress = nullptr);
 
     /// Fraction of the light reaching world point p (see the file comment); `n` the unit normal
-    /// turned towards the light (zero: no offset).
-    float visibility(const Vec3d& p, const Vec3d& n = {0, 0, 0}, double normalOffset = 0,
-                     double depthBias = 0) const;
+    /// turned towards the light (zero: no offset), with the options' normalOffset and depthBias.
+    float visibility(const Vec3d& p, const Vec3d& n) const;
+    /// The same with the given offsets (texel footprints at p).
+    float visibility(const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias) const;
     const std::vector<LightView>& views() const { return views_; }
     const std::vector<DeepShadowMap>& maps() const { return maps_; }
     /// Clusters: views [groupBegin[g], groupBegin[g + 1]) hold the objects of cluster g; the
     /// visibility is the product over clusters. One group without clustering.
     const std::vector<std::size_t>& groupBegin() const { return groupBegin_; }
     /// Node and memory statistics summed over the views (maxNodes: the largest texel of any).
-    DsmStats stats() const;
+    DeepShadowStats stats() const;
     const DeepShadowTimings& timings() const { return timings_; }
 
 private:
@@ -90,22 +127,12 @@ private:
     std::vector<DeepShadowMap> maps_;
     std::vector<std::size_t> groupBegin_;
     DeepShadowTimings timings_;
+    DeepShadowOptions options_;
 };
 
 /// The exact (uncompressed, epsilon ignored) visibility function along texel (x, y) of `view`, as
 /// the deep shadow map builds it: for tests and error measurements.
 std::vector<DsmNode> deepShadowTexel(const VolumeScene& scene, const LightView& view, int64_t x, int64_t y,
                                      const DeepShadowOptions& options);
-
-/// Which of a Scene's meshes volumeSceneOf turns into objects.
-enum class SceneMeshes {
-    All,     ///< every mesh: what the light sees (deep shadows)
-    Blended, ///< the meshes of blended materials (Material::blend): what the camera's G-buffer leaves out
-};
-
-/// The renderer's scene as a volume scene: the chosen meshes, each a leaf and an object (opaque, or
-/// translucent with opacity 1 - luminance(crossingTransmittance); `material` names the mesh's
-/// material), then the objects of scene.volumeScene.
-VolumeScene volumeSceneOf(const Scene& scene, SceneMeshes meshes = SceneMeshes::All);
 
 } // namespace voxfx

@@ -16,7 +16,6 @@
 // Thread-safety: an Environment is a value; lookups are const and may run from any number of threads.
 #pragma once
 
-#include <string>
 #include <vector>
 
 #include "voxfx/image.hpp"
@@ -71,10 +70,5 @@ private:
 
 /// Level k+1 from level k (see the file comment). Exposed for tests.
 Image downsampleEnvironmentLevel(const Image& level);
-
-/// Loads an environment map by extension: .exr (OpenEXR, through the exr module), .pfm, .hdr
-/// (Radiance RGBE, flat or run-length encoded), .png (sRGB, decoded to linear). The string "sky"
-/// gives the default procedural sky. Throws voxfx::Error naming the file.
-Environment loadEnvironment(const std::string& path);
 
 } // namespace voxfx

@@ -55,8 +55,10 @@
 
 #include <concepts>
 #include <cstdint>
+#include <string>
 #include <vector>
 
+#include "voxfx/enum_names.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/parallel.hpp"
@@ -64,6 +66,11 @@
 namespace voxfx {
 
 enum class Coverage : uint8_t { Center, Conservative };
+inline constexpr EnumName<Coverage> kCoverageNames[] = {{"center", Coverage::Center},
+                                                        {"conservative", Coverage::Conservative}};
+const char* toString(Coverage c);
+/// Parses center | conservative; throws voxfx::Error listing them otherwise.
+Coverage parseCoverage(const std::string& name);
 
 /// The parallel scheme, for consumers that offer the direct path (see above); the bits are the
 /// same either way. Auto picks direct for dense meshes. For tests and benchmarks.

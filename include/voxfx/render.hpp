@@ -1,38 +1,52 @@
-// voxfx — the rasterizing renderer: G-buffer, light loop with shadows, Blinn–Phong shading.
+// voxfx — the rasterizing renderer: G-buffer, light loop with shadows, glass, volumes, Blinn–Phong
+// shading.
 //
-// Passes (each separable, so later effects — glass, deep shadow maps — slot in as new passes):
-//   1. flattenScene   every SceneMesh into one indexed mesh with per-triangle material and vertex
-//                     normals (once per scene); meshes of blended materials last.
-//   2. renderGBuffer  the camera is a perspective Frame whose columns are pixels (y up; images are
-//                     y down, flipped on output); a consumer of the one rasterizer keeps the
-//                     nearest centre-sampled fragment per pixel (depth, triangle). Ties go to the
-//                     lower triangle index, so the result does not depend on the thread count.
-//   3. shadows        one LightShadow per light (shadow.hpp): standard map, ED06 transmittance,
-//                     CHANG absorption, or shadow volumes counted over the G-buffer.
-//   4. shade          deferred, tile rows in parallel: ambient + per light Blinn–Phong times the
-//                     light's RGB visibility. Surfaces are lit on both sides; the side facing away
-//                     from a light receives the light that crosses the surface
-//                     (crossingTransmittance: back-lit leaves glow).
-//   4b. volumes       scenes with volume objects, Boolean shapes (scene.volumeScene) or meshes of
-//                     blended materials: ray casting over fragment lists from the camera, composited
-//                     over the shaded image (render/volume_pass): volumes sampled, and the visible
-//                     surfaces of opaque and translucent objects (where a Boolean's inside flag
-//                     changes) and of blended meshes shaded like meshes and α-blended in depth order.
-//   5. resolve        box filter of supersample x supersample pixels.
+// A frame runs an ordered list of passes over one frame state (render/renderer.cpp), each timed
+// (RenderTimings::passes, in this order):
+//   flatten   every SceneMesh into one indexed mesh with per-triangle material and vertex normals;
+//             meshes of blended materials last (voxfx/gbuffer.hpp).
+//   G-buffer  the camera is a perspective Frame whose columns are pixels; a consumer of the one
+//             rasterizer keeps the nearest centre-sampled fragment per pixel (ties to the lower
+//             triangle index, so the result does not depend on the thread count).
+//   shadows   one LightShadow per light, built by the chosen technique (voxfx/shadow.hpp) and, for
+//             techniques that count over the camera's G-buffer, prepared with it.
+//   shading   deferred, tile rows in parallel: ambient + per light Blinn–Phong times the light's RGB
+//             visibility. Surfaces are lit on both sides; the side facing away from a light receives
+//             the light that crosses the surface (crossingTransmittance: back-lit leaves glow). With
+//             an environment, background pixels show it along their ray.
+//   glass     the pixels showing glass (Material::isGlass) get the light through it by the chosen
+//             method (voxfx/glass.hpp).
+//   volumes   scenes with volume objects, Boolean shapes (scene.volumeScene) or meshes of blended
+//             materials: ray casting over fragment lists from the camera, composited over the shaded
+//             image: volumes sampled, and the visible surfaces of opaque and translucent objects
+//             (where a Boolean's inside flag changes) and of blended meshes shaded like meshes and
+//             α-blended in depth order.
+//   resolve   box filter of supersample x supersample pixels, flipped to image rows (y down).
 // Output is linear RGB (writePng encodes sRGB; writePfm keeps HDR). Deterministic for any thread
 // count.
 //
-// EXPERIMENTAL until the renderer issue closes.
+// Options by name. Every setting a front end reaches has a name (voxfx/options.hpp): the fields of
+// RenderOptions itself (renderOptionFields), of each shadow technique and of each glass method.
+// setRenderOption sets one wherever the render uses it, renderOptionsFor applies a scene file's
+// settings, and renderOptionCatalog lists every name for front ends (the CLI's flags, Python's
+// keywords): the defaults are stated once, as the structs' member initializers.
+//
 // Thread-safety: render calls may run concurrently on one const Scene; each uses worker threads
 // (RenderOptions::threads) itself.
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "voxfx/environment.hpp"
+#include "voxfx/gbuffer.hpp"
 #include "voxfx/glass.hpp"
 #include "voxfx/image.hpp"
+#include "voxfx/options.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/scene.hpp"
 #include "voxfx/shadow.hpp"
@@ -40,16 +54,16 @@
 namespace voxfx {
 
 struct RenderOptions {
-    int64_t width = 1280, height = 720; ///< output pixels
-    int supersample = 1;                ///< k: render k*width x k*height, box-filter down (1..8)
-    ShadowOptions shadow;               ///< shadow kind and its resolutions
-    Vec3f ambient{0.05f, 0.06f, 0.08f}; ///< ambient irradiance (times albedo)
+    int64_t width = 1280, height = 720;        ///< output pixels, 1..65536
+    int supersample = 1;                       ///< k: render k*width x k*height, box-filter down (1..8)
+    ShadowOptions shadow = ShadowMapOptions{}; ///< the shadow technique and its options
+    Vec3f ambient{0.05f, 0.06f, 0.08f};        ///< ambient irradiance (times albedo)
     Vec3f background{0.60f, 0.72f, 0.90f};
     float exposure = 1; ///< multiplies the linear result (background included)
-    GlassOptions glass; ///< refraction through transmissive materials (none: shaded as surfaces)
+    GlassOptions glass; ///< the glass method and its options (default none: shaded as surfaces)
     /// Radiance around the scene: shown as the background and seen through and in glass. Null: the
-    /// flat `background`, and the procedural sky (Environment::sky) where glass needs one. Not owned.
-    const Environment* environment = nullptr;
+    /// flat `background`, and the procedural sky (Environment::sky) where glass needs one.
+    std::shared_ptr<const Environment> environment;
     /// A scene without lights is lit by a sun (the sky's, or SkyOptions' default direction for maps)
     /// and the environment's average radiance as ambient, as glTF viewers do.
     bool defaultLights = true;
@@ -58,66 +72,87 @@ struct RenderOptions {
     /// Volume ray casting (scene.volumeScene): sample step in smallest voxel spacings.
     double volumeStep = 1.0;
     /// Volume ray casting: volume bricks the transfer function leaves transparent are not sampled
-    /// (EmptySpace, voxfx/volume_scene.hpp); the image is the same either way, only faster.
+    /// (EmptySpace, voxfx/segment_walker.hpp); the image is the same either way, only faster.
     bool skipEmptySpace = true;
+
+    /// The named fields of RenderOptions itself: width, height, supersample, exposure, ambient,
+    /// background, volumeStep, emptySpaceSkipping, defaultLights.
+    static std::span<const OptionField<RenderOptions>> fields();
 };
 
-/// Wall-clock time of each pass, milliseconds.
+/// Sets the option `name` (lowerCamelCase, or its kebab- or snake-case spelling) wherever the
+/// render uses it. "shadows" and "glass" (names) choose a technique with its default options; any
+/// other name sets that field of RenderOptions, of the chosen shadow technique and of the chosen
+/// glass method, each that has one of that name. Returns false when none of them has it (it belongs
+/// to a technique not chosen). Throws voxfx::Error ("WHERE: NAME: ...") for a name no part of the
+/// render knows, a value of the wrong type or out of range, or an unknown technique.
+bool setRenderOption(RenderOptions& options, std::string_view name, const OptionValue& value,
+                     std::string_view where = {});
+
+/// Checks a setting as a scene file gives it: "shadows" or "glass" names a technique, any other name
+/// a field of RenderOptions, of some shadow technique or of some glass method, with a value that
+/// field takes. Throws voxfx::Error ("WHERE: NAME: ...") otherwise.
+void checkRenderSetting(std::string_view name, const OptionValue& value, std::string_view where = {});
+
+/// The options `scene` renders with unless a front end says otherwise: RenderOptions' defaults; the
+/// shadow technique `shadows` if not empty, else the scene file's "shadows", else map; the glass
+/// method `glass` if not empty, else the scene file's "glass", else defaultGlass(scene); then the
+/// scene file's other settings (SceneSettings::render) where they apply (a setting of a technique not
+/// chosen is ignored). The environment is left to the caller (loadSceneEnvironment
+/// in voxfx/environment_io.hpp reads the scene's map). Throws voxfx::Error as setRenderOption does.
+RenderOptions renderOptionsFor(const Scene& scene, std::string_view shadows = {},
+                               std::string_view glass = {});
+
+/// One name a render takes, for front ends that list them (the CLI's flags, Python's keywords).
+struct RenderOptionInfo {
+    std::string name;  ///< lowerCamelCase
+    std::string alias; ///< an older name meaning the same (lowerCamelCase), or empty
+    OptionType type = OptionType::Real;
+    std::string help;
+    double lo = 0, hi = 0; ///< Integer, Real, Triple: the range (of the first user)
+    std::string choices;   ///< Name: the names allowed
+    /// Who uses it, each with its default: "render (1280)", "shadows map (2048)", "glass multi (128)".
+    std::vector<std::string> users;
+};
+/// Every name setRenderOption takes besides "shadows" and "glass", in the order: RenderOptions',
+/// then each shadow technique's, then each glass method's (a name several use is listed once, with
+/// every user). The types of one name agree (a test checks it).
+std::vector<RenderOptionInfo> renderOptionCatalog();
+
+/// Wall-clock time of one pass.
+struct PassTime {
+    std::string_view name;
+    double ms = 0;
+};
+
 struct RenderTimings {
-    double flattenMs = 0, gbufferMs = 0, shadowMapMs = 0, lightVoxelizeMs = 0, shadingMs = 0, resolveMs = 0,
-           totalMs = 0;
-    double shadowVolumeMs = 0; ///< ShadowKind::Volumes: culling, construction and counting
-    double glassPrepareMs = 0; ///< Embree build (exact) or attribute voxelization (voxel methods)
-    double glassMs = 0;        ///< tracing the glass pixels
-    double volumeMs = 0;       ///< volume ray casting over fragment lists (scenes with volumes)
+    std::vector<PassTime> passes; ///< every pass, in the order they ran (see the file comment)
+    double totalMs = 0;
+    /// The time of the pass called `name` ("flatten", "G-buffer", "shadows", "shading", "glass",
+    /// "volumes", "resolve"); 0 for one that did not run.
+    double ms(std::string_view name) const;
+};
+
+/// What the glass pass did.
+struct GlassReport {
+    std::string_view method = "none";
+    int64_t pixels = 0;   ///< output pixels showing glass
+    double prepareMs = 0; ///< Embree build (exact) or the grids (voxel methods, frosted)
+    double traceMs = 0;   ///< tracing the glass pixels
 };
 
 struct RenderResult {
     Image image;
     RenderTimings timings;
-    int64_t coveredPixels = 0;         ///< pixels (at the supersampled resolution) showing geometry
-    int64_t shadowVolumeFragments = 0; ///< ShadowKind::Volumes: volume fragments, all lights
+    int64_t coveredPixels = 0; ///< pixels (at the supersampled resolution) showing geometry
+    /// The shadow technique's counters, summed over the lights (summary() prints them).
+    ShadowStats shadowStats;
     /// Per output pixel (row-major, row 0 on top): 1 where any of its samples shows glass, else 0.
-    /// Empty when options.glass.kind is None.
+    /// Empty when the glass method is none.
     std::vector<uint8_t> glassMask;
+    GlassReport glass;
     int64_t volumeSamples = 0; ///< volume samples the ray-casting pass took
-    DsmStats deepShadowStats;  ///< ShadowKind::Deep: node and memory statistics over all lights' maps
 };
-
-/// All meshes of a scene as one mesh, with per-triangle material and source mesh and per-vertex
-/// unit normals (given ones, or area-weighted face normals). The meshes the G-buffer draws come
-/// first, in scene order; the meshes of blended materials (Material::blend) follow them.
-struct SceneGeometry {
-    Mesh mesh;
-    std::vector<uint32_t> triangleMaterial, triangleMesh;
-    std::vector<Vec3f> normals;
-    /// Triangles [0, drawnTriangles) are drawn by the G-buffer; the rest are blended meshes, which
-    /// the fragment-list pass draws (they still cast shadows and refract in glass like the others).
-    std::size_t drawnTriangles = 0;
-};
-SceneGeometry flattenScene(const Scene& scene);
-
-/// Nearest fragment per pixel. Pixel (x, y) with y up; triangle == kNone where nothing was hit.
-struct GBuffer {
-    static constexpr uint32_t kNone = 0xffffffffu;
-    Frame frame;              ///< the camera's perspective frame (columns = pixels)
-    std::vector<float> depth; ///< view distance along the camera axis
-    std::vector<uint32_t> triangle;
-};
-/// The camera's frame for a width x height image.
-Frame cameraFrame(const Camera& camera, int64_t width, int64_t height);
-GBuffer renderGBuffer(const SceneGeometry& geometry, const Frame& camera, Progress* progress = nullptr);
-
-/// What the shading pass knows about the surface seen through pixel (x, y) (y up).
-struct SurfacePoint {
-    Vec3d position;        ///< world
-    Vec3d normal;          ///< interpolated vertex normal, turned towards the viewer
-    Vec3d geometricNormal; ///< face normal, turned towards the viewer
-    uint32_t material = 0;
-};
-/// False for background pixels.
-bool surfaceAt(const GBuffer& gbuffer, const SceneGeometry& geometry, int64_t x, int64_t y,
-               SurfacePoint& out);
 
 /// Renders the scene as seen by `camera`. Throws voxfx::Error for invalid options (size, supersample)
 /// or a scene without triangles; Scene::validate is called first.

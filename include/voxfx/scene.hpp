@@ -1,7 +1,8 @@
-// voxfx — scenes: meshes with materials, lights and cameras, loaded from glTF 2.0 or a JSON wrapper.
+// voxfx — scenes: meshes with materials, lights and cameras (read from files by voxfx/scene_io.hpp).
 //
 // The scene model is independent of any file format: everything is in world space (node transforms
-// applied), units are the file's (glTF: metres), angles are radians, colours are linear RGB.
+// applied), units are the file's (glTF: metres), angles are radians, colours are linear RGB. What
+// the loaders read:
 //
 //   glTF 2.0 (.gltf, .glb)  meshes under their node transforms (a mesh used by two nodes becomes two
 //                           SceneMeshes), cameras, KHR_lights_punctual (point, spot, directional),
@@ -13,12 +14,11 @@
 //   JSON wrapper (.json)    what glTF cannot say: effect settings, grid resolution, extra meshes in
 //                           other formats (OFF, OBJ, PLY, STL ... with a transform and a material),
 //                           extra lights and cameras, meshes that only receive shadows, an
-//                           environment map. Format: see loadScene below.
+//                           environment map. Format: see loadScene (voxfx/scene_io.hpp).
 //   other mesh formats      one mesh with a default material, no lights or cameras.
 //
 // EXPERIMENTAL: the scene model will grow (textures, volumes for DSM) until the renderer issue closes.
-// Thread-safety: a Scene is a value: concurrent reads are fine. loadScene/writeGltf of different
-// paths may run concurrently; they run on the calling thread.
+// Thread-safety: a Scene is a value: concurrent reads are fine.
 #pragma once
 
 #include <cstdint>
@@ -26,11 +26,13 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "voxfx/enum_names.hpp"
 #include "voxfx/math.hpp"
 #include "voxfx/mesh.hpp"
+#include "voxfx/options.hpp"
 
 namespace voxfx {
 
@@ -85,6 +87,10 @@ struct Material {
     Vec3f shadowCrossingTransmittance() const;
 };
 
+/// KHR_materials_volume's attenuation coefficient of `m`: sigma = -ln(attenuationColor) /
+/// attenuationDistance per channel, per world unit (zero when the distance is infinite or not > 0).
+Vec3f attenuationCoefficient(const Material& m);
+
 /// One mesh in world space with one material.
 struct SceneMesh {
     std::string name;
@@ -120,19 +126,14 @@ struct Camera {
     double farDepth = 1.0e4; ///< far plane (geometry beyond it is still drawn: the depth is exact)
 };
 
-/// What the JSON wrapper adds to a scene; zero / empty means "not given" (the caller's default).
+/// What a scene file says about how to render it: the JSON wrapper's "render" settings, by name
+/// ("shadows", "glass", and the names voxfx/render.hpp's setRenderOption takes, such as
+/// "gridResolution" or "ambient"; renderOptionsFor applies them, the techniques first), and its
+/// environment map. Nothing is given where the file says nothing: the defaults are the options
+/// structs' own.
 struct SceneSettings {
-    std::string shadows; ///< none | map | transmittance | absorption
-    int64_t width = 0, height = 0;
-    int supersample = 0;
-    int64_t gridResolution = 0; ///< light grid columns per side
-    int64_t gridDepth = 0;      ///< light grid slices
-    int64_t shadowMapResolution = 0;
-    std::string slicing;        ///< uniform | local
-    std::string voxelMode;      ///< surface | conservative
-    std::string environmentMap; ///< path of an environment map (kept for the glass renderer)
-    Vec3f ambient{-1, -1, -1};  ///< negative = not given
-    Vec3f background{-1, -1, -1};
+    std::vector<std::pair<std::string, OptionValue>> render;
+    std::string environmentMap; ///< path of an environment map (resolved against the scene file), or empty
 };
 
 struct Scene {
@@ -162,47 +163,11 @@ struct Scene {
     void validate() const;
 };
 
-/// Loads a scene by extension:
-///   .gltf .glb   glTF 2.0 (see the file comment);
-///   .json        the wrapper:
-///     { "gltf": "tree.glb",                       optional, relative to the JSON file
-///       "meshes": [ { "file": "bunny.off", "name": "bunny",
-///                     "translate": [x,y,z], "scale": s or [sx,sy,sz],
-///                     "rotate": [ax,ay,az, degrees],
-///                     "material": { "name": "fur", "baseColor": [r,g,b], "opacity": 1,
-///                                   "transmission": 0, "ior": 1.5, "specular": 0.2,
-///                                   "shininess": 32 },
-///                     "castsShadow": true } ],
-///       "lights":  [ { "type": "directional|spot|point", "name": "sun", "position": [..],
-///                      "direction": [..], "target": [..] (instead of direction),
-///                      "color": [..], "intensity": 3, "innerConeDegrees": 20,
-///                      "outerConeDegrees": 30 } ],
-///       "cameras": [ { "position": [..], "target": [..], "up": [..], "fovYDegrees": 45,
-///                      "near": 0.01 } ],
-///       "receiversOnly": [ "Ground" ],             mesh names that cast no shadow
-///       "render":  { "shadows": "transmittance", "width": 1280, "height": 720,
-///                    "supersample": 2, "gridResolution": 256, "gridDepth": 256,
-///                    "shadowMapResolution": 2048, "slicing": "local",
-///                    "voxelMode": "surface", "ambient": [..], "background": [..] },
-///       "environmentMap": "sky.pfm" }
-///   anything loadMesh reads: one mesh, default material.
-/// Throws voxfx::Error naming the file for a missing or unreadable file, an unknown extension (with
-/// the allowed list), malformed JSON (with the position), unknown keys or light types, a light
-/// without a usable direction, and everything Scene::validate rejects.
-Scene loadScene(const std::string& path);
-
-/// The JSON wrapper from text, as loadScene reads it from a .json file: `path` names the text in
-/// messages and is the file its relative names are resolved against (it is not read itself).
-/// Throws voxfx::Error as loadScene does.
-Scene parseSceneJson(std::string_view json, const std::string& path);
-
-/// Writes a scene as glTF 2.0: .gltf (JSON with the buffer embedded as a base64 data URI) or .glb
-/// (binary container). Materials with their extensions, lights (KHR_lights_punctual) and cameras are
-/// written as nodes; meshes are written in world space under identity nodes. Per-vertex normals are
-/// written when present. Atomic (temporary file, then rename). Throws voxfx::Error.
-void writeGltf(const Scene& scene, const std::string& path);
-
 /// A camera looking at the whole scene from the front-above (used when a scene has no camera).
 Camera defaultCamera(const Scene& scene, double aspect);
+
+/// The scene's camera `index`; for a scene without cameras, index 0 is defaultCamera(scene,
+/// aspect). Throws voxfx::Error naming the cameras there are otherwise.
+Camera sceneCamera(const Scene& scene, int index, double aspect);
 
 } // namespace voxfx

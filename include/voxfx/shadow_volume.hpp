@@ -1,12 +1,14 @@
 // voxfx — shadow volumes (Crow 1977; depth-fail counting, Carmack / Everitt & Kilgard 2002) with
 // ED06 §3.2's voxel-based culling and clamping: exact hard shadows for point, spot and directional
-// lights, counted per pixel of the camera's G-buffer by a consumer of the one rasterizer.
+// lights, counted per pixel of the camera's G-buffer by a consumer of the one rasterizer. Shadow
+// technique "volumes" (voxfx/shadow.hpp): the one that needs the G-buffer, so VolumeShadow has the
+// prepare step (build: the casters; prepare: culling, volumes and counting for that G-buffer).
 //
 // Casters. Each SceneMesh that casts shadows is welded by exact vertex position and its edge
 // adjacency is built once (ShadowCasterSet). A caster must be closed (every edge shared by exactly
 // two triangles traversing it in opposite directions); open or non-manifold casters are refused
 // with an error naming the mesh (their shadow volume is not a closed surface, so counting is
-// meaningless): mark them castsShadow = false or use another ShadowKind.
+// meaningless): mark them castsShadow = false or use another shadow technique.
 //
 // Volumes. For a light, the triangles of a caster facing away from it (normal . toLight <= 0)
 // form the *near cap*, reversed; silhouette edges (between a lit and an unlit triangle) are
@@ -46,7 +48,6 @@
 // the G-buffer surface of the pixel it projects to (a refracted or reflected point) gets that
 // pixel's answer; shadow volumes only shade what the camera sees directly.
 //
-// EXPERIMENTAL until the renderer issue closes.
 // Thread-safety: ShadowCasterSet is read-only after build; computeShadowVolumes may run
 // concurrently on the same set and G-buffer (it uses worker threads itself); the result does not
 // depend on the thread count.
@@ -54,10 +55,15 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
-#include "voxfx/render.hpp"
+#include "voxfx/gbuffer.hpp"
+#include "voxfx/light_view.hpp"
+#include "voxfx/options.hpp"
+#include "voxfx/scene.hpp"
 
 namespace voxfx {
 
@@ -81,11 +87,19 @@ struct ShadowCasterSet {
 };
 
 struct ShadowVolumeOptions {
+    static constexpr std::string_view kName = "volumes";
+    static constexpr std::string_view kSummary =
+        "exact hard shadows: shadow volumes of the closed casters counted per pixel (open casters "
+        "are refused), culled and clamped against what the camera sees (ED06 3.2; the same image "
+        "without: --no-volume-culling)";
     bool cullReceivers = true;    ///< skip volumes holding no visible receiver
     bool cullOccluded = true;     ///< skip casters entirely in other casters' shadow
     bool clamp = true;            ///< end each volume at its last receiver slab
     int64_t mapResolution = 256;  ///< light views for culling: columns along the longer side
     int64_t receiverSlices = 128; ///< receiver slicemap: slices
+    /// volumeCulling (all three of culling and clamping), cullReceivers, cullOccluded,
+    /// volumeClamping, cullResolution, receiverSlices.
+    static std::span<const OptionField<ShadowVolumeOptions>> fields();
 };
 
 struct ShadowVolumeStats {
@@ -99,6 +113,9 @@ struct ShadowVolumeStats {
     int64_t fragments = 0;        ///< volume fragments the rasterizer emitted in the camera frame
     bool receiversCovered = true; ///< false: some receiver lay outside the light views (no culling)
     double cullMs = 0, buildMs = 0, rasterMs = 0;
+    /// Sums (receiversCovered: both), for the lights of a frame.
+    ShadowVolumeStats& operator+=(const ShadowVolumeStats& o);
+    std::string summary() const;
 };
 
 /// Per pixel of a G-buffer: whether its surface point lies in some caster's shadow for one light.
@@ -115,7 +132,7 @@ struct ShadowVolumeMask {
 /// Which G-buffer pixels count as receivers for culling: a surface facing the light (geometric
 /// normal, towards the viewer, . direction to the light > 0) or of a non-opaque material.
 std::vector<uint8_t> shadowVolumeReceivers(const GBuffer& gbuffer, const SceneGeometry& geometry,
-                                           const Scene& scene, const Light& light);
+                                           std::span<const Material> materials, const Light& light);
 
 /// Shadow volumes of `casters` for `light`, counted per pixel of `gbuffer`. `sceneBounds` bounds
 /// every surface that can receive (the unclamped volumes pass it); `receivers` as returned by
@@ -130,9 +147,31 @@ ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Ligh
 /// inspection.
 Mesh shadowVolumeMesh(const ShadowCasterSet& casters, const Light& light, const Box3d& sceneBounds);
 
-/// The renderer's entry: ShadowKind::Volumes for one light (casters built once per render).
-LightShadow buildVolumeShadow(const ShadowCasterSet& casters, const Scene& scene, const Light& light,
-                              const GBuffer& gbuffer, const SceneGeometry& geometry,
-                              const ShadowOptions& options, ShadowBuildTimings* timings = nullptr);
+/// The shadow of one light as the renderer uses it: built from the scene's casters, then prepared
+/// (counted) for the G-buffer of the frame it shades.
+class VolumeShadow {
+public:
+    using Options = ShadowVolumeOptions;
+    using Stats = ShadowVolumeStats;
+    VolumeShadow() = default; ///< no casters: visibility 1
+    /// The scene's closed casters (ShadowCasterSet::build: throws voxfx::Error naming an open one).
+    static VolumeShadow build(const Scene& scene, const Light& light, const ShadowVolumeOptions& options,
+                              Progress* progress = nullptr);
+    /// Counts the volumes over `gbuffer` (computeShadowVolumes with the receivers it shows).
+    void prepare(const GBuffer& gbuffer, const SceneGeometry& geometry);
+    /// 1 where the G-buffer pixel under p is lit, 0 where it is shadowed (ShadowVolumeMask); 1
+    /// before prepare. `n` is not used: the counting is exact.
+    float visibility(const Vec3d& p, const Vec3d& n) const;
+    Stats stats() const { return mask_.stats; }
+    const ShadowVolumeMask& mask() const { return mask_; }
+
+private:
+    ShadowVolumeOptions options_;
+    std::shared_ptr<const ShadowCasterSet> casters_;
+    Light light_;
+    Box3d sceneBounds_;
+    std::vector<Material> materials_;
+    ShadowVolumeMask mask_;
+};
 
 } // namespace voxfx

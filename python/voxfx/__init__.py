@@ -10,6 +10,7 @@
     d = voxfx.signed_distance(mesh, points)        # exact distance, negative inside, (K,) float64
     field = voxfx.sdf(mesh, resolution=128)        # narrow-band signed distance field
     report = voxfx.batch("meshes.txt", "out/", resolution=64)   # many meshes, as `voxfx batch`
+    image = voxfx.render("scene.json", shadows="deep", epsilon=0.02)  # (H, W, 3) float32, linear RGB
 
 Errors raise voxfx.Error (a RuntimeError) with the library's message, bad arguments
 voxfx.ArgumentError (also a ValueError). Long calls release the GIL and stop at Ctrl-C. See also
@@ -19,7 +20,7 @@ command line.
 import __future__
 
 from . import _voxfx
-from ._voxfx import ArgumentError, Density, Error, Grid, Mesh, PointClassifier, SurfaceMesh, __version__
+from ._voxfx import ArgumentError, Density, Error, Grid, Mesh, PointClassifier, Scene, SurfaceMesh, __version__
 from ._voxfx import ClosestPoints, SignedDistanceField
 
 # The I/O modules (voxfx_vdb.so, ...) lie next to _voxfx (the library looks there): nothing is
@@ -57,7 +58,8 @@ def _with_signature(f):
 _FUNCTIONS = [
     "closing", "compute_density", "contains", "csg", "cuda_status", "dilate", "erode", "extract_surface",
     "from_numpy", "load_mesh", "morphology", "opening", "read_grid", "resample_to_uniform", "reslice", "voxelize",
-    "batch_jobs", "closest_points", "signed_distance", "sdf",
+    "batch_jobs", "glass_methods", "load_scene", "render", "render_options", "shadow_kinds",
+    "closest_points", "signed_distance", "sdf",
 ]
 for _name in _FUNCTIONS:
     globals()[_name] = _with_signature(getattr(_voxfx, _name))
@@ -114,5 +116,5 @@ if hasattr(_batch, "__wrapped__"):
 #: File extension of each grid format that Grid.save writes.
 GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj")
 
-__all__ = ["ArgumentError", "ClosestPoints", "Density", "Error", "Grid", "Mesh", "PointClassifier",
-           "SignedDistanceField", "SurfaceMesh", "GRID_FORMATS", "batch", *sorted(_FUNCTIONS)]
+    "batch_jobs", "glass_methods", "load_scene", "render", "render_options", "shadow_kinds",
+    "closest_points", "signed_distance", "sdf",

@@ -12,28 +12,11 @@ double msSince(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-std::string withCommas(int64_t v) {
-    // The magnitude as unsigned: -v overflows for INT64_MIN.
-    std::string s = std::to_string(v < 0 ? uint64_t(0) - uint64_t(v) : uint64_t(v));
-    for (int i = int(s.size()) - 3; i > 0; i -= 3) s.insert(size_t(i), 1, ',');
-    if (v < 0) s.insert(0, 1, '-'); // not "-" + s: GCC 12 warns falsely (-Wrestrict) once inlined
-    return s;
-}
+std::string withCommas(int64_t v) { return countText(v); }
 
-std::string fmt(double v, int precision) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.*g", precision, v);
-    return buf;
-}
+std::string fmt(double v, int precision) { return numberText(v, precision); }
 
-std::string fmtMs(double ms) {
-    char buf[64];
-    if (ms < 1000)
-        std::snprintf(buf, sizeof buf, "%.1f ms", ms);
-    else
-        std::snprintf(buf, sizeof buf, "%.2f s", ms / 1000);
-    return buf;
-}
+std::string fmtMs(double ms) { return msText(ms); }
 
 std::string boxString(const Box3d& b) {
     return "[" + fmt(b.lo.x, 6) + ", " + fmt(b.lo.y, 6) + ", " + fmt(b.lo.z, 6) + "] .. [" + fmt(b.hi.x, 6) +

@@ -1,28 +1,37 @@
 // voxfx demo — renders the procedural demo scenes (tree, bunny under leaves, CGAL meshes under a
-// pergola) with one or more shadow kinds, and optionally saves the scenes as glTF.
+// pergola, glass) with one or more shadow kinds, and optionally saves the scenes as glTF. The scenes
+// are built through the public API (demo/demo_scenes.hpp); the render options are render's.
 #include <filesystem>
 #include <iostream>
 
 #include "cli_common.hpp"
-#include "voxfx/demo.hpp"
-#include "voxfx/image_io.hpp"
-#include "voxfx/render.hpp"
+#include "demo/demo_scenes.hpp"
+#include "render_flags.hpp"
 
 namespace voxfx::cli {
 namespace {
 
+using namespace voxfx::demo;
+
 struct DemoArgs {
-    std::string scenes = "all", shadows = "transmittance", outDir = "docs/images", meshes = "data/meshes",
-                writeScenes;
-    int64_t width = 640, height = 360, grid = 256, gridDepth = 256;
-    int supersample = 2, threads = 0;
-    std::string slicing = "uniform";
-    bool quiet = false, bilinear = false;
+    std::string scenes = "all", outDir = "docs/images", meshes = "data/meshes", writeScenes;
+    int threads = 0;
+    bool quiet = false;
+    RenderFlags flags; ///< --shadows: a comma list or all (default transmittance)
 };
 
-// What --shadows all renders: every shadow kind that renders each demo scene. Volumes refuse open
-// casters (the tree's leaves), so they are rendered only when named.
-const std::vector<std::string> kAllDemoShadows{"none", "map", "transmittance", "absorption", "exact", "deep"};
+// The demo's image: smaller than render's default, supersampled (the render flags override these).
+void demoImage(RenderOptions& o) {
+    o.width = 640;
+    o.height = 360;
+    o.supersample = 2;
+}
+
+std::vector<std::string> allShadowNames() {
+    std::vector<std::string> out;
+    for (const std::string_view n : shadowNames()) out.emplace_back(n);
+    return out;
+}
 
 std::string demoNameList(const std::vector<std::string>& names) {
     std::string out;
@@ -43,10 +52,38 @@ std::vector<std::string> splitList(const std::string& s, const std::vector<std::
     return out;
 }
 
+// Renders `scene` with one shadow kind into OUT/<name>-<kind>.png; a kind that refuses the scene
+// (shadow volumes refuse open casters) is reported and skipped.
+void renderDemo(const DemoArgs& a, const Scene& scene, const std::string& name, const std::string& kind) {
+    RenderOptions o = renderOptionsFor(scene, kind); // the glass demo renders its glass as glass
+    demoImage(o);
+    a.flags.apply(o, false);
+    o.threads = a.threads;
+    ProgressLine progress("rendering " + name + " (" + kind + ")", !a.quiet);
+    o.progress = &progress;
+    RenderResult r;
+    try {
+        r = render(scene, scene.cameras.at(0), o);
+    } catch (const Error& e) {
+        progress.done();
+        if (!a.quiet) std::cout << "  " << kind << ": refused: " << e.what() << "\n";
+        return;
+    }
+    progress.done();
+    const std::string out = (std::filesystem::path(a.outDir) / (name + "-" + kind + ".png")).string();
+    writePng(r.image, out);
+    if (!a.quiet) {
+        std::cout << "  " << kind << ":";
+        for (const PassTime& p : r.timings.passes) std::cout << " " << p.name << " " << fmtMs(p.ms) << ",";
+        std::cout << " total " << fmtMs(r.timings.totalMs) << " -> " << out << "\n";
+    }
+}
+
 int runDemo(const DemoArgs& a) {
     const std::vector<std::string> names = splitList(a.scenes, demoSceneNames());
-    std::vector<ShadowKind> kinds;
-    for (const std::string& k : splitList(a.shadows, kAllDemoShadows)) kinds.push_back(parseShadowKind(k));
+    const std::vector<std::string> kinds =
+        splitList(a.flags.shadows.empty() ? "transmittance" : a.flags.shadows, allShadowNames());
+    for (const std::string& k : kinds) shadowOptionsNamed(k); // unknown names fail before any work
     std::filesystem::create_directories(a.outDir);
     if (!a.writeScenes.empty()) std::filesystem::create_directories(a.writeScenes);
     for (const std::string& name : names) {
@@ -62,69 +99,33 @@ int runDemo(const DemoArgs& a) {
             writeGltf(scene, path);
             if (!a.quiet) std::cout << "  scene -> " << path << "\n";
         }
-        for (const ShadowKind kind : kinds) {
-            RenderOptions o;
-            o.width = a.width;
-            o.height = a.height;
-            o.supersample = a.supersample;
-            o.shadow.kind = kind;
-            o.shadow.gridResolution = a.grid;
-            o.shadow.gridDepth = a.gridDepth;
-            o.shadow.slicing = parseSlicing(a.slicing);
-            o.threads = a.threads;
-            o.shadow.bilinear = a.bilinear;
-            o.glass.kind = defaultGlassKind(scene); // the glass demo renders its glass as glass
-            ProgressLine progress("rendering " + name + " (" + toString(kind) + ")", !a.quiet);
-            o.progress = &progress;
-            const RenderResult r = render(scene, scene.cameras.at(0), o);
-            progress.done();
-            const std::string out =
-                (std::filesystem::path(a.outDir) / (name + "-" + toString(kind) + ".png")).string();
-            writePng(r.image, out);
-            if (!a.quiet) {
-                const RenderTimings& t = r.timings;
-                std::cout << "  " << toString(kind) << ": G-buffer " << fmtMs(t.gbufferMs) << ", shadow map "
-                          << fmtMs(t.shadowMapMs) << ", voxelization from light " << fmtMs(t.lightVoxelizeMs)
-                          << ", shading " << fmtMs(t.shadingMs) << ", total " << fmtMs(t.totalMs) << " -> "
-                          << out << "\n";
-            }
-        }
+        for (const std::string& kind : kinds) renderDemo(a, scene, name, kind);
     }
     return 0;
 }
 
 const Command kDemo{
-    "demo", "Render the demo scenes (procedural tree, bunny under leaves, CGAL meshes)", [](CLI::App& app) {
+    "demo", "Render the demo scenes (procedural tree, bunny under leaves, CGAL meshes, glass)",
+    [](CLI::App& app) {
         auto a = std::make_shared<DemoArgs>();
+        app.footer(
+            "\nThe render options apply where the shadow kind has them; the demo renders 640 x 360, "
+            "2x2 supersampled,\nunless --width, --height, --supersample say otherwise. --shadows takes "
+            "all (" +
+            demoNameList(allShadowNames()) +
+            ") or a comma list;\na kind that refuses a scene (volumes: open casters) is reported and "
+            "skipped.\n" +
+            RenderFlags::footer());
         app.add_option("--scenes", a->scenes, "all, or a comma list of: " + demoNameList(demoSceneNames()))
             ->default_val("all");
-        app.add_option("--shadows", a->shadows,
-                       "all (" + demoNameList(kAllDemoShadows) + "), or a comma list of those and volumes")
-            ->default_val("transmittance");
         app.add_option("-o,--out-dir", a->outDir, "Folder for <scene>-<shadows>.png")
             ->default_val("docs/images");
         app.add_option("--meshes", a->meshes, "Folder holding bunny00.off, elephant.off, ...")
             ->default_val("data/meshes");
         app.add_option("--write-scenes", a->writeScenes, "Also save each scene as <name>.glb here");
-        app.add_option("--width", a->width, "Image width")
-            ->default_val(640)
-            ->check(CLI::Range(int64_t(1), int64_t(16384)));
-        app.add_option("--height", a->height, "Image height")
-            ->default_val(360)
-            ->check(CLI::Range(int64_t(1), int64_t(16384)));
-        app.add_option("--supersample", a->supersample, "k x k samples per pixel")
-            ->default_val(2)
-            ->check(CLI::Range(1, 8));
-        app.add_option("--grid", a->grid, "Light grid columns")
-            ->default_val(256)
-            ->check(CLI::Range(int64_t(1), int64_t(16384)));
-        app.add_option("--grid-depth", a->gridDepth, "Light grid slices")
-            ->default_val(256)
-            ->check(CLI::Range(int64_t(1), int64_t(16384)));
-        app.add_option("--slicing", a->slicing, "uniform | local")->default_val("uniform");
         app.add_option("-j,--threads", a->threads, "Worker threads, 0 = all")->default_val(0);
-        app.add_flag("--bilinear", a->bilinear, "Interpolate light-grid lookups between 4 columns (softer)");
         app.add_flag("-q,--quiet", a->quiet, "No summary or progress");
+        a->flags.add(app);
         return std::function<int()>([a] { return runDemo(*a); });
     }};
 

@@ -55,16 +55,10 @@ int runSceneInfo(const std::string& path) {
                   << "\n";
     const SceneSettings& s = scene.settings;
     std::string settings;
-    auto add = [&](const std::string& text) { settings += (settings.empty() ? "" : ", ") + text; };
-    if (!s.shadows.empty()) add("shadows " + s.shadows);
-    if (s.width) add("size " + std::to_string(s.width) + " x " + std::to_string(s.height));
-    if (s.supersample) add("supersample " + std::to_string(s.supersample));
-    if (s.gridResolution) add("grid " + std::to_string(s.gridResolution));
-    if (s.gridDepth) add("grid depth " + std::to_string(s.gridDepth));
-    if (s.shadowMapResolution) add("shadow map " + std::to_string(s.shadowMapResolution));
-    if (!s.slicing.empty()) add("slicing " + s.slicing);
-    if (!s.voxelMode.empty()) add("voxel mode " + s.voxelMode);
-    if (!s.environmentMap.empty()) add("environment map " + s.environmentMap);
+    for (const auto& [name, value] : s.render)
+        settings += (settings.empty() ? "" : ", ") + name + " " + formatOption(value);
+    if (!s.environmentMap.empty())
+        settings += (settings.empty() ? "" : ", ") + std::string("environment map ") + s.environmentMap;
     if (!settings.empty()) std::cout << "settings: " << settings << "\n";
     for (const std::string& w : scene.warnings) std::cout << "note: " << w << "\n";
     return 0;

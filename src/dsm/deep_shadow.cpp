@@ -9,6 +9,8 @@
 
 #include "voxfx/error.hpp"
 #include "voxfx/fragment_list.hpp"
+#include "voxfx/text.hpp"
+#include "voxfx/volume_scene.hpp"
 
 namespace voxfx {
 
@@ -198,6 +200,7 @@ DeepShadow DeepShadow::build(const VolumeScene& scene, const Light& light, const
     const std::vector<int> cluster = clusterBoxes(boxes, options.clusters, options.clusterThreshold);
     const int count = cluster.empty() ? 0 : *std::max_element(cluster.begin(), cluster.end()) + 1;
     DeepShadow out;
+    out.options_ = options;
     for (int c = 0; c < count; ++c) {
         VolumeScene part = scene;
         Box3d bounds;
@@ -225,6 +228,7 @@ DeepShadow DeepShadow::build(const VolumeScene& scene, std::vector<LightView> vi
     checkDeepShadowOptions(options);
     scene.validate();
     DeepShadow out;
+    out.options_ = options;
     out.views_ = std::move(views);
     out.groupBegin_ = {0, out.views_.size()};
     const FlatLeaves leaves = flattenLeaves(scene, true);
@@ -290,6 +294,10 @@ float deepShadowLookup(const std::vector<LightView>& views, const std::vector<De
 
 } // namespace
 
+float DeepShadow::visibility(const Vec3d& p, const Vec3d& n) const {
+    return visibility(p, n, options_.normalOffset, options_.depthBias);
+}
+
 float DeepShadow::visibility(const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias) const {
     float v = 1.0f;
     for (std::size_t g = 0; g + 1 < groupBegin_.size(); ++g)
@@ -298,8 +306,10 @@ float DeepShadow::visibility(const Vec3d& p, const Vec3d& n, double normalOffset
     return v;
 }
 
-DsmStats DeepShadow::stats() const {
-    DsmStats s;
+DeepShadowStats DeepShadow::stats() const {
+    DeepShadowStats s;
+    s.storage = options_.storage;
+    s.timings = timings_;
     for (const DeepShadowMap& m : maps_) {
         const DsmStats& t = m.stats();
         s.texels += t.texels;
@@ -310,6 +320,71 @@ DsmStats DeepShadow::stats() const {
         s.maxEpsilon = std::max(s.maxEpsilon, t.maxEpsilon);
     }
     return s;
+}
+
+DeepShadow DeepShadow::build(const Scene& scene, const Light& light, const DeepShadowOptions& options,
+                             Progress* progress) {
+    checkDeepShadowOptions(options);
+    bool casts = scene.volumeScene != nullptr;
+    for (const SceneMesh& m : scene.meshes) casts = casts || (m.castsShadow && !m.mesh.indices.empty());
+    if (!casts) { // nothing casts: no maps, visibility 1
+        DeepShadow out;
+        out.options_ = options;
+        return out;
+    }
+    return build(volumeSceneOf(scene), light, options, progress);
+}
+
+std::span<const OptionField<DeepShadowOptions>> DeepShadowOptions::fields() {
+    using O = DeepShadowOptions;
+    static const std::vector<OptionField<O>> table = {
+        numberOption<O, &O::resolution>(
+            "dsmResolution", "deep shadows: texels along the longer side of a light view", 1, 16384),
+        numberOption<O, &O::epsilon>("epsilon", "deep shadows: compression tolerance (0: every node kept)", 0,
+                                     1),
+        nameOption<O, parseDsmStorage, optionName<DsmStorage>, &O::storage>(
+            "dsmStorage", "deep shadows: node storage", "fixed | chunked"),
+        numberOption<O, &O::fixedNodes>(
+            "fixedNodes", "deep shadows, fixed storage: nodes per texel (0: sized by the worst texel)", 0,
+            65535),
+        numberOption<O, &O::stepVoxels>(
+            "dsmStep", "deep shadows: volume sample step, in smallest voxel spacings", 1e-3, 1000),
+        numberOption<O, &O::termination>(
+            "termination", "deep shadows: early ray termination, visibility below this becomes 0", 0,
+            0.999999),
+        numberOption<O, &O::clusters>(
+            "clusters", "deep shadows: at most this many clustered maps per light (0: off)", 0, 64),
+        numberOption<O, &O::clusterThreshold>(
+            "clusterThreshold", "deep shadows: clustering distance d0, a fraction of the light view's side",
+            0, 100),
+        flagOption<O, &O::skipEmptySpace>(
+            "emptySpaceSkipping",
+            "volumes: skip the bricks the transfer function leaves transparent (same image)"),
+        numberOption<O, &O::normalOffset>(
+            "normalOffset", "lookup offset along the surface normal, in texel footprints", 0, 1000),
+        numberOption<O, &O::depthBias>("depthBias", "deep shadow depth bias, in texel footprints", 0, 1000)};
+    return table;
+}
+
+DeepShadowStats& DeepShadowStats::operator+=(const DeepShadowStats& o) {
+    texels += o.texels;
+    nodes += o.nodes;
+    maxNodes = std::max(maxNodes, o.maxNodes);
+    bytes += o.bytes;
+    overflowTexels += o.overflowTexels;
+    maxEpsilon = std::max(maxEpsilon, o.maxEpsilon);
+    storage = o.storage;
+    timings.fragmentsMs += o.timings.fragmentsMs;
+    timings.buildMs += o.timings.buildMs;
+    return *this;
+}
+
+std::string DeepShadowStats::summary() const {
+    if (texels == 0) return {};
+    const double fixedMiB = double(texels) * double(maxNodes * int64_t(sizeof(DsmNode)) + 2) / 1048576.0;
+    return countText(texels) + " texels, nodes per texel mean " + numberText(meanNodes()) + " max " +
+           countText(maxNodes) + ", " + numberText(double(bytes) / 1048576.0) + " MiB " + toString(storage) +
+           " (fixed layout sized by the worst texel: " + numberText(fixedMiB) + " MiB)";
 }
 
 std::vector<DsmNode> deepShadowTexel(const VolumeScene& scene, const LightView& view, int64_t x, int64_t y,
@@ -326,50 +401,6 @@ std::vector<DsmNode> deepShadowTexel(const VolumeScene& scene, const LightView& 
     ctx.texel(x, y, b);
     b.finish();
     return out;
-}
-
-VolumeScene volumeSceneOf(const Scene& scene, SceneMeshes meshes) {
-    VolumeScene v;
-    for (const SceneMesh& m : scene.meshes) {
-        const Material& mat = scene.materials[m.material];
-        if (meshes == SceneMeshes::Blended && !mat.blend) continue;
-        VolumeSceneObject o;
-        o.name = m.name;
-        o.material = int32_t(m.material);
-        o.shape = v.addLeaf(m.mesh);
-        o.castsShadow = m.castsShadow;
-        o.color = mat.baseColor;
-        if (mat.isOpaque()) {
-            o.kind = ObjectKind::Opaque;
-        } else {
-            const Vec3f t = mat.shadowCrossingTransmittance();
-            o.kind = ObjectKind::Translucent;
-            o.opacity = std::clamp(1.0f - (0.2126f * t.x + 0.7152f * t.y + 0.0722f * t.z), 0.0f, 1.0f);
-        }
-        v.addObject(std::move(o));
-    }
-    if (scene.volumeScene) {
-        const VolumeScene& s = *scene.volumeScene;
-        const auto leafBase = int32_t(v.leaves.size()), nodeBase = int32_t(v.nodes.size()),
-                   volumeBase = int32_t(v.volumes.size());
-        v.leaves.insert(v.leaves.end(), s.leaves.begin(), s.leaves.end());
-        for (ShapeNode n : s.nodes) {
-            if (n.op == ShapeOp::Leaf) {
-                n.leaf += leafBase;
-            } else {
-                n.a += nodeBase;
-                n.b += nodeBase;
-            }
-            v.nodes.push_back(n);
-        }
-        v.volumes.insert(v.volumes.end(), s.volumes.begin(), s.volumes.end());
-        for (VolumeSceneObject o : s.objects) {
-            o.shape += nodeBase;
-            if (o.volume >= 0) o.volume += volumeBase;
-            v.objects.push_back(std::move(o));
-        }
-    }
-    return v;
 }
 
 } // namespace voxfx

@@ -1,5 +1,7 @@
-// voxfx — loading environment maps (the image readers of io/image.cpp, then the pyramid).
-#include "voxfx/environment.hpp"
+// voxfx — loading environment maps (the image readers of voxfx/image_io.hpp, then the pyramid), and the
+// one a scene renders under.
+#include "voxfx/environment_io.hpp"
+
 #include "voxfx/image_io.hpp"
 
 namespace voxfx {
@@ -7,6 +9,14 @@ namespace voxfx {
 Environment loadEnvironment(const std::string& path) {
     if (path == "sky") return Environment::sky();
     return Environment(readImage(path));
+}
+
+std::shared_ptr<const Environment> loadSceneEnvironment(const Scene& scene, const RenderOptions& options,
+                                                        const std::string& requested) {
+    const std::string path = !requested.empty() ? requested : scene.settings.environmentMap;
+    if (path.empty() && std::holds_alternative<NoGlassOptions>(options.glass) && !scene.lights.empty())
+        return nullptr;
+    return std::make_shared<const Environment>(loadEnvironment(path.empty() ? "sky" : path));
 }
 
 } // namespace voxfx

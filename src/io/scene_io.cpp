@@ -1,5 +1,7 @@
 // voxfx — scene files: loadScene (glTF through render/scene_gltf, the JSON scene wrapper, or a
 // single mesh) and the glTF writer. The scene model itself lives in render/scene.cpp.
+#include "voxfx/scene_io.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -11,7 +13,7 @@
 #include "io/scene_gltf.hpp"
 #include "voxfx/file_name.hpp"
 #include "voxfx/mesh_io.hpp"
-#include "voxfx/scene.hpp"
+#include "voxfx/render.hpp"
 #include "voxfx/smoke.hpp"
 #include "voxfx/volume_io.hpp"
 #include "voxfx/volume_scene.hpp"
@@ -63,13 +65,19 @@ double num(const json& j, const char* key, double fallback, const std::string& w
     return j[key].get<double>();
 }
 
-// A count or size of the render settings: a whole number in [0, 2^31) (a double out of int64's
-// range, or NaN, would make the conversion undefined behaviour).
-int64_t settingsCount(const json& j, const char* key, const std::string& where) {
-    const double v = num(j, key, 0, where);
-    if (!(v >= 0 && v < 2147483648.0) || v != std::floor(v))
-        fail(where, ": \"", key, "\" must be a whole number in [0, 2^31), got ", v);
-    return int64_t(v);
+// A render setting's value: on/off, a whole or real number, a name, or three numbers.
+OptionValue settingValue(const json& j, const std::string& where) {
+    if (j.is_boolean()) return j.get<bool>();
+    if (j.is_number_unsigned()) { // past int64_t: a double, which the range check then refuses
+        const uint64_t u = j.get<uint64_t>();
+        return u > uint64_t(INT64_MAX) ? OptionValue(double(u)) : OptionValue(int64_t(u));
+    }
+    if (j.is_number_integer()) return j.get<int64_t>();
+    if (j.is_number()) return j.get<double>();
+    if (j.is_string()) return j.get<std::string>();
+    if (j.is_array() && j.size() == 3 && j[0].is_number() && j[1].is_number() && j[2].is_number())
+        return Vec3d{j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
+    fail(where, ": expected true or false, a number, a name or [x, y, z]");
 }
 
 // A whole number in [lo, hi] (checked before any conversion: a double out of the target type's
@@ -150,7 +158,7 @@ void placeMesh(Mesh& mesh, const Mat4d& xf) {
 struct SceneObjectsParser {
     Scene& scene;
     VolumeScene& vs;
-    std::function<std::string(const std::string&)> resolve;
+    std::function<std::string(const std::string&)> resolve; // a scene file's names against its folder
 
     // A shape expression; returns its node. `volumeBox` is the object's volume's box mesh (turned
     // with the volume), or null outside volume objects.
@@ -323,6 +331,139 @@ struct SceneObjectsParser {
 };
 
 // The wrapper's text; `path` names it in messages and anchors its relative file names.
+// Resolves a name the scene file gives against the file's folder.
+using Resolve = std::function<std::string(const std::string&)>;
+
+// "meshes": extra meshes in any mesh format, placed and given a material. Wrapper meshes without a
+// material get a default one, never the glTF's first material (which may be a leaf or glass: a
+// partial occluder).
+void wrapperMeshes(const json& doc, const std::string& path, const Resolve& resolve, Scene& scene) {
+    int defaultMaterial = scene.materials.empty() ? int(scene.addMaterial(Material{})) : -1;
+    auto defaultIndex = [&] {
+        if (defaultMaterial < 0) {
+            Material d;
+            d.name = "default";
+            defaultMaterial = int(scene.addMaterial(d));
+        }
+        return uint32_t(defaultMaterial);
+    };
+    const json meshes = doc.value("meshes", json::array());
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+        const json& m = meshes[i];
+        const std::string where = concat(path, ": meshes[", i, "]");
+        allowKeys(m, {"file", "name", "translate", "scale", "rotate", "material", "castsShadow"}, where);
+        if (!m.contains("file")) fail(where, ": needs \"file\"");
+        SceneMesh out;
+        out.mesh = inScene(where, [&] { return loadMesh(resolve(str(m, "file", where))); });
+        out.name = m.contains("name") ? str(m, "name", where)
+                                      : std::filesystem::path(str(m, "file", where)).stem().string();
+        placeMesh(out.mesh, wrapperTransform(m, where));
+        out.material = m.contains("material")
+                           ? scene.addMaterial(wrapperMaterial(m["material"], where + ".material"))
+                           : defaultIndex();
+        out.castsShadow = m.value("castsShadow", true);
+        scene.meshes.push_back(std::move(out));
+    }
+}
+
+// "lights": point, spot and directional lights (a direction, or a target to look at).
+void wrapperLights(const json& doc, const std::string& path, Scene& scene) {
+    const json lights = doc.value("lights", json::array());
+    for (std::size_t i = 0; i < lights.size(); ++i) {
+        const json& l = lights[i];
+        std::string where = concat(path, ": lights[", i, "]");
+        allowKeys(l,
+                  {"type", "name", "position", "direction", "target", "color", "intensity",
+                   "innerConeDegrees", "outerConeDegrees"},
+                  where);
+        Light out;
+        out.name = l.contains("name") ? str(l, "name", where) : concat("light", i);
+        where += concat(" '", out.name, "'");
+        const std::string type = str(l, "type", where);
+        out.type = detail::parseLightType(type, where);
+        if (out.type != LightType::Directional) {
+            if (!l.contains("position")) fail(where, ": a ", type, " light needs \"position\"");
+            out.position = vec3(l, "position", where);
+        }
+        if (out.type != LightType::Point) {
+            if (l.contains("direction"))
+                out.direction = vec3(l, "direction", where);
+            else if (l.contains("target"))
+                out.direction = vec3(l, "target", where) - out.position;
+            else
+                fail(where, ": a ", type, " light has no direction: give \"direction\" or \"target\"");
+            if (!(length(out.direction) > 0)) fail(where, ": the light's direction is zero");
+            out.direction = normalize(out.direction);
+        }
+        out.color = Vec3f(vec3Or(l, "color", {1, 1, 1}, where));
+        out.intensity = float(num(l, "intensity", 1, where));
+        out.innerConeAngle = num(l, "innerConeDegrees", 0, where) * M_PI / 180;
+        out.outerConeAngle = num(l, "outerConeDegrees", 45, where) * M_PI / 180;
+        scene.lights.push_back(out);
+    }
+}
+
+// "cameras": they come first, before the glTF's: they are the ones the author meant.
+void wrapperCameras(const json& doc, const std::string& path, Scene& scene) {
+    const json cameras = doc.value("cameras", json::array());
+    for (std::size_t i = 0; i < cameras.size(); ++i) {
+        const json& c = cameras[i];
+        const std::string where = concat(path, ": cameras[", i, "]");
+        allowKeys(c, {"name", "position", "target", "up", "fovYDegrees", "near", "far"}, where);
+        if (!c.contains("position") || !c.contains("target"))
+            fail(where, ": needs \"position\" and \"target\"");
+        Camera out;
+        out.name = c.contains("name") ? str(c, "name", where) : concat("camera", i);
+        out.position = vec3(c, "position", where);
+        out.target = vec3(c, "target", where);
+        out.up = vec3Or(c, "up", {0, 1, 0}, where);
+        out.fovY = num(c, "fovYDegrees", 45, where) * M_PI / 180;
+        out.nearDepth = num(c, "near", 0.01, where);
+        out.farDepth = num(c, "far", 1.0e4, where);
+        scene.cameras.insert(scene.cameras.begin() + std::ptrdiff_t(i), out);
+    }
+}
+
+// "receiversOnly" (meshes that cast no shadow), "render" (named render settings, checked here
+// against what the renderer takes) and "environmentMap".
+void wrapperSettings(const json& doc, const std::string& path, const Resolve& resolve, Scene& scene) {
+    for (const json& name : doc.value("receiversOnly", json::array())) {
+        bool found = false;
+        for (SceneMesh& m : scene.meshes)
+            if (m.name == name.get<std::string>()) {
+                m.castsShadow = false;
+                found = true;
+            }
+        if (!found)
+            fail(path, ": receiversOnly names mesh '", name.get<std::string>(), "', which does not exist");
+    }
+    if (doc.contains("render")) {
+        const json& r = doc["render"];
+        const std::string where = path + ": render";
+        if (!r.is_object()) fail(where, ": expected a JSON object");
+        for (const auto& [key, value] : r.items()) {
+            const OptionValue v = settingValue(value, concat(where, ".", key));
+            checkRenderSetting(key, v, where);
+            scene.settings.render.emplace_back(key, v);
+        }
+    }
+    if (doc.contains("environmentMap"))
+        scene.settings.environmentMap = resolve(str(doc, "environmentMap", path));
+}
+
+// "objects": volume objects and Boolean shapes, as one volume scene.
+void wrapperObjects(const json& doc, const std::string& path, const Resolve& resolve, Scene& scene) {
+    if (!doc.contains("objects")) return;
+    const json& objects = doc["objects"];
+    if (!objects.is_array()) fail(path, ": \"objects\" must be an array");
+    auto vs = std::make_shared<VolumeScene>();
+    SceneObjectsParser parser{scene, *vs, resolve};
+    for (std::size_t i = 0; i < objects.size(); ++i)
+        parser.object(objects[i], concat(path, ": objects[", i, "]"));
+    vs->validate();
+    if (!vs->objects.empty()) scene.volumeScene = std::move(vs);
+}
+
 Scene parseWrapper(std::string_view text, const std::string& path) {
     json doc;
     try {
@@ -332,7 +473,7 @@ Scene parseWrapper(std::string_view text, const std::string& path) {
         fail(path, ": malformed JSON: ", e.what());
     }
     const std::filesystem::path dir = std::filesystem::path(path).parent_path();
-    auto resolve = [&](const std::string& p) {
+    const Resolve resolve = [dir](const std::string& p) {
         return std::filesystem::path(p).is_absolute() ? p : (dir / p).string();
     };
     Scene scene;
@@ -342,128 +483,11 @@ Scene parseWrapper(std::string_view text, const std::string& path) {
             {"gltf", "meshes", "lights", "cameras", "receiversOnly", "render", "environmentMap", "objects"},
             path);
         if (doc.contains("gltf")) scene = detail::loadGltfScene(resolve(str(doc, "gltf", path)));
-        // Wrapper meshes without a material get a default one, never the glTF's first material
-        // (which may be a leaf or glass: a partial occluder).
-        int defaultMaterial = scene.materials.empty() ? int(scene.addMaterial(Material{})) : -1;
-        auto defaultIndex = [&] {
-            if (defaultMaterial < 0) {
-                Material d;
-                d.name = "default";
-                defaultMaterial = int(scene.addMaterial(d));
-            }
-            return uint32_t(defaultMaterial);
-        };
-        const json meshes = doc.value("meshes", json::array());
-        for (std::size_t i = 0; i < meshes.size(); ++i) {
-            const json& m = meshes[i];
-            const std::string where = concat(path, ": meshes[", i, "]");
-            allowKeys(m, {"file", "name", "translate", "scale", "rotate", "material", "castsShadow"}, where);
-            if (!m.contains("file")) fail(where, ": needs \"file\"");
-            SceneMesh out;
-            out.mesh = inScene(where, [&] { return loadMesh(resolve(str(m, "file", where))); });
-            out.name = m.contains("name") ? str(m, "name", where)
-                                          : std::filesystem::path(str(m, "file", where)).stem().string();
-            placeMesh(out.mesh, wrapperTransform(m, where));
-            out.material = m.contains("material")
-                               ? scene.addMaterial(wrapperMaterial(m["material"], where + ".material"))
-                               : defaultIndex();
-            out.castsShadow = m.value("castsShadow", true);
-            scene.meshes.push_back(std::move(out));
-        }
-        const json lights = doc.value("lights", json::array());
-        for (std::size_t i = 0; i < lights.size(); ++i) {
-            const json& l = lights[i];
-            std::string where = concat(path, ": lights[", i, "]");
-            allowKeys(l,
-                      {"type", "name", "position", "direction", "target", "color", "intensity",
-                       "innerConeDegrees", "outerConeDegrees"},
-                      where);
-            Light out;
-            out.name = l.contains("name") ? str(l, "name", where) : concat("light", i);
-            where += concat(" '", out.name, "'");
-            const std::string type = str(l, "type", where);
-            out.type = detail::parseLightType(type, where);
-            if (out.type != LightType::Directional) {
-                if (!l.contains("position")) fail(where, ": a ", type, " light needs \"position\"");
-                out.position = vec3(l, "position", where);
-            }
-            if (out.type != LightType::Point) {
-                if (l.contains("direction"))
-                    out.direction = vec3(l, "direction", where);
-                else if (l.contains("target"))
-                    out.direction = vec3(l, "target", where) - out.position;
-                else
-                    fail(where, ": a ", type, " light has no direction: give \"direction\" or \"target\"");
-                if (!(length(out.direction) > 0)) fail(where, ": the light's direction is zero");
-                out.direction = normalize(out.direction);
-            }
-            out.color = Vec3f(vec3Or(l, "color", {1, 1, 1}, where));
-            out.intensity = float(num(l, "intensity", 1, where));
-            out.innerConeAngle = num(l, "innerConeDegrees", 0, where) * M_PI / 180;
-            out.outerConeAngle = num(l, "outerConeDegrees", 45, where) * M_PI / 180;
-            scene.lights.push_back(out);
-        }
-        const json cameras = doc.value("cameras", json::array());
-        for (std::size_t i = 0; i < cameras.size(); ++i) {
-            const json& c = cameras[i];
-            const std::string where = concat(path, ": cameras[", i, "]");
-            allowKeys(c, {"name", "position", "target", "up", "fovYDegrees", "near", "far"}, where);
-            if (!c.contains("position") || !c.contains("target"))
-                fail(where, ": needs \"position\" and \"target\"");
-            Camera out;
-            out.name = c.contains("name") ? str(c, "name", where) : concat("camera", i);
-            out.position = vec3(c, "position", where);
-            out.target = vec3(c, "target", where);
-            out.up = vec3Or(c, "up", {0, 1, 0}, where);
-            out.fovY = num(c, "fovYDegrees", 45, where) * M_PI / 180;
-            out.nearDepth = num(c, "near", 0.01, where);
-            out.farDepth = num(c, "far", 1.0e4, where);
-            // Cameras given in the wrapper come first: they are the ones the author meant.
-            scene.cameras.insert(scene.cameras.begin() + std::ptrdiff_t(i), out);
-        }
-        for (const json& name : doc.value("receiversOnly", json::array())) {
-            bool found = false;
-            for (SceneMesh& m : scene.meshes)
-                if (m.name == name.get<std::string>()) {
-                    m.castsShadow = false;
-                    found = true;
-                }
-            if (!found)
-                fail(path, ": receiversOnly names mesh '", name.get<std::string>(),
-                     "', which does not exist");
-        }
-        if (doc.contains("render")) {
-            const json& r = doc["render"];
-            const std::string where = path + ": render";
-            allowKeys(r,
-                      {"shadows", "width", "height", "supersample", "gridResolution", "gridDepth",
-                       "shadowMapResolution", "slicing", "voxelMode", "ambient", "background"},
-                      where);
-            SceneSettings& s = scene.settings;
-            s.shadows = str(r, "shadows", where);
-            s.width = settingsCount(r, "width", where);
-            s.height = settingsCount(r, "height", where);
-            s.supersample = int(settingsCount(r, "supersample", where));
-            s.gridResolution = settingsCount(r, "gridResolution", where);
-            s.gridDepth = settingsCount(r, "gridDepth", where);
-            s.shadowMapResolution = settingsCount(r, "shadowMapResolution", where);
-            s.slicing = str(r, "slicing", where);
-            s.voxelMode = str(r, "voxelMode", where);
-            s.ambient = Vec3f(vec3Or(r, "ambient", {-1, -1, -1}, where));
-            s.background = Vec3f(vec3Or(r, "background", {-1, -1, -1}, where));
-        }
-        if (doc.contains("environmentMap"))
-            scene.settings.environmentMap = resolve(str(doc, "environmentMap", path));
-        if (doc.contains("objects")) {
-            const json& objects = doc["objects"];
-            if (!objects.is_array()) fail(path, ": \"objects\" must be an array");
-            auto vs = std::make_shared<VolumeScene>();
-            SceneObjectsParser parser{scene, *vs, resolve};
-            for (std::size_t i = 0; i < objects.size(); ++i)
-                parser.object(objects[i], concat(path, ": objects[", i, "]"));
-            vs->validate();
-            if (!vs->objects.empty()) scene.volumeScene = std::move(vs);
-        }
+        wrapperMeshes(doc, path, resolve, scene);
+        wrapperLights(doc, path, scene);
+        wrapperCameras(doc, path, scene);
+        wrapperSettings(doc, path, resolve, scene);
+        wrapperObjects(doc, path, resolve, scene);
     } catch (const json::exception& e) { fail(path, ": unexpected content: ", e.what()); }
     scene.source = path;
     return scene;
@@ -532,23 +556,26 @@ Scene parseSceneJson(std::string_view text, const std::string& path) {
     return scene;
 }
 
-void writeGltf(const Scene& scene, const std::string& path) {
-    const std::string ext = fileExtension(path);
-    if (ext != ".gltf" && ext != ".glb") fail(path, ": a glTF file needs the extension .gltf or .glb");
-    scene.validate();
+namespace {
+
+// What writeGltf assembles: the JSON arrays of the document and the binary buffer they point into.
+struct GltfWriter {
     std::string bin;
-    json doc;
-    doc["asset"] = {{"version", "2.0"}, {"generator", "voxfx"}};
     json bufferViews = json::array(), accessors = json::array(), meshes = json::array(),
-         nodes = json::array(), materials = json::array();
-    auto addView = [&](const void* data, std::size_t bytes, int target) {
+         nodes = json::array(), materials = json::array(), lights = json::array(), cameras = json::array();
+    std::set<std::string> used; ///< extensions
+
+    // A buffer view of `bytes` at the end of the buffer (4-byte aligned); its index.
+    std::size_t addView(const void* data, std::size_t bytes, int target) {
         while (bin.size() % 4) bin.push_back('\0');
         bufferViews.push_back(
             {{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes}, {"target", target}});
         bin.append(static_cast<const char*>(data), bytes);
         return bufferViews.size() - 1;
-    };
-    for (const SceneMesh& m : scene.meshes) {
+    }
+
+    // A mesh in world space under an identity node: positions, normals when present, indices.
+    void mesh(const SceneMesh& m) {
         const std::size_t nv = m.mesh.positions.size();
         Box3d all; // accessor min/max cover every vertex (glTF requires them for POSITION)
         for (const Vec3f& p : m.mesh.positions) all.extend(Vec3d(p));
@@ -581,8 +608,9 @@ void writeGltf(const Scene& scene, const std::string& path) {
         if (!m.castsShadow) node["extras"] = {{"voxfx", {{"castsShadow", false}}}};
         nodes.push_back(node);
     }
-    std::set<std::string> used;
-    for (const Material& m : scene.materials) {
+
+    // A material with its extensions (transmission, ior, volume).
+    void material(const Material& m) {
         // roughness from the Blinn–Phong exponent (inverse of the loader's mapping).
         const double a = std::sqrt(2.0 / (double(m.shininess) + 2.0));
         json mat = {{"name", m.name},
@@ -615,8 +643,9 @@ void writeGltf(const Scene& scene, const std::string& path) {
         if (!matExt.empty()) mat["extensions"] = matExt;
         materials.push_back(mat);
     }
-    json lights = json::array();
-    for (const Light& l : scene.lights) {
+
+    // A KHR_lights_punctual light and the node that places it.
+    void light(const Light& l) {
         json out = {{"name", l.name},
                     {"type", toString(l.type)},
                     {"color", {l.color.x, l.color.y, l.color.z}},
@@ -632,12 +661,9 @@ void writeGltf(const Scene& scene, const std::string& path) {
               orientedNodeMatrix(l.type == LightType::Directional ? Vec3d{} : l.position, dir, {0, 1, 0})},
              {"extensions", {{"KHR_lights_punctual", {{"light", lights.size() - 1}}}}}});
     }
-    if (!lights.empty()) {
-        used.insert("KHR_lights_punctual");
-        doc["extensions"] = {{"KHR_lights_punctual", {{"lights", lights}}}};
-    }
-    json cameras = json::array();
-    for (const Camera& c : scene.cameras) {
+
+    // A perspective camera and the node that places it.
+    void camera(const Camera& c) {
         cameras.push_back(
             {{"name", c.name},
              {"type", "perspective"},
@@ -646,25 +672,38 @@ void writeGltf(const Scene& scene, const std::string& path) {
                          {"camera", cameras.size() - 1},
                          {"matrix", orientedNodeMatrix(c.position, c.target - c.position, c.up)}});
     }
-    json roots = json::array();
-    for (std::size_t i = 0; i < nodes.size(); ++i) roots.push_back(i);
-    doc["scene"] = 0;
-    doc["scenes"] = {{{"nodes", roots}}};
-    doc["nodes"] = nodes;
-    if (!meshes.empty()) doc["meshes"] = meshes;
-    if (!materials.empty()) doc["materials"] = materials;
-    if (!cameras.empty()) doc["cameras"] = cameras;
-    if (!used.empty()) doc["extensionsUsed"] = json(used);
-    while (bin.size() % 4) bin.push_back('\0');
-    const bool glb = ext == ".glb";
-    if (!bin.empty()) {
-        doc["accessors"] = accessors;
-        doc["bufferViews"] = bufferViews;
-        json buffer = {{"byteLength", bin.size()}};
-        if (!glb) buffer["uri"] = "data:application/octet-stream;base64," + base64(bin);
-        doc["buffers"] = json::array({buffer});
+
+    // The document; the buffer is embedded as a data URI unless it goes into a GLB container.
+    json document(bool glb) {
+        json doc;
+        doc["asset"] = {{"version", "2.0"}, {"generator", "voxfx"}};
+        if (!lights.empty()) {
+            used.insert("KHR_lights_punctual");
+            doc["extensions"] = {{"KHR_lights_punctual", {{"lights", lights}}}};
+        }
+        json roots = json::array();
+        for (std::size_t i = 0; i < nodes.size(); ++i) roots.push_back(i);
+        doc["scene"] = 0;
+        doc["scenes"] = {{{"nodes", roots}}};
+        doc["nodes"] = nodes;
+        if (!meshes.empty()) doc["meshes"] = meshes;
+        if (!materials.empty()) doc["materials"] = materials;
+        if (!cameras.empty()) doc["cameras"] = cameras;
+        if (!used.empty()) doc["extensionsUsed"] = json(used);
+        while (bin.size() % 4) bin.push_back('\0');
+        if (!bin.empty()) {
+            doc["accessors"] = accessors;
+            doc["bufferViews"] = bufferViews;
+            json buffer = {{"byteLength", bin.size()}};
+            if (!glb) buffer["uri"] = "data:application/octet-stream;base64," + base64(bin);
+            doc["buffers"] = json::array({buffer});
+        }
+        return doc;
     }
-    std::string text = doc.dump();
+};
+
+// The .gltf text, or the .glb container (header, JSON chunk, binary chunk), written atomically.
+void writeGltfFile(const std::string& path, std::string text, const std::string& bin, bool glb) {
     detail::AtomicFile file(path);
     std::ostream& out = file.stream();
     if (!glb) {
@@ -687,6 +726,22 @@ void writeGltf(const Scene& scene, const std::string& path) {
         }
     }
     file.commit();
+}
+
+} // namespace
+
+void writeGltf(const Scene& scene, const std::string& path) {
+    const std::string ext = fileExtension(path);
+    if (ext != ".gltf" && ext != ".glb") fail(path, ": a glTF file needs the extension .gltf or .glb");
+    scene.validate();
+    GltfWriter w;
+    for (const SceneMesh& m : scene.meshes) w.mesh(m);
+    for (const Material& m : scene.materials) w.material(m);
+    for (const Light& l : scene.lights) w.light(l);
+    for (const Camera& c : scene.cameras) w.camera(c);
+    const bool glb = ext == ".glb";
+    const json doc = w.document(glb);
+    writeGltfFile(path, doc.dump(), w.bin, glb);
 }
 
 } // namespace voxfx

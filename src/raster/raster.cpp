@@ -4,6 +4,16 @@
 #include <algorithm>
 #include <cmath>
 
+namespace voxfx {
+
+const char* toString(Coverage c) { return enumName(c, kCoverageNames); }
+
+Coverage parseCoverage(const std::string& name) {
+    return parseEnum<Coverage>(name, "coverage", kCoverageNames);
+}
+
+} // namespace voxfx
+
 namespace voxfx::detail {
 
 namespace {

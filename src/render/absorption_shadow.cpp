@@ -5,10 +5,14 @@
 // more). The occlusion at p is the sum of the absorption of the occupied voxels between the light
 // and p (CHANG §3 step 4); the light is attenuated by exp(-sum). Columns are reduced to exclusive
 // prefix sums once, so a lookup is one read.
+#include "voxfx/absorption_shadow.hpp"
+
+#include <algorithm>
 #include <cmath>
 
 #include "render/light_grid_lookup.hpp"
-#include "voxfx/shadow.hpp"
+#include "render/shadow_casters.hpp"
+#include "voxfx/text.hpp"
 
 namespace voxfx {
 
@@ -66,6 +70,80 @@ float AbsorptionShadowMap::transmittanceBilinear(const Vec3d& world, int64_t ski
     return float(detail::bilinearColumns<double, double>(view_, world, 1.0, [&](const detail::ColumnAt& c) {
         return std::exp(-double(columnDepth(c.column, c.depth, skipCells)));
     }));
+}
+
+std::span<const OptionField<AbsorptionShadowOptions>> AbsorptionShadowOptions::fields() {
+    using O = AbsorptionShadowOptions;
+    static const std::vector<OptionField<O>> table = [] {
+        std::vector<OptionField<O>> t;
+        detail::appendLightGridFields(t);
+        t.push_back(numberOption<O, &O::grid, &LightGridOptions::normalOffset>(
+            "normalOffset", "lookup offset along the surface normal, in column footprints", 0, 1000));
+        t.push_back(nameOption<O, parseCoverage, optionName<Coverage>, &O::coverage>(
+            "coverage", "CHANG's writes: one voxel per column (center) or every voxel a triangle touches",
+            "center | conservative"));
+        t.push_back(numberOption<O, &O::opaqueAbsorption>(
+            "opaqueAbsorption", "optical depth of one crossing of an opaque material", 0, 1000));
+        return t;
+    }();
+    return table;
+}
+
+float absorptionPerCrossing(const Material& m, float opaqueAbsorption) {
+    if (m.isOpaque()) return opaqueAbsorption;
+    const Vec3f t = m.shadowCrossingTransmittance();
+    const float luminance = 0.2126f * t.x + 0.7152f * t.y + 0.0722f * t.z;
+    return std::min(opaqueAbsorption, -std::log(std::max(luminance, 1e-30f)));
+}
+
+AbsorptionShadow::Stats& AbsorptionShadow::Stats::operator+=(const Stats& o) {
+    grids += o.grids;
+    writes += o.writes;
+    return *this;
+}
+
+std::string AbsorptionShadow::Stats::summary() const {
+    return countText(grids) + (grids == 1 ? " light grid, " : " light grids, ") + countText(writes) +
+           " attribute writes";
+}
+
+AbsorptionShadow AbsorptionShadow::build(const Scene& scene, const Light& light,
+                                         const AbsorptionShadowOptions& options, Progress* progress) {
+    detail::checkLightGrid(options.grid, "absorption");
+    AbsorptionShadow out;
+    out.options_ = options;
+    const detail::CasterSets casters = detail::collectCasters(scene);
+    if (casters.all.indices.empty()) return out;
+    std::vector<float> perTriangle(casters.allMaterialIndex.size());
+    std::vector<float> perMaterial(scene.materials.size());
+    for (std::size_t i = 0; i < scene.materials.size(); ++i)
+        perMaterial[i] = absorptionPerCrossing(scene.materials[i], options.opaqueAbsorption);
+    for (std::size_t i = 0; i < perTriangle.size(); ++i)
+        perTriangle[i] = perMaterial[casters.allMaterialIndex[i]];
+    out.views_ =
+        makeLightViews(light, computeBounds(casters.all.view()), options.grid.resolution, options.grid.depth);
+    for (const LightView& v : out.views_)
+        out.maps_.push_back(AbsorptionShadowMap::build(v, casters.all.view(), perTriangle, options.coverage,
+                                                       options.grid.slicing, progress));
+    return out;
+}
+
+float AbsorptionShadow::visibility(const Vec3d& p, const Vec3d& n) const {
+    Vec3d q;
+    const int i = detail::lookupView(views_, p, n, options_.grid.normalOffset, q);
+    if (i < 0) return 1.0f;
+    const AbsorptionShadowMap& m = maps_[size_t(i)];
+    const int64_t skip = options_.grid.skipCells;
+    return options_.grid.bilinear ? m.transmittanceBilinear(q, skip) : m.transmittance(q, skip);
+}
+
+AbsorptionShadow::Stats AbsorptionShadow::stats() const {
+    Stats s;
+    for (const AbsorptionShadowMap& m : maps_) {
+        ++s.grids;
+        s.writes += m.writeCount();
+    }
+    return s;
 }
 
 } // namespace voxfx

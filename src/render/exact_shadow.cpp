@@ -1,12 +1,17 @@
 // voxfx — exact shadows through partial occluders: every caster triangle between a point and the
 // light multiplies the light by its crossing transmittance (Embree finds them in order); glass
 // multiplies by the Fresnel-transmitted fraction at each crossing, its tint where the ray enters and
-// Beer–Lambert over the length inside.
+// Beer–Lambert over the length inside (voxfx/exact_shadow.hpp).
+#include "voxfx/exact_shadow.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
-#include "voxfx/glass.hpp"
-#include "voxfx/shadow.hpp"
+#include "render/shadow_casters.hpp"
+#include "voxfx/glass_optics.hpp"
+#include "voxfx/text.hpp"
+#include "voxfx/triangle_tracer.hpp"
 
 namespace voxfx {
 
@@ -26,12 +31,7 @@ ExactShadow::ExactShadow(const MeshView& casters, std::vector<Vec3f> triangleTra
             fail("exact shadows: glass index ", g, " outside the table of ", glass_.size());
     for (const Glass& g : glass_)
         if (!(g.ior >= 1 && std::isfinite(g.ior))) fail("exact shadows: glass ior must be >= 1, got ", g.ior);
-    mesh_.positions.resize(casters.vertexCount);
-    for (size_t i = 0; i < casters.vertexCount; ++i) mesh_.positions[i] = Vec3f(casters.vertex(i));
-    mesh_.indices.assign(casters.indices, casters.indices + 3 * casters.triangleCount);
-    const Box3d box = computeBounds(casters);
-    epsilon_ = box.empty() ? 1e-6 : std::max(1e-9, 1e-5 * length(box.extent()));
-    tracer_ = std::make_shared<const TriangleTracer>(mesh_.view());
+    tracer_ = std::make_shared<const TriangleTracer>(casters);
 }
 
 ExactShadow ExactShadow::fromMaterials(const MeshView& casters, std::span<const uint32_t> triangleMaterial,
@@ -60,6 +60,8 @@ ExactShadow ExactShadow::fromMaterials(const MeshView& casters, std::span<const 
 }
 
 Vec3f ExactShadow::transmittance(const Vec3d& p, const Vec3d& dir, double distance) const {
+    const Mesh& mesh = tracer_->mesh();
+    const double epsilon = tracer_->epsilon();
     Vec3f v{1, 1, 1};
     Vec3d o = p;
     double left = distance, travelled = 0;
@@ -74,7 +76,7 @@ Vec3f ExactShadow::transmittance(const Vec3d& p, const Vec3d& dir, double distan
     inside.clear();
     // Each crossing moves the origin to the hit; epsilon steps over the triangle just crossed.
     for (int crossings = 0; crossings < 100000; ++crossings) {
-        const TriangleTracer::Hit h = tracer_->intersect(o, dir, epsilon_, left);
+        const TriangleTracer::Hit h = tracer_->intersect(o, dir, epsilon, left);
         if (!h.hit) break;
         const uint32_t g = triangleGlass_.empty() ? kNotGlass : triangleGlass_[h.triangle];
         const double tHit = travelled + h.t;
@@ -82,9 +84,9 @@ Vec3f ExactShadow::transmittance(const Vec3d& p, const Vec3d& dir, double distan
             v = v * transmittance_[h.triangle];
         } else {
             const Glass& glass = glass_[g];
-            const Vec3d a = Vec3d(mesh_.positions[mesh_.indices[3 * size_t(h.triangle)]]);
-            const Vec3d b = Vec3d(mesh_.positions[mesh_.indices[3 * size_t(h.triangle) + 1]]);
-            const Vec3d c = Vec3d(mesh_.positions[mesh_.indices[3 * size_t(h.triangle) + 2]]);
+            const Vec3d a = Vec3d(mesh.positions[mesh.indices[3 * size_t(h.triangle)]]);
+            const Vec3d b = Vec3d(mesh.positions[mesh.indices[3 * size_t(h.triangle) + 1]]);
+            const Vec3d c = Vec3d(mesh.positions[mesh.indices[3 * size_t(h.triangle) + 2]]);
             const Vec3d n = normalize(cross(b - a, c - a));
             const double cosine = dot(dir, n);
             v = v * float(1 - fresnelDielectric(std::min(1.0, std::abs(cosine)), 1.0, glass.ior));
@@ -112,5 +114,46 @@ Vec3f ExactShadow::transmittance(const Vec3d& p, const Vec3d& dir, double distan
         for (const Inside& i : inside) v = v * beerLambert(glass_[i.glass].sigma, distance - i.t);
     return v;
 }
+
+std::span<const OptionField<ExactShadowOptions>> ExactShadowOptions::fields() { return {}; }
+
+ExactShadow::Stats& ExactShadow::Stats::operator+=(const Stats& o) {
+    triangles += o.triangles;
+    return *this;
+}
+
+std::string ExactShadow::Stats::summary() const {
+    return countText(triangles) + " caster triangles traced (Embree)";
+}
+
+ExactShadow ExactShadow::build(const Scene& scene, const Light& light, const ExactShadowOptions&, Progress*) {
+    const detail::CasterSets casters = detail::collectCasters(scene);
+    if (casters.all.indices.empty()) return {};
+    ExactShadow out = fromMaterials(casters.all.view(), casters.allMaterialIndex, scene.materials);
+    out.light_ = light;
+    return out;
+}
+
+Vec3f ExactShadow::visibility(const Vec3d& p, const Vec3d& n) const {
+    if (!tracer_) return {1, 1, 1};
+    // Towards the light from p, offset along n against self-intersection.
+    Vec3d l;
+    double distance = std::numeric_limits<double>::infinity();
+    if (light_.type == LightType::Directional) {
+        l = -normalize(light_.direction);
+    } else {
+        l = light_.position - p;
+        distance = length(l);
+        l = l / std::max(distance, 1e-300);
+    }
+    const Vec3d o = p + n * (tracer_->epsilon() * 10);
+    return transmittance(o, l, distance);
+}
+
+ExactShadow::Stats ExactShadow::stats() const {
+    return {tracer_ ? int64_t(tracer_->mesh().triangleCount()) : 0};
+}
+
+double ExactShadow::epsilon() const { return tracer_ ? tracer_->epsilon() : 1e-6; }
 
 } // namespace voxfx

@@ -2,12 +2,13 @@
 // of the one rasterizer keeps the nearest centre-sampled fragment per pixel (DESIGN.md: "G-buffer
 // for rendering: keep the nearest"). Also the scene flattening and surface reconstruction the
 // shading pass reads (position from depth, normals by barycentric interpolation).
+#include "voxfx/gbuffer.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "voxfx/raster.hpp"
-#include "voxfx/render.hpp"
 
 namespace voxfx {
 

@@ -8,16 +8,22 @@
 #include <memory>
 
 #include "render/shading.hpp"
+#include "voxfx/triangle_tracer.hpp"
 
 namespace voxfx::detail {
 
-void shadeGlass(const GBuffer& gbuffer, const SceneGeometry& geometry, const Scene& scene,
-                const std::vector<LightShadow>& shadows, const RenderOptions& options, const Environment& env,
-                std::vector<Vec3f>& shaded, std::vector<uint8_t>& sampleMask, RenderTimings& timings) {
+void shadeGlass(FrameState& frame) {
     using Clock = std::chrono::steady_clock;
-    const GlassKind kind = options.glass.kind;
+    const GlassOptions& method = frame.options.glass;
+    if (std::holds_alternative<NoGlassOptions>(method)) return;
+    const Scene& scene = frame.lit;
+    const SceneGeometry& geometry = frame.geometry;
+    const GBuffer& gbuffer = frame.gbuffer;
+    const RenderOptions& options = frame.options;
+    const Environment& env = *frame.environment;
+    std::vector<Vec3f>& shaded = frame.shaded;
+    std::vector<uint8_t>& sampleMask = frame.glassSamples;
     sampleMask.assign(shaded.size(), 0);
-    if (kind == GlassKind::None) return;
     std::vector<uint8_t> isGlass(scene.materials.size());
     std::vector<GlassMedium> media(scene.materials.size());
     for (size_t m = 0; m < scene.materials.size(); ++m) {
@@ -42,20 +48,13 @@ void shadeGlass(const GBuffer& gbuffer, const SceneGeometry& geometry, const Sce
     if (medium.empty()) return;
 
     const auto t0 = Clock::now();
-    std::unique_ptr<ExactGlass> exact;
-    std::unique_ptr<VoxelGlass> voxels;
-    std::unique_ptr<FrostedGlass> frosted;
-    if (kind == GlassKind::Exact)
-        exact = std::make_unique<ExactGlass>(glass.view(), geometry.normals, medium, media);
-    else if (kind == GlassKind::Frosted)
-        frosted = std::make_unique<FrostedGlass>(glass.view(), medium, media, gbuffer.frame, options.glass);
-    else
-        voxels = std::make_unique<VoxelGlass>(glass.view(), medium, media, options.glass);
+    const BuiltGlass built =
+        buildGlass(GlassInput{glass.view(), geometry.normals, medium, media, gbuffer.frame}, method);
     // What the light leaving the glass (and the reflection) comes from: the opaque scene, traced
     // exactly for every method, else the environment.
     std::unique_ptr<TriangleTracer> behind;
     double epsilon = 1e-6;
-    if (options.glass.sceneBehind && !opaqueTriangle.empty()) {
+    if (glassSeesSceneBehind(method) && !opaqueTriangle.empty()) {
         behind = std::make_unique<TriangleTracer>(opaque.view());
         const Box3d box = computeBounds(geometry.mesh.view());
         epsilon = std::max(1e-9, 1e-5 * length(box.extent()));
@@ -80,13 +79,13 @@ void shadeGlass(const GBuffer& gbuffer, const SceneGeometry& geometry, const Sce
                 if (dot(s.normal, s.geometricNormal) < 0) s.normal = -s.normal;
                 s.material = geometry.triangleMaterial[t];
                 // shadePoint applies the exposure; the caller applies it to the whole glass radiance.
-                return shadePoint(s, scene, shadows, options, from) * (1.0f / options.exposure);
+                return shadePoint(frame, s, from) * (1.0f / options.exposure);
             }
         }
         return env.lookup(dir, blur);
     };
     const auto t1 = Clock::now();
-    timings.glassPrepareMs += std::chrono::duration<double, std::milli>(t1 - t0).count();
+    frame.result.glass.prepareMs += std::chrono::duration<double, std::milli>(t1 - t0).count();
 
     const int64_t W = gbuffer.frame.width(), H = gbuffer.frame.height();
     const Vec3d eye = gbuffer.frame.eye();
@@ -99,10 +98,7 @@ void shadeGlass(const GBuffer& gbuffer, const SceneGeometry& geometry, const Sce
                 SurfacePoint s;
                 if (!surfaceAt(gbuffer, geometry, x, y, s)) continue;
                 const Vec3d d = normalize(s.position - eye);
-                const GlassPath p = exact ? exact->trace(eye, d, options.glass.maxEvents)
-                                    : frosted
-                                        ? frosted->trace(s.position, s.normal, s.material, d, options.glass)
-                                        : voxels->trace(s.position, s.normal, s.material, d, options.glass);
+                const GlassPath p = traceGlass(built, GlassHit{eye, d, s.position, s.normal, s.material});
                 if (!p.hit) continue;
                 // Frosted light is the blurred environment (ED06's pre-filtered map), never the scene.
                 const Vec3f through = incoming(s.position, p.reflectDir, 0) * p.reflectance +
@@ -114,7 +110,7 @@ void shadeGlass(const GBuffer& gbuffer, const SceneGeometry& geometry, const Sce
                 sampleMask[i] = 1;
             }
     });
-    timings.glassMs += std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
+    frame.result.glass.traceMs += std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
 }
 
 } // namespace voxfx::detail

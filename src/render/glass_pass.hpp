@@ -1,18 +1,13 @@
-// voxfx — the renderer's glass pass (internal): replaces the shading of the pixels that show
-// transmissive materials with the light that comes through them (voxfx/glass.hpp).
+// voxfx — the renderer's glass pass (internal): replaces the shading of the pixels that show glass
+// with the light that comes through them (voxfx/glass.hpp).
 #pragma once
 
-#include <vector>
-
-#include "voxfx/render.hpp"
+#include "render/frame_state.hpp"
 
 namespace voxfx::detail {
 
-/// Shades the glass pixels of `shaded` (the G-buffer's samples, y up) with options.glass.kind, marks
-/// them in `sampleMask` (one entry per sample), adds the pass's times to `timings`.
-void shadeGlass(const GBuffer& gbuffer, const SceneGeometry& geometry, const Scene& scene,
-                const std::vector<LightShadow>& shadows, const RenderOptions& options,
-                const Environment& environment, std::vector<Vec3f>& shaded, std::vector<uint8_t>& sampleMask,
-                RenderTimings& timings);
+/// With a glass method other than none: shades the glass samples of frame.shaded with it, marks them
+/// in frame.glassSamples (one entry per sample) and records the method's times in frame.result.glass.
+void shadeGlass(FrameState& frame);
 
 } // namespace voxfx::detail

@@ -1,15 +1,20 @@
 // voxfx — the one lookup path of the light grids (transmittance slicemaps, ED06 §3.1, and the
-// absorption columns, CHANG §3): which column a world point falls in, which slices lie in front
-// of it, and the bilinear blend of the four columns around it. Each map supplies only what a
-// column holds in front of a slice.
+// absorption columns, CHANG §3) and of the shadow maps (internal): which view and column a world
+// point falls in, which slices lie in front of it, and the bilinear blend of the four columns
+// around it. Each map supplies only what a column holds in front of a slice. Also the named
+// options the light-grid shadows share (voxfx/light_grid.hpp).
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include "voxfx/frame.hpp"
-#include "voxfx/shadow.hpp"
+#include "voxfx/light_grid.hpp"
+#include "voxfx/light_view.hpp"
+#include "voxfx/options.hpp"
+#include "voxfx/voxelize.hpp"
 
 namespace voxfx::detail {
 
@@ -59,6 +64,44 @@ T bilinearColumns(const LightView& view, const Vec3d& world, const T& empty, con
             out += (inside ? value(ColumnAt{y * W + x, p.z}) : empty) * w;
         }
     return out;
+}
+
+/// The view among `views` to look p up in, and the lookup point q = p + n * offset (offset in column
+/// footprints of the view at p); -1 (q untouched) when no view covers p. For point lights the
+/// offset can carry q across a cube-face seam, out of the frustum of p's face (which would then
+/// report "outside the view": full light); q picks its own face.
+inline int lookupView(const std::vector<LightView>& views, const Vec3d& p, const Vec3d& n, double offset,
+                      Vec3d& q) {
+    int i = viewIndexFor(views, p);
+    if (i < 0) return i;
+    q = p + n * (offset * views[size_t(i)].columnWorldSize(p));
+    if (views.size() > 1) {
+        const int j = viewIndexFor(views, q);
+        if (j >= 0) i = j;
+    }
+    return i;
+}
+
+/// Throws voxfx::Error unless the grid's resolutions are positive and skipCells >= 0.
+inline void checkLightGrid(const LightGridOptions& g, const char* technique) {
+    if (g.resolution <= 0 || g.depth <= 0 || g.skipCells < 0)
+        fail(technique, " shadows: light grid resolutions must be positive and skipped cells >= 0, got ",
+             g.resolution, " x ", g.depth, ", ", g.skipCells);
+}
+
+/// The named options of a technique O's member `grid` (a LightGridOptions).
+template <class O> void appendLightGridFields(std::vector<OptionField<O>>& out) {
+    out.push_back(numberOption<O, &O::grid, &LightGridOptions::resolution>(
+        "gridResolution", "light grid columns along the longer side of each light view", 1, 16384, "grid"));
+    out.push_back(
+        numberOption<O, &O::grid, &LightGridOptions::depth>("gridDepth", "light grid slices", 1, 16384));
+    out.push_back(nameOption<O, parseSlicing, optionName<Slicing>, &O::grid, &LightGridOptions::slicing>(
+        "slicing", "light grid slices: uniform, or local (ED06: each column's own range)",
+        "uniform | local"));
+    out.push_back(numberOption<O, &O::grid, &LightGridOptions::skipCells>(
+        "skipCells", "cells ending at a point's own cell that its lookup leaves out", 0, 16384));
+    out.push_back(flagOption<O, &O::grid, &LightGridOptions::bilinear>(
+        "bilinear", "interpolate light-grid lookups between the four columns around a point (softer)"));
 }
 
 } // namespace voxfx::detail

@@ -1,15 +1,15 @@
-// voxfx — the renderer's driver: flatten, G-buffer, shadows per light, shading, supersampling
-// resolve, each pass timed (see render.hpp for the passes).
+// voxfx — the renderer's driver: one frame is an ordered list of passes over one frame state, each
+// timed and given its share of the progress (see render.hpp for the passes).
 #include <algorithm>
 #include <chrono>
 #include <optional>
 
+#include "render/frame_state.hpp"
 #include "render/glass_pass.hpp"
 #include "render/shading.hpp"
+#include "render/technique_list.hpp"
 #include "render/volume_pass.hpp"
-#include "voxfx/deep_shadow.hpp"
 #include "voxfx/render.hpp"
-#include "voxfx/shadow_volume.hpp"
 
 namespace voxfx {
 
@@ -32,9 +32,81 @@ private:
     double lo_, hi_;
 };
 
-} // namespace
+using detail::FrameState;
 
-RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
+void flattenPass(FrameState& f, Progress*) { f.geometry = flattenScene(f.scene); }
+
+void gbufferPass(FrameState& f, Progress* progress) {
+    f.gbuffer = renderGBuffer(f.geometry, cameraFrame(f.camera, f.width, f.height), progress);
+    for (const uint32_t tri : f.gbuffer.triangle) f.result.coveredPixels += tri != GBuffer::kNone;
+}
+
+// One shadow per light, each built by the chosen technique with its share of the progress, then
+// given the G-buffer where the technique counts over it; their counters summed.
+void shadowPass(FrameState& f, Progress* progress) {
+    const std::size_t n = f.lit.lights.size();
+    f.result.shadowStats = std::visit(
+        []<class O>(const O&) -> ShadowStats { return typename detail::BuiltFor<LightShadow, O>::Stats{}; },
+        f.options.shadow);
+    for (std::size_t i = 0; i < n; ++i) {
+        PassProgress sp(progress, double(i) / double(n), double(i + 1) / double(n));
+        f.shadows.push_back(buildLightShadow(f.lit, f.lit.lights[i], f.options.shadow, sp.get()));
+        prepareLightShadow(f.shadows.back(), f.gbuffer, f.geometry);
+        accumulate(f.result.shadowStats, shadowStats(f.shadows.back()));
+    }
+}
+
+void shadingPass(FrameState& f, Progress* progress) { detail::shadeGBuffer(f, progress); }
+
+void glassPass(FrameState& f, Progress*) {
+    f.result.glass.method = glassName(f.options.glass);
+    detail::shadeGlass(f);
+}
+
+void volumePass(FrameState& f, Progress*) { detail::compositeVolumes(f); }
+
+// Box filter k x k and flip: frame rows run up, image rows down.
+void resolvePass(FrameState& f, Progress*) {
+    const RenderOptions& o = f.options;
+    const int k = o.supersample;
+    const int64_t W = f.width;
+    RenderResult& r = f.result;
+    r.image = Image(o.width, o.height);
+    const float norm = 1.0f / float(k * k);
+    parallelFor(0, o.height, 16, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < o.width; ++x) {
+                Vec3f sum;
+                for (int dy = 0; dy < k; ++dy)
+                    for (int dx = 0; dx < k; ++dx) sum += f.shaded[size_t((y * k + dy) * W + x * k + dx)];
+                r.image.at(x, o.height - 1 - y) = sum * norm;
+            }
+    });
+    if (f.glassSamples.empty()) return;
+    r.glassMask.assign(size_t(o.width * o.height), 0);
+    for (int64_t y = 0; y < o.height; ++y)
+        for (int64_t x = 0; x < o.width; ++x) {
+            uint8_t any = 0;
+            for (int dy = 0; dy < k; ++dy)
+                for (int dx = 0; dx < k; ++dx) any |= f.glassSamples[size_t((y * k + dy) * W + x * k + dx)];
+            r.glassMask[size_t((o.height - 1 - y) * o.width + x)] = any;
+            r.glass.pixels += any;
+        }
+}
+
+struct RenderPass {
+    std::string_view name;
+    double progressEnd; ///< the share of the whole render done when the pass ends
+    void (*run)(FrameState&, Progress*);
+};
+
+// The frame, in order. A pass reads what the passes before it left in the frame state.
+constexpr RenderPass kPasses[] = {{"flatten", 0.0, flattenPass}, {"G-buffer", 0.2, gbufferPass},
+                                  {"shadows", 0.5, shadowPass},  {"shading", 1.0, shadingPass},
+                                  {"glass", 1.0, glassPass},     {"volumes", 1.0, volumePass},
+                                  {"resolve", 1.0, resolvePass}};
+
+void checkRender(const Scene& scene, const RenderOptions& options) {
     if (options.width <= 0 || options.height <= 0 || options.width > 65536 || options.height > 65536)
         fail("image size must be between 1 and 65536 pixels per side, got ", options.width, " x ",
              options.height);
@@ -43,13 +115,20 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     scene.validate();
     if (scene.triangleCount() == 0 && !(scene.volumeScene && !scene.volumeScene->objects.empty()))
         fail("the scene has no triangles to render");
+}
+
+} // namespace
+
+RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
+    checkRender(scene, options);
     const auto t0 = Clock::now();
     // The environment (given, or the procedural sky when glass or default lights need one) and, for a
     // scene without lights, the default sun and sky ambient.
     std::optional<Environment> sky;
     const bool addSun = scene.lights.empty() && options.defaultLights;
-    const Environment* env = options.environment;
-    if (!env && (addSun || options.glass.kind != GlassKind::None)) env = &sky.emplace(Environment::sky());
+    const Environment* env = options.environment.get();
+    if (!env && (addSun || !std::holds_alternative<NoGlassOptions>(options.glass)))
+        env = &sky.emplace(Environment::sky());
     std::optional<Scene> sunlit;
     RenderOptions litOptions = options;
     if (addSun) {
@@ -63,102 +142,32 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
         sunlit.emplace(scene).lights.push_back(sun);
         litOptions.ambient = env->average();
     }
-    const Scene& lit = sunlit ? *sunlit : scene;
     RenderResult result;
-    RenderTimings& t = result.timings;
     const int k = options.supersample;
-    const int64_t W = options.width * k, H = options.height * k;
+    FrameState frame{scene,
+                     sunlit ? *sunlit : scene,
+                     camera,
+                     litOptions,
+                     env,
+                     options.width * k,
+                     options.height * k,
+                     {},
+                     {},
+                     {},
+                     {},
+                     {},
+                     result};
     withThreads(options.threads, [&] {
-        auto tp = Clock::now();
-        const SceneGeometry geometry = flattenScene(scene);
-        t.flattenMs = msSince(tp);
-
-        tp = Clock::now();
-        PassProgress gp(options.progress, 0.0, 0.2);
-        const GBuffer gbuffer = renderGBuffer(geometry, cameraFrame(camera, W, H), gp.get());
-        t.gbufferMs = msSince(tp);
-        for (const uint32_t tri : gbuffer.triangle) result.coveredPixels += tri != GBuffer::kNone;
-
-        std::vector<LightShadow> shadows;
-        // Shadow volumes: closed casters with edge adjacency, built once for every light.
-        const bool volumes = options.shadow.kind == ShadowKind::Volumes;
-        const ShadowCasterSet casters = volumes ? ShadowCasterSet::build(lit) : ShadowCasterSet{};
-        for (std::size_t i = 0; i < lit.lights.size(); ++i) {
-            PassProgress sp(options.progress, 0.2 + 0.3 * double(i) / double(lit.lights.size()),
-                            0.2 + 0.3 * double(i + 1) / double(lit.lights.size()));
-            ShadowBuildTimings st;
-            if (volumes)
-                shadows.push_back(
-                    buildVolumeShadow(casters, lit, lit.lights[i], gbuffer, geometry, options.shadow, &st));
-            else
-                shadows.push_back(LightShadow::build(lit, lit.lights[i], options.shadow, &st, sp.get()));
-            t.shadowMapMs += st.mapMs;
-            t.lightVoxelizeMs += st.voxelizeMs;
-            t.shadowVolumeMs += st.volumeMs;
-            result.shadowVolumeFragments += st.volumeFragments;
-            if (const DeepShadow* d = shadows.back().deepShadow()) {
-                const DsmStats ds = d->stats();
-                DsmStats& sum = result.deepShadowStats;
-                sum.texels += ds.texels;
-                sum.nodes += ds.nodes;
-                sum.maxNodes = std::max(sum.maxNodes, ds.maxNodes);
-                sum.bytes += ds.bytes;
-                sum.overflowTexels += ds.overflowTexels;
-                sum.maxEpsilon = std::max(sum.maxEpsilon, ds.maxEpsilon);
-            }
+        double done = 0;
+        for (const RenderPass& pass : kPasses) {
+            PassProgress progress(options.progress, done, pass.progressEnd);
+            const auto tp = Clock::now();
+            pass.run(frame, progress.get());
+            result.timings.passes.push_back({pass.name, msSince(tp)});
+            done = pass.progressEnd;
         }
-
-        tp = Clock::now();
-        PassProgress shp(options.progress, 0.5, 1.0);
-        std::vector<Vec3f> shaded =
-            detail::shadeGBuffer(gbuffer, geometry, lit, shadows, litOptions, shp.get());
-        if (options.environment) { // the background shows the environment along each pixel's ray
-            const Frame& cam = gbuffer.frame;
-            parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
-                for (int64_t y = y0; y < y1; ++y)
-                    for (int64_t x = 0; x < W; ++x)
-                        if (gbuffer.triangle[size_t(y * W + x)] == GBuffer::kNone)
-                            shaded[size_t(y * W + x)] =
-                                options.environment->lookup(
-                                    cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - cam.eye()) *
-                                options.exposure;
-            });
-        }
-        t.shadingMs = msSince(tp);
-        std::vector<uint8_t> glassSamples;
-        if (options.glass.kind != GlassKind::None)
-            detail::shadeGlass(gbuffer, geometry, lit, shadows, litOptions, *env, shaded, glassSamples, t);
-        tp = Clock::now();
-        result.volumeSamples = detail::compositeVolumes(gbuffer, lit, shadows, litOptions, shaded, nullptr);
-        t.volumeMs = msSince(tp);
-
-        // Box filter k x k and flip: frame rows run up, image rows down.
-        tp = Clock::now();
-        result.image = Image(options.width, options.height);
-        const float norm = 1.0f / float(k * k);
-        parallelFor(0, options.height, 16, [&](int64_t y0, int64_t y1) {
-            for (int64_t y = y0; y < y1; ++y)
-                for (int64_t x = 0; x < options.width; ++x) {
-                    Vec3f sum;
-                    for (int dy = 0; dy < k; ++dy)
-                        for (int dx = 0; dx < k; ++dx) sum += shaded[size_t((y * k + dy) * W + x * k + dx)];
-                    result.image.at(x, options.height - 1 - y) = sum * norm;
-                }
-        });
-        if (!glassSamples.empty()) {
-            result.glassMask.assign(size_t(options.width * options.height), 0);
-            for (int64_t y = 0; y < options.height; ++y)
-                for (int64_t x = 0; x < options.width; ++x) {
-                    uint8_t any = 0;
-                    for (int dy = 0; dy < k; ++dy)
-                        for (int dx = 0; dx < k; ++dx)
-                            any |= glassSamples[size_t((y * k + dy) * W + x * k + dx)];
-                    result.glassMask[size_t((options.height - 1 - y) * options.width + x)] = any;
-                }
-        }
-        t.resolveMs = msSince(tp);
     });
-    t.totalMs = msSince(t0);
+    result.timings.totalMs = msSince(t0);
     return result;
 }
 

@@ -34,13 +34,14 @@ Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight) {
     return e * float(falloff);
 }
 
-Vec3f shadePoint(const SurfacePoint& s, const Scene& scene, const std::vector<LightShadow>& shadows,
-                 const RenderOptions& options, const Vec3d& eye) {
-    return shadePoint(s, scene.materials[s.material], scene, shadows, options, eye);
+Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Vec3d& eye) {
+    return shadePoint(frame, s, frame.lit.materials[s.material], eye);
 }
 
-Vec3f shadePoint(const SurfacePoint& s, const Material& m, const Scene& scene,
-                 const std::vector<LightShadow>& shadows, const RenderOptions& options, const Vec3d& eye) {
+Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material& m, const Vec3d& eye) {
+    const Scene& scene = frame.lit;
+    const RenderOptions& options = frame.options;
+    const std::vector<LightShadow>& shadows = frame.shadows;
     Vec3f out = options.ambient * m.baseColor;
     const Vec3d toEye = normalize(eye - s.position);
     for (std::size_t k = 0; k < scene.lights.size(); ++k) {
@@ -65,18 +66,41 @@ Vec3f shadePoint(const SurfacePoint& s, const Material& m, const Scene& scene,
         }
         // The shadow lookup's normal offset goes towards the light's side of the surface.
         const Vec3d n = front ? s.geometricNormal : -s.geometricNormal;
-        const Vec3f vis = k < shadows.size() ? shadows[k].visibility(s.position, n) : Vec3f{1, 1, 1};
+        const Vec3f vis = k < shadows.size() ? shadowVisibility(shadows[k], s.position, n) : Vec3f{1, 1, 1};
         out += radiance * e * vis;
     }
     return out * options.exposure;
 }
 
-std::vector<Vec3f> shadeGBuffer(const GBuffer& gbuffer, const SceneGeometry& geometry, const Scene& scene,
-                                const std::vector<LightShadow>& shadows, const RenderOptions& options,
-                                Progress* progress) {
+namespace {
+
+// Background pixels show the environment along their ray (when one was given).
+void shadeBackground(FrameState& frame) {
+    const Environment* env = frame.options.environment.get();
+    if (!env) return;
+    const GBuffer& gbuffer = frame.gbuffer;
+    const Frame& cam = gbuffer.frame;
+    const int64_t W = frame.width;
+    parallelFor(0, frame.height, 16, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < W; ++x)
+                if (gbuffer.triangle[size_t(y * W + x)] == GBuffer::kNone)
+                    frame.shaded[size_t(y * W + x)] =
+                        env->lookup(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - cam.eye()) *
+                        frame.options.exposure;
+    });
+}
+
+} // namespace
+
+void shadeGBuffer(FrameState& frame, Progress* progress) {
+    const GBuffer& gbuffer = frame.gbuffer;
+    const SceneGeometry& geometry = frame.geometry;
+    const RenderOptions& options = frame.options;
     const int64_t W = gbuffer.frame.width(), H = gbuffer.frame.height();
     // Exposure scales the whole linear image, the background included.
-    std::vector<Vec3f> out(size_t(W * H), options.background * options.exposure);
+    std::vector<Vec3f>& out = frame.shaded;
+    out.assign(size_t(W * H), options.background * options.exposure);
     constexpr int64_t kRows = 8;
     const int64_t blocks = (H + kRows - 1) / kRows;
     std::atomic<int64_t> done{0};
@@ -89,7 +113,7 @@ std::vector<Vec3f> shadeGBuffer(const GBuffer& gbuffer, const SceneGeometry& geo
                 for (int64_t x = 0; x < W; ++x) {
                     SurfacePoint s;
                     if (surfaceAt(gbuffer, geometry, x, y, s))
-                        out[size_t(y * W + x)] = shadePoint(s, scene, shadows, options, gbuffer.frame.eye());
+                        out[size_t(y * W + x)] = shadePoint(frame, s, gbuffer.frame.eye());
                 }
             const int64_t n = ++done;
             if (progress) {
@@ -99,7 +123,7 @@ std::vector<Vec3f> shadeGBuffer(const GBuffer& gbuffer, const SceneGeometry& geo
         }
     });
     if (cancelled) fail("cancelled");
-    return out;
+    shadeBackground(frame);
 }
 
 } // namespace voxfx::detail

@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "voxfx/render.hpp"
+#include "render/frame_state.hpp"
 
 namespace voxfx::detail {
 
@@ -11,17 +11,15 @@ namespace voxfx::detail {
 /// unit direction from p towards the light.
 Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight);
 
-/// Linear radiance of one surface point seen from `eye` (ambient + every light).
-Vec3f shadePoint(const SurfacePoint& s, const Scene& scene, const std::vector<LightShadow>& shadows,
-                 const RenderOptions& options, const Vec3d& eye);
-/// The same with material `m` instead of scene.materials[s.material] (the volume pass's objects).
-Vec3f shadePoint(const SurfacePoint& s, const Material& m, const Scene& scene,
-                 const std::vector<LightShadow>& shadows, const RenderOptions& options, const Vec3d& eye);
+/// Linear radiance of one surface point of frame.lit seen from `eye` (ambient + every light, each
+/// times its shadow's visibility).
+Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Vec3d& eye);
+/// The same with material `m` instead of lit.materials[s.material] (the volume pass's objects).
+Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material& m, const Vec3d& eye);
 
-/// Shades every pixel of the G-buffer (row-major, y up, background where nothing was hit), rows in
-/// parallel; `progress` is polled between row blocks.
-std::vector<Vec3f> shadeGBuffer(const GBuffer& gbuffer, const SceneGeometry& geometry, const Scene& scene,
-                                const std::vector<LightShadow>& shadows, const RenderOptions& options,
-                                Progress* progress);
+/// The shading pass: every pixel of the G-buffer into frame.shaded (background where nothing was
+/// hit, or the environment along the pixel's ray when one was given), rows in parallel; `progress`
+/// is polled between row blocks.
+void shadeGBuffer(FrameState& frame, Progress* progress);
 
 } // namespace voxfx::detail

@@ -14,6 +14,7 @@
 
 #include "voxfx/bitgrid.hpp"
 #include "voxfx/raster.hpp"
+#include "voxfx/text.hpp"
 
 namespace voxfx {
 
@@ -358,7 +359,7 @@ float ShadowVolumeMask::visibility(const Vec3d& p) const {
 }
 
 std::vector<uint8_t> shadowVolumeReceivers(const GBuffer& gbuffer, const SceneGeometry& geometry,
-                                           const Scene& scene, const Light& light) {
+                                           std::span<const Material> materials, const Light& light) {
     const int64_t W = gbuffer.frame.width(), H = gbuffer.frame.height();
     std::vector<uint8_t> out(size_t(W * H), 0);
     parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
@@ -373,7 +374,7 @@ std::vector<uint8_t> shadowVolumeReceivers(const GBuffer& gbuffer, const SceneGe
                                                          std::cos(light.outerConeAngle) - 1e-9)
                     continue;
                 out[size_t(y * W + x)] =
-                    dot(s.geometricNormal, toLight) > 0 || !scene.materials[s.material].isOpaque();
+                    dot(s.geometricNormal, toLight) > 0 || !materials[s.material].isOpaque();
             }
     });
     return out;
@@ -537,189 +538,177 @@ void svOccludedInView(const std::vector<ShadowCaster>& casters, const std::vecto
 
 } // namespace
 
-ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Light& light,
-                                      const GBuffer& gbuffer, const std::vector<uint8_t>& receivers,
-                                      const Box3d& sceneBounds, const ShadowVolumeOptions& options) {
-    ShadowVolumeMask out;
-    out.camera = gbuffer.frame;
+namespace {
+
+// What culling and clamping decide for one light: per caster, whether its volume is drawn and the
+// plane its extrusion ends on; `mask` receives the culled flags and the counters.
+struct SvDecision {
+    std::vector<uint8_t> keep;
+    std::vector<double> far;
+};
+
+// The visible receivers (G-buffer points flagged in `receivers`) in world space, and the light's
+// views fitted to them and the casters.
+std::vector<LightView> svReceiverViews(const ShadowCasterSet& casters, const Light& light,
+                                       const GBuffer& gbuffer, const std::vector<uint8_t>& receivers,
+                                       const ShadowVolumeOptions& options, std::vector<Vec3d>& points) {
     const Frame& cam = gbuffer.frame;
     const int64_t W = cam.width(), H = cam.height();
-    out.shadowed.assign(size_t(W * H), 0);
-    ShadowVolumeStats& st = out.stats;
-    st.casters = int64_t(casters.casters.size());
-    if (casters.casters.empty()) return out;
-    if (receivers.size() != size_t(W * H))
-        fail("shadow volumes: one receiver flag per G-buffer pixel needed");
-    if (options.mapResolution <= 0 || options.receiverSlices <= 0)
-        fail("shadow volumes: culling resolutions must be positive");
-    const std::size_t N = casters.casters.size();
-    out.culled.assign(N, 0);
-
-    auto t0 = SvClock::now();
-    std::vector<SvCasterLight> setup;
-    setup.reserve(N);
-    for (const ShadowCaster& c : casters.casters) setup.push_back(svSetup(c, light, sceneBounds, cam));
-    std::vector<uint8_t> keep(N, 1);
-    std::vector<double> far(N);
-    for (std::size_t i = 0; i < N; ++i) far[i] = setup[i].far;
-
-    if (options.cullReceivers || options.clamp || options.cullOccluded) {
-        // The light's views, fitted to the casters and the visible receivers.
-        Box3d bounds;
-        for (const ShadowCaster& c : casters.casters)
-            for (const Vec3f& p : c.positions) bounds.extend(Vec3d(p));
-        std::vector<Vec3d> points;
-        for (int64_t y = 0; y < H; ++y)
-            for (int64_t x = 0; x < W; ++x) {
-                const auto i = size_t(y * W + x);
-                if (!receivers[i] || gbuffer.triangle[i] == GBuffer::kNone) continue;
-                points.push_back(
-                    cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, double(gbuffer.depth[i])}));
-                bounds.extend(points.back());
-            }
-        const std::vector<LightView> views =
-            makeLightViews(light, bounds, options.mapResolution, options.receiverSlices);
-
-        if (options.cullReceivers || options.clamp) {
-            std::vector<BitGrid> slicemaps;
-            for (const LightView& v : views)
-                slicemaps.emplace_back(v.frame.width(), v.frame.height(), v.frame.depth());
-            for (const Vec3d& p : points) {
-                const int k = viewIndexFor(views, p);
-                if (k < 0 || !views[size_t(k)].covers(p)) {
-                    st.receiversCovered = false;
-                    break;
-                }
-                const Frame& f = views[size_t(k)].frame;
-                const Vec3d g = f.gridFromWorld(p);
-                const int64_t x = std::clamp<int64_t>(int64_t(std::floor(g.x)), 0, f.width() - 1);
-                const int64_t y = std::clamp<int64_t>(int64_t(std::floor(g.y)), 0, f.height() - 1);
-                const double s = f.depthToSlice(y * f.width() + x)(g.z);
-                if (!(s >= 0 && s < double(f.depth()))) {
-                    st.receiversCovered = false;
-                    break;
-                }
-                slicemaps[size_t(k)].set(x, y, int64_t(s));
-            }
-            if (st.receiversCovered) {
-                std::vector<uint8_t> hasReceivers(N, 0);
-                // Each caster's unlit triangles, once for all views.
-                std::vector<Mesh> backs(N);
-                parallelFor(0, int64_t(N), 4, [&](int64_t c0, int64_t c1) {
-                    for (std::size_t i = size_t(c0); i < size_t(c1); ++i)
-                        backs[i] = svSubMesh(casters.casters[i],
-                                             [&](std::size_t t) { return setup[i].unlit[t] != 0; });
-                });
-                std::vector<double> receiverFar(N, -std::numeric_limits<double>::infinity());
-                for (std::size_t v = 0; v < views.size(); ++v) {
-                    const Frame& f = views[v].frame;
-                    const BitGrid& bits = slicemaps[v];
-                    const int64_t VW = f.width(), VH = f.height();
-                    // Casters in parallel, each chunk with its own scratch map; each caster writes
-                    // only its own flags.
-                    parallelFor(0, int64_t(N), 4, [&](int64_t c0, int64_t c1) {
-                        std::vector<float> minDepth(size_t(VW * VH), kSvInf);
-                        for (std::size_t i = size_t(c0); i < size_t(c1); ++i) {
-                            if (!keep[i] || !svMayTouch(views[v], casters.casters[i])) continue;
-                            const Mesh& back = backs[i];
-                            SvRect rect;
-                            float* mp = minDepth.data();
-                            svRasterTexels<Coverage::Conservative>(
-                                f, back,
-                                [mp](int64_t texel, double dmin, double) {
-                                    mp[texel] = std::min(mp[texel], float(dmin));
-                                },
-                                rect);
-                            if (rect.empty()) continue;
-                            // The footprint dilated by one column and one slice against the slicemap.
-                            const int64_t x0 = std::max<int64_t>(0, rect.v[0] - 1),
-                                          y0 = std::max<int64_t>(0, rect.v[1] - 1);
-                            const int64_t x1 = std::min<int64_t>(VW - 1, rect.v[2] + 1),
-                                          y1 = std::min<int64_t>(VH - 1, rect.v[3] + 1);
-                            double zmax = -std::numeric_limits<double>::infinity();
-                            for (int64_t y = y0; y <= y1; ++y)
-                                for (int64_t x = x0; x <= x1; ++x) {
-                                    float m = kSvInf;
-                                    for (int64_t yy = std::max<int64_t>(0, y - 1);
-                                         yy <= std::min(VH - 1, y + 1); ++yy)
-                                        for (int64_t xx = std::max<int64_t>(0, x - 1);
-                                             xx <= std::min(VW - 1, x + 1); ++xx)
-                                            m = std::min(m, minDepth[size_t(yy * VW + xx)]);
-                                    if (!(m < kSvInf)) continue;
-                                    const int64_t col = y * VW + x;
-                                    const int64_t s0 =
-                                        int64_t(std::floor(f.depthToSlice(col)(double(m)))) - 1;
-                                    const int64_t top = svHighestSlice(bits, col, s0);
-                                    if (top < 0) continue;
-                                    hasReceivers[i] = 1;
-                                    zmax = std::max(zmax,
-                                                    svCellFar(f, x, y, top, setup[i].origin, setup[i].axis));
-                                }
-                            svReset(minDepth, VW, rect, kSvInf);
-                            // Views share the light: the farthest receiver over all of them.
-                            receiverFar[i] = std::max(receiverFar[i], zmax);
-                        }
-                    });
-                }
-                for (std::size_t i = 0; i < N; ++i) {
-                    if (!keep[i]) continue;
-                    if (!hasReceivers[i]) {
-                        if (options.cullReceivers) {
-                            keep[i] = 0;
-                            out.culled[i] = 1;
-                            ++st.culledNoReceiver;
-                        }
-                        continue;
-                    }
-                    if (!options.clamp) continue;
-                    const double md = setup[i].maxVertexDepth;
-                    const double clamped = std::max(receiverFar[i] + 1e-6 * std::abs(receiverFar[i]) + 1e-9,
-                                                    md + 1e-6 * std::abs(md) + 1e-9);
-                    if (clamped < setup[i].far) {
-                        far[i] = clamped;
-                        ++st.clamped;
-                    }
-                }
-            }
+    Box3d bounds;
+    for (const ShadowCaster& c : casters.casters)
+        for (const Vec3f& p : c.positions) bounds.extend(Vec3d(p));
+    for (int64_t y = 0; y < H; ++y)
+        for (int64_t x = 0; x < W; ++x) {
+            const auto i = size_t(y * W + x);
+            if (!receivers[i] || gbuffer.triangle[i] == GBuffer::kNone) continue;
+            points.push_back(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, double(gbuffer.depth[i])}));
+            bounds.extend(points.back());
         }
-        // Second test, among the casters left: the light's map shows a caster in other casters'
-        // shadow. Views (cube faces) run in parallel, each clearing its own flags.
-        if (options.cullOccluded) {
-            std::vector<std::vector<uint8_t>> perView(views.size(), std::vector<uint8_t>(N, 1));
-            parallelFor(0, int64_t(views.size()), 1, [&](int64_t v0, int64_t v1) {
-                for (int64_t v = v0; v < v1; ++v)
-                    svOccludedInView(casters.casters, setup, keep, views[size_t(v)], views.size() > 1,
-                                     perView[size_t(v)]);
-            });
-            for (std::size_t i = 0; i < N; ++i) {
-                bool occluded = keep[i] != 0;
-                for (const std::vector<uint8_t>& o : perView) occluded = occluded && o[i];
-                if (occluded) {
-                    keep[i] = 0;
-                    out.culled[i] = 2;
-                    ++st.culledOccluded;
-                }
+    return makeLightViews(light, bounds, options.mapResolution, options.receiverSlices);
+}
+
+// The receivers as one slicemap per view; false when some receiver lies outside every view (then
+// nothing may be culled or clamped for this light).
+bool svReceiverSlicemaps(const std::vector<LightView>& views, const std::vector<Vec3d>& points,
+                         std::vector<BitGrid>& slicemaps) {
+    for (const LightView& v : views)
+        slicemaps.emplace_back(v.frame.width(), v.frame.height(), v.frame.depth());
+    for (const Vec3d& p : points) {
+        const int k = viewIndexFor(views, p);
+        if (k < 0 || !views[size_t(k)].covers(p)) return false;
+        const Frame& f = views[size_t(k)].frame;
+        const Vec3d g = f.gridFromWorld(p);
+        const int64_t x = std::clamp<int64_t>(int64_t(std::floor(g.x)), 0, f.width() - 1);
+        const int64_t y = std::clamp<int64_t>(int64_t(std::floor(g.y)), 0, f.height() - 1);
+        const double s = f.depthToSlice(y * f.width() + x)(g.z);
+        if (!(s >= 0 && s < double(f.depth()))) return false;
+        slicemaps[size_t(k)].set(x, y, int64_t(s));
+    }
+    return true;
+}
+
+// The farthest receiver cell (world depth along the caster's axis) at or behind the conservative
+// footprint of `back` (one caster's unlit triangles) in one view, dilated by one column and one
+// slice; -inf when there is none. `minDepth` is a W x H scratch map of +inf, left so.
+double svFarthestReceiver(const Frame& f, const BitGrid& bits, const Mesh& back, const SvCasterLight& setup,
+                          std::vector<float>& minDepth) {
+    const int64_t VW = f.width(), VH = f.height();
+    SvRect rect;
+    float* mp = minDepth.data();
+    svRasterTexels<Coverage::Conservative>(
+        f, back, [mp](int64_t texel, double dmin, double) { mp[texel] = std::min(mp[texel], float(dmin)); },
+        rect);
+    double zmax = -std::numeric_limits<double>::infinity();
+    if (rect.empty()) return zmax;
+    const int64_t x0 = std::max<int64_t>(0, rect.v[0] - 1), y0 = std::max<int64_t>(0, rect.v[1] - 1);
+    const int64_t x1 = std::min<int64_t>(VW - 1, rect.v[2] + 1),
+                  y1 = std::min<int64_t>(VH - 1, rect.v[3] + 1);
+    for (int64_t y = y0; y <= y1; ++y)
+        for (int64_t x = x0; x <= x1; ++x) {
+            float m = kSvInf;
+            for (int64_t yy = std::max<int64_t>(0, y - 1); yy <= std::min(VH - 1, y + 1); ++yy)
+                for (int64_t xx = std::max<int64_t>(0, x - 1); xx <= std::min(VW - 1, x + 1); ++xx)
+                    m = std::min(m, minDepth[size_t(yy * VW + xx)]);
+            if (!(m < kSvInf)) continue;
+            const int64_t col = y * VW + x;
+            const int64_t s0 = int64_t(std::floor(f.depthToSlice(col)(double(m)))) - 1;
+            const int64_t top = svHighestSlice(bits, col, s0);
+            if (top >= 0) zmax = std::max(zmax, svCellFar(f, x, y, top, setup.origin, setup.axis));
+        }
+    svReset(minDepth, VW, rect, kSvInf);
+    return zmax;
+}
+
+// ED06 §3.2 against the receivers: a caster whose footprint holds no receiver is culled, the far
+// cap of the others ends at their farthest receiver.
+void svCullByReceivers(const ShadowCasterSet& casters, const std::vector<SvCasterLight>& setup,
+                       const std::vector<LightView>& views, const std::vector<BitGrid>& slicemaps,
+                       const ShadowVolumeOptions& options, SvDecision& d, ShadowVolumeMask& out) {
+    const std::size_t N = casters.casters.size();
+    // Each caster's unlit triangles, once for all views.
+    std::vector<Mesh> backs(N);
+    parallelFor(0, int64_t(N), 4, [&](int64_t c0, int64_t c1) {
+        for (std::size_t i = size_t(c0); i < size_t(c1); ++i)
+            backs[i] = svSubMesh(casters.casters[i], [&](std::size_t t) { return setup[i].unlit[t] != 0; });
+    });
+    // Views share the light: the farthest receiver over all of them. Casters run in parallel, each
+    // chunk with its own scratch map; each caster writes only its own entry.
+    std::vector<double> receiverFar(N, -std::numeric_limits<double>::infinity());
+    for (std::size_t v = 0; v < views.size(); ++v) {
+        const Frame& f = views[v].frame;
+        parallelFor(0, int64_t(N), 4, [&](int64_t c0, int64_t c1) {
+            std::vector<float> minDepth(size_t(f.width() * f.height()), kSvInf);
+            for (std::size_t i = size_t(c0); i < size_t(c1); ++i)
+                if (d.keep[i] && svMayTouch(views[v], casters.casters[i]))
+                    receiverFar[i] = std::max(
+                        receiverFar[i], svFarthestReceiver(f, slicemaps[v], backs[i], setup[i], minDepth));
+        });
+    }
+    ShadowVolumeStats& st = out.stats;
+    for (std::size_t i = 0; i < N; ++i) {
+        if (!d.keep[i]) continue;
+        if (!(receiverFar[i] > -std::numeric_limits<double>::infinity())) { // no receiver in the volume
+            if (options.cullReceivers) {
+                d.keep[i] = 0;
+                out.culled[i] = 1;
+                ++st.culledNoReceiver;
             }
+            continue;
+        }
+        if (!options.clamp) continue;
+        const double md = setup[i].maxVertexDepth;
+        const double clamped = std::max(receiverFar[i] + 1e-6 * std::abs(receiverFar[i]) + 1e-9,
+                                        md + 1e-6 * std::abs(md) + 1e-9);
+        if (clamped < setup[i].far) {
+            d.far[i] = clamped;
+            ++st.clamped;
         }
     }
-    st.cullMs = svMsSince(t0);
+}
 
-    t0 = SvClock::now();
+// ED06 §3.2, second test, among the casters left: the light's map shows a caster in other casters'
+// shadow. Views (cube faces) run in parallel, each clearing its own flags.
+void svCullOccluded(const ShadowCasterSet& casters, const std::vector<SvCasterLight>& setup,
+                    const std::vector<LightView>& views, SvDecision& d, ShadowVolumeMask& out) {
+    const std::size_t N = casters.casters.size();
+    std::vector<std::vector<uint8_t>> perView(views.size(), std::vector<uint8_t>(N, 1));
+    parallelFor(0, int64_t(views.size()), 1, [&](int64_t v0, int64_t v1) {
+        for (int64_t v = v0; v < v1; ++v)
+            svOccludedInView(casters.casters, setup, d.keep, views[size_t(v)], views.size() > 1,
+                             perView[size_t(v)]);
+    });
+    for (std::size_t i = 0; i < N; ++i) {
+        bool occluded = d.keep[i] != 0;
+        for (const std::vector<uint8_t>& o : perView) occluded = occluded && o[i];
+        if (occluded) {
+            d.keep[i] = 0;
+            out.culled[i] = 2;
+            ++out.stats.culledOccluded;
+        }
+    }
+}
+
+// The volumes kept, extruded to their far planes, counted per pixel of the G-buffer.
+void svCount(const ShadowCasterSet& casters, const std::vector<SvCasterLight>& setup, const SvDecision& d,
+             const GBuffer& gbuffer, ShadowVolumeMask& out) {
+    ShadowVolumeStats& st = out.stats;
+    auto t0 = SvClock::now();
     Mesh volumes;
     std::vector<uint8_t> mode;
     for (std::size_t i = 0; i < casters.casters.size(); ++i) {
-        if (!keep[i]) continue;
+        if (!d.keep[i]) continue;
         (setup[i].depthPass ? st.depthPass : st.depthFail)++;
-        svAppendVolume(casters.casters[i], setup[i], far[i], volumes, mode, st.silhouetteEdges);
+        svAppendVolume(casters.casters[i], setup[i], d.far[i], volumes, mode, st.silhouetteEdges);
     }
     st.volumeTriangles = int64_t(mode.size());
     st.buildMs = svMsSince(t0);
 
     t0 = SvClock::now();
-    std::vector<int32_t> count(size_t(W * H), 0);
+    const Frame& cam = gbuffer.frame;
+    std::vector<int32_t> count(size_t(cam.width() * cam.height()), 0);
     std::atomic<int64_t> fragments{0};
     if (!volumes.indices.empty()) {
-        SvCountConsumer consumer{W, gbuffer.depth.data(), mode.data(), count.data(), &fragments};
+        SvCountConsumer consumer{cam.width(), gbuffer.depth.data(), mode.data(), count.data(), &fragments};
         RasterOptions ro;
         rasterize<Coverage::Center>(cam, volumes.view(), ro, consumer);
     }
@@ -727,25 +716,119 @@ ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Ligh
     for (std::size_t i = 0; i < count.size(); ++i)
         out.shadowed[i] = gbuffer.triangle[i] != GBuffer::kNone && count[i] != 0;
     st.rasterMs = svMsSince(t0);
+}
+
+} // namespace
+
+ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Light& light,
+                                      const GBuffer& gbuffer, const std::vector<uint8_t>& receivers,
+                                      const Box3d& sceneBounds, const ShadowVolumeOptions& options) {
+    ShadowVolumeMask out;
+    out.camera = gbuffer.frame;
+    const Frame& cam = gbuffer.frame;
+    out.shadowed.assign(size_t(cam.width() * cam.height()), 0);
+    out.stats.casters = int64_t(casters.casters.size());
+    if (casters.casters.empty()) return out;
+    if (receivers.size() != size_t(cam.width() * cam.height()))
+        fail("shadow volumes: one receiver flag per G-buffer pixel needed");
+    if (options.mapResolution <= 0 || options.receiverSlices <= 0)
+        fail("shadow volumes: culling resolutions must be positive");
+    const std::size_t N = casters.casters.size();
+    out.culled.assign(N, 0);
+
+    const auto t0 = SvClock::now();
+    std::vector<SvCasterLight> setup;
+    setup.reserve(N);
+    for (const ShadowCaster& c : casters.casters) setup.push_back(svSetup(c, light, sceneBounds, cam));
+    SvDecision d{std::vector<uint8_t>(N, 1), std::vector<double>(N)};
+    for (std::size_t i = 0; i < N; ++i) d.far[i] = setup[i].far;
+    if (options.cullReceivers || options.clamp || options.cullOccluded) {
+        std::vector<Vec3d> points;
+        const std::vector<LightView> views =
+            svReceiverViews(casters, light, gbuffer, receivers, options, points);
+        if (options.cullReceivers || options.clamp) {
+            std::vector<BitGrid> slicemaps;
+            out.stats.receiversCovered = svReceiverSlicemaps(views, points, slicemaps);
+            if (out.stats.receiversCovered)
+                svCullByReceivers(casters, setup, views, slicemaps, options, d, out);
+        }
+        if (options.cullOccluded) svCullOccluded(casters, setup, views, d, out);
+    }
+    out.stats.cullMs = svMsSince(t0);
+    svCount(casters, setup, d, gbuffer, out);
     return out;
 }
 
-LightShadow buildVolumeShadow(const ShadowCasterSet& casters, const Scene& scene, const Light& light,
-                              const GBuffer& gbuffer, const SceneGeometry& geometry,
-                              const ShadowOptions& options, ShadowBuildTimings* timings) {
-    const auto t0 = SvClock::now();
-    ShadowVolumeOptions vo;
-    vo.cullReceivers = options.volumeCulling;
-    vo.cullOccluded = options.volumeCulling;
-    vo.clamp = options.volumeClamping;
-    const Box3d bounds = scene.bounds(false);
-    auto mask = std::make_shared<ShadowVolumeMask>(computeShadowVolumes(
-        casters, light, gbuffer, shadowVolumeReceivers(gbuffer, geometry, scene, light), bounds, vo));
-    if (timings) {
-        timings->volumeMs += svMsSince(t0);
-        timings->volumeFragments += mask->stats.fragments;
-    }
-    return LightShadow::fromVolumes(options, std::move(mask));
+std::span<const OptionField<ShadowVolumeOptions>> ShadowVolumeOptions::fields() {
+    using O = ShadowVolumeOptions;
+    static const std::vector<OptionField<O>> table = [] {
+        std::vector<OptionField<O>> t;
+        OptionField<O> all =
+            optionField<O>("volumeCulling",
+                           "shadow volumes: ED06 culling and clamping (the same image; off: more fragments)",
+                           OptionType::Flag);
+        all.store = +[](O& o, const OptionValue& v) {
+            o.cullReceivers = o.cullOccluded = o.clamp = std::get<bool>(v);
+        };
+        all.get = +[](const O& o) { return OptionValue(o.cullReceivers && o.cullOccluded && o.clamp); };
+        t.push_back(all);
+        t.push_back(flagOption<O, &O::cullReceivers>(
+            "cullReceivers", "shadow volumes: skip volumes holding no visible receiver"));
+        t.push_back(flagOption<O, &O::cullOccluded>(
+            "cullOccluded", "shadow volumes: skip casters entirely in other casters' shadow"));
+        t.push_back(flagOption<O, &O::clamp>("volumeClamping",
+                                             "shadow volumes: end each volume at its last receiver slab"));
+        t.push_back(numberOption<O, &O::mapResolution>(
+            "cullResolution", "shadow volumes: culling light views, columns along the longer side", 1,
+            16384));
+        t.push_back(numberOption<O, &O::receiverSlices>(
+            "receiverSlices", "shadow volumes: slices of the receiver slicemap", 1, 16384));
+        return t;
+    }();
+    return table;
 }
+
+ShadowVolumeStats& ShadowVolumeStats::operator+=(const ShadowVolumeStats& o) {
+    casters += o.casters;
+    culledNoReceiver += o.culledNoReceiver;
+    culledOccluded += o.culledOccluded;
+    clamped += o.clamped;
+    depthPass += o.depthPass;
+    depthFail += o.depthFail;
+    silhouetteEdges += o.silhouetteEdges;
+    volumeTriangles += o.volumeTriangles;
+    fragments += o.fragments;
+    receiversCovered = receiversCovered && o.receiversCovered;
+    cullMs += o.cullMs;
+    buildMs += o.buildMs;
+    rasterMs += o.rasterMs;
+    return *this;
+}
+
+std::string ShadowVolumeStats::summary() const {
+    return countText(fragments) + " volume fragments; " + countText(culledNoReceiver + culledOccluded) +
+           " of " + countText(casters) + " casters culled, " + countText(clamped) + " clamped; culling " +
+           msText(cullMs) + ", volumes " + msText(buildMs) + ", counting " + msText(rasterMs);
+}
+
+VolumeShadow VolumeShadow::build(const Scene& scene, const Light& light, const ShadowVolumeOptions& options,
+                                 Progress*) {
+    VolumeShadow out;
+    out.options_ = options;
+    out.casters_ = std::make_shared<const ShadowCasterSet>(ShadowCasterSet::build(scene));
+    out.light_ = light;
+    out.sceneBounds_ = scene.bounds(false);
+    out.materials_ = scene.materials;
+    return out;
+}
+
+void VolumeShadow::prepare(const GBuffer& gbuffer, const SceneGeometry& geometry) {
+    if (!casters_) return;
+    mask_ = computeShadowVolumes(*casters_, light_, gbuffer,
+                                 shadowVolumeReceivers(gbuffer, geometry, materials_, light_), sceneBounds_,
+                                 options_);
+}
+
+float VolumeShadow::visibility(const Vec3d& p, const Vec3d&) const { return mask_.visibility(p); }
 
 } // namespace voxfx

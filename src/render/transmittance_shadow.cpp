@@ -3,12 +3,16 @@
 // The partial occluders are voxelized from the light into slicemaps, one per channel (a group of
 // equal crossing transmittance, e.g. leaves of one colour). At a point p the light has crossed
 // n = popcount(column bits in front of p) filled cells, and is attenuated by t^n per channel.
-// The lookup skips the cell holding p (its own surface; see shadow.hpp's bias note).
+// The lookup skips the cell holding p (its own surface; see light_grid.hpp's bias note). Opaque
+// casters go to a standard shadow map (shadow_map.hpp).
+#include "voxfx/transmittance_shadow.hpp"
+
 #include <cmath>
 
 #include "render/light_grid_lookup.hpp"
+#include "render/shadow_casters.hpp"
 #include "voxfx/grid_query.hpp"
-#include "voxfx/shadow.hpp"
+#include "voxfx/text.hpp"
 
 namespace voxfx {
 
@@ -73,6 +77,98 @@ Vec3f TransmittanceShadowMap::transmittanceBilinear(const Vec3d& world, int64_t 
     return detail::bilinearColumns<Vec3f, float>(
         view_, world, Vec3f{1, 1, 1},
         [&](const detail::ColumnAt& c) { return columnTransmittance(c.column, c.depth, skipCells); });
+}
+
+std::span<const OptionField<TransmittanceShadowOptions>> TransmittanceShadowOptions::fields() {
+    using O = TransmittanceShadowOptions;
+    static const std::vector<OptionField<O>> table = [] {
+        std::vector<OptionField<O>> t;
+        detail::appendLightGridFields(t);
+        OptionField<O> offset = optionField<O>(
+            "normalOffset", "lookup offset along the surface normal, in column footprints (grids and map)",
+            OptionType::Real, 0, 1000);
+        offset.store = +[](O& o, const OptionValue& v) {
+            o.grid.normalOffset = o.opaque.normalOffset = std::get<double>(v);
+        };
+        offset.get = +[](const O& o) { return OptionValue(o.grid.normalOffset); };
+        t.push_back(offset);
+        t.push_back(nameOption<O, parseVoxelizeMode, optionName<VoxelizeMode>, &O::voxelMode>(
+            "voxelMode", "voxelization of the partial occluders from the light", "surface | conservative"));
+        t.push_back(nameOption<O, parseDevice, optionName<Device>, &O::device>(
+            "device", "where the light grids are voxelized (the same grids; see voxfx devices)",
+            "cpu | cuda | auto"));
+        t.push_back(numberOption<O, &O::opaque, &ShadowMapOptions::resolution>(
+            "mapResolution", "opaque casters' shadow map: texels along the longer side", 1, 32768,
+            "shadowMapResolution"));
+        t.push_back(numberOption<O, &O::opaque, &ShadowMapOptions::pcfRadius>(
+            "pcf", "opaque casters' shadow map: PCF radius r, (2r+1)^2 taps", 0, 8));
+        t.push_back(numberOption<O, &O::opaque, &ShadowMapOptions::depthBias>(
+            "depthBias", "opaque casters' shadow map: depth bias, in texel footprints", 0, 1000));
+        return t;
+    }();
+    return table;
+}
+
+TransmittanceShadow::Stats& TransmittanceShadow::Stats::operator+=(const Stats& o) {
+    grids += o.grids;
+    channels += o.channels;
+    filledCells += o.filledCells;
+    opaque += o.opaque;
+    return *this;
+}
+
+std::string TransmittanceShadow::Stats::summary() const {
+    return countText(grids) + (grids == 1 ? " light grid (" : " light grids (") + countText(channels) +
+           (channels == 1 ? " channel), " : " channels), ") + countText(filledCells) +
+           " filled cells; opaque casters: " + opaque.summary();
+}
+
+TransmittanceShadow TransmittanceShadow::build(const Scene& scene, const Light& light,
+                                               const TransmittanceShadowOptions& options,
+                                               Progress* progress) {
+    detail::checkLightGrid(options.grid, "transmittance");
+    TransmittanceShadow out;
+    out.options_ = options;
+    const detail::CasterSets casters = detail::collectCasters(scene);
+    if (casters.all.indices.empty()) return out;
+    out.opaque_ = MapShadow::build(light, casters.opaque.view(), options.opaque, progress);
+    if (casters.partial.empty()) return out;
+    Box3d bounds;
+    std::vector<MeshView> groups;
+    std::vector<Vec3f> transmittances;
+    for (const auto& [key, mesh] : casters.partial) {
+        bounds.extend(computeBounds(mesh.view()));
+        groups.push_back(mesh.view());
+        transmittances.push_back({key[0], key[1], key[2]});
+    }
+    out.views_ = makeLightViews(light, bounds, options.grid.resolution, options.grid.depth);
+    for (const LightView& v : out.views_)
+        out.maps_.push_back(TransmittanceShadowMap::build(v, groups, transmittances, options.voxelMode,
+                                                          options.grid.slicing, progress, options.device));
+    return out;
+}
+
+Vec3f TransmittanceShadow::visibility(const Vec3d& p, const Vec3d& n) const {
+    Vec3f v{1, 1, 1};
+    v = v * opaque_.visibility(p, n);
+    Vec3d q;
+    const int i = detail::lookupView(views_, p, n, options_.grid.normalOffset, q);
+    if (i < 0) return v;
+    const TransmittanceShadowMap& m = maps_[size_t(i)];
+    const int64_t skip = options_.grid.skipCells;
+    return v * (options_.grid.bilinear ? m.transmittanceBilinear(q, skip) : m.transmittance(q, skip));
+}
+
+TransmittanceShadow::Stats TransmittanceShadow::stats() const {
+    Stats s;
+    s.opaque = opaque_.stats();
+    for (const TransmittanceShadowMap& m : maps_)
+        for (const TransmittanceShadowMap::Channel& c : m.channels()) {
+            ++s.grids;
+            s.filledCells += c.grid.bits.count();
+        }
+    if (!maps_.empty()) s.channels = int64_t(maps_[0].channels().size());
+    return s;
 }
 
 } // namespace voxfx

@@ -9,7 +9,7 @@
 #include <optional>
 
 #include "render/shading.hpp"
-#include "voxfx/deep_shadow.hpp"
+#include "voxfx/volume_scene.hpp"
 
 namespace voxfx::detail {
 
@@ -116,8 +116,136 @@ std::vector<std::vector<ObjectSurfaceHit>> objectSurfaceHits(const VolumeScene& 
     return out;
 }
 
-int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::vector<LightShadow>& shadows,
-                         const RenderOptions& options, std::vector<Vec3f>& shaded, Progress* progress) {
+namespace {
+
+// The ray of one pixel: eye + perDepth * z for frame depth z, and what its walk has gathered.
+struct PixelRay {
+    int64_t x, y;
+    std::span<const ListFragment> column;
+    Vec3d eye, perDepth;
+    double lengthPerDepth;
+    double zMax; ///< the G-buffer's depth: the walk stops at the surface it shows
+    Vec3f color{0, 0, 0};
+    double transmittance = 1;
+    int64_t samples = 0;
+};
+
+// What the pass composites: the volume scene's objects (and blended meshes), how each surface is
+// shaded, the bricks each volume skips and the sample step.
+struct VolumeComposite {
+    const FrameState& frame;
+    const VolumeScene& vs;
+    std::vector<Material> materials; ///< per object: how its surface is shaded
+    ObjectSurfaces surfaces;
+    std::vector<EmptySpace> emptySpace;
+    double step; ///< world length between volume samples
+
+    VolumeComposite(const FrameState& f, const VolumeScene& scene)
+        : frame(f), vs(scene), materials(objectMaterials(f.lit, scene)), surfaces(scene),
+          emptySpace(f.options.skipEmptySpace ? emptySpaceOf(scene)
+                                              : std::vector<EmptySpace>(scene.objects.size())),
+          step(sampleStep(scene) * f.options.volumeStep) {}
+
+    // Opaque and translucent objects are shaded as meshes of their colour and opacity (a blended
+    // mesh with its own material).
+    static std::vector<Material> objectMaterials(const Scene& scene, const VolumeScene& vs) {
+        std::vector<Material> materials(vs.objects.size());
+        for (std::size_t o = 0; o < vs.objects.size(); ++o) {
+            const VolumeSceneObject& obj = vs.objects[o];
+            materials[o].opacity = obj.kind == ObjectKind::Translucent ? obj.opacity : 1.0f;
+            if (obj.material >= 0) {
+                // The mesh's own material; the eye sees its coverage (opacity), whatever its tissue
+                // passes to the shadows.
+                materials[o] = scene.materials[std::size_t(obj.material)];
+                if (obj.kind != ObjectKind::Translucent) materials[o].opacity = 1;
+            }
+            materials[o].name = obj.name;
+            materials[o].baseColor = obj.color;
+        }
+        return materials;
+    }
+
+    // The smallest voxel spacing of the volumes (+inf without volumes: segments are then never
+    // sampled).
+    static double sampleStep(const VolumeScene& vs) {
+        double spacing = std::numeric_limits<double>::infinity();
+        for (const VolumeSceneObject& o : vs.objects)
+            if (o.kind == ObjectKind::Volume) {
+                const Vec3d s = vs.volumes[std::size_t(o.volume)]->spacing();
+                spacing = std::min({spacing, s.x, s.y, s.z});
+            }
+        return spacing;
+    }
+
+    // A surface of object o at depth z: shaded and composited; false stops the walk.
+    bool surface(PixelRay& r, double z, std::size_t o, bool entering) const {
+        const Frame& f = frame.gbuffer.frame;
+        if (z >= r.zMax) return false;
+        if (z < f.nearDepth()) return true;
+        const ObjectSurfaceHit h = surfaces.hit(f, r.x, r.y, r.column, z, o, entering);
+        SurfacePoint s;
+        s.position = h.position;
+        s.geometricNormal = dot(h.outwardNormal, r.perDepth) < 0 ? h.outwardNormal : -h.outwardNormal;
+        s.normal = surfaces.shadingNormal(h, -r.perDepth);
+        const Material& m = materials[o];
+        const double a = m.opacity;
+        r.color += shadePoint(frame, s, m, r.eye) * float(a * r.transmittance);
+        r.transmittance *= 1.0 - a;
+        return r.transmittance >= 1e-3;
+    }
+
+    // Light arriving at volume sample p: ambient plus every light's irradiance times its shadow.
+    Vec3f lightAt(const Vec3d& p) const {
+        const Scene& scene = frame.lit;
+        Vec3f light = frame.options.ambient;
+        for (std::size_t l = 0; l < scene.lights.size(); ++l) {
+            Vec3d toLight;
+            const Vec3f e = lightIrradiance(scene.lights[l], p, toLight);
+            if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
+            const Vec3f vis =
+                l < frame.shadows.size() ? shadowVisibility(frame.shadows[l], p, {0, 0, 0}) : Vec3f{1, 1, 1};
+            light += e * vis * float(1.0 / M_PI);
+        }
+        return light;
+    }
+
+    // The segment [z0, z1) inside the volume objects `inside`: sampled and composited front to back;
+    // false stops the walk.
+    bool segment(PixelRay& r, double z0, double z1, std::span<const uint8_t> inside) const {
+        if (z0 >= r.zMax) return false;
+        z1 = std::min(z1, r.zMax);
+        const double worldLength = (z1 - z0) * r.lengthPerDepth;
+        const int64_t n = std::max<int64_t>(1, int64_t(std::ceil(worldLength / step)));
+        const double dz = (z1 - z0) / double(n), dl = worldLength / double(n);
+        for (int64_t k = 0; k < n; ++k) {
+            const Vec3d p = r.eye + r.perDepth * (z0 + (double(k) + 0.5) * dz);
+            for (std::size_t o = 0; o < inside.size(); ++o) {
+                const VolumeSceneObject& obj = vs.objects[o];
+                if (!inside[o] || obj.kind != ObjectKind::Volume) continue;
+                if (emptySpace[o].empty(p)) continue; // would be transparent
+                const double value = vs.volumes[std::size_t(obj.volume)]->sample(p);
+                ++r.samples;
+                // Opacity first: the colour only where something shows.
+                const float alpha = float(obj.transfer.opacity(value));
+                if (alpha <= 0) continue;
+                const Vec3d tc = obj.transfer.color(value);
+                const Rgba c{float(tc.x), float(tc.y), float(tc.z), alpha};
+                const double a =
+                    1.0 - std::pow(1.0 - std::min(double(c.a), 1.0 - 1e-7), dl / obj.opacityLength);
+                r.color +=
+                    Vec3f{c.r, c.g, c.b} * lightAt(p) * float(a * r.transmittance * frame.options.exposure);
+                r.transmittance *= 1.0 - a;
+            }
+            if (r.transmittance < 1e-3) return false;
+        }
+        return true;
+    }
+};
+
+} // namespace
+
+void compositeVolumes(FrameState& frame) {
+    const Scene& scene = frame.lit;
     // What the camera draws here: the volume scene's objects, and the meshes of blended materials
     // (left out of the G-buffer) as translucent objects.
     const bool anyBlended = std::any_of(scene.meshes.begin(), scene.meshes.end(), [&](const SceneMesh& m) {
@@ -126,113 +254,39 @@ int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::
     std::optional<VolumeScene> merged;
     if (anyBlended) merged.emplace(volumeSceneOf(scene, SceneMeshes::Blended));
     const VolumeScene* chosen = merged ? &*merged : scene.volumeScene.get();
-    if (!chosen || chosen->objects.empty()) return 0;
-    const VolumeScene& vs = *chosen;
-    double spacing = std::numeric_limits<double>::infinity();
-    for (const VolumeSceneObject& o : vs.objects)
-        if (o.kind == ObjectKind::Volume) {
-            const Vec3d s = vs.volumes[std::size_t(o.volume)]->spacing();
-            spacing = std::min({spacing, s.x, s.y, s.z});
-        }
-    const double step = spacing * options.volumeStep;
-    // Opaque and translucent objects are shaded as meshes of their colour and opacity (a blended
-    // mesh with its own material).
-    std::vector<Material> materials(vs.objects.size());
-    for (std::size_t o = 0; o < vs.objects.size(); ++o) {
-        const VolumeSceneObject& obj = vs.objects[o];
-        materials[o].opacity = obj.kind == ObjectKind::Translucent ? obj.opacity : 1.0f;
-        if (obj.material >= 0) {
-            // The mesh's own material; the eye sees its coverage (opacity), whatever its tissue
-            // passes to the shadows.
-            materials[o] = scene.materials[std::size_t(obj.material)];
-            if (obj.kind != ObjectKind::Translucent) materials[o].opacity = 1;
-        }
-        materials[o].name = obj.name;
-        materials[o].baseColor = obj.color;
-    }
-    const ObjectSurfaces surfaces(vs);
-    const std::vector<EmptySpace> emptySpace =
-        options.skipEmptySpace ? emptySpaceOf(vs) : std::vector<EmptySpace>(vs.objects.size());
+    if (!chosen || chosen->objects.empty()) return;
+    const VolumeComposite pass(frame, *chosen);
+    const GBuffer& gbuffer = frame.gbuffer;
     const Frame& f = gbuffer.frame;
-    const FragmentLists lists = FragmentLists::build(f, surfaces.flat.mesh.view(), progress);
+    const FragmentLists lists = FragmentLists::build(f, pass.surfaces.flat.mesh.view());
     const int64_t W = f.width(), H = f.height();
     std::atomic<int64_t> samples{0};
     parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
-        SegmentWalker walker(vs, surfaces.flat.triangleLeaf);
+        SegmentWalker walker(*chosen, pass.surfaces.flat.triangleLeaf);
         int64_t local = 0;
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
                 const auto col = lists.column(x, y);
                 if (col.empty()) continue;
                 const std::size_t pixel = std::size_t(y * W + x);
-                const double zMax = gbuffer.triangle[pixel] != GBuffer::kNone
-                                        ? double(gbuffer.depth[pixel])
-                                        : std::numeric_limits<double>::infinity();
-                const Vec3d eye = f.eye();
-                const Vec3d perDepth = f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - eye;
-                const double lengthPerDepth = length(perDepth);
-                Vec3f color{0, 0, 0};
-                double transmittance = 1;
+                PixelRay r{x, y, col, f.eye(), {}, 0, 0};
+                r.perDepth = f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - r.eye;
+                r.lengthPerDepth = length(r.perDepth);
+                r.zMax = gbuffer.triangle[pixel] != GBuffer::kNone ? double(gbuffer.depth[pixel])
+                                                                   : std::numeric_limits<double>::infinity();
                 walker.walk(
                     col,
-                    [&](double z, std::size_t o, bool entering) {
-                        if (z >= zMax) return false;
-                        if (z < f.nearDepth()) return true;
-                        const ObjectSurfaceHit h = surfaces.hit(f, x, y, col, z, o, entering);
-                        SurfacePoint s;
-                        s.position = h.position;
-                        s.geometricNormal =
-                            dot(h.outwardNormal, perDepth) < 0 ? h.outwardNormal : -h.outwardNormal;
-                        s.normal = surfaces.shadingNormal(h, -perDepth);
-                        const Material& m = materials[o];
-                        const double a = m.opacity;
-                        color += shadePoint(s, m, scene, shadows, options, eye) * float(a * transmittance);
-                        transmittance *= 1.0 - a;
-                        return transmittance >= 1e-3;
-                    },
+                    [&](double z, std::size_t o, bool entering) { return pass.surface(r, z, o, entering); },
                     [&](double z0, double z1, std::span<const uint8_t> inside) {
-                        if (z0 >= zMax) return false;
-                        z1 = std::min(z1, zMax);
-                        const double worldLength = (z1 - z0) * lengthPerDepth;
-                        const int64_t n = std::max<int64_t>(1, int64_t(std::ceil(worldLength / step)));
-                        const double dz = (z1 - z0) / double(n), dl = worldLength / double(n);
-                        for (int64_t k = 0; k < n; ++k) {
-                            const Vec3d p = eye + perDepth * (z0 + (double(k) + 0.5) * dz);
-                            for (std::size_t o = 0; o < inside.size(); ++o) {
-                                const VolumeSceneObject& obj = vs.objects[o];
-                                if (!inside[o] || obj.kind != ObjectKind::Volume) continue;
-                                if (emptySpace[o].empty(p)) continue; // would be transparent
-                                const double value = vs.volumes[std::size_t(obj.volume)]->sample(p);
-                                ++local;
-                                // Opacity first: the colour only where something shows.
-                                const float alpha = float(obj.transfer.opacity(value));
-                                if (alpha <= 0) continue;
-                                const Vec3d tc = obj.transfer.color(value);
-                                const Rgba c{float(tc.x), float(tc.y), float(tc.z), alpha};
-                                const double a = 1.0 - std::pow(1.0 - std::min(double(c.a), 1.0 - 1e-7),
-                                                                dl / obj.opacityLength);
-                                Vec3f light = options.ambient;
-                                for (std::size_t l = 0; l < scene.lights.size(); ++l) {
-                                    Vec3d toLight;
-                                    const Vec3f e = lightIrradiance(scene.lights[l], p, toLight);
-                                    if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
-                                    const Vec3f vis = l < shadows.size() ? shadows[l].visibility(p, {0, 0, 0})
-                                                                         : Vec3f{1, 1, 1};
-                                    light += e * vis * float(1.0 / M_PI);
-                                }
-                                color += Vec3f{c.r, c.g, c.b} * light *
-                                         float(a * transmittance * options.exposure);
-                                transmittance *= 1.0 - a;
-                            }
-                            if (transmittance < 1e-3) return false;
-                        }
-                        return true;
+                        return pass.segment(r, z0, z1, inside);
                     });
-                if (transmittance < 1.0) shaded[pixel] = color + shaded[pixel] * float(transmittance);
+                local += r.samples;
+                if (r.transmittance < 1.0)
+                    frame.shaded[pixel] = r.color + frame.shaded[pixel] * float(r.transmittance);
             }
         samples += local;
     });
-    return samples.load();
+    frame.result.volumeSamples = samples.load();
 }
 
 } // namespace voxfx::detail

@@ -5,9 +5,9 @@
 
 #include <vector>
 
+#include "render/frame_state.hpp"
 #include "voxfx/fragment_list.hpp"
-#include "voxfx/render.hpp"
-#include "voxfx/volume_scene.hpp"
+#include "voxfx/segment_walker.hpp"
 
 namespace voxfx::detail {
 
@@ -19,13 +19,12 @@ namespace voxfx::detail {
 /// opacity. Segments inside volume objects are sampled at steps of `options.volumeStep` smallest
 /// voxel spacings and composited front to back (sample opacity 1 - (1 - α)^(dl / opacityLength),
 /// colour = transfer colour × (ambient + Σ lights irradiance × shadow visibility / π)). The walk
-/// stops when the accumulated opacity reaches 0.999, and the result is blended over `shaded`
+/// stops when the accumulated opacity reaches 0.999, and the result is blended over frame.shaded
 /// (row-major, y up). The meshes of blended materials (Material::blend), which the G-buffer leaves
-/// out, are walked here too, as translucent objects shaded with their own material. Returns the
-/// number of volume samples taken. Nothing happens when the scene has neither volume scene objects
-/// nor blended meshes.
-int64_t compositeVolumes(const GBuffer& gbuffer, const Scene& scene, const std::vector<LightShadow>& shadows,
-                         const RenderOptions& options, std::vector<Vec3f>& shaded, Progress* progress);
+/// out, are walked here too, as translucent objects shaded with their own material. Records the
+/// number of volume samples taken in frame.result. Nothing happens when the scene has neither volume
+/// scene objects nor blended meshes.
+void compositeVolumes(FrameState& frame);
 
 /// A crossing of an opaque or translucent object's boundary along a camera ray.
 struct ObjectSurfaceHit {

@@ -1,6 +1,7 @@
-// voxfx — glass paths: the exact reference on the triangles (Embree) and the voxel march through an
-// attribute grid (CHANG §4.1.1 multiple refraction; Wyman's two-surface refraction as its baseline).
-// See voxfx/glass.hpp for the model both follow.
+// voxfx — the voxel glass methods: the march through an attribute grid (CHANG §4.1.1 multiple
+// refraction; Wyman's two-surface refraction as its baseline), voxfx/voxel_glass.hpp.
+#include "voxfx/voxel_glass.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -13,118 +14,46 @@ namespace voxfx {
 
 namespace {
 
-// A path that stopped after maxEvents: it leaves along its current direction with what it carries
-// (black pixels where a ray is trapped by total internal reflection would be a worse guess).
-void glassTruncate(GlassPath& p, const Vec3d& at, const Vec3d& dir, const Vec3f& throughput) {
-    p.truncated = true;
-    p.exitPoint = at;
-    p.exitDir = dir;
-    p.throughput = throughput;
+template <class O> std::vector<OptionField<O>> voxelGlassFields() {
+    return {
+        numberOption<O, &O::gridResolution>("glassGrid", "glass voxels along the glass's longest side", 2,
+                                            4096),
+        nameOption<O, parseCoverage, optionName<Coverage>, &O::coverage>(
+            "glassCoverage", "glass voxels: every voxel a triangle touches, or one per column",
+            "conservative | center"),
+        numberOption<O, &O::angleThreshold>(
+            "angleThreshold", "glass: radians; a refraction this close to the last normal is skipped", 0,
+            3.2),
+        numberOption<O, &O::maxEvents>("maxEvents", "glass: refractions and reflections followed per ray", 1,
+                                       1024),
+        flagOption<O, &O::sceneBehind>(
+            "sceneBehind", "glass: the light leaving it comes from the opaque scene (off: the environment)")};
 }
 
 } // namespace
 
-GlassMedium glassMedium(const Material& m) {
-    GlassMedium g;
-    g.ior = std::max(1.0f, m.ior);
-    g.sigma = attenuationCoefficient(m);
-    g.tint = m.baseColor;
-    return g;
+std::span<const OptionField<MultiGlassOptions>> MultiGlassOptions::fields() {
+    static const std::vector<OptionField<MultiGlassOptions>> table = voxelGlassFields<MultiGlassOptions>();
+    return table;
 }
 
-// ---- exact --------------------------------------------------------------------------------------
-
-ExactGlass::ExactGlass(const MeshView& mesh, std::vector<Vec3f> vertexNormals,
-                       std::vector<uint32_t> triangleMedium, std::vector<GlassMedium> media)
-    : normals_(std::move(vertexNormals)), medium_(std::move(triangleMedium)), media_(std::move(media)) {
-    validateMesh(mesh, "glass mesh");
-    if (medium_.size() != mesh.triangleCount) fail("exact glass: one medium per triangle expected");
-    if (!normals_.empty() && normals_.size() != mesh.vertexCount)
-        fail("exact glass: one normal per vertex expected");
-    for (const uint32_t m : medium_)
-        if (m >= media_.size()) fail("exact glass: medium index ", m, " out of range");
-    mesh_.positions.resize(mesh.vertexCount);
-    for (size_t i = 0; i < mesh.vertexCount; ++i) mesh_.positions[i] = Vec3f(mesh.vertex(i));
-    mesh_.indices.assign(mesh.indices, mesh.indices + 3 * mesh.triangleCount);
-    const Box3d box = computeBounds(mesh);
-    epsilon_ = box.empty() ? 1e-6 : std::max(1e-9, 1e-5 * length(box.extent()));
-    tracer_ = std::make_unique<TriangleTracer>(mesh_.view());
+std::span<const OptionField<TwoSurfaceGlassOptions>> TwoSurfaceGlassOptions::fields() {
+    static const std::vector<OptionField<TwoSurfaceGlassOptions>> table =
+        voxelGlassFields<TwoSurfaceGlassOptions>();
+    return table;
 }
 
-GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents) const {
-    GlassPath p;
-    Vec3d o = origin, d = normalize(dir);
-    Vec3f thr{1, 1, 1};
-    bool inside = false;
-    uint32_t cur = 0;
-    int crossings = 0; // every crossing, including ignored ones: bounds the loop
-    while (true) {
-        const TriangleTracer::Hit h =
-            tracer_->intersect(o, d, epsilon_, std::numeric_limits<double>::infinity());
-        if (!h.hit) {
-            p.exitPoint = o;
-            p.exitDir = d;
-            p.throughput = thr;
-            return p;
-        }
-        const size_t t = h.triangle;
-        const uint32_t ia = mesh_.indices[3 * t], ib = mesh_.indices[3 * t + 1],
-                       ic = mesh_.indices[3 * t + 2];
-        const Vec3d a(mesh_.positions[ia]), b(mesh_.positions[ib]), c(mesh_.positions[ic]);
-        const Vec3d ng = normalize(cross(b - a, c - a)); // outward
-        Vec3d n = ng;
-        if (!normals_.empty()) {
-            const Vec3d ns = normalize(Vec3d(normals_[ia]) * (1 - h.u - h.v) + Vec3d(normals_[ib]) * h.u +
-                                       Vec3d(normals_[ic]) * h.v);
-            if (length(ns) > 0) n = dot(ns, ng) < 0 ? -ns : ns;
-        }
-        const Vec3d x = o + d * h.t;
-        if (inside) thr = thr * beerLambert(media_[cur].sigma, h.t);
-        o = x;
-        if (++crossings > 4 * maxEvents + 8 || p.events >= maxEvents) {
-            if (!p.hit) return p;
-            glassTruncate(p, x, d, thr);
-            return p;
-        }
-        const bool entering = dot(d, ng) < 0;
-        if (entering) {
-            // Facing the ray: the shading normal unless it faces away (grazing), then the face's.
-            const Vec3d nf = dot(d, n) < 0 ? n : ng;
-            const GlassMedium& m = media_[medium_[t]];
-            const double F = fresnelDielectric(-dot(d, nf), 1.0, m.ior);
-            if (!p.hit) {
-                p.hit = true;
-                p.reflectDir = reflectDirection(d, nf);
-                p.reflectance = float(F);
-            }
-            Vec3d r;
-            if (!refractDirection(d, nf, 1.0 / m.ior, r))
-                r = reflectDirection(d, nf); // cannot happen for ior>=1
-            thr = thr * m.tint * float(1 - F);
-            d = r;
-            inside = true;
-            cur = medium_[t];
-        } else {
-            if (!inside) continue; // a back face seen from outside (open mesh): pass through
-            const Vec3d nf = dot(d, n) > 0 ? -n : -ng; // facing the ray, into the glass
-            const GlassMedium& m = media_[cur];
-            Vec3d r;
-            if (refractDirection(d, nf, m.ior, r)) {
-                thr = thr * float(1 - fresnelDielectric(-dot(d, nf), m.ior, 1.0));
-                d = r;
-                inside = false;
-            } else {
-                d = reflectDirection(d, nf); // total internal reflection
-            }
-        }
-        ++p.events;
-    }
+template <class O, bool kTwoSurface>
+VoxelGlassMethod<O, kTwoSurface> VoxelGlassMethod<O, kTwoSurface>::build(const GlassInput& input,
+                                                                         const O& options) {
+    return VoxelGlassMethod(VoxelGlass(input.mesh, input.triangleMedium, input.media, options), options);
 }
 
-// ---- voxels -------------------------------------------------------------------------------------
+template class VoxelGlassMethod<MultiGlassOptions, false>;
+template class VoxelGlassMethod<TwoSurfaceGlassOptions, true>;
 
 VoxelGlass::VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMedium,
-                       std::vector<GlassMedium> media, const GlassOptions& options)
+                       std::vector<GlassMedium> media, const VoxelGlassOptions& options)
     : media_(std::move(media)) {
     validateMesh(mesh, "glass mesh");
     if (triangleMedium.size() != mesh.triangleCount) fail("voxel glass: one medium per triangle expected");
@@ -155,7 +84,7 @@ VoxelGlass::VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMediu
 }
 
 GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t medium, const Vec3d& dir,
-                            const GlassOptions& options) const {
+                            const VoxelGlassOptions& options, bool twoSurface) const {
     GlassPath p;
     p.hit = true;
     Vec3d d = normalize(dir);
@@ -196,7 +125,7 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                     length(n) > 0 && (inside ? dn > 0 : dn < 0) && dot(n, lastNormal) < cosThreshold;
                 if (candidate) {
                     if (p.events >= options.maxEvents) {
-                        glassTruncate(p, origin_ + (g + d * tEnter) * voxel_, d, thr);
+                        p.truncate(origin_ + (g + d * tEnter) * voxel_, d, thr);
                         return p;
                     }
                     const double tEvent = 0.5 * (tEnter + tLeave);
@@ -212,7 +141,7 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                         } else {
                             d = reflectDirection(d, nf);
                         }
-                        if (options.kind == GlassKind::TwoSurface) stop = true; // Wyman: one back surface
+                        if (twoSurface) stop = true; // Wyman: one back surface
                     } else {
                         const uint32_t mid = grid_.material.empty() ? medium : grid_.material[size_t(i)];
                         cur = &media_[std::min<size_t>(mid, media_.size() - 1)];

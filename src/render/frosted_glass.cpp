@@ -1,7 +1,11 @@
 // voxfx — ED06 §3.3 frosted glass: front- and back-face slicemaps from the eye, the per-column count
-// of inside cells, and the thickness driving a refraction offset, attenuation and blur.
+// of inside cells, and the thickness driving a refraction offset, attenuation and blur
+// (voxfx/frosted_glass.hpp).
+#include "voxfx/frosted_glass.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "voxfx/error.hpp"
 #include "voxfx/glass.hpp"
@@ -9,9 +13,27 @@
 
 namespace voxfx {
 
+std::span<const OptionField<FrostedGlassOptions>> FrostedGlassOptions::fields() {
+    using O = FrostedGlassOptions;
+    static const std::vector<OptionField<O>> table = {
+        numberOption<O, &O::gridResolution>("glassGrid", "frosted glass: slicemap columns across and slices",
+                                            2, 4096),
+        numberOption<O, &O::blur>(
+            "frostedBlur", "frosted glass: blur cone (radians) through a thickness of the glass's diagonal",
+            0, 3.2),
+        flagOption<O, &O::sceneBehind>(
+            "sceneBehind", "glass: the light leaving it comes from the opaque scene (off: the environment)")};
+    return table;
+}
+
+FrostedGlass FrostedGlass::build(const GlassInput& input, const FrostedGlassOptions& options) {
+    return FrostedGlass(input.mesh, input.triangleMedium, input.media, input.camera, options);
+}
+
 FrostedGlass::FrostedGlass(const MeshView& mesh, std::vector<uint32_t> triangleMedium,
-                           std::vector<GlassMedium> media, const Frame& camera, const GlassOptions& options)
-    : media_(std::move(media)) {
+                           std::vector<GlassMedium> media, const Frame& camera,
+                           const FrostedGlassOptions& options)
+    : media_(std::move(media)), blur_(options.blur) {
     validateMesh(mesh, "glass mesh");
     if (!camera.isPerspective()) fail("frosted glass needs the camera's perspective frame");
     if (triangleMedium.size() != mesh.triangleCount) fail("frosted glass: one medium per triangle expected");
@@ -86,8 +108,8 @@ double FrostedGlass::thickness(const Vec3d& p) const {
     return double(insideCells(p)) * slice / std::max(1e-6, dot(ray, frame_.forward()));
 }
 
-GlassPath FrostedGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t medium, const Vec3d& dir,
-                              const GlassOptions& options) const {
+GlassPath FrostedGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t medium,
+                              const Vec3d& dir) const {
     GlassPath p;
     p.hit = true;
     const Vec3d d = normalize(dir);
@@ -105,7 +127,7 @@ GlassPath FrostedGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t 
     p.exitPoint = entry + t * L;
     p.exitDir = t;
     p.throughput = m.tint * beerLambert(m.sigma, L) * float((1 - F) * (1 - F));
-    p.blurAngle = options.frostedBlur * std::min(1.0, L / diagonal_);
+    p.blurAngle = blur_ * std::min(1.0, L / diagonal_);
     p.events = 2;
     return p;
 }

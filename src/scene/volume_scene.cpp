@@ -1,12 +1,11 @@
-// voxfx — mixed polygon and volume scenes: the Boolean shape graph, its validation, flattening of
-// the leaves for the rasterizer, and the per-object flags of the segment walker (volume_scene.hpp).
+// voxfx — mixed polygon and volume scenes: the Boolean shape graph, its validation, and the
+// renderer's scene as a volume scene (volume_scene.hpp).
 #include "voxfx/volume_scene.hpp"
 
 #include <algorithm>
 #include <cmath>
 
 #include "voxfx/error.hpp"
-#include "voxfx/parallel.hpp"
 
 namespace voxfx {
 
@@ -36,63 +35,6 @@ int32_t VolumeScene::addNode(ShapeOp op, int32_t a, int32_t b) {
 int32_t VolumeScene::addObject(VolumeSceneObject object) {
     objects.push_back(std::move(object));
     return int32_t(objects.size() - 1);
-}
-
-EmptySpace::EmptySpace(const Volume& volume, const TransferFunction& transfer) : place_(volume.view()) {
-    place_.values = nullptr;
-    const Vec3i d = volume.dims();
-    const int64_t n[3] = {d.x, d.y, d.z};
-    for (int a = 0; a < 3; ++a) {
-        voxels_[a] = n[a];
-        bricks_[a] = (n[a] + kBrick - 1) / kBrick;
-    }
-    outsideEmpty_ = transfer.opacity(0.0) <= 0;
-    if (volume.voxelCount() == 0) {
-        bricks_[0] = bricks_[1] = bricks_[2] = 0;
-        return;
-    }
-    const int64_t bx = bricks_[0], by = bricks_[1], bz = bricks_[2];
-    // A sample in brick b (continuous voxel coordinate u in [b B, (b + 1) B]) interpolates voxels
-    // floor(u - 0.5) and the next one: voxels b B - 1 .. (b + 1) B, clamped to the volume.
-    empty_.assign(std::size_t(bx * by * bz), 0);
-    parallelFor(0, bz, 1, [&](int64_t k0, int64_t k1) {
-        for (int64_t kb = k0; kb < k1; ++kb)
-            for (int64_t jb = 0; jb < by; ++jb)
-                for (int64_t ib = 0; ib < bx; ++ib) {
-                    float mn = std::numeric_limits<float>::infinity(), mx = -mn;
-                    const int64_t b[3] = {ib, jb, kb};
-                    int64_t first[3], last[3];
-                    for (int a = 0; a < 3; ++a) {
-                        first[a] = std::max<int64_t>(b[a] * kBrick - 1, 0);
-                        last[a] = std::min((b[a] + 1) * kBrick, n[a] - 1);
-                    }
-                    for (int64_t k = first[2]; k <= last[2]; ++k)
-                        for (int64_t j = first[1]; j <= last[1]; ++j)
-                            for (int64_t i = first[0]; i <= last[0]; ++i) {
-                                const float v = volume.at(i, j, k);
-                                mn = std::min(mn, v);
-                                mx = std::max(mx, v);
-                            }
-                    empty_[std::size_t(ib + bx * (jb + by * kb))] =
-                        transfer.maxOpacity(double(mn), double(mx)) <= 0;
-                }
-    });
-}
-
-std::vector<EmptySpace> emptySpaceOf(const VolumeScene& scene) {
-    std::vector<EmptySpace> out(scene.objects.size());
-    for (std::size_t o = 0; o < scene.objects.size(); ++o) {
-        const VolumeSceneObject& obj = scene.objects[o];
-        if (obj.kind == ObjectKind::Volume && obj.volume >= 0 &&
-            std::size_t(obj.volume) < scene.volumes.size() && scene.volumes[std::size_t(obj.volume)])
-            out[o] = EmptySpace(*scene.volumes[std::size_t(obj.volume)], obj.transfer);
-    }
-    return out;
-}
-
-double EmptySpace::emptyFraction() const {
-    if (empty_.empty()) return 0;
-    return double(std::count(empty_.begin(), empty_.end(), uint8_t(1))) / double(empty_.size());
 }
 
 Mesh boxMesh(const Box3d& box) {
@@ -136,19 +78,15 @@ bool VolumeScene::evalShape(int32_t node, std::span<const uint8_t> leafInside) c
     return false;
 }
 
-namespace {
-
-std::vector<uint8_t> volumeSceneUsedLeaves(const VolumeScene& s, bool castersOnly) {
-    std::vector<uint8_t> used(s.leaves.size(), 0);
-    for (const VolumeSceneObject& o : s.objects)
-        if (!castersOnly || o.castsShadow) markShapeLeaves(s, o.shape, used);
+std::vector<uint8_t> VolumeScene::usedLeaves(bool castersOnly) const {
+    std::vector<uint8_t> used(leaves.size(), 0);
+    for (const VolumeSceneObject& o : objects)
+        if (!castersOnly || o.castsShadow) markShapeLeaves(*this, o.shape, used);
     return used;
 }
 
-} // namespace
-
 Box3d VolumeScene::bounds(bool castersOnly) const {
-    const std::vector<uint8_t> used = volumeSceneUsedLeaves(*this, castersOnly);
+    const std::vector<uint8_t> used = usedLeaves(castersOnly);
     Box3d b;
     for (std::size_t i = 0; i < leaves.size(); ++i)
         if (used[i]) b.extend(computeBounds(leaves[i].view()));
@@ -193,32 +131,48 @@ void markShapeLeaves(const VolumeScene& s, int32_t node, std::vector<uint8_t>& u
     markShapeLeaves(s, n.b, used);
 }
 
-FlatLeaves flattenLeaves(const VolumeScene& scene, bool castersOnly) {
-    const std::vector<uint8_t> used = volumeSceneUsedLeaves(scene, castersOnly);
-    FlatLeaves f;
-    for (std::size_t i = 0; i < scene.leaves.size(); ++i) {
-        if (!used[i]) continue;
-        const Mesh& m = scene.leaves[i];
-        const auto base = uint32_t(f.mesh.positions.size());
-        f.mesh.positions.insert(f.mesh.positions.end(), m.positions.begin(), m.positions.end());
-        for (const uint32_t v : m.indices) f.mesh.indices.push_back(base + v);
-        f.triangleLeaf.insert(f.triangleLeaf.end(), m.triangleCount(), uint32_t(i));
+VolumeScene volumeSceneOf(const Scene& scene, SceneMeshes meshes) {
+    VolumeScene v;
+    for (const SceneMesh& m : scene.meshes) {
+        const Material& mat = scene.materials[m.material];
+        if (meshes == SceneMeshes::Blended && !mat.blend) continue;
+        VolumeSceneObject o;
+        o.name = m.name;
+        o.material = int32_t(m.material);
+        o.shape = v.addLeaf(m.mesh);
+        o.castsShadow = m.castsShadow;
+        o.color = mat.baseColor;
+        if (mat.isOpaque()) {
+            o.kind = ObjectKind::Opaque;
+        } else {
+            const Vec3f t = mat.shadowCrossingTransmittance();
+            o.kind = ObjectKind::Translucent;
+            o.opacity = std::clamp(1.0f - (0.2126f * t.x + 0.7152f * t.y + 0.0722f * t.z), 0.0f, 1.0f);
+        }
+        v.addObject(std::move(o));
     }
-    return f;
-}
-
-SegmentWalker::SegmentWalker(const VolumeScene& scene, const std::vector<uint32_t>& triangleLeaf,
-                             bool castersOnly)
-    : scene_(&scene), triangleLeaf_(&triangleLeaf), leafInside_(scene.leaves.size(), 0),
-      objectInside_(scene.objects.size(), 0), previous_(scene.objects.size(), 0),
-      active_(scene.objects.size(), 1) {
-    if (castersOnly)
-        for (std::size_t o = 0; o < active_.size(); ++o) active_[o] = scene.objects[o].castsShadow ? 1 : 0;
-}
-
-void SegmentWalker::updateObjects() {
-    for (std::size_t o = 0; o < objectInside_.size(); ++o)
-        if (active_[o]) objectInside_[o] = scene_->evalShape(scene_->objects[o].shape, leafInside_) ? 1 : 0;
+    if (scene.volumeScene) {
+        const VolumeScene& s = *scene.volumeScene;
+        const auto leafBase = int32_t(v.leaves.size()), nodeBase = int32_t(v.nodes.size()),
+                   volumeBase = int32_t(v.volumes.size());
+        v.leaves.insert(v.leaves.end(), s.leaves.begin(), s.leaves.end());
+        for (ShapeNode n : s.nodes) {
+            if (n.op == ShapeOp::Leaf) {
+                n.leaf += leafBase;
+            } else {
+                n.a += nodeBase;
+                n.b += nodeBase;
+            }
+            v.nodes.push_back(n);
+        }
+        v.volumes.insert(v.volumes.end(), s.volumes.begin(), s.volumes.end());
+        for (VolumeSceneObject o : s.objects) {
+            o.shape += nodeBase;
+            if (o.volume >= 0) o.volume += volumeBase;
+            v.objects.push_back(std::move(o));
+        }
+    }
+    return v;
 }
 
 } // namespace voxfx

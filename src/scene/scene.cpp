@@ -1,11 +1,9 @@
 // voxfx — the scene model: materials, validation and the default camera. Reading and writing
-// scene files lives in io/scene_io.cpp.
+// scene files lives in io/scene_io.cpp (voxfx/scene_io.hpp).
 #include "voxfx/scene.hpp"
 
 #include <algorithm>
 #include <cmath>
-
-#include "voxfx/glass.hpp"
 
 namespace voxfx {
 
@@ -19,6 +17,14 @@ Vec3f Material::crossingTransmittance() const {
     for (int c = 0; c < 3; ++c)
         out[c] = std::clamp((1 - a) + a * t * std::clamp(baseColor[c], 0.0f, 1.0f), 0.0f, 1.0f);
     return out;
+}
+
+Vec3f attenuationCoefficient(const Material& m) {
+    if (!std::isfinite(m.attenuationDistance) || !(m.attenuationDistance > 0)) return {};
+    Vec3f s;
+    for (int c = 0; c < 3; ++c)
+        s[c] = -std::log(std::clamp(m.attenuationColor[c], 1e-6f, 1.0f)) / m.attenuationDistance;
+    return s;
 }
 
 bool Material::isGlass() const { return transmission > 0 && opacity >= 1; }
@@ -124,6 +130,17 @@ Camera defaultCamera(const Scene& scene, double aspect) {
     c.farDepth = distance + 2 * radius;
     c.name = "default";
     return c;
+}
+
+Camera sceneCamera(const Scene& scene, int index, double aspect) {
+    if (scene.cameras.empty()) {
+        if (index != 0) fail(scene.source, ": the scene has no cameras (camera ", index, ")");
+        return defaultCamera(scene, aspect);
+    }
+    if (index < 0 || std::size_t(index) >= scene.cameras.size())
+        fail("camera ", index, ": the scene has ", scene.cameras.size(), " cameras (0 .. ",
+             scene.cameras.size() - 1, ")");
+    return scene.cameras[std::size_t(index)];
 }
 
 } // namespace voxfx

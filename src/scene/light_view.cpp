@@ -3,10 +3,10 @@
 //
 // A directional light's frame is an oriented orthographic frame with basis (right, up, light
 // direction), fitted to the casters' bounds in those local coordinates.
+#include "voxfx/light_view.hpp"
+
 #include <algorithm>
 #include <cmath>
-
-#include "voxfx/shadow.hpp"
 
 namespace voxfx {
 

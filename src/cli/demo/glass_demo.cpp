@@ -3,10 +3,10 @@
 #include <cmath>
 #include <filesystem>
 
-#include "render/demo_scenes.hpp"
+#include "demo/demo_scenes.hpp"
 #include "voxfx/error.hpp"
 
-namespace voxfx {
+namespace voxfx::demo {
 
 namespace {
 
@@ -73,12 +73,10 @@ void glassDemoPlace(Mesh& mesh, double height, double x, double y0, double z) {
 
 } // namespace
 
-namespace detail {
-
-Scene makeGlassScene(const DemoMeshes& meshes) {
-    std::optional<Mesh> bunny = meshes.mesh("bunny00.off");
+Scene makeGlassScene(const std::string& meshesDir) {
+    std::optional<Mesh> bunny = loadDemoMesh(meshesDir, "bunny00.off");
     if (!bunny)
-        fail("demo 'glass': ", (std::filesystem::path(meshes.folder) / "bunny00.off").string(), " not found");
+        fail("demo 'glass': ", (std::filesystem::path(meshesDir) / "bunny00.off").string(), " not found");
     Scene scene;
     scene.source = "demo:glass";
     // A checkered ground (the "texture" the glass distorts): 16 x 16 tiles of two materials.
@@ -152,5 +150,4 @@ Scene makeGlassScene(const DemoMeshes& meshes) {
     return scene;
 }
 
-} // namespace detail
-} // namespace voxfx
+} // namespace voxfx::demo

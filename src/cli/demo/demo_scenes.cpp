@@ -3,17 +3,26 @@
 //
 // World is y-up (as glTF). Leaves are double-sided quads (two triangles) whose material lets part of
 // the light through (opacity < 1, transmission > 0), in colour groups: one shadow channel each.
-#include "render/demo_scenes.hpp"
+#include "demo/demo_scenes.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <initializer_list>
+#include <optional>
 #include <random>
 
-#include "voxfx/demo.hpp"
+#include "voxfx/error.hpp"
+#include "voxfx/mesh_io.hpp"
+#include "voxfx/volume_scene.hpp"
 
-namespace voxfx {
+namespace voxfx::demo {
+
+std::optional<Mesh> loadDemoMesh(const std::string& folder, const std::string& file) {
+    const std::string path = (std::filesystem::path(folder) / file).string();
+    if (!std::filesystem::exists(path)) return std::nullopt;
+    return loadMesh(path);
+}
 
 namespace {
 
@@ -168,7 +177,7 @@ Scene groundedScene(const char* source, double groundHalfSize, const char* groun
 void appendPosts(Mesh& m, std::initializer_list<double> xs, std::initializer_list<double> zs, double half,
                  double height) {
     for (const double x : xs)
-        for (const double z : zs) detail::appendBox(m, {x - half, 0, z - half}, {x + half, height, z + half});
+        for (const double z : zs) appendBox(m, {x - half, 0, z - half}, {x + half, height, z + half});
 }
 
 Light directionalLight(const char* name, const Vec3d& direction, Vec3f colour, float intensity) {
@@ -231,23 +240,17 @@ Scene makeTreeScene(const TreeOptions& o) {
     return withView(std::move(scene), {-2.2, 1.9, 6.2}, {0.8, 1.55, 0.2}, 50);
 }
 
-namespace detail {
-
 void appendBox(Mesh& m, const Vec3d& lo, const Vec3d& hi) {
+    const Mesh box = boxMesh({lo, hi});
     const auto base = uint32_t(m.positions.size());
-    for (int k = 0; k < 8; ++k)
-        m.positions.push_back(
-            Vec3f(Vec3d{(k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z}));
-    static const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                         {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    for (const auto& q : quads)
-        for (const uint32_t t : {q[0], q[1], q[2], q[0], q[2], q[3]}) m.indices.push_back(base + t);
+    m.positions.insert(m.positions.end(), box.positions.begin(), box.positions.end());
+    for (const uint32_t i : box.indices) m.indices.push_back(base + i);
 }
 
-Scene makeBunnyScene(const DemoMeshes& meshes, int leaves, uint64_t seed) {
-    std::optional<Mesh> bunny = meshes.mesh("bunny00.off");
+Scene makeBunnyScene(const std::string& meshesDir, int leaves, uint64_t seed) {
+    std::optional<Mesh> bunny = loadDemoMesh(meshesDir, "bunny00.off");
     if (!bunny)
-        fail("demo 'bunny': ", (std::filesystem::path(meshes.folder) / "bunny00.off").string(), " not found");
+        fail("demo 'bunny': ", (std::filesystem::path(meshesDir) / "bunny00.off").string(), " not found");
     Scene scene = groundedScene("demo:bunny", 30.0, "ground", {0.45f, 0.42f, 0.36f});
     Rng rng(seed);
     const uint32_t fur = scene.addMaterial(solid("bunny", {0.75f, 0.72f, 0.66f}, 0.25f, 40));
@@ -277,7 +280,7 @@ Scene makeBunnyScene(const DemoMeshes& meshes, int leaves, uint64_t seed) {
     return withView(std::move(scene), {-1.0, 1.3, 6.4}, {0.2, 1.15, 0}, 46);
 }
 
-Scene makeCgalScene(const DemoMeshes& meshes, int leaves, uint64_t seed) {
+Scene makeCgalScene(const std::string& meshesDir, int leaves, uint64_t seed) {
     Scene scene = groundedScene("demo:cgal", 30.0, "ground", {0.42f, 0.40f, 0.34f});
     Rng rng(seed);
     struct Item {
@@ -292,9 +295,9 @@ Scene makeCgalScene(const DemoMeshes& meshes, int leaves, uint64_t seed) {
     int loaded = 0;
     std::string lastError;
     for (const Item& it : items) {
-        std::optional<Mesh> mesh = meshes.mesh(it.file);
+        std::optional<Mesh> mesh = loadDemoMesh(meshesDir, it.file);
         if (!mesh) {
-            scene.warnings.push_back("missing " + (std::filesystem::path(meshes.folder) / it.file).string());
+            scene.warnings.push_back("missing " + (std::filesystem::path(meshesDir) / it.file).string());
             continue;
         }
         const uint32_t mat = scene.addMaterial(solid(it.name, it.colour, 0.2f, 30));
@@ -302,8 +305,7 @@ Scene makeCgalScene(const DemoMeshes& meshes, int leaves, uint64_t seed) {
             placedMesh(std::move(*mesh), it.name, it.height, it.x, it.z, it.rotateX, it.rotateY, mat));
         ++loaded;
     }
-    if (loaded == 0)
-        fail("demo 'cgal': none of elephant.off, armadillo.off, camel.off found in ", meshes.folder);
+    if (loaded == 0) fail("demo 'cgal': none of elephant.off, armadillo.off, camel.off found in ", meshesDir);
     // A pergola: posts, beams and a roof of leaves.
     SceneMesh wood;
     wood.name = "Pergola";
@@ -330,8 +332,14 @@ Scene makeCgalScene(const DemoMeshes& meshes, int leaves, uint64_t seed) {
     return withView(std::move(scene), {0.4, 2.2, 7.6}, {0.1, 1.0, 0}, 50);
 }
 
-} // namespace detail
-
 std::vector<std::string> demoSceneNames() { return {"tree", "bunny", "cgal", "glass"}; }
 
-} // namespace voxfx
+Scene makeDemoScene(const std::string& name, const std::string& meshesDir) {
+    if (name == "tree") return makeTreeScene();
+    if (name == "bunny") return makeBunnyScene(meshesDir);
+    if (name == "cgal") return makeCgalScene(meshesDir);
+    if (name == "glass") return makeGlassScene(meshesDir);
+    fail("unknown demo scene '", name, "' (allowed: tree, bunny, cgal, glass)");
+}
+
+} // namespace voxfx::demo

@@ -1,4 +1,6 @@
-// voxfx — procedural demo scenes for shadows through foliage (built in memory; writeGltf saves them).
+// voxfx demo scenes — the procedural scenes `voxfx demo` renders (and the tests and benchmarks that
+// render them), built in memory through the public API (writeGltf saves them). Not part of the
+// library: the CLI, the tests and the benchmarks link them (target voxfx_demo_scenes).
 //
 //   tree    a procedural tree: an opaque trunk with branches, thousands of leaf quads in colour
 //           groups (partial occluders), a ground plane that only receives, a sun (directional).
@@ -8,18 +10,19 @@
 //   glass   glass objects (the bunny, a torus knot, two coloured glasses) over a checkered ground.
 // Every scene has one camera. Generation is deterministic (fixed seeds).
 //
-// EXPERIMENTAL until the renderer issue closes.
 // Thread-safety: makeDemoScene may run concurrently (it only reads mesh files and builds a new
 // Scene); it runs on the calling thread.
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "voxfx/mesh.hpp"
 #include "voxfx/scene.hpp"
 
-namespace voxfx {
+namespace voxfx::demo {
 
 struct TreeOptions {
     int leaves = 3000;        ///< leaf quads (2 triangles each)
@@ -46,9 +49,15 @@ Scene makeCgalScene(const std::string& meshesDir, int leaves = 5000, uint64_t se
 /// self-occluding green glass torus knot and a block of amber and blue glass over a checkered ground.
 Scene makeGlassScene(const std::string& meshesDir);
 
+/// The mesh folder/file (loadMesh), or nullopt when the file does not exist.
+std::optional<Mesh> loadDemoMesh(const std::string& folder, const std::string& file);
+
+/// Appends the axis-aligned box [lo, hi] to m: 8 corners, 12 outward-facing triangles.
+void appendBox(Mesh& m, const Vec3d& lo, const Vec3d& hi);
+
 /// "tree", "bunny", "cgal", "glass".
 std::vector<std::string> demoSceneNames();
 /// makeTreeScene / makeBunnyScene / makeCgalScene / makeGlassScene by name; voxfx::Error for an unknown name.
 Scene makeDemoScene(const std::string& name, const std::string& meshesDir);
 
-} // namespace voxfx
+} // namespace voxfx::demo

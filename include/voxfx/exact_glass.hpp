@@ -1,0 +1,59 @@
+// voxfx — exact glass: ray tracing on the actual triangles (Embree 3, voxfx/triangle_tracer.hpp),
+// the reference for the voxel methods. Glass method "exact" (voxfx/glass.hpp).
+//
+// Snell's law at every crossing with the interpolated vertex normal, total internal reflection
+// where Snell has no solution, (1 - F) at every refraction, Beer–Lambert exp(-sigma * length) over
+// the true path length inside, until the ray leaves every object (or maxEvents: it then leaves
+// along its current direction); then the environment. A back face seen from outside (an open
+// mesh) is passed through.
+//
+// Thread-safety: read-only after construction; trace may run from any number of threads.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "voxfx/glass_optics.hpp"
+#include "voxfx/mesh.hpp"
+#include "voxfx/options.hpp"
+
+namespace voxfx {
+
+class TriangleTracer;
+struct GlassInput;
+
+struct ExactGlassOptions : GlassPathOptions {
+    static constexpr std::string_view kName = "exact";
+    static constexpr std::string_view kSummary =
+        "ray tracing on the triangles (Embree): Snell, Fresnel, total internal reflection, "
+        "Beer-Lambert over true lengths; the reference";
+    /// maxEvents, sceneBehind.
+    static std::span<const OptionField<ExactGlassOptions>> fields();
+};
+
+class ExactGlass {
+public:
+    using Options = ExactGlassOptions;
+    /// `mesh`: the glass triangles (world space, outward CCW); `vertexNormals`: one unit normal per
+    /// vertex for smooth shading, or empty (face normals); `triangleMedium`: index into `media` per
+    /// triangle. Throws voxfx::Error for mismatched sizes or when the Embree module is missing.
+    ExactGlass(const MeshView& mesh, std::vector<Vec3f> vertexNormals, std::vector<uint32_t> triangleMedium,
+               std::vector<GlassMedium> media);
+    static ExactGlass build(const GlassInput& input, const ExactGlassOptions& options);
+    /// Traces origin + t * dir (unit) through the glass (see the file comment).
+    GlassPath trace(const Vec3d& origin, const Vec3d& dir, int maxEvents) const;
+    /// The camera ray of `hit`, from the eye, with the options' maxEvents.
+    GlassPath trace(const GlassHit& hit) const { return trace(hit.eye, hit.dir, maxEvents_); }
+
+private:
+    std::vector<Vec3f> normals_;
+    std::vector<uint32_t> medium_;
+    std::vector<GlassMedium> media_;
+    std::shared_ptr<const TriangleTracer> tracer_; ///< the glass triangles
+    int maxEvents_ = ExactGlassOptions{}.maxEvents;
+};
+
+} // namespace voxfx

@@ -1,0 +1,89 @@
+// voxfx — the exact reference for shadows through partial occluders: the product of the crossing
+// transmittances of every caster triangle between a point and the light, ray traced on the actual
+// triangles with Embree (voxfx/triangle_tracer.hpp). Shadow technique "exact" (voxfx/shadow.hpp).
+//
+// Glass (Material::isGlass: transmission > 0, opacity 1) is a volume, not a sheet: each crossing
+// passes the Fresnel-transmitted fraction 1 - F (exact unpolarized dielectric F at the shadow ray's
+// angle to the face, taken from the outside: by reciprocity the same fraction leaves a parallel
+// slab as enters it), the tint (the material's crossing transmittance) applies once where the ray
+// enters, and Beer–Lambert exp(-sigma * length) applies over the straight length between entering
+// and leaving (a front face, CCW towards the ray, enters). The shadow ray is not bent: light focused
+// or spread by refraction (caustics) is not modelled. The ray starts 10 epsilons off the surface
+// along its normal (epsilon: 1e-5 of the casters' diagonal).
+//
+// Thread-safety: read-only after construction; transmittance and visibility may run from any
+// number of threads.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "voxfx/mesh.hpp"
+#include "voxfx/options.hpp"
+#include "voxfx/parallel.hpp"
+#include "voxfx/scene.hpp"
+
+namespace voxfx {
+
+class TriangleTracer;
+
+struct ExactShadowOptions {
+    static constexpr std::string_view kName = "exact";
+    static constexpr std::string_view kSummary =
+        "ray traced on the triangles (Embree): the product of the transmittances of every surface "
+        "crossed towards the light (the reference)";
+    /// None: the reference has nothing to tune.
+    static std::span<const OptionField<ExactShadowOptions>> fields();
+};
+
+class ExactShadow {
+public:
+    using Options = ExactShadowOptions;
+    struct Stats {
+        int64_t triangles = 0; ///< caster triangles traced, summed over lights
+        Stats& operator+=(const Stats& o);
+        std::string summary() const;
+    };
+    /// How glass triangles pass light (see the file comment).
+    struct Glass {
+        float ior = 1.5f;
+        Vec3f sigma{0.0f, 0.0f, 0.0f}; ///< Beer–Lambert coefficient per world unit
+        Vec3f tint{1.0f, 1.0f, 1.0f};  ///< applied once per entering crossing
+    };
+    static constexpr uint32_t kNotGlass = 0xffffffffu;
+
+    ExactShadow() = default; ///< no casters: visibility 1
+    /// `casters` in world space; one RGB crossing transmittance per triangle (0 for opaque ones);
+    /// optionally, per triangle, an index into `glass` or kNotGlass (empty: no glass).
+    ExactShadow(const MeshView& casters, std::vector<Vec3f> triangleTransmittance,
+                std::vector<uint32_t> triangleGlass = {}, std::vector<Glass> glass = {});
+    /// From scene materials: crossingTransmittance per triangle, and glass for glass materials
+    /// (Material::isGlass; ior, KHR_materials_volume attenuation, tint = crossingTransmittance).
+    static ExactShadow fromMaterials(const MeshView& casters, std::span<const uint32_t> triangleMaterial,
+                                     std::span<const Material> materials);
+    /// The scene's casters (SceneMesh::castsShadow), traced towards `light`.
+    static ExactShadow build(const Scene& scene, const Light& light, const ExactShadowOptions& options,
+                             Progress* progress = nullptr);
+    /// Light fraction along p + t * dir, t in (epsilon, distance): the product over the crossed
+    /// triangles (and glass volumes) described above.
+    Vec3f transmittance(const Vec3d& p, const Vec3d& dir, double distance) const;
+    /// RGB fraction of the light (the one given to build) reaching p: transmittance from p, moved 10
+    /// epsilons along `n` (the unit normal turned towards the light), towards the light.
+    Vec3f visibility(const Vec3d& p, const Vec3d& n) const;
+    /// The tracer's step over a crossed triangle (TriangleTracer::epsilon).
+    double epsilon() const;
+    Stats stats() const;
+
+private:
+    std::vector<Vec3f> transmittance_;
+    std::vector<uint32_t> triangleGlass_;
+    std::vector<Glass> glass_;
+    std::shared_ptr<const TriangleTracer> tracer_; ///< the casters (null: none)
+    Light light_;                                  ///< the light visibility looks towards (build)
+};
+
+} // namespace voxfx

@@ -1,0 +1,55 @@
+// voxfx — scene files: glTF 2.0 (.gltf, .glb), the JSON wrapper (.json) and single meshes read
+// into a Scene (voxfx/scene.hpp), and scenes written as glTF.
+//
+// Thread-safety: loadScene, parseSceneJson and writeGltf of different paths may run concurrently;
+// they run on the calling thread.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "voxfx/scene.hpp"
+
+namespace voxfx {
+
+/// Loads a scene by extension:
+///   .gltf .glb   glTF 2.0 (see the file comment);
+///   .json        the wrapper:
+///     { "gltf": "tree.glb",                       optional, relative to the JSON file
+///       "meshes": [ { "file": "bunny.off", "name": "bunny",
+///                     "translate": [x,y,z], "scale": s or [sx,sy,sz],
+///                     "rotate": [ax,ay,az, degrees],
+///                     "material": { "name": "fur", "baseColor": [r,g,b], "opacity": 1,
+///                                   "transmission": 0, "ior": 1.5, "specular": 0.2,
+///                                   "shininess": 32 },
+///                     "castsShadow": true } ],
+///       "lights":  [ { "type": "directional|spot|point", "name": "sun", "position": [..],
+///                      "direction": [..], "target": [..] (instead of direction),
+///                      "color": [..], "intensity": 3, "innerConeDegrees": 20,
+///                      "outerConeDegrees": 30 } ],
+///       "cameras": [ { "position": [..], "target": [..], "up": [..], "fovYDegrees": 45,
+///                      "near": 0.01 } ],
+///       "receiversOnly": [ "Ground" ],             mesh names that cast no shadow
+///       "render":  { "shadows": "transmittance", "width": 1280, "height": 720,
+///                    "supersample": 2, "gridResolution": 256, "gridDepth": 256,
+///                    "shadowMapResolution": 2048, "slicing": "local",
+///                    "voxelMode": "surface", "ambient": [..], "background": [..] },
+///       "environmentMap": "sky.pfm" }
+///   anything loadMesh reads: one mesh, default material.
+/// Throws voxfx::Error naming the file for a missing or unreadable file, an unknown extension (with
+/// the allowed list), malformed JSON (with the position), unknown keys or light types, a light
+/// without a usable direction, and everything Scene::validate rejects.
+Scene loadScene(const std::string& path);
+
+/// The JSON wrapper from text, as loadScene reads it from a .json file: `path` names the text in
+/// messages and is the file its relative names are resolved against (it is not read itself).
+/// Throws voxfx::Error as loadScene does.
+Scene parseSceneJson(std::string_view json, const std::string& path);
+
+/// Writes a scene as glTF 2.0: .gltf (JSON with the buffer embedded as a base64 data URI) or .glb
+/// (binary container). Materials with their extensions, lights (KHR_lights_punctual) and cameras are
+/// written as nodes; meshes are written in world space under identity nodes. Per-vertex normals are
+/// written when present. Atomic (temporary file, then rename). Throws voxfx::Error.
+void writeGltf(const Scene& scene, const std::string& path);
+
+} // namespace voxfx

@@ -1,0 +1,89 @@
+// voxfx — the standard shadow map (Williams 1978) with percentage-closer filtering (Reeves et al.
+// 1987): the baseline every other shadow is compared with (ED06 table 1, CHANG §3). Shadow
+// technique "map" (voxfx/shadow.hpp): every caster in one depth map per light view, binary
+// visibility, PCF; leaves are opaque to it.
+//
+// A consumer of the one rasterizer keeps the nearest centre-sampled caster depth per texel; a
+// lookup compares the point's depth with the (2r+1)^2 texels around its own and returns the lit
+// fraction. Self-shadowing bias: the lookup point moves along the normal (turned towards the light)
+// by `normalOffset` column footprints, and casters count only `depthBias` texel footprints in front
+// of it.
+//
+// Thread-safety: a built map is read-only (lookups from any number of threads); build rasterizes
+// with worker threads.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "voxfx/light_view.hpp"
+#include "voxfx/mesh.hpp"
+#include "voxfx/options.hpp"
+#include "voxfx/parallel.hpp"
+#include "voxfx/scene.hpp"
+
+namespace voxfx {
+
+struct ShadowMapOptions {
+    static constexpr std::string_view kName = "map";
+    static constexpr std::string_view kSummary = "standard shadow map with PCF (binary: leaves are opaque)";
+    int64_t resolution = 2048; ///< texels along the longer side of each light view
+    int pcfRadius = 1;         ///< PCF over (2r+1)^2 texels (0 = one tap)
+    double normalOffset = 1.0; ///< lookup offset along the normal, in column footprints at p
+    double depthBias = 1.0;    ///< depth bias, in texel footprints at p
+    /// mapResolution (alias shadowMapResolution), pcf, normalOffset, depthBias.
+    static std::span<const OptionField<ShadowMapOptions>> fields();
+};
+
+/// One depth map in one light view.
+class ShadowMap {
+public:
+    ShadowMap() = default;
+    /// `casters` in world space. Cost: one rasterization at the view's resolution.
+    static ShadowMap build(const MeshView& casters, const LightView& view, Progress* progress = nullptr);
+    /// Fraction in [0, 1] of the (2r+1)^2 texels around p's texel whose nearest caster is not in
+    /// front of p by more than `bias` (world units). 1 outside the view.
+    float visibility(const Vec3d& world, int pcfRadius, double bias) const;
+    /// Nearest caster depth of texel (x, y) in frame depth units; +inf where there is none.
+    float depthAt(int64_t x, int64_t y) const { return depth_[size_t(y * view_.frame.width() + x)]; }
+    const LightView& view() const { return view_; }
+
+private:
+    LightView view_;
+    std::vector<float> depth_;
+};
+
+/// The maps of one light (one per light view: six cube faces for a point light), with the lookup.
+class MapShadow {
+public:
+    using Options = ShadowMapOptions;
+    struct Stats {
+        int64_t maps = 0, texels = 0;
+        Stats& operator+=(const Stats& o);
+        std::string summary() const;
+    };
+    MapShadow() = default; ///< no casters: visibility 1
+    /// The maps of `casters` (world space) fitted to them. Throws voxfx::Error for a resolution
+    /// < 1 or a PCF radius < 0.
+    static MapShadow build(const Light& light, const MeshView& casters, const ShadowMapOptions& options,
+                           Progress* progress = nullptr);
+    /// Every mesh of `scene` that casts shadows (SceneMesh::castsShadow).
+    static MapShadow build(const Scene& scene, const Light& light, const ShadowMapOptions& options,
+                           Progress* progress = nullptr);
+    /// Fraction of the light reaching p (see the file comment); `n` the unit geometric normal
+    /// turned towards the light (zero: no offset). 1 outside every view.
+    float visibility(const Vec3d& p, const Vec3d& n) const;
+    Stats stats() const;
+    const std::vector<ShadowMap>& maps() const { return maps_; }
+    const std::vector<LightView>& views() const { return views_; }
+
+private:
+    ShadowMapOptions options_;
+    std::vector<LightView> views_;
+    std::vector<ShadowMap> maps_;
+};
+
+} // namespace voxfx

@@ -1,0 +1,117 @@
+// voxfx — transmittance shadow maps (ED06 §3.1, "Fast Scene Voxelization and Applications"). Shadow
+// technique "transmittance" (voxfx/shadow.hpp).
+//
+// Opaque casters keep a standard shadow map (voxfx/shadow_map.hpp); partial occluders (materials
+// whose shadowCrossingTransmittance is not zero) are grouped by that transmittance, one slicemap per
+// group (a "channel"), voxelized from the light (surface or conservative, uniform or local
+// slicing). At a point p: n_k = filled cells of channel k between the light and p (a popcount of
+// the column's words in front of p's slice, leaving out the skipped cells; voxfx/light_grid.hpp),
+// and visibility = map(p) * prod_k t_k ^ n_k (t_k: the group's RGB transmittance), so groups of
+// different colours tint.
+//
+// Thread-safety: a built shadow is read-only (lookups from any number of threads); build voxelizes
+// with worker threads.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "voxfx/device.hpp"
+#include "voxfx/light_grid.hpp"
+#include "voxfx/light_view.hpp"
+#include "voxfx/options.hpp"
+#include "voxfx/scene.hpp"
+#include "voxfx/shadow_map.hpp"
+#include "voxfx/voxel_grid.hpp"
+#include "voxfx/voxelize.hpp"
+
+namespace voxfx {
+
+struct TransmittanceShadowOptions {
+    static constexpr std::string_view kName = "transmittance";
+    static constexpr std::string_view kSummary =
+        "ED06: partial occluders (leaves, glass) voxelized from the light; light is attenuated per "
+        "filled cell, one channel per leaf colour group; opaque objects keep a standard shadow map";
+    LightGridOptions grid;
+    /// Surface (ED06, one cell per triangle and column) or Conservative.
+    VoxelizeMode voxelMode = VoxelizeMode::Surface;
+    /// Where the light-space voxelizations run (voxfx/device.hpp); the grids are the same on each.
+    /// Cuda without a usable GPU runs on the CPU.
+    Device device = Device::Cpu;
+    /// The standard map of the opaque casters (its normalOffset is the grids' too).
+    ShadowMapOptions opaque;
+    /// gridResolution (alias grid), gridDepth, slicing, skipCells, bilinear, normalOffset,
+    /// voxelMode, device, mapResolution, pcf, depthBias.
+    static std::span<const OptionField<TransmittanceShadowOptions>> fields();
+};
+
+/// The slicemaps of one light view, one per channel.
+class TransmittanceShadowMap {
+public:
+    struct Channel {
+        VoxelGrid grid;              ///< in the view's frame (local slicing: its own ranges)
+        Vec3f crossingTransmittance; ///< RGB factor per filled cell
+    };
+    TransmittanceShadowMap() = default;
+    /// Voxelizes each group (world space) into the view with `mode` (Surface or Conservative) and
+    /// `slicing`. groups.size() == transmittances.size(). Throws voxfx::Error otherwise.
+    /// `device` picks where the voxelizations run (the same grids on each).
+    static TransmittanceShadowMap build(const LightView& view, std::span<const MeshView> groups,
+                                        std::span<const Vec3f> transmittances, VoxelizeMode mode,
+                                        Slicing slicing, Progress* progress = nullptr,
+                                        Device device = Device::Cpu);
+    /// Filled cells of channel k in p's column strictly in front of the last `skipCells` cells up to
+    /// and including p's cell: popcount of slices [0, s - skipCells + 1) with s = p's slice (whole
+    /// words plus a mask). Points in front of the grid count 0, behind it count the whole column.
+    int64_t cellsBefore(std::size_t k, const Vec3d& world, int64_t skipCells) const;
+    /// prod_k crossingTransmittance_k ^ cellsBefore(k, p). 1 outside the view.
+    Vec3f transmittance(const Vec3d& world, int64_t skipCells) const;
+    /// Bilinear interpolation of the transmittance of the four columns around p at p's depth;
+    /// columns outside the grid hold no caster (1).
+    Vec3f transmittanceBilinear(const Vec3d& world, int64_t skipCells) const;
+    const LightView& view() const { return view_; }
+    const std::vector<Channel>& channels() const { return channels_; }
+
+private:
+    // One column of the grids (index y * W + x), at frame depth `depth`.
+    Vec3f columnTransmittance(int64_t column, double depth, int64_t skipCells) const;
+    int64_t columnCells(std::size_t k, int64_t column, double depth, int64_t skipCells) const;
+    LightView view_;
+    std::vector<Channel> channels_;
+    /// Per channel: crossingTransmittance ^ n for n = 0 .. D (std::pow at build time; a lookup is
+    /// then a table read instead of three pow calls per channel).
+    std::vector<std::vector<Vec3f>> powers_;
+};
+
+/// The shadow of one light: the opaque casters' map and the channels' grids per light view.
+class TransmittanceShadow {
+public:
+    using Options = TransmittanceShadowOptions;
+    struct Stats {
+        int64_t grids = 0, channels = 0, filledCells = 0; ///< light grids (views x channels)
+        MapShadow::Stats opaque;
+        Stats& operator+=(const Stats& o);
+        std::string summary() const;
+    };
+    TransmittanceShadow() = default; ///< no casters: visibility 1
+    /// From the scene's casters (SceneMesh::castsShadow). Throws voxfx::Error for resolutions < 1,
+    /// skipped cells < 0 or a voxel mode other than surface and conservative.
+    static TransmittanceShadow build(const Scene& scene, const Light& light,
+                                     const TransmittanceShadowOptions& options, Progress* progress = nullptr);
+    /// RGB fraction of the light reaching p; `n` the unit geometric normal turned towards the light.
+    Vec3f visibility(const Vec3d& p, const Vec3d& n) const;
+    Stats stats() const;
+    const MapShadow& opaque() const { return opaque_; }
+    const std::vector<TransmittanceShadowMap>& maps() const { return maps_; }
+
+private:
+    TransmittanceShadowOptions options_;
+    MapShadow opaque_;
+    std::vector<LightView> views_;
+    std::vector<TransmittanceShadowMap> maps_;
+};
+
+} // namespace voxfx

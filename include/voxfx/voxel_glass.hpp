@@ -1,0 +1,111 @@
+// voxfx — the voxel glass methods: a camera ray refracted at the glass's front surface marches
+// through an attribute grid of the glass (normals and material per voxel; one voxel at a time with
+// the one DDA, voxfx/dda.hpp). Glass methods "multi" and "two-surface" (voxfx/glass.hpp).
+//
+//   multi        CHANG §4.1.1 multiple refraction: at a boundary voxel, whose stored normal points
+//                along the ray when inside (leaving) or against it when outside (entering), Snell
+//                with the voxel's averaged normal and its material's index; total internal
+//                reflection where there is no solution; a refraction is skipped when its normal is
+//                within angleThreshold of the previous one (CHANG's guard against refracting twice at
+//                one surface spread over neighbouring voxels); Beer–Lambert with the coefficient of
+//                the material the ray is in, per voxel segment; until the ray leaves the grid, then
+//                the environment.
+//   two-surface  Wyman 2005 as CHANG's baseline: the same march stops at the first back surface: one
+//                refraction there (or the mirror direction under total internal reflection), then the
+//                environment. It cannot see a second part of the object behind the first.
+//
+// The grid has cubic voxels, gridResolution along the longest side of the glass's bounds (one voxel
+// of margin on each side).
+//
+// Thread-safety: read-only after construction; trace may run from any number of threads.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "voxfx/attribute_grid.hpp"
+#include "voxfx/glass_optics.hpp"
+#include "voxfx/mesh.hpp"
+#include "voxfx/options.hpp"
+#include "voxfx/raster.hpp"
+
+namespace voxfx {
+
+struct GlassInput;
+
+/// What both voxel methods take.
+struct VoxelGlassOptions : GlassPathOptions {
+    int64_t gridResolution = kGlassGridResolution; ///< cubic voxels along the glass's longest side, 2..4096
+    /// Coverage::Conservative writes every voxel a triangle touches (no holes on steep triangles:
+    /// CHANG's widened slabs taken to the limit), Center one voxel per column.
+    Coverage coverage = Coverage::Conservative;
+    double angleThreshold = 0.35; ///< radians: a refraction this close to the last normal is skipped
+};
+
+struct MultiGlassOptions : VoxelGlassOptions {
+    static constexpr std::string_view kName = "multi";
+    static constexpr std::string_view kSummary =
+        "CHANG: march through an attribute grid, refract at boundary voxels";
+    /// glassGrid, glassCoverage, angleThreshold, maxEvents, sceneBehind.
+    static std::span<const OptionField<MultiGlassOptions>> fields();
+};
+
+struct TwoSurfaceGlassOptions : VoxelGlassOptions {
+    static constexpr std::string_view kName = "two-surface";
+    static constexpr std::string_view kSummary =
+        "Wyman 2005: refract at the front surface and at the first back surface";
+    /// glassGrid, glassCoverage, angleThreshold, maxEvents, sceneBehind.
+    static std::span<const OptionField<TwoSurfaceGlassOptions>> fields();
+};
+
+/// The attribute grid (normals and material channel) of the glass triangles, and the march.
+class VoxelGlass {
+public:
+    /// Voxelizes `mesh` (world space) into cubic voxels, options.gridResolution along the longest side
+    /// of its bounds (one voxel of margin), with options.coverage. Throws voxfx::Error for a
+    /// resolution outside 2..4096, mismatched sizes or no triangles.
+    VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMedium, std::vector<GlassMedium> media,
+               const VoxelGlassOptions& options);
+    /// The path of a camera ray along unit `dir` that meets glass at `entry` (a surface point found by
+    /// rasterization) with unit outward normal `normal` and medium `medium`; `twoSurface` stops at
+    /// the first back surface (see the file comment).
+    GlassPath trace(const Vec3d& entry, const Vec3d& normal, uint32_t medium, const Vec3d& dir,
+                    const VoxelGlassOptions& options, bool twoSurface) const;
+    const AttributeGrid& grid() const { return grid_; }
+    double voxelSize() const { return voxel_; }
+
+private:
+    AttributeGrid grid_;
+    std::vector<GlassMedium> media_;
+    Vec3d origin_;
+    double voxel_ = 1;
+};
+
+/// A voxel glass method: the march of VoxelGlass with the options O, stopping at the first back
+/// surface when kTwoSurface.
+template <class O, bool kTwoSurface> class VoxelGlassMethod {
+public:
+    using Options = O;
+    /// Voxelizes the glass of `input` (VoxelGlass's constructor; it throws as that does).
+    static VoxelGlassMethod build(const GlassInput& input, const O& options);
+    GlassPath trace(const GlassHit& h) const {
+        return voxels_.trace(h.entry, h.normal, h.medium, h.dir, options_, kTwoSurface);
+    }
+    const VoxelGlass& voxels() const { return voxels_; }
+
+private:
+    VoxelGlassMethod(VoxelGlass voxels, const O& options) : voxels_(std::move(voxels)), options_(options) {}
+    VoxelGlass voxels_;
+    O options_;
+};
+
+/// Glass method "multi".
+using MultiGlass = VoxelGlassMethod<MultiGlassOptions, false>;
+/// Glass method "two-surface".
+using TwoSurfaceGlass = VoxelGlassMethod<TwoSurfaceGlassOptions, true>;
+extern template class VoxelGlassMethod<MultiGlassOptions, false>; // render/voxel_glass.cpp
+extern template class VoxelGlassMethod<TwoSurfaceGlassOptions, true>;
+
+} // namespace voxfx

@@ -1,0 +1,98 @@
+// voxfx — walking a mixed polygon and volume scene along rays: empty-space bricks, the flattened
+// leaves, and the per-object flags of the segment walker (voxfx/segment_walker.hpp).
+#include "voxfx/segment_walker.hpp"
+
+#include <algorithm>
+#include <limits>
+
+#include "voxfx/error.hpp"
+#include "voxfx/parallel.hpp"
+
+namespace voxfx {
+
+EmptySpace::EmptySpace(const Volume& volume, const TransferFunction& transfer) : place_(volume.view()) {
+    place_.values = nullptr;
+    const Vec3i d = volume.dims();
+    const int64_t n[3] = {d.x, d.y, d.z};
+    for (int a = 0; a < 3; ++a) {
+        voxels_[a] = n[a];
+        bricks_[a] = (n[a] + kBrick - 1) / kBrick;
+    }
+    outsideEmpty_ = transfer.opacity(0.0) <= 0;
+    if (volume.voxelCount() == 0) {
+        bricks_[0] = bricks_[1] = bricks_[2] = 0;
+        return;
+    }
+    const int64_t bx = bricks_[0], by = bricks_[1], bz = bricks_[2];
+    // A sample in brick b (continuous voxel coordinate u in [b B, (b + 1) B]) interpolates voxels
+    // floor(u - 0.5) and the next one: voxels b B - 1 .. (b + 1) B, clamped to the volume.
+    empty_.assign(std::size_t(bx * by * bz), 0);
+    parallelFor(0, bz, 1, [&](int64_t k0, int64_t k1) {
+        for (int64_t kb = k0; kb < k1; ++kb)
+            for (int64_t jb = 0; jb < by; ++jb)
+                for (int64_t ib = 0; ib < bx; ++ib) {
+                    float mn = std::numeric_limits<float>::infinity(), mx = -mn;
+                    const int64_t b[3] = {ib, jb, kb};
+                    int64_t first[3], last[3];
+                    for (int a = 0; a < 3; ++a) {
+                        first[a] = std::max<int64_t>(b[a] * kBrick - 1, 0);
+                        last[a] = std::min((b[a] + 1) * kBrick, n[a] - 1);
+                    }
+                    for (int64_t k = first[2]; k <= last[2]; ++k)
+                        for (int64_t j = first[1]; j <= last[1]; ++j)
+                            for (int64_t i = first[0]; i <= last[0]; ++i) {
+                                const float v = volume.at(i, j, k);
+                                mn = std::min(mn, v);
+                                mx = std::max(mx, v);
+                            }
+                    empty_[std::size_t(ib + bx * (jb + by * kb))] =
+                        transfer.maxOpacity(double(mn), double(mx)) <= 0;
+                }
+    });
+}
+
+std::vector<EmptySpace> emptySpaceOf(const VolumeScene& scene) {
+    std::vector<EmptySpace> out(scene.objects.size());
+    for (std::size_t o = 0; o < scene.objects.size(); ++o) {
+        const VolumeSceneObject& obj = scene.objects[o];
+        if (obj.kind == ObjectKind::Volume && obj.volume >= 0 &&
+            std::size_t(obj.volume) < scene.volumes.size() && scene.volumes[std::size_t(obj.volume)])
+            out[o] = EmptySpace(*scene.volumes[std::size_t(obj.volume)], obj.transfer);
+    }
+    return out;
+}
+
+double EmptySpace::emptyFraction() const {
+    if (empty_.empty()) return 0;
+    return double(std::count(empty_.begin(), empty_.end(), uint8_t(1))) / double(empty_.size());
+}
+
+FlatLeaves flattenLeaves(const VolumeScene& scene, bool castersOnly) {
+    const std::vector<uint8_t> used = scene.usedLeaves(castersOnly);
+    FlatLeaves f;
+    for (std::size_t i = 0; i < scene.leaves.size(); ++i) {
+        if (!used[i]) continue;
+        const Mesh& m = scene.leaves[i];
+        const auto base = uint32_t(f.mesh.positions.size());
+        f.mesh.positions.insert(f.mesh.positions.end(), m.positions.begin(), m.positions.end());
+        for (const uint32_t v : m.indices) f.mesh.indices.push_back(base + v);
+        f.triangleLeaf.insert(f.triangleLeaf.end(), m.triangleCount(), uint32_t(i));
+    }
+    return f;
+}
+
+SegmentWalker::SegmentWalker(const VolumeScene& scene, const std::vector<uint32_t>& triangleLeaf,
+                             bool castersOnly)
+    : scene_(&scene), triangleLeaf_(&triangleLeaf), leafInside_(scene.leaves.size(), 0),
+      objectInside_(scene.objects.size(), 0), previous_(scene.objects.size(), 0),
+      active_(scene.objects.size(), 1) {
+    if (castersOnly)
+        for (std::size_t o = 0; o < active_.size(); ++o) active_[o] = scene.objects[o].castsShadow ? 1 : 0;
+}
+
+void SegmentWalker::updateObjects() {
+    for (std::size_t o = 0; o < objectInside_.size(); ++o)
+        if (active_[o]) objectInside_[o] = scene_->evalShape(scene_->objects[o].shape, leafInside_) ? 1 : 0;
+}
+
+} // namespace voxfx

@@ -1,0 +1,178 @@
+// voxfx — the renderer's options by name (voxfx/render.hpp): RenderOptions' own fields, setting a
+// name wherever the render uses it, a scene file's settings, and the catalog front ends list.
+#include <set>
+
+#include "render/technique_list.hpp"
+#include "voxfx/render.hpp"
+
+namespace voxfx {
+
+std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
+    using O = RenderOptions;
+    static const std::vector<OptionField<O>> table = {
+        numberOption<O, &O::width>("width", "image width, pixels", 1, 65536),
+        numberOption<O, &O::height>("height", "image height, pixels", 1, 65536),
+        numberOption<O, &O::supersample>("supersample", "render k x k samples per pixel", 1, 8),
+        numberOption<O, &O::exposure>("exposure", "multiplies the linear image", 1e-6, 1e6),
+        tripleOption<O, &O::ambient>("ambient", "ambient irradiance, linear RGB", 0, 1e6),
+        tripleOption<O, &O::background>("background",
+                                        "background radiance without an environment, linear RGB", 0, 1e6),
+        numberOption<O, &O::volumeStep>(
+            "volumeStep", "volume ray casting: sample step in smallest voxel spacings", 1e-3, 1000),
+        flagOption<O, &O::skipEmptySpace>(
+            "emptySpaceSkipping",
+            "volumes: skip the bricks the transfer function leaves transparent (same image)"),
+        flagOption<O, &O::defaultLights>("defaultLights",
+                                         "light a scene without lights by a sun and the environment")};
+    return table;
+}
+
+namespace {
+
+// Sets `name` in the options `o` of one technique or method, when it has that field.
+template <class Variant>
+bool setInTechnique(Variant& chosen, const std::string& name, const OptionValue& v, std::string_view where,
+                    std::string_view spelled) {
+    bool used = false;
+    std::visit(
+        [&]<class O>(O& o) {
+            if (const OptionField<O>* f = findOption(O::fields(), name)) {
+                setOption(o, *f, v, where, spelled);
+                used = true;
+            }
+        },
+        chosen);
+    return used;
+}
+
+const std::set<std::string>& knownNames() {
+    static const std::set<std::string> names = [] {
+        std::set<std::string> out;
+        for (const RenderOptionInfo& i : renderOptionCatalog()) {
+            out.insert(i.name);
+            if (!i.alias.empty()) out.insert(i.alias);
+        }
+        return out;
+    }();
+    return names;
+}
+
+const OptionValue* sceneSetting(const Scene& scene, std::string_view name) {
+    for (const auto& [key, value] : scene.settings.render)
+        if (camelCase(key) == name) return &value;
+    return nullptr;
+}
+
+// Appends the fields of O (used by `user`) to the catalog, merging names already listed.
+template <class O> void catalogue(std::vector<RenderOptionInfo>& out, const std::string& user) {
+    const O defaults{};
+    for (const OptionField<O>& f : O::fields()) {
+        RenderOptionInfo* info = nullptr;
+        for (RenderOptionInfo& i : out)
+            if (i.name == f.name) info = &i;
+        if (!info) {
+            info = &out.emplace_back();
+            info->name = f.name;
+            info->alias = f.alias;
+            info->type = f.type;
+            info->help = f.help;
+            info->lo = f.lo;
+            info->hi = f.hi;
+            info->choices = f.choices;
+        }
+        VOXFX_CHECK(info->type == f.type); // one name, one type: a front end has one flag per name
+        info->users.push_back(user + " (" + formatOption(f.get(defaults)) + ")");
+    }
+}
+
+} // namespace
+
+bool setRenderOption(RenderOptions& o, std::string_view nameIn, const OptionValue& v,
+                     std::string_view where) {
+    const std::string name = camelCase(nameIn);
+    if (name == "shadows" || name == "glass") {
+        const std::string* s = std::get_if<std::string>(&v);
+        if (!s) detail::failOption(nameIn, where, "expected a name, got " + formatOption(v));
+        try {
+            if (name == "shadows")
+                o.shadow = shadowOptionsNamed(*s);
+            else
+                o.glass = glassOptionsNamed(*s);
+        } catch (const Error& e) { detail::failOption(nameIn, where, e.what()); }
+        return true;
+    }
+    bool used = false;
+    if (const OptionField<RenderOptions>* f = findOption(RenderOptions::fields(), name)) {
+        setOption(o, *f, v, where, nameIn);
+        used = true;
+    }
+    used = setInTechnique(o.shadow, name, v, where, nameIn) || used;
+    used = setInTechnique(o.glass, name, v, where, nameIn) || used;
+    if (!used && !knownNames().count(name)) {
+        if (where.empty()) fail("unknown render option '", nameIn, "'");
+        fail(where, ": unknown render option '", nameIn, "'");
+    }
+    return used;
+}
+
+void checkRenderSetting(std::string_view nameIn, const OptionValue& v, std::string_view where) {
+    const std::string name = camelCase(nameIn);
+    RenderOptions scratch;
+    if (name == "shadows" || name == "glass") {
+        setRenderOption(scratch, name, v, where);
+        return;
+    }
+    // Every technique that has the name checks the value.
+    bool known = setRenderOption(scratch, name, v, where);
+    detail::forEachAlternative<ShadowOptions>([&]<class O>(std::type_identity<O>) {
+        scratch.shadow = O{};
+        known = setRenderOption(scratch, name, v, where) || known;
+    });
+    detail::forEachAlternative<GlassOptions>([&]<class O>(std::type_identity<O>) {
+        scratch.glass = O{};
+        known = setRenderOption(scratch, name, v, where) || known;
+    });
+    VOXFX_CHECK(known); // setRenderOption throws for names nobody knows
+}
+
+RenderOptions renderOptionsFor(const Scene& scene, std::string_view shadows, std::string_view glass) {
+    RenderOptions o;
+    const std::string where = (scene.source.empty() ? std::string("scene") : scene.source) + ": render";
+    auto choose = [&](const char* what, std::string_view given) {
+        if (!given.empty()) {
+            setRenderOption(o, what, std::string(given));
+            return true;
+        }
+        if (const OptionValue* v = sceneSetting(scene, what)) {
+            setRenderOption(o, what, *v, where);
+            return true;
+        }
+        return false;
+    };
+    choose("shadows", shadows);
+    if (!choose("glass", glass)) o.glass = defaultGlass(scene);
+    for (const auto& [key, value] : scene.settings.render) {
+        const std::string name = camelCase(key);
+        if (name != "shadows" && name != "glass") setRenderOption(o, name, value, where);
+    }
+    return o;
+}
+
+std::vector<RenderOptionInfo> renderOptionCatalog() {
+    std::vector<RenderOptionInfo> out;
+    catalogue<RenderOptions>(out, "render");
+    detail::forEachAlternative<ShadowOptions>(
+        [&]<class O>(std::type_identity<O>) { catalogue<O>(out, "shadows " + std::string(O::kName)); });
+    detail::forEachAlternative<GlassOptions>(
+        [&]<class O>(std::type_identity<O>) { catalogue<O>(out, "glass " + std::string(O::kName)); });
+    return out;
+}
+
+double RenderTimings::ms(std::string_view name) const {
+    double sum = 0;
+    for (const PassTime& p : passes)
+        if (p.name == name) sum += p.ms;
+    return sum;
+}
+
+} // namespace voxfx
