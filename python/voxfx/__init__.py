@@ -116,5 +116,6 @@ if hasattr(_batch, "__wrapped__"):
 #: File extension of each grid format that Grid.save writes.
 GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj")
 
-    "batch_jobs", "glass_methods", "load_scene", "render", "render_options", "shadow_kinds",
-    "closest_points", "signed_distance", "sdf",
+__all__ = ["ArgumentError", "ClosestPoints", "Density", "Error", "Grid", "Mesh", "PointClassifier", "Scene",
+           "SignedDistanceField", "SurfaceMesh", "GRID_FORMATS",
+           "batch", *sorted(_FUNCTIONS)]
