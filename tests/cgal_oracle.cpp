@@ -1,6 +1,9 @@
 // voxfx tests — the CGAL side of the exactness oracle (see cgal_oracle.hpp).
 #include "cgal_oracle.hpp"
 
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/IO/polygon_soup_io.h>
@@ -14,6 +17,8 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/convex_hull_2.h>
 #include <gtest/gtest.h>
+
+#include "voxfx/parallel.hpp"
 
 namespace voxfx::test {
 
@@ -472,6 +477,76 @@ std::vector<int> sideOfClosedMeshPerturbed(const MeshView& mesh, const std::vect
         out.push_back(bs == CGAL::ON_BOUNDED_SIDE ? 1 : (bs == CGAL::ON_BOUNDARY ? 0 : -1));
     }
     return out;
+}
+
+std::vector<OracleNearest> oracleNearest(const MeshView& mesh, const std::vector<Vec3d>& points, bool exact) {
+    using namespace oracle;
+    using Primitive = CGAL::AABB_triangle_primitive<K, std::vector<Triangle3>::const_iterator>;
+    using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+    const std::vector<Triangle3> tris = triangles(mesh);
+    Tree tree(tris.begin(), tris.end());
+    tree.accelerate_distance_queries();
+    std::vector<OracleNearest> out(points.size());
+    // The tree is read-only once built: queries run on worker threads (voxfx's parallel-for only
+    // spreads the loop; nothing of voxfx's distance code is involved).
+    parallelFor(0, int64_t(points.size()), 256, [&](int64_t b, int64_t e) {
+        for (int64_t i = b; i < e; ++i) {
+            const Vec3d& p = points[std::size_t(i)];
+            OracleNearest& o = out[std::size_t(i)];
+            if (!isFinite(p)) {
+                o.distance = std::numeric_limits<double>::quiet_NaN();
+                continue;
+            }
+            const Point3 q(p.x, p.y, p.z);
+            const auto [cp, prim] = tree.closest_point_and_primitive(q);
+            o.point = {cp.x(), cp.y(), cp.z()};
+            o.face = int64_t(prim - tris.begin());
+            o.distance = std::sqrt(CGAL::to_double(CGAL::squared_distance(q, *prim)));
+        }
+    });
+    if (!exact) return out;
+    // Exact minimum over the triangles near the tree's answer, serially (CGAL's lazy exact
+    // numbers): the triangles whose box meets the cube around the point that holds the tree's
+    // distance, filtered by their inexact distance (with a margin far above its rounding), then
+    // compared exactly.
+    using EK = CGAL::Exact_predicates_exact_constructions_kernel;
+    const Box3d bounds = computeBounds(mesh);
+    const double margin = 1e-9 * length(bounds.extent());
+    std::vector<Tree::Primitive_id> nearby;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const Vec3d& p = points[i];
+        OracleNearest& o = out[i];
+        if (!isFinite(p)) continue;
+        const double r = o.distance * (1 + 1e-9) + margin;
+        nearby.clear();
+        tree.all_intersected_primitives(CGAL::Bbox_3(p.x - r, p.y - r, p.z - r, p.x + r, p.y + r, p.z + r),
+                                        std::back_inserter(nearby));
+        std::sort(nearby.begin(), nearby.end());
+        const Point3 q(p.x, p.y, p.z);
+        const EK::Point_3 ep(p.x, p.y, p.z);
+        std::optional<EK::FT> best;
+        for (const auto it : nearby) {
+            if (std::sqrt(CGAL::to_double(CGAL::squared_distance(q, *it))) > r) continue;
+            const auto ek = [](const Point3& v) { return EK::Point_3(v.x(), v.y(), v.z()); };
+            const EK::FT d2 =
+                CGAL::squared_distance(ep, EK::Triangle_3(ek((*it)[0]), ek((*it)[1]), ek((*it)[2])));
+            const auto t = int64_t(it - tris.begin());
+            if (!best || d2 < *best) {
+                best = d2;
+                o.ties.assign(1, t);
+            } else if (d2 == *best) {
+                o.ties.push_back(t);
+            }
+        }
+        if (best) o.distance = std::sqrt(CGAL::to_double(CGAL::exact(*best)));
+    }
+    return out;
+}
+
+double oracleTriangleDistance2(const std::array<Vec3d, 3>& t, const Vec3d& p) {
+    using namespace oracle;
+    const auto pt = [](const Vec3d& v) { return Point3(v.x, v.y, v.z); };
+    return CGAL::to_double(CGAL::squared_distance(pt(p), Triangle3(pt(t[0]), pt(t[1]), pt(t[2]))));
 }
 
 int oracleOrient2d(double ax, double ay, double bx, double by, double cx, double cy) {

@@ -26,6 +26,9 @@
 //                       box grown by it meets a triangle), which a comparison may tolerate.
 //   readWithCgal        a mesh file read by CGAL's own readers (OFF, OBJ, PLY, STL), as a polygon
 //                       soup; meshOfSoup fan-triangulates it into a voxfx::Mesh for the oracles.
+//   oracleNearest       the nearest point of a mesh: CGAL's AABB tree (closest point, face,
+//                       squared distance in double) and, exactly, the minimum of the rational
+//                       squared distances (Epeck) to the triangles near it, with the faces tying.
 //   floodFromBorder     cells not reachable from the grid border through non-wall cells by
 //                       6-connected steps: a plain voxel-by-voxel breadth-first search.
 // The CGAL work is compiled once, in cgal_oracle.cpp (CGAL headers cost a minute per translation unit).
@@ -233,6 +236,24 @@ std::vector<int> sideOfClosedMeshPerturbed(const MeshView& mesh, const std::vect
 /// constructions (Exact_predicates_exact_constructions_kernel), then PMP::volume of the result,
 /// rounded to double only at the end. NaN when an input fails those conditions or CGAL refuses.
 double oracleIntersectionVolume(const MeshView& a, const MeshView& b);
+
+/// What CGAL says about the point of a mesh nearest to a query point.
+struct OracleNearest {
+    double distance = 0;       ///< see oracleNearest
+    Vec3d point;               ///< the AABB tree's closest point (an inexact construction)
+    int64_t face = -1;         ///< the AABB tree's closest triangle
+    std::vector<int64_t> ties; ///< exact mode: every face at the exact minimal distance, ascending
+};
+/// For each point, CGAL's AABB tree over the triangles (Epick, accelerated distance queries):
+/// closest_point_and_primitive, and `distance` = sqrt(squared_distance) in double. With `exact`,
+/// the distance is instead the square root of the exact minimum (Epeck, rational arithmetic) of
+/// the squared distances to every triangle whose box comes within the tree's distance (plus a
+/// relative 1e-6) of the point, rounded to double, and `ties` lists the faces attaining that
+/// minimum. Non-finite points are skipped (distance NaN). The Epick part runs on worker threads.
+std::vector<OracleNearest> oracleNearest(const MeshView& mesh, const std::vector<Vec3d>& points, bool exact);
+
+/// CGAL's squared distance (Epick) from `p` to the triangle (a, b, c), in double.
+double oracleTriangleDistance2(const std::array<Vec3d, 3>& triangle, const Vec3d& p);
 
 /// CGAL::orientation on the double inputs: 1 left turn (counter-clockwise), -1 right turn, 0
 /// collinear.

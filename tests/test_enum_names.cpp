@@ -23,12 +23,14 @@
 #include "voxfx/batch.hpp"
 #include "voxfx/contains.hpp"
 #include "voxfx/csg.hpp"
+#include "voxfx/distance.hpp"
 #include "voxfx/dsm.hpp"
 #include "voxfx/glass.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/morphology.hpp"
 #include "voxfx/raster.hpp"
 #include "voxfx/scene.hpp"
+#include "voxfx/sdf_io.hpp"
 #include "voxfx/shadow.hpp"
 #include "voxfx/surface_mesh.hpp"
 #include "voxfx/volume_io.hpp"
@@ -104,10 +106,12 @@ TEST(EnumNamesTest, EveryEnumeratorHasOneNameThatParsesBackInAnyCase) {
     expectOneNamePerValue<MorphBorder>(kMorphBorderNames, parseMorphBorder);
     expectOneNamePerValue<CsgOp>(kCsgOpNames, parseCsgOp);
     expectOneNamePerValue<ContainsMethod>(kContainsMethodNames, parseContainsMethod);
+    expectOneNamePerValue<SignMethod>(kSignMethodNames, parseSignMethod);
     expectOneNamePerValue<SurfaceSource>(kSurfaceSourceNames, parseSurfaceSource);
     expectOneNamePerValue<LightType>(
         kLightTypeNames, [](const std::string& n) { return detail::parseLightType(n, "scene.json"); });
     expectOneNamePerValue<GridFormat>(kGridFormatNames);
+    expectOneNamePerValue<SdfFormat>(kSdfFormatNames);
     expectOneNamePerValue<VolumeFormat>(kVolumeFormatNames);
     expectOneNamePerValue<ScalarType>(kScalarTypeNames);
     expectOneNamePerValue<BatchStatus>(kBatchStatusNames);

@@ -31,13 +31,16 @@
 #include "voxfx/tiled.hpp"
 #include "voxfx/voxelize.hpp"
 
-// grid: the bit-grid toolkit (GI08): density, normals, morphology, CSG, queries, meshing, smoke.
+// grid: the bit-grid toolkit (GI08): density, normals, morphology, CSG, queries, meshing, smoke;
+// closest points and signed distance fields.
 #include "voxfx/csg.hpp"
 #include "voxfx/dda.hpp"
 #include "voxfx/density.hpp"
+#include "voxfx/distance.hpp"
 #include "voxfx/grid_query.hpp"
 #include "voxfx/intersection_volume.hpp"
 #include "voxfx/morphology.hpp"
+#include "voxfx/sdf.hpp"
 #include "voxfx/smoke.hpp"
 #include "voxfx/surface_mesh.hpp"
 
@@ -82,6 +85,7 @@
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/particles_io.hpp"
 #include "voxfx/scene_io.hpp"
+#include "voxfx/sdf_io.hpp"
 #include "voxfx/sparse_grid.hpp"
 #include "voxfx/volume_io.hpp"
 

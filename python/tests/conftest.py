@@ -1,4 +1,5 @@
-"""Shared fixtures: the fetched data folder and the voxfx command of the same build.
+"""Shared fixtures: the fetched data folder, the voxfx command of the same build, and a probe of
+whether a call releases the GIL.
 
 ctest sets PYTHONPATH (the build tree's python/ folder), VOXFX_CLI_PATH and VOXFX_DATA_DIR_DEFAULT;
 VOXFX_DATA_DIR overrides the data folder as in the C++ tests. A missing data file skips its test,
@@ -6,6 +7,8 @@ or fails it when VOXFX_REQUIRE_DATA is set (CI, after fetching the data).
 """
 import os
 import shutil
+import threading
+import time
 
 import pytest
 
@@ -37,3 +40,32 @@ def cli():
     if not p or not os.path.exists(p):
         pytest.skip("the voxfx command is not built (set VOXFX_CLI_PATH)")
     return p
+
+
+@pytest.fixture(scope="session")
+def gil_stall():
+    """gil_stall(call) runs call() while a Python thread takes timestamps and returns the call's
+    duration and the longest gap between timestamps within it: with the GIL held for the whole
+    call the gap is most of the call (around its start and end the interpreter may switch threads
+    either way). The call should use one thread, so that a core stays free for the counter."""
+    def run(call):
+        stamps = []
+        stop = threading.Event()
+
+        def count():
+            while not stop.is_set():
+                stamps.append(time.perf_counter())
+
+        t = threading.Thread(target=count)
+        t.start()
+        while not stamps:
+            time.sleep(0.001)
+        t0 = time.perf_counter()
+        call()
+        t1 = time.perf_counter()
+        stop.set()
+        t.join()
+        inside = [t0] + [s for s in stamps if t0 < s < t1] + [t1]
+        return t1 - t0, max(b - a for a, b in zip(inside, inside[1:]))
+
+    return run

@@ -4,8 +4,6 @@ voxelizer's own bits for contains() at voxel centres."""
 import os
 import re
 import subprocess
-import threading
-import time
 
 import numpy as np
 import pytest
@@ -271,32 +269,16 @@ def test_contains_methods_agree_on_a_closed_mesh(data_path):
         voxfx.contains(mesh, pts[:, :2])
 
 
-def test_gil_is_released_while_voxelizing(data_path):
+def test_gil_is_released_while_voxelizing(data_path, gil_stall):
     # A Python thread takes timestamps while one voxelize call runs: with the GIL held during
     # the call, none could fall inside it.
     mesh = voxfx.load_mesh(data_path("meshes/elephant.off"))
-    stamps = []
-    stop = threading.Event()
-
-    def count():
-        while not stop.is_set():
-            stamps.append(time.perf_counter())
-
-    t = threading.Thread(target=count)
-    t.start()
-    while not stamps:
-        time.sleep(0.001)
-    t0 = time.perf_counter()
-    voxfx.voxelize(mesh, resolution=800, threads=1)  # one thread: a core stays free for the counter
-    t1 = time.perf_counter()
-    stop.set()
-    t.join()
-    # With the GIL held the counter stalls for the whole voxelization: a gap of most of the call.
-    # (Around the call's start and end the interpreter may switch threads either way.) The call
-    # takes about 35 ms on the project's VM, longer under load; it must be long enough to measure.
-    assert t1 - t0 > 0.01
-    inside = [t0] + [s for s in stamps if t0 < s < t1] + [t1]
-    assert max(b - a for a, b in zip(inside, inside[1:])) < 0.5 * (t1 - t0)
+    # one thread: a core stays free for the counter
+    duration, gap = gil_stall(lambda: voxfx.voxelize(mesh, resolution=800, threads=1))
+    # The call takes about 35 ms on the project's VM, longer under load; it must be long enough to
+    # measure. With the GIL held the counter stalls for most of it.
+    assert duration > 0.01
+    assert gap < 0.5 * duration
 
 
 def test_device_cuda_gives_the_cpu_grid_and_warns_without_a_gpu(data_path):

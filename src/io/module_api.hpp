@@ -20,7 +20,7 @@
 namespace voxfx::detail {
 
 /// Bump when a table below changes.
-inline constexpr uint32_t kModuleAbi = 5;
+inline constexpr uint32_t kModuleAbi = 6;
 
 /// The library's parallel-for handed to a module (so that modules follow withThreads and name no
 /// thread library): calls call(body, b, e) over chunks of `grain` items covering [begin, end).
@@ -73,6 +73,29 @@ struct SparseBrick {
 
 /// Topology operations of sparse grids (sparseCombine).
 enum class SparseOp : int { Union = 0, Intersection = 1, Difference = 2 };
+
+/// An 8 x 8 x 8 leaf of a level set: index origin (multiples of 8), the active mask and the 512
+/// values in OpenVDB's leaf order (offset (i << 6) | (j << 3) | k). Laid out as voxfx::SdfLeaf.
+struct VdbLevelSetLeaf {
+    int64_t origin[3];
+    uint64_t active[8];
+    float values[512];
+};
+
+/// A run of leaf-sized blocks along x inside the surface: blocks x0 .. x1 - 1 at (y, z), block units.
+struct VdbInsideRun {
+    int32_t x0, x1, y, z;
+};
+
+/// A narrow-band level set as the library computed it (see voxfx/sdf.hpp).
+struct VdbLevelSet {
+    int64_t dims[3] = {0, 0, 0};
+    float background = 0;
+    const VdbLevelSetLeaf* leaves = nullptr;
+    std::size_t leafCount = 0;
+    const VdbInsideRun* insideRuns = nullptr;
+    std::size_t insideRunCount = 0;
+};
 
 struct VdbModule {
     uint32_t abi;
@@ -143,6 +166,13 @@ struct VdbModule {
     /// box (dims and world box, as readBits) and `origin` the index of the box's first cell.
     void* (*sparseRead)(const uint8_t* data, std::size_t size, VdbReadBox* box, int64_t origin[3],
                         std::string* error);
+
+    /// A FloatGrid of class level set, background `ls.background` (+ outside, - inside): the
+    /// leaves as given, leaf-sized inactive tiles at -background for the inside runs (merged into
+    /// larger tiles where they fill a node), the placement's transform, the dimensions as
+    /// "voxfx_dims".
+    bool (*writeLevelSet)(const char* path, const VdbLevelSet& ls, const VdbPlacement& placement,
+                          const char* gridName, ParallelFor parallelFor, std::string* error);
 };
 
 // ---- voxfx_assimp: Assimp (glTF 2.0 and the long tail) ----------------------------------------

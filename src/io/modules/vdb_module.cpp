@@ -548,6 +548,48 @@ bool writeFloats(const char* path, const int64_t dims[3], const float* values, c
     });
 }
 
+bool writeLevelSet(const char* path, const VdbLevelSet& ls, const VdbPlacement& placement,
+                   const char* gridName, ParallelFor parallelFor, std::string* error) {
+    return guarded(error, [&] {
+        initializeOpenVdb();
+        using LeafT = openvdb::FloatGrid::TreeType::LeafNodeType;
+        static_assert(LeafT::SIZE == 512 && LeafT::NodeMaskType::WORD_COUNT == 8);
+        auto grid = openvdb::FloatGrid::create(ls.background);
+        // The leaves are made on worker threads and handed to the tree in their order (a
+        // deterministic tree, single-threaded insertion), as for bit grids.
+        std::vector<std::unique_ptr<LeafT>> leaves(ls.leafCount);
+        auto body = [&](int64_t b, int64_t e) {
+            for (int64_t l = b; l < e; ++l) {
+                const VdbLevelSetLeaf& in = ls.leaves[l];
+                auto leaf = std::make_unique<LeafT>(
+                    openvdb::Coord(int(in.origin[0]), int(in.origin[1]), int(in.origin[2])), ls.background,
+                    false);
+                typename LeafT::NodeMaskType mask;
+                for (int i = 0; i < 8; ++i) mask.template getWord<uint64_t>(openvdb::Index(i)) = in.active[i];
+                leaf->setValueMask(mask);
+                std::copy(in.values, in.values + 512, leaf->buffer().data());
+                leaves[std::size_t(l)] = std::move(leaf);
+            }
+        };
+        forChunks(parallelFor, 0, int64_t(ls.leafCount), 64, body);
+        auto& tree = grid->tree();
+        for (auto& leaf : leaves) tree.addLeaf(leaf.release());
+        for (std::size_t r = 0; r < ls.insideRunCount; ++r) {
+            const VdbInsideRun& run = ls.insideRuns[r];
+            for (int32_t x = run.x0; x < run.x1; ++x)
+                tree.addTile(1, openvdb::Coord(8 * x, 8 * run.y, 8 * run.z), -ls.background, false);
+        }
+        // Nodes made only of equal inactive tiles (inside: -background) become one tile.
+        tree.prune();
+        grid->setTransform(transformFor(placement));
+        grid->setName(gridName);
+        grid->setGridClass(openvdb::GRID_LEVEL_SET);
+        grid->insertMeta(kDimsMeta, openvdb::Vec3IMetadata(
+                                        openvdb::Vec3i(int(ls.dims[0]), int(ls.dims[1]), int(ls.dims[2]))));
+        writeFile(path, grid);
+    });
+}
+
 bool readBits(const uint8_t* data, std::size_t size, void* ctx,
               uint64_t* (*allocate)(void* ctx, const VdbReadBox& box, int64_t* wordsPerColumn),
               std::string* error) {
@@ -902,7 +944,7 @@ constexpr VdbModule kTable{
     kModuleAbi,       sizeof(VdbModule), writeBits,    writeFloats,    readBits,     readFloats,
     sparseCreate,     sparseDestroy,     sparseCopy,   sparseAddBrick, sparseFinish, sparseFromBits,
     sparseToBits,     sparseCount,       sparseBounds, sparseMemory,   sparseGet,    sparseCombine,
-    sparseMorphology, sparseCoordinates, sparseWrite,  sparseRead};
+    sparseMorphology, sparseCoordinates, sparseWrite,  sparseRead,     writeLevelSet};
 
 } // namespace
 } // namespace voxfx::detail
