@@ -427,28 +427,15 @@ TEST(GlassTest, CrossingCountingShadowsPassWhatExactShadowsPassThroughGlass) {
 }
 
 TEST(GlassTest, ExactGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
-    // A clear glass cube standing on a grey ground, seen from above, in a magenta environment. A ray
+    // A glass cube (green tint) standing on a grey ground, seen from above, in a magenta environment. A ray
     // entering the top is within the critical angle of the vertical, so it is totally reflected at
     // the sides and leaves through the bottom into the ground: no pixel of the top sees the
     // environment through the glass, only its Fresnel reflection (a few per cent of magenta over
-    // grey). (Rays entering a side can be totally reflected at the bottom and leave upwards: those
-    // rightly see the sky.) Skipping every opaque hit within epsilon of the exit (the ground under
-    // the bottom face) showed the environment below the ground through the top.
-    Scene s;
-    Material ground;
-    ground.baseColor = {0.5f, 0.5f, 0.5f};
-    ground.specular = 0;
-    Material glass;
-    glass.transmission = 1;
-    glass.ior = float(kGlassIor);
-    SceneMesh floor;
-    test::appendQuad(floor.mesh, {0, 0, 0}, {0, 0, 3}, {3, 0, 0});
-    floor.material = s.addMaterial(ground);
-    s.meshes.push_back(floor);
-    SceneMesh cube;
-    cube.mesh = test::makeBox({-0.5, 0, -0.5}, {0.5, 1, 0.5});
-    cube.material = s.addMaterial(glass);
-    s.meshes.push_back(cube);
+    // the ground's grey seen through green). (Rays entering a side can be totally reflected at the bottom and
+    // leave upwards: those rightly see the sky.) Skipping every opaque hit within epsilon of the exit (the
+    // ground under the bottom face) showed the environment below the ground through the top.
+    Scene s = glassTestScene(); // the ground, and the ball (mesh 1) made a cube
+    s.meshes[1].mesh = test::makeBox({-0.5, 0, -0.5}, {0.5, 1, 0.5});
     Light sun;
     sun.direction = normalize(Vec3d{0.2, -1, 0.1});
     sun.intensity = 2;
