@@ -158,23 +158,10 @@ TEST(RenderTest, LambertGroundMatchesHandDerivedRadiance) {
 // face has the same radiance (albedo / pi * E * cos + ambient; float rounding only). With normals
 // averaged over the corners the faces shade as if rounded; creaseAngle 180 still does that.
 TEST(RenderTest, ABoxWithSharedCornersHasFlatFacesAndTheCreaseAngleIsAnOption) {
-    Scene s;
-    Material m;
-    m.baseColor = {0.5f, 0.5f, 0.5f};
-    m.specular = 0;
-    SceneMesh box;
-    box.mesh = test::makeBox({-1, -1, -1}, {1, 1, 1});
-    box.material = s.addMaterial(m);
-    s.meshes.push_back(box);
-    Light sun;
-    sun.direction = normalize(Vec3d{-0.3, -1, -0.5});
-    sun.intensity = 2;
-    s.lights.push_back(sun);
-    Camera c;
-    c.position = {3, 2.5, 4};
-    c.target = {0, 0, 0};
-    c.fovY = 0.8;
-    s.cameras.push_back(c);
+    Scene s = groundScene(); // its Lambert material, sun and camera; the ground made a box
+    s.meshes[0].mesh = test::makeBox({-1, 0.2, -1}, {1, 2.2, 1});
+    s.lights[0].direction = normalize(Vec3d{-0.3, -1, -0.5});
+    const Camera& c = s.cameras[0];
     // The spread (max - min) of the red channel over the pixels of each face (triangles 2f, 2f + 1).
     auto faceSpread = [&](const RenderOptions& o) {
         const RenderResult r = render(s, c, o);
