@@ -45,9 +45,9 @@ namespace {
 // Appends `m` to `g` with vertex normals split at creases: the normal of a corner is the
 // area-weighted sum of the face normals around its vertex that are within the crease angle
 // (cos >= cosCrease) of its own face's; the corners of a vertex with equal normals share one copy
-// of it. Positions are copied exactly, so the split changes no surface, only its shading. Each
-// vertex costs O(degree^2).
-void appendCreased(SceneGeometry& g, const Mesh& m, double cosCrease) {
+// of it. Positions are copied exactly, so the split changes no surface, only its shading. A vertex
+// whose faces all lie within half the angle of their mean costs O(degree), others O(degree^2).
+void appendCreased(SceneGeometry& g, const Mesh& m, double cosCrease, double cosHalf) {
     const std::size_t V = m.positions.size(), T = m.triangleCount();
     std::vector<Vec3d> face(T), unit(T);
     for (std::size_t t = 0; t < T; ++t) {
@@ -71,11 +71,19 @@ void appendCreased(SceneGeometry& g, const Mesh& m, double cosCrease) {
             g.mesh.positions.push_back(m.positions[v]);
             g.normals.push_back(Vec3f{0, 0, 0});
         }
+        // Every face within half the angle of the mean: every pair within the angle, so every
+        // corner has the whole sum (the common case, O(degree)).
+        Vec3d all{0, 0, 0};
+        for (std::size_t k = start[v]; k < start[v + 1]; ++k) all += face[around[k] / 3];
+        bool smooth = length(all) > 0;
+        const Vec3d mean = smooth ? normalize(all) : all;
+        for (std::size_t k = start[v]; k < start[v + 1] && smooth; ++k)
+            smooth = dot(unit[around[k] / 3], mean) >= cosHalf;
         for (std::size_t j = start[v]; j < start[v + 1]; ++j) {
             const Vec3d& own = unit[around[j] / 3];
             const bool degenerate = dot(own, own) == 0; // takes the smooth normal
-            Vec3d n{0, 0, 0};
-            for (std::size_t k = start[v]; k < start[v + 1]; ++k)
+            Vec3d n = smooth ? all : Vec3d{0, 0, 0};
+            for (std::size_t k = start[v]; k < start[v + 1] && !smooth; ++k)
                 if (degenerate || dot(unit[around[k] / 3], own) >= cosCrease) n += face[around[k] / 3];
             auto same = std::find_if(made.begin(), made.end(), [&](const auto& e) { return e.first == n; });
             if (same == made.end()) {
@@ -98,7 +106,11 @@ SceneGeometry flattenScene(const Scene& scene, double creaseAngle) {
         fail("crease angle ", creaseAngle, " outside [0, 180] degrees");
     // Faces whose normals are within the angle are smoothed together (a tolerance keeps coplanar
     // faces together at 0 despite rounding).
-    const double cosCrease = std::cos(creaseAngle * (3.14159265358979323846 / 180)) - 1e-12;
+    const double radians = creaseAngle * (3.14159265358979323846 / 180);
+    const double cosCrease = std::cos(radians) - 1e-12;
+    // The shortcut's bound, kept on the safe side of rounding (a pair it lets through is within the
+    // angle by a margin far above the tolerance).
+    const double cosHalf = std::cos(radians / 2) + 1e-9;
     SceneGeometry g;
     std::size_t vertices = 0, triangles = 0;
     for (const SceneMesh& m : scene.meshes) {
@@ -126,7 +138,7 @@ SceneGeometry flattenScene(const Scene& scene, double creaseAngle) {
         g.triangleMaterial.insert(g.triangleMaterial.end(), m.mesh.triangleCount(), m.material);
         g.triangleMesh.insert(g.triangleMesh.end(), m.mesh.triangleCount(), uint32_t(k));
         if (m.normals.empty()) {
-            appendCreased(g, m.mesh, cosCrease);
+            appendCreased(g, m.mesh, cosCrease, cosHalf);
             continue;
         }
         // Given normals (glTF's) are kept as they are.
