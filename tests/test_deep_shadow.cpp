@@ -444,6 +444,35 @@ TEST(DeepShadowTest, PointLightsUseSixFacesAndLookupsFollowThem) {
     EXPECT_LT(double(wrong) / double(n), 0.05);
 }
 
+TEST(DeepShadowClusterTest, APointLightSaysItsMapsAreNotClustered) {
+    // clusters > 1 applies to spot and directional lights; a point light keeps one map per cube
+    // face, and the counters the renderer prints say so instead of passing over it in silence.
+    Scene s;
+    SceneMesh box;
+    box.mesh = test::makeBox({-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5});
+    box.material = s.addMaterial(Material{});
+    s.meshes.push_back(box);
+    box.mesh = test::makeBox({2, -0.5, -0.5}, {3, 0.5, 0.5});
+    s.meshes.push_back(box);
+    Light point;
+    point.type = LightType::Point;
+    point.position = {1, 3, 0};
+    RenderOptions r;
+    r.shadow = shadowOptionsNamed("deep");
+    setRenderOption(r, "dsmResolution", int64_t(32));
+    setRenderOption(r, "clusters", int64_t(4));
+    const ShadowOptions o = r.shadow;
+    const std::string said = summary(shadowStats(buildLightShadow(s, point, o)));
+    EXPECT_NE(said.find("clusters not applied to 1 point light"), std::string::npos) << said;
+    Light spot = point;
+    spot.type = LightType::Spot;
+    spot.direction = {0, -1, 0};
+    spot.outerConeAngle = 1.2;
+    const std::string spotSaid = summary(shadowStats(buildLightShadow(s, spot, o)));
+    EXPECT_EQ(spotSaid.find("not applied"), std::string::npos) << spotSaid;
+    EXPECT_NE(spotSaid.find("clustered maps"), std::string::npos) << spotSaid;
+}
+
 TEST(DeepShadowTest, InvalidScenesAndOptionsThrow) {
     VolumeScene s;
     VolumeSceneObject o;

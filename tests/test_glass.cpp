@@ -9,6 +9,7 @@
 #include "demo/demo_scenes.hpp"
 #include "test_util.hpp"
 #include "voxfx/attribute_grid.hpp"
+#include "voxfx/environment.hpp"
 #include "voxfx/glass.hpp"
 #include "voxfx/image_io.hpp"
 #include "voxfx/render.hpp"
@@ -101,6 +102,38 @@ TEST(GlassTest, ExactTracerExitsAParallelSlabParallelAndAttenuatedByTheTrueLengt
         const Vec3d entry = origin + d * tIn;
         const Vec3d exitPoint = entry + Vec3d{std::sin(tt), 0, -std::cos(tt)} * L;
         EXPECT_NEAR(length(p.exitPoint - exitPoint), 0, 1e-4) << a;
+    }
+}
+
+// A cube whose corners are shared by three faces (8 vertices, as the demos' boxes are), flattened as
+// the renderer does: its normals are split at the 90-degree creases, so the exact tracer sees flat
+// faces and the cube acts on a straight view ray as a slab (closed form above): parallel exit,
+// lateral shift h sin(a - tt) / cos(tt). Averaged corner normals bent it like a lens.
+TEST(GlassTest, ExactTracerSeesAFlattenedCubeWithSharedCornersAsASlab) {
+    Scene s;
+    Material glass;
+    glass.transmission = 1;
+    glass.ior = float(kGlassIor);
+    SceneMesh cube;
+    cube.mesh = test::makeBox({-1, -1, -1}, {1, 1, 1});
+    ASSERT_EQ(cube.mesh.positions.size(), 8u);
+    cube.material = s.addMaterial(glass);
+    s.meshes.push_back(cube);
+    const SceneGeometry geo = flattenScene(s);
+    ExactGlass exact(geo.mesh.view(), geo.normals, std::vector<uint32_t>(geo.mesh.triangleCount(), 0),
+                     {glassMedium(glass)});
+    const double h = 2;
+    for (const double a : {0.2, 0.5}) {
+        for (const Vec3d entry : {Vec3d{-0.3, 0.2, 1}, Vec3d{-0.7, -0.6, 1}, Vec3d{0.1, 0.55, 1}}) {
+            const Vec3d d = glassDirAt(a);
+            const GlassPath p = exact.trace(entry - d * 2, d, 16);
+            ASSERT_TRUE(p.hit);
+            EXPECT_EQ(p.events, 2);
+            EXPECT_NEAR(length(p.exitDir - d), 0, 1e-5) << a;
+            const double tt = std::asin(std::sin(a) / kGlassIor);
+            const Vec3d exitPoint = entry + Vec3d{std::sin(tt), 0, -std::cos(tt)} * (h / std::cos(tt));
+            EXPECT_NEAR(length(p.exitPoint - exitPoint), 0, 1e-4) << a << " " << entry.x << " " << entry.y;
+        }
     }
 }
 
@@ -391,6 +424,50 @@ TEST(GlassTest, CrossingCountingShadowsPassWhatExactShadowsPassThroughGlass) {
             EXPECT_FALSE(m.isGlass()) << m.name;
             EXPECT_EQ(m.shadowCrossingTransmittance(), m.crossingTransmittance()) << m.name;
         }
+}
+
+TEST(GlassTest, ExactGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
+    // A glass cube (green tint) standing on a grey ground, seen from above, in a magenta environment. A ray
+    // entering the top is within the critical angle of the vertical, so it is totally reflected at
+    // the sides and leaves through the bottom into the ground: no pixel of the top sees the
+    // environment through the glass, only its Fresnel reflection (a few per cent of magenta over
+    // the ground's grey seen through green). (Rays entering a side can be totally reflected at the bottom and
+    // leave upwards: those rightly see the sky.) Skipping every opaque hit within epsilon of the exit (the
+    // ground under the bottom face) showed the environment below the ground through the top.
+    Scene s = glassTestScene(); // the ground, and the ball (mesh 1) made a cube
+    s.meshes[1].mesh = test::makeBox({-0.5, 0, -0.5}, {0.5, 1, 0.5});
+    Light sun;
+    sun.direction = normalize(Vec3d{0.2, -1, 0.1});
+    s.lights.push_back(sun);
+    Camera cam = s.cameras[0]; // from higher up: the top fills the view
+    cam.position = {0.3, 3, 2};
+    cam.target = {0, 0.4, 0};
+    RenderOptions o;
+    o.width = 96;
+    o.height = 72;
+    o.shadow = shadowOptionsNamed("none");
+    o.glass = glassOptionsNamed("exact");
+    Image magenta(4, 2);
+    for (Vec3f& p : magenta.pixels) p = {1, 0, 1};
+    o.environment = std::make_shared<const Environment>(magenta);
+    const RenderResult r = render(s, cam, o);
+    const SceneGeometry geo = flattenScene(s);
+    const GBuffer g = renderGBuffer(geo, cameraFrame(cam, o.width, o.height));
+    int64_t top = 0, sky = 0;
+    for (int64_t y = 0; y < o.height; ++y)
+        for (int64_t x = 0; x < o.width; ++x) {
+            const uint32_t t = g.triangle[size_t(y * o.width + x)];
+            if (t == GBuffer::kNone || geo.triangleMesh[t] != 1) continue;
+            bool onTop = true;
+            for (int k = 0; k < 3; ++k)
+                onTop = onTop && geo.mesh.positions[geo.mesh.indices[3 * t + k]].y == 1;
+            if (!onTop) continue;
+            ++top;
+            const Vec3f& p = r.image.at(x, o.height - 1 - y);
+            sky += p.y < 0.5f * p.x;
+        }
+    EXPECT_GT(top, 600);
+    EXPECT_EQ(sky, 0) << "of " << top << " pixels of the top";
 }
 
 TEST(GlassTest, VoxelGlassRendersCloseToTheExactTracerAndDeterministically) {

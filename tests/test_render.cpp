@@ -154,6 +154,42 @@ TEST(RenderTest, LambertGroundMatchesHandDerivedRadiance) {
     EXPECT_EQ(ground, r.coveredPixels);
 }
 
+// A box with 8 shared corners, Lambert only, under a sun: every face is flat, so every pixel of a
+// face has the same radiance (albedo / pi * E * cos + ambient; float rounding only). With normals
+// averaged over the corners the faces shade as if rounded; creaseAngle 180 still does that.
+TEST(RenderTest, ABoxWithSharedCornersHasFlatFacesAndTheCreaseAngleIsAnOption) {
+    Scene s = groundScene(); // its Lambert material, sun and camera; the ground made a box
+    s.meshes[0].mesh = test::makeBox({-1, 0.2, -1}, {1, 2.2, 1});
+    s.lights[0].direction = normalize(Vec3d{-0.3, -1, -0.5});
+    const Camera& c = s.cameras[0];
+    // The spread (max - min) of the red channel over the pixels of each face (triangles 2f, 2f + 1).
+    auto faceSpread = [&](const RenderOptions& o) {
+        const RenderResult r = render(s, c, o);
+        const SceneGeometry geo = flattenScene(s, o.creaseAngle);
+        const GBuffer g = renderGBuffer(geo, cameraFrame(c, o.width, o.height));
+        std::vector<float> lo(6, 1e9f), hi(6, -1e9f);
+        int64_t n = 0;
+        for (int64_t y = 0; y < o.height; ++y)
+            for (int64_t x = 0; x < o.width; ++x) {
+                const uint32_t t = g.triangle[size_t(y * o.width + x)];
+                if (t == GBuffer::kNone) continue;
+                const float v = r.image.at(x, o.height - 1 - y).x;
+                lo[t / 2] = std::min(lo[t / 2], v);
+                hi[t / 2] = std::max(hi[t / 2], v);
+                ++n;
+            }
+        EXPECT_GT(n, 2000);
+        float spread = 0;
+        for (int f = 0; f < 6; ++f) spread = std::max(spread, hi[f] - lo[f]);
+        return spread;
+    };
+    RenderOptions o = smallOptions();
+    EXPECT_LT(faceSpread(o), 1e-5f);
+    ASSERT_TRUE(setRenderOption(o, "crease-angle", 180.0));
+    EXPECT_GT(faceSpread(o), 0.05f); // smoothed over the edges: the faces look rounded
+    EXPECT_THROW(setRenderOption(o, "creaseAngle", 200.0), Error);
+}
+
 TEST(RenderTest, ExposureScalesTheWholeLinearImageBackgroundIncluded) {
     // --exposure multiplies the linear image: ground and background pixels alike (an HDR file
     // written with exposure k is k times the exposure-1 one everywhere).
@@ -582,6 +618,19 @@ TEST(RenderTest, DemoCommandRendersTheTreeWithEveryShadowKindOfAll) {
         RenderOptions o = smallOptions(k, 4, 2);
         EXPECT_THROW(render(tree, tree.cameras.at(0), o), Error) << k;
     }
+}
+
+TEST(RenderTest, DemoSaysWhichFlagsAShadowKindDoesNotUse) {
+    // Absorption has no voxel mode (its attribute grid counts each crossing once); the demo says
+    // so instead of rendering as if --voxel-mode had been honoured. Transmittance uses it.
+    test::TempDir dir;
+    const test::CommandRun r = test::runVoxfx(
+        dir, "demo --scenes tree --shadows absorption,transmittance --voxel-mode conservative --width 4 "
+             "--height 2 --supersample 1 --grid 8 --grid-depth 8 -q -o " +
+                 dir.path().string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.err.find("--voxel-mode does nothing with --shadows absorption"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("does nothing with --shadows transmittance"), std::string::npos) << r.err;
 }
 
 } // namespace

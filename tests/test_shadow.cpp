@@ -229,8 +229,8 @@ TEST(ShadowTest, OneLeafLayerTransmitsExactlyItsFactor) {
         oneLeafScene({0, 2, 0}, {0, 0, 1}, {1, 0, 0}, leafMaterial({0.2f, 0.5f, 0.1f}, 0.5f, 0.5f));
     const Vec3f t = s.materials[0].crossingTransmittance();
     EXPECT_NEAR(t.y, 0.5f + 0.5f * 0.5f * 0.5f, 1e-6f); // hand: 0.625
-    // Surface (ED06): one cell per leaf and column, exactly t. Conservative: every cell the leaf
-    // touches, t or t^2 for a flat leaf (t^2 when it lies on a slice boundary).
+    // Surface (ED06): one cell per leaf and column, exactly t. Conservative: the run of cells the
+    // leaf touches (two when it lies on a slice boundary) is one crossing: exactly t too.
     for (const VoxelizeMode mode : {VoxelizeMode::Surface, VoxelizeMode::Conservative})
         for (const Slicing slicing : {Slicing::Uniform, Slicing::Local}) {
             const LightShadow sh =
@@ -238,12 +238,51 @@ TEST(ShadowTest, OneLeafLayerTransmitsExactlyItsFactor) {
             const std::string what = std::string(toString(mode)) + " " + toString(slicing);
             for (const double x : {-0.8, -0.3, 0.0, 0.5, 0.9}) {
                 const Vec3f v = visibilityOf(sh, {x, 0, 0.1 * x}, {0, 0, 0});
-                const int cells = mode == VoxelizeMode::Surface || std::abs(v.y - t.y) < 1e-5f ? 1 : 2;
-                for (int c = 0; c < 3; ++c) EXPECT_NEAR(v[c], std::pow(t[c], float(cells)), 1e-5f) << what;
+                for (int c = 0; c < 3; ++c) EXPECT_NEAR(v[c], t[c], 1e-5f) << what;
             }
             EXPECT_EQ(visibilityOf(sh, {1.5, 0, 0}, {0, 0, 0}).y, 1.0f) << what;
             EXPECT_EQ(visibilityOf(sh, {0, 2.5, 0}, {0, 0, 0}).y, 1.0f) << what; // above the leaf
         }
+}
+
+TEST(ShadowTest, ConservativeGridsCountATiltedLeafOnce) {
+    // A leaf tilted 45 degrees across the sun's rays fills 2-3 consecutive cells of a column in a
+    // conservative grid; it is one crossing, so the ground under it receives exactly t, as in the
+    // surface grid (hand: one leaf, t = (1 - a) + a * tr * colour).
+    const Scene s =
+        oneLeafScene({0, 2, 0}, {0, 0, 1}, {0.7, 0.7, 0}, leafMaterial({0.2f, 0.5f, 0.1f}, 0.5f, 0.5f));
+    const Vec3f t = s.materials[0].crossingTransmittance();
+    for (const VoxelizeMode mode : {VoxelizeMode::Surface, VoxelizeMode::Conservative})
+        for (const Slicing slicing : {Slicing::Uniform, Slicing::Local}) {
+            const LightShadow sh =
+                buildLightShadow(s, sun({0, -1, 0}), gridOptions("transmittance", 64, slicing, mode));
+            const std::string what = std::string(toString(mode)) + " " + toString(slicing);
+            for (const double x : {-0.5, -0.2, 0.0, 0.3, 0.55})
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_NEAR(visibilityOf(sh, {x, 0, 0.3}, {0, 0, 0})[c], t[c], 1e-5f) << what;
+        }
+}
+
+TEST(ShadowTest, ConservativeTransmittanceIsAboutAsCloseToExactAsSurface) {
+    // Against exact transport on foliage: the conservative grid, which fills every cell a leaf
+    // touches, counts each leaf once, so it errs about as little as ED06's surface grid; what it
+    // adds is its coverage (a leaf darkens every column it touches: about a column's width around
+    // each leaf, less at a finer grid). Counting cells made it 2-3 times as dark (mean error
+    // 0.20 at 64 and 0.18 at 128 here, against the surface grid's 0.12 and 0.06; now 0.14 and 0.09).
+    const Scene s = leafScene(500, 2, 51);
+    const Light light = sun();
+    const Reference pts = exactReference(s, light, 1500, 6);
+    double previous = 1;
+    for (const int64_t n : {64, 128}) {
+        const ErrorStats surface = shadowError(s, light, pts, gridOptions("transmittance", n));
+        const ErrorStats conservative = shadowError(
+            s, light, pts, gridOptions("transmittance", n, Slicing::Uniform, VoxelizeMode::Conservative));
+        std::printf("transmittance %lld: surface mean %.4f, conservative mean %.4f\n", (long long)n,
+                    surface.mean, conservative.mean);
+        EXPECT_LT(conservative.mean, 1.5 * surface.mean) << n;
+        EXPECT_LT(conservative.mean, previous) << n;
+        previous = conservative.mean;
+    }
 }
 
 TEST(ShadowTest, StackedLayersMultiplyAndAbsorptionAddsPerCrossing) {

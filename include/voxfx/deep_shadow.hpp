@@ -47,7 +47,8 @@ struct DeepShadowOptions {
     double stepVoxels = 1.0;   ///< volume sample step, in smallest voxel spacings
     double termination = 1e-4; ///< early ray termination: V below this becomes 0
     /// Clustering (Bornik et al. §4.4): at most this many maps per light view, each fitted to a
-    /// cluster of objects (0 or 1: one map fitted to all casters). Spot and directional lights.
+    /// cluster of objects (0 or 1: one map fitted to all casters). Spot and directional lights;
+    /// a point light keeps its six cube-face maps, and the stats say so (unclusteredPointLights).
     int clusters = 0;
     /// d0: objects whose light-space projected boxes differ by at most this (fraction of the
     /// light view's side) share a cluster.
@@ -85,9 +86,14 @@ struct DeepShadowTimings {
 struct DeepShadowStats : DsmStats {
     DsmStorage storage = DsmStorage::Chunked;
     DeepShadowTimings timings;
+    int64_t clusteredMaps = 0; ///< cluster groups of lights built with clusters > 1 (summed)
+    /// Lights for which clusters > 1 was asked but not applied: point lights (their six cube-face
+    /// maps each fit every caster; clustering them is not implemented).
+    int64_t unclusteredPointLights = 0;
     DeepShadowStats& operator+=(const DeepShadowStats& o);
     /// "T texels, nodes per texel mean M max X, B MiB chunked (fixed layout sized by the worst
-    /// texel: F MiB)"; empty without texels.
+    /// texel: F MiB)", then ", N clustered maps" or ", clusters not applied to N point light(s)"
+    /// where those apply; empty without texels.
     std::string summary() const;
 };
 
@@ -128,6 +134,7 @@ private:
     std::vector<std::size_t> groupBegin_;
     DeepShadowTimings timings_;
     DeepShadowOptions options_;
+    bool clustered_ = false, pointUnclustered_ = false; ///< clusters > 1: applied; asked, point light
 };
 
 /// The exact (uncompressed, epsilon ignored) visibility function along texel (x, y) of `view`, as

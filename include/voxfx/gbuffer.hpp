@@ -19,8 +19,10 @@
 namespace voxfx {
 
 /// All meshes of a scene as one mesh, with per-triangle material and source mesh and per-vertex
-/// unit normals (given ones, or area-weighted face normals). The meshes the G-buffer draws come
-/// first, in scene order; the meshes of blended materials (Material::blend) follow them.
+/// unit normals: a mesh's given normals (glTF's) as they are; otherwise area-weighted face normals
+/// split at creases, the vertex copied (same position) once per distinct normal around it, so a
+/// box's faces are flat and a sphere is smooth. The meshes the G-buffer draws come first, in scene
+/// order; the meshes of blended materials (Material::blend) follow them.
 struct SceneGeometry {
     Mesh mesh;
     std::vector<uint32_t> triangleMaterial, triangleMesh;
@@ -29,7 +31,13 @@ struct SceneGeometry {
     /// the fragment-list pass draws (they still cast shadows and refract in glass like the others).
     std::size_t drawnTriangles = 0;
 };
-SceneGeometry flattenScene(const Scene& scene);
+/// The crease angle flattenScene splits normals at by default, degrees (RenderOptions::creaseAngle).
+inline constexpr double kDefaultCreaseAngle = 45;
+/// Faces around a vertex whose normals differ by at most `creaseAngle` degrees (0..180) share a
+/// smoothed normal; a wider angle is a crease (180: every vertex smooth; 0: flat faces). Cost
+/// O(degree^2) per vertex. Throws voxfx::Error for an angle outside [0, 180] or more than 2^32 - 1
+/// vertices after the split.
+SceneGeometry flattenScene(const Scene& scene, double creaseAngle = kDefaultCreaseAngle);
 
 /// Nearest fragment per pixel. Pixel (x, y) with y up; triangle == kNone where nothing was hit.
 struct GBuffer {

@@ -3,8 +3,9 @@
 //
 // A frame runs an ordered list of passes over one frame state (render/renderer.cpp), each timed
 // (RenderTimings::passes, in this order):
-//   flatten   every SceneMesh into one indexed mesh with per-triangle material and vertex normals;
-//             meshes of blended materials last (voxfx/gbuffer.hpp).
+//   flatten   every SceneMesh into one indexed mesh with per-triangle material and vertex normals
+//             (split at creases, RenderOptions::creaseAngle); meshes of blended materials last
+//             (voxfx/gbuffer.hpp).
 //   G-buffer  the camera is a perspective Frame whose columns are pixels; a consumer of the one
 //             rasterizer keeps the nearest centre-sampled fragment per pixel (ties to the lower
 //             triangle index, so the result does not depend on the thread count).
@@ -74,9 +75,12 @@ struct RenderOptions {
     /// Volume ray casting: volume bricks the transfer function leaves transparent are not sampled
     /// (EmptySpace, voxfx/segment_walker.hpp); the image is the same either way, only faster.
     bool skipEmptySpace = true;
+    /// Meshes without normals of their own: faces meeting at more than this angle (degrees, 0..180)
+    /// have a crease between them, smaller angles are smoothed over (flattenScene, gbuffer.hpp).
+    double creaseAngle = kDefaultCreaseAngle;
 
     /// The named fields of RenderOptions itself: width, height, supersample, exposure, ambient,
-    /// background, volumeStep, emptySpaceSkipping, defaultLights.
+    /// background, volumeStep, emptySpaceSkipping, defaultLights, creaseAngle.
     static std::span<const OptionField<RenderOptions>> fields();
 };
 

@@ -5,7 +5,8 @@
 // whose shadowCrossingTransmittance is not zero) are grouped by that transmittance, one slicemap per
 // group (a "channel"), voxelized from the light (surface or conservative, uniform or local
 // slicing). At a point p: n_k = filled cells of channel k between the light and p (a popcount of
-// the column's words in front of p's slice, leaving out the skipped cells; voxfx/light_grid.hpp),
+// the column's words in front of p's slice, leaving out the skipped cells; voxfx/light_grid.hpp;
+// conservative grids count runs of consecutive filled cells instead, one per leaf crossed),
 // and visibility = map(p) * prod_k t_k ^ n_k (t_k: the group's RGB transmittance), so groups of
 // different colours tint.
 //
@@ -63,9 +64,12 @@ public:
                                         std::span<const Vec3f> transmittances, VoxelizeMode mode,
                                         Slicing slicing, Progress* progress = nullptr,
                                         Device device = Device::Cpu);
-    /// Filled cells of channel k in p's column strictly in front of the last `skipCells` cells up to
-    /// and including p's cell: popcount of slices [0, s - skipCells + 1) with s = p's slice (whole
-    /// words plus a mask). Points in front of the grid count 0, behind it count the whole column.
+    /// Surface mode: filled cells of channel k in p's column strictly in front of the last
+    /// `skipCells` cells up to and including p's cell: popcount of slices [0, s - skipCells + 1)
+    /// with s = p's slice (whole words plus a mask). Conservative mode: the runs of consecutive
+    /// filled cells that end in those slices (a leaf fills every cell it touches, 2-3 in a column
+    /// when tilted, and is one crossing). Points in front of the grid count 0, behind it count the
+    /// whole column.
     int64_t cellsBefore(std::size_t k, const Vec3d& world, int64_t skipCells) const;
     /// prod_k crossingTransmittance_k ^ cellsBefore(k, p). 1 outside the view.
     Vec3f transmittance(const Vec3d& world, int64_t skipCells) const;
@@ -80,6 +84,7 @@ private:
     Vec3f columnTransmittance(int64_t column, double depth, int64_t skipCells) const;
     int64_t columnCells(std::size_t k, int64_t column, double depth, int64_t skipCells) const;
     LightView view_;
+    VoxelizeMode mode_ = VoxelizeMode::Surface;
     std::vector<Channel> channels_;
     /// Per channel: crossingTransmittance ^ n for n = 0 .. D (std::pow at build time; a lookup is
     /// then a table read instead of three pow calls per channel).

@@ -108,7 +108,7 @@ def test_scene_settings_apply_and_keywords_override_them(tmp_path):
 def test_every_technique_option_is_a_keyword_and_bad_ones_are_refused(tmp_path):
     names = {o["name"] for o in voxfx.render_options()}
     for n in ("fixed_nodes", "dsm_step", "termination", "cluster_threshold", "grid_resolution", "glass_grid",
-              "frosted_blur", "receiver_slices", "empty_space_skipping"):
+              "frosted_blur", "receiver_slices", "empty_space_skipping", "crease_angle"):
         assert n in names, n
     kinds = [k for k, _ in voxfx.shadow_kinds()]
     assert kinds == ["none", "map", "transmittance", "absorption", "volumes", "exact", "deep"]

@@ -57,7 +57,7 @@ std::vector<std::string> splitList(const std::string& s, const std::vector<std::
 void renderDemo(const DemoArgs& a, const Scene& scene, const std::string& name, const std::string& kind) {
     RenderOptions o = renderOptionsFor(scene, kind); // the glass demo renders its glass as glass
     demoImage(o);
-    a.flags.apply(o, false);
+    a.flags.apply(o, true); // a flag the kind does not use says so (absorption has no --voxel-mode)
     o.threads = a.threads;
     ProgressLine progress("rendering " + name + " (" + kind + ")", !a.quiet);
     o.progress = &progress;

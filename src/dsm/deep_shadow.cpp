@@ -170,7 +170,11 @@ DeepShadow DeepShadow::build(const VolumeScene& scene, const Light& light, const
     checkDeepShadowOptions(options);
     scene.validate();
     std::vector<LightView> all = makeLightViews(light, scene.bounds(true), options.resolution, 1);
-    if (options.clusters <= 1 || light.type == LightType::Point) return build(scene, all, options, progress);
+    if (options.clusters <= 1 || light.type == LightType::Point) {
+        DeepShadow out = build(scene, all, options, progress);
+        out.pointUnclustered_ = options.clusters > 1;
+        return out;
+    }
     // Project every casting object's bounds into the light view fitted to all casters.
     const LightView& base = all[0];
     std::vector<std::size_t> casters;
@@ -220,6 +224,7 @@ DeepShadow DeepShadow::build(const VolumeScene& scene, const Light& light, const
         out.timings_.buildMs += d.timings_.buildMs;
     }
     out.groupBegin_.push_back(out.views_.size());
+    out.clustered_ = true;
     return out;
 }
 
@@ -310,6 +315,8 @@ DeepShadowStats DeepShadow::stats() const {
     DeepShadowStats s;
     s.storage = options_.storage;
     s.timings = timings_;
+    s.clusteredMaps = clustered_ ? int64_t(groupBegin_.size()) - 1 : 0;
+    s.unclusteredPointLights = pointUnclustered_;
     for (const DeepShadowMap& m : maps_) {
         const DsmStats& t = m.stats();
         s.texels += t.texels;
@@ -376,6 +383,8 @@ DeepShadowStats& DeepShadowStats::operator+=(const DeepShadowStats& o) {
     storage = o.storage;
     timings.fragmentsMs += o.timings.fragmentsMs;
     timings.buildMs += o.timings.buildMs;
+    clusteredMaps += o.clusteredMaps;
+    unclusteredPointLights += o.unclusteredPointLights;
     return *this;
 }
 
@@ -384,7 +393,11 @@ std::string DeepShadowStats::summary() const {
     const double fixedMiB = double(texels) * double(maxNodes * int64_t(sizeof(DsmNode)) + 2) / 1048576.0;
     return countText(texels) + " texels, nodes per texel mean " + numberText(meanNodes()) + " max " +
            countText(maxNodes) + ", " + numberText(double(bytes) / 1048576.0) + " MiB " + toString(storage) +
-           " (fixed layout sized by the worst texel: " + numberText(fixedMiB) + " MiB)";
+           " (fixed layout sized by the worst texel: " + numberText(fixedMiB) + " MiB)" +
+           (clusteredMaps > 0 ? ", " + countText(clusteredMaps) + " clustered maps" : "") +
+           (unclusteredPointLights > 0 ? ", clusters not applied to " + countText(unclusteredPointLights) +
+                                             " point light(s): one map per cube face fits every caster"
+                                       : "");
 }
 
 std::vector<DsmNode> deepShadowTexel(const VolumeScene& scene, const LightView& view, int64_t x, int64_t y,

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "voxfx/error.hpp"
 #include "voxfx/raster.hpp"
 
 namespace voxfx {
@@ -39,7 +40,77 @@ struct NearestFragmentConsumer {
 
 } // namespace
 
-SceneGeometry flattenScene(const Scene& scene) {
+namespace {
+
+// Appends `m` to `g` with vertex normals split at creases: the normal of a corner is the
+// area-weighted sum of the face normals around its vertex that are within the crease angle
+// (cos >= cosCrease) of its own face's; the corners of a vertex with equal normals share one copy
+// of it. Positions are copied exactly, so the split changes no surface, only its shading. A vertex
+// whose faces all lie within half the angle of their mean costs O(degree), others O(degree^2).
+void appendCreased(SceneGeometry& g, const Mesh& m, double cosCrease, double cosHalf) {
+    const std::size_t V = m.positions.size(), T = m.triangleCount();
+    std::vector<Vec3d> face(T), unit(T);
+    for (std::size_t t = 0; t < T; ++t) {
+        const Vec3d a(m.positions[m.indices[3 * t]]), b(m.positions[m.indices[3 * t + 1]]),
+            c(m.positions[m.indices[3 * t + 2]]);
+        face[t] = cross(b - a, c - a); // twice the area
+        const double len = length(face[t]);
+        unit[t] = len > 0 ? face[t] / len : Vec3d{0, 0, 0};
+    }
+    // The corners around each vertex, in corner order (so sums run in a fixed order).
+    std::vector<std::size_t> start(V + 1, 0), around(3 * T);
+    for (const uint32_t i : m.indices) ++start[i + 1];
+    for (std::size_t v = 0; v < V; ++v) start[v + 1] += start[v];
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t c = 0; c < 3 * T; ++c) around[fill[m.indices[c]]++] = c;
+    std::vector<uint32_t> index(3 * T);
+    std::vector<std::pair<Vec3d, uint32_t>> made;
+    for (std::size_t v = 0; v < V; ++v) {
+        made.clear();
+        if (start[v] == start[v + 1]) { // unused: kept, so the scene's bounds do not change
+            g.mesh.positions.push_back(m.positions[v]);
+            g.normals.push_back(Vec3f{0, 0, 0});
+        }
+        // Every face within half the angle of the mean: every pair within the angle, so every
+        // corner has the whole sum (the common case, O(degree)).
+        Vec3d all{0, 0, 0};
+        for (std::size_t k = start[v]; k < start[v + 1]; ++k) all += face[around[k] / 3];
+        bool smooth = length(all) > 0;
+        const Vec3d mean = smooth ? normalize(all) : all;
+        for (std::size_t k = start[v]; k < start[v + 1] && smooth; ++k)
+            smooth = dot(unit[around[k] / 3], mean) >= cosHalf;
+        for (std::size_t j = start[v]; j < start[v + 1]; ++j) {
+            const Vec3d& own = unit[around[j] / 3];
+            const bool degenerate = dot(own, own) == 0; // takes the smooth normal
+            Vec3d n = smooth ? all : Vec3d{0, 0, 0};
+            for (std::size_t k = start[v]; k < start[v + 1] && !smooth; ++k)
+                if (degenerate || dot(unit[around[k] / 3], own) >= cosCrease) n += face[around[k] / 3];
+            auto same = std::find_if(made.begin(), made.end(), [&](const auto& e) { return e.first == n; });
+            if (same == made.end()) {
+                if (g.mesh.positions.size() >= 0xffffffffu)
+                    fail("the scene's vertices, split at creases, are more than 32-bit indices allow");
+                same = made.insert(made.end(), {n, uint32_t(g.mesh.positions.size())});
+                g.mesh.positions.push_back(m.positions[v]);
+                g.normals.push_back(length(n) > 0 ? Vec3f(normalize(n)) : Vec3f{0, 0, 0});
+            }
+            index[around[j]] = same->second;
+        }
+    }
+    g.mesh.indices.insert(g.mesh.indices.end(), index.begin(), index.end());
+}
+
+} // namespace
+
+SceneGeometry flattenScene(const Scene& scene, double creaseAngle) {
+    if (!(creaseAngle >= 0 && creaseAngle <= 180))
+        fail("crease angle ", creaseAngle, " outside [0, 180] degrees");
+    // Faces whose normals are within the angle are smoothed together (a tolerance keeps coplanar
+    // faces together at 0 despite rounding).
+    const double radians = creaseAngle * (3.14159265358979323846 / 180);
+    const double cosCrease = std::cos(radians) - 1e-12;
+    // The shortcut's bound, kept on the safe side of rounding (a pair it lets through is within the
+    // angle by a margin far above the tolerance).
+    const double cosHalf = std::cos(radians / 2) + 1e-9;
     SceneGeometry g;
     std::size_t vertices = 0, triangles = 0;
     for (const SceneMesh& m : scene.meshes) {
@@ -64,27 +135,17 @@ SceneGeometry flattenScene(const Scene& scene) {
     for (const std::size_t k : order) {
         const SceneMesh& m = scene.meshes[k];
         if (!blended(m)) g.drawnTriangles += m.mesh.triangleCount();
+        g.triangleMaterial.insert(g.triangleMaterial.end(), m.mesh.triangleCount(), m.material);
+        g.triangleMesh.insert(g.triangleMesh.end(), m.mesh.triangleCount(), uint32_t(k));
+        if (m.normals.empty()) {
+            appendCreased(g, m.mesh, cosCrease, cosHalf);
+            continue;
+        }
+        // Given normals (glTF's) are kept as they are.
         const auto base = uint32_t(g.mesh.positions.size());
         g.mesh.positions.insert(g.mesh.positions.end(), m.mesh.positions.begin(), m.mesh.positions.end());
         for (const uint32_t i : m.mesh.indices) g.mesh.indices.push_back(base + i);
-        g.triangleMaterial.insert(g.triangleMaterial.end(), m.mesh.triangleCount(), m.material);
-        g.triangleMesh.insert(g.triangleMesh.end(), m.mesh.triangleCount(), uint32_t(k));
-        if (!m.normals.empty()) {
-            g.normals.insert(g.normals.end(), m.normals.begin(), m.normals.end());
-            continue;
-        }
-        // Area-weighted face normals (the cross product's length is twice the area).
-        std::vector<Vec3d> sum(m.mesh.positions.size());
-        for (std::size_t t = 0; t < m.mesh.triangleCount(); ++t) {
-            const uint32_t a = m.mesh.indices[3 * t], b = m.mesh.indices[3 * t + 1],
-                           c = m.mesh.indices[3 * t + 2];
-            const Vec3d pa(m.mesh.positions[a]), pb(m.mesh.positions[b]), pc(m.mesh.positions[c]);
-            const Vec3d n = cross(pb - pa, pc - pa);
-            sum[a] += n;
-            sum[b] += n;
-            sum[c] += n;
-        }
-        for (const Vec3d& n : sum) g.normals.push_back(Vec3f(normalize(n)));
+        g.normals.insert(g.normals.end(), m.normals.begin(), m.normals.end());
     }
     return g;
 }

@@ -61,8 +61,13 @@ void shadeGlass(FrameState& frame) {
     }
     auto incoming = [&](const Vec3d& from, const Vec3d& dir, double blur) -> Vec3f {
         if (behind) {
-            const TriangleTracer::Hit h =
-                behind->intersect(from, dir, epsilon, std::numeric_limits<double>::infinity());
+            // The opaque scene holds no glass triangle, so `from` (on the glass) left none of its
+            // triangles: a hit within epsilon counts, on either side (a glass box standing on the
+            // ground leaves through its bottom into the ground at t = 0 up to rounding; skipping
+            // it showed the sky below the ground through the box).
+            TriangleTracer::Hit h =
+                behind->intersect(from - dir * epsilon, dir, 0, std::numeric_limits<double>::infinity());
+            h.t -= epsilon;
             if (h.hit) {
                 const size_t t = opaqueTriangle[h.triangle];
                 const uint32_t ia = geometry.mesh.indices[3 * t], ib = geometry.mesh.indices[3 * t + 1],

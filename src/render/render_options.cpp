@@ -23,7 +23,10 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
             "emptySpaceSkipping",
             "volumes: skip the bricks the transfer function leaves transparent (same image)"),
         flagOption<O, &O::defaultLights>("defaultLights",
-                                         "light a scene without lights by a sun and the environment")};
+                                         "light a scene without lights by a sun and the environment"),
+        numberOption<O, &O::creaseAngle>(
+            "creaseAngle",
+            "meshes without normals: faces meeting at a wider angle (degrees) are not smoothed", 0, 180)};
     return table;
 }
 

@@ -34,7 +34,7 @@ private:
 
 using detail::FrameState;
 
-void flattenPass(FrameState& f, Progress*) { f.geometry = flattenScene(f.scene); }
+void flattenPass(FrameState& f, Progress*) { f.geometry = flattenScene(f.scene, f.options.creaseAngle); }
 
 void gbufferPass(FrameState& f, Progress* progress) {
     f.gbuffer = renderGBuffer(f.geometry, cameraFrame(f.camera, f.width, f.height), progress);

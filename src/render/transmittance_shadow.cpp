@@ -7,6 +7,8 @@
 // casters go to a standard shadow map (shadow_map.hpp).
 #include "voxfx/transmittance_shadow.hpp"
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "render/light_grid_lookup.hpp"
@@ -27,6 +29,7 @@ TransmittanceShadowMap TransmittanceShadowMap::build(const LightView& view, std:
              toString(mode));
     TransmittanceShadowMap map;
     map.view_ = view;
+    map.mode_ = mode;
     for (std::size_t k = 0; k < groups.size(); ++k) {
         VoxelizeOptions vo;
         vo.mode = mode;
@@ -43,10 +46,36 @@ TransmittanceShadowMap TransmittanceShadowMap::build(const LightView& view, std:
     return map;
 }
 
+namespace {
+
+// Runs of filled cells (maximal sequences of consecutive ones) whose last cell lies in [0, end):
+// cell i ends a run when it is filled and i + 1 is not (the padding bits beyond the depth are 0).
+// One popcount per word.
+int64_t runsEndingBefore(const BitGrid& bits, int64_t column, int64_t end) {
+    end = std::min(end, bits.depth());
+    if (end <= 0) return 0;
+    const uint64_t* words = bits.column(column);
+    const int64_t last = (end - 1) >> 6, P = bits.wordsPerColumn();
+    int64_t n = 0;
+    for (int64_t w = 0; w <= last; ++w) {
+        const uint64_t next = w + 1 < P ? words[w + 1] & 1u : 0;
+        uint64_t ends = words[w] & ~((words[w] >> 1) | (next << 63));
+        if (w == last) ends &= ~uint64_t(0) >> (63 - ((end - 1) & 63));
+        n += std::popcount(ends);
+    }
+    return n;
+}
+
+} // namespace
+
 int64_t TransmittanceShadowMap::columnCells(std::size_t k, int64_t column, double depth,
                                             int64_t skipCells) const {
     const VoxelGrid& g = channels_[k].grid;
     const int64_t end = detail::slicesInFront(g.frame, column, depth, skipCells);
+    // Surface: ED06's count of filled cells. Conservative: a leaf fills every cell its depth range
+    // over the column touches (2-3 for a tilted one), so the occluders are the runs of cells, each
+    // counted once when it ends in front of p's skipped cells.
+    if (mode_ == VoxelizeMode::Conservative) return runsEndingBefore(g.bits, column, end);
     return countColumnRange(g.bits.column(column), g.frame.depth(), 0, end);
 }
 
