@@ -69,6 +69,8 @@ def test_an_unshadowed_ground_has_the_closed_form_radiance(tmp_path):
         ("transmittance", {"grid_resolution": 64, "slicing": "local", "bilinear": True},
          "--grid 64 --slicing local --bilinear"),
         ("absorption", {"grid_resolution": 48, "opaque_absorption": 4.0}, "--grid 48 --opaque-absorption 4"),
+        ("translucency", {"grid_resolution": 40, "extinction": 2.5, "fill": "parity"},
+         "--grid 40 --extinction 2.5 --fill parity"),
         ("volumes", {"volume_culling": False}, "--no-volume-culling"),
         ("deep", {"dsm_resolution": 96, "dsm_storage": "fixed", "fixed_nodes": 8, "termination": 0.01,
                   "dsm_step": 0.5, "clusters": 2, "cluster_threshold": 0.1},
@@ -111,7 +113,7 @@ def test_every_technique_option_is_a_keyword_and_bad_ones_are_refused(tmp_path):
               "frosted_blur", "receiver_slices", "empty_space_skipping"):
         assert n in names, n
     kinds = [k for k, _ in voxfx.shadow_kinds()]
-    assert kinds == ["none", "map", "transmittance", "absorption", "volumes", "exact", "deep"]
+    assert kinds == ["none", "map", "transmittance", "absorption", "translucency", "volumes", "exact", "deep"]
     assert [m for m, _ in voxfx.glass_methods()] == ["none", "exact", "multi", "two-surface", "frosted"]
     scene = write_scene(tmp_path)
     with pytest.raises(voxfx.ArgumentError, match="unknown render option 'shininess'"):
