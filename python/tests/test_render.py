@@ -5,6 +5,7 @@ command line's PFM output of the same options (the keywords must reach the libra
 do: same pixels, bit for bit), and the options catalog (every technique's options are keywords).
 """
 import os
+import re
 import signal
 import subprocess
 import threading
@@ -82,7 +83,8 @@ def test_keywords_reach_the_library_as_the_command_line_flags_do(tmp_path, cli, 
     scene = write_scene(tmp_path)
     img, report = voxfx.render(scene, shadows=shadows, width=48, height=36, report=True, **options)
     # Every keyword is in the options the technique ran with ("fixed_nodes 8" for fixed_nodes=8).
-    ran = dict(item.split(" ", 1) for item in report["shadow_options"].split(", "))
+    # Split at the commas between options, not inside a triple's "(1, 1, 1)".
+    ran = dict(item.split(" ", 1) for item in re.split(r", (?![^(]*\))", report["shadow_options"]))
     for name, value in options.items():
         want = {True: "on", False: "off"}.get(value, value) if isinstance(value, bool) else value
         assert ran[name] == str(want) if not isinstance(want, float) else float(ran[name]) == want, (name, ran)
