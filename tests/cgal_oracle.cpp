@@ -38,6 +38,14 @@ std::vector<Triangle3> triangles(const MeshView& mesh) {
     return out;
 }
 
+/// The triangles' bounding boxes (for a rejection test before an exact one).
+std::vector<CGAL::Bbox_3> boxes(const std::vector<Triangle3>& tris) {
+    std::vector<CGAL::Bbox_3> out;
+    out.reserve(tris.size());
+    for (const Triangle3& t : tris) out.push_back(t.bbox());
+    return out;
+}
+
 /// The mesh as a CGAL::Surface_mesh with world axis `lineAxis` last (cyclic permutation), vertices
 /// with bit-identical positions merged (as analyzeTopology does). A vertex where separate fans
 /// of triangles meet cannot be represented; orient_polygon_soup duplicates it (and may flip
@@ -311,9 +319,7 @@ bool writeWithCgal(const std::string& path, const CgalSoup& soup, bool binary) {
 std::vector<uint8_t> oracleSegmentsHitMesh(const MeshView& mesh, const std::vector<Vec3d>& from,
                                            const std::vector<Vec3d>& to) {
     const std::vector<oracle::Triangle3> tris = oracle::triangles(mesh);
-    std::vector<CGAL::Bbox_3> boxes;
-    boxes.reserve(tris.size());
-    for (const oracle::Triangle3& t : tris) boxes.push_back(t.bbox());
+    const std::vector<CGAL::Bbox_3> boxes = oracle::boxes(tris);
     std::vector<uint8_t> out(from.size(), 0);
     for (std::size_t i = 0; i < from.size(); ++i) {
         const oracle::K::Segment_3 seg(oracle::Point3(from[i].x, from[i].y, from[i].z),
@@ -329,9 +335,7 @@ std::vector<uint8_t> oracleSegmentsHitMesh(const MeshView& mesh, const std::vect
 std::vector<OracleChord> oracleChords(const MeshView& mesh, const std::vector<Vec3d>& from,
                                       const std::vector<Vec3d>& to) {
     const std::vector<oracle::Triangle3> tris = oracle::triangles(mesh);
-    std::vector<CGAL::Bbox_3> boxes;
-    boxes.reserve(tris.size());
-    for (const oracle::Triangle3& t : tris) boxes.push_back(t.bbox());
+    const std::vector<CGAL::Bbox_3> boxes = oracle::boxes(tris);
     std::vector<OracleChord> out(from.size());
     for (std::size_t i = 0; i < from.size(); ++i) {
         const oracle::Point3 a(from[i].x, from[i].y, from[i].z), b(to[i].x, to[i].y, to[i].z);

@@ -73,11 +73,13 @@ Receiver receiverBehind(const Frame& f, int64_t x, int64_t y) {
     return r;
 }
 
-/// Distance from c to the line through a and b.
+/// Distance from c to the segment from a to b (a point light's ray runs from the light, not
+/// through it: a sphere behind the light is not on the ray).
 double lineDistance(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
     const Vec3d u = normalize(b - a);
     const Vec3d w = c - a;
-    return length(w - u * dot(w, u));
+    const double t = std::clamp(dot(w, u), 0.0, length(b - a));
+    return length(w - u * t);
 }
 
 double sphereChord(double r, double d) { return d < r ? 2 * std::sqrt(r * r - d * d) : 0.0; }
@@ -87,12 +89,10 @@ struct Counts {
     double maxError = 0; ///< largest |L - chord| / h
 };
 
-/// Checks every `stride`-th column of the shadow's one view against the polygonal sphere (centre c,
+/// Checks every `stride`-th column of view frame `f` against the polygonal sphere (centre c,
 /// circumradius R, inradius r) for receivers whose ray passes at most 0.8 R from the centre.
-Counts checkSphere(const TranslucencyShadow& shadow, const Vec3d& c, double R, double r, const Vec3d& sigma,
-                   int64_t stride) {
-    Counts n;
-    const Frame& f = shadow.maps().at(0).view().frame;
+void checkSphereView(const TranslucencyShadow& shadow, const Frame& f, const Vec3d& c, double R, double r,
+                     const Vec3d& sigma, int64_t stride, Counts& n) {
     for (int64_t y = 0; y < f.height(); y += stride)
         for (int64_t x = 0; x < f.width(); x += stride) {
             const Receiver rc = receiverBehind(f, x, y);
@@ -115,6 +115,14 @@ Counts checkSphere(const TranslucencyShadow& shadow, const Vec3d& c, double R, d
                 EXPECT_GE(v[ch], std::exp(-sigma[ch] * (hi + rc.slice)) * (1 - 1e-5)) << "channel " << ch;
             }
         }
+}
+
+/// checkSphereView over every view of the shadow (a point light's six cube faces).
+Counts checkSphere(const TranslucencyShadow& shadow, const Vec3d& c, double R, double r, const Vec3d& sigma,
+                   int64_t stride) {
+    Counts n;
+    for (const TranslucencyShadowMap& map : shadow.maps())
+        checkSphereView(shadow, map.view().frame, c, R, r, sigma, stride, n);
     return n;
 }
 
@@ -166,6 +174,24 @@ TEST(TranslucencyShadowTest, SphereChordsUnderSpotLight) {
     EXPECT_GT(n.checked, 1000);
     EXPECT_EQ(n.nonzero, n.checked);
     std::printf("sphere, spot: %lld receivers, largest error %.3f slices\n", (long long)n.checked,
+                n.maxError);
+}
+
+TEST(TranslucencyShadowTest, SphereChordsUnderPointLightAcrossCubeFaces) {
+    // The sphere straddles the edge between two cube faces of the point light.
+    const Vec3d c{1.2, 1.0, 1.2};
+    const double R = 0.7;
+    const Mesh sphere = test::makeUvSphere(c, R, 96, 192);
+    Light lamp;
+    lamp.type = LightType::Point;
+    lamp.position = {0, 1.0, 0};
+    const TranslucencyShadow shadow =
+        TranslucencyShadow::build(solidScene(sphere, lamp), lamp, exactLookup(96, 128, 1.0, {1, 1, 1}));
+    ASSERT_EQ(shadow.maps().size(), 6u);
+    const Counts n = checkSphere(shadow, c, R, inradius(sphere, c), {1, 1, 1}, 1);
+    EXPECT_GT(n.checked, 300);
+    EXPECT_EQ(n.nonzero, n.checked);
+    std::printf("sphere, point light: %lld receivers, largest error %.3f slices\n", (long long)n.checked,
                 n.maxError);
 }
 
