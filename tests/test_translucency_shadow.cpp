@@ -138,61 +138,45 @@ double inradius(const Mesh& mesh, const Vec3d& c) {
     return r;
 }
 
-TEST(TranslucencyShadowTest, SphereChordsUnderDirectionalLight) {
-    const Vec3d c{0.3, 1.5, -0.2};
-    const double R = 1.0;
+/// A UV sphere (centre c, radius R) lit by `light` through a light grid of columns x slices, checked
+/// with checkSphere over every view; at least `minChecked` receivers, each behind some matter.
+Counts sphereUnder(const Light& light, const Vec3d& c, double R, int64_t columns, int64_t slices,
+                   double extinction, Vec3f tint, std::size_t views, int64_t minChecked) {
     const Mesh sphere = test::makeUvSphere(c, R, 96, 192);
-    Light sun;
-    sun.direction = normalize(Vec3d{0.35, -1, 0.2});
-    const Vec3f tint{0.35f, 1.0f, 0.55f};
-    const TranslucencyShadow shadow =
-        TranslucencyShadow::build(solidScene(sphere, sun), sun, exactLookup(64, 96, 0.8, tint));
-    ASSERT_EQ(shadow.maps().size(), 1u);
-    const Vec3d sigma{0.8 / tint.x, 0.8 / tint.y, 0.8 / tint.z};
+    const TranslucencyShadow shadow = TranslucencyShadow::build(
+        solidScene(sphere, light), light, exactLookup(columns, slices, extinction, tint));
+    EXPECT_EQ(shadow.maps().size(), views);
+    const Vec3d sigma{extinction / tint.x, extinction / tint.y, extinction / tint.z};
     const Counts n = checkSphere(shadow, c, R, inradius(sphere, c), sigma, 1);
-    EXPECT_GT(n.checked, 500); // the disc of radius 0.8 R in a view fitted to the bounding box
+    EXPECT_GT(n.checked, minChecked);
     EXPECT_EQ(n.nonzero, n.checked);
     EXPECT_LE(n.maxError, 1.0);
-    std::printf("sphere, directional: %lld receivers, largest error %.3f slices\n", (long long)n.checked,
-                n.maxError);
+    std::printf("sphere: %lld receivers, largest error %.3f slices\n", (long long)n.checked, n.maxError);
+    return n;
+}
+
+TEST(TranslucencyShadowTest, SphereChordsUnderDirectionalLight) {
+    Light sun;
+    sun.direction = normalize(Vec3d{0.35, -1, 0.2});
+    // 500: the disc of radius 0.8 R in a view fitted to the bounding box.
+    sphereUnder(sun, {0.3, 1.5, -0.2}, 1.0, 64, 96, 0.8, {0.35f, 1.0f, 0.55f}, 1, 500);
 }
 
 TEST(TranslucencyShadowTest, SphereChordsUnderSpotLight) {
-    const Vec3d c{0, 1, 0};
-    const double R = 0.8;
-    const Mesh sphere = test::makeUvSphere(c, R, 96, 192);
     Light spot;
     spot.type = LightType::Spot;
     spot.position = {1.5, 4.5, 0.8};
-    spot.direction = normalize(c - spot.position);
+    spot.direction = normalize(Vec3d{0, 1, 0} - spot.position);
     spot.outerConeAngle = 0.6;
-    const TranslucencyShadow shadow =
-        TranslucencyShadow::build(solidScene(sphere, spot), spot, exactLookup(80, 128, 1.5, {1, 1, 1}));
-    ASSERT_EQ(shadow.maps().size(), 1u);
-    ASSERT_TRUE(shadow.maps()[0].view().frame.isPerspective());
-    const Counts n = checkSphere(shadow, c, R, inradius(sphere, c), {1.5, 1.5, 1.5}, 1);
-    EXPECT_GT(n.checked, 1000);
-    EXPECT_EQ(n.nonzero, n.checked);
-    std::printf("sphere, spot: %lld receivers, largest error %.3f slices\n", (long long)n.checked,
-                n.maxError);
+    sphereUnder(spot, {0, 1, 0}, 0.8, 80, 128, 1.5, {1, 1, 1}, 1, 1000);
 }
 
 TEST(TranslucencyShadowTest, SphereChordsUnderPointLightAcrossCubeFaces) {
     // The sphere straddles the edge between two cube faces of the point light.
-    const Vec3d c{1.2, 1.0, 1.2};
-    const double R = 0.7;
-    const Mesh sphere = test::makeUvSphere(c, R, 96, 192);
     Light lamp;
     lamp.type = LightType::Point;
     lamp.position = {0, 1.0, 0};
-    const TranslucencyShadow shadow =
-        TranslucencyShadow::build(solidScene(sphere, lamp), lamp, exactLookup(96, 128, 1.0, {1, 1, 1}));
-    ASSERT_EQ(shadow.maps().size(), 6u);
-    const Counts n = checkSphere(shadow, c, R, inradius(sphere, c), {1, 1, 1}, 1);
-    EXPECT_GT(n.checked, 300);
-    EXPECT_EQ(n.nonzero, n.checked);
-    std::printf("sphere, point light: %lld receivers, largest error %.3f slices\n", (long long)n.checked,
-                n.maxError);
+    sphereUnder(lamp, {1.2, 1.0, 1.2}, 0.7, 96, 128, 1.0, {1, 1, 1}, 6, 300);
 }
 
 TEST(TranslucencyShadowTest, BunnyChordsMatchCgalCrossings) {
