@@ -61,7 +61,7 @@ run "$bin" demo --scenes all --shadows none --meshes "$data" --write-scenes "$sc
   --width 64 --height 36 --supersample 1 -q
 size=(--width 200 --height 112)
 for s in tree bunny cgal glass; do
-  for k in none map transmittance absorption exact deep; do
+  for k in none map transmittance absorption translucency exact deep; do
     run "$bin" render "$scenes/$s.glb" -o "$out/$s-$k.pfm" "${size[@]}" --shadows "$k" -q
   done
 done

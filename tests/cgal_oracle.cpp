@@ -16,6 +16,7 @@
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/convex_hull_2.h>
+#include <CGAL/intersections.h>
 #include <gtest/gtest.h>
 
 #include "voxfx/parallel.hpp"
@@ -43,6 +44,14 @@ std::vector<Triangle3> triangles(const MeshView& mesh) {
         }
         out.emplace_back(p[0], p[1], p[2]);
     }
+    return out;
+}
+
+/// The triangles' bounding boxes (for a rejection test before an exact one).
+std::vector<CGAL::Bbox_3> boxes(const std::vector<Triangle3>& tris) {
+    std::vector<CGAL::Bbox_3> out;
+    out.reserve(tris.size());
+    for (const Triangle3& t : tris) out.push_back(t.bbox());
     return out;
 }
 
@@ -319,9 +328,7 @@ bool writeWithCgal(const std::string& path, const CgalSoup& soup, bool binary) {
 std::vector<uint8_t> oracleSegmentsHitMesh(const MeshView& mesh, const std::vector<Vec3d>& from,
                                            const std::vector<Vec3d>& to) {
     const std::vector<oracle::Triangle3> tris = oracle::triangles(mesh);
-    std::vector<CGAL::Bbox_3> boxes;
-    boxes.reserve(tris.size());
-    for (const oracle::Triangle3& t : tris) boxes.push_back(t.bbox());
+    const std::vector<CGAL::Bbox_3> boxes = oracle::boxes(tris);
     std::vector<uint8_t> out(from.size(), 0);
     for (std::size_t i = 0; i < from.size(); ++i) {
         const oracle::K::Segment_3 seg(oracle::Point3(from[i].x, from[i].y, from[i].z),
@@ -329,6 +336,38 @@ std::vector<uint8_t> oracleSegmentsHitMesh(const MeshView& mesh, const std::vect
         const CGAL::Bbox_3 sb = seg.bbox();
         for (std::size_t t = 0; t < tris.size() && !out[i]; ++t)
             if (CGAL::do_overlap(sb, boxes[t]) && CGAL::do_intersect(seg, tris[t])) out[i] = 1;
+    }
+    return out;
+}
+
+// See cgal_oracle.hpp.
+std::vector<OracleChord> oracleChords(const MeshView& mesh, const std::vector<Vec3d>& from,
+                                      const std::vector<Vec3d>& to) {
+    const std::vector<oracle::Triangle3> tris = oracle::triangles(mesh);
+    const std::vector<CGAL::Bbox_3> boxes = oracle::boxes(tris);
+    std::vector<OracleChord> out(from.size());
+    for (std::size_t i = 0; i < from.size(); ++i) {
+        const oracle::Point3 a(from[i].x, from[i].y, from[i].z), b(to[i].x, to[i].y, to[i].z);
+        const oracle::K::Segment_3 seg(a, b);
+        const CGAL::Bbox_3 sb = seg.bbox();
+        const double len = std::sqrt(CGAL::to_double(seg.squared_length()));
+        std::vector<double> t; // distances from `from` of the crossings
+        for (std::size_t k = 0; k < tris.size(); ++k) {
+            if (!CGAL::do_overlap(sb, boxes[k]) || !CGAL::do_intersect(seg, tris[k])) continue;
+            const auto hit = CGAL::intersection(seg, tris[k]);
+            const oracle::Point3* p = hit ? boost::get<oracle::Point3>(&*hit) : nullptr;
+            if (!p) {
+                out[i].degenerate = true; // the segment lies in the triangle's plane
+                continue;
+            }
+            t.push_back(std::sqrt(CGAL::to_double(CGAL::squared_distance(a, *p))));
+        }
+        std::sort(t.begin(), t.end());
+        for (std::size_t k = 1; k < t.size(); ++k)
+            if (t[k] - t[k - 1] <= 1e-9 * len) out[i].degenerate = true;
+        if (t.size() % 2) out[i].degenerate = true;
+        out[i].crossings = int(t.size());
+        for (std::size_t k = 1; k < t.size(); k += 2) out[i].inside += t[k] - t[k - 1];
     }
     return out;
 }

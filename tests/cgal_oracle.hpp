@@ -201,6 +201,21 @@ ConservativeOracle oracleConservative(const MeshView& mesh, const CellGeometry& 
 std::vector<uint8_t> oracleSegmentsHitMesh(const MeshView& mesh, const std::vector<Vec3d>& from,
                                            const std::vector<Vec3d>& to);
 
+/// What a segment crosses of a closed mesh (oracleChords).
+struct OracleChord {
+    double inside = 0;       ///< length of the segment inside the mesh (world units)
+    int crossings = 0;       ///< points where the segment crosses the surface
+    bool degenerate = false; ///< an edge or vertex hit, a segment in a triangle's plane, or an odd count
+};
+/// For each segment (from[i], to[i]), both ends outside a closed mesh: the crossings with the
+/// triangles (CGAL::intersection(Segment_3, Triangle_3), the points constructed in double, after an
+/// axis-aligned bounding box rejection; brute force over the triangles), sorted along the segment
+/// and paired by parity (entry, exit); the inside length is the sum of the pairs' distances.
+/// Segments that meet an edge or vertex (two hits within 1e-9 of the length), lie in a triangle's
+/// plane or cross an odd number of times are marked degenerate.
+std::vector<OracleChord> oracleChords(const MeshView& mesh, const std::vector<Vec3d>& from,
+                                      const std::vector<Vec3d>& to);
+
 /// Result of oracleFrameCells, in the frame's index order (x, y, s) as WorldGrids of dims (W, H, D).
 struct FrameOracle {
     WorldGrid conservative;     ///< the cell's closed box meets a triangle

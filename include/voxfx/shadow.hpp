@@ -5,6 +5,7 @@
 //   transmittance  voxfx/transmittance_shadow.hpp: ED06 §3.1, per-cell attenuation in coloured
 //                  channels, opaque casters in a standard map
 //   absorption     voxfx/absorption_shadow.hpp: CHANG §3, per-write absorption summed from the light
+//   translucency   voxfx/translucency_shadow.hpp: GI08 §7, Beer-Lambert over the solid matter crossed
 //   volumes        voxfx/shadow_volume.hpp: exact hard shadows by shadow volumes counted over the
 //                  camera's G-buffer, with ED06 §3.2 culling and clamping
 //   exact          voxfx/exact_shadow.hpp: ray traced on the triangles with Embree (the reference)
@@ -45,6 +46,7 @@
 #include "voxfx/scene.hpp"
 #include "voxfx/shadow_map.hpp"
 #include "voxfx/shadow_volume.hpp"
+#include "voxfx/translucency_shadow.hpp"
 #include "voxfx/transmittance_shadow.hpp"
 
 namespace voxfx {
@@ -95,7 +97,7 @@ template <ShadowTechnique... S> struct TechniqueList {
 
 /// Every shadow technique, in the order the CLI lists them.
 using ShadowTechniques = TechniqueList<NoShadow, MapShadow, TransmittanceShadow, AbsorptionShadow,
-                                       VolumeShadow, ExactShadow, DeepShadow>;
+                                       TranslucencyShadow, VolumeShadow, ExactShadow, DeepShadow>;
 
 /// The options of one technique (which one is the alternative held). Default: the standard map.
 using ShadowOptions = ShadowTechniques::Options;

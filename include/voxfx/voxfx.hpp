@@ -70,6 +70,7 @@
 #include "voxfx/shadow.hpp"
 #include "voxfx/shadow_map.hpp"
 #include "voxfx/shadow_volume.hpp"
+#include "voxfx/translucency_shadow.hpp"
 #include "voxfx/transmittance_shadow.hpp"
 #include "voxfx/triangle_tracer.hpp"
 #include "voxfx/voxel_glass.hpp"

@@ -5,6 +5,7 @@ command line's PFM output of the same options (the keywords must reach the libra
 do: same pixels, bit for bit), and the options catalog (every technique's options are keywords).
 """
 import os
+import re
 import signal
 import subprocess
 import threading
@@ -69,6 +70,8 @@ def test_an_unshadowed_ground_has_the_closed_form_radiance(tmp_path):
         ("transmittance", {"grid_resolution": 64, "slicing": "local", "bilinear": True},
          "--grid 64 --slicing local --bilinear"),
         ("absorption", {"grid_resolution": 48, "opaque_absorption": 4.0}, "--grid 48 --opaque-absorption 4"),
+        ("translucency", {"grid_resolution": 40, "extinction": 2.5, "fill": "parity"},
+         "--grid 40 --extinction 2.5 --fill parity"),
         ("volumes", {"volume_culling": False}, "--no-volume-culling"),
         ("deep", {"dsm_resolution": 96, "dsm_storage": "fixed", "fixed_nodes": 8, "termination": 0.01,
                   "dsm_step": 0.5, "clusters": 2, "cluster_threshold": 0.1},
@@ -80,7 +83,8 @@ def test_keywords_reach_the_library_as_the_command_line_flags_do(tmp_path, cli, 
     scene = write_scene(tmp_path)
     img, report = voxfx.render(scene, shadows=shadows, width=48, height=36, report=True, **options)
     # Every keyword is in the options the technique ran with ("fixed_nodes 8" for fixed_nodes=8).
-    ran = dict(item.split(" ", 1) for item in report["shadow_options"].split(", "))
+    # Split at the commas between options, not inside a triple's "(1, 1, 1)".
+    ran = dict(item.split(" ", 1) for item in re.split(r", (?![^(]*\))", report["shadow_options"]))
     for name, value in options.items():
         want = {True: "on", False: "off"}.get(value, value) if isinstance(value, bool) else value
         assert ran[name] == str(want) if not isinstance(want, float) else float(ran[name]) == want, (name, ran)
@@ -111,7 +115,7 @@ def test_every_technique_option_is_a_keyword_and_bad_ones_are_refused(tmp_path):
               "frosted_blur", "receiver_slices", "empty_space_skipping", "crease_angle"):
         assert n in names, n
     kinds = [k for k, _ in voxfx.shadow_kinds()]
-    assert kinds == ["none", "map", "transmittance", "absorption", "volumes", "exact", "deep"]
+    assert kinds == ["none", "map", "transmittance", "absorption", "translucency", "volumes", "exact", "deep"]
     assert [m for m, _ in voxfx.glass_methods()] == ["none", "exact", "multi", "two-surface", "frosted"]
     scene = write_scene(tmp_path)
     with pytest.raises(voxfx.ArgumentError, match="unknown render option 'shininess'"):

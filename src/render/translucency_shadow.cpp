@@ -1,0 +1,175 @@
+// voxfx — translucency shadows (GI08 §7, "Single-pass GPU Solid Voxelization for Real-time
+// Applications").
+//
+// The casters are voxelized as a solid from the light (GI08 §4–5). The matter the light crosses to
+// reach p is the count of filled cells in front of p along its column (GI08 §6 "counting",
+// countColumnRange) times the world length of one slice along the column's centre ray; the light
+// is attenuated by exp(-sigma_c * length) per channel (Beer-Lambert; GI08's jade dragon).
+#include "voxfx/translucency_shadow.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "render/light_grid_lookup.hpp"
+#include "render/shadow_casters.hpp"
+#include "voxfx/grid_query.hpp"
+#include "voxfx/text.hpp"
+
+namespace voxfx {
+
+namespace {
+
+// Light views are perspective or oriented frames, where flood and vote cannot run.
+Fill parseLightFill(const std::string& name) {
+    const Fill f = parseFill(name);
+    if (f == Fill::Flood || f == Fill::Vote)
+        fail("fill '", name, "' needs an axis-aligned grid; light views take auto, parity, winding or gwn");
+    return f;
+}
+
+// Fill::Auto for a light view: parity when the casters are closed, else the generalized winding
+// number (voxelize's own Auto would choose flood, which light views cannot run).
+Fill lightFill(Fill fill, const MeshView& casters) {
+    if (fill != Fill::Auto) return fill;
+    return analyzeTopology(casters).closed() ? Fill::Parity : Fill::Gwn;
+}
+
+} // namespace
+
+TranslucencyShadowMap TranslucencyShadowMap::build(const LightView& view, const MeshView& casters, Fill fill,
+                                                   Slicing slicing, Progress* progress) {
+    TranslucencyShadowMap map;
+    map.view_ = view;
+    VoxelizeOptions vo;
+    vo.mode = VoxelizeMode::Solid;
+    vo.fill = fill;
+    vo.slicing = slicing;
+    vo.progress = progress;
+    map.grid_ = voxelize(casters, view.frame, vo);
+    return map;
+}
+
+double TranslucencyShadowMap::columnPath(int64_t column, double depth, int64_t skipCells) const {
+    const Frame& f = grid_.frame;
+    const int64_t end = detail::slicesInFront(f, column, depth, skipCells);
+    const int64_t n = countColumnRange(grid_.bits.column(column), f.depth(), 0, end);
+    if (n == 0) return 0.0;
+    // World length of one depth unit along the column's centre ray (a perspective frame's depth is
+    // the distance along its axis, so the ray is longer by 1 / cos of its angle to the axis), over
+    // the column's slices per depth unit.
+    const int64_t W = f.width();
+    const double gx = double(column % W) + 0.5, gy = double(column / W) + 0.5;
+    const double d0 = std::max(depth, f.isPerspective() ? f.nearDepth() : 0.0);
+    const double perDepth = length(f.worldFromGrid({gx, gy, d0 + 1}) - f.worldFromGrid({gx, gy, d0}));
+    return double(n) * perDepth / f.depthToSlice(column).scale;
+}
+
+double TranslucencyShadowMap::pathLength(const Vec3d& world, int64_t skipCells) const {
+    if (grid_.bits.empty() || !view_.covers(world)) return 0.0;
+    const detail::ColumnAt c = detail::nearestColumn(view_, world);
+    return columnPath(c.column, c.depth, skipCells);
+}
+
+namespace {
+
+Vec3f beerLambert(const Vec3d& sigma, double length) {
+    if (length == 0) return {1, 1, 1};
+    return {float(std::exp(-sigma.x * length)), float(std::exp(-sigma.y * length)),
+            float(std::exp(-sigma.z * length))};
+}
+
+} // namespace
+
+Vec3f TranslucencyShadowMap::transmittance(const Vec3d& world, int64_t skipCells, const Vec3d& sigma) const {
+    return beerLambert(sigma, pathLength(world, skipCells));
+}
+
+Vec3f TranslucencyShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells,
+                                                   const Vec3d& sigma) const {
+    if (grid_.bits.empty() || !view_.covers(world)) return {1, 1, 1};
+    return detail::bilinearColumns<Vec3f, float>(
+        view_, world, Vec3f{1, 1, 1}, [&](const detail::ColumnAt& c) {
+            return beerLambert(sigma, columnPath(c.column, c.depth, skipCells));
+        });
+}
+
+std::span<const OptionField<TranslucencyShadowOptions>> TranslucencyShadowOptions::fields() {
+    using O = TranslucencyShadowOptions;
+    static const std::vector<OptionField<O>> table = [] {
+        std::vector<OptionField<O>> t;
+        detail::appendLightGridFields(t);
+        t.push_back(numberOption<O, &O::grid, &LightGridOptions::normalOffset>(
+            "normalOffset", "lookup offset along the surface normal, in column footprints", 0, 1000));
+        t.push_back(numberOption<O, &O::extinction>(
+            "extinction", "extinction coefficient of the solid casters, per world unit", 0, 1e9));
+        t.push_back(tripleOption<O, &O::tint>(
+            "tint", "relative mean free path per channel (1,1,1 grey; 0.35,1,0.55 jade)", 1e-6, 1));
+        t.push_back(nameOption<O, parseLightFill, optionName<Fill>, &O::fill>(
+            "fill", "how the casters' inside is decided (auto: parity if closed, else gwn)",
+            "auto | parity | winding | gwn"));
+        return t;
+    }();
+    return table;
+}
+
+TranslucencyShadow::Stats& TranslucencyShadow::Stats::operator+=(const Stats& o) {
+    grids += o.grids;
+    filledCells += o.filledCells;
+    return *this;
+}
+
+std::string TranslucencyShadow::Stats::summary() const {
+    return countText(grids) + (grids == 1 ? " solid light grid, " : " solid light grids, ") +
+           countText(filledCells) + " filled cells";
+}
+
+TranslucencyShadow TranslucencyShadow::build(const Scene& scene, const Light& light,
+                                             const TranslucencyShadowOptions& options, Progress* progress) {
+    detail::checkLightGrid(options.grid, "translucency");
+    const Vec3f& t = options.tint;
+    if (!(options.extinction >= 0) || !std::isfinite(options.extinction))
+        fail("translucency shadows: extinction must be finite and >= 0, got ", options.extinction);
+    for (int c = 0; c < 3; ++c)
+        if (!(t[c] > 0 && t[c] <= 1))
+            fail("translucency shadows: tint components must lie in (0, 1], got ", t.x, ", ", t.y, ", ", t.z);
+    TranslucencyShadow out;
+    out.options_ = options;
+    out.sigma_ = {options.extinction / t.x, options.extinction / t.y, options.extinction / t.z};
+    const detail::CasterSets casters = detail::collectCasters(scene);
+    if (casters.all.indices.empty()) return out;
+    out.views_ =
+        makeLightViews(light, computeBounds(casters.all.view()), options.grid.resolution, options.grid.depth);
+    const Fill fill = lightFill(options.fill, casters.all.view());
+    for (const LightView& v : out.views_)
+        out.maps_.push_back(
+            TranslucencyShadowMap::build(v, casters.all.view(), fill, options.grid.slicing, progress));
+    return out;
+}
+
+Vec3f TranslucencyShadow::visibility(const Vec3d& p, const Vec3d& n) const {
+    Vec3d q;
+    const int i = detail::lookupView(views_, p, n, options_.grid.normalOffset, q);
+    if (i < 0) return {1, 1, 1};
+    const TranslucencyShadowMap& m = maps_[size_t(i)];
+    const int64_t skip = options_.grid.skipCells;
+    return options_.grid.bilinear ? m.transmittanceBilinear(q, skip, sigma_)
+                                  : m.transmittance(q, skip, sigma_);
+}
+
+double TranslucencyShadow::pathLength(const Vec3d& p, const Vec3d& n) const {
+    Vec3d q;
+    const int i = detail::lookupView(views_, p, n, options_.grid.normalOffset, q);
+    return i < 0 ? 0.0 : maps_[size_t(i)].pathLength(q, options_.grid.skipCells);
+}
+
+TranslucencyShadow::Stats TranslucencyShadow::stats() const {
+    Stats s;
+    for (const TranslucencyShadowMap& m : maps_) {
+        ++s.grids;
+        s.filledCells += m.grid().bits.count();
+    }
+    return s;
+}
+
+} // namespace voxfx

@@ -1,0 +1,269 @@
+// Tests of the translucency shadows (GI08 §7; src/render/translucency_shadow.cpp) against exact
+// chord lengths: the matter a light ray crosses on its way to a receiver is, for a sphere, the
+// analytic chord 2 sqrt(R^2 - d^2) (the polygonal sphere's own facets bound how far its chords can
+// fall short), and for a CGAL mesh (the Stanford bunny) the sum of the inside intervals between the
+// segment's exact crossings (cgal_oracle.hpp: CGAL::intersection of the segment with every
+// triangle, paired by parity). Receivers sit at the light grid's column centres behind the
+// casters, so the light's ray to them is the column's centre ray along which the solid
+// voxelization samples; the cell centres inside a chord of length c number floor or ceil of c / h
+// (h: a slice's world length along the ray, derived here from the frame's definition), so the
+// counted length may differ from the chord by less than h per entry into the solid. Visibility is
+// checked per channel against Beer-Lambert exp(-extinction / tint_c * chord) over the same band.
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "cgal_oracle.hpp"
+#include "test_util.hpp"
+#include "voxfx/mesh_io.hpp"
+#include "voxfx/render.hpp"
+#include "voxfx/shadow.hpp"
+
+namespace voxfx {
+namespace {
+
+Scene solidScene(const Mesh& mesh, const Light& light) {
+    Scene s;
+    SceneMesh m;
+    m.name = "solid";
+    m.mesh = mesh;
+    m.material = s.addMaterial(Material{});
+    s.meshes.push_back(m);
+    s.lights.push_back(light);
+    return s;
+}
+
+TranslucencyShadowOptions exactLookup(int64_t columns, int64_t slices, double extinction, Vec3f tint) {
+    TranslucencyShadowOptions o;
+    o.grid.resolution = columns;
+    o.grid.depth = slices;
+    o.grid.skipCells = 0; // receivers lie behind the grid: every slice of the column counts
+    o.grid.normalOffset = 0;
+    o.extinction = extinction;
+    o.tint = tint;
+    return o;
+}
+
+/// A receiver behind the grid on the centre ray of column (x, y), where the light's ray to it
+/// starts, and the world length h of one slice along that ray (from the frame's definition: an
+/// orthographic slice is cellSize().z thick along the light's direction; a perspective frame's
+/// depth is the distance along its axis, uniform over [near, far] in D slices, and the ray is
+/// longer by |p - eye| / ((p - eye) . forward)).
+struct Receiver {
+    Vec3d from, at;
+    double slice;
+};
+
+Receiver receiverBehind(const Frame& f, int64_t x, int64_t y) {
+    const double gx = double(x) + 0.5, gy = double(y) + 0.5;
+    Receiver r;
+    if (!f.isPerspective()) {
+        r.from = f.worldFromGrid({gx, gy, -0.5});
+        r.at = f.worldFromGrid({gx, gy, double(f.depth()) + 0.5});
+        r.slice = f.cellSize().z;
+        return r;
+    }
+    r.from = f.eye();
+    r.at = f.worldFromGrid({gx, gy, f.farDepth() * 1.05});
+    const Vec3d v = r.at - r.from;
+    r.slice = (f.farDepth() - f.nearDepth()) / double(f.depth()) * length(v) / dot(v, f.forward());
+    return r;
+}
+
+/// Distance from c to the segment from a to b (a point light's ray runs from the light, not
+/// through it: a sphere behind the light is not on the ray).
+double lineDistance(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    const Vec3d u = normalize(b - a);
+    const Vec3d w = c - a;
+    const double t = std::clamp(dot(w, u), 0.0, length(b - a));
+    return length(w - u * t);
+}
+
+double sphereChord(double r, double d) { return d < r ? 2 * std::sqrt(r * r - d * d) : 0.0; }
+
+struct Counts {
+    int64_t checked = 0, nonzero = 0;
+    double maxError = 0; ///< largest |L - chord| / h
+};
+
+/// Checks every `stride`-th column of view frame `f` against the polygonal sphere (centre c,
+/// circumradius R, inradius r) for receivers whose ray passes at most 0.8 R from the centre.
+void checkSphereView(const TranslucencyShadow& shadow, const Frame& f, const Vec3d& c, double R, double r,
+                     const Vec3d& sigma, int64_t stride, Counts& n) {
+    for (int64_t y = 0; y < f.height(); y += stride)
+        for (int64_t x = 0; x < f.width(); x += stride) {
+            const Receiver rc = receiverBehind(f, x, y);
+            const double d = lineDistance(rc.from, rc.at, c);
+            if (d > 0.8 * R) continue;
+            // The faceted sphere holds the inscribed ball and lies in the circumscribed one.
+            // 1e-6: the vertices are rounded to float.
+            const double hi = sphereChord(R, d) + 1e-6, lo = sphereChord(r, d) - 1e-6;
+            const double L = shadow.pathLength(rc.at, {0, 0, 0});
+            ++n.checked;
+            n.nonzero += L > 0;
+            EXPECT_GE(L, lo - rc.slice)
+                << "column " << x << ", " << y << ": chord in [" << lo << ", " << hi << "]";
+            EXPECT_LE(L, hi + rc.slice)
+                << "column " << x << ", " << y << ": chord in [" << lo << ", " << hi << "]";
+            n.maxError = std::max(n.maxError, std::max(lo - L, L - hi) / rc.slice);
+            const Vec3f v = shadow.visibility(rc.at, {0, 0, 0});
+            for (int ch = 0; ch < 3; ++ch) {
+                EXPECT_LE(v[ch], std::exp(-sigma[ch] * (lo - rc.slice)) * (1 + 1e-5)) << "channel " << ch;
+                EXPECT_GE(v[ch], std::exp(-sigma[ch] * (hi + rc.slice)) * (1 - 1e-5)) << "channel " << ch;
+            }
+        }
+}
+
+/// checkSphereView over every view of the shadow (a point light's six cube faces).
+Counts checkSphere(const TranslucencyShadow& shadow, const Vec3d& c, double R, double r, const Vec3d& sigma,
+                   int64_t stride) {
+    Counts n;
+    for (const TranslucencyShadowMap& map : shadow.maps())
+        checkSphereView(shadow, map.view().frame, c, R, r, sigma, stride, n);
+    return n;
+}
+
+/// The smallest distance from c to a face plane of `mesh` (a convex mesh holds that ball).
+double inradius(const Mesh& mesh, const Vec3d& c) {
+    double r = 1e300;
+    for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
+        const Vec3d a(mesh.positions[mesh.indices[3 * t]]), b(mesh.positions[mesh.indices[3 * t + 1]]),
+            e(mesh.positions[mesh.indices[3 * t + 2]]);
+        const Vec3d nrm = normalize(cross(b - a, e - a));
+        r = std::min(r, std::abs(dot(c - a, nrm)));
+    }
+    return r;
+}
+
+/// A UV sphere (centre c, radius R) lit by `light` through a light grid of columns x slices, checked
+/// with checkSphere over every view; at least `minChecked` receivers, each behind some matter.
+Counts sphereUnder(const Light& light, const Vec3d& c, double R, int64_t columns, int64_t slices,
+                   double extinction, Vec3f tint, std::size_t views, int64_t minChecked) {
+    const Mesh sphere = test::makeUvSphere(c, R, 96, 192);
+    const TranslucencyShadow shadow = TranslucencyShadow::build(
+        solidScene(sphere, light), light, exactLookup(columns, slices, extinction, tint));
+    EXPECT_EQ(shadow.maps().size(), views);
+    const Vec3d sigma{extinction / tint.x, extinction / tint.y, extinction / tint.z};
+    const Counts n = checkSphere(shadow, c, R, inradius(sphere, c), sigma, 1);
+    EXPECT_GT(n.checked, minChecked);
+    EXPECT_EQ(n.nonzero, n.checked);
+    EXPECT_LE(n.maxError, 1.0);
+    std::printf("sphere: %lld receivers, largest error %.3f slices\n", (long long)n.checked, n.maxError);
+    return n;
+}
+
+TEST(TranslucencyShadowTest, SphereChordsUnderDirectionalLight) {
+    Light sun;
+    sun.direction = normalize(Vec3d{0.35, -1, 0.2});
+    // 500: the disc of radius 0.8 R in a view fitted to the bounding box.
+    sphereUnder(sun, {0.3, 1.5, -0.2}, 1.0, 64, 96, 0.8, {0.35f, 1.0f, 0.55f}, 1, 500);
+}
+
+TEST(TranslucencyShadowTest, SphereChordsUnderSpotLight) {
+    Light spot;
+    spot.type = LightType::Spot;
+    spot.position = {1.5, 4.5, 0.8};
+    spot.direction = normalize(Vec3d{0, 1, 0} - spot.position);
+    spot.outerConeAngle = 0.6;
+    sphereUnder(spot, {0, 1, 0}, 0.8, 80, 128, 1.5, {1, 1, 1}, 1, 1000);
+}
+
+TEST(TranslucencyShadowTest, SphereChordsUnderPointLightAcrossCubeFaces) {
+    // The sphere straddles the edge between two cube faces of the point light.
+    Light lamp;
+    lamp.type = LightType::Point;
+    lamp.position = {0, 1.0, 0};
+    sphereUnder(lamp, {1.2, 1.0, 1.2}, 0.7, 96, 128, 1.0, {1, 1, 1}, 6, 300);
+}
+
+TEST(TranslucencyShadowTest, BunnyChordsMatchCgalCrossings) {
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    const Mesh bunny = loadMesh(test::dataPath("meshes/bunny00.off"));
+    Light sun;
+    sun.direction = normalize(Vec3d{-0.4, -1, 0.3});
+    const Box3d box = computeBounds(bunny.view());
+    const double size = length(box.hi - box.lo);
+    const double sigma = 4 / size;
+    const TranslucencyShadow shadow =
+        TranslucencyShadow::build(solidScene(bunny, sun), sun, exactLookup(72, 160, sigma, {1, 1, 1}));
+    ASSERT_EQ(shadow.maps().size(), 1u);
+    const Frame& f = shadow.maps()[0].view().frame;
+    std::vector<Receiver> receivers;
+    std::vector<Vec3d> from, to;
+    for (int64_t y = 0; y < f.height(); ++y)
+        for (int64_t x = 0; x < f.width(); ++x) {
+            receivers.push_back(receiverBehind(f, x, y));
+            from.push_back(receivers.back().from);
+            to.push_back(receivers.back().at);
+        }
+    const std::vector<test::OracleChord> chords = test::oracleChords(bunny.view(), from, to);
+    int64_t checked = 0, crossed = 0, degenerate = 0;
+    double maxError = 0;
+    for (std::size_t i = 0; i < receivers.size(); ++i) {
+        if (chords[i].degenerate) {
+            ++degenerate;
+            continue;
+        }
+        const Receiver& r = receivers[i];
+        const double L = shadow.pathLength(r.at, {0, 0, 0});
+        const double chord = chords[i].inside;
+        const double tolerance = r.slice * (chords[i].crossings / 2) * (1 + 1e-9);
+        ++checked;
+        crossed += chords[i].crossings > 0;
+        EXPECT_NEAR(L, chord, tolerance) << "receiver " << i << " (" << chords[i].crossings << " crossings)";
+        if (chords[i].crossings > 0) maxError = std::max(maxError, std::abs(L - chord) / r.slice);
+        const float v = shadow.visibility(r.at, {0, 0, 0}).y;
+        EXPECT_LE(v, std::exp(-sigma * (chord - tolerance)) * (1 + 1e-5)) << "receiver " << i;
+        EXPECT_GE(v, std::exp(-sigma * (chord + tolerance)) * (1 - 1e-5)) << "receiver " << i;
+    }
+    EXPECT_LT(degenerate, checked / 100);
+    EXPECT_GT(crossed, checked / 4); // the bunny covers a good part of its fitted view
+    std::printf("bunny: %lld receivers (%lld behind the bunny, %lld degenerate), largest error %.3f slices\n",
+                (long long)checked, (long long)crossed, (long long)degenerate, maxError);
+}
+
+TEST(TranslucencyShadowTest, OptionsByNameReachTheTechnique) {
+    RenderOptions o;
+    setRenderOption(o, "shadows", std::string("translucency"));
+    ASSERT_TRUE(std::holds_alternative<TranslucencyShadowOptions>(o.shadow));
+    EXPECT_TRUE(setRenderOption(o, "extinction", 2.5));
+    EXPECT_TRUE(setRenderOption(o, "tint", Vec3d{0.5, 1, 0.25}));
+    EXPECT_TRUE(setRenderOption(o, "fill", std::string("parity")));
+    EXPECT_TRUE(setRenderOption(o, "grid-resolution", int64_t(40)));
+    const auto& t = std::get<TranslucencyShadowOptions>(o.shadow);
+    EXPECT_EQ(t.extinction, 2.5);
+    EXPECT_EQ(t.tint, (Vec3f{0.5f, 1, 0.25f}));
+    EXPECT_EQ(t.fill, Fill::Parity);
+    EXPECT_EQ(t.grid.resolution, 40);
+    EXPECT_THROW(setRenderOption(o, "tint", Vec3d{0, 1, 1}), Error);
+    EXPECT_THROW(setRenderOption(o, "extinction", -1.0), Error);
+    EXPECT_THROW(setRenderOption(o, "fill", std::string("flood")), Error); // light views cannot flood
+}
+
+TEST(TranslucencyShadowTest, BadOptionsAndEmptyScenes) {
+    Light sun;
+    const Scene s = solidScene(test::makeBox({0, 0, 0}, {1, 1, 1}), sun);
+    TranslucencyShadowOptions o;
+    o.tint = {0, 1, 1};
+    EXPECT_THROW(TranslucencyShadow::build(s, sun, o), Error);
+    o = {};
+    o.extinction = std::nan("");
+    EXPECT_THROW(TranslucencyShadow::build(s, sun, o), Error);
+    o = {};
+    o.grid.depth = 0;
+    EXPECT_THROW(TranslucencyShadow::build(s, sun, o), Error);
+    // An open caster (a box without its top) under Auto: the gwn fill, which light views can run.
+    Mesh open = test::makeBox({0, 0, 0}, {1, 1, 1});
+    open.indices.resize(open.indices.size() - 6);
+    Scene openScene = solidScene(open, sun);
+    EXPECT_GT(TranslucencyShadow::build(openScene, sun, {}).stats().filledCells, 0);
+    const TranslucencyShadow none = TranslucencyShadow::build(Scene{}, sun, {});
+    EXPECT_EQ(none.visibility({0, 0, 0}, {0, 0, 0}), (Vec3f{1, 1, 1}));
+    EXPECT_EQ(none.stats().grids, 0);
+}
+
+} // namespace
+} // namespace voxfx
