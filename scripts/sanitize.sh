@@ -14,15 +14,7 @@ set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 start=$SECONDS
-scripts/install-deps.sh
-scripts/fetch-data.sh
-export VOXFX_REQUIRE_DATA=1
-label="${VOXFX_TEST_LABEL-fast}"
-label_args=()
-[ -n "$label" ] && label_args=(-L "$label")
-jobs="$(nproc)"
-launcher=()
-command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+source scripts/test-setup.sh
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests (clang)"
 CC=clang CXX=clang++ cmake -S . -B build-sanitize -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
