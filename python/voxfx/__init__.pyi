@@ -2,7 +2,8 @@
 # mypy. python/tests/test_learning.py checks that every public function and class is here, with
 # the parameters the module has.
 import os
-from typing import Any, Callable, Dict, Iterator, List, Literal, NamedTuple, Optional, Sequence, Tuple, Union
+from typing import (Any, Callable, Dict, Iterator, List, Literal, NamedTuple, Optional, Sequence, Tuple, Union,
+                    overload)
 
 import numpy as np
 import numpy.typing as npt
@@ -203,12 +204,21 @@ class Scene:
     def settings(self) -> Dict[str, str]: ...
 
 def load_mesh(path: PathLike) -> Mesh: ...
+# sparse=True returns the sparse tree (SparseGrid), otherwise the dense Grid.
+@overload
 def voxelize(mesh: MeshLike, faces: Optional[npt.ArrayLike] = None, *, resolution: Optional[int] = None,
              voxel_size: Optional[float] = None, dims: Optional[Sequence[int]] = None,
              bounds: Optional[Bounds] = None, margin: int = 0, cube: bool = False, padding: int = 0,
              like: Optional[Grid] = None, mode: Mode = "solid", fill: FillName = "auto", axis: AxisName = "z",
              slicing: Literal["uniform", "local"] = "uniform", threads: int = 0,
-             device: Literal["cpu", "cuda", "auto"] = "cpu", sparse: bool = False) -> Union[Grid, SparseGrid]: ...
+             device: Literal["cpu", "cuda", "auto"] = "cpu", sparse: Literal[False] = False) -> Grid: ...
+@overload
+def voxelize(mesh: MeshLike, faces: Optional[npt.ArrayLike] = None, *, resolution: Optional[int] = None,
+             voxel_size: Optional[float] = None, dims: Optional[Sequence[int]] = None,
+             bounds: Optional[Bounds] = None, margin: int = 0, cube: bool = False, padding: int = 0,
+             like: Optional[Grid] = None, mode: Mode = "solid", fill: FillName = "auto", axis: AxisName = "z",
+             slicing: Literal["uniform", "local"] = "uniform", threads: int = 0,
+             device: Literal["cpu", "cuda", "auto"] = "cpu", sparse: Literal[True]) -> SparseGrid: ...
 def contains(mesh: MeshLike, faces: Optional[npt.ArrayLike] = None, points: Optional[Points] = None, *,
              method: Literal["parity", "winding", "flood"] = "parity", resolution: Optional[int] = None,
              threads: int = 0, winding_beta: float = 3.0) -> npt.NDArray[np.bool_]: ...
