@@ -7,7 +7,7 @@
 #include <cmath>
 #include <mutex>
 
-#include "grid/progress_range.hpp"
+#include "core/progress_range.hpp"
 #include "grid/triangle_bvh.hpp"
 #include "voxfx/contains.hpp"
 #include "voxfx/error.hpp"

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <optional>
 
+#include "core/progress_range.hpp"
 #include "render/frame_state.hpp"
 #include "render/glass_pass.hpp"
 #include "render/shading.hpp"
@@ -19,18 +20,6 @@ using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
-
-// Maps a pass's progress [0, 1] into [lo, hi] of the whole render.
-class PassProgress : public Progress {
-public:
-    PassProgress(Progress* parent, double lo, double hi) : parent_(parent), lo_(lo), hi_(hi) {}
-    bool update(double f) override { return parent_ ? parent_->update(lo_ + (hi_ - lo_) * f) : true; }
-    Progress* get() { return parent_ ? this : nullptr; }
-
-private:
-    Progress* parent_;
-    double lo_, hi_;
-};
 
 using detail::FrameState;
 
@@ -49,7 +38,7 @@ void shadowPass(FrameState& f, Progress* progress) {
         []<class O>(const O&) -> ShadowStats { return typename detail::BuiltFor<LightShadow, O>::Stats{}; },
         f.options.shadow);
     for (std::size_t i = 0; i < n; ++i) {
-        PassProgress sp(progress, double(i) / double(n), double(i + 1) / double(n));
+        detail::ProgressRange sp(progress, double(i) / double(n), double(i + 1) / double(n));
         f.shadows.push_back(buildLightShadow(f.lit, f.lit.lights[i], f.options.shadow, sp.get()));
         prepareLightShadow(f.shadows.back(), f.gbuffer, f.geometry);
         accumulate(f.result.shadowStats, shadowStats(f.shadows.back()));
@@ -160,7 +149,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     withThreads(options.threads, [&] {
         double done = 0;
         for (const RenderPass& pass : kPasses) {
-            PassProgress progress(options.progress, done, pass.progressEnd);
+            detail::ProgressRange progress(options.progress, done, pass.progressEnd);
             const auto tp = Clock::now();
             pass.run(frame, progress.get());
             result.timings.passes.push_back({pass.name, msSince(tp)});

@@ -1,5 +1,6 @@
-// voxfx — a part of a long operation's progress (internal to grid/): the distance functions run
-// several steps (a voxelization, the distances, an inside test) and report them as one line.
+// voxfx — a part of a long operation's progress (internal): a step of a longer operation (the
+// distance functions' voxelization, distances and inside test; a frame's shadow per light) reports
+// its [0, 1] as its share of the whole line.
 #pragma once
 
 #include "voxfx/parallel.hpp"
