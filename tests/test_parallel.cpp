@@ -1,6 +1,8 @@
 // parallelFor and parallelReduce (src/core/parallel.cpp): the reduction combines per-chunk values
 // in chunk order, so its result (floating-point sums and order-sensitive combinations included)
 // is the one a serial loop over the same chunks gives, for every thread count.
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -79,6 +81,48 @@ TEST(ParallelTest, ForCoversEveryIndexExactlyOnce) {
         for (int64_t i = b; i < e; ++i) ++hits[size_t(i)];
     });
     for (size_t i = 0; i < hits.size(); ++i) ASSERT_EQ(hits[i], 1) << i;
+}
+
+struct Recorder final : Progress {
+    std::vector<double> seen; // written under ProgressSteps' lock
+    std::size_t stopAt = SIZE_MAX;
+    bool update(double f) override {
+        seen.push_back(f);
+        return seen.size() < stopAt;
+    }
+};
+
+TEST(ParallelTest, ProgressStepsReportGrowingFractionsFromEveryThread) {
+    // Steps finish on many threads at once; the fractions must still arrive in order (a count
+    // taken outside the report's lock lets a later step report before an earlier one).
+    for (int round = 0; round < 20; ++round) {
+        Recorder r;
+        constexpr int64_t kSteps = 5000;
+        ProgressSteps steps(&r, kSteps);
+        parallelFor(0, kSteps, 1, [&](int64_t b, int64_t e) {
+            for (int64_t i = b; i < e; ++i) EXPECT_TRUE(steps.step());
+        });
+        ASSERT_EQ(r.seen.size(), std::size_t(kSteps));
+        EXPECT_TRUE(std::is_sorted(r.seen.begin(), r.seen.end())) << round;
+        EXPECT_DOUBLE_EQ(r.seen.back(), 1.0);
+        EXPECT_FALSE(steps.cancelled());
+    }
+}
+
+TEST(ParallelTest, ProgressStepsStopReportingOnceCancelled) {
+    Recorder r;
+    r.stopAt = 10;
+    ProgressSteps steps(&r, 1000);
+    std::atomic<int> falses{0};
+    parallelFor(0, 1000, 1, [&](int64_t b, int64_t e) {
+        for (int64_t i = b; i < e; ++i)
+            if (!steps.step()) ++falses;
+    });
+    EXPECT_TRUE(steps.cancelled());
+    EXPECT_EQ(r.seen.size(), 10u); // nothing reported after the Progress said stop
+    EXPECT_GT(falses, 0);
+    ProgressSteps silent(nullptr, 5); // no Progress: steps never cancel
+    for (int i = 0; i < 10; ++i) EXPECT_TRUE(silent.step());
 }
 
 } // namespace

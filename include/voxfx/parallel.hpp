@@ -9,8 +9,10 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <type_traits>
 
 namespace voxfx {
@@ -88,6 +90,34 @@ public:
     virtual ~Progress() = default;
     /// fraction in [0, 1]; return false to cancel (the operation then throws voxfx::Error).
     virtual bool update(double fraction) = 0;
+};
+
+/// The finished steps of a parallel loop, reported to a Progress as done / total. The count is
+/// taken under the lock that guards the report, so the fractions a Progress sees only grow
+/// whatever the thread count (counting first and locking after lets two threads report out of
+/// order). Thread-safe; with a null Progress it only carries the cancelled flag.
+class ProgressSteps {
+public:
+    ProgressSteps(Progress* progress, int64_t total)
+        : progress_(progress), total_(std::max<int64_t>(total, 1)) {}
+    /// One more step done; false once the Progress has asked to stop.
+    bool step() {
+        if (!progress_) return !cancelled();
+        const std::lock_guard lock(mutex_);
+        if (!cancelled_.load(std::memory_order_relaxed) &&
+            !progress_->update(double(++done_) / double(total_)))
+            cancelled_.store(true, std::memory_order_relaxed);
+        return !cancelled();
+    }
+    /// Whether the Progress has asked to stop (workers poll this between steps).
+    bool cancelled() const { return cancelled_.load(std::memory_order_relaxed); }
+
+private:
+    Progress* progress_;
+    int64_t total_;
+    int64_t done_ = 0; // under mutex_
+    std::mutex mutex_;
+    std::atomic<bool> cancelled_{false};
 };
 
 } // namespace voxfx

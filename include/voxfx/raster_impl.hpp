@@ -403,16 +403,6 @@ void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& op
     const detail::RasterSetup setup = detail::prepareVertices(frame, mesh, options.fullLine);
     const FrameView& view = setup.frame;
 
-    std::atomic<bool> cancelled{false};
-    std::atomic<int64_t> done{0};
-    std::mutex progressMutex;
-    auto report = [&](int64_t total) {
-        const int64_t d = ++done;
-        if (!options.progress) return;
-        std::lock_guard<std::mutex> lock(progressMutex);
-        if (!options.progress->update(double(d) / double(total))) cancelled = true;
-    };
-
     if constexpr (DirectConsumer<Consumer>) {
         if (options.path == RasterPath::Direct ||
             (options.path == RasterPath::Auto && detail::preferDirect(mesh.triangleCount, W, H))) {
@@ -421,35 +411,33 @@ void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& op
             // then the per-row finishing pass. No binning, each triangle set up once.
             constexpr int64_t kChunk = 4096;
             const int64_t T = int64_t(mesh.triangleCount), chunks = (T + kChunk - 1) / kChunk;
-            const int64_t steps = chunks + tileCount;
+            ProgressSteps steps(options.progress, chunks + tileCount);
             parallelFor(0, chunks, 1, [&](int64_t cb, int64_t ce) {
                 auto sink = consumer.direct();
-                for (int64_t c = cb; c < ce; ++c) {
-                    if (cancelled.load(std::memory_order_relaxed)) return;
+                for (int64_t c = cb; c < ce && !steps.cancelled(); ++c) {
                     for (int64_t t = c * kChunk, e = std::min(T, t + kChunk); t < e; ++t)
                         setup.triangle(size_t(t), [&](const detail::RasterTriangle& rt) {
                             detail::rasterizePiece(rt, options.coverage, view, 0, H, sink);
                         });
-                    report(steps);
+                    steps.step();
                 }
             });
-            if (cancelled) fail("cancelled");
+            if (steps.cancelled()) fail("cancelled");
             parallelFor(0, tileCount, 1, [&](int64_t tb, int64_t te) {
-                for (int64_t tile = tb; tile < te; ++tile) {
-                    if (cancelled.load(std::memory_order_relaxed)) return;
+                for (int64_t tile = tb; tile < te && !steps.cancelled(); ++tile) {
                     consumer.finishRows(tileAt(tile));
-                    report(steps);
+                    steps.step();
                 }
             });
-            if (cancelled) fail("cancelled");
+            if (steps.cancelled()) fail("cancelled");
             return;
         }
     }
 
     const detail::TileBins bins = detail::binTriangles(setup, options.coverage, rowsPerTile);
+    ProgressSteps steps(options.progress, bins.tileCount);
     parallelFor(0, bins.tileCount, 1, [&](int64_t tb, int64_t te) {
-        for (int64_t tile = tb; tile < te; ++tile) {
-            if (cancelled.load(std::memory_order_relaxed)) return;
+        for (int64_t tile = tb; tile < te && !steps.cancelled(); ++tile) {
             const Tile rows = tileAt(tile);
             auto sink = consumer.tile(rows);
             for (int64_t i = bins.offsets[size_t(tile)]; i < bins.offsets[size_t(tile) + 1]; ++i)
@@ -457,10 +445,10 @@ void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& op
                     detail::rasterizePiece(rt, options.coverage, view, rows.y0, rows.y1, sink);
                 });
             sink.finish();
-            report(bins.tileCount);
+            steps.step();
         }
     });
-    if (cancelled) fail("cancelled");
+    if (steps.cancelled()) fail("cancelled");
 }
 
 template <Coverage C, TileConsumer Consumer>

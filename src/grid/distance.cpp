@@ -64,11 +64,8 @@ std::vector<std::pair<uint64_t, uint32_t>> mortonOrder(std::span<const Vec3d> po
 template <class Store>
 void forPoints(const detail::TriangleBvh& bvh, std::span<const Vec3d> points, int threads, Progress* progress,
                Store&& store) {
-    std::atomic<bool> cancelled{false};
-    std::atomic<int64_t> done{0};
-    std::mutex progressMutex;
     const auto n = int64_t(points.size());
-    const int64_t chunks = (n + kChunk - 1) / kChunk;
+    ProgressSteps steps(progress, (n + kChunk - 1) / kChunk);
     // The points' order is taken in the mesh's box grown by half its size: farther points are
     // clamped to it (they are few, and far from everything anyway).
     Box3d box = bvh.bounds();
@@ -76,11 +73,11 @@ void forPoints(const detail::TriangleBvh& bvh, std::span<const Vec3d> points, in
     box.lo -= grow;
     box.hi += grow;
     withThreads(threads, [&] {
-        for (int64_t block = 0; block < n && !cancelled; block += kBlock) {
+        for (int64_t block = 0; block < n && !steps.cancelled(); block += kBlock) {
             const int64_t blockEnd = std::min(n, block + kBlock);
             const auto order = mortonOrder(points, block, blockEnd, box);
             parallelFor(0, blockEnd - block, kChunk, [&](int64_t b, int64_t e) {
-                if (cancelled.load(std::memory_order_relaxed)) return;
+                if (steps.cancelled()) return;
                 uint32_t hint = UINT32_MAX;
                 for (int64_t k = b; k < e; ++k) {
                     const int64_t i = block + order[std::size_t(k)].second;
@@ -89,14 +86,11 @@ void forPoints(const detail::TriangleBvh& bvh, std::span<const Vec3d> points, in
                     if (hit.face >= 0) hint = hit.index;
                     store(i, hit);
                 }
-                const int64_t d = ++done;
-                if (!progress) return;
-                std::lock_guard<std::mutex> lock(progressMutex);
-                if (!progress->update(double(d) / double(chunks))) cancelled = true;
+                steps.step();
             });
         }
     });
-    if (cancelled) fail("cancelled");
+    if (steps.cancelled()) fail("cancelled");
 }
 
 } // namespace

@@ -498,11 +498,9 @@ sdfTiles(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& builder, 
                   (p.dims.z + brick - 1) / brick};
     const int64_t count = n.x * n.y * n.z;
     std::vector<SdfPiece> pieces{std::size_t(count)};
-    std::atomic<bool> cancelled{false};
-    int64_t done = 0; // bricks finished, under progressMutex
-    std::mutex progressMutex;
+    ProgressSteps steps(progress, count);
     parallelFor(0, count, 1, [&](int64_t b, int64_t e) {
-        for (int64_t i = b; i < e && !cancelled; ++i) {
+        for (int64_t i = b; i < e && !steps.cancelled(); ++i) {
             SdfTile t;
             t.lo = Vec3i{i % n.x, (i / n.x) % n.y, i / (n.x * n.y)} * brick;
             t.hi = min(t.lo + Vec3i{brick, brick, brick}, p.dims);
@@ -514,13 +512,10 @@ sdfTiles(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& builder, 
                              t.lo.z - p.dilation.z, surface.bits.depth(), p.dilation.x - t.lo.x,
                              p.dilation.y - t.lo.y};
             builder.tile(t, pieces[std::size_t(i)]);
-            if (!progress) continue;
-            // Counted under the lock, so the fractions reported only grow.
-            std::lock_guard<std::mutex> lock(progressMutex);
-            if (!progress->update(double(++done) / double(count))) cancelled = true;
+            steps.step();
         }
     });
-    if (cancelled) fail("cancelled");
+    if (steps.cancelled()) fail("cancelled");
     std::vector<SdfLeaf> leaves;
     std::vector<SdfInsideRun> runs;
     for (SdfPiece& piece : pieces) {

@@ -103,26 +103,19 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
     out.assign(size_t(W * H), options.background * options.exposure);
     constexpr int64_t kRows = 8;
     const int64_t blocks = (H + kRows - 1) / kRows;
-    std::atomic<int64_t> done{0};
-    std::atomic<bool> cancelled{false};
-    std::mutex progressMutex;
+    ProgressSteps steps(progress, blocks);
     parallelFor(0, blocks, 1, [&](int64_t b0, int64_t b1) {
-        for (int64_t b = b0; b < b1; ++b) {
-            if (cancelled.load(std::memory_order_relaxed)) return;
+        for (int64_t b = b0; b < b1 && !steps.cancelled(); ++b) {
             for (int64_t y = b * kRows; y < std::min(H, (b + 1) * kRows); ++y)
                 for (int64_t x = 0; x < W; ++x) {
                     SurfacePoint s;
                     if (surfaceAt(gbuffer, geometry, x, y, s))
                         out[size_t(y * W + x)] = shadePoint(frame, s, gbuffer.frame.eye());
                 }
-            const int64_t n = ++done;
-            if (progress) {
-                std::lock_guard<std::mutex> lock(progressMutex);
-                if (!progress->update(double(n) / double(blocks))) cancelled = true;
-            }
+            steps.step();
         }
     });
-    if (cancelled) fail("cancelled");
+    if (steps.cancelled()) fail("cancelled");
     shadeBackground(frame);
 }
 

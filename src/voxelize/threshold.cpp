@@ -30,30 +30,23 @@ VoxelGrid thresholdVolume(const Volume& volume, double threshold, const Threshol
     const float* values = volume.values().data();
     BitGrid& bits = out.bits;
 
-    std::atomic<bool> cancelled{false};
-    std::atomic<int64_t> rowsDone{0};
-    std::mutex progressMutex;
+    ProgressSteps rows(options.progress, H);
     withThreads(options.threads, [&] {
         // One owner per row of columns. Slices outermost and columns inside, so that along z
         // (the default) each pass reads one contiguous row of samples.
         parallelFor(0, H, 1, [&](int64_t yb, int64_t ye) {
-            for (int64_t y = yb; y < ye; ++y) {
-                if (cancelled.load(std::memory_order_relaxed)) return;
+            for (int64_t y = yb; y < ye && !rows.cancelled(); ++y) {
                 for (int64_t s = 0; s < D; ++s) {
                     const float* row = values + y * sy + s * ss;
                     const uint64_t bit = uint64_t(1) << (s & 63);
                     for (int64_t x = 0; x < W; ++x)
                         if (double(row[x * sx]) >= threshold) bits.column(x, y)[s >> 6] |= bit;
                 }
-                const int64_t done = ++rowsDone;
-                if (options.progress) {
-                    std::lock_guard<std::mutex> lock(progressMutex);
-                    if (!options.progress->update(double(done) / double(H))) cancelled = true;
-                }
+                rows.step();
             }
         });
     });
-    if (cancelled) fail("cancelled");
+    if (rows.cancelled()) fail("cancelled");
     return out;
 }
 

@@ -450,11 +450,11 @@ void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
             tree.build(mesh, 2.0);
             edges = detail::gwnEdges(mesh);
         }
-        std::atomic<bool> stop{false};
-        std::atomic<int64_t> done{0};
+        std::atomic<bool> stop{false}; // an error: the first one is rethrown
         std::mutex errorMutex;
         std::exception_ptr error;
         const int64_t stacks = stacksX * stacksY;
+        ProgressSteps steps(options.progress, stacks);
         parallelFor(0, stacks, 1, [&](int64_t sb, int64_t se) {
             Stack st;
             st.frame = &view;
@@ -464,7 +464,7 @@ void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
             st.edges = &edges;
             st.fullFrame = &frame;
             st.mesh = &mesh;
-            for (int64_t k = sb; k < se && !stop.load(std::memory_order_relaxed); ++k) {
+            for (int64_t k = sb; k < se && !stop.load(std::memory_order_relaxed) && !steps.cancelled(); ++k) {
                 try {
                     const int64_t x0 = (k % stacksX) * B, y0 = (k / stacksX) * B;
                     st.own = {x0, y0, std::min(B, W - x0), std::min(B, H - y0)};
@@ -491,15 +491,11 @@ void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
                     if (!error) error = std::current_exception();
                     stop = true;
                 }
-                const int64_t n = ++done;
-                if (options.progress && !stop) {
-                    std::lock_guard<std::mutex> lock(errorMutex);
-                    if (!options.progress->update(double(n) / double(stacks))) stop = true;
-                }
+                if (!stop) steps.step();
             }
         });
         if (error) std::rethrow_exception(error);
-        if (stop) fail("cancelled");
+        if (steps.cancelled()) fail("cancelled");
     });
 }
 } // namespace voxfx

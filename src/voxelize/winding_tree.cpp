@@ -497,21 +497,16 @@ BitGrid gwnFillInside(const Frame& frame, const MeshView& mesh, const WindingTre
     };
     // Polled after each tile, one call at a time (as the rasterizer does); once it says stop,
     // the remaining tiles are skipped.
-    std::atomic<bool> cancelled{false};
-    std::atomic<int64_t> done{0};
-    std::mutex progressMutex;
+    ProgressSteps steps(progress, tx * ty);
     // Tiles own whole columns, so no two threads write the same word.
     parallelFor(0, tx * ty, 1, [&](int64_t t0, int64_t t1) {
         GwnTile tile(frame, tree, whole);
-        for (int64_t t = t0; t < t1 && !cancelled.load(std::memory_order_relaxed); ++t) {
+        for (int64_t t = t0; t < t1 && !steps.cancelled(); ++t) {
             tile.run(t % tx * kGwnBlock, t / tx * kGwnBlock);
-            const int64_t d = ++done;
-            if (!progress) continue;
-            const std::lock_guard lock(progressMutex);
-            if (!progress->update(double(d) / double(tx * ty))) cancelled = true;
+            steps.step();
         }
     });
-    if (cancelled) fail("cancelled");
+    if (steps.cancelled()) fail("cancelled");
     return out;
 }
 
