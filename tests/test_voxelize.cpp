@@ -392,6 +392,36 @@ TEST(VoxelizeTest, AutoFillIsParityForAClosedMeshAndFloodForAnOpenOneAndSaysWhy)
     EXPECT_FALSE(report.topologyAnalyzed);
 }
 
+TEST(VoxelizeTest, AutoFillOfAnOpenMeshIsGwnWhereFloodCannotRun) {
+    // Flood walks an axis-aligned grid; in a perspective frame (a spot light's view) or with local
+    // slicing, Auto on an open mesh must pick the generalized winding number instead of a fill
+    // that then fails. The cells must be those of the closed torus's parity fill but near the hole.
+    const HoleyTorus torus = holeyTorus();
+    const Frame persp = Frame::perspective({8, -20, 30}, {8, 8, 8}, {0, 0, 1}, 0.9, 48, 48, 15, 50, 64);
+    VoxelizeReport report;
+    VoxelizeOptions o{.mode = VoxelizeMode::Solid, .fill = Fill::Auto, .report = &report};
+    const VoxelGrid autoGrid = voxelize(torus.holey.view(), persp, o);
+    EXPECT_EQ(report.fill, Fill::Gwn);
+    EXPECT_NE(report.fillNote.find("filled by gwn"), std::string::npos) << report.fillNote;
+    VoxelizeOptions parity{.mode = VoxelizeMode::Solid, .fill = Fill::Parity};
+    const VoxelGrid closed = voxelize(torus.closed.view(), persp, parity);
+    const int64_t inside = int64_t(closed.bits.count());
+    ASSERT_GT(inside, 500);
+    int64_t differ = 0;
+    for (int64_t y = 0; y < persp.height(); ++y)
+        for (int64_t x = 0; x < persp.width(); ++x)
+            for (int64_t z = 0; z < persp.depth(); ++z)
+                differ += autoGrid.bits.get(x, y, z) != closed.bits.get(x, y, z);
+    EXPECT_LT(differ, inside / 50) << "of " << inside;
+
+    o.slicing = Slicing::Local;
+    (void)voxelize(torus.holey.view(), unitFrame(), o);
+    EXPECT_EQ(report.fill, Fill::Gwn);
+    o.slicing = Slicing::Uniform;
+    (void)voxelize(torus.holey.view(), unitFrame(), o);
+    EXPECT_EQ(report.fill, Fill::Flood);
+}
+
 TEST(VoxelizeTest, WindingGivesTheUnionAndParityTheSymmetricDifferenceOfOverlaps) {
     Mesh overlap = makeBox({1.3, 1.3, 1.3}, {8.7, 8.7, 8.7});
     test::appendBox(overlap, {4.3, 4.3, 4.3}, {12.7, 12.7, 12.7});

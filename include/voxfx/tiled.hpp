@@ -80,7 +80,7 @@ struct GridTile {
 
 /// Why `options` cannot be voxelized tile by tile in `frame` (the fill needs the whole grid, the
 /// frame is perspective, oriented or locally sliced), or an empty string when it can. Fill::Auto
-/// is taken as Parity: ask with resolveFill(mesh, options) for a mesh that may be open.
+/// is taken as Parity: ask with resolveFill(mesh, frame, options) for a mesh that may be open.
 std::string wholeGridReason(const Frame& frame, const VoxelizeOptions& options);
 
 /// Voxelizes `mesh` into `frame` brick by brick and calls visit(tile) once per brick (uniform

@@ -139,10 +139,12 @@ struct FitOptions {
 /// is available.
 Frame fitFrame(const Box3d& meshBounds, const FitOptions& options);
 
-/// The fill voxelize() (and voxelizeTiles, voxelizeSparse) use for `options`: options.fill, or
-/// for Fill::Auto Parity when the mesh is closed or the mode needs no fill, else Flood (one pass
-/// over the edges). Writes *options.report when given.
-Fill resolveFill(const MeshView& mesh, const VoxelizeOptions& options);
+/// The fill voxelize() (and voxelizeTiles, voxelizeSparse) use for `options` in `frame`:
+/// options.fill, or for Fill::Auto Parity when the mesh is closed or the mode needs no fill, else
+/// Flood (one pass over the edges) where the frame is an axis-aligned, uniformly sliced
+/// orthographic grid and Gwn where it is not (perspective, oriented or locally sliced frames:
+/// light views). Writes *options.report when given.
+Fill resolveFill(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options);
 
 /// Voxelizes `mesh` into `frame`. Returns the grid (in `frame`, with local slicing applied when
 /// requested). Validates the mesh first (voxfx::Error on bad indices or non-finite vertices).

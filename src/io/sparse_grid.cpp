@@ -226,7 +226,7 @@ SparseGrid voxelizeSparse(const MeshView& mesh, const Frame& frame, const Voxeli
     validateMesh(mesh, "mesh");
     // Fill::Auto decided once, here (the report is the caller's; the calls below see the fill).
     VoxelizeOptions options = given;
-    options.fill = resolveFill(mesh, given);
+    options.fill = resolveFill(mesh, frame, given);
     options.report = nullptr;
     const uint64_t budget = tiles.memoryBytes ? tiles.memoryBytes : availableMemoryBytes();
     if (options.deviceNote) options.deviceNote->clear();

@@ -28,13 +28,6 @@ Fill parseLightFill(const std::string& name) {
     return f;
 }
 
-// Fill::Auto for a light view: parity when the casters are closed, else the generalized winding
-// number (voxelize's own Auto would choose flood, which light views cannot run).
-Fill lightFill(Fill fill, const MeshView& casters) {
-    if (fill != Fill::Auto) return fill;
-    return analyzeTopology(casters).closed() ? Fill::Parity : Fill::Gwn;
-}
-
 } // namespace
 
 TranslucencyShadowMap TranslucencyShadowMap::build(const LightView& view, const MeshView& casters, Fill fill,
@@ -140,10 +133,9 @@ TranslucencyShadow TranslucencyShadow::build(const Scene& scene, const Light& li
     if (casters.all.indices.empty()) return out;
     out.views_ =
         makeLightViews(light, computeBounds(casters.all.view()), options.grid.resolution, options.grid.depth);
-    const Fill fill = lightFill(options.fill, casters.all.view());
     for (const LightView& v : out.views_)
-        out.maps_.push_back(
-            TranslucencyShadowMap::build(v, casters.all.view(), fill, options.grid.slicing, progress));
+        out.maps_.push_back(TranslucencyShadowMap::build(v, casters.all.view(), options.fill,
+                                                         options.grid.slicing, progress));
     return out;
 }
 

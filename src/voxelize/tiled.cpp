@@ -412,7 +412,7 @@ void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
     using namespace detail::tiles;
     validateMesh(mesh, "mesh");
     VoxelizeOptions options = given;
-    options.fill = resolveFill(mesh, given);
+    options.fill = resolveFill(mesh, frame, given);
     if (const std::string why = wholeGridReason(frame, options); !why.empty()) fail(why);
     const int64_t B = tiles.brickSize == 0 ? kDefaultBrick : tiles.brickSize;
     if (B <= 0 || B % 8 != 0) fail("the brick size must be a positive multiple of 8, got ", tiles.brickSize);

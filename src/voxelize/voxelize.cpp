@@ -174,8 +174,10 @@ VoxelGrid voxelizeImpl(const MeshView& mesh, const Frame& inFrame, const Voxeliz
 } // namespace
 
 // Fill::Auto, decided once for every front end: parity is exact for a closed mesh; on an open
-// one it fills wrong cells, and flood is robust to holes narrower than a voxel.
-Fill resolveFill(const MeshView& mesh, const VoxelizeOptions& o) {
+// one it fills wrong cells, and flood is robust to holes narrower than a voxel. Flood walks an
+// axis-aligned grid (requireUniformOrthographic), so a frame it cannot run in (perspective,
+// oriented, locally sliced: light views) takes the generalized winding number instead.
+Fill resolveFill(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& o) {
     VoxelizeReport r;
     r.fill = o.fill;
     if (o.fill == Fill::Auto) {
@@ -184,12 +186,16 @@ Fill resolveFill(const MeshView& mesh, const VoxelizeOptions& o) {
             r.topology = analyzeTopology(mesh);
             r.topologyAnalyzed = true;
             if (!r.topology.closed()) {
-                r.fill = Fill::Flood;
-                r.fillNote = detail::concat("not closed (", r.topology.boundaryEdges, " boundary, ",
-                                            r.topology.nonManifoldEdges, " non-manifold, ",
-                                            r.topology.misorientedEdges,
-                                            " misoriented edges): filled by flood (holes wider than a voxel "
-                                            "let the flood in; the gwn fill closes them)");
+                const bool gridWalk = !frame.isPerspective() && !frame.isOriented() &&
+                                      frame.slicing() == Slicing::Uniform && o.slicing == Slicing::Uniform;
+                r.fill = gridWalk ? Fill::Flood : Fill::Gwn;
+                r.fillNote = detail::concat(
+                    "not closed (", r.topology.boundaryEdges, " boundary, ", r.topology.nonManifoldEdges,
+                    " non-manifold, ", r.topology.misorientedEdges, " misoriented edges): ",
+                    gridWalk ? "filled by flood (holes wider than a voxel let the flood in; the gwn fill "
+                               "closes them)"
+                             : "filled by gwn (the generalized winding number; flood needs an axis-aligned, "
+                               "uniformly sliced orthographic grid)");
             }
         }
     }
@@ -278,7 +284,7 @@ Frame fitFrame(const Box3d& meshBounds, const FitOptions& o) {
 VoxelGrid voxelize(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options) {
     validateMesh(mesh, "mesh");
     VoxelizeOptions o = options;
-    o.fill = resolveFill(mesh, options);
+    o.fill = resolveFill(mesh, frame, options);
     if (frame.isPerspective() && (o.fill == Fill::Flood || o.fill == Fill::Vote) && needsFill(o.mode))
         fail("fill '", toString(o.fill), "' needs an orthographic frame");
     VoxelGrid result;
