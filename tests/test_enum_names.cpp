@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include "io/scene_gltf.hpp"
+#include "voxfx/attribute_io.hpp"
 #include "voxfx/batch.hpp"
 #include "voxfx/contains.hpp"
 #include "voxfx/csg.hpp"
@@ -112,6 +113,7 @@ TEST(EnumNamesTest, EveryEnumeratorHasOneNameThatParsesBackInAnyCase) {
         kLightTypeNames, [](const std::string& n) { return detail::parseLightType(n, "scene.json"); });
     expectOneNamePerValue<GridFormat>(kGridFormatNames);
     expectOneNamePerValue<SdfFormat>(kSdfFormatNames);
+    expectOneNamePerValue<AttributeChannel>(kAttributeChannelNames);
     expectOneNamePerValue<VolumeFormat>(kVolumeFormatNames);
     expectOneNamePerValue<ScalarType>(kScalarTypeNames);
     expectOneNamePerValue<BatchStatus>(kBatchStatusNames);

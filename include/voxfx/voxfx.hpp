@@ -80,6 +80,7 @@
 #include "voxfx/particles.hpp"
 
 // io: every function that reads or writes a file.
+#include "voxfx/attribute_io.hpp"
 #include "voxfx/environment_io.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/image_io.hpp"

@@ -20,7 +20,7 @@
 namespace voxfx::detail {
 
 /// Bump when a table below changes.
-inline constexpr uint32_t kModuleAbi = 6;
+inline constexpr uint32_t kModuleAbi = 7;
 
 /// The library's parallel-for handed to a module (so that modules follow withThreads and name no
 /// thread library): calls call(body, b, e) over chunks of `grain` items covering [begin, end).
@@ -95,6 +95,16 @@ struct VdbLevelSet {
     std::size_t leafCount = 0;
     const VdbInsideRun* insideRuns = nullptr;
     std::size_t insideRunCount = 0;
+};
+
+/// One grid of writeDenseGrids: `components` (1: FloatGrid, 3: Vec3SGrid) floats per voxel, x
+/// fastest, then y, then z (components innermost); voxels outside the call's active mask hold
+/// `background`.
+struct VdbDenseGrid {
+    const char* name = "";
+    int components = 1;
+    const float* values = nullptr;
+    float background = 0;
 };
 
 struct VdbModule {
@@ -173,6 +183,12 @@ struct VdbModule {
     /// "voxfx_dims".
     bool (*writeLevelSet)(const char* path, const VdbLevelSet& ls, const VdbPlacement& placement,
                           const char* gridName, ParallelFor parallelFor, std::string* error);
+    /// Several dense grids of the same voxels in one file (class unknown), each with the
+    /// placement's transform and the dimensions as "voxfx_dims"; a voxel is active where
+    /// active[x + nx * (y + ny * z)] is non-zero.
+    bool (*writeDenseGrids)(const char* path, const int64_t dims[3], const uint8_t* active,
+                            const VdbDenseGrid* grids, std::size_t gridCount, const VdbPlacement& placement,
+                            std::string* error);
 };
 
 // ---- voxfx_assimp: Assimp (glTF 2.0 and the long tail) ----------------------------------------

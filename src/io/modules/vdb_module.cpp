@@ -548,6 +548,60 @@ bool writeFloats(const char* path, const int64_t dims[3], const float* values, c
     });
 }
 
+// A dense grid's active voxels with their values, inserted serially in a fixed order (a
+// deterministic tree and file).
+template <class GridT, class Make>
+openvdb::GridBase::Ptr denseGrid(const int64_t dims[3], const uint8_t* active, const VdbDenseGrid& in,
+                                 const openvdb::math::Transform::Ptr& xform, Make&& value) {
+    using V = typename GridT::ValueType;
+    auto grid = GridT::create(value(in.background, nullptr));
+    grid->setTransform(xform);
+    grid->setName(in.name);
+    grid->insertMeta(kDimsMeta,
+                     openvdb::Vec3IMetadata(openvdb::Vec3i(int(dims[0]), int(dims[1]), int(dims[2]))));
+    auto acc = grid->getAccessor();
+    std::size_t n = 0;
+    for (int64_t k = 0; k < dims[2]; ++k)
+        for (int64_t j = 0; j < dims[1]; ++j)
+            for (int64_t i = 0; i < dims[0]; ++i, ++n)
+                if (active[n]) {
+                    const V v = value(0, in.values + n * std::size_t(in.components));
+                    acc.setValue(openvdb::Coord(int(i), int(j), int(k)), v);
+                }
+    return grid;
+}
+
+bool writeDenseGrids(const char* path, const int64_t dims[3], const uint8_t* active,
+                     const VdbDenseGrid* grids, std::size_t gridCount, const VdbPlacement& placement,
+                     std::string* error) {
+    return guarded(error, [&] {
+        initializeOpenVdb();
+        auto xform = openvdb::math::Transform::createLinearTransform(1.0);
+        xform->preScale(openvdb::Vec3d(placement.cell[0], placement.cell[1], placement.cell[2]));
+        xform->postTranslate(
+            openvdb::Vec3d(placement.centre0[0], placement.centre0[1], placement.centre0[2]));
+        openvdb::GridPtrVec out;
+        for (std::size_t g = 0; g < gridCount; ++g) {
+            const VdbDenseGrid& in = grids[g];
+            if (in.components == 1)
+                out.push_back(denseGrid<openvdb::FloatGrid>(
+                    dims, active, in, xform, [](float bg, const float* v) { return v ? *v : bg; }));
+            else if (in.components == 3)
+                out.push_back(
+                    denseGrid<openvdb::Vec3SGrid>(dims, active, in, xform, [](float bg, const float* v) {
+                        return v ? openvdb::Vec3s(v[0], v[1], v[2]) : openvdb::Vec3s(bg, bg, bg);
+                    }));
+            else
+                fail("grid '", in.name, "': ", in.components, " components (1 or 3 expected)");
+        }
+        try {
+            openvdb::io::File f(path);
+            f.write(out);
+            f.close();
+        } catch (const openvdb::Exception& e) { fail("OpenVDB: ", e.what()); }
+    });
+}
+
 bool writeLevelSet(const char* path, const VdbLevelSet& ls, const VdbPlacement& placement,
                    const char* gridName, ParallelFor parallelFor, std::string* error) {
     return guarded(error, [&] {
@@ -941,10 +995,10 @@ void* sparseRead(const uint8_t* data, std::size_t size, VdbReadBox* box, int64_t
 }
 
 constexpr VdbModule kTable{
-    kModuleAbi,       sizeof(VdbModule), writeBits,    writeFloats,    readBits,     readFloats,
-    sparseCreate,     sparseDestroy,     sparseCopy,   sparseAddBrick, sparseFinish, sparseFromBits,
-    sparseToBits,     sparseCount,       sparseBounds, sparseMemory,   sparseGet,    sparseCombine,
-    sparseMorphology, sparseCoordinates, sparseWrite,  sparseRead,     writeLevelSet};
+    kModuleAbi,       sizeof(VdbModule), writeBits,    writeFloats,    readBits,      readFloats,
+    sparseCreate,     sparseDestroy,     sparseCopy,   sparseAddBrick, sparseFinish,  sparseFromBits,
+    sparseToBits,     sparseCount,       sparseBounds, sparseMemory,   sparseGet,     sparseCombine,
+    sparseMorphology, sparseCoordinates, sparseWrite,  sparseRead,     writeLevelSet, writeDenseGrids};
 
 } // namespace
 } // namespace voxfx::detail
