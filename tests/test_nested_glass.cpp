@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "demo/demo_scenes.hpp"
 #include "test_util.hpp"
 #include "voxfx/glass.hpp"
 #include "voxfx/render.hpp"
@@ -270,6 +271,25 @@ TEST(NestedGlassTest, VoxelGlassRendersANestedBallCloseToTheExactTracer) {
                 e.psnr, (long long)e.pixels);
     EXPECT_LT(e.mae, 0.035);
     EXPECT_GT(e.psnr, 19);
+}
+
+TEST(NestedGlassTest, GlassDemoHoldsAnObjectOfOneGlassInsideAnother) {
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    const Scene s = demo::makeGlassScene(test::dataPath("meshes"));
+    const SceneMesh *ball = nullptr, *inside = nullptr;
+    for (const SceneMesh& m : s.meshes) {
+        if (m.name == "Ball") ball = &m;
+        if (m.name == "Bunny-in-ball") inside = &m;
+    }
+    ASSERT_TRUE(ball && inside);
+    const Material &outer = s.materials[ball->material], &inner = s.materials[inside->material];
+    EXPECT_TRUE(outer.isGlass() && inner.isGlass());
+    EXPECT_NE(outer.ior, inner.ior);
+    // Every vertex of the inner object strictly inside the ball (its centre and radius from its bounds).
+    const Box3d b = computeBounds(ball->mesh.view());
+    const double radius = 0.5 * b.extent().y;
+    for (const Vec3f& p : inside->mesh.positions) ASSERT_LT(length(Vec3d(p) - b.center()), 0.9 * radius);
+    ASSERT_GE(s.cameras.size(), 2u); // the second camera looks at the ball
 }
 
 } // namespace
