@@ -9,7 +9,8 @@
 //           a point light and a directional one.
 //   glass   glass objects (the bunny, a torus knot, two coloured glasses, a ruby bunny inside a glass
 //           ball) over a checkered ground.
-// Every scene has one camera (glass: a second one close to the ball). Generation is deterministic (fixed seeds).
+// Every scene has one camera (glass: a second one close to the ball). Generation is deterministic
+// (fixed seeds).
 //
 // Thread-safety: makeDemoScene may run concurrently (it only reads mesh files and builds a new
 // Scene); it runs on the calling thread.
