@@ -1,11 +1,17 @@
 // voxfx — exact glass: ray tracing on the actual triangles (Embree 3, voxfx/triangle_tracer.hpp),
 // the reference for the voxel methods. Glass method "exact" (voxfx/glass.hpp).
 //
-// Snell's law at every crossing with the interpolated vertex normal, total internal reflection
-// where Snell has no solution, (1 - F) at every refraction, Beer–Lambert exp(-sigma * length) over
-// the true path length inside, until the ray leaves every object (or maxEvents: it then leaves
-// along its current direction); then the environment. A back face seen from outside (an open
-// mesh) is passed through.
+// Objects may nest (CHANG §4.2, fig. 3: an angel inside a glass ball) and touch: the tracer keeps
+// the stack of media the ray is in (closed meshes; entering a front face pushes its medium, leaving
+// a back face removes the innermost copy of its medium; the top is the medium the ray is in, air
+// when empty). Faces at the same point (two objects touching, found within the tracer's epsilon)
+// are crossed together as one interface, from the medium before all of them to the medium after.
+// Snell's law at every interface with n_from / n_to and the interpolated vertex normal, total
+// internal reflection where Snell has no solution (the stack unchanged), (1 - F(n_from, n_to)) at
+// every refraction, the tint of each medium entered, Beer–Lambert exp(-sigma * length) with the
+// sigma of the medium each segment is in, until the ray is back in air and meets nothing (or
+// maxEvents: it then leaves along its current direction); then the environment. A back face of a
+// medium the ray is not in (an open mesh seen from outside) is passed through.
 //
 // Thread-safety: read-only after construction; trace may run from any number of threads.
 #pragma once
@@ -53,6 +59,14 @@ private:
     std::vector<uint32_t> medium_;
     std::vector<GlassMedium> media_;
     std::shared_ptr<const TriangleTracer> tracer_; ///< the glass triangles
+    /// With several media: each medium's triangles (indices into the glass triangles) and a tracer
+    /// over them alone, to find the faces of other media that coincide with a hit.
+    struct MediumTriangles {
+        uint32_t medium = 0;
+        std::vector<uint32_t> triangle;
+        std::shared_ptr<const TriangleTracer> tracer;
+    };
+    std::vector<MediumTriangles> byMedium_;
     int maxEvents_ = ExactGlassOptions{}.maxEvents;
 };
 

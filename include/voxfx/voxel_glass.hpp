@@ -2,14 +2,20 @@
 // through an attribute grid of the glass (normals and material per voxel; one voxel at a time with
 // the one DDA, voxfx/dda.hpp). Glass methods "multi" and "two-surface" (voxfx/glass.hpp).
 //
-//   multi        CHANG §4.1.1 multiple refraction: at a boundary voxel, whose stored normal points
-//                along the ray when inside (leaving) or against it when outside (entering), Snell
-//                with the voxel's averaged normal and its material's index; total internal
-//                reflection where there is no solution; a refraction is skipped when its normal is
-//                within angleThreshold of the previous one (CHANG's guard against refracting twice at
+//   multi        CHANG §4.1.1 multiple refraction, with the objects of several materials of §4.2
+//                (nested and touching glass): the march keeps the stack of media the ray is in
+//                (material ids). A boundary voxel whose stored normal faces the ray enters the
+//                voxel's material (unless the ray is in it already); one whose normal points along
+//                the ray leaves its material (or, where the ray is not in that material, the
+//                innermost one). Snell with the voxel's averaged normal and n_from / n_to of the media
+//                on both sides, (1 - F(n_from, n_to)), the tint of a medium entered; total internal
+//                reflection where there is no solution (the media unchanged); a refraction is
+//                skipped when its voxel has the material of the last surface and its normal is
+//                within angleThreshold of that surface's (CHANG's guard against refracting twice at
 //                one surface spread over neighbouring voxels); Beer–Lambert with the coefficient of
-//                the material the ray is in, per voxel segment; until the ray leaves the grid, then
-//                the environment.
+//                the medium the ray is in, per voxel segment; until the ray leaves the grid, then the
+//                environment. Faces of two materials lying on each other share voxels whose averaged
+//                normals cancel: that interface is not seen (the ray keeps the first medium).
 //   two-surface  Wyman 2005 as CHANG's baseline: the same march stops at the first back surface: one
 //                refraction there (or the mirror direction under total internal reflection), then the
 //                environment. It cannot see a second part of the object behind the first.

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 
 #include "voxfx/error.hpp"
@@ -37,16 +38,56 @@ ExactGlass::ExactGlass(const MeshView& mesh, std::vector<Vec3f> vertexNormals,
     for (const uint32_t m : medium_)
         if (m >= media_.size()) fail("exact glass: medium index ", m, " out of range");
     tracer_ = std::make_shared<const TriangleTracer>(mesh);
+    // Several media: each one's triangles in a tracer of their own, so that a face of another
+    // medium lying on the face just hit (touching objects) is found however Embree orders them.
+    std::vector<uint8_t> used(media_.size());
+    for (const uint32_t m : medium_) used[m] = 1;
+    if (std::count(used.begin(), used.end(), uint8_t(1)) < 2) return;
+    for (uint32_t m = 0; m < media_.size(); ++m) {
+        if (!used[m]) continue;
+        MediumTriangles mt;
+        mt.medium = m;
+        const Mesh& all = tracer_->mesh();
+        Mesh sub;
+        sub.positions = all.positions;
+        for (uint32_t t = 0; t < medium_.size(); ++t) {
+            if (medium_[t] != m) continue;
+            mt.triangle.push_back(t);
+            for (int k = 0; k < 3; ++k) sub.indices.push_back(all.indices[3 * size_t(t) + size_t(k)]);
+        }
+        mt.tracer = std::make_shared<const TriangleTracer>(sub.view());
+        byMedium_.push_back(std::move(mt));
+    }
 }
+
+namespace {
+
+// One face of a crossing: the triangle and whether the ray enters its object there.
+struct Face {
+    uint32_t triangle;
+    bool entering;
+};
+
+} // namespace
 
 GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents) const {
     const Mesh& mesh = tracer_->mesh();
     const double epsilon = tracer_->epsilon();
+    static const GlassMedium kAir{1.0f, {0, 0, 0}, {1, 1, 1}};
     GlassPath p;
     Vec3d o = origin, d = normalize(dir);
     Vec3f thr{1, 1, 1};
-    bool inside = false;
-    uint32_t cur = 0;
+    // The media the ray is in, innermost (last entered) on top; empty: air.
+    std::vector<uint32_t> stack, next;
+    auto mediumOf = [&](const std::vector<uint32_t>& s) -> const GlassMedium& {
+        return s.empty() ? kAir : media_[s.back()];
+    };
+    auto outwardNormal = [&](uint32_t t) {
+        const uint32_t ia = mesh.indices[3 * t], ib = mesh.indices[3 * t + 1], ic = mesh.indices[3 * t + 2];
+        const Vec3d a(mesh.positions[ia]), b(mesh.positions[ib]), c(mesh.positions[ic]);
+        return normalize(cross(b - a, c - a));
+    };
+    std::vector<Face> faces;
     int crossings = 0; // every crossing, including ignored ones: bounds the loop
     while (true) {
         const TriangleTracer::Hit h =
@@ -57,54 +98,71 @@ GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents
             p.throughput = thr;
             return p;
         }
-        const size_t t = h.triangle;
-        const uint32_t ia = mesh.indices[3 * t], ib = mesh.indices[3 * t + 1], ic = mesh.indices[3 * t + 2];
-        const Vec3d a(mesh.positions[ia]), b(mesh.positions[ib]), c(mesh.positions[ic]);
-        const Vec3d ng = normalize(cross(b - a, c - a)); // outward
+        const uint32_t t = h.triangle;
+        const Vec3d ng = outwardNormal(t);
         Vec3d n = ng;
         if (!normals_.empty()) {
+            const uint32_t ia = mesh.indices[3 * t], ib = mesh.indices[3 * t + 1],
+                           ic = mesh.indices[3 * t + 2];
             const Vec3d ns = normalize(Vec3d(normals_[ia]) * (1 - h.u - h.v) + Vec3d(normals_[ib]) * h.u +
                                        Vec3d(normals_[ic]) * h.v);
             if (length(ns) > 0) n = dot(ns, ng) < 0 ? -ns : ns;
         }
         const Vec3d x = o + d * h.t;
-        if (inside) thr = thr * beerLambert(media_[cur].sigma, h.t);
+        thr = thr * beerLambert(mediumOf(stack).sigma, h.t);
         o = x;
         if (++crossings > 4 * maxEvents + 8 || p.events >= maxEvents) {
             if (!p.hit) return p;
             p.truncate(x, d, thr);
             return p;
         }
-        const bool entering = dot(d, ng) < 0;
-        if (entering) {
-            // Facing the ray: the shading normal unless it faces away (grazing), then the face's.
-            const Vec3d nf = dot(d, n) < 0 ? n : ng;
-            const GlassMedium& m = media_[medium_[t]];
-            const double F = fresnelDielectric(-dot(d, nf), 1.0, m.ior);
-            if (!p.hit) {
-                p.hit = true;
-                p.reflectDir = reflectDirection(d, nf);
-                p.reflectance = float(F);
+        // Every face at this point (within epsilon): the one hit and those of other media lying on it
+        // (two objects touching). They are crossed together, as one interface.
+        faces.assign(1, Face{t, dot(d, ng) < 0});
+        for (const MediumTriangles& mt : byMedium_) {
+            if (mt.medium == medium_[t]) continue;
+            const TriangleTracer::Hit c = mt.tracer->intersect(x - d * epsilon, d, 0, 2 * epsilon);
+            if (c.hit) {
+                const uint32_t ct = mt.triangle[c.triangle];
+                faces.push_back({ct, dot(d, outwardNormal(ct)) < 0});
             }
-            Vec3d r;
-            if (!refractDirection(d, nf, 1.0 / m.ior, r))
-                r = reflectDirection(d, nf); // cannot happen for ior>=1
-            thr = thr * m.tint * float(1 - F);
+        }
+        // The media after the interface: leave first (the innermost copy of each medium left), then
+        // enter. A face that leaves a medium the ray is not in (an open mesh's back face seen from
+        // outside) is passed through.
+        next = stack;
+        bool changed = false;
+        for (const Face& f : faces) {
+            if (f.entering) continue;
+            const auto it = std::find(next.rbegin(), next.rend(), medium_[f.triangle]);
+            if (it == next.rend()) continue;
+            next.erase(std::next(it).base());
+            changed = true;
+        }
+        Vec3f tint{1, 1, 1};
+        for (const Face& f : faces) {
+            if (!f.entering) continue;
+            next.push_back(medium_[f.triangle]);
+            tint = tint * media_[medium_[f.triangle]].tint;
+            changed = true;
+        }
+        if (!changed) continue;
+        // Facing the ray: the shading normal unless it faces away (grazing), then the face's.
+        const Vec3d nf = dot(d, ng) < 0 ? (dot(d, n) < 0 ? n : ng) : (dot(d, n) > 0 ? -n : -ng);
+        const double etaFrom = mediumOf(stack).ior, etaTo = mediumOf(next).ior;
+        const double F = fresnelDielectric(-dot(d, nf), etaFrom, etaTo);
+        if (!p.hit) {
+            p.hit = true;
+            p.reflectDir = reflectDirection(d, nf);
+            p.reflectance = float(F);
+        }
+        Vec3d r;
+        if (refractDirection(d, nf, etaFrom / etaTo, r)) {
+            thr = thr * tint * float(1 - F);
             d = r;
-            inside = true;
-            cur = medium_[t];
+            stack.swap(next);
         } else {
-            if (!inside) continue; // a back face seen from outside (open mesh): pass through
-            const Vec3d nf = dot(d, n) > 0 ? -n : -ng; // facing the ray, into the glass
-            const GlassMedium& m = media_[cur];
-            Vec3d r;
-            if (refractDirection(d, nf, m.ior, r)) {
-                thr = thr * float(1 - fresnelDielectric(-dot(d, nf), m.ior, 1.0));
-                d = r;
-                inside = false;
-            } else {
-                d = reflectDirection(d, nf); // total internal reflection
-            }
+            d = reflectDirection(d, nf); // total internal reflection: the ray stays where it was
         }
         ++p.events;
     }

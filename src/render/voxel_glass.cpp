@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 
 #include "voxfx/dda.hpp"
@@ -99,9 +100,15 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
     d = r;
     Vec3f thr = m0.tint * float(1 - F0);
     p.events = 1;
-    bool inside = true;
-    const GlassMedium* cur = &m0;
-    Vec3d lastNormal = n0; // the entry surface's outward normal (it faces the incoming ray)
+    // The media the ray is in, innermost (last entered) on top; empty: air. Material-id transitions
+    // at boundary voxels change it: a voxel whose normal faces the ray enters its material, one whose
+    // normal points along the ray leaves it (or, where its material is not one the ray is in, the
+    // innermost medium: the boundary still says the ray leaves something).
+    static const GlassMedium kAir{1.0f, {0, 0, 0}, {1, 1, 1}};
+    std::vector<uint32_t> stack{uint32_t(std::min<size_t>(medium, media_.size() - 1))};
+    auto current = [&]() -> const GlassMedium& { return stack.empty() ? kAir : media_[stack.back()]; };
+    Vec3d lastNormal = n0;                // the entry surface's outward normal (it faces the incoming ray)
+    uint32_t lastMaterial = stack.back(); // the material of that surface
     const double cosThreshold = std::cos(options.angleThreshold);
     const int64_t dims[3] = {grid_.frame.width(), grid_.frame.height(), grid_.frame.depth()};
     const int64_t D = dims[2];
@@ -121,42 +128,53 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
             if (grid_.written(i)) {
                 const Vec3d n = Vec3d(grid_.normal(i));
                 const double dn = dot(d, n);
-                const bool candidate =
-                    length(n) > 0 && (inside ? dn > 0 : dn < 0) && dot(n, lastNormal) < cosThreshold;
+                const uint32_t mid = uint32_t(std::min<size_t>(
+                    grid_.material.empty() ? medium : grid_.material[size_t(i)], media_.size() - 1));
+                // Leaving needs a medium to leave; entering a material the ray is already in is the
+                // same surface seen again.
+                const bool leaving = dn > 0 && !stack.empty();
+                const bool entering = dn < 0 && (stack.empty() || stack.back() != mid);
+                // The angle threshold guards against refracting twice at one surface spread over
+                // neighbouring voxels: a surface of another material is another surface (an
+                // embedded object's faces can be nearly parallel to the one just crossed).
+                const bool candidate = length(n) > 0 && (leaving || entering) &&
+                                       (mid != lastMaterial || dot(n, lastNormal) < cosThreshold);
                 if (candidate) {
                     if (p.events >= options.maxEvents) {
                         p.truncate(origin_ + (g + d * tEnter) * voxel_, d, thr);
                         return p;
                     }
                     const double tEvent = 0.5 * (tEnter + tLeave);
-                    if (inside) thr = thr * beerLambert(cur->sigma, (tEvent - tEnter) * voxel_);
+                    thr = thr * beerLambert(current().sigma, (tEvent - tEnter) * voxel_);
                     pos = origin_ + (g + d * tEvent) * voxel_;
                     ++p.events;
-                    if (inside) {
-                        const Vec3d nf = -n;
-                        if (refractDirection(d, nf, cur->ior, r)) {
-                            thr = thr * float(1 - fresnelDielectric(-dot(d, nf), cur->ior, 1.0));
-                            d = r;
-                            inside = false;
-                        } else {
-                            d = reflectDirection(d, nf);
-                        }
-                        if (twoSurface) stop = true; // Wyman: one back surface
+                    std::vector<uint32_t> next = stack;
+                    Vec3f tint{1, 1, 1};
+                    if (leaving) {
+                        const auto it = std::find(next.rbegin(), next.rend(), mid);
+                        next.erase(it == next.rend() ? next.end() - 1 : std::next(it).base());
                     } else {
-                        const uint32_t mid = grid_.material.empty() ? medium : grid_.material[size_t(i)];
-                        cur = &media_[std::min<size_t>(mid, media_.size() - 1)];
-                        const double F = fresnelDielectric(-dn, 1.0, cur->ior);
-                        if (!refractDirection(d, n, 1.0 / cur->ior, r)) r = reflectDirection(d, n);
-                        thr = thr * cur->tint * float(1 - F);
-                        d = r;
-                        inside = true;
+                        next.push_back(mid);
+                        tint = media_[mid].tint;
                     }
+                    const double etaFrom = current().ior,
+                                 etaTo = next.empty() ? 1.0 : media_[next.back()].ior;
+                    const Vec3d nf = leaving ? -n : n; // facing the ray
+                    if (refractDirection(d, nf, etaFrom / etaTo, r)) {
+                        thr = thr * tint * float(1 - fresnelDielectric(-dot(d, nf), etaFrom, etaTo));
+                        d = r;
+                        stack.swap(next);
+                    } else {
+                        d = reflectDirection(d, nf); // total internal reflection
+                    }
+                    if (twoSurface && leaving) stop = true; // Wyman: one back surface
                     lastNormal = n;
+                    lastMaterial = mid;
                     restarted = true;
                     break;
                 }
             }
-            if (inside) thr = thr * beerLambert(cur->sigma, (tLeave - tEnter) * voxel_);
+            thr = thr * beerLambert(current().sigma, (tLeave - tEnter) * voxel_);
             tEnter = tLeave;
             if (tLeave >= clip.t1 || !walk.advance(axis)) {
                 pos = origin_ + (g + d * tLeave) * voxel_;

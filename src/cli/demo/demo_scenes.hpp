@@ -7,8 +7,10 @@
 //   bunny   the Stanford bunny (bunny00.off) under a canopy of leaves, lit by a spot light.
 //   cgal    meshes from the CGAL data set (elephant, armadillo, cactus) under a leafy pergola lit by
 //           a point light and a directional one.
-//   glass   glass objects (the bunny, a torus knot, two coloured glasses) over a checkered ground.
-// Every scene has one camera. Generation is deterministic (fixed seeds).
+//   glass   glass objects (the bunny, a torus knot, two coloured glasses, a ruby bunny inside a glass
+//           ball) over a checkered ground.
+// Every scene has one camera (glass: a second one close to the ball). Generation is deterministic
+// (fixed seeds).
 //
 // Thread-safety: makeDemoScene may run concurrently (it only reads mesh files and builds a new
 // Scene); it runs on the calling thread.
@@ -46,7 +48,8 @@ Scene makeBunnyScene(const std::string& meshesDir, int leaves = 4000, uint64_t s
 Scene makeCgalScene(const std::string& meshesDir, int leaves = 5000, uint64_t seed = 3);
 
 /// Glass (no lights: the default sun and sky): a glass bunny (meshesDir/bunny00.off), a
-/// self-occluding green glass torus knot and a block of amber and blue glass over a checkered ground.
+/// self-occluding green glass torus knot, a block of amber and blue glass and a ruby bunny inside a
+/// clear glass ball (nested glass, CHANG fig. 3) over a checkered ground.
 Scene makeGlassScene(const std::string& meshesDir);
 
 /// The mesh folder/file (loadMesh), or nullopt when the file does not exist.

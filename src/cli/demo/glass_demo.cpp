@@ -1,5 +1,6 @@
-// voxfx — the glass demo scene: a glass bunny, a self-occluding glass torus knot and a block of two
-// coloured glasses over a checkered ground, no lights (the default sun and sky light it).
+// voxfx — the glass demo scene: a glass bunny, a self-occluding glass torus knot, a block of two
+// coloured glasses and a ruby bunny inside a clear glass ball (CHANG fig. 3's angel in a ball: glass
+// of several materials, nested) over a checkered ground, no lights (the default sun and sky light it).
 #include <cmath>
 #include <filesystem>
 
@@ -45,6 +46,31 @@ Mesh glassDemoTorusKnot(int p, int q, double R, double r, double tube, int segme
     }
     if (volume < 0)
         for (size_t t = 0; t < m.triangleCount(); ++t) std::swap(m.indices[3 * t + 1], m.indices[3 * t + 2]);
+    return m;
+}
+
+// A closed UV sphere (outward CCW): `rings` latitude bands, `segments` longitudes, poles shared.
+Mesh glassDemoSphere(const Vec3d& centre, double radius, int rings, int segments) {
+    Mesh m;
+    m.positions.push_back(Vec3f(centre + Vec3d{0, -radius, 0}));
+    for (int i = 1; i < rings; ++i)
+        for (int j = 0; j < segments; ++j) {
+            const double theta = M_PI * i / rings, phi = 2 * M_PI * j / segments;
+            m.positions.push_back(
+                Vec3f(centre + Vec3d{radius * std::sin(theta) * std::cos(phi), -radius * std::cos(theta),
+                                     -radius * std::sin(theta) * std::sin(phi)}));
+        }
+    m.positions.push_back(Vec3f(centre + Vec3d{0, radius, 0}));
+    const auto top = uint32_t(m.positions.size() - 1);
+    auto ring = [&](int i, int j) { return uint32_t(1 + (i - 1) * segments + (j + segments) % segments); };
+    for (int j = 0; j < segments; ++j) {
+        for (const uint32_t t : {uint32_t(0), ring(1, j + 1), ring(1, j)}) m.indices.push_back(t);
+        for (const uint32_t t : {top, ring(rings - 1, j), ring(rings - 1, j + 1)}) m.indices.push_back(t);
+        for (int i = 1; i + 1 < rings; ++i)
+            for (const uint32_t t : {ring(i, j), ring(i, j + 1), ring(i + 1, j + 1), ring(i, j),
+                                     ring(i + 1, j + 1), ring(i + 1, j)})
+                m.indices.push_back(t);
+    }
     return m;
 }
 
@@ -115,6 +141,24 @@ Scene makeGlassScene(const std::string& meshesDir) {
     const uint32_t blue =
         scene.addMaterial(glassDemoMaterial("blue-glass", {1, 1, 1}, {0.25f, 0.45f, 0.95f}, 0.5f));
 
+    // CHANG fig. 3: an object inside a glass object. A ruby bunny (index 1.76) in a clear ball: rays
+    // refract at the ball, again between the glasses (1.5 to 1.76) and back.
+    const uint32_t ruby =
+        scene.addMaterial(glassDemoMaterial("ruby-glass", {1, 1, 1}, {0.9f, 0.12f, 0.2f}, 0.25f));
+    scene.materials[ruby].ior = 1.76f;
+    const Vec3d ballCentre{-0.65, 0.46, 1.15};
+    SceneMesh ball;
+    ball.name = "Ball";
+    ball.mesh = glassDemoSphere(ballCentre, 0.46, 48, 96);
+    ball.material = clear;
+    scene.meshes.push_back(std::move(ball));
+    SceneMesh inside;
+    inside.name = "Bunny-in-ball";
+    inside.mesh = *bunny;
+    glassDemoPlace(inside.mesh, 0.4, ballCentre.x, ballCentre.y - 0.2, ballCentre.z);
+    inside.material = ruby;
+    scene.meshes.push_back(std::move(inside));
+
     SceneMesh b;
     b.name = "Bunny";
     b.mesh = std::move(*bunny);
@@ -146,6 +190,13 @@ Scene makeGlassScene(const std::string& meshesDir) {
     cam.nearDepth = 0.05;
     cam.farDepth = 100;
     scene.cameras.push_back(cam);
+    // A second camera close to the ball (render --camera 1): the nested glass fills the view.
+    Camera close = cam;
+    close.name = "Ball-view";
+    close.position = ballCentre + Vec3d{0.5, 0.75, 1.9};
+    close.target = ballCentre;
+    close.fovY = 30 * M_PI / 180;
+    scene.cameras.push_back(close);
     scene.validate();
     return scene;
 }
