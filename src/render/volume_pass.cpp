@@ -124,10 +124,17 @@ struct PixelRay {
     std::span<const ListFragment> column;
     Vec3d eye, perDepth;
     double lengthPerDepth;
-    double zMax; ///< the G-buffer's depth: the walk stops at the surface it shows
+    double zMax;   ///< the G-buffer's depth: the walk stops at the surface it shows
+    double jitter; ///< sampleJitter of the pixel: where its first volume sample falls in a step
     Vec3f color{0, 0, 0};
     double transmittance = 1;
     int64_t samples = 0;
+    /// Per object: the value sampled at the end of the last interval (reused as the next one's
+    /// start), and whether it is there (empty intervals skip the sample).
+    std::vector<double>* value = nullptr;
+    std::vector<uint8_t>* haveValue = nullptr;
+    std::vector<double>* start = nullptr; ///< per object: the value at the current interval's start
+    std::vector<double>* sigma = nullptr; ///< per object: the current interval's extinction
 };
 
 // What the pass composites: the volume scene's objects (and blended meshes), how each surface is
@@ -138,13 +145,23 @@ struct VolumeComposite {
     std::vector<Material> materials; ///< per object: how its surface is shaded
     ObjectSurfaces surfaces;
     std::vector<EmptySpace> emptySpace;
-    double step; ///< world length between volume samples
+    std::vector<PreintegratedTransfer> preintegrated; ///< per Volume object
+    double step;                                      ///< world length between volume samples
+    static constexpr double kPieceDepth = 0.25;       ///< optical depth of the pieces of a dense interval
 
     VolumeComposite(const FrameState& f, const VolumeScene& scene)
         : frame(f), vs(scene), materials(objectMaterials(f.lit, scene)), surfaces(scene),
           emptySpace(f.options.skipEmptySpace ? emptySpaceOf(scene)
                                               : std::vector<EmptySpace>(scene.objects.size())),
-          step(sampleStep(scene) * f.options.volumeStep) {}
+          preintegrated(preintegrate(scene)), step(sampleStep(scene) * f.options.volumeStep) {}
+
+    static std::vector<PreintegratedTransfer> preintegrate(const VolumeScene& vs) {
+        std::vector<PreintegratedTransfer> out(vs.objects.size());
+        for (std::size_t o = 0; o < vs.objects.size(); ++o)
+            if (vs.objects[o].kind == ObjectKind::Volume)
+                out[o] = PreintegratedTransfer(vs.objects[o].transfer, vs.objects[o].opacityLength);
+        return out;
+    }
 
     // Opaque and translucent objects are shaded as meshes of their colour and opacity (a blended
     // mesh with its own material).
@@ -194,7 +211,11 @@ struct VolumeComposite {
         return r.transmittance >= 1e-3;
     }
 
-    // Light arriving at volume sample p: ambient plus every light's irradiance times its shadow.
+    // Light arriving at volume sample p: ambient plus every light's irradiance times its shadow,
+    // looked up at p moved one sample step towards the light (and given that direction as the
+    // lookup's normal, so the technique adds its own offset): a shadow map samples the volume in
+    // steps of its own, and a dense layer the sample lies at the front of (bone under skin) must not
+    // shadow its own surface by the step over which the map's visibility falls.
     Vec3f lightAt(const Vec3d& p) const {
         const Scene& scene = frame.lit;
         Vec3f light = frame.options.ambient;
@@ -202,41 +223,84 @@ struct VolumeComposite {
             Vec3d toLight;
             const Vec3f e = lightIrradiance(scene.lights[l], p, toLight);
             if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
-            const Vec3f vis =
-                l < frame.shadows.size() ? shadowVisibility(frame.shadows[l], p, {0, 0, 0}) : Vec3f{1, 1, 1};
+            const Vec3f vis = l < frame.shadows.size()
+                                  ? shadowVisibility(frame.shadows[l], p + toLight * step, toLight)
+                                  : Vec3f{1, 1, 1};
             light += e * vis * float(1.0 / M_PI);
         }
         return light;
     }
 
-    // The segment [z0, z1) inside the volume objects `inside`: sampled and composited front to back;
-    // false stops the walk.
+    // The segment [z0, z1) inside the volume objects `inside`, composited front to back; false
+    // stops the walk. Its samples lie at the segment's ends and at z0 + (j + jitter) steps between
+    // them; each interval between two samples takes the pre-integrated extinction and colour of the
+    // values at its ends (exact for a homogeneous volume: Beer-Lambert over its length) and the
+    // light at its middle.
     bool segment(PixelRay& r, double z0, double z1, std::span<const uint8_t> inside) const {
         if (z0 >= r.zMax) return false;
         z1 = std::min(z1, r.zMax);
         const double worldLength = (z1 - z0) * r.lengthPerDepth;
-        const int64_t n = std::max<int64_t>(1, int64_t(std::ceil(worldLength / step)));
-        const double dz = (z1 - z0) / double(n), dl = worldLength / double(n);
-        for (int64_t k = 0; k < n; ++k) {
-            const Vec3d p = r.eye + r.perDepth * (z0 + (double(k) + 0.5) * dz);
+        const double depthPerLength = (z1 - z0) / worldLength;
+        std::fill(r.haveValue->begin(), r.haveValue->end(), uint8_t(0));
+        double l0 = 0;
+        for (int64_t j = 0; l0 < worldLength; ++j) {
+            const double l1 = std::min(worldLength, (double(j) + r.jitter) * step);
+            if (!(l1 > l0)) continue;
+            const Vec3d p0 = r.eye + r.perDepth * (z0 + l0 * depthPerLength);
+            const Vec3d p1 = r.eye + r.perDepth * (z0 + l1 * depthPerLength);
+            const double dl = l1 - l0;
+            // Each object's extinction over the interval (opacity first: the colour only where
+            // something shows).
+            double sigmaSum = 0;
             for (std::size_t o = 0; o < inside.size(); ++o) {
+                (*r.sigma)[o] = 0;
                 const VolumeSceneObject& obj = vs.objects[o];
                 if (!inside[o] || obj.kind != ObjectKind::Volume) continue;
-                if (emptySpace[o].empty(p)) continue; // would be transparent
-                const double value = vs.volumes[std::size_t(obj.volume)]->sample(p);
+                if (emptySpace[o].emptyBetween(p0, p1)) { // would be transparent
+                    (*r.haveValue)[o] = 0;
+                    continue;
+                }
+                const Volume& volume = *vs.volumes[std::size_t(obj.volume)];
+                double& value = (*r.value)[o];
+                (*r.start)[o] = value;
+                if (!(*r.haveValue)[o]) {
+                    (*r.start)[o] = volume.sample(p0);
+                    ++r.samples;
+                }
+                value = volume.sample(p1);
+                (*r.haveValue)[o] = 1;
                 ++r.samples;
-                // Opacity first: the colour only where something shows.
-                const float alpha = float(obj.transfer.opacity(value));
-                if (alpha <= 0) continue;
-                const Vec3d tc = obj.transfer.color(value);
-                const Rgba c{float(tc.x), float(tc.y), float(tc.z), alpha};
-                const double a =
-                    1.0 - std::pow(1.0 - std::min(double(c.a), 1.0 - 1e-7), dl / obj.opacityLength);
-                r.color +=
-                    Vec3f{c.r, c.g, c.b} * lightAt(p) * float(a * r.transmittance * frame.options.exposure);
-                r.transmittance *= 1.0 - a;
+                (*r.sigma)[o] = preintegrated[o].extinction((*r.start)[o], value);
+                sigmaSum += (*r.sigma)[o];
+            }
+            if (!(sigmaSum > 0)) {
+                l0 = l1;
+                continue;
+            }
+            // The light where the interval's matter shows on average (its opacity-weighted depth:
+            // the middle of a thin interval, 1/sigma from the front of a dense one).
+            // A dense interval in pieces of optical depth at most kPieceDepth (up to 16), each lit
+            // where its matter shows on average (its opacity-weighted depth: the middle of a thin
+            // piece, 1/sigma behind the start of a dense one): the light falls fast across a dense
+            // layer, and one lookup per step would weigh it by where the step happened to start.
+            const int64_t pieces =
+                std::clamp<int64_t>(int64_t(std::ceil(sigmaSum * dl / kPieceDepth)), 1, 16);
+            const double pl = dl / double(pieces), x = sigmaSum * pl;
+            const double lightDepth = x < 1e-6 ? 0.5 * pl : (1 - x / std::expm1(x)) / sigmaSum;
+            for (int64_t k = 0; k < pieces && r.transmittance >= 1e-3; ++k) {
+                const Vec3f light = lightAt(p0 + (p1 - p0) * ((double(k) * pl + lightDepth) / dl));
+                for (std::size_t o = 0; o < inside.size(); ++o) {
+                    const double sigma = (*r.sigma)[o];
+                    if (!(sigma > 0)) continue;
+                    const double alpha = -std::expm1(-sigma * pl);
+                    const Vec3d c = preintegrated[o].color((*r.start)[o], (*r.value)[o]);
+                    r.color += Vec3f{float(c.x), float(c.y), float(c.z)} * light *
+                               float(alpha * r.transmittance * frame.options.exposure);
+                    r.transmittance *= 1.0 - alpha;
+                }
             }
             if (r.transmittance < 1e-3) return false;
+            l0 = l1;
         }
         return true;
     }
@@ -263,13 +327,20 @@ void compositeVolumes(FrameState& frame) {
     std::atomic<int64_t> samples{0};
     parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
         SegmentWalker walker(*chosen, pass.surfaces.flat.triangleLeaf);
+        std::vector<double> values(chosen->objects.size(), 0.0);
+        std::vector<uint8_t> haveValues(chosen->objects.size(), 0);
+        std::vector<double> starts(chosen->objects.size(), 0.0), sigmas(chosen->objects.size(), 0.0);
         int64_t local = 0;
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
                 const auto col = lists.column(x, y);
                 if (col.empty()) continue;
                 const std::size_t pixel = std::size_t(y * W + x);
-                PixelRay r{x, y, col, f.eye(), {}, 0, 0};
+                PixelRay r{x, y, col, f.eye(), {}, 0, 0, sampleJitter(x, y, 1)};
+                r.value = &values;
+                r.haveValue = &haveValues;
+                r.start = &starts;
+                r.sigma = &sigmas;
                 r.perDepth = f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - r.eye;
                 r.lengthPerDepth = length(r.perDepth);
                 r.zMax = gbuffer.triangle[pixel] != GBuffer::kNone ? double(gbuffer.depth[pixel])
