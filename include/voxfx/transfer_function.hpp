@@ -104,12 +104,16 @@ public:
     PreintegratedTransfer(const TransferFunction& tf, double opacityLength);
     /// Mean extinction (per world unit) over values running linearly from a to b (either order).
     double extinction(double a, double b) const;
+    /// The integral of -ln(1 - alpha) from the first opacity point to v (negative below it): a
+    /// walk that reuses each sample as the next interval's start keeps it with the value.
+    double cumulative(double v) const;
+    /// extinction(a, b) given ca = cumulative(a) and cb = cumulative(b).
+    double extinction(double a, double ca, double b, double cb) const;
     /// Extinction-weighted mean colour over the same interval.
     Vec3d color(double a, double b) const;
     const TransferFunction& transfer() const { return tf_; }
 
 private:
-    double integral(double v) const; ///< integral of -ln(1 - alpha) from the first point to v
     double pointExtinction(double v) const;
     TransferFunction tf_;
     double opacityLength_ = 1;

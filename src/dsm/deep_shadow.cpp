@@ -55,7 +55,7 @@ struct DeepShadowView {
         const double lengthPerDepth = length(perDepth);
         const double term = options.termination;
         const double jitter = sampleJitter(x, y, 2);
-        std::vector<double> value(scene->objects.size(), 0.0);
+        std::vector<double> value(scene->objects.size(), 0.0), cumulative(scene->objects.size(), 0.0);
         std::vector<uint8_t> haveValue(scene->objects.size(), 0);
         SegmentWalker walker(*scene, leaves->triangleLeaf, true);
         walker.walk(
@@ -93,16 +93,22 @@ struct DeepShadowView {
                             continue;
                         }
                         const Volume& volume = *scene->volumes[std::size_t(obj.volume)];
-                        const double a = haveValue[o] ? value[o] : double(volume.sample(p0));
+                        const PreintegratedTransfer& pre = preintegrated[o];
+                        if (!haveValue[o]) {
+                            value[o] = double(volume.sample(p0));
+                            cumulative[o] = pre.cumulative(value[o]);
+                        }
+                        const double a = value[o], ca = cumulative[o];
                         value[o] = double(volume.sample(p1));
+                        cumulative[o] = pre.cumulative(value[o]);
                         haveValue[o] = 1;
-                        sigma += preintegrated[o].extinction(a, value[o]);
+                        sigma += pre.extinction(a, ca, value[o], cumulative[o]);
                     }
-                    // A dense interval in pieces of optical depth at most 0.25 (up to 16): the
+                    // A dense interval in pieces of optical depth at most 0.5 (up to 8): the
                     // map's linear pieces then follow the exponential fall, which a lookup in the
                     // interval (the front of a bone layer) reads; compression drops what it need not.
                     const double dl = l1 - l0;
-                    const int64_t pieces = std::clamp<int64_t>(int64_t(std::ceil(sigma * dl / 0.25)), 1, 16);
+                    const int64_t pieces = std::clamp<int64_t>(int64_t(std::ceil(sigma * dl / 0.5)), 1, 8);
                     const double zStart = z0 + l0 * depthPerLength;
                     for (int64_t k = 1; k <= pieces; ++k) {
                         const double zp =

@@ -118,6 +118,16 @@ std::vector<std::vector<ObjectSurfaceHit>> objectSurfaceHits(const VolumeScene& 
 
 namespace {
 
+// One volume object along the current interval of a pixel's walk.
+struct ObjectInterval {
+    /// The value sampled at the interval's end and its PreintegratedTransfer::cumulative (reused as
+    /// the next interval's start), and whether they are there (empty intervals skip the sample).
+    double value = 0, cumulative = 0;
+    bool have = false;
+    double sigma = 0; ///< the interval's extinction (0: transparent or not inside)
+    Vec3f color;      ///< its pre-integrated colour
+};
+
 // The ray of one pixel: eye + perDepth * z for frame depth z, and what its walk has gathered.
 struct PixelRay {
     int64_t x, y;
@@ -129,12 +139,7 @@ struct PixelRay {
     Vec3f color{0, 0, 0};
     double transmittance = 1;
     int64_t samples = 0;
-    /// Per object: the value sampled at the end of the last interval (reused as the next one's
-    /// start), and whether it is there (empty intervals skip the sample).
-    std::vector<double>* value = nullptr;
-    std::vector<uint8_t>* haveValue = nullptr;
-    std::vector<double>* start = nullptr; ///< per object: the value at the current interval's start
-    std::vector<double>* sigma = nullptr; ///< per object: the current interval's extinction
+    std::vector<ObjectInterval>* objects = nullptr; ///< per object of the scene
 };
 
 // What the pass composites: the volume scene's objects (and blended meshes), how each surface is
@@ -147,7 +152,7 @@ struct VolumeComposite {
     std::vector<EmptySpace> emptySpace;
     std::vector<PreintegratedTransfer> preintegrated; ///< per Volume object
     double step;                                      ///< world length between volume samples
-    static constexpr double kPieceDepth = 0.25;       ///< optical depth of the pieces of a dense interval
+    static constexpr double kPieceDepth = 0.5;        ///< optical depth of the pieces of a dense interval
 
     VolumeComposite(const FrameState& f, const VolumeScene& scene)
         : frame(f), vs(scene), materials(objectMaterials(f.lit, scene)), surfaces(scene),
@@ -241,7 +246,7 @@ struct VolumeComposite {
         z1 = std::min(z1, r.zMax);
         const double worldLength = (z1 - z0) * r.lengthPerDepth;
         const double depthPerLength = (z1 - z0) / worldLength;
-        std::fill(r.haveValue->begin(), r.haveValue->end(), uint8_t(0));
+        for (ObjectInterval& w : *r.objects) w.have = false;
         double l0 = 0;
         for (int64_t j = 0; l0 < worldLength; ++j) {
             const double l1 = std::min(worldLength, (double(j) + r.jitter) * step);
@@ -253,49 +258,51 @@ struct VolumeComposite {
             // something shows).
             double sigmaSum = 0;
             for (std::size_t o = 0; o < inside.size(); ++o) {
-                (*r.sigma)[o] = 0;
+                ObjectInterval& w = (*r.objects)[o];
+                w.sigma = 0;
                 const VolumeSceneObject& obj = vs.objects[o];
                 if (!inside[o] || obj.kind != ObjectKind::Volume) continue;
                 if (emptySpace[o].emptyBetween(p0, p1)) { // would be transparent
-                    (*r.haveValue)[o] = 0;
+                    w.have = false;
                     continue;
                 }
                 const Volume& volume = *vs.volumes[std::size_t(obj.volume)];
-                double& value = (*r.value)[o];
-                (*r.start)[o] = value;
-                if (!(*r.haveValue)[o]) {
-                    (*r.start)[o] = volume.sample(p0);
+                const PreintegratedTransfer& pre = preintegrated[o];
+                if (!w.have) {
+                    w.value = volume.sample(p0);
+                    w.cumulative = pre.cumulative(w.value);
                     ++r.samples;
                 }
-                value = volume.sample(p1);
-                (*r.haveValue)[o] = 1;
+                const double a = w.value, ca = w.cumulative;
+                w.value = volume.sample(p1);
+                w.cumulative = pre.cumulative(w.value);
+                w.have = true;
                 ++r.samples;
-                (*r.sigma)[o] = preintegrated[o].extinction((*r.start)[o], value);
-                sigmaSum += (*r.sigma)[o];
+                w.sigma = pre.extinction(a, ca, w.value, w.cumulative);
+                if (w.sigma > 0) {
+                    const Vec3d c = pre.color(a, w.value);
+                    w.color = Vec3f{float(c.x), float(c.y), float(c.z)};
+                }
+                sigmaSum += w.sigma;
             }
             if (!(sigmaSum > 0)) {
                 l0 = l1;
                 continue;
             }
-            // The light where the interval's matter shows on average (its opacity-weighted depth:
-            // the middle of a thin interval, 1/sigma from the front of a dense one).
-            // A dense interval in pieces of optical depth at most kPieceDepth (up to 16), each lit
+            // A dense interval in pieces of optical depth at most kPieceDepth (up to 8), each lit
             // where its matter shows on average (its opacity-weighted depth: the middle of a thin
             // piece, 1/sigma behind the start of a dense one): the light falls fast across a dense
             // layer, and one lookup per step would weigh it by where the step happened to start.
-            const int64_t pieces =
-                std::clamp<int64_t>(int64_t(std::ceil(sigmaSum * dl / kPieceDepth)), 1, 16);
+            const int64_t pieces = std::clamp<int64_t>(int64_t(std::ceil(sigmaSum * dl / kPieceDepth)), 1, 8);
             const double pl = dl / double(pieces), x = sigmaSum * pl;
             const double lightDepth = x < 1e-6 ? 0.5 * pl : (1 - x / std::expm1(x)) / sigmaSum;
             for (int64_t k = 0; k < pieces && r.transmittance >= 1e-3; ++k) {
                 const Vec3f light = lightAt(p0 + (p1 - p0) * ((double(k) * pl + lightDepth) / dl));
                 for (std::size_t o = 0; o < inside.size(); ++o) {
-                    const double sigma = (*r.sigma)[o];
-                    if (!(sigma > 0)) continue;
-                    const double alpha = -std::expm1(-sigma * pl);
-                    const Vec3d c = preintegrated[o].color((*r.start)[o], (*r.value)[o]);
-                    r.color += Vec3f{float(c.x), float(c.y), float(c.z)} * light *
-                               float(alpha * r.transmittance * frame.options.exposure);
+                    const ObjectInterval& w = (*r.objects)[o];
+                    if (!(w.sigma > 0)) continue;
+                    const double alpha = -std::expm1(-w.sigma * pl);
+                    r.color += w.color * light * float(alpha * r.transmittance * frame.options.exposure);
                     r.transmittance *= 1.0 - alpha;
                 }
             }
@@ -327,9 +334,7 @@ void compositeVolumes(FrameState& frame) {
     std::atomic<int64_t> samples{0};
     parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
         SegmentWalker walker(*chosen, pass.surfaces.flat.triangleLeaf);
-        std::vector<double> values(chosen->objects.size(), 0.0);
-        std::vector<uint8_t> haveValues(chosen->objects.size(), 0);
-        std::vector<double> starts(chosen->objects.size(), 0.0), sigmas(chosen->objects.size(), 0.0);
+        std::vector<ObjectInterval> objects(chosen->objects.size());
         int64_t local = 0;
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
@@ -337,10 +342,7 @@ void compositeVolumes(FrameState& frame) {
                 if (col.empty()) continue;
                 const std::size_t pixel = std::size_t(y * W + x);
                 PixelRay r{x, y, col, f.eye(), {}, 0, 0, sampleJitter(x, y, 1)};
-                r.value = &values;
-                r.haveValue = &haveValues;
-                r.start = &starts;
-                r.sigma = &sigmas;
+                r.objects = &objects;
                 r.perDepth = f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - r.eye;
                 r.lengthPerDepth = length(r.perDepth);
                 r.zMax = gbuffer.triangle[pixel] != GBuffer::kNone ? double(gbuffer.depth[pixel])

@@ -146,7 +146,8 @@ double PreintegratedTransfer::pointExtinction(double v) const {
     return preintegratedOpticalDepth(tf_.opacity(v)) / opacityLength_;
 }
 
-double PreintegratedTransfer::integral(double v) const {
+double PreintegratedTransfer::cumulative(double v) const {
+    if (tf_.opacityPoints().empty() || std::isnan(v)) return 0;
     const std::vector<OpacityPoint>& op = tf_.opacityPoints();
     if (v <= op.front().value) return preintegratedOpticalDepth(op.front().opacity) * (v - op.front().value);
     if (v >= op.back().value)
@@ -161,10 +162,14 @@ double PreintegratedTransfer::integral(double v) const {
 }
 
 double PreintegratedTransfer::extinction(double a, double b) const {
+    return extinction(a, cumulative(a), b, cumulative(b));
+}
+
+double PreintegratedTransfer::extinction(double a, double ca, double b, double cb) const {
     if (tf_.opacityPoints().empty() || std::isnan(a) || std::isnan(b)) return 0;
     if (std::abs(b - a) <= 1e-6 * std::max({1.0, std::abs(a), std::abs(b)}))
         return pointExtinction(0.5 * (a + b));
-    return std::max(0.0, (integral(b) - integral(a)) / (b - a)) / opacityLength_;
+    return std::max(0.0, (cb - ca) / (b - a)) / opacityLength_;
 }
 
 Vec3d PreintegratedTransfer::color(double a, double b) const {
