@@ -341,6 +341,62 @@ TEST(ShadowVolumeTest, RendererDrawsVolumeShadowsAndCullingDoesNotChangeTheImage
     EXPECT_EQ(shadowVisibility(unprepared, {0, 0, 0}, {0, 1, 0}), (Vec3f{1, 1, 1}));
 }
 
+// A blended (see-through) quad half in a floating box's shadow, over a ground whose own shadow lies
+// elsewhere on screen: the quad's pixels must take the quad's shadow, not the ground's behind it.
+// The ground and box are black, so a pixel on the quad is the quad's shading alone: equal to the
+// exact tracer's wherever the visibility is.
+TEST(ShadowVolumeTest, BlendedSurfacesTakeTheirOwnShadowAsTheExactTracerDoes) {
+    Scene s;
+    Material black;
+    black.baseColor = {0, 0, 0};
+    black.specular = 0;
+    const uint32_t blackId = s.addMaterial(black);
+    Material glassy;
+    glassy.baseColor = {0.9f, 0.8f, 0.7f};
+    glassy.opacity = 0.5f;
+    glassy.blend = true;
+    const uint32_t glassyId = s.addMaterial(glassy);
+    SceneMesh ground;
+    ground.name = "ground";
+    test::appendQuad(ground.mesh, {0, 0, 0}, {0, 0, 4}, {4, 0, 0});
+    ground.material = blackId;
+    ground.castsShadow = false;
+    s.meshes.push_back(ground);
+    SceneMesh box;
+    box.name = "box";
+    box.mesh = test::makeBox({-0.5, 1.5, -0.5}, {0.5, 2.5, 0.5});
+    box.material = blackId;
+    s.meshes.push_back(box);
+    SceneMesh quad;
+    quad.name = "quad";
+    test::appendQuad(quad.mesh, {-0.2, 1.0, 0}, {0, 0, 1.2}, {1.2, 0, 0});
+    quad.material = glassyId;
+    quad.castsShadow = false;
+    s.meshes.push_back(quad);
+    s.lights = {svSun({0.4, -1, 0.1})};
+    s.cameras = {svCamera({0, 5, 4}, {0, 0.5, 0})};
+    RenderOptions o;
+    o.width = 80;
+    o.height = 60;
+    o.background = {0, 0, 0};
+    o.shadow = ExactShadowOptions{};
+    const RenderResult exact = render(s, s.cameras[0], o);
+    o.shadow = NoShadowOptions{};
+    const RenderResult lit = render(s, s.cameras[0], o);
+    o.shadow = ShadowVolumeOptions{};
+    const RenderResult volumes = render(s, s.cameras[0], o);
+    int64_t shadowedOnQuad = 0, litOnQuad = 0, differ = 0;
+    for (std::size_t i = 0; i < exact.image.pixels.size(); ++i) {
+        const Vec3f e = exact.image.pixels[i], v = volumes.image.pixels[i], l = lit.image.pixels[i];
+        if (!(l.x > 0.05f)) continue; // not on the quad (the rest is black)
+        (e.x < l.x - 0.05f ? shadowedOnQuad : litOnQuad) += 1;
+        differ += std::abs(e.x - v.x) > 1e-5f || std::abs(e.y - v.y) > 1e-5f || std::abs(e.z - v.z) > 1e-5f;
+    }
+    EXPECT_GT(shadowedOnQuad, 50);
+    EXPECT_GT(litOnQuad, 100);
+    EXPECT_EQ(differ, 0);
+}
+
 // CGAL meshes as casters over a ground plane: exact against the ray tracer, unchanged by culling.
 TEST(ShadowVolumeTest, CgalMeshCastersMatchRayTracingAndCulling) {
     const std::string path = test::dataPath("meshes/elephant.off");

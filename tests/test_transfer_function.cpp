@@ -80,6 +80,45 @@ TEST(TransferFunction, TableAgreesWithTheFunctionAtItsEntriesAndOnLinearStretche
     EXPECT_THROW(TransferTable(tf, 5, 5, 16), Error);
 }
 
+// The oracle: the extinction and extinction-weighted colour over a linear value ramp by a dense
+// midpoint sum of the curve itself.
+TEST(TransferFunction, PreintegratedIntervalsAreTheMeanOverTheValueRamp) {
+    const TransferFunction tf({{0, {0, 0, 1}}, {0.5, {1, 0, 0}}, {1, {1, 1, 1}}},
+                              {{0.2, 0}, {0.45, 0}, {0.5, 0.9}, {0.55, 0}, {0.7, 0.3}, {0.7, 1}, {0.9, 0.2}});
+    const double len = 0.25;
+    const PreintegratedTransfer pre(tf, len);
+    const auto dense = [&](double a, double b, Vec3d& color) {
+        const int n = 200000;
+        double s = 0;
+        Vec3d e{0, 0, 0};
+        for (int i = 0; i < n; ++i) {
+            const double v = a + (b - a) * (i + 0.5) / n;
+            const double sg = -std::log(1 - std::min(tf.opacity(v), 1 - 1e-7)) / len;
+            s += sg / n;
+            e += tf.color(v) * (sg / n);
+        }
+        color = s > 0 ? e / s : tf.color(0.5 * (a + b));
+        return s;
+    };
+    const double ramps[][2] = {{0.3, 0.6},  {0.6, 0.3},   {0.4, 0.52}, {0.68, 0.72}, {-1, 2},
+                               {0.1, 0.44}, {0.46, 0.47}, {0.95, 3},   {0.8, 0.8}};
+    for (const auto& r : ramps) {
+        Vec3d c;
+        const double want = dense(r[0], r[1], c);
+        EXPECT_NEAR(pre.extinction(r[0], r[1]), want, 1e-4 * std::max(1.0, want)) << r[0] << " " << r[1];
+        const Vec3d got = pre.color(r[0], r[1]);
+        EXPECT_NEAR(got.x, c.x, 0.01) << r[0] << " " << r[1];
+        EXPECT_NEAR(got.y, c.y, 0.01) << r[0] << " " << r[1];
+        EXPECT_NEAR(got.z, c.z, 0.01) << r[0] << " " << r[1];
+    }
+    // Where the curve is transparent over the whole ramp: exactly 0 (empty-space skipping relies on it).
+    EXPECT_EQ(pre.extinction(0.0, 0.44), 0.0);
+    // A thin peak between two samples that both read opacity 0 counts.
+    EXPECT_EQ(tf.opacity(0.42), 0.0);
+    EXPECT_EQ(tf.opacity(0.55), 0.0);
+    EXPECT_GT(pre.extinction(0.42, 0.55), 1.0);
+}
+
 TEST(TransferFunction, NanValueAndEmptyFunctionGiveTransparentBlack) {
     const TransferFunction tf({{0, {1, 1, 1}}, {1, {1, 1, 1}}}, {{0, 1}, {1, 1}});
     EXPECT_EQ(tf.opacity(std::nan("")), 0.0);

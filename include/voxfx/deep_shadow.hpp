@@ -3,8 +3,10 @@
 // view (LightView: spot one perspective frame, point six cube faces, directional one orthographic
 // frame) the scene's boundary triangles are rasterized into fragment lists (FragmentLists); every
 // texel walks its list front to back (SegmentWalker): crossings of opaque and translucent objects
-// are steps (V *= 1 - α, opaque α = 1), segments inside volume objects are sampled at steps of
-// `stepVoxels` smallest voxel spacings (σ = -ln(1 - α(value)) / opacityLength, V *= exp(-σ·dl)),
+// are steps (V *= 1 - α, opaque α = 1), segments inside volume objects are sampled at their ends
+// and at steps of `stepVoxels` smallest voxel spacings from a start jittered per texel
+// (sampleJitter), each interval with the pre-integrated extinction σ of the values at its ends
+// (PreintegratedTransfer: σ = -ln(1 - α(value)) / opacityLength averaged over them, V *= exp(-σ·dl)),
 // empty space between fragments is skipped and the walk stops when V falls below `termination`
 // (V is then set to 0). The visibility function is ε-compressed on the fly into fixed or chunked
 // storage (voxfx/dsm.hpp). Depths are the light frame's depths (perspective: view distance along

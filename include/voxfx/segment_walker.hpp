@@ -50,15 +50,55 @@ public:
         }
         return empty_[std::size_t(b[0] + bricks_[0] * (b[1] + bricks_[1] * b[2]))] != 0;
     }
+    /// True when every value a linear ramp between the samples at p and q can take has opacity 0,
+    /// so a pre-integrated interval (PreintegratedTransfer) from p to q is transparent: both lie
+    /// outside the volume's box (samples read 0, whose opacity is 0), or both in empty bricks that
+    /// touch (the same brick or neighbours, diagonals included: their value ranges share the voxels
+    /// between them, so every value between the two samples lies in one of the two ranges). Points
+    /// farther apart than a brick are never both "empty" here unless outside.
+    bool emptyBetween(const Vec3d& p, const Vec3d& q) const {
+        if (empty_.empty()) return outsideEmpty_;
+        int64_t a[3] = {0, 0, 0}, b[3] = {0, 0, 0};
+        const bool inP = brickOf(p, a), inQ = brickOf(q, b);
+        if (!inP && !inQ) return outsideEmpty_;
+        if (inP != inQ) return false;
+        for (int k = 0; k < 3; ++k)
+            if (a[k] - b[k] > 1 || b[k] - a[k] > 1) return false;
+        return empty_[std::size_t(a[0] + bricks_[0] * (a[1] + bricks_[1] * a[2]))] != 0 &&
+               empty_[std::size_t(b[0] + bricks_[0] * (b[1] + bricks_[1] * b[2]))] != 0;
+    }
     /// Fraction of the bricks that are empty (0 for a volume without voxels).
     double emptyFraction() const;
 
 private:
+    bool brickOf(const Vec3d& p, int64_t b[3]) const {
+        for (int a = 0; a < 3; ++a) {
+            const double u = place_.voxelCoordinate(p, a);
+            if (!(u >= 0 && u <= double(voxels_[a]))) return false;
+            b[a] = std::min(int64_t(u) / kBrick, bricks_[a] - 1);
+        }
+        return true;
+    }
     VolumeView place_; // the volume's placement (no values)
     int64_t voxels_[3] = {0, 0, 0}, bricks_[3] = {0, 0, 0};
     bool outsideEmpty_ = false;
     std::vector<uint8_t> empty_;
 };
+
+/// Deterministic noise in [0, 1) for pixel or texel (x, y) and a salt naming the pass: the phase
+/// by which volume ray casting and the deep shadow map's walk offset their first sample (a
+/// jittered start turns the rings that equal steps from each segment's start draw into fine
+/// noise). A hash, so images are the same for every thread count.
+inline double sampleJitter(int64_t x, int64_t y, uint64_t salt) {
+    uint64_t h = uint64_t(x) * 0x9E3779B97F4A7C15ull + uint64_t(y) * 0xC2B2AE3D27D4EB4Full +
+                 salt * 0x165667B19E3779F9ull;
+    h ^= h >> 30;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 27;
+    h *= 0x94D049BB133111EBull;
+    h ^= h >> 31;
+    return double(h >> 11) * 0x1.0p-53;
+}
 
 /// The EmptySpace of every Volume object of the scene (a default one, skipping nothing, for the
 /// other objects), index by index.

@@ -45,8 +45,10 @@
 // fill it saves (BENCHMARKS.md).
 //
 // Lookups: the mask answers for the surface point of each G-buffer pixel. A point that is not
-// the G-buffer surface of the pixel it projects to (a refracted or reflected point) gets that
-// pixel's answer; shadow volumes only shade what the camera sees directly.
+// the G-buffer surface of the pixel it projects to (its depth differs from the pixel's: a blended
+// surface or a volume sample in front of it, a refracted or reflected point) gets the exact answer
+// instead: the segment from it to the light traced against the same closed casters (Embree,
+// voxfx/triangle_tracer.hpp), so it does not take the shadow of the opaque surface behind it.
 //
 // Thread-safety: ShadowCasterSet is read-only after build; computeShadowVolumes may run
 // concurrently on the same set and G-buffer (it uses worker threads itself); the result does not
@@ -66,6 +68,8 @@
 #include "voxfx/scene.hpp"
 
 namespace voxfx {
+
+class TriangleTracer;
 
 /// One closed caster: welded positions, triangles and, per directed edge 3t+k (from corner k to
 /// corner k+1 of triangle t), the directed edge of the neighbour traversing it backwards.
@@ -122,11 +126,15 @@ struct ShadowVolumeStats {
 struct ShadowVolumeMask {
     Frame camera; ///< the G-buffer's frame
     std::vector<uint8_t> shadowed;
+    std::vector<float> depth; ///< the G-buffer's depth per pixel
     ShadowVolumeStats stats;
     /// Per caster: 0 drawn, 1 culled (no visible receiver), 2 culled (in other casters' shadow).
     std::vector<uint8_t> culled;
     /// 1 where the pixel under p (a G-buffer point) is not shadowed, 0 where it is; 1 outside.
     float visibility(const Vec3d& p) const;
+    /// Whether p is the surface point of the pixel it projects to (its frame depth within 1e-5,
+    /// relative, of the pixel's G-buffer depth): the points the mask answers for.
+    bool atSurface(const Vec3d& p) const;
 };
 
 /// Which G-buffer pixels count as receivers for culling: a surface facing the light (geometric
@@ -159,8 +167,9 @@ public:
                               Progress* progress = nullptr);
     /// Counts the volumes over `gbuffer` (computeShadowVolumes with the receivers it shows).
     void prepare(const GBuffer& gbuffer, const SceneGeometry& geometry);
-    /// 1 where the G-buffer pixel under p is lit, 0 where it is shadowed (ShadowVolumeMask); 1
-    /// before prepare. `n` is not used: the counting is exact.
+    /// At a G-buffer surface point (ShadowVolumeMask::atSurface): 1 where its pixel is lit, 0 where
+    /// it is shadowed; elsewhere 1 or 0 as the segment from p (moved 10 tracer epsilons along n)
+    /// to the light misses or crosses a caster. 1 before prepare.
     float visibility(const Vec3d& p, const Vec3d& n) const;
     Stats stats() const { return mask_.stats; }
     const ShadowVolumeMask& mask() const { return mask_; }
@@ -171,6 +180,7 @@ private:
     Light light_;
     Box3d sceneBounds_;
     std::vector<Material> materials_;
+    std::shared_ptr<const TriangleTracer> tracer_; ///< the casters, for points off the G-buffer
     ShadowVolumeMask mask_;
 };
 

@@ -15,6 +15,7 @@
 #include "voxfx/bitgrid.hpp"
 #include "voxfx/raster.hpp"
 #include "voxfx/text.hpp"
+#include "voxfx/triangle_tracer.hpp"
 
 namespace voxfx {
 
@@ -356,6 +357,16 @@ float ShadowVolumeMask::visibility(const Vec3d& p) const {
     const double fx = std::floor(g.x), fy = std::floor(g.y);
     if (!(fx >= 0 && fy >= 0 && fx < double(camera.width()) && fy < double(camera.height()))) return 1.0f;
     return shadowed[size_t(int64_t(fy) * camera.width() + int64_t(fx))] ? 0.0f : 1.0f;
+}
+
+bool ShadowVolumeMask::atSurface(const Vec3d& p) const {
+    if (shadowed.empty() || depth.size() != shadowed.size()) return false;
+    if (!(camera.viewDepth(p) > 0)) return false;
+    const Vec3d g = camera.gridFromWorld(p);
+    const double fx = std::floor(g.x), fy = std::floor(g.y);
+    if (!(fx >= 0 && fy >= 0 && fx < double(camera.width()) && fy < double(camera.height()))) return false;
+    const double d = depth[size_t(int64_t(fy) * camera.width() + int64_t(fx))];
+    return std::abs(g.z - d) <= 1e-5 * std::max(std::abs(d), 1e-3);
 }
 
 std::vector<uint8_t> shadowVolumeReceivers(const GBuffer& gbuffer, const SceneGeometry& geometry,
@@ -725,6 +736,7 @@ ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Ligh
                                       const Box3d& sceneBounds, const ShadowVolumeOptions& options) {
     ShadowVolumeMask out;
     out.camera = gbuffer.frame;
+    out.depth = gbuffer.depth;
     const Frame& cam = gbuffer.frame;
     out.shadowed.assign(size_t(cam.width() * cam.height()), 0);
     out.stats.casters = int64_t(casters.casters.size());
@@ -819,6 +831,14 @@ VolumeShadow VolumeShadow::build(const Scene& scene, const Light& light, const S
     out.light_ = light;
     out.sceneBounds_ = scene.bounds(false);
     out.materials_ = scene.materials;
+    // The exact answer off the G-buffer's surfaces: the same casters, each opaque, traced.
+    Mesh all;
+    for (const ShadowCaster& c : out.casters_->casters) {
+        const auto base = uint32_t(all.positions.size());
+        all.positions.insert(all.positions.end(), c.positions.begin(), c.positions.end());
+        for (const uint32_t i : c.indices) all.indices.push_back(base + i);
+    }
+    if (!all.indices.empty()) out.tracer_ = std::make_shared<const TriangleTracer>(all.view());
     return out;
 }
 
@@ -829,6 +849,21 @@ void VolumeShadow::prepare(const GBuffer& gbuffer, const SceneGeometry& geometry
                                  options_);
 }
 
-float VolumeShadow::visibility(const Vec3d& p, const Vec3d&) const { return mask_.visibility(p); }
+float VolumeShadow::visibility(const Vec3d& p, const Vec3d& n) const {
+    if (mask_.shadowed.empty() || mask_.atSurface(p) || !tracer_) return mask_.visibility(p); // 1 unprepared
+    // Off the G-buffer's surfaces (blended surfaces, volume samples, refracted points): whether
+    // the segment towards the light crosses a caster, from p moved 10 epsilons along n.
+    Vec3d l;
+    double distance = std::numeric_limits<double>::infinity();
+    if (light_.type == LightType::Directional) {
+        l = -normalize(light_.direction);
+    } else {
+        l = light_.position - p;
+        distance = length(l);
+        l = l / std::max(distance, 1e-300);
+    }
+    const Vec3d o = p + n * (tracer_->epsilon() * 10);
+    return tracer_->intersect(o, l, 0.0, distance).hit ? 0.0f : 1.0f;
+}
 
 } // namespace voxfx

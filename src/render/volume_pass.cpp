@@ -118,16 +118,28 @@ std::vector<std::vector<ObjectSurfaceHit>> objectSurfaceHits(const VolumeScene& 
 
 namespace {
 
+// One volume object along the current interval of a pixel's walk.
+struct ObjectInterval {
+    /// The value sampled at the interval's end and its PreintegratedTransfer::cumulative (reused as
+    /// the next interval's start), and whether they are there (empty intervals skip the sample).
+    double value = 0, cumulative = 0;
+    bool have = false;
+    double sigma = 0; ///< the interval's extinction (0: transparent or not inside)
+    Vec3f color;      ///< its pre-integrated colour
+};
+
 // The ray of one pixel: eye + perDepth * z for frame depth z, and what its walk has gathered.
 struct PixelRay {
     int64_t x, y;
     std::span<const ListFragment> column;
     Vec3d eye, perDepth;
     double lengthPerDepth;
-    double zMax; ///< the G-buffer's depth: the walk stops at the surface it shows
+    double zMax;   ///< the G-buffer's depth: the walk stops at the surface it shows
+    double jitter; ///< sampleJitter of the pixel: where its first volume sample falls in a step
     Vec3f color{0, 0, 0};
     double transmittance = 1;
     int64_t samples = 0;
+    std::vector<ObjectInterval>* objects = nullptr; ///< per object of the scene
 };
 
 // What the pass composites: the volume scene's objects (and blended meshes), how each surface is
@@ -138,13 +150,23 @@ struct VolumeComposite {
     std::vector<Material> materials; ///< per object: how its surface is shaded
     ObjectSurfaces surfaces;
     std::vector<EmptySpace> emptySpace;
-    double step; ///< world length between volume samples
+    std::vector<PreintegratedTransfer> preintegrated; ///< per Volume object
+    double step;                                      ///< world length between volume samples
+    static constexpr double kPieceDepth = 0.5;        ///< optical depth of the pieces of a dense interval
 
     VolumeComposite(const FrameState& f, const VolumeScene& scene)
         : frame(f), vs(scene), materials(objectMaterials(f.lit, scene)), surfaces(scene),
           emptySpace(f.options.skipEmptySpace ? emptySpaceOf(scene)
                                               : std::vector<EmptySpace>(scene.objects.size())),
-          step(sampleStep(scene) * f.options.volumeStep) {}
+          preintegrated(preintegrate(scene)), step(sampleStep(scene) * f.options.volumeStep) {}
+
+    static std::vector<PreintegratedTransfer> preintegrate(const VolumeScene& vs) {
+        std::vector<PreintegratedTransfer> out(vs.objects.size());
+        for (std::size_t o = 0; o < vs.objects.size(); ++o)
+            if (vs.objects[o].kind == ObjectKind::Volume)
+                out[o] = PreintegratedTransfer(vs.objects[o].transfer, vs.objects[o].opacityLength);
+        return out;
+    }
 
     // Opaque and translucent objects are shaded as meshes of their colour and opacity (a blended
     // mesh with its own material).
@@ -194,7 +216,11 @@ struct VolumeComposite {
         return r.transmittance >= 1e-3;
     }
 
-    // Light arriving at volume sample p: ambient plus every light's irradiance times its shadow.
+    // Light arriving at volume sample p: ambient plus every light's irradiance times its shadow,
+    // looked up at p moved one sample step towards the light (and given that direction as the
+    // lookup's normal, so the technique adds its own offset): a shadow map samples the volume in
+    // steps of its own, and a dense layer the sample lies at the front of (bone under skin) must not
+    // shadow its own surface by the step over which the map's visibility falls.
     Vec3f lightAt(const Vec3d& p) const {
         const Scene& scene = frame.lit;
         Vec3f light = frame.options.ambient;
@@ -202,41 +228,86 @@ struct VolumeComposite {
             Vec3d toLight;
             const Vec3f e = lightIrradiance(scene.lights[l], p, toLight);
             if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
-            const Vec3f vis =
-                l < frame.shadows.size() ? shadowVisibility(frame.shadows[l], p, {0, 0, 0}) : Vec3f{1, 1, 1};
+            const Vec3f vis = l < frame.shadows.size()
+                                  ? shadowVisibility(frame.shadows[l], p + toLight * step, toLight)
+                                  : Vec3f{1, 1, 1};
             light += e * vis * float(1.0 / M_PI);
         }
         return light;
     }
 
-    // The segment [z0, z1) inside the volume objects `inside`: sampled and composited front to back;
-    // false stops the walk.
+    // The segment [z0, z1) inside the volume objects `inside`, composited front to back; false
+    // stops the walk. Its samples lie at the segment's ends and at z0 + (j + jitter) steps between
+    // them; each interval between two samples takes the pre-integrated extinction and colour of the
+    // values at its ends (exact for a homogeneous volume: Beer-Lambert over its length) and the
+    // light at its middle.
     bool segment(PixelRay& r, double z0, double z1, std::span<const uint8_t> inside) const {
         if (z0 >= r.zMax) return false;
         z1 = std::min(z1, r.zMax);
         const double worldLength = (z1 - z0) * r.lengthPerDepth;
-        const int64_t n = std::max<int64_t>(1, int64_t(std::ceil(worldLength / step)));
-        const double dz = (z1 - z0) / double(n), dl = worldLength / double(n);
-        for (int64_t k = 0; k < n; ++k) {
-            const Vec3d p = r.eye + r.perDepth * (z0 + (double(k) + 0.5) * dz);
+        const double depthPerLength = (z1 - z0) / worldLength;
+        for (ObjectInterval& w : *r.objects) w.have = false;
+        double l0 = 0;
+        for (int64_t j = 0; l0 < worldLength; ++j) {
+            const double l1 = std::min(worldLength, (double(j) + r.jitter) * step);
+            if (!(l1 > l0)) continue;
+            const Vec3d p0 = r.eye + r.perDepth * (z0 + l0 * depthPerLength);
+            const Vec3d p1 = r.eye + r.perDepth * (z0 + l1 * depthPerLength);
+            const double dl = l1 - l0;
+            // Each object's extinction over the interval (opacity first: the colour only where
+            // something shows).
+            double sigmaSum = 0;
             for (std::size_t o = 0; o < inside.size(); ++o) {
+                ObjectInterval& w = (*r.objects)[o];
+                w.sigma = 0;
                 const VolumeSceneObject& obj = vs.objects[o];
                 if (!inside[o] || obj.kind != ObjectKind::Volume) continue;
-                if (emptySpace[o].empty(p)) continue; // would be transparent
-                const double value = vs.volumes[std::size_t(obj.volume)]->sample(p);
+                if (emptySpace[o].emptyBetween(p0, p1)) { // would be transparent
+                    w.have = false;
+                    continue;
+                }
+                const Volume& volume = *vs.volumes[std::size_t(obj.volume)];
+                const PreintegratedTransfer& pre = preintegrated[o];
+                if (!w.have) {
+                    w.value = volume.sample(p0);
+                    w.cumulative = pre.cumulative(w.value);
+                    ++r.samples;
+                }
+                const double a = w.value, ca = w.cumulative;
+                w.value = volume.sample(p1);
+                w.cumulative = pre.cumulative(w.value);
+                w.have = true;
                 ++r.samples;
-                // Opacity first: the colour only where something shows.
-                const float alpha = float(obj.transfer.opacity(value));
-                if (alpha <= 0) continue;
-                const Vec3d tc = obj.transfer.color(value);
-                const Rgba c{float(tc.x), float(tc.y), float(tc.z), alpha};
-                const double a =
-                    1.0 - std::pow(1.0 - std::min(double(c.a), 1.0 - 1e-7), dl / obj.opacityLength);
-                r.color +=
-                    Vec3f{c.r, c.g, c.b} * lightAt(p) * float(a * r.transmittance * frame.options.exposure);
-                r.transmittance *= 1.0 - a;
+                w.sigma = pre.extinction(a, ca, w.value, w.cumulative);
+                if (w.sigma > 0) {
+                    const Vec3d c = pre.color(a, w.value);
+                    w.color = Vec3f{float(c.x), float(c.y), float(c.z)};
+                }
+                sigmaSum += w.sigma;
+            }
+            if (!(sigmaSum > 0)) {
+                l0 = l1;
+                continue;
+            }
+            // A dense interval in pieces of optical depth at most kPieceDepth (up to 8), each lit
+            // where its matter shows on average (its opacity-weighted depth: the middle of a thin
+            // piece, 1/sigma behind the start of a dense one): the light falls fast across a dense
+            // layer, and one lookup per step would weigh it by where the step happened to start.
+            const int64_t pieces = std::clamp<int64_t>(int64_t(std::ceil(sigmaSum * dl / kPieceDepth)), 1, 8);
+            const double pl = dl / double(pieces), x = sigmaSum * pl;
+            const double lightDepth = x < 1e-6 ? 0.5 * pl : (1 - x / std::expm1(x)) / sigmaSum;
+            for (int64_t k = 0; k < pieces && r.transmittance >= 1e-3; ++k) {
+                const Vec3f light = lightAt(p0 + (p1 - p0) * ((double(k) * pl + lightDepth) / dl));
+                for (std::size_t o = 0; o < inside.size(); ++o) {
+                    const ObjectInterval& w = (*r.objects)[o];
+                    if (!(w.sigma > 0)) continue;
+                    const double alpha = -std::expm1(-w.sigma * pl);
+                    r.color += w.color * light * float(alpha * r.transmittance * frame.options.exposure);
+                    r.transmittance *= 1.0 - alpha;
+                }
             }
             if (r.transmittance < 1e-3) return false;
+            l0 = l1;
         }
         return true;
     }
@@ -263,13 +334,15 @@ void compositeVolumes(FrameState& frame) {
     std::atomic<int64_t> samples{0};
     parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
         SegmentWalker walker(*chosen, pass.surfaces.flat.triangleLeaf);
+        std::vector<ObjectInterval> objects(chosen->objects.size());
         int64_t local = 0;
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
                 const auto col = lists.column(x, y);
                 if (col.empty()) continue;
                 const std::size_t pixel = std::size_t(y * W + x);
-                PixelRay r{x, y, col, f.eye(), {}, 0, 0};
+                PixelRay r{x, y, col, f.eye(), {}, 0, 0, sampleJitter(x, y, 1)};
+                r.objects = &objects;
                 r.perDepth = f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - r.eye;
                 r.lengthPerDepth = length(r.perDepth);
                 r.zMax = gbuffer.triangle[pixel] != GBuffer::kNone ? double(gbuffer.depth[pixel])

@@ -16,9 +16,14 @@ namespace voxfx::detail {
 /// to the G-buffer's depth. Where an opaque or translucent object's inside flag changes, the ray
 /// crosses its visible surface (ObjectSurfaceHit): it is shaded like a mesh of the object's colour
 /// (Blinn–Phong, shadows) and composited with α = 1 (opaque: the walk stops) or the object's
-/// opacity. Segments inside volume objects are sampled at steps of `options.volumeStep` smallest
-/// voxel spacings and composited front to back (sample opacity 1 - (1 - α)^(dl / opacityLength),
-/// colour = transfer colour × (ambient + Σ lights irradiance × shadow visibility / π)). The walk
+/// opacity. Segments inside volume objects are sampled at their ends and at steps of
+/// `options.volumeStep` smallest voxel spacings from a start jittered per pixel (sampleJitter, so no
+/// rings where equal steps from each segment's start would draw them) and composited front to back:
+/// each interval of length dl between two samples has the pre-integrated extinction σ of the values
+/// at its ends (PreintegratedTransfer; opacity 1 - exp(-σ dl)), its colour = pre-integrated transfer
+/// colour × (ambient + Σ lights irradiance × shadow visibility / π), the light taken at the
+/// interval's opacity-weighted depth (its middle when thin, 1/σ behind its start when dense) and the
+/// shadow looked up one step towards the light, with that direction as the lookup's normal. The walk
 /// stops when the accumulated opacity reaches 0.999, and the result is blended over frame.shaded
 /// (row-major, y up). The meshes of blended materials (Material::blend), which the G-buffer leaves
 /// out, are walked here too, as translucent objects shaded with their own material. Records the
