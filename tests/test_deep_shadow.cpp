@@ -438,7 +438,7 @@ TEST(DeepShadowTest, PointLightsUseSixFacesAndLookupsFollowThem) {
         if (ref < 0) continue;
         ++n;
         // Bilinear lookups blur one texel: count the points whose value is off by more than a step.
-        wrong += std::abs(deep.visibility(p, {0, 0, 0}, 0, 0) - ref) > 0.26;
+        wrong += std::abs(deep.visibility(p, {0, 0, 0}, 0, 0).x - ref) > 0.26;
     }
     ASSERT_GT(n, 1500);
     EXPECT_LT(double(wrong) / double(n), 0.05);
@@ -562,8 +562,8 @@ TEST(DeepShadowClusterTest, ClusteredMapsAgreeWithTheReferenceOnASparseScene) {
         const Vec3d p{side + 0.45 * u(rng), 0.45 * u(rng), -0.8};
         const double ref = dsmrReferenceTransmittance(s, l.position, p, 1.0);
         if (ref < 0) continue;
-        errSingle += std::abs(single.visibility(p, {0, 0, 0}, 0, 0) - ref);
-        errClustered += std::abs(clustered.visibility(p, {0, 0, 0}, 0, 0) - ref);
+        errSingle += std::abs(single.visibility(p, {0, 0, 0}, 0, 0).x - ref);
+        errClustered += std::abs(clustered.visibility(p, {0, 0, 0}, 0, 0).x - ref);
         ++n;
     }
     ASSERT_GT(n, 1400);
@@ -1068,7 +1068,7 @@ TEST(DeepShadowSlowTest, ErrorAgainstTheDenseReferenceAsEpsilonAndResolutionVary
             const DeepShadow d = DeepShadow::build(s, light, opt);
             double sum = 0, worst = 0;
             for (std::size_t i = 0; i < points.size(); ++i) {
-                const double e = std::abs(d.visibility(points[i], {0, 0, 0}, 0, 0) - refs[i]);
+                const double e = std::abs(d.visibility(points[i], {0, 0, 0}, 0, 0).x - refs[i]);
                 sum += e;
                 worst = std::max(worst, e);
             }

@@ -1,13 +1,18 @@
 // voxfx — per-voxel absorption shadows (CHANG §3, "Real-time Realistic Voxel-based Rendering").
 // Shadow technique "absorption" (voxfx/shadow.hpp).
 //
-// One attribute voxelization of every caster from the light; each write adds the material's
-// optical depth sigma = -ln(luminance(shadowCrossingTransmittance)) (opaque materials:
+// An attribute voxelization of the casters from the light; each write adds the material's optical
+// depth per channel, sigma = -ln(shadowCrossingTransmittance) (opaque materials and the cap:
 // `opaqueAbsorption`), so dense foliage that writes a voxel several times absorbs more. At p,
-// visibility = exp(-sum of the absorption of the cells between the light and p). Grey, per write,
-// not per unit length: a crossing written once attenuates exactly by e^-sigma, matching the
-// per-crossing model of the exact reference. Columns are reduced to prefix sums once, so a lookup
-// scans the few written voxels of one column (voxfx/light_grid.hpp for the lookup's bias).
+// visibility = exp(-sum of the absorption of the cells between the light and p), per channel. Per
+// write, not per unit length: a crossing written once attenuates exactly by e^-sigma, matching the
+// per-crossing model of the exact reference. Grey materials (opaque ones, grey leaves) share one
+// voxelization whose writes carry their scalar depth; each coloured material (its RGB depth and
+// glass attenuation) has its own, so an opaque-only scene keeps one grid and a grey lookup. Glass
+// pairs its writes along a column (the first enters, the next leaves; a voxel written twice holds
+// both) and adds Beer–Lambert's sigma_glass x chord (Material::shadowAttenuationCoefficient), up to
+// p when p lies inside. Columns are reduced to prefix sums once, so a lookup scans the few written
+// voxels of one column per grid (voxfx/light_grid.hpp for the lookup's bias).
 //
 // Thread-safety: a built shadow is read-only (lookups from any number of threads); build voxelizes
 // with worker threads.
@@ -41,39 +46,64 @@ struct AbsorptionShadowOptions {
     static std::span<const OptionField<AbsorptionShadowOptions>> fields();
 };
 
-/// The absorption columns of one light view: an attribute voxelization (its sparse form,
-/// voxelizeAttributeColumns: only written voxels are stored), reduced to inclusive prefix sums of
-/// the absorption along each column.
+/// The absorption columns of one light view: per group of casters an attribute voxelization (its
+/// sparse form, voxelizeAttributeColumns: only written voxels are stored), reduced to inclusive
+/// prefix sums of the absorption along each column.
 class AbsorptionShadowMap {
 public:
+    /// Casters that absorb alike: `mesh` (world space) with a scalar per triangle added per write,
+    /// the RGB optical depth per unit of that sum (grey: {1, 1, 1}) and, for glass, the
+    /// Beer–Lambert coefficient over the chord between paired writes (per world unit; else zero).
+    struct Group {
+        MeshView mesh;
+        std::span<const float> triangleAbsorption;
+        Vec3f depthPerUnit{1, 1, 1};
+        Vec3f attenuation{0, 0, 0};
+    };
     AbsorptionShadowMap() = default;
-    /// `casters` in world space; triangleAbsorption: optical depth added per write, one per triangle.
+    /// `casters` in world space; triangleAbsorption: optical depth added per write, one per triangle
+    /// (one grey group).
     static AbsorptionShadowMap build(const LightView& view, const MeshView& casters,
                                      std::span<const float> triangleAbsorption, Coverage coverage,
                                      Slicing slicing, Progress* progress = nullptr);
-    /// Sum of the absorption of the cells in front of the last `skipCells` cells up to p's cell.
-    float opticalDepth(const Vec3d& world, int64_t skipCells) const;
+    static AbsorptionShadowMap build(const LightView& view, std::span<const Group> groups, Coverage coverage,
+                                     Slicing slicing, Progress* progress = nullptr);
+    /// RGB sum of the absorption of the cells in front of the last `skipCells` cells up to p's cell
+    /// (with the glass chords' Beer–Lambert depth).
+    Vec3f opticalDepth(const Vec3d& world, int64_t skipCells) const;
     /// exp(-opticalDepth). 1 outside the view.
-    float transmittance(const Vec3d& world, int64_t skipCells) const;
+    Vec3f transmittance(const Vec3d& world, int64_t skipCells) const;
     /// Bilinear interpolation of exp(-optical depth) of the four columns around p at p's depth.
-    float transmittanceBilinear(const Vec3d& world, int64_t skipCells) const;
+    Vec3f transmittanceBilinear(const Vec3d& world, int64_t skipCells) const;
     const LightView& view() const { return view_; }
-    const Frame& frame() const { return frame_; }
+    /// The first group's frame (with local slicing when requested: each group fits its own).
+    const Frame& frame() const { return grids_.empty() ? view_.frame : grids_[0].frame; }
     int64_t writeCount() const { return writes_; }
+    int64_t groupCount() const { return int64_t(grids_.size()); }
 
 private:
-    float columnDepth(int64_t column, double depth, int64_t skipCells) const;
+    struct Grid {
+        Frame frame;                  ///< the grid's frame (with local slicing when requested)
+        Vec3f depthPerUnit{1, 1, 1};  ///< RGB optical depth per unit of prefix
+        Vec3f attenuation{0, 0, 0};   ///< glass: Beer–Lambert per world unit over the chord
+        std::vector<int64_t> offsets; ///< per column, into slice and prefix
+        std::vector<uint32_t> slice;
+        std::vector<float> prefix;
+        /// Glass: per entry, the chord (slices) of the passages closed up to it, and the slice
+        /// coordinate where the open passage entered (-1: outside after it).
+        std::vector<float> chord, open;
+    };
+    // Grid g's column: the prefix sum and chord (frame depth units) in front of p's skipped cells.
+    float columnSum(const Grid& g, int64_t column, double depth, int64_t skipCells, double& chord) const;
+    Vec3f columnDepth(int64_t column, double depth, int64_t skipCells, double lengthPerDepth) const;
     LightView view_;
-    Frame frame_;                  ///< the grid's frame (with local slicing when requested)
-    std::vector<int64_t> offsets_; ///< per column, into slice_ and prefix_
-    std::vector<uint32_t> slice_;
-    std::vector<float> prefix_;
+    std::vector<Grid> grids_;
     int64_t writes_ = 0;
 };
 
-/// Optical depth of one crossing of `m`: -ln(luminance(shadowCrossingTransmittance)), or
+/// RGB optical depth of one crossing of `m`: -ln(shadowCrossingTransmittance) per channel, or
 /// `opaqueAbsorption` for opaque materials (and as an upper bound).
-float absorptionPerCrossing(const Material& m, float opaqueAbsorption);
+Vec3f absorptionPerCrossing(const Material& m, float opaqueAbsorption);
 
 /// The shadow of one light: one absorption map per light view.
 class AbsorptionShadow {
@@ -89,8 +119,8 @@ public:
     /// or skipped cells < 0.
     static AbsorptionShadow build(const Scene& scene, const Light& light,
                                   const AbsorptionShadowOptions& options, Progress* progress = nullptr);
-    /// Fraction of the light reaching p; `n` the unit geometric normal turned towards the light.
-    float visibility(const Vec3d& p, const Vec3d& n) const;
+    /// RGB fraction of the light reaching p; `n` the unit geometric normal turned towards the light.
+    Vec3f visibility(const Vec3d& p, const Vec3d& n) const;
     Stats stats() const;
     const std::vector<AbsorptionShadowMap>& maps() const { return maps_; }
 

@@ -3,14 +3,18 @@
 // view (LightView: spot one perspective frame, point six cube faces, directional one orthographic
 // frame) the scene's boundary triangles are rasterized into fragment lists (FragmentLists); every
 // texel walks its list front to back (SegmentWalker): crossings of opaque and translucent objects
-// are steps (V *= 1 - α, opaque α = 1), segments inside volume objects are sampled at their ends
+// are steps (V *= the crossing's transmittance, opaque 0), between a crossing that enters translucent
+// glass and the next that leaves it V falls by Beer–Lambert over the chord (VolumeSceneObject::
+// attenuation, as ExactShadow), segments inside volume objects are sampled at their ends
 // and at steps of `stepVoxels` smallest voxel spacings from a start jittered per texel
 // (sampleJitter), each interval with the pre-integrated extinction σ of the values at its ends
 // (PreintegratedTransfer: σ = -ln(1 - α(value)) / opacityLength averaged over them, V *= exp(-σ·dl)),
 // empty space between fragments is skipped and the walk stops when V falls below `termination`
 // (V is then set to 0). The visibility function is ε-compressed on the fly into fixed or chunked
 // storage (voxfx/dsm.hpp). Depths are the light frame's depths (perspective: view distance along
-// the light's axis; orthographic: slices).
+// the light's axis; orthographic: slices). Where a casting translucent object colours the light
+// (its transmittance or attenuation differs between channels) each view has three maps, one per
+// channel; a grey scene (opaque casters, grey leaves, volumes) keeps one.
 //
 // Lookup: p (moved along its normal by normalOffset texel footprints) is projected into the view
 // that covers it; the visibility at its depth (minus depthBias texel footprints) is interpolated
@@ -116,13 +120,16 @@ public:
     static DeepShadow build(const Scene& scene, const Light& light, const DeepShadowOptions& options,
                             Progress* progress = nullptr);
 
-    /// Fraction of the light reaching world point p (see the file comment); `n` the unit normal
+    /// RGB fraction of the light reaching world point p (see the file comment); `n` the unit normal
     /// turned towards the light (zero: no offset), with the options' normalOffset and depthBias.
-    float visibility(const Vec3d& p, const Vec3d& n) const;
+    Vec3f visibility(const Vec3d& p, const Vec3d& n) const;
     /// The same with the given offsets (texel footprints at p).
-    float visibility(const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias) const;
+    Vec3f visibility(const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias) const;
     const std::vector<LightView>& views() const { return views_; }
+    /// One map per view: the red channel, or every channel where the view's scene is grey.
     const std::vector<DeepShadowMap>& maps() const { return maps_; }
+    /// Per view, the green and blue channels' maps, or none (grey).
+    const std::vector<std::vector<DeepShadowMap>>& greenBlueMaps() const { return greenBlue_; }
     /// Clusters: views [groupBegin[g], groupBegin[g + 1]) hold the objects of cluster g; the
     /// visibility is the product over clusters. One group without clustering.
     const std::vector<std::size_t>& groupBegin() const { return groupBegin_; }
@@ -133,6 +140,7 @@ public:
 private:
     std::vector<LightView> views_;
     std::vector<DeepShadowMap> maps_;
+    std::vector<std::vector<DeepShadowMap>> greenBlue_;
     std::vector<std::size_t> groupBegin_;
     DeepShadowTimings timings_;
     DeepShadowOptions options_;

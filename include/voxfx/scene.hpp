@@ -80,16 +80,24 @@ struct Material {
     bool isGlass() const;
     /// What one crossing passes for the shadow methods that multiply crossings (transmittance,
     /// absorption, deep shadow maps). A sheet: crossingTransmittance. Glass, crossed twice per
-    /// passage: each crossing passes 1 - F0 (Fresnel at normal incidence, ((ior - 1) / (ior + 1))^2),
-    /// half the tint (its square root) and half the Beer–Lambert loss over `thickness`
-    /// (KHR_materials_volume's typical thickness; none when 0), so that a passage gives what
-    /// ExactShadow gives at normal incidence through that thickness.
+    /// passage: each crossing passes 1 - F0 (Fresnel at normal incidence, ((ior - 1) / (ior + 1))^2)
+    /// and half the tint (its square root); the methods pair a crossing that enters with the next
+    /// that leaves and multiply by beerLambert(shadowAttenuationCoefficient(), chord), so that a
+    /// passage gives what ExactShadow gives at normal incidence (`thickness` is not used: the chord
+    /// is the glass's own).
     Vec3f shadowCrossingTransmittance() const;
+    /// Glass: attenuationCoefficient (Beer–Lambert over the chord between paired crossings); a sheet
+    /// or an opaque material: zero (its crossings are all it does to light).
+    Vec3f shadowAttenuationCoefficient() const;
 };
 
 /// KHR_materials_volume's attenuation coefficient of `m`: sigma = -ln(attenuationColor) /
 /// attenuationDistance per channel, per world unit (zero when the distance is infinite or not > 0).
 Vec3f attenuationCoefficient(const Material& m);
+/// Beer–Lambert: exp(-sigma * length) per channel. The one glass attenuation of every shadow
+/// method (ExactShadow over the traced chord, the light grids and deep shadow maps over the chord
+/// between paired crossings) and of the glass tracers.
+Vec3f beerLambert(const Vec3f& sigma, double length);
 
 /// One mesh in world space with one material.
 struct SceneMesh {

@@ -8,7 +8,11 @@
 // the column's words in front of p's slice, leaving out the skipped cells; voxfx/light_grid.hpp;
 // conservative grids count runs of consecutive filled cells instead, one per leaf crossed),
 // and visibility = map(p) * prod_k t_k ^ n_k (t_k: the group's RGB transmittance), so groups of
-// different colours tint.
+// different colours tint. Glass groups (a Beer–Lambert coefficient sigma_k, Material::
+// shadowAttenuationCoefficient) pair their crossings along the column, the first entering and the
+// next leaving, and multiply by beerLambert(sigma_k, chord): the world length between the paired
+// cells (cell centres; conservative grids: run centres), up to p when p lies inside (the column
+// holds an even number of crossings and an odd number lies in front of p).
 //
 // Thread-safety: a built shadow is read-only (lookups from any number of threads); build voxelizes
 // with worker threads.
@@ -55,15 +59,18 @@ public:
     struct Channel {
         VoxelGrid grid;              ///< in the view's frame (local slicing: its own ranges)
         Vec3f crossingTransmittance; ///< RGB factor per filled cell
+        Vec3f attenuation{0, 0, 0};  ///< glass: Beer–Lambert coefficient over the chord (world units)
     };
     TransmittanceShadowMap() = default;
     /// Voxelizes each group (world space) into the view with `mode` (Surface or Conservative) and
     /// `slicing`. groups.size() == transmittances.size(). Throws voxfx::Error otherwise.
-    /// `device` picks where the voxelizations run (the same grids on each).
+    /// `device` picks where the voxelizations run (the same grids on each). `attenuations`: per
+    /// group, the glass's Beer–Lambert coefficient (empty: none is glass).
     static TransmittanceShadowMap build(const LightView& view, std::span<const MeshView> groups,
                                         std::span<const Vec3f> transmittances, VoxelizeMode mode,
                                         Slicing slicing, Progress* progress = nullptr,
-                                        Device device = Device::Cpu);
+                                        Device device = Device::Cpu,
+                                        std::span<const Vec3f> attenuations = {});
     /// Surface mode: filled cells of channel k in p's column strictly in front of the last
     /// `skipCells` cells up to and including p's cell: popcount of slices [0, s - skipCells + 1)
     /// with s = p's slice (whole words plus a mask). Conservative mode: the runs of consecutive
@@ -71,7 +78,8 @@ public:
     /// when tilted, and is one crossing). Points in front of the grid count 0, behind it count the
     /// whole column.
     int64_t cellsBefore(std::size_t k, const Vec3d& world, int64_t skipCells) const;
-    /// prod_k crossingTransmittance_k ^ cellsBefore(k, p). 1 outside the view.
+    /// prod_k crossingTransmittance_k ^ cellsBefore(k, p), times Beer–Lambert over the chords of
+    /// the glass channels. 1 outside the view.
     Vec3f transmittance(const Vec3d& world, int64_t skipCells) const;
     /// Bilinear interpolation of the transmittance of the four columns around p at p's depth;
     /// columns outside the grid hold no caster (1).
@@ -80,8 +88,11 @@ public:
     const std::vector<Channel>& channels() const { return channels_; }
 
 private:
-    // One column of the grids (index y * W + x), at frame depth `depth`.
-    Vec3f columnTransmittance(int64_t column, double depth, int64_t skipCells) const;
+    // One column of the grids (index y * W + x), at frame depth `depth`; lengthPerDepth: world
+    // length along the light's ray per frame depth unit there.
+    Vec3f columnTransmittance(int64_t column, double depth, int64_t skipCells, double lengthPerDepth) const;
+    // Glass channel k: the chord (frame depth units) inside its glass in front of p's skipped cells.
+    double columnChord(std::size_t k, int64_t column, double depth, int64_t skipCells) const;
     int64_t columnCells(std::size_t k, int64_t column, double depth, int64_t skipCells) const;
     LightView view_;
     VoxelizeMode mode_ = VoxelizeMode::Surface;

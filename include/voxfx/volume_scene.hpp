@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -61,6 +62,18 @@ struct VolumeSceneObject {
     /// An object made of a scene mesh (volumeSceneOf): the index of its Material in Scene::materials,
     /// which shades it; -1 otherwise (shaded with `color`).
     int32_t material = -1;
+    /// Translucent, for shadows: the RGB fraction of the light one crossing passes (volumeSceneOf:
+    /// Material::shadowCrossingTransmittance, coloured leaves and glass); none: 1 - opacity.
+    std::optional<Vec3f> transmittance;
+    /// Translucent glass, for shadows: Beer–Lambert coefficient per world unit over the chord
+    /// between a crossing that enters the object and the next that leaves it (volumeSceneOf:
+    /// Material::shadowAttenuationCoefficient); zero for a sheet.
+    Vec3f attenuation{0, 0, 0};
+
+    /// What one crossing passes per channel: `transmittance`, or 1 - opacity in every channel.
+    Vec3f shadowTransmittance() const {
+        return transmittance ? *transmittance : Vec3f{1 - opacity, 1 - opacity, 1 - opacity};
+    }
 };
 
 struct VolumeScene {
@@ -103,8 +116,9 @@ enum class SceneMeshes {
 };
 
 /// The renderer's scene as a volume scene: the chosen meshes, each a leaf and an object (opaque, or
-/// translucent with opacity 1 - luminance(shadowCrossingTransmittance); `material` names the mesh's
-/// material), then the objects of scene.volumeScene.
+/// translucent with opacity 1 - luminance(shadowCrossingTransmittance), that transmittance and the
+/// material's shadowAttenuationCoefficient; `material` names the mesh's material), then the objects
+/// of scene.volumeScene.
 VolumeScene volumeSceneOf(const Scene& scene, SceneMeshes meshes = SceneMeshes::All);
 
 } // namespace voxfx

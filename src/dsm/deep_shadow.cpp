@@ -42,6 +42,8 @@ struct DeepShadowView {
             if (s->objects[i].kind == ObjectKind::Volume)
                 preintegrated[i] = PreintegratedTransfer(s->objects[i].transfer, s->objects[i].opacityLength);
     }
+    /// The colour channel this map holds (0: red, or every channel of a grey scene).
+    int channel = 0;
 
     // Feeds texel (x, y) into the builder.
     void texel(int64_t x, int64_t y, VisibilityBuilder& b) const {
@@ -57,12 +59,26 @@ struct DeepShadowView {
         const double jitter = sampleJitter(x, y, 2);
         std::vector<double> value(scene->objects.size(), 0.0), cumulative(scene->objects.size(), 0.0);
         std::vector<uint8_t> haveValue(scene->objects.size(), 0);
+        // Glass the ray is inside: the sum of the Beer–Lambert coefficients (this channel, per world
+        // unit), applied as a ramp up to each crossing (the chord between a crossing that enters
+        // and the next that leaves, as ExactShadow applies it).
+        double glassSigma = 0, glassFrom = 0;
         SegmentWalker walker(*scene, leaves->triangleLeaf, true);
         walker.walk(
             frags,
-            [&](double z, std::size_t o, bool) {
+            [&](double z, std::size_t o, bool entering) {
                 const VolumeSceneObject& obj = scene->objects[o];
-                b.surface(z, obj.kind == ObjectKind::Opaque ? 1.0 : double(obj.opacity));
+                if (glassSigma > 0 && z > glassFrom)
+                    b.ramp(z,
+                           beerLambert(Vec3f{float(glassSigma), 0, 0}, (z - glassFrom) * lengthPerDepth).x);
+                glassFrom = z;
+                const double sigma =
+                    obj.kind == ObjectKind::Translucent ? double(obj.attenuation[channel]) : 0;
+                if (sigma > 0) glassSigma = entering ? glassSigma + sigma : std::max(0.0, glassSigma - sigma);
+                if (glassSigma < 1e-12) glassSigma = 0;
+                b.surface(z, obj.kind == ObjectKind::Opaque
+                                 ? 1.0
+                                 : 1.0 - double(obj.shadowTransmittance()[channel]));
                 if (b.visibility() < term) {
                     if (b.visibility() > 0) b.ramp(z, 0.0);
                     return false;
@@ -262,6 +278,7 @@ DeepShadow DeepShadow::build(const VolumeScene& scene, const Light& light, const
         for (std::size_t i = 0; i < d.views_.size(); ++i) {
             out.views_.push_back(std::move(d.views_[i]));
             out.maps_.push_back(std::move(d.maps_[i]));
+            out.greenBlue_.push_back(std::move(d.greenBlue_[i]));
         }
         out.timings_.fragmentsMs += d.timings_.fragmentsMs;
         out.timings_.buildMs += d.timings_.buildMs;
@@ -281,6 +298,12 @@ DeepShadow DeepShadow::build(const VolumeScene& scene, std::vector<LightView> vi
     out.groupBegin_ = {0, out.views_.size()};
     const FlatLeaves leaves = flattenLeaves(scene, true);
     const double step = deepShadowStep(scene, options);
+    bool coloured = false;
+    for (const VolumeSceneObject& o : scene.objects) {
+        if (!o.castsShadow || o.kind != ObjectKind::Translucent) continue;
+        const Vec3f t = o.shadowTransmittance(), a = o.attenuation;
+        coloured = coloured || t.x != t.y || t.y != t.z || a.x != a.y || a.y != a.z;
+    }
     const std::vector<EmptySpace> emptySpace =
         options.skipEmptySpace ? emptySpaceOf(scene) : std::vector<EmptySpace>(scene.objects.size());
     for (const LightView& v : out.views_) {
@@ -289,13 +312,23 @@ DeepShadow DeepShadow::build(const VolumeScene& scene, std::vector<LightView> vi
         const FragmentLists lists = FragmentLists::build(v.frame, leaves.mesh.view(), progress);
         out.timings_.fragmentsMs += deepShadowMsSince(t0);
         t0 = std::chrono::steady_clock::now();
-        const DeepShadowView ctx{&scene, &v, &leaves, &lists, options, step, &emptySpace};
         DsmBuildOptions bo;
         bo.epsilon = options.epsilon;
         bo.fixedNodes = options.fixedNodes;
-        out.maps_.push_back(DeepShadowMap::build(
-            v.frame.width(), v.frame.height(),
-            [&ctx](int64_t x, int64_t y, VisibilityBuilder& b) { ctx.texel(x, y, b); }, options.storage, bo));
+        // One map per colour channel where a caster's crossings or glass colour the light (red,
+        // then green and blue); one map for every channel of a grey scene.
+        auto channelMap = [&](int channel) {
+            DeepShadowView ctx{&scene, &v, &leaves, &lists, options, step, &emptySpace};
+            ctx.channel = channel;
+            return DeepShadowMap::build(
+                v.frame.width(), v.frame.height(),
+                [&ctx](int64_t x, int64_t y, VisibilityBuilder& b) { ctx.texel(x, y, b); }, options.storage,
+                bo);
+        };
+        out.maps_.push_back(channelMap(0));
+        std::vector<DeepShadowMap>& greenBlue = out.greenBlue_.emplace_back();
+        if (coloured)
+            for (const int channel : {1, 2}) greenBlue.push_back(channelMap(channel));
         out.timings_.buildMs += deepShadowMsSince(t0);
     }
     return out;
@@ -319,14 +352,15 @@ int deepShadowViewIndex(const LightView* views, std::size_t count, const Vec3d& 
     return best;
 }
 
-// Lookup among views [b, e) (one light's views: one frame, or six cube faces).
-float deepShadowLookup(const std::vector<LightView>& views, const std::vector<DeepShadowMap>& maps,
-                       std::size_t b, std::size_t e, const Vec3d& p, const Vec3d& n, double normalOffset,
-                       double depthBias) {
+// Lookup among views [b, e) (one light's views: one frame, or six cube faces); greenBlue: per view,
+// the maps of the green and blue channels, or none (the first map holds every channel).
+Vec3f deepShadowLookup(const std::vector<LightView>& views, const std::vector<DeepShadowMap>& maps,
+                       const std::vector<std::vector<DeepShadowMap>>& greenBlue, std::size_t b, std::size_t e,
+                       const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias) {
     const LightView* group = views.data() + b;
     const std::size_t count = e - b;
     int i = deepShadowViewIndex(group, count, p);
-    if (i < 0) return 1.0f;
+    if (i < 0) return {1, 1, 1};
     const double texel = group[i].columnWorldSize(p);
     const Vec3d q = p + n * (normalOffset * texel);
     if (count > 1) {
@@ -334,23 +368,27 @@ float deepShadowLookup(const std::vector<LightView>& views, const std::vector<De
         if (j >= 0) i = j;
     }
     const LightView& v = group[i];
-    if (!v.covers(q)) return 1.0f;
+    if (!v.covers(q)) return {1, 1, 1};
     const Vec3d g = v.gridFromWorld(q);
     const double z = g.z - depthBias * texel / v.worldPerDepthUnit();
-    return maps[b + std::size_t(i)].view().visibilityBilinear(float(g.x), float(g.y), float(z));
+    const std::size_t k = b + std::size_t(i);
+    const float red = maps[k].view().visibilityBilinear(float(g.x), float(g.y), float(z));
+    if (greenBlue[k].empty()) return {red, red, red};
+    return {red, greenBlue[k][0].view().visibilityBilinear(float(g.x), float(g.y), float(z)),
+            greenBlue[k][1].view().visibilityBilinear(float(g.x), float(g.y), float(z))};
 }
 
 } // namespace
 
-float DeepShadow::visibility(const Vec3d& p, const Vec3d& n) const {
+Vec3f DeepShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     return visibility(p, n, options_.normalOffset, options_.depthBias);
 }
 
-float DeepShadow::visibility(const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias) const {
-    float v = 1.0f;
+Vec3f DeepShadow::visibility(const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias) const {
+    Vec3f v{1, 1, 1};
     for (std::size_t g = 0; g + 1 < groupBegin_.size(); ++g)
-        v *= deepShadowLookup(views_, maps_, groupBegin_[g], groupBegin_[g + 1], p, n, normalOffset,
-                              depthBias);
+        v = v * deepShadowLookup(views_, maps_, greenBlue_, groupBegin_[g], groupBegin_[g + 1], p, n,
+                                 normalOffset, depthBias);
     return v;
 }
 
@@ -360,8 +398,12 @@ DeepShadowStats DeepShadow::stats() const {
     s.timings = timings_;
     s.clusteredMaps = clustered_ ? int64_t(groupBegin_.size()) - 1 : 0;
     s.unclusteredPointLights = pointUnclustered_;
-    for (const DeepShadowMap& m : maps_) {
-        const DsmStats& t = m.stats();
+    std::vector<const DeepShadowMap*> all;
+    for (const DeepShadowMap& m : maps_) all.push_back(&m);
+    for (const std::vector<DeepShadowMap>& gb : greenBlue_)
+        for (const DeepShadowMap& m : gb) all.push_back(&m);
+    for (const DeepShadowMap* m : all) {
+        const DsmStats& t = m->stats();
         s.texels += t.texels;
         s.nodes += t.nodes;
         s.maxNodes = std::max(s.maxNodes, t.maxNodes);

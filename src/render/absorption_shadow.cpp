@@ -3,12 +3,15 @@
 // An attribute voxelization from the light stores, per voxel, the absorption of every write
 // (material optical depth per crossing; dense foliage writes a voxel several times and so absorbs
 // more). The occlusion at p is the sum of the absorption of the occupied voxels between the light
-// and p (CHANG §3 step 4); the light is attenuated by exp(-sum). Columns are reduced to exclusive
-// prefix sums once, so a lookup is one read.
+// and p (CHANG §3 step 4); the light is attenuated by exp(-sum), per channel (coloured materials
+// in grids of their own), and through glass by Beer–Lambert over the chord between paired writes.
+// Columns are reduced to prefix sums once, so a lookup is a short scan per grid.
 #include "voxfx/absorption_shadow.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 
 #include "render/light_grid_lookup.hpp"
 #include "render/shadow_casters.hpp"
@@ -19,6 +22,12 @@ namespace voxfx {
 AbsorptionShadowMap AbsorptionShadowMap::build(const LightView& view, const MeshView& casters,
                                                std::span<const float> triangleAbsorption, Coverage coverage,
                                                Slicing slicing, Progress* progress) {
+    const Group grey{casters, triangleAbsorption};
+    return build(view, std::span<const Group>(&grey, 1), coverage, slicing, progress);
+}
+
+AbsorptionShadowMap AbsorptionShadowMap::build(const LightView& view, std::span<const Group> groups,
+                                               Coverage coverage, Slicing slicing, Progress* progress) {
     AbsorptionShadowMap map;
     map.view_ = view;
     AttributeOptions ao;
@@ -26,50 +35,124 @@ AbsorptionShadowMap AbsorptionShadowMap::build(const LightView& view, const Mesh
     ao.channels = AttributeChannels::shadows();
     ao.slicing = slicing;
     ao.progress = progress;
-    // The sparse form of the attribute voxelization: light grids through foliage are mostly empty.
-    AttributeColumns grid = voxelizeAttributeColumns(casters, view.frame, triangleAbsorption, ao);
-    map.frame_ = grid.frame;
-    for (const uint16_t n : grid.count) map.writes_ += n;
-    map.offsets_ = std::move(grid.offsets);
-    map.slice_ = std::move(grid.slice);
-    // Inclusive prefix sums along each column, in place; double accumulation.
-    map.prefix_ = std::move(grid.absorption);
-    parallelFor(0, map.frame_.columnCount(), 4096, [&](int64_t b, int64_t e) {
-        for (int64_t c = b; c < e; ++c) {
-            double sum = 0;
-            for (int64_t i = map.offsets_[size_t(c)]; i < map.offsets_[size_t(c) + 1]; ++i) {
-                sum += double(map.prefix_[size_t(i)]);
-                map.prefix_[size_t(i)] = float(sum);
-            }
+    for (const Group& group : groups) {
+        // The sparse form of the attribute voxelization: light grids through foliage are mostly empty.
+        AttributeColumns columns =
+            voxelizeAttributeColumns(group.mesh, view.frame, group.triangleAbsorption, ao);
+        Grid& g = map.grids_.emplace_back();
+        g.frame = columns.frame;
+        g.depthPerUnit = group.depthPerUnit;
+        g.attenuation = group.attenuation;
+        for (const uint16_t n : columns.count) map.writes_ += n;
+        g.offsets = std::move(columns.offsets);
+        g.slice = std::move(columns.slice);
+        // Inclusive prefix sums along each column, in place; double accumulation.
+        g.prefix = std::move(columns.absorption);
+        const bool glass = g.attenuation.x > 0 || g.attenuation.y > 0 || g.attenuation.z > 0;
+        if (glass) {
+            g.chord.resize(g.slice.size());
+            g.open.resize(g.slice.size());
         }
-    });
+        parallelFor(0, g.frame.columnCount(), 4096, [&](int64_t c0, int64_t c1) {
+            for (int64_t c = c0; c < c1; ++c) {
+                double sum = 0, chord = 0, open = -1;
+                const int64_t b = g.offsets[size_t(c)], e = g.offsets[size_t(c) + 1];
+                int64_t runStart = b;
+                for (int64_t i = b; i < e; ++i) {
+                    sum += double(g.prefix[size_t(i)]);
+                    g.prefix[size_t(i)] = float(sum);
+                    if (!glass) continue;
+                    // Glass: an odd count of writes in a voxel enters or leaves (an even one, a
+                    // passage within the voxel or none, leaves the state as it was). Conservative
+                    // writes: a run of consecutive voxels is one crossing, at its centre.
+                    bool crosses = columns.count[size_t(i)] % 2 == 1;
+                    double at = double(g.slice[size_t(i)]) + 0.5;
+                    if (coverage == Coverage::Conservative) {
+                        if (i > b && g.slice[size_t(i)] != g.slice[size_t(i - 1)] + 1) runStart = i;
+                        crosses = i + 1 == e || g.slice[size_t(i + 1)] != g.slice[size_t(i)] + 1;
+                        at = 0.5 * double(g.slice[size_t(runStart)] + g.slice[size_t(i)] + 1);
+                    }
+                    if (crosses) {
+                        if (open < 0) {
+                            open = at;
+                        } else {
+                            chord += at - open;
+                            open = -1;
+                        }
+                    }
+                    g.chord[size_t(i)] = float(chord);
+                    g.open[size_t(i)] = float(open);
+                }
+            }
+        });
+    }
     return map;
 }
 
-float AbsorptionShadowMap::columnDepth(int64_t column, double depth, int64_t skipCells) const {
-    const int64_t end = detail::slicesInFront(frame_, column, depth, skipCells);
+float AbsorptionShadowMap::columnSum(const Grid& g, int64_t column, double depth, int64_t skipCells,
+                                     double& chord) const {
+    chord = 0;
+    const int64_t end = detail::slicesInFront(g.frame, column, depth, skipCells);
     // Written voxels of the column with slice < end (few per column: a linear scan).
-    const int64_t b = offsets_[size_t(column)], e = offsets_[size_t(column) + 1];
+    const int64_t b = g.offsets[size_t(column)], e = g.offsets[size_t(column) + 1];
     int64_t i = b;
-    while (i < e && int64_t(slice_[size_t(i)]) < end) ++i;
-    return i == b ? 0.0f : prefix_[size_t(i - 1)];
+    while (i < e && int64_t(g.slice[size_t(i)]) < end) ++i;
+    if (i == b) return 0.0f;
+    if (!g.chord.empty()) {
+        const size_t last = size_t(i - 1);
+        chord = double(g.chord[last]);
+        // Inside an open passage: up to p, when the whole column pairs up (an odd one lost a
+        // crossing to a glass thinner than a voxel: no chord then).
+        if (g.open[last] >= 0 && g.open[size_t(e - 1)] < 0) {
+            const double t = g.frame.depthToSlice(column)(depth);
+            chord += std::clamp(t, double(g.open[last]), double(g.frame.depth())) - double(g.open[last]);
+        }
+        chord /= g.frame.depthToSlice(column).scale;
+    }
+    return g.prefix[size_t(i - 1)];
 }
 
-float AbsorptionShadowMap::opticalDepth(const Vec3d& world, int64_t skipCells) const {
-    if (offsets_.empty() || !view_.covers(world)) return 0.0f;
+Vec3f AbsorptionShadowMap::columnDepth(int64_t column, double depth, int64_t skipCells,
+                                       double lengthPerDepth) const {
+    Vec3f out{0, 0, 0};
+    for (const Grid& g : grids_) {
+        double chord = 0;
+        const float sum = columnSum(g, column, depth, skipCells, chord);
+        out += g.depthPerUnit * sum + g.attenuation * float(chord * lengthPerDepth);
+    }
+    return out;
+}
+
+Vec3f AbsorptionShadowMap::opticalDepth(const Vec3d& world, int64_t skipCells) const {
+    if (grids_.empty() || !view_.covers(world)) return {0, 0, 0};
     const detail::ColumnAt c = detail::nearestColumn(view_, world);
-    return columnDepth(c.column, c.depth, skipCells);
+    return columnDepth(c.column, c.depth, skipCells, detail::worldLengthPerDepth(view_, world));
 }
 
-float AbsorptionShadowMap::transmittance(const Vec3d& world, int64_t skipCells) const {
-    return std::exp(-opticalDepth(world, skipCells));
+namespace {
+
+Vec3f absorptionExp(const Vec3f& depth) {
+    // One exp for a grey depth (every opaque-only or grey scene).
+    if (depth.x == depth.y && depth.y == depth.z) {
+        const auto v = float(std::exp(-double(depth.x)));
+        return {v, v, v};
+    }
+    return beerLambert(depth, 1.0);
 }
 
-float AbsorptionShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells) const {
-    if (offsets_.empty() || !view_.covers(world)) return 1.0f;
-    return float(detail::bilinearColumns<double, double>(view_, world, 1.0, [&](const detail::ColumnAt& c) {
-        return std::exp(-double(columnDepth(c.column, c.depth, skipCells)));
-    }));
+} // namespace
+
+Vec3f AbsorptionShadowMap::transmittance(const Vec3d& world, int64_t skipCells) const {
+    return absorptionExp(opticalDepth(world, skipCells));
+}
+
+Vec3f AbsorptionShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells) const {
+    if (grids_.empty() || !view_.covers(world)) return {1, 1, 1};
+    const double lengthPerDepth = detail::worldLengthPerDepth(view_, world);
+    return detail::bilinearColumns<Vec3f, float>(
+        view_, world, Vec3f{1, 1, 1}, [&](const detail::ColumnAt& c) {
+            return absorptionExp(columnDepth(c.column, c.depth, skipCells, lengthPerDepth));
+        });
 }
 
 std::span<const OptionField<AbsorptionShadowOptions>> AbsorptionShadowOptions::fields() {
@@ -89,11 +172,12 @@ std::span<const OptionField<AbsorptionShadowOptions>> AbsorptionShadowOptions::f
     return table;
 }
 
-float absorptionPerCrossing(const Material& m, float opaqueAbsorption) {
-    if (m.isOpaque()) return opaqueAbsorption;
+Vec3f absorptionPerCrossing(const Material& m, float opaqueAbsorption) {
+    if (m.isOpaque()) return {opaqueAbsorption, opaqueAbsorption, opaqueAbsorption};
     const Vec3f t = m.shadowCrossingTransmittance();
-    const float luminance = 0.2126f * t.x + 0.7152f * t.y + 0.0722f * t.z;
-    return std::min(opaqueAbsorption, -std::log(std::max(luminance, 1e-30f)));
+    Vec3f out;
+    for (int c = 0; c < 3; ++c) out[c] = std::min(opaqueAbsorption, -std::log(std::max(t[c], 1e-30f)));
+    return out;
 }
 
 AbsorptionShadow::Stats& AbsorptionShadow::Stats::operator+=(const Stats& o) {
@@ -114,24 +198,58 @@ AbsorptionShadow AbsorptionShadow::build(const Scene& scene, const Light& light,
     out.options_ = options;
     const detail::CasterSets casters = detail::collectCasters(scene);
     if (casters.all.indices.empty()) return out;
-    std::vector<float> perTriangle(casters.allMaterialIndex.size());
-    std::vector<float> perMaterial(scene.materials.size());
-    for (std::size_t i = 0; i < scene.materials.size(); ++i)
-        perMaterial[i] = absorptionPerCrossing(scene.materials[i], options.opaqueAbsorption);
-    for (std::size_t i = 0; i < perTriangle.size(); ++i)
-        perTriangle[i] = perMaterial[casters.allMaterialIndex[i]];
+    // Grey materials (no glass attenuation) in one grid with their scalar depth per write; each
+    // other (depth, attenuation) its own grid with a write count.
+    using Key = std::array<float, 6>;
+    std::map<Key, uint32_t> groupOf;
+    std::vector<uint32_t> materialGroup(scene.materials.size());
+    std::vector<float> materialScalar(scene.materials.size());
+    std::vector<Key> keys{Key{1, 1, 1, 0, 0, 0}};
+    for (std::size_t i = 0; i < scene.materials.size(); ++i) {
+        const Vec3f d = absorptionPerCrossing(scene.materials[i], options.opaqueAbsorption);
+        const Vec3f a = scene.materials[i].shadowAttenuationCoefficient();
+        const bool grey = d.x == d.y && d.y == d.z && a == Vec3f{0, 0, 0};
+        materialScalar[i] = grey ? d.x : 1.0f;
+        if (grey) continue;
+        const Key k{d.x, d.y, d.z, a.x, a.y, a.z};
+        const auto [it, added] = groupOf.emplace(k, uint32_t(keys.size()));
+        if (added) keys.push_back(k);
+        materialGroup[i] = it->second;
+    }
+    // The casters of each group, with their per-write scalars (all of them when every material is
+    // grey: no copy).
+    const bool oneGroup = keys.size() == 1;
+    std::vector<Mesh> meshes(oneGroup ? 0 : keys.size());
+    std::vector<std::vector<float>> scalars(keys.size());
+    const Mesh& all = casters.all;
+    for (std::size_t t = 0; t < casters.allMaterialIndex.size(); ++t) {
+        const uint32_t m = casters.allMaterialIndex[t], g = materialGroup[m];
+        scalars[g].push_back(materialScalar[m]);
+        if (oneGroup) continue;
+        Mesh& mesh = meshes[g];
+        for (int k = 0; k < 3; ++k) {
+            mesh.indices.push_back(uint32_t(mesh.positions.size()));
+            mesh.positions.push_back(all.positions[all.indices[3 * t + size_t(k)]]);
+        }
+    }
+    std::vector<AbsorptionShadowMap::Group> groups;
+    for (std::size_t g = 0; g < keys.size(); ++g)
+        if (!scalars[g].empty())
+            groups.push_back({oneGroup ? all.view() : meshes[g].view(), scalars[g],
+                              Vec3f{keys[g][0], keys[g][1], keys[g][2]},
+                              Vec3f{keys[g][3], keys[g][4], keys[g][5]}});
     out.views_ =
         makeLightViews(light, computeBounds(casters.all.view()), options.grid.resolution, options.grid.depth);
     for (const LightView& v : out.views_)
-        out.maps_.push_back(AbsorptionShadowMap::build(v, casters.all.view(), perTriangle, options.coverage,
-                                                       options.grid.slicing, progress));
+        out.maps_.push_back(
+            AbsorptionShadowMap::build(v, groups, options.coverage, options.grid.slicing, progress));
     return out;
 }
 
-float AbsorptionShadow::visibility(const Vec3d& p, const Vec3d& n) const {
+Vec3f AbsorptionShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     Vec3d q;
     const int i = detail::lookupView(views_, p, n, options_.grid.normalOffset, q);
-    if (i < 0) return 1.0f;
+    if (i < 0) return {1, 1, 1};
     const AbsorptionShadowMap& m = maps_[size_t(i)];
     const int64_t skip = options_.grid.skipCells;
     return options_.grid.bilinear ? m.transmittanceBilinear(q, skip) : m.transmittance(q, skip);

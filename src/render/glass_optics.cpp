@@ -30,11 +30,6 @@ double fresnelDielectric(double cosI, double etaI, double etaT) {
     return 0.5 * (rs * rs + rp * rp);
 }
 
-Vec3f beerLambert(const Vec3f& sigma, double length) {
-    return {float(std::exp(-double(sigma.x) * length)), float(std::exp(-double(sigma.y) * length)),
-            float(std::exp(-double(sigma.z) * length))};
-}
-
 GlassMedium glassMedium(const Material& m) {
     GlassMedium g;
     g.ior = std::max(1.0f, m.ior);

@@ -44,6 +44,15 @@ inline ColumnAt nearestColumn(const LightView& view, const Vec3d& world) {
     return {y * view.frame.width() + x, p.z};
 }
 
+/// World length along the light's ray through p per frame depth unit (orthographic: a slice;
+/// perspective: depth is the distance along the view axis, so |p - eye| / depth). Precondition:
+/// view.covers(world).
+inline double worldLengthPerDepth(const LightView& view, const Vec3d& world) {
+    if (!view.frame.isPerspective()) return view.worldPerDepthUnit();
+    const double depth = view.frame.viewDepth(world);
+    return depth > 0 ? length(world - view.frame.eye()) / depth : 1.0;
+}
+
 /// Bilinear interpolation of value(ColumnAt) over the four columns whose centres (x + 0.5)
 /// surround p, at p's depth; columns outside the frame hold no caster and give `empty`.
 /// Weights are computed in double and applied as S (float for colours, double for scalars).

@@ -23,8 +23,8 @@ CasterSets collectCasters(const Scene& scene) {
         if (mat.isOpaque()) {
             append(s.opaque, m.mesh);
         } else {
-            const Vec3f t = mat.shadowCrossingTransmittance();
-            append(s.partial[{t.x, t.y, t.z}], m.mesh);
+            const Vec3f t = mat.shadowCrossingTransmittance(), sigma = mat.shadowAttenuationCoefficient();
+            append(s.partial[{t.x, t.y, t.z, sigma.x, sigma.y, sigma.z}], m.mesh);
         }
     }
     return s;

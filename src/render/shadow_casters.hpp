@@ -13,9 +13,11 @@
 namespace voxfx::detail {
 
 struct CasterSets {
-    Mesh all, opaque;                             ///< every caster; the opaque ones
-    std::vector<uint32_t> allMaterialIndex;       ///< per triangle of `all`
-    std::map<std::array<float, 3>, Mesh> partial; ///< by shadowCrossingTransmittance: one channel each
+    Mesh all, opaque;                       ///< every caster; the opaque ones
+    std::vector<uint32_t> allMaterialIndex; ///< per triangle of `all`
+    /// The partial occluders by what they do to light: shadowCrossingTransmittance (RGB), then
+    /// shadowAttenuationCoefficient (RGB; zero but for glass). One channel each.
+    std::map<std::array<float, 6>, Mesh> partial;
 };
 
 /// The meshes with SceneMesh::castsShadow, in scene order.

@@ -2,7 +2,8 @@
 //
 // The partial occluders are voxelized from the light into slicemaps, one per channel (a group of
 // equal crossing transmittance, e.g. leaves of one colour). At a point p the light has crossed
-// n = popcount(column bits in front of p) filled cells, and is attenuated by t^n per channel.
+// n = popcount(column bits in front of p) filled cells, and is attenuated by t^n per channel;
+// through glass also by Beer–Lambert over the chord between paired crossings (entering, leaving).
 // The lookup skips the cell holding p (its own surface; see light_grid.hpp's bias note). Opaque
 // casters go to a standard shadow map (shadow_map.hpp).
 #include "voxfx/transmittance_shadow.hpp"
@@ -20,10 +21,14 @@ namespace voxfx {
 
 TransmittanceShadowMap TransmittanceShadowMap::build(const LightView& view, std::span<const MeshView> groups,
                                                      std::span<const Vec3f> transmittances, VoxelizeMode mode,
-                                                     Slicing slicing, Progress* progress, Device device) {
+                                                     Slicing slicing, Progress* progress, Device device,
+                                                     std::span<const Vec3f> attenuations) {
     if (groups.size() != transmittances.size())
         fail("transmittance shadow map: ", groups.size(), " groups but ", transmittances.size(),
              " transmittances");
+    if (!attenuations.empty() && attenuations.size() != groups.size())
+        fail("transmittance shadow map: ", groups.size(), " groups but ", attenuations.size(),
+             " attenuations");
     if (mode != VoxelizeMode::Surface && mode != VoxelizeMode::Conservative)
         fail("transmittance shadow map: voxelization mode must be surface or conservative, got ",
              toString(mode));
@@ -36,7 +41,8 @@ TransmittanceShadowMap TransmittanceShadowMap::build(const LightView& view, std:
         vo.slicing = slicing;
         vo.progress = progress;
         vo.device = device;
-        map.channels_.push_back({voxelize(groups[k], view.frame, vo), transmittances[k]});
+        map.channels_.push_back({voxelize(groups[k], view.frame, vo), transmittances[k],
+                                 attenuations.empty() ? Vec3f{0, 0, 0} : attenuations[k]});
         // A column holds at most D filled cells.
         const Vec3f& t = transmittances[k];
         std::vector<Vec3f>& powers = map.powers_.emplace_back(size_t(view.frame.depth() + 1));
@@ -66,7 +72,65 @@ int64_t runsEndingBefore(const BitGrid& bits, int64_t column, int64_t end) {
     return n;
 }
 
+// The crossings of a column in slices [0, end), in depth order, as slice coordinates: each filled
+// cell's centre, or (runs) the centre of each run of filled cells that ends before `end`.
+template <class Crossing>
+void forEachCrossing(const BitGrid& bits, int64_t column, int64_t end, bool runs, const Crossing& crossing) {
+    end = std::min(end, bits.depth());
+    const uint64_t* words = bits.column(column);
+    int64_t runStart = -1;
+    for (int64_t w = 0; w * 64 < end; ++w) {
+        uint64_t word = words[w];
+        while (word) {
+            const int64_t s = w * 64 + std::countr_zero(word);
+            word &= word - 1;
+            if (!runs) {
+                if (s < end) crossing(double(s) + 0.5);
+                continue;
+            }
+            if (runStart < 0) runStart = s;
+            const bool next = s + 1 < bits.depth() && ((words[(s + 1) >> 6] >> ((s + 1) & 63)) & 1u);
+            if (!next) {
+                if (s < end) crossing(0.5 * double(runStart + s + 1));
+                runStart = -1;
+            }
+        }
+    }
+}
+
 } // namespace
+
+double TransmittanceShadowMap::columnChord(std::size_t k, int64_t column, double depth,
+                                           int64_t skipCells) const {
+    const VoxelGrid& g = channels_[k].grid;
+    const int64_t end = detail::slicesInFront(g.frame, column, depth, skipCells);
+    if (end <= 0) return 0;
+    const bool runs = mode_ == VoxelizeMode::Conservative;
+    // Pairs in depth order: the first crossing enters, the next leaves.
+    bool inside = false;
+    int64_t crossings = 0;
+    double entered = 0, chord = 0;
+    forEachCrossing(g.bits, column, end, runs, [&](double s) {
+        ++crossings;
+        if (!inside)
+            entered = s;
+        else
+            chord += s - entered;
+        inside = !inside;
+    });
+    // Still inside: p lies in the glass when the whole column pairs up (an odd column has lost a
+    // crossing to a cell it shares with another, a glass thinner than a cell: no chord then).
+    if (inside) {
+        const int64_t all =
+            runs ? runsEndingBefore(g.bits, column, g.frame.depth())
+                 : countColumnRange(g.bits.column(column), g.frame.depth(), 0, g.frame.depth());
+        if (all % 2 == 0) {
+            const double t = g.frame.depthToSlice(column)(depth);
+            chord += std::clamp(t, entered, double(g.frame.depth())) - entered;
+        }
+    }
+    return chord / g.frame.depthToSlice(column).scale;
+}
 
 int64_t TransmittanceShadowMap::columnCells(std::size_t k, int64_t column, double depth,
                                             int64_t skipCells) const {
@@ -79,12 +143,16 @@ int64_t TransmittanceShadowMap::columnCells(std::size_t k, int64_t column, doubl
     return countColumnRange(g.bits.column(column), g.frame.depth(), 0, end);
 }
 
-Vec3f TransmittanceShadowMap::columnTransmittance(int64_t column, double depth, int64_t skipCells) const {
+Vec3f TransmittanceShadowMap::columnTransmittance(int64_t column, double depth, int64_t skipCells,
+                                                  double lengthPerDepth) const {
     Vec3f out{1, 1, 1};
     for (std::size_t k = 0; k < channels_.size(); ++k) {
         const int64_t n = columnCells(k, column, depth, skipCells);
         if (n == 0) continue;
         out = out * powers_[k][size_t(n)];
+        const Vec3f& sigma = channels_[k].attenuation;
+        if (sigma.x > 0 || sigma.y > 0 || sigma.z > 0)
+            out = out * beerLambert(sigma, columnChord(k, column, depth, skipCells) * lengthPerDepth);
     }
     return out;
 }
@@ -98,14 +166,16 @@ int64_t TransmittanceShadowMap::cellsBefore(std::size_t k, const Vec3d& world, i
 Vec3f TransmittanceShadowMap::transmittance(const Vec3d& world, int64_t skipCells) const {
     if (channels_.empty() || !view_.covers(world)) return {1, 1, 1};
     const detail::ColumnAt c = detail::nearestColumn(view_, world);
-    return columnTransmittance(c.column, c.depth, skipCells);
+    return columnTransmittance(c.column, c.depth, skipCells, detail::worldLengthPerDepth(view_, world));
 }
 
 Vec3f TransmittanceShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells) const {
     if (channels_.empty() || !view_.covers(world)) return {1, 1, 1};
+    const double lengthPerDepth = detail::worldLengthPerDepth(view_, world);
     return detail::bilinearColumns<Vec3f, float>(
-        view_, world, Vec3f{1, 1, 1},
-        [&](const detail::ColumnAt& c) { return columnTransmittance(c.column, c.depth, skipCells); });
+        view_, world, Vec3f{1, 1, 1}, [&](const detail::ColumnAt& c) {
+            return columnTransmittance(c.column, c.depth, skipCells, lengthPerDepth);
+        });
 }
 
 std::span<const OptionField<TransmittanceShadowOptions>> TransmittanceShadowOptions::fields() {
@@ -164,16 +234,18 @@ TransmittanceShadow TransmittanceShadow::build(const Scene& scene, const Light& 
     if (casters.partial.empty()) return out;
     Box3d bounds;
     std::vector<MeshView> groups;
-    std::vector<Vec3f> transmittances;
+    std::vector<Vec3f> transmittances, attenuations;
     for (const auto& [key, mesh] : casters.partial) {
         bounds.extend(computeBounds(mesh.view()));
         groups.push_back(mesh.view());
         transmittances.push_back({key[0], key[1], key[2]});
+        attenuations.push_back({key[3], key[4], key[5]});
     }
     out.views_ = makeLightViews(light, bounds, options.grid.resolution, options.grid.depth);
     for (const LightView& v : out.views_)
         out.maps_.push_back(TransmittanceShadowMap::build(v, groups, transmittances, options.voxelMode,
-                                                          options.grid.slicing, progress, options.device));
+                                                          options.grid.slicing, progress, options.device,
+                                                          attenuations));
     return out;
 }
 

@@ -29,16 +29,23 @@ Vec3f attenuationCoefficient(const Material& m) {
 
 bool Material::isGlass() const { return transmission > 0 && opacity >= 1; }
 
+Vec3f beerLambert(const Vec3f& sigma, double length) {
+    Vec3f out;
+    for (int c = 0; c < 3; ++c) out[c] = float(std::exp(-double(sigma[c]) * length));
+    return out;
+}
+
 Vec3f Material::shadowCrossingTransmittance() const {
     const Vec3f tint = crossingTransmittance();
     if (!isGlass()) return tint;
     const double n = std::max(1.0f, ior), f0 = ((n - 1) / (n + 1)) * ((n - 1) / (n + 1));
-    const Vec3f sigma = attenuationCoefficient(*this);
-    const double half = std::isfinite(thickness) && thickness > 0 ? 0.5 * double(thickness) : 0.0;
     Vec3f out;
-    for (int c = 0; c < 3; ++c)
-        out[c] = float(std::sqrt(double(tint[c])) * (1 - f0) * std::exp(-double(sigma[c]) * half));
+    for (int c = 0; c < 3; ++c) out[c] = float(std::sqrt(double(tint[c])) * (1 - f0));
     return out;
+}
+
+Vec3f Material::shadowAttenuationCoefficient() const {
+    return isGlass() ? attenuationCoefficient(*this) : Vec3f{0, 0, 0};
 }
 
 bool Material::isOpaque() const {

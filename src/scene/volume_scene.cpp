@@ -111,6 +111,12 @@ void VolumeScene::validate() const {
             fail("volume scene: object '", o.name, "' has shape ", o.shape, " of ", nodes.size(), " nodes");
         if (!(o.opacity >= 0 && o.opacity <= 1))
             fail("volume scene: object '", o.name, "' has opacity ", o.opacity, " outside [0, 1]");
+        for (int c = 0; c < 3; ++c) {
+            if (o.transmittance && !((*o.transmittance)[c] >= 0 && (*o.transmittance)[c] <= 1))
+                fail("volume scene: object '", o.name, "' has a transmittance outside [0, 1]");
+            if (!(o.attenuation[c] >= 0 && std::isfinite(o.attenuation[c])))
+                fail("volume scene: object '", o.name, "' has a negative or non-finite attenuation");
+        }
         if (o.kind == ObjectKind::Volume) {
             if (o.volume < 0 || std::size_t(o.volume) >= volumes.size() || !volumes[std::size_t(o.volume)])
                 fail("volume scene: volume object '", o.name, "' has no volume (index ", o.volume, ")");
@@ -148,6 +154,8 @@ VolumeScene volumeSceneOf(const Scene& scene, SceneMeshes meshes) {
             const Vec3f t = mat.shadowCrossingTransmittance();
             o.kind = ObjectKind::Translucent;
             o.opacity = std::clamp(1.0f - (0.2126f * t.x + 0.7152f * t.y + 0.0722f * t.z), 0.0f, 1.0f);
+            o.transmittance = t;
+            o.attenuation = mat.shadowAttenuationCoefficient();
         }
         v.addObject(std::move(o));
     }
