@@ -217,7 +217,11 @@ TEST(BooleanRenderTest, RenderedPixelsAreTheSurfacesAlphaCompositedInDepthOrder)
     o.shadow = NoShadowOptions{};
     o.defaultLights = false;
     o.ambient = {1, 1, 1}; // no lights: a surface's radiance is its colour
+    o.skyLight = 0;
+    o.sky = SkyKind::Flat;
     o.background = {0.1f, 0.2f, 0.3f};
+    o.antiAliasing = AntiAliasing::Off;
+    o.toneMap = ToneMap::Clamp;
     const RenderResult r = render(scene, brenCamera(), o);
     const auto expected = brenOracle(s, cameraFrame(brenCamera(), 64, 48));
     int64_t checked = 0, blended = 0;

@@ -202,5 +202,58 @@ TEST(EnvironmentTest, SkyIsBrightestAtTheSunAndGroundColouredBelow) {
     EXPECT_THROW(Environment(Image{}), Error);
 }
 
+// A map whose texel (i, j) holds f(direction of its centre).
+template <class F> Environment mapOf(int W, int H, F f) {
+    Image img(W, H);
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i) {
+            const double v = f(equirectToDirection((i + 0.5) / W, (j + 0.5) / H));
+            img.at(i, j) = Vec3f{float(v), float(2 * v), float(0.5 * v)};
+        }
+    return Environment(std::move(img));
+}
+
+TEST(EnvironmentTest, UniformSkyGivesIrradiancePiLOnEveryFace) {
+    // E(n) = integral of L max(0, cos) over the sphere = pi L, whatever n; from a 1 x 1 map too.
+    for (const Environment& env : {mapOf(256, 128, [](const Vec3d&) { return 0.7; }),
+                                   Environment(Image(1, 1, Vec3f{0.7f, 1.4f, 0.35f}))})
+        for (const Vec3d n : {Vec3d{0, 1, 0}, Vec3d{0, -1, 0}, Vec3d{1, 0, 0}, Vec3d{0.3, 0.5, -0.8}}) {
+            const Vec3f e = env.irradiance(n);
+            EXPECT_NEAR(e.x, M_PI * 0.7, 2e-3) << n.x << "," << n.y << "," << n.z;
+            EXPECT_NEAR(e.y, M_PI * 1.4, 4e-3);
+            EXPECT_NEAR(e.z, M_PI * 0.35, 1e-3);
+        }
+}
+
+TEST(EnvironmentTest, GradientSkyGivesTheCosineWeightedIntegral) {
+    // L(d) = a + b d.y: E(up) = pi a + 2 pi b / 3, E(down) = pi a - 2 pi b / 3, E(horizontal) = pi a
+    // (integrals of (a + b cos t) cos t over a hemisphere). L = d.y^2: E(up) = pi / 2, E(x) = pi / 4.
+    const double a = 0.5, b = 0.3;
+    const Environment linear = mapOf(256, 128, [&](const Vec3d& d) { return a + b * d.y; });
+    EXPECT_NEAR(linear.irradiance({0, 1, 0}).x, M_PI * a + 2 * M_PI * b / 3, 2e-3);
+    EXPECT_NEAR(linear.irradiance({0, -1, 0}).x, M_PI * a - 2 * M_PI * b / 3, 2e-3);
+    EXPECT_NEAR(linear.irradiance({1, 0, 0}).x, M_PI * a, 2e-3);
+    EXPECT_NEAR(linear.irradiance({0, 0, 1}).y, 2 * M_PI * a, 4e-3);
+    // Tilted by t from up: pi a + 2 pi b cos(t) / 3.
+    EXPECT_NEAR(linear.irradiance({std::sin(0.6), std::cos(0.6), 0}).x,
+                M_PI * a + 2 * M_PI * b * std::cos(0.6) / 3, 2e-3);
+    const Environment quadratic = mapOf(256, 128, [&](const Vec3d& d) { return d.y * d.y; });
+    EXPECT_NEAR(quadratic.irradiance({0, 1, 0}).x, M_PI / 2, 2e-3);
+    // Horizontal face: the integral of y^2 x over x > 0 is pi / 4.
+    EXPECT_NEAR(quadratic.irradiance({1, 0, 0}).x, M_PI / 4, 2e-3);
+}
+
+TEST(EnvironmentTest, SunOfAMapIsItsBrightestRegion) {
+    // A dim map with a bright patch around direction s: the default sun points there (within the
+    // 64-texel level's resolution); a map without a bright region has no sun.
+    const Vec3d s = normalize(Vec3d{-0.4, 0.6, 0.7});
+    const Environment withSun =
+        mapOf(512, 256, [&](const Vec3d& d) { return dot(d, s) > std::cos(0.05) ? 500.0 : 0.2 + 0.1 * d.y; });
+    ASSERT_GT(length(withSun.sunDirection()), 0.5);
+    EXPECT_GT(dot(withSun.sunDirection(), s), std::cos(0.1));
+    const Environment overcast = mapOf(512, 256, [&](const Vec3d& d) { return 0.5 + 0.2 * d.y; });
+    EXPECT_EQ(length(overcast.sunDirection()), 0.0);
+}
+
 } // namespace
 } // namespace voxfx

@@ -576,6 +576,7 @@ TEST(GlassTest, ExactGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
     Image magenta(4, 2);
     for (Vec3f& p : magenta.pixels) p = {1, 0, 1};
     o.environment = std::make_shared<const Environment>(magenta);
+    o.skyLight = 0; // what the glass sees, not the magenta ambient on its surface
     const RenderResult r = render(s, cam, o);
     const SceneGeometry geo = flattenScene(s);
     const GBuffer g = renderGBuffer(geo, cameraFrame(cam, o.width, o.height));
@@ -628,21 +629,26 @@ TEST(GlassTest, ASceneWithoutLightsIsLitByTheDefaultSunAndSkyAmbient) {
     o.width = 64;
     o.height = 48;
     o.ambient = {0, 0, 0};
+    o.sky = SkyKind::Flat; // black
     o.background = {0, 0, 0};
     o.shadow = NoShadowOptions{};
     o.defaultLights = false;
+    o.toneMap = ToneMap::Clamp;
+    o.antiAliasing = AntiAliasing::Off;
     const RenderResult dark = render(s, s.cameras[0], o);
     for (const Vec3f& p : dark.image.pixels) EXPECT_EQ(p, (Vec3f{0, 0, 0}));
     o.defaultLights = true;
+    o.sky = SkyKind::Procedural;
     const RenderResult lit = render(s, s.cameras[0], o);
-    // A ground pixel: albedo * sky average (ambient) + albedo / pi * E * cos(sun), hand-derived with
-    // the default sun (intensity 3, colour (1, 0.96, 0.9), towards SkyOptions' sun direction).
+    // A ground pixel: albedo / pi * the sky's irradiance on an upward face (ambient) + albedo / pi
+    // * E * cos(sun), hand-derived with the default sun (intensity 3, colour (1, 0.96, 0.9), towards
+    // SkyOptions' sun direction).
     const Vec3d p{1.2, 0, 0.3}; // beside the ball, in view
     const Vec3d g = cameraFrame(s.cameras[0], 64, 48).gridFromWorld(p);
     const int64_t x = int64_t(std::floor(g.x)), y = 47 - int64_t(std::floor(g.y));
     ASSERT_TRUE(x >= 0 && x < 64 && y >= 0 && y < 48) << x << " " << y;
     const Vec3d sun = normalize(SkyOptions{}.sunDirection);
-    const Vec3f avg = Environment::sky().average();
+    const Vec3f avg = Environment::sky().irradiance({0, 1, 0}) * float(1 / M_PI);
     const float albedo = 0.6f;
     const Vec3f colour{1.0f, 0.96f, 0.9f};
     for (int c = 0; c < 3; ++c)

@@ -16,6 +16,7 @@
 // Thread-safety: an Environment is a value; lookups are const and may run from any number of threads.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "voxfx/image.hpp"
@@ -58,14 +59,29 @@ public:
     /// Diffuse approximation of the light arriving around normal n: the map blurred over about a
     /// hemisphere (the level of about 4 x 2 texels) looked up along n.
     Vec3f ambient(const Vec3d& n) const;
+    /// Irradiance on a surface of unit normal n: the integral of radiance times max(0, cos) over
+    /// the sphere, from the map's projection on the 9 real spherical harmonics of order <= 2 and the
+    /// clamped cosine's coefficients pi, 2pi/3, pi/4 (Ramamoorthi & Hanrahan 2001). Exact for a map
+    /// whose radiance is a polynomial of degree <= 2 in the direction (a uniform sky L gives pi L)
+    /// up to the quadrature over texels (each weighed by its exact solid angle, sampled at its
+    /// centre; the first level at most 1024 texels wide).
+    Vec3f irradiance(const Vec3d& n) const;
+    /// The projection's coefficients, in the order Y00, Y1-1 (y), Y10 (z), Y11 (x), Y2-2 (xy),
+    /// Y2-1 (yz), Y20 (3z^2 - 1), Y21 (xz), Y22 (x^2 - y^2) of the world axes.
+    const std::array<Vec3f, 9>& sphericalHarmonics() const { return sh_; }
     /// Mean of level 0's texels (the last level).
     Vec3f average() const { return levels_.back().pixels[0]; }
-    /// The sun of a procedural sky (its direction towards the sun); zero for maps.
+    /// The sun: a procedural sky's (its direction towards the sun); for a map the direction of its
+    /// brightest region (the brightest texel of the first level at most 64 texels wide) when it is
+    /// at least 4 times the map's mean luminance, else zero (a map without a sun).
     const Vec3d& sunDirection() const { return sunDirection_; }
 
 private:
+    void projectOnHarmonics();
+    void findSun();
     std::vector<Image> levels_;
     Vec3d sunDirection_;
+    std::array<Vec3f, 9> sh_{};
 };
 
 /// Level k+1 from level k (see the file comment). Exposed for tests.

@@ -18,10 +18,10 @@ namespace voxfx {
 Environment loadEnvironment(const std::string& path);
 
 /// The environment `scene` renders under with `options` (what `voxfx render` and Python's render
-/// use): `requested` if not empty ("sky" or a file), else the scene file's environmentMap, else the
-/// procedural sky where the scene has no lights or the glass method is not none; null otherwise (the
-/// flat background). A loaded environment is also what the background shows. Throws voxfx::Error as
-/// loadEnvironment does.
+/// use): `requested` if not empty ("sky" or a file), else the scene file's environmentMap; null
+/// otherwise (render then uses its own: the procedural sky, or the flat background with
+/// RenderOptions::sky = flat). The environment is what the background shows, what glass sees and
+/// the ambient light. Throws voxfx::Error as loadEnvironment does.
 std::shared_ptr<const Environment> loadSceneEnvironment(const Scene& scene, const RenderOptions& options,
                                                         const std::string& requested = {});
 

@@ -22,9 +22,22 @@
 //             image: volumes sampled, and the visible surfaces of opaque and translucent objects
 //             (where a Boolean's inside flag changes) and of blended meshes shaded like meshes and
 //             α-blended in depth order.
-//   resolve   box filter of supersample x supersample pixels, flipped to image rows (y down).
-// Output is linear RGB (writePng encodes sRGB; writePfm keeps HDR). Deterministic for any thread
-// count.
+//   resolve   box filter of the samples of each pixel, flipped to image rows (y down), then the
+//             output transform (RenderOptions::toneMap) and the post-process anti-aliasing.
+// Anti-aliasing (RenderOptions::antiAliasing, default full): the G-buffer holds s x s samples per
+// pixel (s = adaptiveSamples, times supersample); the shading pass shades every sample only in the
+// pixels on an edge (more than one mesh or material, background and geometry, a depth or normal
+// discontinuity), s samples (N-rooks) in pixels showing glass inside, and one sample, copied,
+// elsewhere; the glass pass traces the glass samples shaded. Pixels shaded once then get FXAA-style
+// post-process anti-aliasing (Lottes 2009: an edge along the luma gradient, searched to its ends, blended by
+// the sub-pixel distance). Scenes the volume pass draws (volumes, Boolean shapes, blended meshes) keep one
+// sample per pixel (s = 1) and get the post-process only. Lighting: one environment
+// (RenderOptions::environment, else the procedural sky, or the flat `background` with sky = flat) is what the
+// background shows, what glass reflects and refracts, and the ambient light: albedo / pi times the
+// environment's irradiance around the normal (order-2 spherical harmonics, Ramamoorthi & Hanrahan 2001) times
+// skyLight, plus the constant `ambient`. Output: RenderOptions::toneMap filmic (default; the ACES fit of
+// Narkowicz 2015: display-referred, in [0, 1)) or clamp (the linear image as it is: writePng clamps at 1;
+// .pfm/.exr keep HDR). Deterministic for any thread count.
 //
 // Options by name. Every setting a front end reaches has a name (voxfx/options.hpp): the fields of
 // RenderOptions itself (renderOptionFields), of each shadow technique and of each glass method.
@@ -43,6 +56,7 @@
 #include <string_view>
 #include <vector>
 
+#include "voxfx/enum_names.hpp"
 #include "voxfx/environment.hpp"
 #include "voxfx/gbuffer.hpp"
 #include "voxfx/glass.hpp"
@@ -54,19 +68,54 @@
 
 namespace voxfx {
 
+/// Anti-aliasing of render(): off (one sample per pixel), post (FXAA-style post-process only),
+/// adaptive (edge and glass pixels supersampled only), full (both; the default).
+enum class AntiAliasing : uint8_t { Off, Post, Adaptive, Full };
+inline constexpr EnumName<AntiAliasing> kAntiAliasingNames[] = {{"off", AntiAliasing::Off},
+                                                                {"post", AntiAliasing::Post},
+                                                                {"adaptive", AntiAliasing::Adaptive},
+                                                                {"full", AntiAliasing::Full}};
+const char* toString(AntiAliasing a);
+/// Parses off | post | adaptive | full; throws voxfx::Error listing them otherwise.
+AntiAliasing parseAntiAliasing(const std::string& name);
+
+/// The output transform of render(): filmic (ACES fit, display-referred) or clamp (linear as is).
+enum class ToneMap : uint8_t { Filmic, Clamp };
+inline constexpr EnumName<ToneMap> kToneMapNames[] = {{"filmic", ToneMap::Filmic}, {"clamp", ToneMap::Clamp}};
+const char* toString(ToneMap t);
+ToneMap parseToneMap(const std::string& name);
+/// The filmic curve (Narkowicz 2015's fit of ACES, input scaled by 0.6): f(0) = 0, increasing,
+/// f(x) < 1 for every x below about 12, f(x) -> 1.033 (clamped to 1). Per channel.
+float filmicToneMap(float x);
+
+/// Which environment render() uses when RenderOptions::environment is null: the procedural sky
+/// (Environment::sky) or a flat one of radiance RenderOptions::background.
+enum class SkyKind : uint8_t { Procedural, Flat };
+inline constexpr EnumName<SkyKind> kSkyKindNames[] = {{"procedural", SkyKind::Procedural},
+                                                      {"flat", SkyKind::Flat}};
+const char* toString(SkyKind k);
+SkyKind parseSkyKind(const std::string& name);
+
 struct RenderOptions {
     int64_t width = 1280, height = 720;        ///< output pixels, 1..65536
     int supersample = 1;                       ///< k: render k*width x k*height, box-filter down (1..8)
     ShadowOptions shadow = ShadowMapOptions{}; ///< the shadow technique and its options
-    Vec3f ambient{0.05f, 0.06f, 0.08f};        ///< ambient irradiance (times albedo)
-    Vec3f background{0.60f, 0.72f, 0.90f};
-    float exposure = 1; ///< multiplies the linear result (background included)
+    Vec3f ambient{0, 0, 0}; ///< constant ambient radiance (times albedo), added to the sky's
+    /// The environment's irradiance (over pi, times albedo) as ambient light is scaled by this (0: none).
+    double skyLight = 1;
+    SkyKind sky = SkyKind::Procedural;     ///< the environment when none is given
+    Vec3f background{0.60f, 0.72f, 0.90f}; ///< the flat environment's radiance (sky = flat)
+    AntiAliasing antiAliasing = AntiAliasing::Full;
+    /// Adaptive anti-aliasing: edge and glass pixels get s x s samples (2..8).
+    int adaptiveSamples = 2;
+    ToneMap toneMap = ToneMap::Filmic; ///< the output transform
+    float exposure = 1;                ///< multiplies the linear result (background included)
     GlassOptions glass; ///< the glass method and its options (default none: shaded as surfaces)
-    /// Radiance around the scene: shown as the background and seen through and in glass. Null: the
-    /// flat `background`, and the procedural sky (Environment::sky) where glass needs one.
+    /// Radiance around the scene: shown as the background, seen through and in glass, and the ambient
+    /// light. Null: the procedural sky (Environment::sky), or the flat `background` (sky = flat).
     std::shared_ptr<const Environment> environment;
-    /// A scene without lights is lit by a sun (the sky's, or SkyOptions' default direction for maps)
-    /// and the environment's average radiance as ambient, as glTF viewers do.
+    /// A scene without lights is lit by a sun (the sky's, or a map's brightest region, else SkyOptions'
+    /// default direction) besides the environment's ambient light, as glTF viewers do.
     bool defaultLights = true;
     int threads = 0;              ///< 0 = all; output is identical for every value
     Progress* progress = nullptr; ///< polled between tiles of every pass; may cancel
@@ -79,8 +128,9 @@ struct RenderOptions {
     /// have a crease between them, smaller angles are smoothed over (flattenScene, gbuffer.hpp).
     double creaseAngle = kDefaultCreaseAngle;
 
-    /// The named fields of RenderOptions itself: width, height, supersample, exposure, ambient,
-    /// background, volumeStep, emptySpaceSkipping, defaultLights, creaseAngle.
+    /// The named fields of RenderOptions itself: width, height, supersample, antiAliasing,
+    /// adaptiveSamples, toneMap, exposure, ambient, skyLight, sky, background, volumeStep,
+    /// emptySpaceSkipping, defaultLights, creaseAngle.
     static std::span<const OptionField<RenderOptions>> fields();
 };
 
@@ -148,7 +198,9 @@ struct GlassReport {
 struct RenderResult {
     Image image;
     RenderTimings timings;
-    int64_t coveredPixels = 0; ///< pixels (at the supersampled resolution) showing geometry
+    int64_t coveredPixels = 0; ///< samples (of the supersampled G-buffer) showing geometry
+    /// Output pixels shaded at every sample by adaptive anti-aliasing (the rest shaded once).
+    int64_t refinedPixels = 0;
     /// The shadow technique's counters, summed over the lights (summary() prints them).
     ShadowStats shadowStats;
     /// Per output pixel (row-major, row 0 on top): 1 where any of its samples shows glass, else 0.

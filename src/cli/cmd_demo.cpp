@@ -20,11 +20,11 @@ struct DemoArgs {
     RenderFlags flags; ///< --shadows: a comma list or all (default transmittance)
 };
 
-// The demo's image: smaller than render's default, supersampled (the render flags override these).
+// The demo's image: smaller than render's default (the render flags override these); anti-aliased
+// as render's (adaptive samples on edges and glass, post-process elsewhere).
 void demoImage(RenderOptions& o) {
     o.width = 640;
     o.height = 360;
-    o.supersample = 2;
 }
 
 std::vector<std::string> allShadowNames() {
@@ -108,14 +108,13 @@ const Command kDemo{
     "demo", "Render the demo scenes (procedural tree, bunny under leaves, CGAL meshes, glass)",
     [](CLI::App& app) {
         auto a = std::make_shared<DemoArgs>();
-        app.footer(
-            "\nThe render options apply where the shadow kind has them; the demo renders 640 x 360, "
-            "2x2 supersampled,\nunless --width, --height, --supersample say otherwise. --shadows takes "
-            "all (" +
-            demoNameList(allShadowNames()) +
-            ") or a comma list;\na kind that refuses a scene (volumes: open casters) is reported and "
-            "skipped.\n" +
-            RenderFlags::footer());
+        app.footer("\nThe render options apply where the shadow kind has them; the demo renders 640 x 360 "
+                   "(anti-aliased as render),\nunless --width, --height say otherwise. --shadows takes "
+                   "all (" +
+                   demoNameList(allShadowNames()) +
+                   ") or a comma list;\na kind that refuses a scene (volumes: open casters) is reported and "
+                   "skipped.\n" +
+                   RenderFlags::footer());
         app.add_option("--scenes", a->scenes, "all, or a comma list of: " + demoNameList(demoSceneNames()))
             ->default_val("all");
         app.add_option("-o,--out-dir", a->outDir, "Folder for <scene>-<shadows>.png")

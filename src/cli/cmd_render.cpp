@@ -83,7 +83,8 @@ int runRender(const RenderArgs& a) {
 }
 
 const char* kRenderHelp = R"(
-A scene without lights is lit by a default sun and the sky (or --environment).
+A scene without lights is lit by a default sun and the sky (or --environment). The background,
+what glass reflects and the ambient light all come from that one environment (--sky, --sky-light).
 Settings a JSON scene file gives under "render" (the options above, by their camelCase names:
 "gridResolution", "shadows", ...) are used unless a flag overrides them. An option of another
 shadow kind or glass method than the chosen ones does nothing (a line on stderr says so).

@@ -11,12 +11,11 @@ Environment loadEnvironment(const std::string& path) {
     return Environment(readImage(path));
 }
 
-std::shared_ptr<const Environment> loadSceneEnvironment(const Scene& scene, const RenderOptions& options,
+std::shared_ptr<const Environment> loadSceneEnvironment(const Scene& scene, const RenderOptions&,
                                                         const std::string& requested) {
     const std::string path = !requested.empty() ? requested : scene.settings.environmentMap;
-    if (path.empty() && std::holds_alternative<NoGlassOptions>(options.glass) && !scene.lights.empty())
-        return nullptr;
-    return std::make_shared<const Environment>(loadEnvironment(path.empty() ? "sky" : path));
+    if (path.empty()) return nullptr; // render's own: the procedural sky, or the flat background
+    return std::make_shared<const Environment>(loadEnvironment(path));
 }
 
 } // namespace voxfx

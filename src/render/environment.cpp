@@ -50,6 +50,82 @@ Environment::Environment(Image image) {
     levels_.push_back(std::move(image));
     while (levels_.back().width > 1 || levels_.back().height > 1)
         levels_.push_back(downsampleEnvironmentLevel(levels_.back()));
+    projectOnHarmonics();
+    findSun();
+}
+
+namespace {
+
+// The 9 real spherical harmonics of order <= 2 at unit direction d (see sphericalHarmonics()).
+std::array<double, 9> harmonics(const Vec3d& d) {
+    const double x = d.x, y = d.y, z = d.z;
+    return {0.282095,
+            0.488603 * y,
+            0.488603 * z,
+            0.488603 * x,
+            1.092548 * x * y,
+            1.092548 * y * z,
+            0.315392 * (3 * z * z - 1),
+            1.092548 * x * z,
+            0.546274 * (x * x - y * y)};
+}
+
+double luminance(const Vec3f& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }
+
+} // namespace
+
+void Environment::projectOnHarmonics() {
+    std::size_t k = 0;
+    while (k + 1 < levels_.size() && levels_[k].width > 1024) ++k;
+    const Image& im = levels_[k];
+    // Quadrature cells: the texels, or a 64 x 32 grid over a smaller map (each cell takes the texel
+    // holding its centre), so that a tiny map's one texel is not read as one direction.
+    const int64_t W = std::max<int64_t>(im.width, 64), H = std::max<int64_t>(im.height, 32);
+    std::array<Vec3d, 9> sum{};
+    const double dPhi = 2 * M_PI / double(W);
+    for (int64_t j = 0; j < H; ++j) {
+        // Row j covers polar angles [j, j + 1] pi / H: solid angle dPhi (cos theta0 - cos theta1).
+        const double omega =
+            dPhi * (std::cos(double(j) * M_PI / double(H)) - std::cos(double(j + 1) * M_PI / double(H)));
+        std::array<Vec3d, 9> row{};
+        for (int64_t i = 0; i < W; ++i) {
+            const std::array<double, 9> y =
+                harmonics(equirectToDirection((double(i) + 0.5) / double(W), (double(j) + 0.5) / double(H)));
+            const Vec3d c(im.at(i * im.width / W, j * im.height / H));
+            for (int b = 0; b < 9; ++b) row[size_t(b)] += c * y[size_t(b)];
+        }
+        for (int b = 0; b < 9; ++b) sum[size_t(b)] += row[size_t(b)] * omega;
+    }
+    for (int b = 0; b < 9; ++b) sh_[size_t(b)] = Vec3f(sum[size_t(b)]);
+}
+
+void Environment::findSun() {
+    sunDirection_ = {0, 0, 0};
+    std::size_t k = 0;
+    while (k + 1 < levels_.size() && levels_[k].width > 64) ++k;
+    const Image& im = levels_[k];
+    double best = -1, mean = 0;
+    int64_t bi = 0, bj = 0;
+    for (int64_t j = 0; j < im.height; ++j)
+        for (int64_t i = 0; i < im.width; ++i) {
+            const double l = luminance(im.at(i, j));
+            mean += l;
+            if (l > best) best = l, bi = i, bj = j;
+        }
+    mean /= double(im.width * im.height);
+    if (best > 4 * mean && best > 0)
+        sunDirection_ = equirectToDirection((double(bi) + 0.5) / double(im.width),
+                                            (double(bj) + 0.5) / double(im.height));
+}
+
+Vec3f Environment::irradiance(const Vec3d& n) const {
+    const std::array<double, 9> y = harmonics(normalize(n));
+    // The clamped cosine's coefficients per band: pi, 2 pi / 3, pi / 4.
+    constexpr double a[9] = {M_PI,     2 * M_PI / 3, 2 * M_PI / 3, 2 * M_PI / 3, M_PI / 4,
+                             M_PI / 4, M_PI / 4,     M_PI / 4,     M_PI / 4};
+    Vec3d e{0, 0, 0};
+    for (int b = 0; b < 9; ++b) e += Vec3d(sh_[size_t(b)]) * (a[b] * y[size_t(b)]);
+    return Vec3f{float(std::max(0.0, e.x)), float(std::max(0.0, e.y)), float(std::max(0.0, e.z))};
 }
 
 Environment Environment::sky(const SkyOptions& o) {

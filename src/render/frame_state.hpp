@@ -13,12 +13,18 @@ struct FrameState {
     const Scene& scene; ///< as given: the G-buffer draws its meshes
     const Scene& lit;   ///< the scene lit and shadowed: with the default sun when it has no lights
     const Camera& camera;
-    /// The options, with the environment's average as ambient when the default sun lights the scene.
     const RenderOptions& options;
-    /// The given environment, or the procedural sky where glass or the default sun needs one; null
-    /// otherwise.
+    /// The given environment, else the procedural sky or the flat background (RenderOptions::sky):
+    /// never null.
     const Environment* environment;
-    int64_t width, height; ///< samples (supersampled image)
+    int64_t width, height; ///< samples (supersampled image, times `adaptive`)
+    /// Adaptive anti-aliasing: the G-buffer has adaptive x adaptive samples per supersampled pixel
+    /// (a cell); 1 when off.
+    int adaptive;
+    /// Per cell (row-major, y up, (width / adaptive) x (height / adaptive)): 1 where every sample
+    /// is shaded; elsewhere only the cell's representative sample (adaptive / 2, adaptive / 2) is,
+    /// and copied to the others. Empty when adaptive is 1.
+    std::vector<uint8_t> refined;
     SceneGeometry geometry;
     GBuffer gbuffer;
     std::vector<LightShadow> shadows;  ///< one per light of `lit`

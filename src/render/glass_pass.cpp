@@ -7,6 +7,7 @@
 #include <limits>
 #include <memory>
 
+#include "render/antialias.hpp"
 #include "render/shading.hpp"
 #include "voxfx/triangle_tracer.hpp"
 
@@ -100,6 +101,7 @@ void shadeGlass(FrameState& frame) {
                 const size_t i = size_t(y * W + x);
                 const uint32_t tri = gbuffer.triangle[i];
                 if (tri == GBuffer::kNone || !isGlass[geometry.triangleMaterial[tri]]) continue;
+                if (!shadedSample(frame, x, y)) continue; // adaptive anti-aliasing fills it in
                 SurfacePoint s;
                 if (!surfaceAt(gbuffer, geometry, x, y, s)) continue;
                 const Vec3d d = normalize(s.position - eye);

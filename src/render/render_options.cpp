@@ -12,11 +12,30 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
     static const std::vector<OptionField<O>> table = {
         numberOption<O, &O::width>("width", "image width, pixels", 1, 65536),
         numberOption<O, &O::height>("height", "image height, pixels", 1, 65536),
-        numberOption<O, &O::supersample>("supersample", "render k x k samples per pixel", 1, 8),
+        numberOption<O, &O::supersample>("supersample", "render k x k samples per pixel everywhere", 1, 8),
+        nameOption<O, parseAntiAliasing, optionName<AntiAliasing>, &O::antiAliasing>(
+            "antiAliasing",
+            "anti-aliasing: adaptive shades every sample of edge and glass pixels, post blends the "
+            "other pixels' luma edges (FXAA), full does both, off takes one sample per pixel",
+            "off | post | adaptive | full", "aa"),
+        numberOption<O, &O::adaptiveSamples>(
+            "adaptiveSamples", "adaptive anti-aliasing: s x s samples in edge and glass pixels", 2, 8),
+        nameOption<O, parseToneMap, optionName<ToneMap>, &O::toneMap>(
+            "toneMap",
+            "output transform: filmic (ACES curve, highlights roll off) or clamp (linear; PNG clips at "
+            "1, .exr/.pfm keep HDR)",
+            "filmic | clamp"),
         numberOption<O, &O::exposure>("exposure", "multiplies the linear image", 1e-6, 1e6),
-        tripleOption<O, &O::ambient>("ambient", "ambient irradiance, linear RGB", 0, 1e6),
-        tripleOption<O, &O::background>("background",
-                                        "background radiance without an environment, linear RGB", 0, 1e6),
+        numberOption<O, &O::skyLight>(
+            "skyLight", "ambient light from the environment's irradiance, times this (0: none)", 0, 1e6),
+        tripleOption<O, &O::ambient>("ambient", "constant ambient radiance added to the sky's, linear RGB", 0,
+                                     1e6),
+        nameOption<O, parseSkyKind, optionName<SkyKind>, &O::sky>(
+            "sky",
+            "the environment without --environment: procedural (gradient, ground, sun) or flat "
+            "(--background everywhere); background, glass and ambient all use it",
+            "procedural | flat"),
+        tripleOption<O, &O::background>("background", "the flat sky's radiance, linear RGB", 0, 1e6),
         numberOption<O, &O::volumeStep>(
             "volumeStep", "volume ray casting: sample step in smallest voxel spacings", 1e-3, 1000),
         flagOption<O, &O::skipEmptySpace>(

@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "core/progress_range.hpp"
+#include "render/antialias.hpp"
 #include "render/frame_state.hpp"
 #include "render/glass_pass.hpp"
 #include "render/shading.hpp"
@@ -28,6 +29,7 @@ void flattenPass(FrameState& f, Progress*) { f.geometry = flattenScene(f.scene, 
 void gbufferPass(FrameState& f, Progress* progress) {
     f.gbuffer = renderGBuffer(f.geometry, cameraFrame(f.camera, f.width, f.height), progress);
     for (const uint32_t tri : f.gbuffer.triangle) f.result.coveredPixels += tri != GBuffer::kNone;
+    detail::markRefinedCells(f);
 }
 
 // One shadow per light, each built by the chosen technique with its share of the progress, then
@@ -50,27 +52,70 @@ void shadingPass(FrameState& f, Progress* progress) { detail::shadeGBuffer(f, pr
 void glassPass(FrameState& f, Progress*) {
     f.result.glass.method = glassName(f.options.glass);
     detail::shadeGlass(f);
+    detail::fillUnrefinedCells(f); // the samples adaptive anti-aliasing left out take their cell's
 }
 
 void volumePass(FrameState& f, Progress*) { detail::compositeVolumes(f); }
 
-// Box filter k x k and flip: frame rows run up, image rows down.
+// The output transform of one sample.
+Vec3f toneMapped(const Vec3f& c, ToneMap t) {
+    if (t == ToneMap::Clamp) return c;
+    return {filmicToneMap(c.x), filmicToneMap(c.y), filmicToneMap(c.z)};
+}
+
+// Box filter of the k x k (times adaptive) samples of each pixel, each tone-mapped first (so an edge
+// against a bright sky keeps its coverage), and flip: frame rows run up, image rows down. Then the
+// post-process anti-aliasing on the pixels adaptive sampling did not refine (nor touch).
 void resolvePass(FrameState& f, Progress*) {
     const RenderOptions& o = f.options;
-    const int k = o.supersample;
-    const int64_t W = f.width;
+    const int k = o.supersample * f.adaptive, a = f.adaptive;
+    const int64_t W = f.width, cw = f.width / std::max(a, 1);
     RenderResult& r = f.result;
     r.image = Image(o.width, o.height);
+    std::vector<uint8_t> refined(size_t(o.width * o.height), 0);
     const float norm = 1.0f / float(k * k);
+    const int cells = o.supersample; // cells of a x a samples per pixel side
     parallelFor(0, o.height, 16, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < o.width; ++x) {
                 Vec3f sum;
-                for (int dy = 0; dy < k; ++dy)
-                    for (int dx = 0; dx < k; ++dx) sum += f.shaded[size_t((y * k + dy) * W + x * k + dx)];
+                for (int cy = 0; cy < cells; ++cy)
+                    for (int cx = 0; cx < cells; ++cx) {
+                        const int64_t sx = (x * cells + cx) * a, sy = (y * cells + cy) * a;
+                        // A cell not shaded at every sample holds one value a x a times.
+                        if (!f.refined.empty() && f.refined[size_t((y * cells + cy) * cw + x * cells + cx)] !=
+                                                      detail::kEveryRefinedSample) {
+                            sum += toneMapped(f.shaded[size_t(sy * W + sx)], o.toneMap) * float(a * a);
+                            continue;
+                        }
+                        for (int dy = 0; dy < a; ++dy)
+                            for (int dx = 0; dx < a; ++dx)
+                                sum += toneMapped(f.shaded[size_t((sy + dy) * W + sx + dx)], o.toneMap);
+                    }
                 r.image.at(x, o.height - 1 - y) = sum * norm;
+                if (f.refined.empty()) continue;
+                uint8_t any = 0;
+                for (int dy = 0; dy < o.supersample; ++dy)
+                    for (int dx = 0; dx < o.supersample; ++dx)
+                        any |= f.refined[size_t((y * o.supersample + dy) * cw + x * o.supersample + dx)];
+                refined[size_t((o.height - 1 - y) * o.width + x)] = any;
             }
     });
+    for (const uint8_t v : refined) r.refinedPixels += v;
+    if (o.antiAliasing == AntiAliasing::Post || o.antiAliasing == AntiAliasing::Full) {
+        // Pixels next to a refined one keep their samples' coverage too.
+        std::vector<uint8_t> skip(refined.size(), 0);
+        if (r.refinedPixels > 0)
+            for (int64_t y = 0; y < o.height; ++y)
+                for (int64_t x = 0; x < o.width; ++x) {
+                    uint8_t any = 0;
+                    for (int64_t v = std::max<int64_t>(0, y - 1); v <= std::min(o.height - 1, y + 1); ++v)
+                        for (int64_t u = std::max<int64_t>(0, x - 1); u <= std::min(o.width - 1, x + 1); ++u)
+                            any |= refined[size_t(v * o.width + u)];
+                    skip[size_t(y * o.width + x)] = any;
+                }
+        r.image = detail::postAntiAlias(r.image, skip);
+    }
     if (f.glassSamples.empty()) return;
     r.glassMask.assign(size_t(o.width * o.height), 0);
     for (int64_t y = 0; y < o.height; ++y)
@@ -101,6 +146,8 @@ void checkRender(const Scene& scene, const RenderOptions& options) {
              options.height);
     if (options.supersample < 1 || options.supersample > 8)
         fail("supersampling must be between 1 and 8, got ", options.supersample);
+    if (options.adaptiveSamples < 2 || options.adaptiveSamples > 8)
+        fail("adaptive samples must be between 2 and 8, got ", options.adaptiveSamples);
     scene.validate();
     if (scene.triangleCount() == 0 && !(scene.volumeScene && !scene.volumeScene->objects.empty()))
         fail("the scene has no triangles to render");
@@ -111,15 +158,15 @@ void checkRender(const Scene& scene, const RenderOptions& options) {
 RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
     checkRender(scene, options);
     const auto t0 = Clock::now();
-    // The environment (given, or the procedural sky when glass or default lights need one) and, for a
-    // scene without lights, the default sun and sky ambient.
-    std::optional<Environment> sky;
-    const bool addSun = scene.lights.empty() && options.defaultLights;
+    // The one environment: given, else the procedural sky or the flat background. A scene without
+    // lights gets the default sun: the sky's, or a map's brightest region.
+    static const Environment defaultSky = Environment::sky();
+    std::optional<Environment> flat;
     const Environment* env = options.environment.get();
-    if (!env && (addSun || !std::holds_alternative<NoGlassOptions>(options.glass)))
-        env = &sky.emplace(Environment::sky());
+    if (!env)
+        env = options.sky == SkyKind::Flat ? &flat.emplace(Image(1, 1, options.background)) : &defaultSky;
+    const bool addSun = scene.lights.empty() && options.defaultLights;
     std::optional<Scene> sunlit;
-    RenderOptions litOptions = options;
     if (addSun) {
         Light sun;
         sun.name = "default sun";
@@ -129,17 +176,26 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
         sun.color = {1.0f, 0.96f, 0.9f};
         sun.intensity = 3;
         sunlit.emplace(scene).lights.push_back(sun);
-        litOptions.ambient = env->average();
     }
+    // Adaptive anti-aliasing, except where the volume pass draws (it casts a ray per sample).
+    const bool volumes = (scene.volumeScene && !scene.volumeScene->objects.empty()) ||
+                         std::any_of(scene.meshes.begin(), scene.meshes.end(), [&](const SceneMesh& m) {
+                             return m.material < scene.materials.size() && scene.materials[m.material].blend;
+                         });
+    const bool adaptiveOn =
+        options.antiAliasing == AntiAliasing::Adaptive || options.antiAliasing == AntiAliasing::Full;
+    const int adaptive = adaptiveOn && !volumes ? options.adaptiveSamples : 1;
     RenderResult result;
-    const int k = options.supersample;
+    const int k = options.supersample * adaptive;
     FrameState frame{scene,
                      sunlit ? *sunlit : scene,
                      camera,
-                     litOptions,
+                     options,
                      env,
                      options.width * k,
                      options.height * k,
+                     adaptive,
+                     {},
                      {},
                      {},
                      {},

@@ -10,6 +10,8 @@
 #include <cmath>
 #include <mutex>
 
+#include "render/antialias.hpp"
+
 namespace voxfx::detail {
 
 Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight) {
@@ -23,13 +25,15 @@ Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight) {
     toLight = d / std::sqrt(dist2);
     double falloff = 1.0 / dist2;
     if (light.type == LightType::Spot) {
-        // Smooth step between the outer and inner cone (glTF KHR_lights_punctual's reference).
+        // Smoothstep between the outer and inner cone in the angle's cosine: continuous with a
+        // continuous slope at both cones (glTF's reference t^2 has a kink at the inner cone, which
+        // the eye sees as a bright ring: a Mach band).
         const double cosAngle = dot(-toLight, normalize(light.direction));
         const double cosOuter = std::cos(light.outerConeAngle), cosInner = std::cos(light.innerConeAngle);
         double s =
             cosInner > cosOuter ? (cosAngle - cosOuter) / (cosInner - cosOuter) : (cosAngle >= cosOuter);
         s = std::clamp(s, 0.0, 1.0);
-        falloff *= s * s;
+        falloff *= s * s * (3 - 2 * s);
     }
     return e * float(falloff);
 }
@@ -42,7 +46,11 @@ Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material&
     const Scene& scene = frame.lit;
     const RenderOptions& options = frame.options;
     const std::vector<LightShadow>& shadows = frame.shadows;
-    Vec3f out = options.ambient * m.baseColor;
+    // Ambient: the constant plus the environment's irradiance around the normal (Lambert: / pi).
+    Vec3f ambient = options.ambient;
+    if (options.skyLight > 0)
+        ambient += frame.environment->irradiance(s.normal) * float(options.skyLight / M_PI);
+    Vec3f out = ambient * m.baseColor;
     const Vec3d toEye = normalize(eye - s.position);
     for (std::size_t k = 0; k < scene.lights.size(); ++k) {
         Vec3d l;
@@ -74,17 +82,16 @@ Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material&
 
 namespace {
 
-// Background pixels show the environment along their ray (when one was given).
+// Background pixels show the environment along their ray.
 void shadeBackground(FrameState& frame) {
-    const Environment* env = frame.options.environment.get();
-    if (!env) return;
+    const Environment* env = frame.environment;
     const GBuffer& gbuffer = frame.gbuffer;
     const Frame& cam = gbuffer.frame;
     const int64_t W = frame.width;
     parallelFor(0, frame.height, 16, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x)
-                if (gbuffer.triangle[size_t(y * W + x)] == GBuffer::kNone)
+                if (gbuffer.triangle[size_t(y * W + x)] == GBuffer::kNone && shadedSample(frame, x, y))
                     frame.shaded[size_t(y * W + x)] =
                         env->lookup(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - cam.eye()) *
                         frame.options.exposure;
@@ -109,7 +116,7 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
             for (int64_t y = b * kRows; y < std::min(H, (b + 1) * kRows); ++y)
                 for (int64_t x = 0; x < W; ++x) {
                     SurfacePoint s;
-                    if (surfaceAt(gbuffer, geometry, x, y, s))
+                    if (shadedSample(frame, x, y) && surfaceAt(gbuffer, geometry, x, y, s))
                         out[size_t(y * W + x)] = shadePoint(frame, s, gbuffer.frame.eye());
                 }
             steps.step();

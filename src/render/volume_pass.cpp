@@ -216,14 +216,16 @@ struct VolumeComposite {
         return r.transmittance >= 1e-3;
     }
 
-    // Light arriving at volume sample p: ambient plus every light's irradiance times its shadow,
-    // looked up at p moved one sample step towards the light (and given that direction as the
-    // lookup's normal, so the technique adds its own offset): a shadow map samples the volume in
-    // steps of its own, and a dense layer the sample lies at the front of (bone under skin) must not
-    // shadow its own surface by the step over which the map's visibility falls.
+    // Light arriving at volume sample p: ambient (the constant and the sky's mean radiance, its
+    // order-0 harmonic) plus every light's irradiance times its shadow, looked up at p moved one
+    // sample step towards the light (and given that direction as the lookup's normal, so the
+    // technique adds its own offset): a shadow map samples the volume in steps of its own, and a
+    // dense layer the sample lies at the front of (bone under skin) must not shadow its own surface
+    // by the step over which the map's visibility falls.
     Vec3f lightAt(const Vec3d& p) const {
         const Scene& scene = frame.lit;
-        Vec3f light = frame.options.ambient;
+        Vec3f light = frame.options.ambient +
+                      frame.environment->sphericalHarmonics()[0] * float(0.282095 * frame.options.skyLight);
         for (std::size_t l = 0; l < scene.lights.size(); ++l) {
             Vec3d toLight;
             const Vec3f e = lightIrradiance(scene.lights[l], p, toLight);

@@ -1,0 +1,202 @@
+// voxfx — adaptive sample selection, FXAA-style post-process and the filmic curve (antialias.hpp).
+#include "render/antialias.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace voxfx {
+
+const char* toString(AntiAliasing a) { return enumName(a, kAntiAliasingNames); }
+AntiAliasing parseAntiAliasing(const std::string& name) {
+    return parseEnum<AntiAliasing>(name, "anti-aliasing", kAntiAliasingNames);
+}
+const char* toString(ToneMap t) { return enumName(t, kToneMapNames); }
+ToneMap parseToneMap(const std::string& name) { return parseEnum<ToneMap>(name, "tone map", kToneMapNames); }
+const char* toString(SkyKind k) { return enumName(k, kSkyKindNames); }
+SkyKind parseSkyKind(const std::string& name) { return parseEnum<SkyKind>(name, "sky", kSkyKindNames); }
+
+float filmicToneMap(float x) {
+    if (!(x > 0)) return 0;
+    // Narkowicz 2015, "ACES Filmic Tone Mapping Curve", with its 0.6 exposure.
+    const double v = 0.6 * double(x);
+    const double y = v * (2.51 * v + 0.03) / (v * (2.43 * v + 0.59) + 0.14);
+    return float(std::min(1.0, y));
+}
+
+namespace detail {
+
+void markRefinedCells(FrameState& f) {
+    const int s = f.adaptive;
+    if (s <= 1) return;
+    const GBuffer& g = f.gbuffer;
+    const SceneGeometry& geo = f.geometry;
+    const int64_t W = f.width, cw = f.width / s, ch = f.height / s;
+    f.refined.assign(size_t(cw * ch), 0);
+    const bool glassShown = !std::holds_alternative<NoGlassOptions>(f.options.glass);
+    std::vector<uint8_t> glass(f.lit.materials.size(), 0);
+    for (std::size_t m = 0; m < glass.size(); ++m) glass[m] = glassShown && f.lit.materials[m].isGlass();
+    auto faceNormal = [&](uint32_t t) {
+        const Vec3d a(geo.mesh.positions[geo.mesh.indices[3 * size_t(t)]]),
+            b(geo.mesh.positions[geo.mesh.indices[3 * size_t(t) + 1]]),
+            c(geo.mesh.positions[geo.mesh.indices[3 * size_t(t) + 2]]);
+        const Vec3d n = cross(b - a, c - a);
+        return length(n) > 0 ? normalize(n) : n;
+    };
+    const double cos30 = std::cos(30 * M_PI / 180);
+    parallelFor(0, ch, 8, [&](int64_t y0, int64_t y1) {
+        for (int64_t cy = y0; cy < y1; ++cy)
+            for (int64_t cx = 0; cx < cw; ++cx) {
+                const uint32_t first = g.triangle[size_t(cy * s * W + cx * s)];
+                bool refine = false, same = true, anyGlass = false;
+                float dmin = g.depth[size_t(cy * s * W + cx * s)], dmax = dmin;
+                for (int dy = 0; dy < s && !refine; ++dy)
+                    for (int dx = 0; dx < s && !refine; ++dx) {
+                        const size_t i = size_t((cy * s + dy) * W + cx * s + dx);
+                        const uint32_t t = g.triangle[i];
+                        if (t != GBuffer::kNone && glass[geo.triangleMaterial[t]]) anyGlass = true;
+                        if (t == first) continue;
+                        same = false;
+                        if (t == GBuffer::kNone || first == GBuffer::kNone ||
+                            geo.triangleMesh[t] != geo.triangleMesh[first] ||
+                            geo.triangleMaterial[t] != geo.triangleMaterial[first])
+                            refine = true;
+                        else {
+                            dmin = std::min(dmin, g.depth[i]);
+                            dmax = std::max(dmax, g.depth[i]);
+                            // Both sides of a face shade alike: the angle between the lines.
+                            if (std::abs(dot(faceNormal(t), faceNormal(first))) < cos30) refine = true;
+                        }
+                    }
+                if (!refine && !same && dmax - dmin > 0.02f * dmin) refine = true;
+                f.refined[size_t(cy * cw + cx)] = refine ? kEveryRefinedSample : anyGlass ? kRookSamples : 0;
+            }
+    });
+}
+
+int rookColumn(int s, int dy) {
+    const int c = 2 * dy;
+    return (s % 2 ? c : c + (c >= s)) % s;
+}
+
+bool shadedSample(const FrameState& f, int64_t x, int64_t y) {
+    const int a = f.adaptive;
+    if (a <= 1) return true;
+    const int dx = int(x % a), dy = int(y % a);
+    switch (f.refined[size_t((y / a) * (f.width / a) + x / a)]) {
+    case kEveryRefinedSample:
+        return true;
+    case kRookSamples:
+        return dx == rookColumn(a, dy);
+    default:
+        return dx == a / 2 && dy == a / 2;
+    }
+}
+
+void fillUnrefinedCells(FrameState& f) {
+    const int s = f.adaptive;
+    if (s <= 1) return;
+    const int64_t W = f.width, cw = f.width / s, ch = f.height / s;
+    parallelFor(0, ch, 8, [&](int64_t y0, int64_t y1) {
+        for (int64_t cy = y0; cy < y1; ++cy)
+            for (int64_t cx = 0; cx < cw; ++cx) {
+                const uint8_t kind = f.refined[size_t(cy * cw + cx)];
+                if (kind == kEveryRefinedSample) continue;
+                Vec3f c;
+                if (kind == kRookSamples) {
+                    for (int dy = 0; dy < s; ++dy)
+                        c += f.shaded[size_t((cy * s + dy) * W + cx * s + rookColumn(s, dy))];
+                    c = c * (1.0f / float(s));
+                } else
+                    c = f.shaded[size_t((cy * s + s / 2) * W + cx * s + s / 2)];
+                for (int dy = 0; dy < s; ++dy)
+                    for (int dx = 0; dx < s; ++dx) f.shaded[size_t((cy * s + dy) * W + cx * s + dx)] = c;
+            }
+    });
+}
+
+namespace {
+
+float lumaOf(const Vec3f& c) {
+    const float r = std::clamp(c.x, 0.0f, 1.0f), g = std::clamp(c.y, 0.0f, 1.0f),
+                b = std::clamp(c.z, 0.0f, 1.0f);
+    return std::sqrt(0.299f * r + 0.587f * g + 0.114f * b); // perceptual (gamma 2) luma
+}
+
+} // namespace
+
+Image postAntiAlias(const Image& in, const std::vector<uint8_t>& skip) {
+    const int64_t W = in.width, H = in.height;
+    Image out = in;
+    if (W < 3 || H < 3) return out;
+    std::vector<float> luma(in.pixels.size());
+    for (std::size_t i = 0; i < luma.size(); ++i) luma[i] = lumaOf(in.pixels[i]);
+    auto L = [&](int64_t x, int64_t y) {
+        return luma[size_t(std::clamp<int64_t>(y, 0, H - 1) * W + std::clamp<int64_t>(x, 0, W - 1))];
+    };
+    auto C = [&](int64_t x, int64_t y) {
+        return in.pixels[size_t(std::clamp<int64_t>(y, 0, H - 1) * W + std::clamp<int64_t>(x, 0, W - 1))];
+    };
+    constexpr int kSearch = 12;
+    parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < W; ++x) {
+                if (!skip.empty() && skip[size_t(y * W + x)]) continue;
+                const float m = L(x, y), n = L(x, y + 1), s = L(x, y - 1), e = L(x + 1, y), w = L(x - 1, y);
+                const float hi = std::max({m, n, s, e, w}), lo = std::min({m, n, s, e, w});
+                const float range = hi - lo;
+                if (range < std::max(1.0f / 32, hi / 8)) continue;
+                const float nw = L(x - 1, y + 1), ne = L(x + 1, y + 1), sw = L(x - 1, y - 1),
+                            se = L(x + 1, y - 1);
+                const float horizontal =
+                    std::abs(nw + ne - 2 * n) + 2 * std::abs(w + e - 2 * m) + std::abs(sw + se - 2 * s);
+                const float vertical =
+                    std::abs(nw + sw - 2 * w) + 2 * std::abs(n + s - 2 * m) + std::abs(ne + se - 2 * e);
+                // A horizontal edge (luma changes along y): the neighbours across it are s and n.
+                const bool isHorizontal = horizontal >= vertical;
+                const float l1 = isHorizontal ? s : w, l2 = isHorizontal ? n : e;
+                const float g1 = l1 - m, g2 = l2 - m;
+                const bool steepest1 = std::abs(g1) >= std::abs(g2);
+                const float gradientScaled = 0.25f * std::max(std::abs(g1), std::abs(g2));
+                const int side = steepest1 ? -1 : 1; // towards the steeper neighbour
+                const float localAverage = 0.5f * ((steepest1 ? l1 : l2) + m);
+                // Luma on the edge line (half-way to the neighbour across) at offset k along it.
+                auto edgeLuma = [&](int64_t k) {
+                    return isHorizontal ? 0.5f * (L(x + k, y) + L(x + k, y + side))
+                                        : 0.5f * (L(x, y + k) + L(x + side, y + k));
+                };
+                float end1 = 0, end2 = 0;
+                int d1 = kSearch, d2 = kSearch;
+                for (int k = 1; k <= kSearch; ++k) {
+                    end1 = edgeLuma(-k) - localAverage;
+                    if (std::abs(end1) >= gradientScaled) {
+                        d1 = k;
+                        break;
+                    }
+                }
+                for (int k = 1; k <= kSearch; ++k) {
+                    end2 = edgeLuma(k) - localAverage;
+                    if (std::abs(end2) >= gradientScaled) {
+                        d2 = k;
+                        break;
+                    }
+                }
+                const bool nearer1 = d1 < d2;
+                const float dist = float(std::min(d1, d2)), thickness = float(d1 + d2);
+                const float pixelOffset = 0.5f - dist / thickness;
+                const bool centreSmaller = m < localAverage;
+                const bool correct = ((nearer1 ? end1 : end2) < 0) != centreSmaller;
+                float offset = correct ? pixelOffset : 0;
+                // Sub-pixel aliasing: the 3 x 3 low-pass against the centre.
+                const float average = (2 * (n + s + e + w) + nw + ne + sw + se) / 12;
+                const float sub1 = std::clamp(std::abs(average - m) / range, 0.0f, 1.0f);
+                const float sub2 = (-2 * sub1 + 3) * sub1 * sub1;
+                offset = std::clamp(std::max(offset, sub2 * sub2 * 0.75f), 0.0f, 1.0f);
+                const Vec3f across = isHorizontal ? C(x, y + side) : C(x + side, y);
+                out.at(x, y) = in.at(x, y) * (1 - offset) + across * offset;
+            }
+    });
+    return out;
+}
+
+} // namespace detail
+} // namespace voxfx
