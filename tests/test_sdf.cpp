@@ -432,6 +432,19 @@ struct SdfScopedEnv {
     std::optional<std::string> saved;
 };
 
+TEST(Sdf, BricksLargerThanTheGridAreTheGrid) {
+    // A brick edge far beyond the grid (8192 for a 24^3 grid) makes one brick of the grid's size:
+    // the tiled voxelizer's bricks are not sized for it (8192^3 bits per brick would exceed the
+    // budget), and the field is the one of the default bricks.
+    const Mesh box = test::makeBox({0, 0, 0}, {1, 1, 1});
+    const Frame frame = sdfFrame(box.view(), 20, 2);
+    const SignedDistanceField reference = signedDistanceField(box.view(), frame);
+    const SdfScopedEnv budget("VOXFX_MEMORY_LIMIT", "256M");
+    SdfOptions o;
+    o.brickSize = 8192;
+    expectSameField(signedDistanceField(box.view(), frame, o), reference, "bricks of 8192");
+}
+
 TEST(Sdf, LargeGridsNeedNoSolidOfTheWholeVolume) {
     // A box of 180 voxels in a 2048^3 grid under a 64 MiB budget: the dense solid alone would be
     // 1 GiB (refused by the budget), the tiled sign holds a few bricks. The field against the

@@ -556,6 +556,10 @@ struct Bricks {
 std::pair<std::vector<SdfLeaf>, std::vector<SdfInsideRun>> joinPieces(std::vector<SdfPiece>& pieces) {
     std::vector<SdfLeaf> leaves;
     std::vector<SdfInsideRun> runs;
+    // Reserved, so that the result is not copied as it grows (it is most of the memory).
+    std::size_t count = 0;
+    for (const SdfPiece& piece : pieces) count += piece.leaves.size();
+    leaves.reserve(count);
     for (SdfPiece& piece : pieces) {
         for (SdfLeaf& l : piece.leaves) leaves.push_back(std::move(l));
         runs.insert(runs.end(), piece.runs.begin(), piece.runs.end());
@@ -760,7 +764,10 @@ SignedDistanceField detail::signedDistanceField(const MeshView& mesh, const Fram
     p.cell = cell;
     p.width = f.background;
     p.full = options.full;
-    p.brick = options.brickSize;
+    // A brick larger than the grid is the grid: clamped (to a multiple of 16, the gwn fill's
+    // tiles), so that the tiled voxelizer's bricks are not sized for voxels that do not exist.
+    // The field is the same for every brick size.
+    p.brick = std::min(options.brickSize, (std::max({dims.x, dims.y, dims.z}) + 15) / 16 * 16);
     // A centre closer than W to the surface is within ceil(W / cell + 1/2) - 1 cells of the
     // conservative cell holding its nearest point (the relative 1e-9 absorbs rounding).
     for (int a = 0; a < 3 && !options.full; ++a)
