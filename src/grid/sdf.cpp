@@ -6,7 +6,8 @@
 // indices outwards from the intersecting voxels (approximate past the first voxels), every band
 // voxel takes the minimum over the triangles its block gathered from the hierarchy, which holds
 // every triangle within the band width (exact). The sign comes from the solid voxelization (GI08
-// parity and its tie rule), as voxfx/sdf.hpp explains.
+// parity and its tie rule), as voxfx/sdf.hpp explains, brick by brick from the tiled voxelizer
+// where the fill allows it (sdf_detail.hpp), so no grid of the whole volume is made.
 //
 // The builder consumes slabs of slices along z (solid bits of the slab, conservative surface bits
 // of the slab and of kz slices on either side) and processes layers of 8^3 blocks: per column the
