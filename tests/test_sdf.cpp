@@ -6,18 +6,24 @@
 //     voxel is inactive at +-W; the largest error is reported in float ulps of the cell size;
 //   - the solid voxelization with the same frame and fill: the sign bit of every voxel's value is
 //     its bit (the property the field promises), and CGAL::Side_of_triangle_mesh off the surface;
-//   - the dense field against the sparse one (value(), activeVoxels()), and one thread against all.
+//   - the dense field against the sparse one (value(), activeVoxels()), and one thread against all;
+//   - the sign taken brick by brick from the tiled voxelization against the one dense solid
+//     voxelization (the former path, kept for the fills that need the whole grid), bit for bit;
+//   - at 2048^3, the closed-form distance to a box, under a memory budget the dense solid exceeds.
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "cgal_oracle.hpp"
+#include "grid/sdf_detail.hpp"
 #include "test_util.hpp"
 #include "voxfx/distance.hpp"
 #include "voxfx/mesh_io.hpp"
@@ -322,6 +328,176 @@ TEST(Sdf, BadInputIsAnError) {
     const SignedDistanceField f = signedDistanceField(empty.view(), frame);
     EXPECT_EQ(f.activeCount(), 0);
     EXPECT_EQ(f.value(3, 4, 5), float(f.background));
+}
+
+/// Whether two fields are the same, bit for bit (leaves, their masks and values, inside runs).
+void expectSameField(const SignedDistanceField& a, const SignedDistanceField& b, const std::string& what) {
+    EXPECT_EQ(a.fill, b.fill) << what;
+    EXPECT_EQ(a.background, b.background) << what;
+    ASSERT_EQ(a.leaves.size(), b.leaves.size()) << what;
+    for (std::size_t l = 0; l < a.leaves.size(); ++l) {
+        ASSERT_EQ(a.leaves[l].origin, b.leaves[l].origin) << what << ", leaf " << l;
+        ASSERT_EQ(a.leaves[l].active, b.leaves[l].active) << what << ", leaf " << l;
+        ASSERT_EQ(0, std::memcmp(a.leaves[l].values.data(), b.leaves[l].values.data(), 512 * sizeof(float)))
+            << what << ", leaf " << l;
+    }
+    ASSERT_EQ(a.insideRuns.size(), b.insideRuns.size()) << what;
+    for (std::size_t r = 0; r < a.insideRuns.size(); ++r)
+        ASSERT_EQ(0, std::memcmp(&a.insideRuns[r], &b.insideRuns[r], sizeof(SdfInsideRun)))
+            << what << ", run " << r;
+}
+
+// The sign brick by brick from voxelizeTiles (parity, winding and gwn carried down each stack)
+// against one dense solid voxelization of the grid: the same field, bit for bit, for one thread and
+// all, and bricks of 8 and 24 that cut the mesh anywhere (the gwn fill, which tiles in multiples
+// of 16, in bricks of 48 cut into the field's 24) and 64.
+void expectTiledSignGivesTheDenseField(const Mesh& mesh, const Frame& frame, Fill fill, Fill resolved,
+                                       const std::string& name) {
+    SdfOptions o;
+    o.fill = fill;
+    detail::SdfSignReport dense, tiled;
+    const SignedDistanceField reference =
+        detail::signedDistanceField(mesh.view(), frame, o, detail::SdfSign::Dense, &dense);
+    EXPECT_FALSE(dense.tiled) << name;
+    EXPECT_GT(reference.activeCount(), 1000) << name;
+    EXPECT_EQ(reference.fill, resolved) << name;
+    for (const int threads : {1, 0})
+        for (const int64_t brick : {int64_t(8), int64_t(24), int64_t(64)}) {
+            o.threads = threads;
+            o.brickSize = brick;
+            const SignedDistanceField f =
+                detail::signedDistanceField(mesh.view(), frame, o, detail::SdfSign::Auto, &tiled);
+            EXPECT_TRUE(tiled.tiled) << name;
+            expectSameField(f, reference,
+                            name + ", " + std::to_string(threads) + " threads, bricks of " +
+                                std::to_string(brick));
+        }
+}
+
+TEST(Sdf, TiledSignGivesTheDenseSolidsFieldOnAClosedMesh) {
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    const Mesh bunny = loadMesh(test::dataPath("meshes/bunny00.off"));
+    const Frame frame = sdfFrame(bunny.view(), 44, 3);
+    expectTiledSignGivesTheDenseField(bunny, frame, Fill::Auto, Fill::Parity, "bunny");
+    expectTiledSignGivesTheDenseField(bunny, frame, Fill::Winding, Fill::Winding, "bunny, winding fill");
+}
+
+TEST(Sdf, TiledSignGivesTheDenseSolidsFieldOnAMeshCutByTheGrid) {
+    // The grid is not a multiple of 8 on any axis, so the border cuts blocks inside the mesh.
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    const Mesh bunny = loadMesh(test::dataPath("meshes/bunny00.off"));
+    const Box3d b = computeBounds(bunny.view());
+    FitOptions fo;
+    fo.voxelSize = b.extent().x / 61;
+    fo.bounds = {b.lo + b.extent() * 0.3, b.hi - b.extent() * 0.22};
+    const Frame cut = fitFrame(b, fo);
+    ASSERT_TRUE(cut.width() % 8 && cut.height() % 8 && cut.depth() % 8)
+        << cut.width() << " x " << cut.height() << " x " << cut.depth();
+    expectTiledSignGivesTheDenseField(bunny, cut, Fill::Auto, Fill::Parity, "bunny cut by the grid");
+}
+
+TEST(Sdf, TiledSignGivesTheDenseSolidsFieldOnAnOpenMesh) {
+    VOXFX_REQUIRE_DATA("meshes/elephant-with-holes.off");
+    const Mesh mesh = loadMesh(test::dataPath("meshes/elephant-with-holes.off"));
+    expectTiledSignGivesTheDenseField(mesh, sdfFrame(mesh.view(), 56, 3), Fill::Auto, Fill::Gwn,
+                                      "elephant with holes");
+}
+
+TEST(Sdf, FillsThatNeedTheWholeGridKeepTheDenseSolid) {
+    // Flood and vote cannot run tile by tile: their sign still comes from the dense voxelization.
+    const Mesh box = test::makeBox({0, 0, 0}, {1, 1, 1});
+    for (const Fill fill : {Fill::Flood, Fill::Vote}) {
+        SdfOptions o;
+        o.fill = fill;
+        detail::SdfSignReport used;
+        const SignedDistanceField f = detail::signedDistanceField(box.view(), sdfFrame(box.view(), 16, 2), o,
+                                                                  detail::SdfSign::Auto, &used);
+        EXPECT_FALSE(used.tiled);
+        EXPECT_EQ(f.value(8, 8, 8), -float(f.background));
+    }
+}
+
+struct SdfScopedEnv {
+    SdfScopedEnv(const char* name, const char* value) : name(name) {
+        if (const char* old = std::getenv(name)) saved = old;
+        setenv(name, value, 1);
+    }
+    ~SdfScopedEnv() {
+        if (saved)
+            setenv(name, saved->c_str(), 1);
+        else
+            unsetenv(name);
+    }
+    const char* name;
+    std::optional<std::string> saved;
+};
+
+TEST(Sdf, BricksLargerThanTheGridAreTheGrid) {
+    // A brick edge far beyond the grid (8192 for a 24^3 grid) makes one brick of the grid's size:
+    // the tiled voxelizer's bricks are not sized for it (8192^3 bits per brick would exceed the
+    // budget), and the field is the one of the default bricks.
+    const Mesh box = test::makeBox({0, 0, 0}, {1, 1, 1});
+    const Frame frame = sdfFrame(box.view(), 20, 2);
+    const SignedDistanceField reference = signedDistanceField(box.view(), frame);
+    const SdfScopedEnv budget("VOXFX_MEMORY_LIMIT", "256M");
+    SdfOptions o;
+    o.brickSize = 8192;
+    expectSameField(signedDistanceField(box.view(), frame, o), reference, "bricks of 8192");
+}
+
+TEST(Sdf, LargeGridsNeedNoSolidOfTheWholeVolume) {
+    // A box of 180 voxels in a 2048^3 grid under a 64 MiB budget: the dense solid alone would be
+    // 1 GiB (refused by the budget), the tiled sign holds a few bricks. The field against the
+    // closed-form distance to the box at every voxel within 4 of it (all of the band: none lies
+    // elsewhere), the inside far from the surface and the outside far from it.
+    const int64_t n = 2048, lo = 120, hi = 300;
+    const Mesh box = test::makeBox(Vec3d{1, 1, 1} * double(lo), Vec3d{1, 1, 1} * double(hi));
+    const Frame frame = Frame::orthographic({{0, 0, 0}, Vec3d{1, 1, 1} * double(n)}, Axis::Z, n, n, n);
+    const uint64_t denseBytes = BitGrid::requiredBytes(n, n, n);
+    const SdfScopedEnv budget("VOXFX_MEMORY_LIMIT", "64M");
+    EXPECT_THROW(detail::signedDistanceField(box.view(), frame, {}, detail::SdfSign::Dense), Error);
+    detail::SdfSignReport used;
+    const SignedDistanceField f =
+        detail::signedDistanceField(box.view(), frame, {}, detail::SdfSign::Auto, &used);
+    EXPECT_TRUE(used.tiled);
+    std::cout << "2048^3: the tiled sign held " << used.workingBytes << " bytes, the dense solid needs "
+              << denseBytes << "\n";
+    EXPECT_LT(used.workingBytes * 100, denseBytes);
+    const double W = f.background;
+    ASSERT_EQ(W, 3.0);
+    // Closed form: outside, the distance to the box; inside, to its nearest face.
+    const auto exact = [&](int64_t i, int64_t j, int64_t k, bool& inside) {
+        double out2 = 0, in = std::numeric_limits<double>::infinity();
+        inside = true;
+        for (const int64_t v : {i, j, k}) {
+            const double c = double(v) + 0.5, below = double(lo) - c, above = c - double(hi);
+            const double d = std::max(below, above);
+            if (d > 0) {
+                inside = false;
+                out2 += d * d;
+            }
+            in = std::min(in, -d);
+        }
+        return inside ? in : std::sqrt(out2);
+    };
+    int64_t band = 0, wrong = 0;
+    for (int64_t k = lo - 4; k < hi + 4; ++k)
+        for (int64_t j = lo - 4; j < hi + 4; ++j)
+            for (int64_t i = lo - 4; i < hi + 4; ++i) {
+                bool inside = false;
+                const double d = exact(i, j, k, inside);
+                if (d >= W) continue; // no voxel's distance is W itself (half-integer offsets)
+                ++band;
+                const float v = f.value(i, j, k);
+                if ((std::abs(double(v) - (inside ? -d : d)) > floatUlp(d) + 1e-12 * W) && wrong++ < 5)
+                    ADD_FAILURE() << "voxel (" << i << ", " << j << ", " << k << "): " << v << ", exact "
+                                  << (inside ? -d : d);
+            }
+    EXPECT_EQ(f.activeCount(), band);
+    EXPECT_EQ(f.value(210, 210, 210), -float(W)); // a run of inside blocks
+    EXPECT_EQ(f.value(0, 0, 0), float(W));
+    EXPECT_EQ(f.value(n - 1, n - 1, n - 1), float(W));
+    EXPECT_EQ(f.value(1000, 210, 210), float(W));
 }
 
 } // namespace

@@ -29,9 +29,12 @@
 // Bricks: the field is built brick by brick (SdfOptions::brickSize voxels a side, in parallel): a
 // brick takes its solid bits and the conservative surface of the triangles within the band of it,
 // voxelized in the brick grown by the dilation, so no surface grid of the whole mesh is made and
-// bricks far from the surface cost a look at their solid bits. A tiled voxelizer can hand its
-// bricks to the same per-brick code; today the solid bits come from one dense solid voxelization:
-// peak memory ~ N^3 / 8 bytes for it, plus the result (the band's leaves, 2 KiB per 8^3 block).
+// bricks far from the surface cost a look at their solid bits (none when the brick is uniform).
+// The solid bits come brick by brick from the tiled voxelizer (voxfx/tiled.hpp: parity, winding
+// and gwn carried down each stack of bricks), the same bits as the dense voxelization's, so no
+// grid of the whole volume is made: memory ~ a few bricks per thread plus the result (the band's
+// leaves, 2 KiB per 8^3 block), growing with the surface. The flood and vote fills need the whole
+// grid (voxfx::wholeGridReason) and take them from one dense solid voxelization, N^3 / 8 bytes.
 // Thread-safety: pure functions; blocks of a layer are spread over worker threads, one owner per
 // block, so the result does not depend on the thread count. A SignedDistanceField is a value.
 #pragma once
@@ -109,9 +112,10 @@ struct SignedDistanceField {
 /// any slicing axis: the result is sliced along z). Validates the mesh (voxfx::Error on bad
 /// indices or non-finite vertices; a mesh without triangles gives an all-outside field); throws
 /// voxfx::Error for a perspective or oriented frame, bandVoxels < 1 or not finite, a brick size
-/// that is not a positive multiple of 8, or too little memory. Cost: two voxelizations (solid and
-/// conservative) plus, per band voxel, the distance to the few triangles its block gathered; see the file
-/// comment.
+/// that is not a positive multiple of 8, or too little memory (the dense solid of the flood and
+/// vote fills, or the tiled voxelizer's triangle lists). Cost: two voxelizations (solid, brick by
+/// brick, and conservative) plus, per band voxel, the distance to the few triangles its block
+/// gathered; see the file comment.
 SignedDistanceField signedDistanceField(const MeshView& mesh, const Frame& frame,
                                         const SdfOptions& options = {});
 

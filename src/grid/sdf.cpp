@@ -6,7 +6,8 @@
 // indices outwards from the intersecting voxels (approximate past the first voxels), every band
 // voxel takes the minimum over the triangles its block gathered from the hierarchy, which holds
 // every triangle within the band width (exact). The sign comes from the solid voxelization (GI08
-// parity and its tie rule), as voxfx/sdf.hpp explains.
+// parity and its tie rule), as voxfx/sdf.hpp explains, brick by brick from the tiled voxelizer
+// where the fill allows it (sdf_detail.hpp), so no grid of the whole volume is made.
 //
 // The builder consumes slabs of slices along z (solid bits of the slab, conservative surface bits
 // of the slab and of kz slices on either side) and processes layers of 8^3 blocks: per column the
@@ -21,8 +22,10 @@
 #include <mutex>
 
 #include "core/progress_range.hpp"
+#include "grid/sdf_detail.hpp"
 #include "grid/triangle_bvh.hpp"
 #include "voxfx/error.hpp"
+#include "voxfx/tiled.hpp"
 
 namespace voxfx {
 
@@ -487,40 +490,81 @@ VoxelGrid tileSurface(const SdfParams& p, const TriangleBvh& bvh, const Vec3i& l
     return voxelize(part.view(), Frame::orthographic(box, Axis::Z, gd.x, gd.y, gd.z), co);
 }
 
-// The whole grid in bricks of p.brick^3 voxels, on worker threads (one owner per brick), each with
-// the solid bits of `solid` and the surface of its own triangles; the pieces joined in (z, y, x)
-// order. A tiled voxelization can hand its bricks to the same per-brick code.
-std::pair<std::vector<SdfLeaf>, std::vector<SdfInsideRun>>
-sdfTiles(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& builder, const SlabBits& solid,
-         Progress* progress) {
-    const int64_t brick = p.brick;
-    const Vec3i n{(p.dims.x + brick - 1) / brick, (p.dims.y + brick - 1) / brick,
-                  (p.dims.z + brick - 1) / brick};
-    const int64_t count = n.x * n.y * n.z;
-    std::vector<SdfPiece> pieces{std::size_t(count)};
-    ProgressSteps steps(progress, count);
-    parallelFor(0, count, 1, [&](int64_t b, int64_t e) {
-        for (int64_t i = b; i < e && !steps.cancelled(); ++i) {
-            SdfTile t;
-            t.lo = Vec3i{i % n.x, (i / n.x) % n.y, i / (n.x * n.y)} * brick;
-            t.hi = min(t.lo + Vec3i{brick, brick, brick}, p.dims);
-            t.solid = solid;
-            VoxelGrid surface;
-            if (!p.full) surface = tileSurface(p, bvh, t.lo, t.hi);
-            if (!surface.bits.empty())
-                t.surface = {surface.bits.words(),  surface.bits.width(), surface.bits.wordsPerColumn(),
-                             t.lo.z - p.dilation.z, surface.bits.depth(), p.dilation.x - t.lo.x,
-                             p.dilation.y - t.lo.y};
-            builder.tile(t, pieces[std::size_t(i)]);
-            steps.step();
-        }
-    });
-    if (steps.cancelled()) fail("cancelled");
+// A tile whose solid bits are uniform and that no triangle's band reaches (no surface): outside,
+// nothing; inside, what SdfBuilder::tile makes of it without looking at a column: runs of the
+// blocks wholly in the grid, and leaves at -W inside the grid and +W beyond it for the blocks the
+// grid's border cuts (their bits outside the grid are 0, so they are not all inside).
+void uniformTile(const SdfParams& p, const SdfTile& t, SdfPiece& out) {
+    if (!t.solid.value) return;
+    const Vec3i d = p.dims;
+    for (int64_t bz = t.lo.z / kLeafDim; bz * kLeafDim < t.hi.z; ++bz)
+        for (int64_t by = t.lo.y / kLeafDim; by * kLeafDim < t.hi.y; ++by)
+            for (int64_t bx = t.lo.x / kLeafDim; bx * kLeafDim < t.hi.x; ++bx) {
+                const Vec3i o{bx * kLeafDim, by * kLeafDim, bz * kLeafDim};
+                if (o.x + kLeafDim <= d.x && o.y + kLeafDim <= d.y && o.z + kLeafDim <= d.z) {
+                    if (!out.runs.empty() && out.runs.back().x1 == int32_t(bx) &&
+                        out.runs.back().y == int32_t(by) && out.runs.back().z == int32_t(bz))
+                        ++out.runs.back().x1;
+                    else
+                        out.runs.push_back({int32_t(bx), int32_t(bx + 1), int32_t(by), int32_t(bz)});
+                    continue;
+                }
+                SdfLeaf leaf;
+                leaf.origin = o;
+                for (int n = 0; n < 512; ++n) {
+                    const bool in = o.x + (n >> 6) < d.x && o.y + ((n >> 3) & 7) < d.y && o.z + (n & 7) < d.z;
+                    leaf.values[std::size_t(n)] = in ? -float(p.width) : float(p.width);
+                }
+                out.leaves.push_back(leaf);
+            }
+}
+
+// One brick [lo, hi) with its solid bits: the surface of its own triangles (tileSurface), then its
+// blocks into `out`.
+void sdfBrick(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& builder, const Vec3i& lo,
+              const Vec3i& hi, const SlabBits& solid, SdfPiece& out) {
+    SdfTile t;
+    t.lo = lo;
+    t.hi = hi;
+    t.solid = solid;
+    VoxelGrid surface;
+    if (!p.full) surface = tileSurface(p, bvh, t.lo, t.hi);
+    if (surface.bits.empty() && solid.uniform && !p.full) return uniformTile(p, t, out);
+    if (!surface.bits.empty())
+        t.surface = {surface.bits.words(),  surface.bits.width(), surface.bits.wordsPerColumn(),
+                     t.lo.z - p.dilation.z, surface.bits.depth(), p.dilation.x - t.lo.x,
+                     p.dilation.y - t.lo.y};
+    builder.tile(t, out);
+}
+
+namespace {
+
+/// The grid's bricks of p.brick^3 voxels: n of them along each axis, brick i at (i % n.x,
+/// (i / n.x) % n.y, i / (n.x n.y)), one piece each.
+struct Bricks {
+    Vec3i n;
+    int64_t brick = 0;
+    explicit Bricks(const SdfParams& p)
+        : n((p.dims + Vec3i{p.brick - 1, p.brick - 1, p.brick - 1}) / p.brick), brick(p.brick) {}
+    int64_t count() const { return n.x * n.y * n.z; }
+    int64_t index(const Vec3i& lo) const {
+        const Vec3i b = lo / brick;
+        return (b.z * n.y + b.y) * n.x + b.x;
+    }
+};
+
+// The pieces joined in (z, y, x) order, runs that meet at a brick's side made one.
+std::pair<std::vector<SdfLeaf>, std::vector<SdfInsideRun>> joinPieces(std::vector<SdfPiece>& pieces) {
     std::vector<SdfLeaf> leaves;
     std::vector<SdfInsideRun> runs;
+    // Reserved, so that the result is not copied as it grows (it is most of the memory).
+    std::size_t count = 0;
+    for (const SdfPiece& piece : pieces) count += piece.leaves.size();
+    leaves.reserve(count);
     for (SdfPiece& piece : pieces) {
         for (SdfLeaf& l : piece.leaves) leaves.push_back(std::move(l));
         runs.insert(runs.end(), piece.runs.begin(), piece.runs.end());
+        piece = {};
     }
     const auto zyx = [](const Vec3i& a, const Vec3i& b) {
         return a.z != b.z ? a.z < b.z : (a.y != b.y ? a.y < b.y : a.x < b.x);
@@ -530,7 +574,6 @@ sdfTiles(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& builder, 
     std::sort(runs.begin(), runs.end(), [&](const SdfInsideRun& a, const SdfInsideRun& b) {
         return zyx({a.x0, a.y, a.z}, {b.x0, b.y, b.z});
     });
-    // Runs that meet at a brick's side become one.
     std::vector<SdfInsideRun> merged;
     for (const SdfInsideRun& r : runs)
         if (!merged.empty() && merged.back().z == r.z && merged.back().y == r.y && merged.back().x1 == r.x0)
@@ -538,6 +581,76 @@ sdfTiles(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& builder, 
         else
             merged.push_back(r);
     return {std::move(leaves), std::move(merged)};
+}
+
+} // namespace
+
+// The whole grid in bricks of p.brick^3 voxels, on worker threads (one owner per brick), each with
+// the solid bits of `solid` (a dense voxelization of the grid) and the surface of its own
+// triangles; the pieces joined in (z, y, x) order.
+std::pair<std::vector<SdfLeaf>, std::vector<SdfInsideRun>>
+sdfTiles(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& builder, const SlabBits& solid,
+         Progress* progress) {
+    const Bricks bricks(p);
+    std::vector<SdfPiece> pieces{std::size_t(bricks.count())};
+    ProgressSteps steps(progress, bricks.count());
+    parallelFor(0, bricks.count(), 1, [&](int64_t b, int64_t e) {
+        for (int64_t i = b; i < e && !steps.cancelled(); ++i) {
+            const Vec3i lo =
+                Vec3i{i % bricks.n.x, (i / bricks.n.x) % bricks.n.y, i / (bricks.n.x * bricks.n.y)} * p.brick;
+            sdfBrick(p, bvh, builder, lo, min(lo + Vec3i{p.brick, p.brick, p.brick}, p.dims), solid,
+                     pieces[std::size_t(i)]);
+            steps.step();
+        }
+    });
+    if (steps.cancelled()) fail("cancelled");
+    return joinPieces(pieces);
+}
+
+// The same bricks with their solid bits from a tiled voxelization (voxfx/tiled.hpp), so that no
+// grid of the whole volume is made: each brick the voxelizer visits (p.brick^3, or 2 p.brick a
+// side where the gwn fill needs a multiple of 16) is cut into the field's bricks, computed on the
+// thread that visits it. The bits are the dense voxelization's, so the field is the same.
+std::pair<std::vector<SdfLeaf>, std::vector<SdfInsideRun>>
+sdfTilesStreamed(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& vo, const SdfParams& p,
+                 const TriangleBvh& bvh, const SdfBuilder& builder, Progress* progress,
+                 uint64_t* workingBytes) {
+    const Bricks bricks(p);
+    std::vector<SdfPiece> pieces{std::size_t(bricks.count())};
+    ProgressSteps steps(progress, bricks.count());
+    TileOptions to;
+    to.brickSize = vo.fill == Fill::Gwn && p.brick % 16 ? 2 * p.brick : p.brick;
+    to.workingBytes = workingBytes;
+    VoxelizeOptions tiled = vo;
+    tiled.progress = nullptr; // the field's bricks report, below
+    voxelizeTiles(mesh, frame, tiled, to, [&](const GridTile& g) {
+        SlabBits solid;
+        solid.firstSlice = g.s0;
+        solid.slices = g.depth;
+        if (g.uniform) {
+            solid.uniform = true;
+            solid.value = g.value;
+        } else {
+            solid.words = g.bits.words;
+            solid.width = g.width;
+            solid.wordsPerColumn = g.bits.wordsPerColumn;
+            solid.x0 = -g.x0;
+            solid.y0 = -g.y0;
+        }
+        const Vec3i end{g.x0 + g.width, g.y0 + g.height, g.s0 + g.depth};
+        for (int64_t z = g.s0; z < end.z; z += p.brick)
+            for (int64_t y = g.y0; y < end.y; y += p.brick)
+                for (int64_t x = g.x0; x < end.x; x += p.brick) {
+                    // The voxelizer stops at the first exception and rethrows it.
+                    if (steps.cancelled()) fail("cancelled");
+                    const Vec3i lo{x, y, z};
+                    sdfBrick(p, bvh, builder, lo, min(lo + Vec3i{p.brick, p.brick, p.brick}, end), solid,
+                             pieces[std::size_t(bricks.index(lo))]);
+                    steps.step();
+                }
+    });
+    if (steps.cancelled()) fail("cancelled");
+    return joinPieces(pieces);
 }
 
 } // namespace detail
@@ -617,6 +730,12 @@ void SignedDistanceField::activeVoxels(std::vector<std::array<int32_t, 3>>& indi
 }
 
 SignedDistanceField signedDistanceField(const MeshView& mesh, const Frame& frame, const SdfOptions& options) {
+    return detail::signedDistanceField(mesh, frame, options, detail::SdfSign::Auto);
+}
+
+SignedDistanceField detail::signedDistanceField(const MeshView& mesh, const Frame& frame,
+                                                const SdfOptions& options, SdfSign sign,
+                                                SdfSignReport* report) {
     validateMesh(mesh, "signed distance field");
     if (frame.isPerspective() || frame.isOriented())
         fail("signed distance fields need an axis-aligned orthographic frame");
@@ -646,30 +765,47 @@ SignedDistanceField signedDistanceField(const MeshView& mesh, const Frame& frame
     p.cell = cell;
     p.width = f.background;
     p.full = options.full;
-    p.brick = options.brickSize;
+    // A brick larger than the grid is the grid: clamped (to a multiple of 16, the gwn fill's
+    // tiles), so that the tiled voxelizer's bricks are not sized for voxels that do not exist.
+    // The field is the same for every brick size.
+    p.brick = std::min(options.brickSize, (std::max({dims.x, dims.y, dims.z}) + 15) / 16 * 16);
     // A centre closer than W to the surface is within ceil(W / cell + 1/2) - 1 cells of the
     // conservative cell holding its nearest point (the relative 1e-9 absorbs rounding).
     for (int a = 0; a < 3 && !options.full; ++a)
         p.dilation[a] = int64_t(std::ceil(0.5 + f.background / cell[a] * (1 + 1e-9))) - 1;
 
+    VoxelizeOptions vo;
+    vo.mode = VoxelizeMode::Solid;
+    vo.fill = f.fill;
+    vo.threads = options.threads;
+    // Tiled where the fill allows it: the sign brick by brick, no grid of the whole volume.
+    const bool tiled = sign == SdfSign::Auto && wholeGridReason(f.frame, vo).empty();
+    SdfSignReport used;
+    used.tiled = tiled;
     const auto run = [&] {
-        VoxelizeOptions vo;
-        vo.mode = VoxelizeMode::Solid;
-        vo.fill = f.fill;
+        const detail::TriangleBvh bvh(mesh);
+        const detail::SdfBuilder builder(p, bvh);
+        if (tiled) {
+            auto [leaves, runs] = detail::sdfTilesStreamed(mesh, f.frame, vo, p, bvh, builder,
+                                                           options.progress, &used.workingBytes);
+            f.leaves = std::move(leaves);
+            f.insideRuns = std::move(runs);
+            return;
+        }
         // The solid voxelization is quick next to the distances: a tenth of the progress.
         detail::ProgressRange solidProgress(options.progress, 0.0, 0.1),
             brickProgress(options.progress, 0.1, 1.0);
         vo.progress = solidProgress.get();
         const VoxelGrid solid = voxelize(mesh, f.frame, vo);
-        const detail::TriangleBvh bvh(mesh);
-        const detail::SdfBuilder builder(p, bvh);
+        used.workingBytes = solid.bits.byteCount();
         const detail::SlabBits solidBits{
             solid.bits.words(), dims.x, solid.bits.wordsPerColumn(), 0, dims.z, 0, 0};
-        const auto [leaves, runs] = detail::sdfTiles(p, bvh, builder, solidBits, brickProgress.get());
+        auto [leaves, runs] = detail::sdfTiles(p, bvh, builder, solidBits, brickProgress.get());
         f.leaves = std::move(leaves);
         f.insideRuns = std::move(runs);
     };
     withThreads(options.threads, run);
+    if (report) *report = used;
     return f;
 }
 
