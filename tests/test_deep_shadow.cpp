@@ -713,8 +713,13 @@ RenderOptions dsmrUniformOptions(bool deep) {
     RenderOptions o;
     o.width = 96;
     o.height = 72;
+    // The linear image without sky light, tone map or anti-aliasing: what the closed form describes.
     o.ambient = {0, 0, 0};
+    o.skyLight = 0;
+    o.sky = SkyKind::Flat;
     o.background = {0, 0, 0};
+    o.antiAliasing = AntiAliasing::Off;
+    o.toneMap = ToneMap::Clamp;
     if (deep) {
         DeepShadowOptions d;
         d.resolution = 96;
