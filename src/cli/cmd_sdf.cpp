@@ -126,7 +126,9 @@ The band (--band W, default 3 voxels, as OpenVDB's level sets):
 The sign (--fill, default auto):
   auto is parity (the exact crossing count) for closed meshes and gwn (generalized winding
   number >= 1/2) for meshes with holes, boundary or non-manifold edges; --fill picks another:
-  parity, gwn, winding, flood, vote (see `voxfx voxelize --help`).
+  parity, gwn, winding, flood, vote (see `voxfx voxelize --help`). Parity, winding and gwn are
+  decided brick by brick, so memory grows with the surface; flood and vote need the whole grid's
+  solid in memory (one bit per voxel).
 
 Formats (by extension; written atomically):
   .vdb   OpenVDB FloatGrid "sdf", class level set, background = band width: sparse, opens in
