@@ -80,6 +80,57 @@ TEST(Volume, TrilinearSampleReproducesAffineFunctions) {
     }
 }
 
+TEST(Volume, GradientOfAnAffineFieldIsExactWithAnisotropicSpacingAndTurnedAxes) {
+    // f = 1.5 + a.p: central differences of the trilinear field are exact for it, also within
+    // half a voxel of the faces (one-sided there) and whatever the spacing and the axes.
+    const Vec3d a{2, -3, 0.5};
+    const auto f = [&](const Vec3d& p) { return 1.5 + dot(a, p); };
+    for (const bool turned : {false, true}) {
+        Volume v({6, 7, 8}, {-3, 1, 2}, {0.3, 0.2, 0.1});
+        if (turned) {
+            const double c = std::cos(0.6), s = std::sin(0.6);
+            v.setAxes({c, s, 0}, {-s * 0.8, c * 0.8, 0.6}, {s * 0.6, -c * 0.6, 0.8});
+        }
+        for (int64_t k = 0; k < 8; ++k)
+            for (int64_t j = 0; j < 7; ++j)
+                for (int64_t i = 0; i < 6; ++i) v.at(i, j, k) = float(f(v.voxelCenter(i, j, k)));
+        std::mt19937 rng(7);
+        std::uniform_real_distribution<double> u(0, 1);
+        for (int n = 0; n < 1000; ++n) {
+            const Vec3d p = v.worldFromVoxel({6 * u(rng), 7 * u(rng), 8 * u(rng)});
+            const Vec3d g = v.gradient(p);
+            EXPECT_NEAR(g.x, a.x, 1e-4) << turned;
+            EXPECT_NEAR(g.y, a.y, 1e-4) << turned;
+            EXPECT_NEAR(g.z, a.z, 1e-4) << turned;
+        }
+        // Outside the box, where sample() is constant: zero.
+        EXPECT_EQ(v.gradient(v.worldFromVoxel({-0.01, 3, 3})), Vec3d(0, 0, 0));
+        EXPECT_EQ(v.gradient(v.worldFromVoxel({3, 3, 8.01})), Vec3d(0, 0, 0));
+    }
+}
+
+TEST(Volume, GradientIsTheCentralDifferenceOfNeighbouringVoxelsAndZeroWhereConstant) {
+    const Volume v = randomVolume({5, 6, 7}, {1, -2, 0.5}, {0.5, 0.25, 2}, 11);
+    const Vec3d h = v.spacing();
+    for (int64_t k = 1; k + 1 < 7; ++k)
+        for (int64_t j = 1; j + 1 < 6; ++j)
+            for (int64_t i = 1; i + 1 < 5; ++i) {
+                const Vec3d g = v.gradient(v.voxelCenter(i, j, k));
+                EXPECT_NEAR(g.x, (double(v.at(i + 1, j, k)) - v.at(i - 1, j, k)) / (2 * h.x), 1e-5);
+                EXPECT_NEAR(g.y, (double(v.at(i, j + 1, k)) - v.at(i, j - 1, k)) / (2 * h.y), 1e-5);
+                EXPECT_NEAR(g.z, (double(v.at(i, j, k + 1)) - v.at(i, j, k - 1)) / (2 * h.z), 1e-5);
+            }
+    // At an outermost centre the difference is one-sided, to the centre itself.
+    const Vec3d g = v.gradient(v.voxelCenter(0, 2, 3));
+    EXPECT_NEAR(g.x, (double(v.at(1, 2, 3)) - v.at(0, 2, 3)) / h.x, 1e-5);
+    // A constant volume has no gradient anywhere in its box, up to the faces (the field is clamped
+    // there, not faded to the outside value).
+    Volume c({4, 4, 4}, {0, 0, 0}, {1, 1, 1});
+    std::fill(c.values().begin(), c.values().end(), 3.0f);
+    for (const Vec3d& p : {Vec3d{0, 0, 0}, Vec3d{0.2, 2, 3.9}, Vec3d{4, 4, 4}, Vec3d{2, 2, 2}})
+        EXPECT_EQ(c.gradient(p), Vec3d(0, 0, 0));
+}
+
 TEST(Volume, SampleAtCentresBorderAndOutside) {
     const Volume v = randomVolume({3, 3, 3}, {0, 0, 0}, {1, 1, 1}, 5);
     for (int64_t k = 0; k < 3; ++k)

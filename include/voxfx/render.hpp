@@ -96,6 +96,15 @@ inline constexpr EnumName<SkyKind> kSkyKindNames[] = {{"procedural", SkyKind::Pr
 const char* toString(SkyKind k);
 SkyKind parseSkyKind(const std::string& name);
 
+/// How render() lights volume samples (DSM §3.2: Phong): none (ambient plus each light's irradiance
+/// times its shadow, whatever the direction) or phong (Blinn–Phong about the gradient normal,
+/// weighted by the gradient's magnitude; see RenderOptions::volumeShading).
+enum class VolumeShading : uint8_t { None, Phong };
+inline constexpr EnumName<VolumeShading> kVolumeShadingNames[] = {{"none", VolumeShading::None},
+                                                                  {"phong", VolumeShading::Phong}};
+const char* toString(VolumeShading v);
+VolumeShading parseVolumeShading(const std::string& name);
+
 struct RenderOptions {
     int64_t width = 1280, height = 720;        ///< output pixels, 1..65536
     int supersample = 1;                       ///< k: render k*width x k*height, box-filter down (1..8)
@@ -124,13 +133,21 @@ struct RenderOptions {
     /// Volume ray casting: volume bricks the transfer function leaves transparent are not sampled
     /// (EmptySpace, voxfx/segment_walker.hpp); the image is the same either way, only faster.
     bool skipEmptySpace = true;
+    /// Volume ray casting: how samples are lit. phong: the normal is -gradient / |gradient| (central
+    /// differences of the volume, VolumeView::gradient: it points from high values to low, out of a
+    /// dense core), each light adds diffuse max(0, n.l) / pi times the sample's colour plus the
+    /// normalized Blinn–Phong specular of a default Material (white), and the result is blended with
+    /// the unshaded light by s = min(1, |gradient| * h / (0.05 * range)) (h the smallest spacing,
+    /// range the volume's max - min: full shading where the value changes by 5 % of its range per
+    /// voxel, none where the volume is homogeneous). none: every sample unshaded.
+    VolumeShading volumeShading = VolumeShading::Phong;
     /// Meshes without normals of their own: faces meeting at more than this angle (degrees, 0..180)
     /// have a crease between them, smaller angles are smoothed over (flattenScene, gbuffer.hpp).
     double creaseAngle = kDefaultCreaseAngle;
 
     /// The named fields of RenderOptions itself: width, height, supersample, antiAliasing,
     /// adaptiveSamples, toneMap, exposure, ambient, skyLight, sky, background, volumeStep,
-    /// emptySpaceSkipping, defaultLights, creaseAngle.
+    /// emptySpaceSkipping, volumeShading, defaultLights, creaseAngle.
     static std::span<const OptionField<RenderOptions>> fields();
 };
 

@@ -94,6 +94,63 @@ struct VolumeView {
         const double x11 = lerp(v(0, 1, 1), v(1, 1, 1), t[0]);
         return float(lerp(lerp(x00, x10, t[1]), lerp(x01, x11, t[1]), t[2]));
     }
+
+    /// The gradient of sample() at world point p, per world unit, by central differences one voxel
+    /// either side along each voxel axis (spacing[a] apart, so anisotropic spacing counts), turned
+    /// into world axes. The field is taken as sample() sees it inside the box, clamped at the
+    /// outermost voxel centres: there the difference is one-sided (to the centre itself), so a
+    /// constant volume has a zero gradient up to its faces and an affine one its exact gradient
+    /// everywhere in the box. Zero outside the box (where sample() is the constant `outside`), for
+    /// a NaN p, and along an axis of one voxel.
+    VOXFX_HOSTDEV Vec3d gradient(const Vec3d& p) const {
+        if (values == nullptr) return {0, 0, 0};
+        const int64_t n[3] = {nx, ny, nz};
+        double c[3];
+        for (int a = 0; a < 3; ++a) {
+            const double u = voxelCoordinate(p, a);
+            if (!(u >= 0 && u <= double(n[a]))) return {0, 0, 0};
+            // Lattice coordinate (voxel centres at integers), clamped to the outermost centres.
+            const double l = u - 0.5, hi = double(n[a] - 1);
+            c[a] = l < 0 ? 0 : (l > hi ? hi : l);
+        }
+        Vec3d g{0, 0, 0};
+        for (int a = 0; a < 3; ++a) {
+            const double hi = double(n[a] - 1);
+            const double cm = c[a] - 1 < 0 ? 0 : c[a] - 1, cp = c[a] + 1 > hi ? hi : c[a] + 1;
+            if (!(cp > cm)) continue;
+            double q[3] = {c[0], c[1], c[2]};
+            q[a] = cp;
+            const double fp = lattice(q);
+            q[a] = cm;
+            const double fm = lattice(q);
+            const double d = (fp - fm) / ((cp - cm) * spacing[a]);
+            g = g + axes[a] * d;
+        }
+        return g;
+    }
+
+    /// Trilinear interpolation at lattice coordinates c (voxel centres at integers), each within
+    /// [0, n - 1].
+    VOXFX_HOSTDEV double lattice(const double c[3]) const {
+        const int64_t n[3] = {nx, ny, nz};
+        int64_t i0[3], i1[3];
+        double t[3];
+        for (int a = 0; a < 3; ++a) {
+            i0[a] = int64_t(c[a]); // c >= 0: truncation is floor
+            if (i0[a] > n[a] - 1) i0[a] = n[a] - 1;
+            i1[a] = i0[a] + 1 < n[a] ? i0[a] + 1 : n[a] - 1;
+            t[a] = c[a] - double(i0[a]);
+        }
+        const auto v = [&](int dx, int dy, int dz) {
+            return double(at(dx ? i1[0] : i0[0], dy ? i1[1] : i0[1], dz ? i1[2] : i0[2]));
+        };
+        const auto lerp = [](double a, double b, double s) { return a + (b - a) * s; };
+        const double x00 = lerp(v(0, 0, 0), v(1, 0, 0), t[0]);
+        const double x10 = lerp(v(0, 1, 0), v(1, 1, 0), t[0]);
+        const double x01 = lerp(v(0, 0, 1), v(1, 0, 1), t[0]);
+        const double x11 = lerp(v(0, 1, 1), v(1, 1, 1), t[0]);
+        return lerp(lerp(x00, x10, t[1]), lerp(x01, x11, t[1]), t[2]);
+    }
 };
 
 class Volume {
@@ -140,6 +197,8 @@ public:
     /// within half a voxel of its faces the samples are clamped to the nearest centre (no fade at
     /// the border); outside the box (or for a non-finite p) it returns `outside`.
     float sample(const Vec3d& p, float outside = 0.0f) const { return view().sample(p, outside); }
+    /// The gradient of sample() per world unit by central differences (see VolumeView::gradient).
+    Vec3d gradient(const Vec3d& p) const { return view().gradient(p); }
     /// The plain view kernels sample (see VolumeView).
     VolumeView view() const {
         return {values_.empty() ? nullptr : values_.data(),

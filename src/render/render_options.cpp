@@ -41,6 +41,13 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
         flagOption<O, &O::skipEmptySpace>(
             "emptySpaceSkipping",
             "volumes: skip the bricks the transfer function leaves transparent (same image)"),
+        nameOption<O, parseVolumeShading, optionName<VolumeShading>, &O::volumeShading>(
+            "volumeShading",
+            "volumes: phong (DSM sec. 3.2) lights each sample by Blinn-Phong about its gradient normal "
+            "(central differences of the volume): fully where the value changes by 5 % of its range per "
+            "voxel, less where it changes less, not at all where the volume is homogeneous; none lights "
+            "every sample alike from every direction",
+            "none | phong"),
         flagOption<O, &O::defaultLights>("defaultLights",
                                          "light a scene without lights by a sun and the environment"),
         numberOption<O, &O::creaseAngle>(

@@ -11,6 +11,15 @@
 #include "render/shading.hpp"
 #include "voxfx/volume_scene.hpp"
 
+namespace voxfx {
+
+const char* toString(VolumeShading v) { return enumName(v, kVolumeShadingNames); }
+VolumeShading parseVolumeShading(const std::string& name) {
+    return parseEnum<VolumeShading>(name, "volume shading", kVolumeShadingNames);
+}
+
+} // namespace voxfx
+
 namespace voxfx::detail {
 
 namespace {
@@ -128,6 +137,12 @@ struct ObjectInterval {
     Vec3f color;      ///< its pre-integrated colour
 };
 
+// One light as a volume sample receives it: irradiance times shadow, and the direction to it.
+struct LightSample {
+    Vec3f irradiance;
+    Vec3d toLight;
+};
+
 // The ray of one pixel: eye + perDepth * z for frame depth z, and what its walk has gathered.
 struct PixelRay {
     int64_t x, y;
@@ -140,6 +155,7 @@ struct PixelRay {
     double transmittance = 1;
     int64_t samples = 0;
     std::vector<ObjectInterval>* objects = nullptr; ///< per object of the scene
+    std::vector<LightSample>* lights = nullptr;     ///< per light of the scene, at the current sample
 };
 
 // What the pass composites: the volume scene's objects (and blended meshes), how each surface is
@@ -153,12 +169,33 @@ struct VolumeComposite {
     std::vector<PreintegratedTransfer> preintegrated; ///< per Volume object
     double step;                                      ///< world length between volume samples
     static constexpr double kPieceDepth = 0.5;        ///< optical depth of the pieces of a dense interval
+    /// Phong shading of volume samples (RenderOptions::volumeShading) with lights to shade by.
+    bool shaded;
+    /// Per Volume object, phong: the gradient magnitude (value per world unit) from which a sample
+    /// is fully shaded; +inf for a constant volume (never shaded).
+    std::vector<double> fullGradient;
+    /// Phong: a change of this fraction of the volume's value range per voxel shades fully.
+    static constexpr double kFullShadingChange = 0.05;
 
     VolumeComposite(const FrameState& f, const VolumeScene& scene)
         : frame(f), vs(scene), materials(objectMaterials(f.lit, scene)), surfaces(scene),
           emptySpace(f.options.skipEmptySpace ? emptySpaceOf(scene)
                                               : std::vector<EmptySpace>(scene.objects.size())),
-          preintegrated(preintegrate(scene)), step(sampleStep(scene) * f.options.volumeStep) {}
+          preintegrated(preintegrate(scene)), step(sampleStep(scene) * f.options.volumeStep),
+          shaded(f.options.volumeShading == VolumeShading::Phong && !f.lit.lights.empty()),
+          fullGradient(shaded ? fullGradients(scene) : std::vector<double>()) {}
+
+    static std::vector<double> fullGradients(const VolumeScene& vs) {
+        std::vector<double> out(vs.objects.size(), std::numeric_limits<double>::infinity());
+        for (std::size_t o = 0; o < vs.objects.size(); ++o)
+            if (vs.objects[o].kind == ObjectKind::Volume) {
+                const Volume& v = *vs.volumes[std::size_t(vs.objects[o].volume)];
+                const double range = double(v.maxValue()) - double(v.minValue());
+                const Vec3d h = v.spacing();
+                if (range > 0) out[o] = kFullShadingChange * range / std::min({h.x, h.y, h.z});
+            }
+        return out;
+    }
 
     static std::vector<PreintegratedTransfer> preintegrate(const VolumeScene& vs) {
         std::vector<PreintegratedTransfer> out(vs.objects.size());
@@ -216,16 +253,19 @@ struct VolumeComposite {
         return r.transmittance >= 1e-3;
     }
 
-    // Light arriving at volume sample p: ambient (the constant and the sky's mean radiance, its
-    // order-0 harmonic) plus every light's irradiance times its shadow, looked up at p moved one
-    // sample step towards the light (and given that direction as the lookup's normal, so the
-    // technique adds its own offset): a shadow map samples the volume in steps of its own, and a
-    // dense layer the sample lies at the front of (bone under skin) must not shadow its own surface
-    // by the step over which the map's visibility falls.
-    Vec3f lightAt(const Vec3d& p) const {
+    // Light arriving at volume sample p: returns the ambient light (the constant and the sky's mean
+    // radiance, its order-0 harmonic) and sets `lights` to every light's irradiance times its
+    // shadow, looked up at p moved one sample step towards the light (and given that direction as
+    // the lookup's normal, so the technique adds its own offset): a shadow map samples the volume in
+    // steps of its own, and a dense layer the sample lies at the front of (bone under skin) must not
+    // shadow its own surface by the step over which the map's visibility falls. `unshaded` is the
+    // ambient plus every light's irradiance / pi: the light a sample takes without a normal.
+    Vec3f lightAt(const Vec3d& p, std::vector<LightSample>& lights, Vec3f& unshaded) const {
         const Scene& scene = frame.lit;
-        Vec3f light = frame.options.ambient +
-                      frame.environment->sphericalHarmonics()[0] * float(0.282095 * frame.options.skyLight);
+        const Vec3f ambient = frame.options.ambient + frame.environment->sphericalHarmonics()[0] *
+                                                          float(0.282095 * frame.options.skyLight);
+        unshaded = ambient;
+        lights.clear();
         for (std::size_t l = 0; l < scene.lights.size(); ++l) {
             Vec3d toLight;
             const Vec3f e = lightIrradiance(scene.lights[l], p, toLight);
@@ -233,9 +273,42 @@ struct VolumeComposite {
             const Vec3f vis = l < frame.shadows.size()
                                   ? shadowVisibility(frame.shadows[l], p + toLight * step, toLight)
                                   : Vec3f{1, 1, 1};
-            light += e * vis * float(1.0 / M_PI);
+            const Vec3f ev = e * vis;
+            unshaded += ev * float(1.0 / M_PI);
+            lights.push_back({ev, toLight});
         }
-        return light;
+        return ambient;
+    }
+
+    // Phong (DSM §3.2) at sample p of volume object o: the diffuse light (times the sample's colour)
+    // and the specular radiance (white), blended with the unshaded light by the gradient's
+    // magnitude: s = min(1, |g| / fullGradient); diffuse = ambient + sum E ((1 - s) + s max(0, n.l)) / pi,
+    // specular = s sum E ks (m + 8) / (8 pi) max(0, n.h)^m max(0, n.l) with n = -g / |g|.
+    void phong(const Vec3d& p, std::size_t o, const Vec3d& eye, const std::vector<LightSample>& lights,
+               const Vec3f& ambient, const Vec3f& unshaded, Vec3f& diffuse, Vec3f& specular) const {
+        const Volume& volume = *vs.volumes[std::size_t(vs.objects[o].volume)];
+        const Vec3d g = volume.gradient(p);
+        const double gm = length(g);
+        const double s = std::min(1.0, gm / fullGradient[o]);
+        specular = {0, 0, 0};
+        if (!(s > 0)) {
+            diffuse = unshaded;
+            return;
+        }
+        const Vec3d n = g * (-1.0 / gm);
+        const Vec3d toEye = normalize(eye - p);
+        const Material& m = materials[o];
+        const double ks = double(m.specular) * (m.shininess + 8) / (8 * M_PI);
+        diffuse = ambient;
+        for (const LightSample& l : lights) {
+            const double ndl = std::max(0.0, dot(n, l.toLight));
+            diffuse += l.irradiance * float(((1 - s) + s * ndl) / M_PI);
+            if (ndl > 0 && ks > 0) {
+                const Vec3d h = normalize(l.toLight + toEye);
+                specular += l.irradiance *
+                            float(s * ks * std::pow(std::max(0.0, dot(n, h)), double(m.shininess)) * ndl);
+            }
+        }
     }
 
     // The segment [z0, z1) inside the volume objects `inside`, composited front to back; false
@@ -299,12 +372,21 @@ struct VolumeComposite {
             const double pl = dl / double(pieces), x = sigmaSum * pl;
             const double lightDepth = x < 1e-6 ? 0.5 * pl : (1 - x / std::expm1(x)) / sigmaSum;
             for (int64_t k = 0; k < pieces && r.transmittance >= 1e-3; ++k) {
-                const Vec3f light = lightAt(p0 + (p1 - p0) * ((double(k) * pl + lightDepth) / dl));
+                const Vec3d p = p0 + (p1 - p0) * ((double(k) * pl + lightDepth) / dl);
+                Vec3f unshaded;
+                const Vec3f ambient = lightAt(p, *r.lights, unshaded);
                 for (std::size_t o = 0; o < inside.size(); ++o) {
                     const ObjectInterval& w = (*r.objects)[o];
                     if (!(w.sigma > 0)) continue;
                     const double alpha = -std::expm1(-w.sigma * pl);
-                    r.color += w.color * light * float(alpha * r.transmittance * frame.options.exposure);
+                    const float weight = float(alpha * r.transmittance * frame.options.exposure);
+                    if (shaded) {
+                        Vec3f diffuse, specular;
+                        phong(p, o, r.eye, *r.lights, ambient, unshaded, diffuse, specular);
+                        r.color += (w.color * diffuse + specular) * weight;
+                    } else {
+                        r.color += w.color * unshaded * weight;
+                    }
                     r.transmittance *= 1.0 - alpha;
                 }
             }
@@ -337,6 +419,8 @@ void compositeVolumes(FrameState& frame) {
     parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
         SegmentWalker walker(*chosen, pass.surfaces.flat.triangleLeaf);
         std::vector<ObjectInterval> objects(chosen->objects.size());
+        std::vector<LightSample> lights;
+        lights.reserve(scene.lights.size());
         int64_t local = 0;
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
@@ -345,6 +429,7 @@ void compositeVolumes(FrameState& frame) {
                 const std::size_t pixel = std::size_t(y * W + x);
                 PixelRay r{x, y, col, f.eye(), {}, 0, 0, sampleJitter(x, y, 1)};
                 r.objects = &objects;
+                r.lights = &lights;
                 r.perDepth = f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - r.eye;
                 r.lengthPerDepth = length(r.perDepth);
                 r.zMax = gbuffer.triangle[pixel] != GBuffer::kNone ? double(gbuffer.depth[pixel])
