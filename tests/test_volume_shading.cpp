@@ -223,6 +223,16 @@ TEST(VolumeShadingTest, ABallOfFallingDensityIsLitByTheLambertCosineOfItsRadialN
     EXPECT_LT(darkSum / double(dark), 0.02 * litSum / double(lit));
 }
 
+TEST(VolumeShadingTest, ShadedImagesAreTheSameForOneAndAllThreads) {
+    const Scene s = vshdBall();
+    RenderOptions o = vshdOptions(VolumeShading::Phong, 48, 36);
+    o.threads = 1;
+    const RenderResult one = render(s, s.cameras[0], o);
+    o.threads = 0;
+    const RenderResult all = render(s, s.cameras[0], o);
+    EXPECT_EQ(one.image.pixels, all.image.pixels);
+}
+
 TEST(VolumeShadingTest, TheOptionHasANameForFrontEndsAndSceneFiles) {
     RenderOptions o;
     EXPECT_EQ(o.volumeShading, VolumeShading::Phong);

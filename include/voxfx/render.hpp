@@ -19,8 +19,9 @@
 //             method (voxfx/glass.hpp).
 //   volumes   scenes with volume objects, Boolean shapes (scene.volumeScene) or meshes of blended
 //             materials: ray casting over fragment lists from the camera, composited over the shaded
-//             image: volumes sampled, and the visible surfaces of opaque and translucent objects
-//             (where a Boolean's inside flag changes) and of blended meshes shaded like meshes and
+//             image: volumes sampled (lit by Phong about their gradient normals unless
+//             RenderOptions::volumeShading is none), and the visible surfaces of opaque and translucent
+//             objects (where a Boolean's inside flag changes) and of blended meshes shaded like meshes and
 //             α-blended in depth order.
 //   resolve   box filter of the samples of each pixel, flipped to image rows (y down), then the
 //             output transform (RenderOptions::toneMap) and the post-process anti-aliasing.
