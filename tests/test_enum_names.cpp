@@ -30,6 +30,7 @@
 #include "voxfx/grid_io.hpp"
 #include "voxfx/morphology.hpp"
 #include "voxfx/raster.hpp"
+#include "voxfx/render.hpp"
 #include "voxfx/scene.hpp"
 #include "voxfx/sdf_io.hpp"
 #include "voxfx/shadow.hpp"
@@ -114,6 +115,10 @@ TEST(EnumNamesTest, EveryEnumeratorHasOneNameThatParsesBackInAnyCase) {
     expectOneNamePerValue<GridFormat>(kGridFormatNames);
     expectOneNamePerValue<SdfFormat>(kSdfFormatNames);
     expectOneNamePerValue<AttributeChannel>(kAttributeChannelNames);
+    expectOneNamePerValue<AntiAliasing>(kAntiAliasingNames);
+    expectOneNamePerValue<ToneMap>(kToneMapNames);
+    expectOneNamePerValue<SkyKind>(kSkyKindNames);
+    expectOneNamePerValue<VolumeShading>(kVolumeShadingNames);
     expectOneNamePerValue<VolumeFormat>(kVolumeFormatNames);
     expectOneNamePerValue<ScalarType>(kScalarTypeNames);
     expectOneNamePerValue<BatchStatus>(kBatchStatusNames);
