@@ -77,9 +77,13 @@ public:
     FileLocation location() const { return {FileLocation::Kind::kLine, line_}; }
     const std::string& path() const { return path_; }
 
-    /// Skips spaces, tabs, carriage returns and a comment, never the newline.
+    /// Skips blanks (space, tab, carriage return, vertical tab, form feed) and a comment, never the
+    /// newline.
     void skipBlanks() {
-        while (p_ != end_ && (*p_ == ' ' || *p_ == '\t' || *p_ == '\r')) ++p_;
+        // Every space but the newline: word() stops at the same set (isSpace), so a token never
+        // starts at a space this leaves (a vertical tab here once made word() read nothing,
+        // forever, in a list of 2^31 entries).
+        while (p_ != end_ && *p_ != '\n' && isSpace(*p_)) ++p_;
         if (p_ != end_ && *p_ == comment_ && comment_ != 0) {
             const void* nl = std::memchr(p_, '\n', std::size_t(end_ - p_));
             p_ = nl ? static_cast<const char*>(nl) : end_;
