@@ -191,19 +191,9 @@ void writeDense(const AttributeGrid& g, AttributeChannel c, const WorldOrder& w,
             << "space origin: (" << detail::formatDouble(origin.x) << ',' << detail::formatDouble(origin.y)
             << ',' << detail::formatDouble(origin.z) << ")\n\n";
     } else {
-        // NumPy .npy 1.0: magic, header length, a dict padded to a multiple of 64 bytes.
         std::ostringstream shape;
         shape << "(" << (vector ? "3, " : "") << w.dims.x << ", " << w.dims.y << ", " << w.dims.z << ")";
-        std::string dict = std::string("{'descr': '") + npyType +
-                           "', 'fortran_order': True, 'shape': " + shape.str() + ", }";
-        const std::size_t unpadded = 10 + dict.size() + 1;
-        dict.append((64 - unpadded % 64) % 64, ' ');
-        dict += '\n';
-        const auto len = uint16_t(dict.size());
-        out.write("\x93NUMPY\x01\x00", 8);
-        const char lenBytes[2] = {char(len & 0xFF), char(len >> 8)};
-        out.write(lenBytes, 2);
-        out << dict;
+        detail::writeNpyHeader(out, npyType, shape.str());
     }
     out.write(bytes.data(), std::streamsize(bytes.size()));
 }

@@ -44,4 +44,8 @@ void writeVoxelMesh(const VoxelGrid& grid, std::ostream& out, GridFormat format)
 /// Shortest decimal text that reads back as the same double (std::to_chars).
 std::string formatDouble(double v);
 
+/// A NumPy .npy 1.0 header: magic, length, the dict padded to a multiple of 64 bytes; Fortran
+/// order. `descr` e.g. "<f4", `shape` e.g. "(3, 16, 16, 16)". The data follows.
+void writeNpyHeader(std::ostream& out, const std::string& descr, const std::string& shape);
+
 } // namespace voxfx::detail

@@ -41,6 +41,18 @@ std::string formatDouble(double v) {
     const auto r = std::to_chars(buf, buf + sizeof(buf), v);
     return std::string(buf, r.ptr);
 }
+
+void writeNpyHeader(std::ostream& out, const std::string& descr, const std::string& shape) {
+    std::string dict = "{'descr': '" + descr + "', 'fortran_order': True, 'shape': " + shape + ", }";
+    const std::size_t unpadded = 10 + dict.size() + 1;
+    dict.append((64 - unpadded % 64) % 64, ' ');
+    dict += '\n';
+    const auto len = uint16_t(dict.size());
+    out.write("\x93NUMPY\x01\x00", 8);
+    const char lenBytes[2] = {char(len & 0xFF), char(len >> 8)};
+    out.write(lenBytes, 2);
+    out << dict;
+}
 } // namespace detail
 
 GridFormat gridFormatFromPath(const std::string& path) {

@@ -79,16 +79,8 @@ void writeSdfNrrd(const SignedDistanceField& f, const std::vector<float>& values
 // to a multiple of 64 bytes and ended by a newline, then the data.
 void writeSdfNpy(const SignedDistanceField& f, const std::vector<float>& values, std::ostream& out) {
     const Vec3i n = f.dims();
-    std::string dict = "{'descr': '<f4', 'fortran_order': True, 'shape': (" + std::to_string(n.x) + ", " +
-                       std::to_string(n.y) + ", " + std::to_string(n.z) + "), }";
-    const std::size_t unpadded = 10 + dict.size() + 1;
-    dict.append((64 - unpadded % 64) % 64, ' ');
-    dict += '\n';
-    const auto len = uint16_t(dict.size());
-    out.write("\x93NUMPY\x01\x00", 8);
-    const char lenBytes[2] = {char(len & 0xFF), char(len >> 8)};
-    out.write(lenBytes, 2);
-    out << dict;
+    writeNpyHeader(out, "<f4",
+                   "(" + std::to_string(n.x) + ", " + std::to_string(n.y) + ", " + std::to_string(n.z) + ")");
     out.write(reinterpret_cast<const char*>(values.data()), std::streamsize(values.size() * sizeof(float)));
 }
 
