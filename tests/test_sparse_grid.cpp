@@ -7,6 +7,9 @@
 // the dense writer's.
 #include <algorithm>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <set>
@@ -440,6 +443,74 @@ TEST(SparseGridTest, CliMorphsAVdbThatDoesNotFitDensely) {
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_NE(r.out.find("(OpenVDB, sparse)"), std::string::npos) << r.out;
     EXPECT_EQ(readSparseGrid(dir.file("shell.vdb")).count(), (int64_t(1) << 24) - int64_t(252) * 252 * 252);
+}
+
+// ---- Sparse grids streamed into .binvox and .nrrd ---------------------------------------------
+
+namespace sparse_stream_test {
+std::string fileBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+} // namespace sparse_stream_test
+
+TEST(SparseGridTest, StreamedBinvoxAndNrrdAreTheDenseWritersBytes) {
+    // Oracle: the dense writers' files (writeBinvox, writeNrrd of the whole grid). Slabs of one
+    // cell up to the whole grid, grids of several axes, runs longer than 255 and runs that cross
+    // slabs (a solid box), random cells.
+    test::TempDir dir;
+    const Frame box = Frame::orthographic({{0, 0, 0}, {45, 37, 150}}, Axis::Z, 45, 37, 150);
+    const VoxelGrid grids[] = {voxelize(latticeBox({0, 3, 0}, {45, 37, 140}).view(), box),
+                               {Frame::orthographic({{-1, 2, 0.5}, {3.5, 5.7, 15.5}}, Axis::Z, 45, 37, 150),
+                                test::randomBits(45, 37, 150, 0.4, 31)},
+                               {Frame::orthographic({{0, 0, 0}, {1, 2, 3}}, Axis::Y, 70, 129, 33),
+                                test::randomBits(70, 129, 33, 0.1, 32)}};
+    for (const VoxelGrid& dense : grids) {
+        const SparseGrid sparse = SparseGrid::fromDense(dense);
+        for (const char* ext : {".binvox", ".nrrd"}) {
+            writeGrid(dense, dir.file(std::string("dense") + ext));
+            const std::string expected = sparse_stream_test::fileBytes(dir.file(std::string("dense") + ext));
+            for (uint64_t slabBytes : {uint64_t(1), uint64_t(5000), uint64_t(1) << 30}) {
+                SCOPED_TRACE(::testing::Message() << ext << ", slabs of " << slabBytes << " bytes, "
+                                                  << dense.bits.count() << " cells");
+                GridWriteOptions wo;
+                wo.slabBytes = slabBytes;
+                const std::string path = dir.file(std::string("sparse") + ext);
+                writeGrid(sparse, path, wo);
+                const std::string got = sparse_stream_test::fileBytes(path);
+                EXPECT_EQ(got.size(), expected.size());
+                EXPECT_TRUE(got == expected);
+            }
+        }
+    }
+}
+
+TEST(SparseGridTest, CliStreamsBinvoxAndNrrdThatDoNotFitAndWritesTheDenseBytes) {
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    test::TempDir dir;
+    const std::string bunnyPath = test::dataPath("meshes/bunny00.off");
+    for (const char* ext : {".binvox", ".nrrd"}) {
+        SCOPED_TRACE(ext);
+        const std::string dense = dir.file(std::string("dense") + ext),
+                          tiled = dir.file(std::string("tiled") + ext);
+        // 512 x 507 x 397 cells: 13.9 MiB densely, over a 12 MiB budget; slabs of 1.5 MiB.
+        const test::CommandRun d = test::runVoxfx(dir, "voxelize " + bunnyPath + " -r 512 -o " + dense);
+        ASSERT_EQ(d.exitCode, 0) << d.err;
+        EXPECT_EQ(d.out.find(", sparse)"), std::string::npos) << d.out;
+        const test::CommandRun t =
+            test::runVoxfx(dir, "voxelize " + bunnyPath + " -r 512 --memory 12M -o " + tiled);
+        ASSERT_EQ(t.exitCode, 0) << t.err;
+        EXPECT_NE(t.out.find("(tiled)"), std::string::npos) << t.out;
+        EXPECT_NE(t.out.find(", sparse)"), std::string::npos) << t.out;
+        EXPECT_TRUE(sparse_stream_test::fileBytes(dense) == sparse_stream_test::fileBytes(tiled));
+        // --dense under the budget: the one-line refusal, no file.
+        const test::CommandRun r =
+            test::runVoxfx(dir, "voxelize " + bunnyPath + " -r 512 --memory 12M --dense -o " +
+                                    dir.file(std::string("x") + ext));
+        EXPECT_NE(r.exitCode, 0);
+        EXPECT_NE(r.err.find("needs"), std::string::npos) << r.err;
+        EXPECT_FALSE(std::filesystem::exists(dir.file(std::string("x") + ext)));
+    }
 }
 
 } // namespace

@@ -68,6 +68,9 @@ public:
     /// The cells [0, dims) as a dense grid in frame() (sliced along its axis). Throws voxfx::Error
     /// when the dense grid needs more memory than is available.
     VoxelGrid toDense() const;
+    /// The cells of `box` (any box of indices, inside [0, dims) or not) as a dense grid sliced
+    /// along Z whose frame is the box's part of the lattice. Throws as toDense().
+    VoxelGrid toDense(const IndexBox& box) const;
 
     const Frame& frame() const { return frame_; }
     /// Cells along world x, y, z.

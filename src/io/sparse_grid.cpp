@@ -114,6 +114,21 @@ VoxelGrid SparseGrid::toDense() const {
     return frame_.axis() == Axis::Z ? z : reslice(z, frame_.axis());
 }
 
+VoxelGrid SparseGrid::toDense(const IndexBox& box) const {
+    if (!tree_ || box.empty()) return {};
+    const Vec3i d = box.hi - box.lo + Vec3i{1, 1, 1};
+    BitGrid bits(d.x, d.y, d.z); // checks the memory
+    const int64_t origin[3] = {origin_.x + box.lo.x, origin_.y + box.lo.y, origin_.z + box.lo.z};
+    std::string error;
+    checkSparse(sparseModule().sparseToBits(tree_, origin, d.x, d.y, d.z, bits.wordsPerColumn(), bits.words(),
+                                            &error),
+                error, "cannot convert a sparse grid to a dense one");
+    const Vec3d cell = frame_.cellSize(), lo = frame_.box().lo;
+    const Box3d world{lo + cell * Vec3d(double(box.lo.x), double(box.lo.y), double(box.lo.z)),
+                      lo + cell * Vec3d(double(box.hi.x + 1), double(box.hi.y + 1), double(box.hi.z + 1))};
+    return {Frame::orthographic(world, Axis::Z, d.x, d.y, d.z), std::move(bits)};
+}
+
 Vec3i SparseGrid::dims() const { return tree_ ? sparseWorldDims(frame_) : Vec3i{0, 0, 0}; }
 
 int64_t SparseGrid::count() const { return tree_ ? sparseModule().sparseCount(tree_) : 0; }
