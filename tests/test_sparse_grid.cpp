@@ -6,6 +6,12 @@
 // voxfx::morphology (two implementations); coordinates against the dense cells; the file against
 // the dense writer's.
 #include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <optional>
 #include <set>
 #include <tuple>
 
@@ -13,6 +19,7 @@
 #include <openvdb/openvdb.h>
 
 #include "test_util.hpp"
+#include "voxfx/csg.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/morphology.hpp"
@@ -311,6 +318,198 @@ TEST(SparseGridTest, BudgetsAreEnforcedWithAMessageThatSaysWhat) {
         const std::string what = e.what();
         EXPECT_NE(what.find("fill 'flood' needs the whole grid"), std::string::npos) << what;
         EXPECT_NE(what.find("but the memory budget is 1.0 MiB"), std::string::npos) << what;
+    }
+}
+
+// ---- OpenVDB's tools in place of the dense operations (voxfx morph / csg on .vdb) -------------
+
+namespace sparse_ops_test {
+
+struct ScopedEnv {
+    ScopedEnv(const char* name, const char* value) : name(name) {
+        if (const char* old = std::getenv(name)) saved = old;
+        setenv(name, value, 1);
+    }
+    ~ScopedEnv() {
+        if (saved)
+            setenv(name, saved->c_str(), 1);
+        else
+            unsetenv(name);
+    }
+    const char* name;
+    std::optional<std::string> saved;
+};
+
+} // namespace sparse_ops_test
+
+TEST(SparseGridTest, SparseMorphologyEqualsTheDenseOneForEveryOpBorderAndRadius) {
+    // Oracle: voxfx::morphology's separable word passes on the dense grid (independent of OpenVDB).
+    // Random grids of sizes that are no multiple of 8, dense and sparse, and a box that reaches
+    // two sides of the grid (tiles and leaves at the borders).
+    const Frame frame = Frame::orthographic({{0, 0, 0}, {1, 1, 1}}, Axis::Z, 45, 37, 51);
+    const VoxelGrid box = voxelize(latticeBox({0, 5, 3}, {45, 37, 40}).view(),
+                                   Frame::orthographic({{0, 0, 0}, {45, 37, 51}}, Axis::Z, 45, 37, 51));
+    const BitGrid grids[] = {test::randomBits(45, 37, 51, 0.9, 11), test::randomBits(45, 37, 51, 0.03, 12),
+                             box.bits};
+    for (const BitGrid& bits : grids) {
+        const SparseGrid sparse = SparseGrid::fromDense({frame, bits});
+        for (MorphOp op : {MorphOp::Erode, MorphOp::Dilate, MorphOp::Open, MorphOp::Close})
+            for (MorphBorder border : {MorphBorder::Neutral, MorphBorder::Empty, MorphBorder::Filled})
+                for (int r : {0, 1, 2, 3}) {
+                    SCOPED_TRACE(::testing::Message() << toString(op) << " " << toString(border) << " r " << r
+                                                      << ", " << bits.count() << " cells");
+                    MorphologyOptions mo;
+                    mo.rx = mo.ry = mo.rz = r;
+                    mo.border = border;
+                    const BitGrid expected = morphology(bits, op, mo);
+                    EXPECT_TRUE(sameCells(morphology(sparse, op, r, border), {frame, expected}));
+                }
+    }
+    EXPECT_THROW(morphology(SparseGrid::fromDense({frame, grids[0]}), MorphOp::Dilate, -1), Error);
+}
+
+TEST(SparseGridTest, SparseCsgEqualsTheDenseExpression) {
+    const Frame frame = Frame::orthographic({{0, 0, 0}, {1, 1, 1}}, Axis::Y, 41, 66, 29);
+    std::map<std::string, BitGrid> dense;
+    dense["a"] = test::randomBits(41, 66, 29, 0.5, 21);
+    dense["b"] = test::randomBits(41, 66, 29, 0.3, 22);
+    dense["c"] = test::randomBits(41, 66, 29, 0.7, 23);
+    for (const char* text : {"difference(a, union(b, c), xor(a, c))", "xor(a, b, c)", "intersection(c, a, b)",
+                             "union(difference(c, b), intersection(a, b))", "a"}) {
+        const CsgNode root = parseCsgExpression(text);
+        const BitGrid expected = evaluateCsg(root, [&](const std::string& p) { return dense.at(p); });
+        const SparseGrid got = evaluateCsg(root, [&](const std::string& p) {
+            return SparseGrid::fromDense({frame, dense.at(p)});
+        });
+        EXPECT_TRUE(sameCells(got, {frame, expected})) << text;
+    }
+}
+
+TEST(SparseGridTest, CliMorphAndCsgOnVdbStaySparseAndEqualTheDensePath) {
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    test::TempDir dir;
+    const std::string bunnyPath = test::dataPath("meshes/bunny00.off");
+    const Mesh mesh = bunny();
+    const Frame frame = bunnyFrame(mesh, 61, Axis::Z);
+    VoxelizeOptions surface;
+    surface.mode = VoxelizeMode::Surface;
+    writeGrid(voxelize(mesh.view(), frame), dir.file("solid.vdb"));
+    writeGrid(voxelize(mesh.view(), frame, surface), dir.file("shell.vdb"));
+    const std::string runs[][2] = {
+        {"morph " + dir.file("solid.vdb") + " --op open --radius 2", "morph"},
+        {"morph " + dir.file("shell.vdb") + " --op close --radius 1 --border filled", "morph"},
+        {"morph " + dir.file("solid.vdb") + " --op erode --radius 3 --border empty", "morph"},
+        {"csg \"xor(" + dir.file("solid.vdb") + ", " + dir.file("shell.vdb") + ")\"", "csg"},
+        {"csg \"difference(" + bunnyPath + ", " + dir.file("shell.vdb") + ")\"", "csg"}};
+    for (const auto& [args, what] : runs) {
+        SCOPED_TRACE(args);
+        const test::CommandRun sparse = test::runVoxfx(dir, args + " --sparse -o " + dir.file("sparse.vdb"));
+        ASSERT_EQ(sparse.exitCode, 0) << sparse.err;
+        EXPECT_NE(sparse.out.find("(OpenVDB, sparse)"), std::string::npos) << sparse.out;
+        const test::CommandRun dense = test::runVoxfx(dir, args + " --dense -o " + dir.file("dense.vdb"));
+        ASSERT_EQ(dense.exitCode, 0) << dense.err;
+        EXPECT_EQ(dense.out.find("(OpenVDB, sparse)"), std::string::npos) << dense.out;
+        const VoxelGrid a = readGrid(dir.file("sparse.vdb")), b = readGrid(dir.file("dense.vdb"));
+        EXPECT_TRUE(a.frame.sameGrid(b.frame));
+        EXPECT_TRUE(a.bits == b.bits) << a.bits.count() << " vs " << b.bits.count();
+        EXPECT_GT(b.bits.count(), 0);
+    }
+}
+
+TEST(SparseGridTest, CliMorphsAVdbThatDoesNotFitDensely) {
+    // A cube filling a 256^3 grid (2 MiB densely, three grids for the dense morph: 6 MiB) under a
+    // 4 MiB budget: the sparse path erodes
+    // it; closed forms: a neutral border keeps every cell, an empty one eats 2 from every side.
+    test::TempDir dir;
+    const std::string mesh = test::writeFile(
+        dir.file("cube.off"), "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
+                              "3 0 2 3\n3 0 3 1\n3 4 5 7\n3 4 7 6\n3 0 1 5\n3 0 5 4\n"
+                              "3 2 6 7\n3 2 7 3\n3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n");
+    const sparse_ops_test::ScopedEnv budget("VOXFX_MEMORY_LIMIT", "4M");
+    const std::string cube = dir.file("cube.vdb"), out = dir.file("eroded.vdb");
+    ASSERT_EQ(test::runVoxfx(dir, "voxelize " + mesh + " -r 256 -o " + cube).exitCode, 0);
+    test::CommandRun r = test::runVoxfx(dir, "morph " + cube + " --op erode --radius 2 -o " + out);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("16,777,216 filled"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("(OpenVDB, sparse)"), std::string::npos) << r.out;
+    EXPECT_EQ(readSparseGrid(out).count(), int64_t(1) << 24);
+    r = test::runVoxfx(dir, "morph " + cube + " --op erode --radius 2 --border empty -o " + out);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(readSparseGrid(out).count(), int64_t(252) * 252 * 252);
+    const IndexBox b = readSparseGrid(out).bounds();
+    EXPECT_EQ(b.lo, Vec3i(2, 2, 2));
+    EXPECT_EQ(b.hi, Vec3i(253, 253, 253));
+    r = test::runVoxfx(dir, "csg \"difference(" + cube + ", " + out + ")\" -o " + dir.file("shell.vdb"));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("(OpenVDB, sparse)"), std::string::npos) << r.out;
+    EXPECT_EQ(readSparseGrid(dir.file("shell.vdb")).count(), (int64_t(1) << 24) - int64_t(252) * 252 * 252);
+}
+
+// ---- Sparse grids streamed into .binvox and .nrrd ---------------------------------------------
+
+namespace sparse_stream_test {
+std::string fileBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+} // namespace sparse_stream_test
+
+TEST(SparseGridTest, StreamedBinvoxAndNrrdAreTheDenseWritersBytes) {
+    // Oracle: the dense writers' files (writeBinvox, writeNrrd of the whole grid). Slabs of one
+    // cell up to the whole grid, grids of several axes, runs longer than 255 and runs that cross
+    // slabs (a solid box), random cells.
+    test::TempDir dir;
+    const Frame box = Frame::orthographic({{0, 0, 0}, {45, 37, 150}}, Axis::Z, 45, 37, 150);
+    const VoxelGrid grids[] = {voxelize(latticeBox({0, 3, 0}, {45, 37, 140}).view(), box),
+                               {Frame::orthographic({{-1, 2, 0.5}, {3.5, 5.7, 15.5}}, Axis::Z, 45, 37, 150),
+                                test::randomBits(45, 37, 150, 0.4, 31)},
+                               {Frame::orthographic({{0, 0, 0}, {1, 2, 3}}, Axis::Y, 70, 129, 33),
+                                test::randomBits(70, 129, 33, 0.1, 32)}};
+    for (const VoxelGrid& dense : grids) {
+        const SparseGrid sparse = SparseGrid::fromDense(dense);
+        for (const char* ext : {".binvox", ".nrrd"}) {
+            writeGrid(dense, dir.file(std::string("dense") + ext));
+            const std::string expected = sparse_stream_test::fileBytes(dir.file(std::string("dense") + ext));
+            for (uint64_t slabBytes : {uint64_t(1), uint64_t(5000), uint64_t(1) << 30}) {
+                SCOPED_TRACE(::testing::Message() << ext << ", slabs of " << slabBytes << " bytes, "
+                                                  << dense.bits.count() << " cells");
+                GridWriteOptions wo;
+                wo.slabBytes = slabBytes;
+                const std::string path = dir.file(std::string("sparse") + ext);
+                writeGrid(sparse, path, wo);
+                const std::string got = sparse_stream_test::fileBytes(path);
+                EXPECT_EQ(got.size(), expected.size());
+                EXPECT_TRUE(got == expected);
+            }
+        }
+    }
+}
+
+TEST(SparseGridTest, CliStreamsBinvoxAndNrrdThatDoNotFitAndWritesTheDenseBytes) {
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    test::TempDir dir;
+    const std::string bunnyPath = test::dataPath("meshes/bunny00.off");
+    for (const char* ext : {".binvox", ".nrrd"}) {
+        SCOPED_TRACE(ext);
+        const std::string dense = dir.file(std::string("dense") + ext),
+                          tiled = dir.file(std::string("tiled") + ext);
+        // 512 x 507 x 397 cells: 13.9 MiB densely, over a 12 MiB budget; slabs of 1.5 MiB.
+        const test::CommandRun d = test::runVoxfx(dir, "voxelize " + bunnyPath + " -r 512 -o " + dense);
+        ASSERT_EQ(d.exitCode, 0) << d.err;
+        EXPECT_EQ(d.out.find(", sparse)"), std::string::npos) << d.out;
+        const test::CommandRun t =
+            test::runVoxfx(dir, "voxelize " + bunnyPath + " -r 512 --memory 12M -o " + tiled);
+        ASSERT_EQ(t.exitCode, 0) << t.err;
+        EXPECT_NE(t.out.find("(tiled)"), std::string::npos) << t.out;
+        EXPECT_NE(t.out.find(", sparse)"), std::string::npos) << t.out;
+        EXPECT_TRUE(sparse_stream_test::fileBytes(dense) == sparse_stream_test::fileBytes(tiled));
+        // --dense under the budget: the one-line refusal, no file.
+        const test::CommandRun r =
+            test::runVoxfx(dir, "voxelize " + bunnyPath + " -r 512 --memory 12M --dense -o " +
+                                    dir.file(std::string("x") + ext));
+        EXPECT_NE(r.exitCode, 0);
+        EXPECT_NE(r.err.find("needs"), std::string::npos) << r.err;
+        EXPECT_FALSE(std::filesystem::exists(dir.file(std::string("x") + ext)));
     }
 }
 

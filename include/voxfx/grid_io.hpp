@@ -50,6 +50,9 @@ const char* toString(GridFormat f);
 struct GridWriteOptions {
     bool vdbFloat = false; ///< vdb: FloatGrid with 1.0 in filled voxels instead of BoolGrid
     std::string gridName = "voxels";
+    /// Sparse grids to .binvox and .nrrd: bytes of one dense slab of the streamed write (0: an
+    /// eighth of the memory available, at least one slab of cells).
+    uint64_t slabBytes = 0;
 };
 
 /// Writes an orthographic grid (locally sliced grids are resampled to uniform first); throws
@@ -65,10 +68,11 @@ void writeGrid(const VoxelGrid& grid, const std::string& path, const GridWriteOp
 VoxelGrid readGrid(const std::string& path);
 
 class SparseGrid;
-/// Writes a sparse grid (voxfx/sparse_grid.hpp): .vdb straight from its tree, the dense grid never
-/// built (same conventions as above, "voxfx_dims" = its dims; cells outside [0, dims) are kept);
-/// the other formats through toDense(), which must fit in memory. Throws voxfx::Error naming the
-/// path.
+/// Writes a sparse grid (voxfx/sparse_grid.hpp), the dense grid never built: .vdb straight from
+/// its tree (same conventions as above, "voxfx_dims" = its dims; cells outside [0, dims) are
+/// kept); .binvox and .nrrd streamed in slabs of options.slabBytes along the format's slowest
+/// axis (x for binvox, z for nrrd), byte for byte the dense writer's file; .ply and .obj through
+/// toDense(), which must fit in memory. Throws voxfx::Error naming the path.
 void writeGrid(const SparseGrid& grid, const std::string& path, const GridWriteOptions& options = {});
 /// Reads a grid file as a sparse grid: .vdb without a dense grid (the same grids and checks as
 /// readGrid; the frame spans "voxfx_dims" or the filled voxels' box), .binvox and .nrrd through

@@ -22,11 +22,14 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
+#include "voxfx/csg.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/mesh.hpp"
+#include "voxfx/morphology.hpp"
 #include "voxfx/tiled.hpp"
 #include "voxfx/voxel_grid.hpp"
 #include "voxfx/voxelize.hpp"
@@ -65,6 +68,9 @@ public:
     /// The cells [0, dims) as a dense grid in frame() (sliced along its axis). Throws voxfx::Error
     /// when the dense grid needs more memory than is available.
     VoxelGrid toDense() const;
+    /// The cells of `box` (any box of indices, inside [0, dims) or not) as a dense grid sliced
+    /// along Z whose frame is the box's part of the lattice. Throws as toDense().
+    VoxelGrid toDense(const IndexBox& box) const;
 
     const Frame& frame() const { return frame_; }
     /// Cells along world x, y, z.
@@ -89,6 +95,12 @@ public:
     /// past them). With Neighbours::Box, r steps equal voxfx::morphology's box of radius r.
     SparseGrid& dilate(int steps, Neighbours neighbours = Neighbours::Box);
     SparseGrid& erode(int steps, Neighbours neighbours = Neighbours::Box);
+    /// Fills every cell of `box` (OpenVDB's fill: tiles where a whole node is covered).
+    SparseGrid& fill(const IndexBox& box);
+    /// Empties every cell outside `box` (OpenVDB's clip); an empty box empties the grid.
+    SparseGrid& clip(const IndexBox& box);
+    /// The cells [0, dims) as a box.
+    IndexBox box() const;
 
     /// The filled cells as (i, j, k) triples of int32 (3 * count() values), without a dense grid:
     /// the cells of each leaf, then of each tile, in the tree's order (the same on every run).
@@ -114,6 +126,21 @@ private:
     Vec3i origin_{0, 0, 0};
     void* tree_ = nullptr; // the voxfx_vdb module's grid
 };
+
+/// voxfx::morphology on a sparse grid, bit for bit the dense result on the cells [0, dims) (cells
+/// outside are dropped first, and after every step, as a dense grid has none): the box of half-size
+/// `radius` on every axis is `radius` steps of OpenVDB's 26-neighbour dilation or erosion, and
+/// the border is emulated on the tree: Neutral and Filled erosions see filled cells outside where
+/// they matter (those within `radius` of a filled cell within `radius` of a side), a Filled
+/// dilation fills the cells within `radius` of a side. Memory grows with the surface (and, for
+/// Filled dilation, the sides). Throws voxfx::Error for a negative radius or one over 2^20.
+SparseGrid morphology(const SparseGrid& grid, MorphOp op, int64_t radius,
+                      MorphBorder border = MorphBorder::Neutral);
+
+/// Evaluates a CSG expression (voxfx/csg.hpp) on sparse grids with OpenVDB's topology union,
+/// intersection and difference (xor as (a | b) - (a & b)); the leaves must share one frame
+/// (voxfx::Error otherwise). Bit for bit voxfx::evaluateCsg on the leaves' dense grids.
+SparseGrid evaluateCsg(const CsgNode& node, const std::function<SparseGrid(const std::string&)>& leaf);
 
 /// Voxelizes `mesh` into `frame` as a sparse grid, tile by tile (voxfx/tiled.hpp): the dense grid
 /// is never built and memory grows with the surface. The cells are those of voxelize(mesh, frame,

@@ -8,6 +8,8 @@
 #include "voxfx/csg.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/intersection_volume.hpp"
+#include "voxfx/parallel.hpp"
+#include "voxfx/sparse_grid.hpp"
 
 namespace voxfx::cli {
 namespace {
@@ -16,8 +18,80 @@ struct CsgArgs {
     std::string expression, output, fill = "auto";
     FitArgs fit;
     int threads = 0;
-    bool vdbFloat = false, quiet = false, volume = false;
+    bool vdbFloat = false, quiet = false, volume = false, dense = false, sparse = false;
 };
+
+std::string frameString(const Frame& f) {
+    return std::to_string(f.width()) + " x " + std::to_string(f.height()) + " x " +
+           std::to_string(f.depth()) + ", box " + boxString(f.box());
+}
+
+// .vdb grid leaves (and meshes voxelized into their frame tile by tile) to a .vdb: OpenVDB's
+// topology operations on the sparse trees, the dense grids never built.
+// Returns false, with the grids made dense in `dense`, when they fit in memory (all leaves, the
+// result and a mesh's grid) and --sparse was not given.
+bool runSparseCsg(const CsgArgs& a, const CsgNode& root, const std::vector<std::string>& paths,
+                  std::map<std::string, VoxelGrid>& dense) {
+    const auto t0 = Clock::now();
+    const Fill fill = parseFill(a.fill);
+    std::map<std::string, SparseGrid> grids;
+    std::map<std::string, Mesh> meshes;
+    std::string firstGrid;
+    for (const std::string& path : paths) {
+        if (!isGridFile(path)) {
+            meshes.emplace(path, loadMesh(path));
+            continue;
+        }
+        const SparseGrid& g = grids.emplace(path, readSparseGrid(path)).first->second;
+        if (firstGrid.empty()) firstGrid = path;
+        const SparseGrid& g0 = grids.at(firstGrid);
+        if (!g.frame().sameGrid(g0.frame()) || !(g.treeOrigin() == g0.treeOrigin()))
+            fail("CSG: grids '", firstGrid, "' (", frameString(g0.frame()), ") and '", path, "' (",
+                 frameString(g.frame()), ") lie in different frames",
+                 g.frame().sameGrid(g0.frame()) ? " (index origins differ)" : "",
+                 "; grids combined by CSG must share one frame");
+    }
+    const double loadMs = msSince(t0);
+    const Frame frame = grids.at(firstGrid).frame();
+    const Vec3i n = grids.at(firstGrid).dims();
+    if (!a.sparse && (grids.size() + 2) * BitGrid::requiredBytes(n.x, n.y, n.z) <= availableMemoryBytes()) {
+        for (auto& [path, g] : grids) dense.emplace(path, g.toDense());
+        return false;
+    }
+    const auto tv = Clock::now();
+    std::vector<std::pair<std::string, VoxelizeReport>> reports;
+    const SparseGrid result = evaluateCsg(root, [&](const std::string& path) {
+        if (auto it = grids.find(path); it != grids.end()) return it->second;
+        VoxelizeOptions mv;
+        mv.threads = a.threads;
+        mv.fill = fill;
+        VoxelizeReport report;
+        mv.report = &report;
+        SparseGrid g = voxelizeSparse(meshes.at(path).view(), frame, mv);
+        if (!(g.treeOrigin() == grids.at(firstGrid).treeOrigin()))
+            fail("CSG: the grids' index origin is not (0, 0, 0); combine them with meshes with --dense");
+        reports.emplace_back(path, report);
+        return g;
+    });
+    const double csgMs = msSince(tv);
+    if (!a.quiet)
+        for (const auto& [path, report] : reports)
+            if (!report.fillNote.empty()) std::cerr << "voxfx: " << path << ": " << report.fillNote << "\n";
+    const auto tw = Clock::now();
+    GridWriteOptions wo;
+    wo.vdbFloat = a.vdbFloat;
+    writeGrid(result, a.output, wo);
+    const double writeMs = msSince(tw);
+    if (!a.quiet) {
+        const Vec3i d = result.dims();
+        std::cout << toString(root) << ": " << meshes.size() << " meshes, " << grids.size() << " grids -> "
+                  << d.x << " x " << d.y << " x " << d.z << " grid (cell " << fmt(frame.cellSize().x, 4)
+                  << ", sparse), " << withCommas(result.count()) << " filled voxels\n";
+        std::cout << "time: load " << fmtMs(loadMs) << ", voxelize + csg " << fmtMs(csgMs)
+                  << " (OpenVDB, sparse), write " << fmtMs(writeMs) << " -> " << a.output << " (vdb)\n";
+    }
+    return true;
+}
 
 const FitChoices kCsgFit = [] {
     FitChoices c;
@@ -51,6 +125,24 @@ int runCsg(const CsgArgs& a) {
     const GridFormat format = a.output.empty() ? GridFormat::Vdb : gridFormatFromPath(a.output);
     const CsgNode root = parseCsgExpression(a.expression);
     const Fill fill = parseFill(a.fill);
+    std::map<std::string, VoxelGrid> preloaded;
+    {
+        // Grid leaves all .vdb, output .vdb, no --volume: the sparse path.
+        const std::vector<std::string> paths = csgMeshes(root);
+        bool anyGrid = false, allVdb = true;
+        for (const std::string& path : paths)
+            if (isGridFile(path)) {
+                anyGrid = true;
+                allVdb = allVdb && gridFormatFromPath(path) == GridFormat::Vdb;
+            }
+        if (!a.dense && !a.volume && !a.output.empty() && format == GridFormat::Vdb && anyGrid && allVdb) {
+            bool done = false;
+            withThreads(a.threads, [&] { done = runSparseCsg(a, root, paths, preloaded); });
+            if (done) return 0;
+        } else if (a.sparse) {
+            fail("--sparse needs .vdb grid leaves, a .vdb output and no --volume");
+        }
+    }
 
     // Every leaf is loaded once: grid files (.binvox .vdb .nrrd) as grids, anything else as a
     // mesh; open meshes get the flood fill unless a fill is forced.
@@ -60,7 +152,10 @@ int runCsg(const CsgArgs& a) {
     std::string firstGrid;
     for (const std::string& path : csgMeshes(root)) {
         if (isGridFile(path)) {
-            const VoxelGrid& g = grids.emplace(path, readGrid(path)).first->second;
+            auto pre = preloaded.find(path);
+            const VoxelGrid& g =
+                grids.emplace(path, pre != preloaded.end() ? std::move(pre->second) : readGrid(path))
+                    .first->second;
             if (firstGrid.empty()) firstGrid = path;
             const Frame& f0 = grids.at(firstGrid).frame;
             if (!g.frame.sameGrid(f0))
@@ -134,7 +229,12 @@ Parse errors give the column where parsing stopped.
 --volume prints the result's volume: its cells times their volume, with the bound that holds
 against the meshes' exact solids (cells a surface passes through may hold any part of their
 volume; a grid leaf counts as exact). intersection(a, b) is GI08's intersection volume, for
-collision and haptics.)";
+collision and haptics.
+When every grid leaf is a .vdb and so is the output (without --volume), and the dense grids do
+not fit in memory (or VOXFX_MEMORY_LIMIT), the grids stay sparse: OpenVDB's topology union,
+intersection and difference on their trees (xor as (a | b) - (a & b)), meshes voxelized into the
+grids' frame tile by tile, bit for bit the dense result, in memory that grows with the surface.
+--sparse forces that path, --dense refuses it.)";
 
 const Command kCsg{
     "csg", "Voxelize a CSG expression of meshes into one grid", [](CLI::App& app) {
@@ -152,6 +252,9 @@ const Command kCsg{
             ->check(CLI::NonNegativeNumber)
             ->default_val(0);
         app.add_flag("--vdb-float", a->vdbFloat, "Write a FloatGrid instead of a BoolGrid");
+        auto* dense = app.add_flag("--dense", a->dense, ".vdb grids to .vdb: never the sparse trees");
+        app.add_flag("--sparse", a->sparse, ".vdb grids to .vdb: the sparse trees even when dense grids fit")
+            ->excludes(dense);
         app.add_flag("--volume", a->volume,
                      "Print the result's volume (world units) and its error bound (-o then optional)");
         app.add_flag("-q,--quiet", a->quiet, "No summary");

@@ -6,6 +6,8 @@
 #include "grid_input.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/morphology.hpp"
+#include "voxfx/parallel.hpp"
+#include "voxfx/sparse_grid.hpp"
 
 namespace voxfx::cli {
 namespace {
@@ -15,8 +17,31 @@ struct MorphArgs {
     std::string output, op = "close", border = "neutral";
     int64_t radius = 1;
     std::vector<int64_t> radii;
-    bool vdbFloat = false;
+    bool vdbFloat = false, dense = false, sparse = false;
 };
+
+// .vdb to .vdb with one radius: OpenVDB's tools on the sparse tree, the dense grid never built.
+int runSparseMorph(const MorphArgs& a, const SparseGrid& grid, double loadMs, MorphOp op,
+                   const MorphologyOptions& mo, int64_t radius) {
+    const auto tm = Clock::now();
+    const SparseGrid out = morphology(grid, op, radius, mo.border);
+    const double morphMs = msSince(tm);
+    const auto tw = Clock::now();
+    GridWriteOptions wo;
+    wo.vdbFloat = a.vdbFloat;
+    writeGrid(out, a.output, wo);
+    const double writeMs = msSince(tw);
+    if (!a.in.quiet) {
+        const Vec3i d = grid.dims();
+        std::cout << a.in.path << ": " << d.x << " x " << d.y << " x " << d.z << " grid (sparse), "
+                  << withCommas(grid.count()) << " filled -> " << toString(op) << " by (" << radius << ", "
+                  << radius << ", " << radius << ") cells, border " << toString(mo.border) << ": "
+                  << withCommas(out.count()) << " filled\n";
+        std::cout << "time: input " << fmtMs(loadMs) << ", " << toString(op) << " " << fmtMs(morphMs)
+                  << " (OpenVDB, sparse), write " << fmtMs(writeMs) << " -> " << a.output << " (vdb)\n";
+    }
+    return 0;
+}
 
 int runMorph(const MorphArgs& a) {
     const auto t0 = Clock::now();
@@ -27,11 +52,25 @@ int runMorph(const MorphArgs& a) {
     mo.threads = a.in.threads;
     const Vec3i radii =
         a.radii.empty() ? Vec3i{a.radius, a.radius, a.radius} : Vec3i{a.radii[0], a.radii[1], a.radii[2]};
-
-    // Mesh input: room for the dilation by default.
-    const VoxelGrid grid =
-        loadGridInput(a.in, /*uniform=*/false,
-                      a.in.fit.margin >= 0 ? a.in.fit.margin : std::max({radii.x, radii.y, radii.z}));
+    VoxelGrid grid;
+    if (!a.dense && format == GridFormat::Vdb && isGridFile(a.in.path) &&
+        gridFormatFromPath(a.in.path) == GridFormat::Vdb && radii.x == radii.y && radii.y == radii.z) {
+        // Sparse when asked for or when the dense input, result and scratch grids do not fit.
+        const SparseGrid sparse = readSparseGrid(a.in.path);
+        const Vec3i d = sparse.dims();
+        if (a.sparse || 3 * BitGrid::requiredBytes(d.x, d.y, d.z) > availableMemoryBytes()) {
+            int rc = 0;
+            withThreads(a.in.threads, [&] { rc = runSparseMorph(a, sparse, msSince(t0), op, mo, radii.x); });
+            return rc;
+        }
+        grid = sparse.toDense();
+    } else {
+        if (a.sparse)
+            fail("--sparse needs a .vdb input, a .vdb output and one radius on every axis (--radius)");
+        // Mesh input: room for the dilation by default.
+        grid = loadGridInput(a.in, /*uniform=*/false,
+                             a.in.fit.margin >= 0 ? a.in.fit.margin : std::max({radii.x, radii.y, radii.z}));
+    }
     const double loadMs = msSince(t0);
 
     const auto tm = Clock::now();
@@ -59,7 +98,13 @@ Morphology with a box structuring element of half-sizes (rx, ry, rz) cells along
 Borders (cells outside the grid): neutral (ignored, default), empty, filled.
 Input: a grid (.binvox .vdb .nrrd) or a mesh (voxelized as a solid; --margin defaults to the
 largest radius so a dilation is not cut by the grid's border). Output: .binvox .vdb .nrrd
-.ply .obj, written atomically.)";
+.ply .obj, written atomically.
+From .vdb to .vdb with one radius on every axis, a grid whose dense input, result and scratch
+do not fit in memory (or VOXFX_MEMORY_LIMIT) stays sparse: OpenVDB's dilation and
+erosion (26 neighbours, radius steps) on its tree, the borders emulated, bit for bit the dense
+result, in memory that grows with the surface. It is slower than the dense path where that fits
+(the bunny at 256^3, close by 2: 0.84 s against 0.03 s), so --sparse forces it and --dense
+refuses it.)";
 
 const Command kMorph{
     "morph", "Erode, dilate, open or close a grid or mesh with a box", [](CLI::App& app) {
@@ -77,6 +122,10 @@ const Command kMorph{
         app.add_option("--border", a->border, enumNameList<MorphBorder>(kMorphBorderNames, " | "))
             ->default_val("neutral");
         app.add_flag("--vdb-float", a->vdbFloat, "Write a FloatGrid instead of a BoolGrid");
+        auto* dense = app.add_flag("--dense", a->dense, ".vdb to .vdb: never the sparse tree");
+        app.add_flag("--sparse", a->sparse, ".vdb to .vdb: the sparse tree even when the dense grid fits")
+            ->excludes(dense);
+
         addGridInputOptions(app, a->in, "Mesh input: empty cells on every side (default: largest radius)");
         return std::function<int()>([a] { return runMorph(*a); });
     }};

@@ -105,10 +105,11 @@ int runVoxelize(const VoxelizeArgs& a) {
     FitOptions fo = toFitOptions(a.fit, voxelizeFitChoices());
     fo.axis = parseAxis(a.choice.axis);
     // .vdb goes tile by tile into a sparse tree unless the dense grid is asked for (--dense,
-    // local slicing, a GPU device).
-    const bool sparse =
-        format == GridFormat::Vdb && !a.dense && vo.slicing == Slicing::Uniform && vo.device == Device::Cpu;
-    fo.checkDenseMemory = !sparse;
+    // local slicing, a GPU device); so do .binvox and .nrrd when the dense grid does not fit
+    // (decided once the frame is known), streamed from the tree into the file in slabs.
+    const bool canSparse = !a.dense && vo.slicing == Slicing::Uniform && vo.device == Device::Cpu;
+    const bool streamable = format == GridFormat::Binvox || format == GridFormat::Nrrd;
+    fo.checkDenseMemory = !canSparse || !(format == GridFormat::Vdb || streamable);
 
     MeshLoadReport report;
     const Mesh mesh = loadMesh(a.input, &report);
@@ -125,6 +126,11 @@ int runVoxelize(const VoxelizeArgs& a) {
                      "--fill vote)\n";
 
     const Frame frame = fitFrame(computeBounds(mesh.view()), fo);
+    bool sparse = canSparse && format == GridFormat::Vdb;
+    if (canSparse && streamable) {
+        const uint64_t denseBytes = BitGrid::requiredBytes(frame.width(), frame.height(), frame.depth());
+        sparse = denseBytes > availableMemoryBytes();
+    }
     const VoxelizeRun r = sparse ? runSparse(mesh, frame, vo, a) : runDense(mesh, frame, vo, a);
     if (!decided.fillNote.empty() && !a.quiet)
         std::cerr << "voxfx: " << a.input << ": " << decided.fillNote << "\n";
@@ -188,8 +194,10 @@ Memory and tiles (--memory, VOXFX_MEMORY_LIMIT):
   Fills: parity, winding and gwn work tile by tile, in every mode. flood and vote need the
   whole grid: they voxelize it whole and convert it when that fits the budget. --fill auto
   picks flood for a mesh that is not closed, so for open meshes at large sizes give --fill gwn.
-  Other formats, --slicing local and --device cuda|auto build the whole grid too (so does
-  --dense).
+  .binvox and .nrrd build the whole grid when it fits the budget; when it does not, they go
+  tile by tile into the sparse tree too and are streamed from it into the file in slabs (x for
+  binvox, z for nrrd; an eighth of the budget each), the same bytes as the whole grid's file.
+  .ply, .obj, --slicing local and --device cuda|auto build the whole grid (so does --dense).
   --memory SIZE caps what the run may use (bytes, or K, M, G, T in powers of 1024: 4G), for
   every size check, as VOXFX_MEMORY_LIMIT does; the default is the memory available now
   (MemAvailable, or VOXFX_MEMORY_LIMIT when smaller). A size that cannot fit stops before

@@ -25,9 +25,10 @@
 
 namespace voxfx::detail {
 
-void writeBinvox(const VoxelGrid& grid, std::ostream& out) {
-    const Vec3i n = grid.worldDims();
-    const Box3d& box = grid.frame.box();
+namespace {
+
+void writeBinvoxHeader(const Frame& frame, const Vec3i& n, std::ostream& out) {
+    const Box3d& box = frame.box();
     const Vec3d ext = box.extent();
     const double scale = std::max({ext.x, ext.y, ext.z});
     out << "#binvox 1\n"
@@ -36,47 +37,82 @@ void writeBinvox(const VoxelGrid& grid, std::ostream& out) {
         << formatDouble(box.lo.z) << '\n'
         << "scale " << formatDouble(scale) << '\n'
         << "data\n";
+}
+
+// The (value, count) pairs of binvox's data, from columns of y bits in binvox's order; a run
+// carries over from one call of `columns` to the next.
+class BinvoxRuns {
+public:
+    explicit BinvoxRuns(std::ostream& out) : out_(out) { buf_.reserve(size_t(1) << 20); }
 
     // Sliced along y, columns run along (z, x): column c = x * nz + z holds the bits of y, so
     // walking the columns in memory order walks binvox's order and runs come straight from words.
-    const VoxelGrid g = reslice(grid, Axis::Y);
-    const int64_t columns = g.bits.columnCount(), wpc = g.bits.wordsPerColumn(), ny = g.bits.depth();
-    std::vector<uint8_t> buf;
-    buf.reserve(size_t(1) << 20);
-    auto emit = [&](uint8_t value, int64_t count) {
-        for (; count > 0; count -= 255) {
-            buf.push_back(value);
-            buf.push_back(uint8_t(std::min<int64_t>(count, 255)));
-            if (buf.size() == buf.capacity()) {
-                out.write(reinterpret_cast<const char*>(buf.data()), std::streamsize(buf.size()));
-                buf.clear();
-            }
-        }
-    };
-    uint8_t value = 0;
-    int64_t run = 0;
-    for (int64_t c = 0; c < columns; ++c) {
-        const uint64_t* col = g.bits.column(c);
-        for (int64_t w = 0; w < wpc; ++w) {
-            const int bits = int(std::min<int64_t>(64, ny - 64 * w));
-            const uint64_t word = col[w];
-            int pos = 0;
-            while (pos < bits) {
-                // Length of the run of `value` starting at bit pos (capped at the valid bits).
-                const uint64_t rest = word >> pos;
-                const int len = std::min(value ? std::countr_one(rest) : std::countr_zero(rest), bits - pos);
-                run += len;
-                pos += len;
-                if (pos < bits) {
-                    emit(value, run);
-                    value ^= 1;
-                    run = 0;
+    void columns(const BitGrid& ySliced) {
+        const int64_t columns = ySliced.columnCount(), wpc = ySliced.wordsPerColumn(), ny = ySliced.depth();
+        for (int64_t c = 0; c < columns; ++c) {
+            const uint64_t* col = ySliced.column(c);
+            for (int64_t w = 0; w < wpc; ++w) {
+                const int bits = int(std::min<int64_t>(64, ny - 64 * w));
+                const uint64_t word = col[w];
+                int pos = 0;
+                while (pos < bits) {
+                    // Length of the run of `value` starting at bit pos (capped at the valid bits).
+                    const uint64_t rest = word >> pos;
+                    const int len =
+                        std::min(value_ ? std::countr_one(rest) : std::countr_zero(rest), bits - pos);
+                    run_ += len;
+                    pos += len;
+                    if (pos < bits) {
+                        emit(value_, run_);
+                        value_ ^= 1;
+                        run_ = 0;
+                    }
                 }
             }
         }
     }
-    emit(value, run);
-    out.write(reinterpret_cast<const char*>(buf.data()), std::streamsize(buf.size()));
+
+    void finish() {
+        emit(value_, run_);
+        out_.write(reinterpret_cast<const char*>(buf_.data()), std::streamsize(buf_.size()));
+        buf_.clear();
+    }
+
+private:
+    void emit(uint8_t value, int64_t count) {
+        for (; count > 0; count -= 255) {
+            buf_.push_back(value);
+            buf_.push_back(uint8_t(std::min<int64_t>(count, 255)));
+            if (buf_.size() == buf_.capacity()) {
+                out_.write(reinterpret_cast<const char*>(buf_.data()), std::streamsize(buf_.size()));
+                buf_.clear();
+            }
+        }
+    }
+    std::ostream& out_;
+    std::vector<uint8_t> buf_;
+    uint8_t value_ = 0;
+    int64_t run_ = 0;
+};
+
+} // namespace
+
+void writeBinvox(const VoxelGrid& grid, std::ostream& out) {
+    writeBinvoxHeader(grid.frame, grid.worldDims(), out);
+    BinvoxRuns runs(out);
+    runs.columns(reslice(grid, Axis::Y).bits);
+    runs.finish();
+}
+
+void writeBinvoxSlabs(const Frame& frame, const Vec3i& n, int64_t slab,
+                      const std::function<VoxelGrid(int64_t, int64_t)>& cells, std::ostream& out) {
+    writeBinvoxHeader(frame, n, out);
+    BinvoxRuns runs(out);
+    for (int64_t x0 = 0; x0 < n.x; x0 += slab) {
+        const VoxelGrid g = cells(x0, std::min(n.x, x0 + slab));
+        runs.columns(g.frame.axis() == Axis::Y ? g.bits : reslice(g, Axis::Y).bits);
+    }
+    runs.finish();
 }
 
 namespace {

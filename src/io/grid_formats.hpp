@@ -5,6 +5,7 @@
 
 #include <bit>
 #include <cstdint>
+#include <functional>
 #include <ostream>
 #include <span>
 #include <string>
@@ -21,6 +22,12 @@ namespace voxfx::detail {
 static_assert(std::endian::native == std::endian::little, "voxfx io assumes a little-endian host");
 
 void writeBinvox(const VoxelGrid& grid, std::ostream& out);
+/// The same file in slabs along world x, for grids that are not held densely: the header of
+/// `frame` (world dims `n`), then cells(x0, x1) for x0 = 0, slab, 2 slab, ...: the cells
+/// [x0, x1) x [0, ny) x [0, nz) as a grid of that size (any slicing axis; its box is not read).
+/// Byte for byte writeBinvox of the whole grid (one run-length encoder carried across slabs).
+void writeBinvoxSlabs(const Frame& frame, const Vec3i& n, int64_t slab,
+                      const std::function<VoxelGrid(int64_t, int64_t)>& cells, std::ostream& out);
 VoxelGrid readBinvox(std::span<const uint8_t> bytes);
 
 /// Writes through the temporary file's path (OpenVDB opens files by name).
@@ -36,6 +43,10 @@ void writeSparseVdb(const SparseGrid& grid, AtomicFile& file, const GridWriteOpt
 SparseGrid readSparseVdb(std::span<const uint8_t> bytes);
 
 void writeNrrd(const VoxelGrid& grid, std::ostream& out);
+/// As writeBinvoxSlabs, in slabs along world z (NRRD's slowest axis): cells(z0, z1) are the cells
+/// [0, nx) x [0, ny) x [z0, z1). Byte for byte writeNrrd of the whole grid.
+void writeNrrdSlabs(const Frame& frame, const Vec3i& n, int64_t slab,
+                    const std::function<VoxelGrid(int64_t, int64_t)>& cells, std::ostream& out);
 VoxelGrid readNrrd(std::span<const uint8_t> bytes);
 
 /// format: GridFormat::Ply or GridFormat::Obj.

@@ -130,12 +130,36 @@ VoxelGrid readGrid(const std::string& path) {
 
 void writeGrid(const SparseGrid& grid, const std::string& path, const GridWriteOptions& options) {
     const GridFormat format = gridFormatFromPath(path);
-    if (format != GridFormat::Vdb) {
+    if (format == GridFormat::Ply || format == GridFormat::Obj) {
         writeGrid(grid.toDense(), path, options);
         return;
     }
     detail::AtomicFile file(path);
-    detail::writeSparseVdb(grid, file, options);
+    if (format == GridFormat::Vdb) {
+        detail::writeSparseVdb(grid, file, options);
+    } else {
+        // Slabs along the format's slowest axis, each read densely from the tree.
+        const Vec3i n = grid.dims();
+        if (n.x == 0) fail("cannot write '", path, "': the sparse grid has no frame");
+        // binvox: slabs of x, z-sliced (one column of nz bits per (x, y)); nrrd: slabs of z, whose
+        // z-sliced columns take a word per 64 slices. Twice: the slab and its reslicing.
+        const int a = format == GridFormat::Binvox ? 0 : 2;
+        const int64_t unit = a == 0 ? 1 : 64;
+        const uint64_t unitBytes = BitGrid::requiredBytes(a == 0 ? 1 : n.x, n.y, a == 0 ? n.z : 64);
+        const uint64_t budget = options.slabBytes ? options.slabBytes : availableMemoryBytes() / 8;
+        const int64_t slab =
+            std::min<int64_t>(n[a], std::max<int64_t>(1, int64_t(budget / (2 * unitBytes))) * unit);
+        auto cells = [&](int64_t lo, int64_t hi) {
+            IndexBox box{{0, 0, 0}, n - Vec3i{1, 1, 1}};
+            box.lo[a] = lo;
+            box.hi[a] = hi - 1;
+            return grid.toDense(box);
+        };
+        if (format == GridFormat::Binvox)
+            detail::writeBinvoxSlabs(grid.frame(), n, slab, cells, file.stream());
+        else
+            detail::writeNrrdSlabs(grid.frame(), n, slab, cells, file.stream());
+    }
     file.commit();
 }
 

@@ -20,7 +20,7 @@
 namespace voxfx::detail {
 
 /// Bump when a table below changes.
-inline constexpr uint32_t kModuleAbi = 7;
+inline constexpr uint32_t kModuleAbi = 8;
 
 /// The library's parallel-for handed to a module (so that modules follow withThreads and name no
 /// thread library): calls call(body, b, e) over chunks of `grain` items covering [begin, end).
@@ -162,6 +162,10 @@ struct VdbModule {
     /// OpenVDB's dilateActiveValues / erodeActiveValues: `iterations` steps over `neighbours`
     /// (6 face, 18 face and edge, 26 face, edge and vertex neighbours).
     bool (*sparseMorphology)(void* grid, bool erode, int iterations, int neighbours, std::string* error);
+    /// Tree indices [lo, hi] (inclusive; every index fits int32): sparseFill fills them (OpenVDB's
+    /// fill: tiles where a node is covered), sparseClip empties everything outside them (clip).
+    bool (*sparseFill)(void* grid, const int64_t lo[3], const int64_t hi[3], std::string* error);
+    bool (*sparseClip)(void* grid, const int64_t lo[3], const int64_t hi[3], std::string* error);
     /// The filled cells' indices minus `origin`, three int32 per cell in the tree's order
     /// (leaves, then tiles), into `out` (room for `count` cells: sparseCount).
     bool (*sparseCoordinates)(const void* grid, const int64_t origin[3], int32_t* out, int64_t count,

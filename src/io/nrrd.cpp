@@ -47,10 +47,11 @@ inline uint64_t packNonzeroBytes(uint64_t x) {
 }
 } // namespace
 
-void writeNrrd(const VoxelGrid& grid, std::ostream& out) {
-    const Vec3i n = grid.worldDims();
-    const Vec3d cell = grid.frame.cellSize();
-    const Vec3d origin = grid.frame.box().lo + cell * 0.5;
+namespace {
+
+void writeNrrdHeader(const Frame& frame, const Vec3i& n, std::ostream& out) {
+    const Vec3d cell = frame.cellSize();
+    const Vec3d origin = frame.box().lo + cell * 0.5;
     auto fmt = [](double v) { return formatDouble(v); };
     out << "NRRD0004\n"
         << "# Complete NRRD file format specification at:\n"
@@ -66,18 +67,19 @@ void writeNrrd(const VoxelGrid& grid, std::ostream& out) {
         << "endian: little\n"
         << "encoding: raw\n"
         << "space origin: (" << fmt(origin.x) << ',' << fmt(origin.y) << ',' << fmt(origin.z) << ")\n\n";
+}
 
-    // Sliced along x, columns run along (y, z): column c = z * ny + y holds the bits of x, so
-    // the columns in memory order are NRRD's rows, each expanded to nx bytes.
-    const VoxelGrid g = reslice(grid, Axis::X);
-    const int64_t nx = n.x, columns = g.bits.columnCount();
+// Sliced along x, columns run along (y, z): column c = z * ny + y holds the bits of x, so
+// the columns in memory order are NRRD's rows, each expanded to nx bytes.
+void writeNrrdRows(const BitGrid& xSliced, std::ostream& out) {
+    const int64_t nx = xSliced.depth(), columns = xSliced.columnCount();
     const int64_t batch = std::max<int64_t>(1, (int64_t(16) << 20) / nx);
     std::vector<uint8_t> buf(size_t(std::min(batch, columns) * nx));
     for (int64_t c0 = 0; c0 < columns; c0 += batch) {
         const int64_t c1 = std::min(columns, c0 + batch);
         parallelFor(c0, c1, 256, [&](int64_t b, int64_t e) {
             for (int64_t c = b; c < e; ++c) {
-                const uint64_t* col = g.bits.column(c);
+                const uint64_t* col = xSliced.column(c);
                 uint8_t* dst = buf.data() + (c - c0) * nx;
                 for (int64_t x = 0; x < nx; x += 8) {
                     const uint64_t bytes = kByteBits.entry[(col[x >> 6] >> (x & 63)) & 0xFF];
@@ -86,6 +88,22 @@ void writeNrrd(const VoxelGrid& grid, std::ostream& out) {
             }
         });
         out.write(reinterpret_cast<const char*>(buf.data()), std::streamsize((c1 - c0) * nx));
+    }
+}
+
+} // namespace
+
+void writeNrrd(const VoxelGrid& grid, std::ostream& out) {
+    writeNrrdHeader(grid.frame, grid.worldDims(), out);
+    writeNrrdRows(reslice(grid, Axis::X).bits, out);
+}
+
+void writeNrrdSlabs(const Frame& frame, const Vec3i& n, int64_t slab,
+                    const std::function<VoxelGrid(int64_t, int64_t)>& cells, std::ostream& out) {
+    writeNrrdHeader(frame, n, out);
+    for (int64_t z0 = 0; z0 < n.z; z0 += slab) {
+        const VoxelGrid g = cells(z0, std::min(n.z, z0 + slab));
+        writeNrrdRows(g.frame.axis() == Axis::X ? g.bits : reslice(g, Axis::X).bits, out);
     }
 }
 

@@ -905,6 +905,36 @@ bool sparseMorphology(void* g, bool erode, int iterations, int neighbours, std::
     });
 }
 
+openvdb::CoordBBox indexBox(const int64_t lo[3], const int64_t hi[3]) {
+    for (int a = 0; a < 3; ++a)
+        if (lo[a] < std::numeric_limits<int32_t>::min() || hi[a] > std::numeric_limits<int32_t>::max())
+            fail("the index box [", lo[a], ", ", hi[a], "] along axis ", a, " does not fit OpenVDB's int32");
+    return openvdb::CoordBBox(openvdb::Coord(int(lo[0]), int(lo[1]), int(lo[2])),
+                              openvdb::Coord(int(hi[0]), int(hi[1]), int(hi[2])));
+}
+
+bool sparseFill(void* g, const int64_t lo[3], const int64_t hi[3], std::string* error) {
+    return guarded(error, [&] {
+        const openvdb::CoordBBox box = indexBox(lo, hi);
+        if (box.empty()) return;
+        BoolTree& tree = handle(g).grid->tree();
+        tree.fill(box, true, true);
+        normalize(tree);
+    });
+}
+
+bool sparseClip(void* g, const int64_t lo[3], const int64_t hi[3], std::string* error) {
+    return guarded(error, [&] {
+        BoolTree& tree = handle(g).grid->tree();
+        const openvdb::CoordBBox box = indexBox(lo, hi);
+        if (box.empty())
+            tree.clear();
+        else
+            tree.clip(box);
+        normalize(tree);
+    });
+}
+
 bool sparseCoordinates(const void* g, const int64_t origin[3], int32_t* out, int64_t count,
                        std::string* error) {
     return guarded(error, [&] {
@@ -994,11 +1024,12 @@ void* sparseRead(const uint8_t* data, std::size_t size, VdbReadBox* box, int64_t
     return h;
 }
 
-constexpr VdbModule kTable{
-    kModuleAbi,       sizeof(VdbModule), writeBits,    writeFloats,    readBits,      readFloats,
-    sparseCreate,     sparseDestroy,     sparseCopy,   sparseAddBrick, sparseFinish,  sparseFromBits,
-    sparseToBits,     sparseCount,       sparseBounds, sparseMemory,   sparseGet,     sparseCombine,
-    sparseMorphology, sparseCoordinates, sparseWrite,  sparseRead,     writeLevelSet, writeDenseGrids};
+constexpr VdbModule kTable{kModuleAbi,     sizeof(VdbModule), writeBits,     writeFloats,      readBits,
+                           readFloats,     sparseCreate,      sparseDestroy, sparseCopy,       sparseAddBrick,
+                           sparseFinish,   sparseFromBits,    sparseToBits,  sparseCount,      sparseBounds,
+                           sparseMemory,   sparseGet,         sparseCombine, sparseMorphology, sparseFill,
+                           sparseClip,     sparseCoordinates, sparseWrite,   sparseRead,       writeLevelSet,
+                           writeDenseGrids};
 
 } // namespace
 } // namespace voxfx::detail
