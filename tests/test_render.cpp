@@ -640,5 +640,24 @@ TEST(RenderTest, DemoSaysWhichFlagsAShadowKindDoesNotUse) {
     EXPECT_EQ(r.err.find("does nothing with --shadows transmittance"), std::string::npos) << r.err;
 }
 
+TEST(RenderTest, DemoRendersGlassByTheMethodGiven) {
+    // `demo --glass M` renders the glass scene's glass by M: frosted and exact give different
+    // images (the demo once ignored --glass and rendered every method as the scene's default).
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    test::TempDir dir;
+    std::map<std::string, std::string> images;
+    for (const std::string method : {"exact", "frosted"}) {
+        const std::filesystem::path out = dir.path() / method;
+        const test::CommandRun r =
+            test::runVoxfx(dir, "demo --scenes glass --shadows none --glass " + method +
+                                    " --width 48 --height 27 --aa off -q --meshes " +
+                                    test::dataPath("meshes") + " -o " + out.string());
+        ASSERT_EQ(r.exitCode, 0) << r.err;
+        images[method] = test::readFileBytes((out / "glass-none.png").string());
+        EXPECT_FALSE(images[method].empty()) << method;
+    }
+    EXPECT_NE(images["exact"], images["frosted"]);
+}
+
 } // namespace
 } // namespace voxfx

@@ -55,7 +55,8 @@ std::vector<std::string> splitList(const std::string& s, const std::vector<std::
 // Renders `scene` with one shadow kind into OUT/<name>-<kind>.png; a kind that refuses the scene
 // (shadow volumes refuse open casters) is reported and skipped.
 void renderDemo(const DemoArgs& a, const Scene& scene, const std::string& name, const std::string& kind) {
-    RenderOptions o = renderOptionsFor(scene, kind); // the glass demo renders its glass as glass
+    // --glass as given, else the scene's default (the glass demo renders its glass as glass).
+    RenderOptions o = renderOptionsFor(scene, kind, a.flags.glass);
     demoImage(o);
     a.flags.apply(o, true); // a flag the kind does not use says so (absorption has no --voxel-mode)
     o.threads = a.threads;
