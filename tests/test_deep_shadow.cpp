@@ -701,6 +701,86 @@ TEST(DeepShadowClusterTest, APointLightRenderChangesWithClusters) {
     EXPECT_NE(summary(with.shadowStats).find("clusters in"), std::string::npos) << summary(with.shadowStats);
 }
 
+// ---- filtering ---------------------------------------------------------------------------------
+
+// A square box turned 30 degrees about the vertical, floating over the ground at y = 0 under a sun
+// straight above: its exact shadow is the turned square |x'|, |z'| <= 0.5 (closed form).
+struct DsmrTurnedSquare {
+    double c = std::cos(0.5235987755982988), s = std::sin(0.5235987755982988);
+    Vec3d world(double lx, double lz) const { return {c * lx - s * lz, 0, s * lx + c * lz}; }
+    double exact(const Vec3d& p) const {
+        const double lx = c * p.x + s * p.z, lz = -s * p.x + c * p.z;
+        return std::abs(lx) <= 0.5 && std::abs(lz) <= 0.5 ? 0.0 : 1.0;
+    }
+};
+
+TEST(DeepShadowFilterTest, BilinearLookupsCutTheStairStepsOfAShadowEdge) {
+    const DsmrTurnedSquare sq;
+    Mesh box = test::makeBox({-0.5, 1, -0.5}, {0.5, 1.5, 0.5});
+    for (Vec3f& p : box.positions) {
+        const Vec3d w = sq.world(p.x, p.z);
+        p = Vec3f(Vec3d{w.x, double(p.y), w.z});
+    }
+    VolumeScene s;
+    VolumeSceneObject o;
+    o.shape = s.addLeaf(box);
+    s.addObject(o);
+    Light sun;
+    sun.direction = {0, -1, 0};
+    DeepShadowOptions opt;
+    opt.resolution = 32;
+    EXPECT_EQ(opt.filter, DsmFilter::Bilinear); // filtered by default
+    const DeepShadow bilinear = DeepShadow::build(s, sun, opt);
+    opt.filter = DsmFilter::None;
+    const DeepShadow none = DeepShadow::build(s, sun, opt);
+    const double texel = bilinear.views()[0].columnWorldSize({0, 0, 0});
+    // Lines parallel to each edge, at fixed distances from it (up to a texel either side): the exact
+    // shadow is constant along each, so its total variation there is the stair-stepping; and the
+    // RMS error against the exact shadow over the same points.
+    double tv[2] = {0, 0}, sq2[2] = {0, 0};
+    int64_t n = 0;
+    for (int edge = 0; edge < 4; ++edge)
+        for (const double off : {-1.0, -0.6, -0.3, 0.3, 0.6, 1.0}) {
+            float prev[2] = {-1, -1};
+            for (double t = -0.4; t <= 0.4; t += 0.002) {
+                const double a = 0.5 + off * texel, lx = edge < 2 ? (edge ? -a : a) : t,
+                             lz = edge < 2 ? t : (edge == 2 ? a : -a);
+                const Vec3d p = sq.world(lx, lz);
+                const double ref = sq.exact(p);
+                const DeepShadow* maps[2] = {&bilinear, &none};
+                for (int k = 0; k < 2; ++k) {
+                    const float v = maps[k]->visibility(p, {0, 0, 0}, 0, 0).x;
+                    if (prev[k] >= 0) tv[k] += std::abs(v - prev[k]);
+                    prev[k] = v;
+                    sq2[k] += (v - ref) * (v - ref);
+                }
+                ++n;
+            }
+        }
+    const double rms[2] = {std::sqrt(sq2[0] / double(n)), std::sqrt(sq2[1] / double(n))};
+    std::printf(
+        "edge: total variation along the edge bilinear %.1f none %.1f; RMS error bilinear %.4f none %.4f\n",
+        tv[0], tv[1], rms[0], rms[1]);
+    EXPECT_LT(tv[0], 0.6 * tv[1]);
+    EXPECT_LT(rms[0], rms[1]);
+    // Unfiltered: the visibility function of the one texel the point falls in; filtered: the
+    // bilinear lookup (the behaviour before the option existed).
+    const LightView& v = none.views()[0];
+    std::mt19937 rng(2);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int k = 0; k < 500; ++k) {
+        const Vec3d p{u(rng), 0, u(rng)};
+        const Vec3d g = v.gridFromWorld(p);
+        const int64_t x = std::clamp<int64_t>(int64_t(std::floor(g.x)), 0, v.frame.width() - 1);
+        const int64_t y = std::clamp<int64_t>(int64_t(std::floor(g.y)), 0, v.frame.height() - 1);
+        const std::vector<DsmNode> nodes = none.maps()[0].texel(x, y);
+        ASSERT_EQ(none.visibility(p, {0, 0, 0}, 0, 0).x,
+                  evalVisibility(nodes.data(), int64_t(nodes.size()), float(g.z)));
+        ASSERT_EQ(bilinear.visibility(p, {0, 0, 0}, 0, 0).x,
+                  bilinear.maps()[0].view().visibilityBilinear(float(g.x), float(g.y), float(g.z)));
+    }
+}
+
 TEST(DeepShadowTest, InvalidScenesAndOptionsThrow) {
     VolumeScene s;
     VolumeSceneObject o;

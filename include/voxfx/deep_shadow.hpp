@@ -18,7 +18,8 @@
 //
 // Lookup: p (moved along its normal by normalOffset texel footprints) is projected into the view
 // that covers it; the visibility at its depth (minus depthBias texel footprints) is interpolated
-// bilinearly between the four texels around it. Points outside every view are lit.
+// bilinearly between the four texels around it (filter bilinear, the default), or read from the
+// one texel p falls in (filter none). Points outside every view are lit.
 //
 // Clustering (§4, clusters > 1): the casting objects are grouped by the distance of their
 // light-space projected boxes (clusterBoxes; for a point light the largest distance over the six
@@ -75,6 +76,8 @@ struct DeepShadowOptions {
     /// scaled, up or down, to fit); off: every clustered map has `resolution` texels along its
     /// longer side.
     bool clusterEqualTexels = true;
+    /// Filtering of lookups between texels.
+    DsmFilter filter = DsmFilter::Bilinear;
     /// The camera's eye, for clusters fitted to the view (see the file comment); not an option by
     /// name: the renderer sets it from the frame's camera. Unset: clusters ignore the camera.
     std::optional<Vec3d> camera;
@@ -86,7 +89,7 @@ struct DeepShadowOptions {
     /// Lookups by DeepShadow::visibility(p, n): depth bias, in texel footprints at p.
     double depthBias = 1.0;
     /// dsmResolution, epsilon, dsmStorage, fixedNodes, dsmStep, termination, clusters,
-    /// clusterThreshold, clusterEqualTexels, emptySpaceSkipping, normalOffset, depthBias.
+    /// clusterThreshold, clusterEqualTexels, dsmFilter, emptySpaceSkipping, normalOffset, depthBias.
     static std::span<const OptionField<DeepShadowOptions>> fields();
 };
 

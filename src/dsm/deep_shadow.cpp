@@ -546,7 +546,8 @@ int deepShadowViewIndex(const LightView* views, std::size_t count, const Vec3d& 
 // the maps of the green and blue channels, or none (the first map holds every channel).
 Vec3f deepShadowLookup(const std::vector<LightView>& views, const std::vector<DeepShadowMap>& maps,
                        const std::vector<std::vector<DeepShadowMap>>& greenBlue, std::size_t b, std::size_t e,
-                       const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias) {
+                       const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias,
+                       DsmFilter filter) {
     const LightView* group = views.data() + b;
     const std::size_t count = e - b;
     int i = deepShadowViewIndex(group, count, p);
@@ -562,10 +563,10 @@ Vec3f deepShadowLookup(const std::vector<LightView>& views, const std::vector<De
     const Vec3d g = v.gridFromWorld(q);
     const double z = g.z - depthBias * texel / v.worldPerDepthUnit();
     const std::size_t k = b + std::size_t(i);
-    const float red = maps[k].view().visibilityBilinear(float(g.x), float(g.y), float(z));
+    const float red = maps[k].view().visibilityFiltered(filter, float(g.x), float(g.y), float(z));
     if (greenBlue[k].empty()) return {red, red, red};
-    return {red, greenBlue[k][0].view().visibilityBilinear(float(g.x), float(g.y), float(z)),
-            greenBlue[k][1].view().visibilityBilinear(float(g.x), float(g.y), float(z))};
+    return {red, greenBlue[k][0].view().visibilityFiltered(filter, float(g.x), float(g.y), float(z)),
+            greenBlue[k][1].view().visibilityFiltered(filter, float(g.x), float(g.y), float(z))};
 }
 
 } // namespace
@@ -578,7 +579,7 @@ Vec3f DeepShadow::visibility(const Vec3d& p, const Vec3d& n, double normalOffset
     Vec3f v{1, 1, 1};
     for (std::size_t g = 0; g + 1 < groupBegin_.size(); ++g)
         v = v * deepShadowLookup(views_, maps_, greenBlue_, groupBegin_[g], groupBegin_[g + 1], p, n,
-                                 normalOffset, depthBias);
+                                 normalOffset, depthBias, options_.filter);
     return v;
 }
 
@@ -652,6 +653,11 @@ std::span<const OptionField<DeepShadowOptions>> DeepShadowOptions::fields() {
             "clusterEqualTexels",
             "deep shadows, --clusters: the clustered maps share the texels of the unclustered ones (the "
             "paper's 4 x 128^2 against 256^2)"),
+        nameOption<O, parseDsmFilter, optionName<DsmFilter>, &O::filter>(
+            "dsmFilter",
+            "deep shadows: lookups between texels, bilinear over the four around the point (2x2 PCF) or "
+            "none (the texel the point falls in: stair-stepped edges)",
+            "bilinear | none"),
         flagOption<O, &O::skipEmptySpace>(
             "emptySpaceSkipping",
             "volumes: skip the bricks the transfer function leaves transparent (same image)"),
