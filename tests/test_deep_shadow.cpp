@@ -1352,6 +1352,50 @@ TEST(DeepShadowCliTest, RenderWithDeepShadowsEveryStorageAndClusters) {
     EXPECT_FALSE(std::filesystem::exists(dir.file("out.png")));
 }
 
+TEST(DeepShadowCliTest, TheDsmKnobsAreFlagsWithHelpAndBadValuesFailNamingThem) {
+    test::TempDir dir;
+    const test::CommandRun help = test::runVoxfx(dir, "render --help");
+    ASSERT_EQ(help.exitCode, 0) << help.err;
+    for (const char* flag : {"--fixed-nodes", "--dsm-step", "--termination", "--clusters",
+                             "--cluster-threshold", "--cluster-equal-texels", "--dsm-filter"})
+        EXPECT_NE(help.out.find(flag), std::string::npos) << flag;
+    EXPECT_NE(help.out.find("bilinear | none"), std::string::npos);
+    test::writeFile(dir.file("cube.off"),
+                    "OFF\n8 6 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
+                    "4 0 2 3 1\n4 4 5 7 6\n4 0 1 5 4\n4 2 6 7 3\n4 0 4 6 2\n4 1 3 7 5\n");
+    test::writeFile(dir.file("scene.json"), R"({
+      "meshes": [{"file": "cube.off", "name": "floor", "scale": [4, 0.1, 4], "translate": [-2, -0.1, -2]},
+                 {"file": "cube.off", "name": "a", "scale": 0.5, "translate": [-1.5, 0.5, 0]},
+                 {"file": "cube.off", "name": "b", "scale": 0.5, "translate": [1.0, 0.5, 0]}],
+      "receiversOnly": ["floor"],
+      "lights": [{"type": "point", "position": [0, 3, 0.2]}]
+    })");
+    const std::string base = "render " + dir.file("scene.json") + " -o " + dir.file("out.png") +
+                             " --shadows deep --dsm-resolution 32 --width 40 --height 30 ";
+    const test::CommandRun good =
+        test::runVoxfx(dir, base + "--fixed-nodes 4 --dsm-storage fixed --dsm-step 0.5 --termination 0.01 "
+                                   "--clusters 3 --cluster-threshold 0.1 --dsm-filter none");
+    EXPECT_EQ(good.exitCode, 0) << good.err;
+    EXPECT_NE(good.out.find("clusters in"), std::string::npos) << good.out;
+    std::filesystem::remove(dir.file("out.png"));
+    // Each bad value: a non-zero exit, the flag (or the option) named, no image.
+    for (const auto& [flags, named] :
+         std::vector<std::pair<std::string, std::string>>{{"--fixed-nodes 1", "--fixed-nodes"},
+                                                          {"--fixed-nodes -3", "--fixed-nodes"},
+                                                          {"--dsm-step 0", "--dsm-step"},
+                                                          {"--dsm-step abc", "--dsm-step"},
+                                                          {"--termination 1", "--termination"},
+                                                          {"--cluster-threshold -1", "--cluster-threshold"},
+                                                          {"--clusters -2", "--clusters"},
+                                                          {"--dsm-filter blurry", "blurry"}}) {
+        const test::CommandRun bad = test::runVoxfx(dir, base + flags);
+        EXPECT_NE(bad.exitCode, 0) << flags;
+        EXPECT_NE(bad.err.find(named), std::string::npos) << flags << ": " << bad.err;
+        EXPECT_EQ(bad.err.find("terminate called"), std::string::npos) << flags << ": " << bad.err;
+        EXPECT_FALSE(std::filesystem::exists(dir.file("out.png"))) << flags;
+    }
+}
+
 // The table of BENCHMARKS.md: DSM lookups (bilinear, at random points of the mixed scene) against the
 // dense reference as ε and the resolution vary. Slow: the reference marches at an eighth of a voxel.
 TEST(DeepShadowSlowTest, ErrorAgainstTheDenseReferenceAsEpsilonAndResolutionVary) {

@@ -156,6 +156,11 @@ void checkDeepShadowOptions(const DeepShadowOptions& o) {
         fail("deep shadow map: the volume step must be positive, got ", o.stepVoxels, " voxels");
     if (!(o.termination >= 0 && o.termination < 1))
         fail("deep shadow map: early termination threshold ", o.termination, " is not in [0, 1)");
+    if (o.fixedNodes == 1 || o.fixedNodes < 0 || o.fixedNodes > 65535)
+        fail("deep shadow map (--fixed-nodes): fixed storage needs 0 (sized by the worst texel) or 2..65535 "
+             "nodes per texel "
+             "(a surface is a step of two nodes), got ",
+             o.fixedNodes);
     if (o.clusters < 0) fail("deep shadow map (--clusters): must be 0 or more, got ", o.clusters);
     if (!(o.clusterThreshold >= 0) || !std::isfinite(o.clusterThreshold))
         fail("deep shadow map (--cluster-threshold): the cluster distance d0 must be a number >= 0, got ",
@@ -632,13 +637,21 @@ std::span<const OptionField<DeepShadowOptions>> DeepShadowOptions::fields() {
         nameOption<O, parseDsmStorage, optionName<DsmStorage>, &O::storage>(
             "dsmStorage", "deep shadows: node storage", "fixed | chunked"),
         numberOption<O, &O::fixedNodes>(
-            "fixedNodes", "deep shadows, fixed storage: nodes per texel (0: sized by the worst texel)", 0,
-            65535),
+            "fixedNodes",
+            "deep shadows, --dsm-storage fixed: nodes each texel holds (the paper's 3D texture depth); a "
+            "texel needing more is rebuilt with a doubled epsilon until it fits (counted in the summary); 0: "
+            "as many as the worst texel needs",
+            0, 65535),
         numberOption<O, &O::stepVoxels>(
-            "dsmStep", "deep shadows: volume sample step, in smallest voxel spacings", 1e-3, 1000),
+            "dsmStep",
+            "deep shadows: volume sample step along a light ray, in smallest voxel spacings (smaller: "
+            "finer volume shadows, slower maps)",
+            1e-3, 1000),
         numberOption<O, &O::termination>(
-            "termination", "deep shadows: early ray termination, visibility below this becomes 0", 0,
-            0.999999),
+            "termination",
+            "deep shadows: early ray termination; a light ray whose visibility falls below this stops "
+            "and is 0 beyond (0: never stop early)",
+            0, 0.999999),
         numberOption<O, &O::clusters>(
             "clusters",
             "deep shadows: at most this many clusters of casting objects per light, each with its own "
