@@ -444,9 +444,205 @@ TEST(DeepShadowTest, PointLightsUseSixFacesAndLookupsFollowThem) {
     EXPECT_LT(double(wrong) / double(n), 0.05);
 }
 
-TEST(DeepShadowClusterTest, APointLightSaysItsMapsAreNotClustered) {
-    // clusters > 1 applies to spot and directional lights; a point light keeps one map per cube
-    // face, and the counters the renderer prints say so instead of passing over it in silence.
+// Two small objects far apart below a point light (both in its -y cube face), the knot
+// translucent and the elephant opaque; the ground at y = -0.5 receives only.
+VolumeScene dsmrTwoUnderAPointLight() {
+    VolumeScene s;
+    VolumeSceneObject o;
+    o.kind = ObjectKind::Translucent;
+    o.opacity = 0.6f;
+    o.shape = s.addLeaf(dsmrLoadScaled("knot1", {{-2.3, 0.2, -0.3}, {-1.7, 0.8, 0.3}}));
+    s.addObject(o);
+    o.kind = ObjectKind::Opaque;
+    o.shape = s.addLeaf(dsmrLoadScaled("elephant", {{1.7, 0.2, -0.3}, {2.3, 0.8, 0.3}}));
+    s.addObject(o);
+    return s;
+}
+
+Light dsmrPoint(const Vec3d& at) {
+    Light l;
+    l.type = LightType::Point;
+    l.position = at;
+    return l;
+}
+
+TEST(DeepShadowClusterTest, PointLightClustersAimFewerMapsAndAreCloserToTheReferenceAtEqualTexels) {
+    VOXFX_REQUIRE_DATA("meshes/knot1.off");
+    VOXFX_REQUIRE_DATA("meshes/elephant.off");
+    const VolumeScene s = dsmrTwoUnderAPointLight();
+    const Light l = dsmrPoint({0, 3, 0});
+    DeepShadowOptions opt;
+    opt.resolution = 64;
+    opt.epsilon = 0.01;
+    const DeepShadow single = DeepShadow::build(s, l, opt);
+    opt.clusters = 4;
+    const DeepShadow clustered = DeepShadow::build(s, l, opt);
+    ASSERT_EQ(single.views().size(), 6u);
+    // Two clusters, one aimed map each: fewer than the six cube faces.
+    ASSERT_EQ(clustered.groupBegin().size(), 3u);
+    EXPECT_EQ(clustered.views().size(), 2u);
+    EXPECT_NE(clustered.objectClusters()[0], clustered.objectClusters()[1]);
+    // Equal memory: the two maps share the six faces' texels (and use most of them).
+    const DeepShadowStats st = clustered.stats();
+    EXPECT_EQ(st.unclusteredViewTexels, 6 * 64 * 64);
+    EXPECT_LE(st.clusteredViewTexels, st.unclusteredViewTexels);
+    EXPECT_GT(st.clusteredViewTexels, st.unclusteredViewTexels * 9 / 10);
+    EXPECT_LE(st.texels, single.stats().texels);
+    EXPECT_NE(st.summary().find("2 clusters in 2 maps"), std::string::npos) << st.summary();
+    // Receivers on the ground around both shadows, against the independent reference.
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-1, 1);
+    double errSingle = 0, errClustered = 0;
+    int64_t n = 0, differ = 0;
+    for (int k = 0; k < 2000; ++k) {
+        const double side = k % 2 ? 2.8 : -2.8;
+        const Vec3d p{side + 0.6 * u(rng), -0.5, 0.6 * u(rng)};
+        const double ref = dsmrReferenceTransmittance(s, l.position, p, 1.0);
+        if (ref < 0) continue;
+        const double a = single.visibility(p, {0, 0, 0}, 0, 0).x,
+                     b = clustered.visibility(p, {0, 0, 0}, 0, 0).x;
+        errSingle += std::abs(a - ref);
+        errClustered += std::abs(b - ref);
+        differ += std::abs(a - b) > 0.01;
+        ++n;
+    }
+    ASSERT_GT(n, 1800);
+    std::printf("point light, mean error single %.4f clustered %.4f, %lld of %lld differ\n",
+                errSingle / double(n), errClustered / double(n), (long long)differ, (long long)n);
+    EXPECT_GT(differ, n / 20); // not the unclustered maps again
+    EXPECT_LT(errClustered, 0.7 * errSingle);
+}
+
+TEST(DeepShadowClusterTest, APointLightClusterWiderThanAConeKeepsOnlyTheCubeFacesItReaches) {
+    // A long box just below the light spans more than 60 degrees from its centre's direction: its
+    // cluster takes the cube faces it reaches (+x, -x, -y), not all six, and loses no shadow.
+    VolumeScene s;
+    VolumeSceneObject o;
+    o.shape = s.addLeaf(test::makeBox({-1.5, -1.2, -0.3}, {1.5, -0.8, 0.3}));
+    s.addObject(o);
+    o.shape = s.addLeaf(test::makeBox({-0.2, 1.5, -0.2}, {0.2, 1.9, 0.2}));
+    s.addObject(o);
+    const Light l = dsmrPoint({0, 0, 0});
+    DeepShadowOptions opt;
+    opt.resolution = 48;
+    opt.epsilon = 0.01;
+    const DeepShadow single = DeepShadow::build(s, l, opt);
+    opt.clusters = 2;
+    const DeepShadow clustered = DeepShadow::build(s, l, opt);
+    ASSERT_EQ(clustered.groupBegin().size(), 3u);
+    // The small box above: one aimed map; the long box: three faces.
+    EXPECT_EQ(clustered.views().size(), 4u);
+    EXPECT_LE(clustered.stats().clusteredViewTexels, clustered.stats().unclusteredViewTexels);
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<double> u(-1, 1);
+    double errSingle = 0, errClustered = 0;
+    int64_t n = 0, wrong = 0, shadowed = 0;
+    for (int k = 0; k < 3000; ++k) {
+        const Vec3d p{3 * u(rng), 3 * u(rng), 3 * u(rng)};
+        const double ref = dsmrReferenceTransmittance(s, l.position, p, 1.0);
+        if (ref < 0) continue;
+        const double a = single.visibility(p, {0, 0, 0}, 0, 0).x,
+                     b = clustered.visibility(p, {0, 0, 0}, 0, 0).x;
+        errSingle += std::abs(a - ref);
+        errClustered += std::abs(b - ref);
+        wrong += std::abs(b - ref) > 0.5;
+        shadowed += ref < 0.5;
+        ++n;
+    }
+    ASSERT_GT(n, 2800);
+    EXPECT_GT(shadowed, 200);
+    std::printf("wide cluster, mean error single %.4f clustered %.4f, %lld wrong\n", errSingle / double(n),
+                errClustered / double(n), (long long)wrong);
+    EXPECT_LT(double(wrong) / double(n), 0.01);
+    EXPECT_LE(errClustered, errSingle * 1.05);
+}
+
+// Three boxes in a row under a directional light; the ground at y = 0 receives. Their exact shadows
+// are the boxes' footprints.
+VolumeScene dsmrThreeInARow() {
+    VolumeScene s;
+    VolumeSceneObject o;
+    for (const double x : {-3.0, 0.0, 3.0}) {
+        o.shape = s.addLeaf(test::makeBox({x - 0.25, 1, -0.25}, {x + 0.25, 1.5, 0.25}));
+        s.addObject(o);
+    }
+    return s;
+}
+
+TEST(DeepShadowClusterTest, ClustersFollowTheCameraAndSharpenTheShadowsNearIt) {
+    const VolumeScene s = dsmrThreeInARow();
+    Light sun;
+    sun.direction = {0, -1, 0};
+    DeepShadowOptions opt;
+    opt.resolution = 64;
+    opt.clusters = 3;
+    opt.clusterThreshold = 0.5;
+    opt.camera = Vec3d{-3, 2.5, 3}; // near the left box
+    const DeepShadow nearLeft = DeepShadow::build(s, sun, opt);
+    opt.camera = Vec3d{3, 2.5, 3}; // near the right box
+    const DeepShadow nearRight = DeepShadow::build(s, sun, opt);
+    const std::vector<int>& l = nearLeft.objectClusters();
+    const std::vector<int>& r = nearRight.objectClusters();
+    EXPECT_NE(l[0], l[1]);
+    EXPECT_EQ(l[1], l[2]);
+    EXPECT_NE(r[2], r[1]);
+    EXPECT_EQ(r[0], r[1]);
+    // At equal texels, the left box's shadow is closer to its exact footprint when the camera is near it.
+    double errNear = 0, errFar = 0;
+    int64_t n = 0;
+    for (double x = -3.6; x <= -2.4; x += 0.01)
+        for (double z = -0.6; z <= 0.6; z += 0.01) {
+            const double ref = std::abs(x + 3) <= 0.25 && std::abs(z) <= 0.25 ? 0.0 : 1.0;
+            errNear += std::abs(nearLeft.visibility({x, 0, z}, {0, 0, 0}, 0, 0).x - ref);
+            errFar += std::abs(nearRight.visibility({x, 0, z}, {0, 0, 0}, 0, 0).x - ref);
+            ++n;
+        }
+    std::printf("left box, mean error camera near %.4f far %.4f\n", errNear / double(n), errFar / double(n));
+    EXPECT_LT(errNear, 0.5 * errFar);
+}
+
+TEST(DeepShadowClusterTest, ClusterCountTexelsAndTheSummaryKeepTheirInvariants) {
+    const VolumeScene s = dsmrThreeInARow();
+    for (const Light& light : {Light{}, dsmrSpot(), dsmrPoint({0, 4, 0})}) {
+        DeepShadowOptions opt;
+        opt.resolution = 40;
+        const DeepShadow single = DeepShadow::build(s, light, opt);
+        for (const int m : {2, 3, 8}) {
+            for (const double d0 : {0.0, 0.3, 10.0}) {
+                opt.clusters = m;
+                opt.clusterThreshold = d0;
+                opt.clusterEqualTexels = true;
+                const DeepShadow c = DeepShadow::build(s, light, opt);
+                const DeepShadowStats st = c.stats();
+                const int64_t groups = int64_t(c.groupBegin().size()) - 1;
+                EXPECT_GE(groups, 1);
+                EXPECT_LE(groups, std::min(m, 3));
+                EXPECT_EQ(st.clusterGroups, groups);
+                EXPECT_EQ(st.clusterViews, int64_t(c.views().size()));
+                if (d0 == 10.0) { EXPECT_EQ(groups, 1); } // every pair within d0: one cluster
+                if (d0 == 0.0) { EXPECT_EQ(groups, std::min(m, 3)); }
+                // Every casting object in exactly one cluster, numbered 0..groups-1.
+                for (const int k : c.objectClusters()) {
+                    EXPECT_GE(k, 0);
+                    EXPECT_LT(k, groups);
+                }
+                EXPECT_EQ(st.unclusteredViewTexels, single.stats().texels);
+                EXPECT_LE(st.clusteredViewTexels, st.unclusteredViewTexels);
+                EXPECT_LE(c.views().size(),
+                          light.type == LightType::Point ? 6u * std::size_t(groups) : std::size_t(groups));
+                // Without the equal-texel budget every map has the full resolution.
+                opt.clusterEqualTexels = false;
+                const DeepShadow full = DeepShadow::build(s, light, opt);
+                for (const LightView& v : full.views())
+                    EXPECT_EQ(std::max(v.frame.width(), v.frame.height()), 40);
+            }
+        }
+    }
+}
+
+TEST(DeepShadowClusterTest, ClustersAreNeverSilentlyIgnored) {
+    // A point light clusters (the summary counts its maps); a light over a single casting object
+    // says it has one cluster.
     Scene s;
     SceneMesh box;
     box.mesh = test::makeBox({-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5});
@@ -463,14 +659,126 @@ TEST(DeepShadowClusterTest, APointLightSaysItsMapsAreNotClustered) {
     setRenderOption(r, "clusters", int64_t(4));
     const ShadowOptions o = r.shadow;
     const std::string said = summary(shadowStats(buildLightShadow(s, point, o)));
-    EXPECT_NE(said.find("clusters not applied to 1 point light"), std::string::npos) << said;
-    Light spot = point;
-    spot.type = LightType::Spot;
-    spot.direction = {0, -1, 0};
-    spot.outerConeAngle = 1.2;
-    const std::string spotSaid = summary(shadowStats(buildLightShadow(s, spot, o)));
-    EXPECT_EQ(spotSaid.find("not applied"), std::string::npos) << spotSaid;
-    EXPECT_NE(spotSaid.find("clustered maps"), std::string::npos) << spotSaid;
+    EXPECT_NE(said.find("2 clusters in 2 maps"), std::string::npos) << said;
+    EXPECT_EQ(said.find("one casting object"), std::string::npos) << said;
+    s.meshes.pop_back();
+    const std::string one = summary(shadowStats(buildLightShadow(s, point, o)));
+    EXPECT_NE(one.find("1 light(s) have one casting object"), std::string::npos) << one;
+}
+
+TEST(DeepShadowClusterTest, APointLightRenderChangesWithClusters) {
+    // The bug this replaces: --clusters with a point light gave a byte-identical image.
+    Scene s;
+    Material m;
+    const uint32_t mat = s.addMaterial(m);
+    SceneMesh g;
+    test::appendQuad(g.mesh, {0, 0, 0}, {0, 0, 4}, {4, 0, 0});
+    g.material = mat;
+    g.castsShadow = false;
+    s.meshes.push_back(g);
+    for (const double x : {-1.5, 1.5}) {
+        SceneMesh b;
+        b.mesh = test::makeBox({x - 0.2, 0.4, -0.2}, {x + 0.2, 0.8, 0.2});
+        b.material = mat;
+        s.meshes.push_back(b);
+    }
+    s.lights.push_back(dsmrPoint({0, 3, 0}));
+    Camera c;
+    c.position = {0, 4, 5};
+    c.fovY = 0.8;
+    RenderOptions o;
+    o.width = 64;
+    o.height = 48;
+    o.shadow = shadowOptionsNamed("deep");
+    setRenderOption(o, "dsmResolution", int64_t(32));
+    const RenderResult without = render(s, c, o);
+    setRenderOption(o, "clusters", int64_t(4));
+    const RenderResult with = render(s, c, o);
+    int64_t differ = 0;
+    for (int64_t y = 0; y < o.height; ++y)
+        for (int64_t x = 0; x < o.width; ++x) differ += !(with.image.at(x, y) == without.image.at(x, y));
+    EXPECT_GT(differ, 10);
+    EXPECT_NE(summary(with.shadowStats).find("clusters in"), std::string::npos) << summary(with.shadowStats);
+}
+
+// ---- filtering ---------------------------------------------------------------------------------
+
+// A square box turned 30 degrees about the vertical, floating over the ground at y = 0 under a sun
+// straight above: its exact shadow is the turned square |x'|, |z'| <= 0.5 (closed form).
+struct DsmrTurnedSquare {
+    double c = std::cos(0.5235987755982988), s = std::sin(0.5235987755982988);
+    Vec3d world(double lx, double lz) const { return {c * lx - s * lz, 0, s * lx + c * lz}; }
+    double exact(const Vec3d& p) const {
+        const double lx = c * p.x + s * p.z, lz = -s * p.x + c * p.z;
+        return std::abs(lx) <= 0.5 && std::abs(lz) <= 0.5 ? 0.0 : 1.0;
+    }
+};
+
+TEST(DeepShadowFilterTest, BilinearLookupsCutTheStairStepsOfAShadowEdge) {
+    const DsmrTurnedSquare sq;
+    Mesh box = test::makeBox({-0.5, 1, -0.5}, {0.5, 1.5, 0.5});
+    for (Vec3f& p : box.positions) {
+        const Vec3d w = sq.world(p.x, p.z);
+        p = Vec3f(Vec3d{w.x, double(p.y), w.z});
+    }
+    VolumeScene s;
+    VolumeSceneObject o;
+    o.shape = s.addLeaf(box);
+    s.addObject(o);
+    Light sun;
+    sun.direction = {0, -1, 0};
+    DeepShadowOptions opt;
+    opt.resolution = 32;
+    EXPECT_EQ(opt.filter, DsmFilter::Bilinear); // filtered by default
+    const DeepShadow bilinear = DeepShadow::build(s, sun, opt);
+    opt.filter = DsmFilter::None;
+    const DeepShadow none = DeepShadow::build(s, sun, opt);
+    const double texel = bilinear.views()[0].columnWorldSize({0, 0, 0});
+    // Lines parallel to each edge, at fixed distances from it (up to a texel either side): the exact
+    // shadow is constant along each, so its total variation there is the stair-stepping; and the
+    // RMS error against the exact shadow over the same points.
+    double tv[2] = {0, 0}, sq2[2] = {0, 0};
+    int64_t n = 0;
+    for (int edge = 0; edge < 4; ++edge)
+        for (const double off : {-1.0, -0.6, -0.3, 0.3, 0.6, 1.0}) {
+            float prev[2] = {-1, -1};
+            for (double t = -0.4; t <= 0.4; t += 0.002) {
+                const double a = 0.5 + off * texel, lx = edge < 2 ? (edge ? -a : a) : t,
+                             lz = edge < 2 ? t : (edge == 2 ? a : -a);
+                const Vec3d p = sq.world(lx, lz);
+                const double ref = sq.exact(p);
+                const DeepShadow* maps[2] = {&bilinear, &none};
+                for (int k = 0; k < 2; ++k) {
+                    const float v = maps[k]->visibility(p, {0, 0, 0}, 0, 0).x;
+                    if (prev[k] >= 0) tv[k] += std::abs(v - prev[k]);
+                    prev[k] = v;
+                    sq2[k] += (v - ref) * (v - ref);
+                }
+                ++n;
+            }
+        }
+    const double rms[2] = {std::sqrt(sq2[0] / double(n)), std::sqrt(sq2[1] / double(n))};
+    std::printf(
+        "edge: total variation along the edge bilinear %.1f none %.1f; RMS error bilinear %.4f none %.4f\n",
+        tv[0], tv[1], rms[0], rms[1]);
+    EXPECT_LT(tv[0], 0.6 * tv[1]);
+    EXPECT_LT(rms[0], rms[1]);
+    // Unfiltered: the visibility function of the one texel the point falls in; filtered: the
+    // bilinear lookup (the behaviour before the option existed).
+    const LightView& v = none.views()[0];
+    std::mt19937 rng(2);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int k = 0; k < 500; ++k) {
+        const Vec3d p{u(rng), 0, u(rng)};
+        const Vec3d g = v.gridFromWorld(p);
+        const int64_t x = std::clamp<int64_t>(int64_t(std::floor(g.x)), 0, v.frame.width() - 1);
+        const int64_t y = std::clamp<int64_t>(int64_t(std::floor(g.y)), 0, v.frame.height() - 1);
+        const std::vector<DsmNode> nodes = none.maps()[0].texel(x, y);
+        ASSERT_EQ(none.visibility(p, {0, 0, 0}, 0, 0).x,
+                  evalVisibility(nodes.data(), int64_t(nodes.size()), float(g.z)));
+        ASSERT_EQ(bilinear.visibility(p, {0, 0, 0}, 0, 0).x,
+                  bilinear.maps()[0].view().visibilityBilinear(float(g.x), float(g.y), float(g.z)));
+    }
 }
 
 TEST(DeepShadowTest, InvalidScenesAndOptionsThrow) {
@@ -1042,6 +1350,50 @@ TEST(DeepShadowCliTest, RenderWithDeepShadowsEveryStorageAndClusters) {
     EXPECT_NE(bad.exitCode, 0);
     EXPECT_NE(bad.err.find("linked"), std::string::npos) << bad.err;
     EXPECT_FALSE(std::filesystem::exists(dir.file("out.png")));
+}
+
+TEST(DeepShadowCliTest, TheDsmKnobsAreFlagsWithHelpAndBadValuesFailNamingThem) {
+    test::TempDir dir;
+    const test::CommandRun help = test::runVoxfx(dir, "render --help");
+    ASSERT_EQ(help.exitCode, 0) << help.err;
+    for (const char* flag : {"--fixed-nodes", "--dsm-step", "--termination", "--clusters",
+                             "--cluster-threshold", "--cluster-equal-texels", "--dsm-filter"})
+        EXPECT_NE(help.out.find(flag), std::string::npos) << flag;
+    EXPECT_NE(help.out.find("bilinear | none"), std::string::npos);
+    test::writeFile(dir.file("cube.off"),
+                    "OFF\n8 6 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
+                    "4 0 2 3 1\n4 4 5 7 6\n4 0 1 5 4\n4 2 6 7 3\n4 0 4 6 2\n4 1 3 7 5\n");
+    test::writeFile(dir.file("scene.json"), R"({
+      "meshes": [{"file": "cube.off", "name": "floor", "scale": [4, 0.1, 4], "translate": [-2, -0.1, -2]},
+                 {"file": "cube.off", "name": "a", "scale": 0.5, "translate": [-1.5, 0.5, 0]},
+                 {"file": "cube.off", "name": "b", "scale": 0.5, "translate": [1.0, 0.5, 0]}],
+      "receiversOnly": ["floor"],
+      "lights": [{"type": "point", "position": [0, 3, 0.2]}]
+    })");
+    const std::string base = "render " + dir.file("scene.json") + " -o " + dir.file("out.png") +
+                             " --shadows deep --dsm-resolution 32 --width 40 --height 30 ";
+    const test::CommandRun good =
+        test::runVoxfx(dir, base + "--fixed-nodes 4 --dsm-storage fixed --dsm-step 0.5 --termination 0.01 "
+                                   "--clusters 3 --cluster-threshold 0.1 --dsm-filter none");
+    EXPECT_EQ(good.exitCode, 0) << good.err;
+    EXPECT_NE(good.out.find("clusters in"), std::string::npos) << good.out;
+    std::filesystem::remove(dir.file("out.png"));
+    // Each bad value: a non-zero exit, the flag (or the option) named, no image.
+    for (const auto& [flags, named] :
+         std::vector<std::pair<std::string, std::string>>{{"--fixed-nodes 1", "--fixed-nodes"},
+                                                          {"--fixed-nodes -3", "--fixed-nodes"},
+                                                          {"--dsm-step 0", "--dsm-step"},
+                                                          {"--dsm-step abc", "--dsm-step"},
+                                                          {"--termination 1", "--termination"},
+                                                          {"--cluster-threshold -1", "--cluster-threshold"},
+                                                          {"--clusters -2", "--clusters"},
+                                                          {"--dsm-filter blurry", "blurry"}}) {
+        const test::CommandRun bad = test::runVoxfx(dir, base + flags);
+        EXPECT_NE(bad.exitCode, 0) << flags;
+        EXPECT_NE(bad.err.find(named), std::string::npos) << flags << ": " << bad.err;
+        EXPECT_EQ(bad.err.find("terminate called"), std::string::npos) << flags << ": " << bad.err;
+        EXPECT_FALSE(std::filesystem::exists(dir.file("out.png"))) << flags;
+    }
 }
 
 // The table of BENCHMARKS.md: DSM lookups (bilinear, at random points of the mixed scene) against the

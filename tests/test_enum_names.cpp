@@ -104,6 +104,7 @@ TEST(EnumNamesTest, EveryEnumeratorHasOneNameThatParsesBackInAnyCase) {
     expectOneNamePerValue<Device>(kDeviceNames, parseDevice);
     expectOneNamePerValue<Coverage>(kCoverageNames, parseCoverage);
     expectOneNamePerValue<DsmStorage>(kDsmStorageNames, parseDsmStorage);
+    expectOneNamePerValue<DsmFilter>(kDsmFilterNames, parseDsmFilter);
     expectOneNamePerValue<MorphOp>(kMorphOpNames, parseMorphOp);
     expectOneNamePerValue<MorphBorder>(kMorphBorderNames, parseMorphBorder);
     expectOneNamePerValue<CsgOp>(kCsgOpNames, parseCsgOp);

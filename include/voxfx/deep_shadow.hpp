@@ -18,13 +18,27 @@
 //
 // Lookup: p (moved along its normal by normalOffset texel footprints) is projected into the view
 // that covers it; the visibility at its depth (minus depthBias texel footprints) is interpolated
-// bilinearly between the four texels around it. Points outside every view are lit.
+// bilinearly between the four texels around it (filter bilinear, the default), or read from the
+// one texel p falls in (filter none). Points outside every view are lit.
+//
+// Clustering (§4, clusters > 1): the casting objects are grouped by the distance of their
+// light-space projected boxes (clusterBoxes; for a point light the largest distance over the six
+// cube directions), each cluster gets its own maps fitted to its objects, and the visibility is the
+// product over clusters. Directional lights: one map per cluster. Spot and point lights: one
+// perspective map aimed at the cluster when its objects lie within a cone of at most 120 degrees
+// around the light, else the spot's own frame or the cube faces its objects reach (so a point light
+// may need fewer than six maps). Where the camera is given (options.camera; the renderer sets it), distances
+// are scaled by how near the pair is to the camera against the casters' centre (the light-space perspective
+// idea: resolution where the viewer is close), so objects near the camera get clusters, and maps, of their
+// own. With clusterEqualTexels (default) the clustered maps share the texels of the unclustered maps (the
+// paper's 4 x 128^2 against 256^2): the trade is at equal memory.
 //
 // Thread-safety: build uses worker threads; a built DeepShadow is read-only (lookups from any number
 // of threads).
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -52,13 +66,21 @@ struct DeepShadowOptions {
     int32_t fixedNodes = 0;    ///< fixed storage: nodes per texel, 0 = sized by the worst texel
     double stepVoxels = 1.0;   ///< volume sample step, in smallest voxel spacings
     double termination = 1e-4; ///< early ray termination: V below this becomes 0
-    /// Clustering (Bornik et al. §4.4): at most this many maps per light view, each fitted to a
-    /// cluster of objects (0 or 1: one map fitted to all casters). Spot and directional lights;
-    /// a point light keeps its six cube-face maps, and the stats say so (unclusteredPointLights).
+    /// Clustering (Bornik et al. §4): at most this many clusters of casting objects per light,
+    /// each with its own maps (0 or 1: one set of maps fitted to all casters). See the file comment.
     int clusters = 0;
     /// d0: objects whose light-space projected boxes differ by at most this (fraction of the
     /// light view's side) share a cluster.
     double clusterThreshold = 0.2;
+    /// Clustered maps share the texels the unclustered maps would have (their resolution is
+    /// scaled, up or down, to fit); off: every clustered map has `resolution` texels along its
+    /// longer side.
+    bool clusterEqualTexels = true;
+    /// Filtering of lookups between texels.
+    DsmFilter filter = DsmFilter::Bilinear;
+    /// The camera's eye, for clusters fitted to the view (see the file comment); not an option by
+    /// name: the renderer sets it from the frame's camera. Unset: clusters ignore the camera.
+    std::optional<Vec3d> camera;
     /// Volume bricks the transfer function leaves transparent are not sampled (EmptySpace in
     /// voxfx/segment_walker.hpp); the map is the same either way, only faster.
     bool skipEmptySpace = true;
@@ -67,7 +89,7 @@ struct DeepShadowOptions {
     /// Lookups by DeepShadow::visibility(p, n): depth bias, in texel footprints at p.
     double depthBias = 1.0;
     /// dsmResolution, epsilon, dsmStorage, fixedNodes, dsmStep, termination, clusters,
-    /// clusterThreshold, emptySpaceSkipping, normalOffset, depthBias.
+    /// clusterThreshold, clusterEqualTexels, dsmFilter, emptySpaceSkipping, normalOffset, depthBias.
     static std::span<const OptionField<DeepShadowOptions>> fields();
 };
 
@@ -81,6 +103,9 @@ struct ProjectedBox {
     double lo[2], hi[2];
 };
 std::vector<int> clusterBoxes(const std::vector<ProjectedBox>& boxes, int maxClusters, double d0);
+/// The same heuristic over any symmetric distance: dist[i * n + j] for n objects.
+std::vector<int> clusterByDistance(std::size_t n, const std::vector<double>& dist, int maxClusters,
+                                   double d0);
 
 struct DeepShadowTimings {
     double fragmentsMs = 0; ///< rasterizing the fragment lists
@@ -92,14 +117,20 @@ struct DeepShadowTimings {
 struct DeepShadowStats : DsmStats {
     DsmStorage storage = DsmStorage::Chunked;
     DeepShadowTimings timings;
-    int64_t clusteredMaps = 0; ///< cluster groups of lights built with clusters > 1 (summed)
-    /// Lights for which clusters > 1 was asked but not applied: point lights (their six cube-face
-    /// maps each fit every caster; clustering them is not implemented).
-    int64_t unclusteredPointLights = 0;
+    int64_t clusteredLights = 0; ///< lights built with clusters > 1
+    int64_t clusterGroups = 0;   ///< clusters formed (summed over those lights)
+    int64_t clusterViews = 0;    ///< their light views (one map each, or three for coloured light)
+    /// Texels of the views the unclustered maps of those lights would have (the budget that
+    /// clusterEqualTexels keeps to), and of the clustered views.
+    int64_t unclusteredViewTexels = 0, clusteredViewTexels = 0;
+    /// Lights with clusters > 1 that have a single casting object: one cluster, the same maps as
+    /// without clusters (the summary says so).
+    int64_t singleObjectLights = 0;
     DeepShadowStats& operator+=(const DeepShadowStats& o);
     /// "T texels, nodes per texel mean M max X, B MiB chunked (fixed layout sized by the worst
-    /// texel: F MiB)", then ", N clustered maps" or ", clusters not applied to N point light(s)"
-    /// where those apply; empty without texels.
+    /// texel: F MiB)", then for clusters ", K clusters in V maps (C texels per channel against
+    /// U unclustered)" and ", clusters asked but N light(s) have one casting object" where those
+    /// apply; empty without texels.
     std::string summary() const;
 };
 
@@ -133,6 +164,9 @@ public:
     /// Clusters: views [groupBegin[g], groupBegin[g + 1]) hold the objects of cluster g; the
     /// visibility is the product over clusters. One group without clustering.
     const std::vector<std::size_t>& groupBegin() const { return groupBegin_; }
+    /// Per object of the scene it was built from, its cluster (-1: casts no shadow); empty without
+    /// clustering.
+    const std::vector<int>& objectClusters() const { return objectClusters_; }
     /// Node and memory statistics summed over the views (maxNodes: the largest texel of any).
     DeepShadowStats stats() const;
     const DeepShadowTimings& timings() const { return timings_; }
@@ -144,7 +178,8 @@ private:
     std::vector<std::size_t> groupBegin_;
     DeepShadowTimings timings_;
     DeepShadowOptions options_;
-    bool clustered_ = false, pointUnclustered_ = false; ///< clusters > 1: applied; asked, point light
+    std::vector<int> objectClusters_;
+    DeepShadowStats clusterStats_; ///< the cluster counters (clusteredLights ... singleObjectLights)
 };
 
 /// The exact (uncompressed, epsilon ignored) visibility function along texel (x, y) of `view`, as

@@ -313,6 +313,26 @@ const char* toString(DsmStorage s);
 /// Parses fixed | chunked (any case); throws voxfx::Error listing them otherwise.
 DsmStorage parseDsmStorage(const std::string& name);
 
+/// How a lookup between texels filters (`--dsm-filter`): Bilinear weighs the visibility functions of
+/// the four texels around the point (the paper's §3.2 filtering, a 2x2 PCF); None takes the one
+/// texel the point falls in (the unfiltered lookup of the paper's table 1).
+enum class DsmFilter : uint8_t { Bilinear, None };
+inline constexpr EnumName<DsmFilter> kDsmFilterNames[] = {{"bilinear", DsmFilter::Bilinear},
+                                                          {"none", DsmFilter::None}};
+const char* toString(DsmFilter f);
+/// Parses bilinear | none (any case); throws voxfx::Error listing them otherwise.
+DsmFilter parseDsmFilter(const std::string& name);
+
+namespace detail {
+/// The texel holding light-space (u, v) (texel units), clamped at the border (NaN: the first).
+VOXFX_HOSTDEV inline int64_t dsmNearest(float u, int64_t n) {
+    if (!(u == u) || u < 0.0f) return 0;
+    if (u >= float(n)) return n - 1;
+    const int64_t i = int64_t(u);
+    return i >= n ? n - 1 : i;
+}
+} // namespace detail
+
 /// A plain view of either storage, for lookups that choose at run time (`--dsm-storage`).
 struct DsmView {
     DsmStorage storage = DsmStorage::Chunked;
@@ -325,6 +345,15 @@ struct DsmView {
     VOXFX_HOSTDEV float visibilityBilinear(float u, float v, float z) const {
         return storage == DsmStorage::Fixed ? fixed.visibilityBilinear(u, v, z)
                                             : chunked.visibilityBilinear(u, v, z);
+    }
+    /// The texel (u, v) falls in (texel units, clamped at the border), unfiltered.
+    VOXFX_HOSTDEV float visibilityNearest(float u, float v, float z) const {
+        const int64_t w = storage == DsmStorage::Fixed ? fixed.width : chunked.width;
+        const int64_t h = storage == DsmStorage::Fixed ? fixed.height : chunked.height;
+        return visibility(detail::dsmNearest(u, w), detail::dsmNearest(v, h), z);
+    }
+    VOXFX_HOSTDEV float visibilityFiltered(DsmFilter f, float u, float v, float z) const {
+        return f == DsmFilter::None ? visibilityNearest(u, v, z) : visibilityBilinear(u, v, z);
     }
 };
 

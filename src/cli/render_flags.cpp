@@ -102,7 +102,11 @@ void RenderFlags::add(CLI::App& app) {
             app.add_option_function<std::string>(
                    names,
                    [this, info](const std::string& text) {
-                       given_.emplace_back(info.name, parseFlagValue(info, text));
+                       // A value that does not parse fails the parse (CLI11 prints it, exit non-zero)
+                       // instead of leaving the callback as an uncaught voxfx::Error (abort).
+                       try {
+                           given_.emplace_back(info.name, parseFlagValue(info, text));
+                       } catch (const Error& e) { throw CLI::ValidationError(e.what()); }
                    },
                    help)
                 ->type_name(kTypeNames[int(info.type)])

@@ -156,22 +156,27 @@ void checkDeepShadowOptions(const DeepShadowOptions& o) {
         fail("deep shadow map: the volume step must be positive, got ", o.stepVoxels, " voxels");
     if (!(o.termination >= 0 && o.termination < 1))
         fail("deep shadow map: early termination threshold ", o.termination, " is not in [0, 1)");
+    if (o.fixedNodes == 1 || o.fixedNodes < 0 || o.fixedNodes > 65535)
+        fail("deep shadow map (--fixed-nodes): fixed storage needs 0 (sized by the worst texel) or 2..65535 "
+             "nodes per texel "
+             "(a surface is a step of two nodes), got ",
+             o.fixedNodes);
+    if (o.clusters < 0) fail("deep shadow map (--clusters): must be 0 or more, got ", o.clusters);
+    if (!(o.clusterThreshold >= 0) || !std::isfinite(o.clusterThreshold))
+        fail("deep shadow map (--cluster-threshold): the cluster distance d0 must be a number >= 0, got ",
+             o.clusterThreshold);
 }
 
 } // namespace
 
-std::vector<int> clusterBoxes(const std::vector<ProjectedBox>& boxes, int maxClusters, double d0) {
-    const std::size_t n = boxes.size();
+std::vector<int> clusterByDistance(std::size_t n, const std::vector<double>& distances, int maxClusters,
+                                   double d0) {
     std::vector<int> cluster(n, -1);
     if (n == 0) return cluster;
+    if (distances.size() != n * n)
+        fail("clusterByDistance: ", distances.size(), " distances for ", n, " objects");
     maxClusters = std::max(1, maxClusters);
-    auto dist = [&](std::size_t a, std::size_t b) {
-        double d = 0;
-        for (int k = 0; k < 2; ++k)
-            d = std::max(
-                {d, std::abs(boxes[a].lo[k] - boxes[b].lo[k]), std::abs(boxes[a].hi[k] - boxes[b].hi[k])});
-        return d;
-    };
+    auto dist = [&](std::size_t a, std::size_t b) { return distances[a * n + b]; };
     // Pairs by increasing distance (ties by index): objects are placed in the order they appear.
     std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
     for (std::size_t a = 0; a < n; ++a)
@@ -209,71 +214,255 @@ std::vector<int> clusterBoxes(const std::vector<ProjectedBox>& boxes, int maxClu
     return cluster;
 }
 
-namespace {
+std::vector<int> clusterBoxes(const std::vector<ProjectedBox>& boxes, int maxClusters, double d0) {
+    const std::size_t n = boxes.size();
+    std::vector<double> dist(n * n, 0.0);
+    for (std::size_t a = 0; a < n; ++a)
+        for (std::size_t b = 0; b < n; ++b)
+            for (int k = 0; k < 2; ++k)
+                dist[a * n + b] = std::max({dist[a * n + b], std::abs(boxes[a].lo[k] - boxes[b].lo[k]),
+                                            std::abs(boxes[a].hi[k] - boxes[b].hi[k])});
+    return clusterByDistance(n, dist, maxClusters, d0);
+}
 
-// Light-space projected box of the leaves under `node`, in fractions of the view's sides.
-void deepShadowLeavesOf(const VolumeScene& s, int32_t node, std::vector<int32_t>& out) {
+namespace detail_dsmcluster {
+
+// The leaves under `node`.
+void leavesOf(const VolumeScene& s, int32_t node, std::vector<int32_t>& out) {
     const ShapeNode& n = s.nodes[std::size_t(node)];
     if (n.op == ShapeOp::Leaf) {
         out.push_back(n.leaf);
         return;
     }
-    deepShadowLeavesOf(s, n.a, out);
-    deepShadowLeavesOf(s, n.b, out);
+    leavesOf(s, n.a, out);
+    leavesOf(s, n.b, out);
 }
 
-} // namespace
+// A lattice of k^3 points over a box (its corners among them) and the largest distance from a
+// point of the box to the nearest lattice point.
+constexpr int kLattice = 9;
+std::vector<Vec3d> lattice(const Box3d& b, double& reach) {
+    std::vector<Vec3d> out;
+    const Vec3d e = b.extent() * (1.0 / double(kLattice - 1));
+    reach = 0.5 * length(e);
+    for (int i = 0; i < kLattice; ++i)
+        for (int j = 0; j < kLattice; ++j)
+            for (int k = 0; k < kLattice; ++k)
+                out.push_back(b.lo + Vec3d{e.x * double(i), e.y * double(j), e.z * double(k)});
+    return out;
+}
+
+// The cube faces of a point light, in makeLightViews' order: +x, -x, +y, -y, +z, -z. Face f has
+// axis f / 2 with sign (f odd: negative); (u, v) are the other two coordinates over the axis one,
+// in [-1, 1] inside the face.
+struct Faces {
+    bool present[6] = {false, false, false, false, false, false};
+    ProjectedBox box[6];
+};
+
+// Which faces the world box reaches from `eye` (conservative: the lattice test allows for the
+// points between lattice points; f = s * d_i - max(|d_j|, |d_k|) changes by at most sqrt(2) per
+// unit of distance), and the projected box on each, in fractions of the face's side.
+Faces cubeFacesOf(const Box3d& b, const Vec3d& eye) {
+    Faces out;
+    for (ProjectedBox& pb : out.box) pb = {{1e300, 1e300}, {-1e300, -1e300}};
+    double reach = 0;
+    for (const Vec3d& q : lattice(b, reach)) {
+        const Vec3d d = q - eye;
+        for (int f = 0; f < 6; ++f) {
+            const int i = f / 2, j = (i + 1) % 3, k = (i + 2) % 3;
+            const double axis = f % 2 ? -d[i] : d[i];
+            const double side = std::max(std::abs(d[j]), std::abs(d[k]));
+            if (axis - side < -1.5 * reach) continue;
+            out.present[f] = true;
+            // Inside the face's pyramid (up to the tolerance): its (u, v), clamped to the face.
+            const double w = std::max(axis, 1e-12);
+            const double u = std::clamp(d[j] / w, -1.0, 1.0), v = std::clamp(d[k] / w, -1.0, 1.0);
+            ProjectedBox& pb = out.box[f];
+            pb.lo[0] = std::min(pb.lo[0], 0.5 * (u + 1));
+            pb.hi[0] = std::max(pb.hi[0], 0.5 * (u + 1));
+            pb.lo[1] = std::min(pb.lo[1], 0.5 * (v + 1));
+            pb.hi[1] = std::max(pb.hi[1], 0.5 * (v + 1));
+        }
+    }
+    return out;
+}
+
+double boxDistance(const ProjectedBox& a, const ProjectedBox& b) {
+    double d = 0;
+    for (int k = 0; k < 2; ++k) d = std::max({d, std::abs(a.lo[k] - b.lo[k]), std::abs(a.hi[k] - b.hi[k])});
+    return d;
+}
+
+// The largest angle (cosine) between `axis` and the directions from `eye` to the box's corners.
+double minCosine(const Box3d& b, const Vec3d& eye, const Vec3d& axis) {
+    double c = 1;
+    for (int k = 0; k < 8; ++k) {
+        const Vec3d q{(k & 1) ? b.hi.x : b.lo.x, (k & 2) ? b.hi.y : b.lo.y, (k & 4) ? b.hi.z : b.lo.z};
+        const double l = length(q - eye);
+        if (!(l > 0)) return -1;
+        c = std::min(c, dot(q - eye, axis) / l);
+    }
+    return c;
+}
+
+// How the maps of one cluster are made: makeLightViews for `light` fitted to `bounds` (a spot aimed
+// at the cluster stands in for a point light where that is enough), keeping only the cube faces
+// marked (point lights).
+struct ClusterViews {
+    Light light;
+    Box3d bounds;
+    bool keep[6] = {true, true, true, true, true, true};
+    std::vector<LightView> make(int64_t columns) const {
+        std::vector<LightView> all = makeLightViews(light, bounds, columns, 1), out;
+        for (std::size_t i = 0; i < all.size(); ++i)
+            if (all.size() == 1 || keep[i]) out.push_back(all[i]);
+        return out;
+    }
+};
+
+int64_t texelsOf(const std::vector<LightView>& views) {
+    int64_t t = 0;
+    for (const LightView& v : views) t += v.frame.width() * v.frame.height();
+    return t;
+}
+
+// A point light's cluster is served by one perspective map when every corner of its bounds lies
+// within this angle of the direction to its centre (a frame of at most about 120 degrees; wider
+// frames spread their texels worse than the cube faces do).
+constexpr double kPointClusterHalfAngle = M_PI / 3;
+
+} // namespace detail_dsmcluster
 
 DeepShadow DeepShadow::build(const VolumeScene& scene, const Light& light, const DeepShadowOptions& options,
                              Progress* progress) {
+    namespace dc = detail_dsmcluster;
     checkDeepShadowOptions(options);
     scene.validate();
     std::vector<LightView> all = makeLightViews(light, scene.bounds(true), options.resolution, 1);
-    if (options.clusters <= 1 || light.type == LightType::Point) {
-        DeepShadow out = build(scene, all, options, progress);
-        out.pointUnclustered_ = options.clusters > 1;
-        return out;
-    }
-    // Project every casting object's bounds into the light view fitted to all casters.
-    const LightView& base = all[0];
+    if (options.clusters <= 1) return build(scene, all, options, progress);
+    // The casting objects' world bounds.
     std::vector<std::size_t> casters;
-    std::vector<ProjectedBox> boxes;
     std::vector<Box3d> worldBoxes;
+    Box3d allBounds;
     for (std::size_t o = 0; o < scene.objects.size(); ++o) {
         if (!scene.objects[o].castsShadow) continue;
         std::vector<int32_t> leaves;
-        deepShadowLeavesOf(scene, scene.objects[o].shape, leaves);
+        dc::leavesOf(scene, scene.objects[o].shape, leaves);
         Box3d wb;
         for (const int32_t l : leaves) wb.extend(computeBounds(scene.leaves[std::size_t(l)].view()));
-        ProjectedBox pb{{1e300, 1e300}, {-1e300, -1e300}};
-        for (int k = 0; k < 8; ++k) {
-            const Vec3d c{(k & 1) ? wb.hi.x : wb.lo.x, (k & 2) ? wb.hi.y : wb.lo.y,
-                          (k & 4) ? wb.hi.z : wb.lo.z};
-            const Vec3d g = base.covers(c) ? base.gridFromWorld(c) : Vec3d{0, 0, 0};
-            const double u = g.x / double(base.frame.width()), v = g.y / double(base.frame.height());
-            pb.lo[0] = std::min(pb.lo[0], u);
-            pb.hi[0] = std::max(pb.hi[0], u);
-            pb.lo[1] = std::min(pb.lo[1], v);
-            pb.hi[1] = std::max(pb.hi[1], v);
-        }
+        if (wb.empty()) continue;
         casters.push_back(o);
-        boxes.push_back(pb);
         worldBoxes.push_back(wb);
+        allBounds.extend(wb);
     }
-    const std::vector<int> cluster = clusterBoxes(boxes, options.clusters, options.clusterThreshold);
+    const std::size_t n = casters.size();
+    // d(A, B) in light space: the largest difference of the projected boxes' corners, in fractions
+    // of the view's side; for a point light the largest over the six cube directions (a face that
+    // one object reaches and the other does not counts as a whole side apart).
+    std::vector<double> dist(n * n, 0.0);
+    if (light.type == LightType::Point) {
+        std::vector<dc::Faces> faces;
+        for (const Box3d& b : worldBoxes) faces.push_back(dc::cubeFacesOf(b, light.position));
+        for (std::size_t a = 0; a < n; ++a)
+            for (std::size_t b = 0; b < n; ++b)
+                for (int f = 0; f < 6; ++f) {
+                    const bool pa = faces[a].present[f], pb = faces[b].present[f];
+                    const double d =
+                        pa && pb ? dc::boxDistance(faces[a].box[f], faces[b].box[f]) : (pa || pb ? 1 : 0);
+                    dist[a * n + b] = std::max(dist[a * n + b], d);
+                }
+    } else {
+        const LightView& base = all[0];
+        std::vector<ProjectedBox> boxes;
+        for (const Box3d& wb : worldBoxes) {
+            ProjectedBox pb{{1e300, 1e300}, {-1e300, -1e300}};
+            for (int k = 0; k < 8; ++k) {
+                const Vec3d c{(k & 1) ? wb.hi.x : wb.lo.x, (k & 2) ? wb.hi.y : wb.lo.y,
+                              (k & 4) ? wb.hi.z : wb.lo.z};
+                // The base view is fitted to every caster: a corner outside it (behind a spot
+                // light) is clamped to the view's border.
+                Vec3d g = base.frame.isPerspective() && !(base.frame.viewDepth(c) > 0)
+                              ? Vec3d{0, 0, 0}
+                              : base.gridFromWorld(c);
+                const double u = std::clamp(g.x / double(base.frame.width()), 0.0, 1.0),
+                             v = std::clamp(g.y / double(base.frame.height()), 0.0, 1.0);
+                pb.lo[0] = std::min(pb.lo[0], u);
+                pb.hi[0] = std::max(pb.hi[0], u);
+                pb.lo[1] = std::min(pb.lo[1], v);
+                pb.hi[1] = std::max(pb.hi[1], v);
+            }
+            boxes.push_back(pb);
+        }
+        for (std::size_t a = 0; a < n; ++a)
+            for (std::size_t b = 0; b < n; ++b) dist[a * n + b] = dc::boxDistance(boxes[a], boxes[b]);
+    }
+    // The camera: a pair's distance scaled by how much nearer the camera it is than the casters'
+    // centre (at most 4x), so that objects near the viewer get clusters (and texels) of their own.
+    if (options.camera && n > 0) {
+        const Vec3d eye = *options.camera;
+        const double ref = std::max(length(allBounds.center() - eye), 1e-12);
+        std::vector<double> weight(n);
+        for (std::size_t i = 0; i < n; ++i)
+            weight[i] = ref / std::max(length(worldBoxes[i].center() - eye), 0.25 * ref);
+        for (std::size_t a = 0; a < n; ++a)
+            for (std::size_t b = 0; b < n; ++b) dist[a * n + b] *= std::max(weight[a], weight[b]);
+    }
+    const std::vector<int> cluster = clusterByDistance(n, dist, options.clusters, options.clusterThreshold);
     const int count = cluster.empty() ? 0 : *std::max_element(cluster.begin(), cluster.end()) + 1;
+    // Each cluster's views: a directional light one map fitted to the cluster; spot and point lights
+    // one map aimed at the cluster where its bounds fit a cone (a spot's own axis would leave a
+    // cluster off to the side spread over a frame as wide as the unclustered one), else the spot's
+    // own frame, or the cube faces the cluster reaches.
+    std::vector<dc::ClusterViews> specs(static_cast<std::size_t>(count));
+    for (int c = 0; c < count; ++c) {
+        dc::ClusterViews& spec = specs[std::size_t(c)];
+        spec.light = light;
+        for (std::size_t i = 0; i < n; ++i)
+            if (cluster[i] == c) spec.bounds.extend(worldBoxes[i]);
+        if (light.type == LightType::Directional) continue; // an orthographic frame fitted to the bounds
+        const Vec3d toCentre = spec.bounds.center() - light.position;
+        const double len = length(toCentre);
+        if (len > 0 && dc::minCosine(spec.bounds, light.position, toCentre * (1.0 / len)) >=
+                           std::cos(dc::kPointClusterHalfAngle)) {
+            spec.light.type = LightType::Spot;
+            spec.light.direction = toCentre * (1.0 / len);
+            spec.light.outerConeAngle = M_PI / 2; // makeLightViews narrows it to the bounds
+            continue;
+        }
+        if (light.type == LightType::Spot) continue; // too wide to aim at: the spot's own frame
+        for (bool& k : spec.keep) k = false;
+        for (std::size_t i = 0; i < n; ++i)
+            if (cluster[i] == c) {
+                const dc::Faces f = dc::cubeFacesOf(worldBoxes[i], light.position);
+                for (int k = 0; k < 6; ++k) spec.keep[k] = spec.keep[k] || f.present[k];
+            }
+    }
+    // Equal texels: the clustered views share those of the unclustered ones.
+    auto clusteredTexels = [&](int64_t columns) {
+        int64_t t = 0;
+        for (const dc::ClusterViews& spec : specs) t += dc::texelsOf(spec.make(columns));
+        return t;
+    };
+    const int64_t budget = dc::texelsOf(all);
+    int64_t columns = options.resolution;
+    if (options.clusterEqualTexels && count > 0) {
+        // Up or down: fewer maps than the unclustered views get more texels each.
+        const int64_t atFull = clusteredTexels(columns);
+        columns = std::clamp<int64_t>(
+            int64_t(std::floor(double(columns) * std::sqrt(double(budget) / double(atFull)))), 1, 16384);
+        while (columns > 1 && clusteredTexels(columns) > budget) --columns;
+    }
     DeepShadow out;
     out.options_ = options;
+    out.objectClusters_.assign(scene.objects.size(), -1);
+    for (std::size_t i = 0; i < n; ++i) out.objectClusters_[casters[i]] = cluster[i];
     for (int c = 0; c < count; ++c) {
         VolumeScene part = scene;
-        Box3d bounds;
         for (VolumeSceneObject& o : part.objects) o.castsShadow = false;
-        for (std::size_t i = 0; i < casters.size(); ++i)
-            if (cluster[i] == c) {
-                part.objects[casters[i]].castsShadow = true;
-                bounds.extend(worldBoxes[i]);
-            }
-        DeepShadow d = build(part, makeLightViews(light, bounds, options.resolution, 1), options, progress);
+        for (std::size_t i = 0; i < n; ++i)
+            if (cluster[i] == c) part.objects[casters[i]].castsShadow = true;
+        DeepShadow d = build(part, specs[std::size_t(c)].make(columns), options, progress);
         out.groupBegin_.push_back(out.views_.size());
         for (std::size_t i = 0; i < d.views_.size(); ++i) {
             out.views_.push_back(std::move(d.views_[i]));
@@ -284,7 +473,13 @@ DeepShadow DeepShadow::build(const VolumeScene& scene, const Light& light, const
         out.timings_.buildMs += d.timings_.buildMs;
     }
     out.groupBegin_.push_back(out.views_.size());
-    out.clustered_ = true;
+    DeepShadowStats& cs = out.clusterStats_;
+    cs.clusteredLights = 1;
+    cs.clusterGroups = count;
+    cs.clusterViews = int64_t(out.views_.size());
+    cs.unclusteredViewTexels = budget;
+    cs.clusteredViewTexels = dc::texelsOf(out.views_);
+    cs.singleObjectLights = n == 1;
     return out;
 }
 
@@ -356,7 +551,8 @@ int deepShadowViewIndex(const LightView* views, std::size_t count, const Vec3d& 
 // the maps of the green and blue channels, or none (the first map holds every channel).
 Vec3f deepShadowLookup(const std::vector<LightView>& views, const std::vector<DeepShadowMap>& maps,
                        const std::vector<std::vector<DeepShadowMap>>& greenBlue, std::size_t b, std::size_t e,
-                       const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias) {
+                       const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias,
+                       DsmFilter filter) {
     const LightView* group = views.data() + b;
     const std::size_t count = e - b;
     int i = deepShadowViewIndex(group, count, p);
@@ -372,10 +568,10 @@ Vec3f deepShadowLookup(const std::vector<LightView>& views, const std::vector<De
     const Vec3d g = v.gridFromWorld(q);
     const double z = g.z - depthBias * texel / v.worldPerDepthUnit();
     const std::size_t k = b + std::size_t(i);
-    const float red = maps[k].view().visibilityBilinear(float(g.x), float(g.y), float(z));
+    const float red = maps[k].view().visibilityFiltered(filter, float(g.x), float(g.y), float(z));
     if (greenBlue[k].empty()) return {red, red, red};
-    return {red, greenBlue[k][0].view().visibilityBilinear(float(g.x), float(g.y), float(z)),
-            greenBlue[k][1].view().visibilityBilinear(float(g.x), float(g.y), float(z))};
+    return {red, greenBlue[k][0].view().visibilityFiltered(filter, float(g.x), float(g.y), float(z)),
+            greenBlue[k][1].view().visibilityFiltered(filter, float(g.x), float(g.y), float(z))};
 }
 
 } // namespace
@@ -388,7 +584,7 @@ Vec3f DeepShadow::visibility(const Vec3d& p, const Vec3d& n, double normalOffset
     Vec3f v{1, 1, 1};
     for (std::size_t g = 0; g + 1 < groupBegin_.size(); ++g)
         v = v * deepShadowLookup(views_, maps_, greenBlue_, groupBegin_[g], groupBegin_[g + 1], p, n,
-                                 normalOffset, depthBias);
+                                 normalOffset, depthBias, options_.filter);
     return v;
 }
 
@@ -396,8 +592,12 @@ DeepShadowStats DeepShadow::stats() const {
     DeepShadowStats s;
     s.storage = options_.storage;
     s.timings = timings_;
-    s.clusteredMaps = clustered_ ? int64_t(groupBegin_.size()) - 1 : 0;
-    s.unclusteredPointLights = pointUnclustered_;
+    s.clusteredLights = clusterStats_.clusteredLights;
+    s.clusterGroups = clusterStats_.clusterGroups;
+    s.clusterViews = clusterStats_.clusterViews;
+    s.unclusteredViewTexels = clusterStats_.unclusteredViewTexels;
+    s.clusteredViewTexels = clusterStats_.clusteredViewTexels;
+    s.singleObjectLights = clusterStats_.singleObjectLights;
     std::vector<const DeepShadowMap*> all;
     for (const DeepShadowMap& m : maps_) all.push_back(&m);
     for (const std::vector<DeepShadowMap>& gb : greenBlue_)
@@ -437,18 +637,40 @@ std::span<const OptionField<DeepShadowOptions>> DeepShadowOptions::fields() {
         nameOption<O, parseDsmStorage, optionName<DsmStorage>, &O::storage>(
             "dsmStorage", "deep shadows: node storage", "fixed | chunked"),
         numberOption<O, &O::fixedNodes>(
-            "fixedNodes", "deep shadows, fixed storage: nodes per texel (0: sized by the worst texel)", 0,
-            65535),
+            "fixedNodes",
+            "deep shadows, --dsm-storage fixed: nodes each texel holds (the paper's 3D texture depth); a "
+            "texel needing more is rebuilt with a doubled epsilon until it fits (counted in the summary); 0: "
+            "as many as the worst texel needs",
+            0, 65535),
         numberOption<O, &O::stepVoxels>(
-            "dsmStep", "deep shadows: volume sample step, in smallest voxel spacings", 1e-3, 1000),
+            "dsmStep",
+            "deep shadows: volume sample step along a light ray, in smallest voxel spacings (smaller: "
+            "finer volume shadows, slower maps)",
+            1e-3, 1000),
         numberOption<O, &O::termination>(
-            "termination", "deep shadows: early ray termination, visibility below this becomes 0", 0,
-            0.999999),
+            "termination",
+            "deep shadows: early ray termination; a light ray whose visibility falls below this stops "
+            "and is 0 beyond (0: never stop early)",
+            0, 0.999999),
         numberOption<O, &O::clusters>(
-            "clusters", "deep shadows: at most this many clustered maps per light (0: off)", 0, 64),
+            "clusters",
+            "deep shadows: at most this many clusters of casting objects per light, each with its own "
+            "maps fitted to it (point lights too: one aimed map or the cube faces it reaches); 0 or 1: off",
+            0, 64),
         numberOption<O, &O::clusterThreshold>(
-            "clusterThreshold", "deep shadows: clustering distance d0, a fraction of the light view's side",
+            "clusterThreshold",
+            "deep shadows, --clusters: d0, objects whose light-space projected boxes differ by at most this "
+            "(a fraction of the light view's side) may share a cluster; smaller: more clusters",
             0, 100),
+        flagOption<O, &O::clusterEqualTexels>(
+            "clusterEqualTexels",
+            "deep shadows, --clusters: the clustered maps share the texels of the unclustered ones (the "
+            "paper's 4 x 128^2 against 256^2)"),
+        nameOption<O, parseDsmFilter, optionName<DsmFilter>, &O::filter>(
+            "dsmFilter",
+            "deep shadows: lookups between texels, bilinear over the four around the point (2x2 PCF) or "
+            "none (the texel the point falls in: stair-stepped edges)",
+            "bilinear | none"),
         flagOption<O, &O::skipEmptySpace>(
             "emptySpaceSkipping",
             "volumes: skip the bricks the transfer function leaves transparent (same image)"),
@@ -468,8 +690,12 @@ DeepShadowStats& DeepShadowStats::operator+=(const DeepShadowStats& o) {
     storage = o.storage;
     timings.fragmentsMs += o.timings.fragmentsMs;
     timings.buildMs += o.timings.buildMs;
-    clusteredMaps += o.clusteredMaps;
-    unclusteredPointLights += o.unclusteredPointLights;
+    clusteredLights += o.clusteredLights;
+    clusterGroups += o.clusterGroups;
+    clusterViews += o.clusterViews;
+    unclusteredViewTexels += o.unclusteredViewTexels;
+    clusteredViewTexels += o.clusteredViewTexels;
+    singleObjectLights += o.singleObjectLights;
     return *this;
 }
 
@@ -479,10 +705,14 @@ std::string DeepShadowStats::summary() const {
     return countText(texels) + " texels, nodes per texel mean " + numberText(meanNodes()) + " max " +
            countText(maxNodes) + ", " + numberText(double(bytes) / 1048576.0) + " MiB " + toString(storage) +
            " (fixed layout sized by the worst texel: " + numberText(fixedMiB) + " MiB)" +
-           (clusteredMaps > 0 ? ", " + countText(clusteredMaps) + " clustered maps" : "") +
-           (unclusteredPointLights > 0 ? ", clusters not applied to " + countText(unclusteredPointLights) +
-                                             " point light(s): one map per cube face fits every caster"
-                                       : "");
+           (clusteredLights > 0
+                ? ", " + countText(clusterGroups) + " clusters in " + countText(clusterViews) + " maps (" +
+                      countText(clusteredViewTexels) + " texels per channel against " +
+                      countText(unclusteredViewTexels) + " unclustered)"
+                : "") +
+           (singleObjectLights > 0 ? ", clusters asked but " + countText(singleObjectLights) +
+                                         " light(s) have one casting object: one cluster"
+                                   : "");
 }
 
 std::vector<DsmNode> deepShadowTexel(const VolumeScene& scene, const LightView& view, int64_t x, int64_t y,

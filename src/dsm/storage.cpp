@@ -233,6 +233,12 @@ DsmStorage parseDsmStorage(const std::string& name) {
     return parseEnum<DsmStorage>(name, "deep shadow map storage", kDsmStorageNames);
 }
 
+const char* toString(DsmFilter f) { return enumName(f, kDsmFilterNames); }
+
+DsmFilter parseDsmFilter(const std::string& name) {
+    return parseEnum<DsmFilter>(name, "deep shadow map filter", kDsmFilterNames);
+}
+
 DeepShadowMap DeepShadowMap::build(int64_t width, int64_t height, const DsmTexelFunction& texel,
                                    DsmStorage storage, const DsmBuildOptions& options) {
     DeepShadowMap m;

@@ -39,9 +39,12 @@ void shadowPass(FrameState& f, Progress* progress) {
     f.result.shadowStats = std::visit(
         []<class O>(const O&) -> ShadowStats { return typename detail::BuiltFor<LightShadow, O>::Stats{}; },
         f.options.shadow);
+    // Deep shadows fit their clusters to the camera (DeepShadowOptions::camera).
+    ShadowOptions options = f.options.shadow;
+    if (auto* deep = std::get_if<DeepShadowOptions>(&options)) deep->camera = f.camera.position;
     for (std::size_t i = 0; i < n; ++i) {
         detail::ProgressRange sp(progress, double(i) / double(n), double(i + 1) / double(n));
-        f.shadows.push_back(buildLightShadow(f.lit, f.lit.lights[i], f.options.shadow, sp.get()));
+        f.shadows.push_back(buildLightShadow(f.lit, f.lit.lights[i], options, sp.get()));
         prepareLightShadow(f.shadows.back(), f.gbuffer, f.geometry);
         accumulate(f.result.shadowStats, shadowStats(f.shadows.back()));
     }
