@@ -576,14 +576,12 @@ TEST(GlassTest, AbsorptionAndDeepShadowsAreColouredUnderTintedLeavesAndGlass) {
     }
 }
 
-TEST(GlassTest, ExactGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
-    // A glass cube (green tint) standing on a grey ground, seen from above, in a magenta environment. A ray
-    // entering the top is within the critical angle of the vertical, so it is totally reflected at
-    // the sides and leaves through the bottom into the ground: no pixel of the top sees the
-    // environment through the glass, only its Fresnel reflection (a few per cent of magenta over
-    // the ground's grey seen through green). (Rays entering a side can be totally reflected at the bottom and
-    // leave upwards: those rightly see the sky.) Skipping every opaque hit within epsilon of the exit (the
-    // ground under the bottom face) showed the environment below the ground through the top.
+// The top pixels of a green glass cube standing on the ground in a magenta environment, and how
+// many of them show the environment (magenta over green) through the glass.
+struct TopPixels {
+    int64_t top = 0, sky = 0;
+};
+TopPixels glassCubeOnTheGround(const GlassOptions& method) {
     Scene s = glassTestScene(); // the ground, and the ball (mesh 1) made a cube
     s.meshes[1].mesh = test::makeBox({-0.5, 0, -0.5}, {0.5, 1, 0.5});
     Light sun;
@@ -596,7 +594,7 @@ TEST(GlassTest, ExactGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
     o.width = 96;
     o.height = 72;
     o.shadow = shadowOptionsNamed("none");
-    o.glass = glassOptionsNamed("exact");
+    o.glass = method;
     Image magenta(4, 2);
     for (Vec3f& p : magenta.pixels) p = {1, 0, 1};
     o.environment = std::make_shared<const Environment>(magenta);
@@ -604,7 +602,7 @@ TEST(GlassTest, ExactGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
     const RenderResult r = render(s, cam, o);
     const SceneGeometry geo = flattenScene(s);
     const GBuffer g = renderGBuffer(geo, cameraFrame(cam, o.width, o.height));
-    int64_t top = 0, sky = 0;
+    TopPixels out;
     for (int64_t y = 0; y < o.height; ++y)
         for (int64_t x = 0; x < o.width; ++x) {
             const uint32_t t = g.triangle[size_t(y * o.width + x)];
@@ -613,12 +611,44 @@ TEST(GlassTest, ExactGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
             for (int k = 0; k < 3; ++k)
                 onTop = onTop && geo.mesh.positions[geo.mesh.indices[3 * t + k]].y == 1;
             if (!onTop) continue;
-            ++top;
+            ++out.top;
             const Vec3f& p = r.image.at(x, o.height - 1 - y);
-            sky += p.y < 0.5f * p.x;
+            out.sky += p.y < 0.5f * p.x;
         }
-    EXPECT_GT(top, 600);
-    EXPECT_EQ(sky, 0) << "of " << top << " pixels of the top";
+    return out;
+}
+
+TEST(GlassTest, ExactGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
+    // A glass cube (green tint) standing on a grey ground, seen from above, in a magenta environment. A ray
+    // entering the top is within the critical angle of the vertical, so it is totally reflected at
+    // the sides and leaves through the bottom into the ground: no pixel of the top sees the
+    // environment through the glass, only its Fresnel reflection (a few per cent of magenta over
+    // the ground's grey seen through green). (Rays entering a side can be totally reflected at the bottom and
+    // leave upwards: those rightly see the sky.) Skipping every opaque hit within epsilon of the exit (the
+    // ground under the bottom face) showed the environment below the ground through the top.
+    const TopPixels exact = glassCubeOnTheGround(glassOptionsNamed("exact"));
+    EXPECT_GT(exact.top, 600);
+    EXPECT_EQ(exact.sky, 0) << "of " << exact.top << " pixels of the top";
+}
+
+TEST(GlassTest, VoxelGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
+    // The cube above with the voxel methods. Multi marched on after the exit to the grid's edge, a
+    // voxel below the ground, and the scene cast from there met only the environment: 1,232 /
+    // 1,236 / 1,236 of the 1,236 top pixels at 16³ / 32³ / 64³. The exact tracer sees no
+    // environment through the top; the voxel methods now look the scene up from where the ray left
+    // glass: two-surface none, multi 86 / 17 / 7 (rays bent by averaged normals at the cube's
+    // edges and corners, a voxel's worth of the top, shrinking with the grid).
+    for (const int64_t res : {16, 32, 64}) {
+        MultiGlassOptions multi;
+        multi.gridResolution = res;
+        const TopPixels m = glassCubeOnTheGround(multi);
+        EXPECT_GT(m.top, 600);
+        EXPECT_LT(m.sky, m.top * 8 / res) << "multi " << res << "³: of " << m.top << " pixels of the top";
+        TwoSurfaceGlassOptions two;
+        two.gridResolution = res;
+        const TopPixels t = glassCubeOnTheGround(two);
+        EXPECT_EQ(t.sky, 0) << "two-surface " << res << "³: of " << t.top << " pixels of the top";
+    }
 }
 
 TEST(GlassTest, VoxelGlassRendersCloseToTheExactTracerAndDeterministically) {
@@ -644,6 +674,59 @@ TEST(GlassTest, VoxelGlassRendersCloseToTheExactTracerAndDeterministically) {
     // Glass off: the mask is empty, and the sphere is shaded like a surface.
     o.glass = NoGlassOptions{};
     EXPECT_TRUE(render(s, s.cameras[0], o).glassMask.empty());
+}
+
+// Open (#25 item 2): disabled until multi's extra error after the last exit is found. Measured at
+// 120x68, 64³: multi 0.0388, two-surface 0.0338 (before the exit-point fix: larger still; on the
+// 320x180 view, 64³: 0.0380 -> 0.0357 against two-surface 0.0310).
+TEST(GlassTest, DISABLED_MultiIsNoFurtherFromExactThanTwoSurfaceWhereMostPathsCrossTwoInterfaces) {
+    // A standing clear torus and a tinted ball, both on the ground: most paths enter and leave once,
+    // where multi and two-surface refract alike; multi must then be no further from the exact image
+    // than two-surface.
+    Scene s;
+    Material ground;
+    ground.baseColor = {0.6f, 0.6f, 0.6f};
+    ground.specular = 0;
+    Material clear;
+    clear.transmission = 1;
+    clear.ior = 1.5f;
+    Material tinted = clear;
+    tinted.baseColor = {0.7f, 0.9f, 1.0f};
+    SceneMesh floor;
+    test::appendQuad(floor.mesh, {0, 0, 0}, {0, 0, 4}, {4, 0, 0});
+    floor.material = s.addMaterial(ground);
+    s.meshes.push_back(floor);
+    SceneMesh torus;
+    torus.mesh = test::makeTorus({-0.8, 0.95, 0}, 0.7, 0.25, 48, 24);
+    torus.material = s.addMaterial(clear);
+    s.meshes.push_back(torus);
+    SceneMesh ball;
+    ball.mesh = test::makeUvSphere({0.9, 0.6, 0.2}, 0.6, 24, 48);
+    ball.material = s.addMaterial(tinted);
+    s.meshes.push_back(ball);
+    Camera cam;
+    cam.position = {0, 1.4, 4.5};
+    cam.target = {0, 0.8, 0};
+    cam.fovY = 45 * M_PI / 180;
+    RenderOptions o;
+    o.width = 120;
+    o.height = 68;
+    o.shadow = NoShadowOptions{};
+    o.antiAliasing = AntiAliasing::Off;
+    o.glass = ExactGlassOptions{};
+    const RenderResult exact = render(s, cam, o);
+    int64_t glassPixels = 0;
+    for (const uint8_t m : exact.glassMask) glassPixels += m;
+    ASSERT_GT(glassPixels, 1000);
+    MultiGlassOptions multi;
+    multi.gridResolution = 64;
+    o.glass = multi;
+    const ImageError m = imageError(render(s, cam, o).image, exact.image, exact.glassMask);
+    TwoSurfaceGlassOptions two;
+    two.gridResolution = 64;
+    o.glass = two;
+    const ImageError t = imageError(render(s, cam, o).image, exact.image, exact.glassMask);
+    EXPECT_LE(m.mae, t.mae + 0.001) << "multi " << m.mae << ", two-surface " << t.mae;
 }
 
 TEST(GlassTest, ASceneWithoutLightsIsLitByTheDefaultSunAndSkyAmbient) {

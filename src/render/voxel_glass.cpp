@@ -113,6 +113,12 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
     const int64_t dims[3] = {grid_.frame.width(), grid_.frame.height(), grid_.frame.depth()};
     const int64_t D = dims[2];
     Vec3d pos = entry;
+    // Where the light leaving the glass is looked up from (the renderer's exact scene cast): the
+    // start of the boundary voxel where the ray last left glass, still on the glass's side of the
+    // surface, or, while the ray is inside glass, the last event. Never the grid's edge: the grid
+    // reaches a voxel beyond the glass, below the ground under glass standing on it, and the cast
+    // from there met only the environment.
+    Vec3d castFrom = entry;
     bool stop = false;
     while (!stop) {
         const Vec3d g = (pos - origin_) / voxel_;
@@ -147,6 +153,7 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                     const double tEvent = 0.5 * (tEnter + tLeave);
                     thr = thr * beerLambert(current().sigma, (tEvent - tEnter) * voxel_);
                     pos = origin_ + (g + d * tEvent) * voxel_;
+                    castFrom = leaving ? origin_ + (g + d * tEnter) * voxel_ : pos;
                     ++p.events;
                     std::vector<uint32_t> next = stack;
                     Vec3f tint{1, 1, 1};
@@ -183,7 +190,7 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
         }
         if (!restarted) break;
     }
-    p.exitPoint = pos;
+    p.exitPoint = castFrom;
     p.exitDir = d;
     p.throughput = thr;
     return p;
