@@ -233,6 +233,52 @@ TEST(GlassTest, VoxelMarchThroughASlabExitsParallelLikeTheExactTracer) {
     }
 }
 
+// The right-angle prism of ExactTracerReflectsTotallyInsideAPrism (45-45-90, extruded along y), 2 long.
+Mesh rightPrism() {
+    Mesh prism;
+    const float L = 1;
+    for (const float y : {-L, L})
+        for (const Vec3f p : {Vec3f{-1, y, 0}, Vec3f{1, y, 0}, Vec3f{0, y, 1}}) prism.positions.push_back(p);
+    prism.indices = {0, 1, 2, 3, 5, 4, 0, 3, 4, 0, 4, 1, 1, 4, 5, 1, 5, 2, 2, 5, 3, 2, 3, 0};
+    return prism;
+}
+
+TEST(GlassTest, MultiReflectsTotallyInsideAPrismAtTheCriticalAngle) {
+    // CHANG §4.1.1 on the voxel path. Snell: a ray inside glass of index n meeting a face at more
+    // than asin(1 / n) is totally reflected. Lit normally through the prism's hypotenuse, the ray
+    // meets each leg at 45 degrees: above the critical angle for n = 1.5 (41.8), so it is reflected
+    // at both legs and leaves back through the hypotenuse reversed, at -x (closed form, as the exact
+    // tracer); below it for n = 1.3 (50.3), so it leaves through the first leg, bent away from
+    // the normal by asin(1.3 sin 45) - 45 degrees.
+    const Mesh prism = rightPrism();
+    VoxelGlassOptions o;
+    o.gridResolution = 64; // 2 / 62 per voxel
+    for (const double ior : {1.5, 1.3}) {
+        GlassMedium medium;
+        medium.ior = float(ior);
+        const bool tir = std::asin(1 / ior) < M_PI / 4;
+        VoxelGlass glass(prism.view(), std::vector<uint32_t>(prism.triangleCount(), 0), {medium}, o);
+        const GlassPath p = glass.trace({0.3, 0.1, 0}, {0, 0, -1}, 0, {0, 0, 1}, o, false);
+        ASSERT_TRUE(p.hit);
+        if (tir) {
+            EXPECT_EQ(p.events, 4) << ior; // enter, two total reflections, exit
+            EXPECT_NEAR(length(p.exitDir - Vec3d{0, 0, -1}), 0, 1e-3) << ior;
+            EXPECT_NEAR(p.exitPoint.x, -0.3, 2 * glass.voxelSize()) << ior;
+        } else {
+            EXPECT_EQ(p.events, 2) << ior;
+            const double out = std::asin(ior * std::sin(M_PI / 4)); // from the leg's normal (1, 0, 1)/sqrt2
+            const Vec3d nLeg = normalize(Vec3d{1, 0, 1}), tLeg = normalize(Vec3d{1, 0, -1});
+            const Vec3d want = nLeg * std::cos(out) - tLeg * std::sin(out);
+            EXPECT_NEAR(length(p.exitDir - want), 0, 1e-3) << ior;
+        }
+        // The exact tracer agrees.
+        ExactGlass exact(prism.view(), {}, std::vector<uint32_t>(prism.triangleCount(), 0), {medium});
+        const GlassPath e = exact.trace({0.3, 0.1, -2}, {0, 0, 1}, 16);
+        EXPECT_EQ(e.events, p.events) << ior;
+        EXPECT_NEAR(length(e.exitDir - p.exitDir), 0, 1e-3) << ior;
+    }
+}
+
 TEST(GlassTest, MultipleRefractionSeesThroughTwoSlabsWhereTwoSurfaceStopsAfterOne) {
     // Two parallel slabs, one behind the other: the refracted ray crosses both. Multi follows four
     // refractions and exits parallel; two-surface stops after the first slab's back face (also parallel
