@@ -2,6 +2,7 @@
 // form; the exact tracer (Embree) and the voxel march on slabs and a sphere against the closed-form
 // refracted rays; the material channel of the attribute voxelization.
 #include <cmath>
+#include <filesystem>
 #include <limits>
 
 #include <gtest/gtest.h>
@@ -839,6 +840,53 @@ TEST(GlassTest, CommandLineRendersGlassAndComparesTheVoxelMethodsWithTheExactTra
                                              " --glass frosty");
     EXPECT_NE(bad.exitCode, 0);
     EXPECT_NE(bad.err.find("exact, multi, two-surface"), std::string::npos) << bad.err;
+}
+
+TEST(GlassTest, CommandLineGlassKnobsChangeTheImageAndBadValuesSayWhich) {
+    // CHANG's knobs on the render command line (--glass-grid, --glass-coverage, --angle-threshold,
+    // --max-events, --no-scene-behind: CHANG's environment-only lookup after the last exit): each
+    // is parsed, most change the multi image of a glass octahedron over a ground quad, and a bad
+    // value exits 1 naming the flag, with no image written.
+    test::TempDir dir;
+    test::writeFile(dir.file("gem.off"),
+                    "OFF\n6 8 0\n1 0 0\n-1 0 0\n0 1 0\n0 -1 0\n0 0 1\n0 0 -1\n"
+                    "3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n");
+    test::writeFile(dir.file("ground.off"),
+                    "OFF\n4 2 0\n-4 -1.2 -4\n4 -1.2 -4\n4 -1.2 4\n-4 -1.2 4\n3 0 2 1\n3 0 3 2\n");
+    test::writeFile(dir.file("scene.json"),
+                    R"({ "meshes": [ { "file": "gem.off", "material": { "transmission": 1, "ior": 1.5,
+                                                                         "baseColor": [0.6, 0.8, 1] } },
+                                     { "file": "ground.off" } ],
+                         "cameras": [ { "position": [0, 1, 4], "target": [0, 0, 0], "fovYDegrees": 50 } ] })");
+    const std::string base =
+        "render " + dir.file("scene.json") + " --width 48 --height 36 --shadows none --glass multi ";
+    auto renderWith = [&](const std::string& flags, const std::string& png) {
+        const auto r = test::runVoxfx(dir, base + flags + " -o " + dir.file(png));
+        EXPECT_EQ(r.exitCode, 0) << flags << ": " << r.err;
+        return readPng(dir.file(png));
+    };
+    const Image plain = renderWith("--glass-grid 24", "plain.png");
+    for (const char* flags : {"--glass-grid 12", "--glass-grid 24 --glass-coverage center",
+                              "--glass-grid 24 --max-events 1", "--glass-grid 24 --no-scene-behind"}) {
+        const Image other = renderWith(flags, "other.png");
+        EXPECT_NE(other.pixels, plain.pixels) << flags << " changed nothing";
+    }
+    // The defaults, given. (The angle threshold changes nothing on this gem: with the media stack a
+    // voxel of the surface just crossed is no new event whatever the threshold.)
+    EXPECT_EQ(renderWith("--glass-grid 24 --angle-threshold 0.35 --max-events 16 --scene-behind", "same.png")
+                  .pixels,
+              plain.pixels);
+    for (const auto& [flags, says] :
+         std::vector<std::pair<std::string, std::string>>{{"--angle-threshold abc", "--angle-threshold"},
+                                                          {"--angle-threshold 4", "angle"},
+                                                          {"--max-events 0", "max"},
+                                                          {"--glass-grid 1", "glass"},
+                                                          {"--glass-coverage most", "conservative"}}) {
+        const auto r = test::runVoxfx(dir, base + flags + " -o " + dir.file("bad.png"));
+        EXPECT_EQ(r.exitCode, 1) << flags << ": " << r.err; // "abc" aborted the program before
+        EXPECT_NE(r.err.find(says), std::string::npos) << flags << ": " << r.err;
+        EXPECT_FALSE(std::filesystem::exists(dir.file("bad.png"))) << flags;
+    }
 }
 
 TEST(GlassTest, FrostedThicknessCountsInsideCellsOfTheFrontAndBackSlicemaps) {

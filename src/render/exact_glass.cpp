@@ -15,10 +15,13 @@ namespace voxfx {
 std::span<const OptionField<ExactGlassOptions>> ExactGlassOptions::fields() {
     using O = ExactGlassOptions;
     static const std::vector<OptionField<O>> table = {
-        numberOption<O, &O::maxEvents>("maxEvents", "glass: refractions and reflections followed per ray", 1,
-                                       1024),
+        numberOption<O, &O::maxEvents>("maxEvents",
+                                       "glass: refractions and reflections followed per ray (then it leaves "
+                                       "along its current direction)",
+                                       1, 1024),
         flagOption<O, &O::sceneBehind>(
-            "sceneBehind", "glass: the light leaving it comes from the opaque scene (off: the environment)")};
+            "sceneBehind", "glass: the light leaving it comes from the opaque scene, traced exactly "
+                           "(off: the environment alone after the last exit, as CHANG)")};
     return table;
 }
 

@@ -20,15 +20,23 @@ template <class O> std::vector<OptionField<O>> voxelGlassFields() {
         numberOption<O, &O::gridResolution>("glassGrid", "glass voxels along the glass's longest side", 2,
                                             4096),
         nameOption<O, parseCoverage, optionName<Coverage>, &O::coverage>(
-            "glassCoverage", "glass voxels: every voxel a triangle touches, or one per column",
+            "glassCoverage",
+            "glass voxels: every voxel a triangle touches (CHANG's widened slabs at their limit: no "
+            "holes on steep faces), or one per column (thinner boundary, holes where faces are steep)",
             "conservative | center"),
         numberOption<O, &O::angleThreshold>(
-            "angleThreshold", "glass: radians; a refraction this close to the last normal is skipped", 0,
-            3.2),
-        numberOption<O, &O::maxEvents>("maxEvents", "glass: refractions and reflections followed per ray", 1,
-                                       1024),
+            "angleThreshold",
+            "glass (CHANG's angle threshold, radians): a boundary voxel of the last surface's material "
+            "whose normal is this close to that surface's is the same surface, not a new event (0: "
+            "every voxel refracts, a reflection repeats in the next voxel)",
+            0, 3.2),
+        numberOption<O, &O::maxEvents>("maxEvents",
+                                       "glass: refractions and reflections followed per ray (then it leaves "
+                                       "along its current direction)",
+                                       1, 1024),
         flagOption<O, &O::sceneBehind>(
-            "sceneBehind", "glass: the light leaving it comes from the opaque scene (off: the environment)")};
+            "sceneBehind", "glass: the light leaving it comes from the opaque scene, traced exactly "
+                           "(off: the environment alone after the last exit, as CHANG)")};
 }
 
 } // namespace
