@@ -28,7 +28,7 @@ template <class O> std::vector<OptionField<O>> voxelGlassFields() {
             "angleThreshold",
             "glass (CHANG's angle threshold, radians): a boundary voxel of the last surface's material "
             "whose normal is this close to that surface's is the same surface, not a new event (0: "
-            "every voxel refracts, a reflection repeats in the next voxel)",
+            "only the media stack guards against refracting twice at one surface)",
             0, 3.2),
         numberOption<O, &O::maxEvents>("maxEvents",
                                        "glass: refractions and reflections followed per ray (then it leaves "
