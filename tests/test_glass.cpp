@@ -3,6 +3,7 @@
 // refracted rays; the material channel of the attribute voxelization; ED06 frosted glass (at the end).
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <string>
 #include <utility>
@@ -190,6 +191,30 @@ TEST(GlassTest, ExactTracerReflectsTotallyInsideAPrism) {
     EXPECT_NEAR(p.exitPoint.x, -0.3, 1e-4);
 }
 
+TEST(GlassTest, ExactTracerCrossesASheetThinnerThanItsEpsilonAsAParallelSlab) {
+    // A sheet 2 x 2 and 1.2e-5 thick: the tracer's epsilon (1e-5 of the diagonal, 2.8e-5) is more
+    // than the sheet's thickness. Skipping every hit within epsilon of the front face missed the back
+    // face: the ray stayed bent inside. Only the surface just crossed is skipped now, so the sheet
+    // is a slab (closed form): parallel exit, (1 - F_in)(1 - F_out), two events.
+    const double h = 1.2e-5;
+    const Mesh sheet = test::makeBox({-1, -1, -h / 2}, {1, 1, h / 2});
+    GlassMedium medium;
+    medium.ior = float(kGlassIor);
+    ExactGlass glass(sheet.view(), {}, std::vector<uint32_t>(sheet.triangleCount(), 0), {medium});
+    for (const double a : {0.0, 0.3, 0.9}) {
+        const Vec3d d = glassDirAt(a);
+        const GlassPath p = glass.trace(Vec3d{0.1, 0.2, 0} - d * 2, d, 16);
+        ASSERT_TRUE(p.hit);
+        EXPECT_EQ(p.events, 2) << a;
+        EXPECT_NEAR(length(p.exitDir - d), 0, 1e-5) << a;
+        const double tt = std::asin(std::sin(a) / kGlassIor);
+        const double want = (1 - fresnelDielectric(std::cos(a), 1, kGlassIor)) *
+                            (1 - fresnelDielectric(std::cos(tt), kGlassIor, 1));
+        EXPECT_NEAR(p.throughput.x, want, 1e-4) << a;
+        EXPECT_NEAR(p.exitPoint.z, -h / 2, 1e-6) << a;
+    }
+}
+
 TEST(GlassTest, VoxelMarchThroughASlabExitsParallelLikeTheExactTracer) {
     const double h = 0.5, sigma = 0.8;
     const Mesh slab = test::makeBox({-1, -1, -h / 2}, {1, 1, h / 2});
@@ -212,6 +237,52 @@ TEST(GlassTest, VoxelMarchThroughASlabExitsParallelLikeTheExactTracer) {
                             (1 - fresnelDielectric(std::cos(tt), kGlassIor, 1)) * std::exp(-sigma * L);
         // The exit is placed mid-voxel: the length is right to about a voxel.
         EXPECT_NEAR(p.throughput.x, want, want * sigma * 2 * glass.voxelSize()) << kind;
+    }
+}
+
+// The right-angle prism of ExactTracerReflectsTotallyInsideAPrism (45-45-90, extruded along y), 2 long.
+Mesh rightPrism() {
+    Mesh prism;
+    const float L = 1;
+    for (const float y : {-L, L})
+        for (const Vec3f p : {Vec3f{-1, y, 0}, Vec3f{1, y, 0}, Vec3f{0, y, 1}}) prism.positions.push_back(p);
+    prism.indices = {0, 1, 2, 3, 5, 4, 0, 3, 4, 0, 4, 1, 1, 4, 5, 1, 5, 2, 2, 5, 3, 2, 3, 0};
+    return prism;
+}
+
+TEST(GlassTest, MultiReflectsTotallyInsideAPrismAtTheCriticalAngle) {
+    // CHANG §4.1.1 on the voxel path. Snell: a ray inside glass of index n meeting a face at more
+    // than asin(1 / n) is totally reflected. Lit normally through the prism's hypotenuse, the ray
+    // meets each leg at 45 degrees: above the critical angle for n = 1.5 (41.8), so it is reflected
+    // at both legs and leaves back through the hypotenuse reversed, at -x (closed form, as the exact
+    // tracer); below it for n = 1.3 (50.3), so it leaves through the first leg, bent away from
+    // the normal by asin(1.3 sin 45) - 45 degrees.
+    const Mesh prism = rightPrism();
+    VoxelGlassOptions o;
+    o.gridResolution = 64; // 2 / 62 per voxel
+    for (const double ior : {1.5, 1.3}) {
+        GlassMedium medium;
+        medium.ior = float(ior);
+        const bool tir = std::asin(1 / ior) < M_PI / 4;
+        VoxelGlass glass(prism.view(), std::vector<uint32_t>(prism.triangleCount(), 0), {medium}, o);
+        const GlassPath p = glass.trace({0.3, 0.1, 0}, {0, 0, -1}, 0, {0, 0, 1}, o, false);
+        ASSERT_TRUE(p.hit);
+        if (tir) {
+            EXPECT_EQ(p.events, 4) << ior; // enter, two total reflections, exit
+            EXPECT_NEAR(length(p.exitDir - Vec3d{0, 0, -1}), 0, 1e-3) << ior;
+            EXPECT_NEAR(p.exitPoint.x, -0.3, 2 * glass.voxelSize()) << ior;
+        } else {
+            EXPECT_EQ(p.events, 2) << ior;
+            const double out = std::asin(ior * std::sin(M_PI / 4)); // from the leg's normal (1, 0, 1)/sqrt2
+            const Vec3d nLeg = normalize(Vec3d{1, 0, 1}), tLeg = normalize(Vec3d{1, 0, -1});
+            const Vec3d want = nLeg * std::cos(out) - tLeg * std::sin(out);
+            EXPECT_NEAR(length(p.exitDir - want), 0, 1e-3) << ior;
+        }
+        // The exact tracer agrees.
+        ExactGlass exact(prism.view(), {}, std::vector<uint32_t>(prism.triangleCount(), 0), {medium});
+        const GlassPath e = exact.trace({0.3, 0.1, -2}, {0, 0, 1}, 16);
+        EXPECT_EQ(e.events, p.events) << ior;
+        EXPECT_NEAR(length(e.exitDir - p.exitDir), 0, 1e-3) << ior;
     }
 }
 
@@ -558,14 +629,12 @@ TEST(GlassTest, AbsorptionAndDeepShadowsAreColouredUnderTintedLeavesAndGlass) {
     }
 }
 
-TEST(GlassTest, ExactGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
-    // A glass cube (green tint) standing on a grey ground, seen from above, in a magenta environment. A ray
-    // entering the top is within the critical angle of the vertical, so it is totally reflected at
-    // the sides and leaves through the bottom into the ground: no pixel of the top sees the
-    // environment through the glass, only its Fresnel reflection (a few per cent of magenta over
-    // the ground's grey seen through green). (Rays entering a side can be totally reflected at the bottom and
-    // leave upwards: those rightly see the sky.) Skipping every opaque hit within epsilon of the exit (the
-    // ground under the bottom face) showed the environment below the ground through the top.
+// The top pixels of a green glass cube standing on the ground in a magenta environment, and how
+// many of them show the environment (magenta over green) through the glass.
+struct TopPixels {
+    int64_t top = 0, sky = 0;
+};
+TopPixels glassCubeOnTheGround(const GlassOptions& method) {
     Scene s = glassTestScene(); // the ground, and the ball (mesh 1) made a cube
     s.meshes[1].mesh = test::makeBox({-0.5, 0, -0.5}, {0.5, 1, 0.5});
     Light sun;
@@ -578,7 +647,7 @@ TEST(GlassTest, ExactGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
     o.width = 96;
     o.height = 72;
     o.shadow = shadowOptionsNamed("none");
-    o.glass = glassOptionsNamed("exact");
+    o.glass = method;
     Image magenta(4, 2);
     for (Vec3f& p : magenta.pixels) p = {1, 0, 1};
     o.environment = std::make_shared<const Environment>(magenta);
@@ -586,7 +655,7 @@ TEST(GlassTest, ExactGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
     const RenderResult r = render(s, cam, o);
     const SceneGeometry geo = flattenScene(s);
     const GBuffer g = renderGBuffer(geo, cameraFrame(cam, o.width, o.height));
-    int64_t top = 0, sky = 0;
+    TopPixels out;
     for (int64_t y = 0; y < o.height; ++y)
         for (int64_t x = 0; x < o.width; ++x) {
             const uint32_t t = g.triangle[size_t(y * o.width + x)];
@@ -595,12 +664,44 @@ TEST(GlassTest, ExactGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
             for (int k = 0; k < 3; ++k)
                 onTop = onTop && geo.mesh.positions[geo.mesh.indices[3 * t + k]].y == 1;
             if (!onTop) continue;
-            ++top;
+            ++out.top;
             const Vec3f& p = r.image.at(x, o.height - 1 - y);
-            sky += p.y < 0.5f * p.x;
+            out.sky += p.y < 0.5f * p.x;
         }
-    EXPECT_GT(top, 600);
-    EXPECT_EQ(sky, 0) << "of " << top << " pixels of the top";
+    return out;
+}
+
+TEST(GlassTest, ExactGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
+    // A glass cube (green tint) standing on a grey ground, seen from above, in a magenta environment. A ray
+    // entering the top is within the critical angle of the vertical, so it is totally reflected at
+    // the sides and leaves through the bottom into the ground: no pixel of the top sees the
+    // environment through the glass, only its Fresnel reflection (a few per cent of magenta over
+    // the ground's grey seen through green). (Rays entering a side can be totally reflected at the bottom and
+    // leave upwards: those rightly see the sky.) Skipping every opaque hit within epsilon of the exit (the
+    // ground under the bottom face) showed the environment below the ground through the top.
+    const TopPixels exact = glassCubeOnTheGround(glassOptionsNamed("exact"));
+    EXPECT_GT(exact.top, 600);
+    EXPECT_EQ(exact.sky, 0) << "of " << exact.top << " pixels of the top";
+}
+
+TEST(GlassTest, VoxelGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
+    // The cube above with the voxel methods. Multi marched on after the exit to the grid's edge, a
+    // voxel below the ground, and the scene cast from there met only the environment: 1,232 /
+    // 1,236 / 1,236 of the 1,236 top pixels at 16³ / 32³ / 64³. The exact tracer sees no
+    // environment through the top; the voxel methods now look the scene up from where the ray left
+    // glass: two-surface none, multi 86 / 17 / 7 (rays bent by averaged normals at the cube's
+    // edges and corners, a voxel's worth of the top, shrinking with the grid).
+    for (const int64_t res : {16, 32, 64}) {
+        MultiGlassOptions multi;
+        multi.gridResolution = res;
+        const TopPixels m = glassCubeOnTheGround(multi);
+        EXPECT_GT(m.top, 600);
+        EXPECT_LT(m.sky, m.top * 8 / res) << "multi " << res << "³: of " << m.top << " pixels of the top";
+        TwoSurfaceGlassOptions two;
+        two.gridResolution = res;
+        const TopPixels t = glassCubeOnTheGround(two);
+        EXPECT_EQ(t.sky, 0) << "two-surface " << res << "³: of " << t.top << " pixels of the top";
+    }
 }
 
 TEST(GlassTest, VoxelGlassRendersCloseToTheExactTracerAndDeterministically) {
@@ -626,6 +727,59 @@ TEST(GlassTest, VoxelGlassRendersCloseToTheExactTracerAndDeterministically) {
     // Glass off: the mask is empty, and the sphere is shaded like a surface.
     o.glass = NoGlassOptions{};
     EXPECT_TRUE(render(s, s.cameras[0], o).glassMask.empty());
+}
+
+// Open (#25 item 2): disabled until multi's extra error after the last exit is found. Measured at
+// 120x68, 64³: multi 0.0388, two-surface 0.0338 (before the exit-point fix: larger still; on the
+// 320x180 view, 64³: 0.0380 -> 0.0357 against two-surface 0.0310).
+TEST(GlassTest, DISABLED_MultiIsNoFurtherFromExactThanTwoSurfaceWhereMostPathsCrossTwoInterfaces) {
+    // A standing clear torus and a tinted ball, both on the ground: most paths enter and leave once,
+    // where multi and two-surface refract alike; multi must then be no further from the exact image
+    // than two-surface.
+    Scene s;
+    Material ground;
+    ground.baseColor = {0.6f, 0.6f, 0.6f};
+    ground.specular = 0;
+    Material clear;
+    clear.transmission = 1;
+    clear.ior = 1.5f;
+    Material tinted = clear;
+    tinted.baseColor = {0.7f, 0.9f, 1.0f};
+    SceneMesh floor;
+    test::appendQuad(floor.mesh, {0, 0, 0}, {0, 0, 4}, {4, 0, 0});
+    floor.material = s.addMaterial(ground);
+    s.meshes.push_back(floor);
+    SceneMesh torus;
+    torus.mesh = test::makeTorus({-0.8, 0.95, 0}, 0.7, 0.25, 48, 24);
+    torus.material = s.addMaterial(clear);
+    s.meshes.push_back(torus);
+    SceneMesh ball;
+    ball.mesh = test::makeUvSphere({0.9, 0.6, 0.2}, 0.6, 24, 48);
+    ball.material = s.addMaterial(tinted);
+    s.meshes.push_back(ball);
+    Camera cam;
+    cam.position = {0, 1.4, 4.5};
+    cam.target = {0, 0.8, 0};
+    cam.fovY = 45 * M_PI / 180;
+    RenderOptions o;
+    o.width = 120;
+    o.height = 68;
+    o.shadow = NoShadowOptions{};
+    o.antiAliasing = AntiAliasing::Off;
+    o.glass = ExactGlassOptions{};
+    const RenderResult exact = render(s, cam, o);
+    int64_t glassPixels = 0;
+    for (const uint8_t m : exact.glassMask) glassPixels += m;
+    ASSERT_GT(glassPixels, 1000);
+    MultiGlassOptions multi;
+    multi.gridResolution = 64;
+    o.glass = multi;
+    const ImageError m = imageError(render(s, cam, o).image, exact.image, exact.glassMask);
+    TwoSurfaceGlassOptions two;
+    two.gridResolution = 64;
+    o.glass = two;
+    const ImageError t = imageError(render(s, cam, o).image, exact.image, exact.glassMask);
+    EXPECT_LE(m.mae, t.mae + 0.001) << "multi " << m.mae << ", two-surface " << t.mae;
 }
 
 TEST(GlassTest, ASceneWithoutLightsIsLitByTheDefaultSunAndSkyAmbient) {
@@ -692,6 +846,53 @@ TEST(GlassTest, CommandLineRendersGlassAndComparesTheVoxelMethodsWithTheExactTra
                                              " --glass frosty");
     EXPECT_NE(bad.exitCode, 0);
     EXPECT_NE(bad.err.find("exact, multi, two-surface"), std::string::npos) << bad.err;
+}
+
+TEST(GlassTest, CommandLineGlassKnobsChangeTheImageAndBadValuesSayWhich) {
+    // CHANG's knobs on the render command line (--glass-grid, --glass-coverage, --angle-threshold,
+    // --max-events, --no-scene-behind: CHANG's environment-only lookup after the last exit): each
+    // is parsed, most change the multi image of a glass octahedron over a ground quad, and a bad
+    // value exits 1 naming the flag, with no image written.
+    test::TempDir dir;
+    test::writeFile(dir.file("gem.off"),
+                    "OFF\n6 8 0\n1 0 0\n-1 0 0\n0 1 0\n0 -1 0\n0 0 1\n0 0 -1\n"
+                    "3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n");
+    test::writeFile(dir.file("ground.off"),
+                    "OFF\n4 2 0\n-4 -1.2 -4\n4 -1.2 -4\n4 -1.2 4\n-4 -1.2 4\n3 0 2 1\n3 0 3 2\n");
+    test::writeFile(dir.file("scene.json"),
+                    R"({ "meshes": [ { "file": "gem.off", "material": { "transmission": 1, "ior": 1.5,
+                                                                         "baseColor": [0.6, 0.8, 1] } },
+                                     { "file": "ground.off" } ],
+                         "cameras": [ { "position": [0, 1, 4], "target": [0, 0, 0], "fovYDegrees": 50 } ] })");
+    const std::string base =
+        "render " + dir.file("scene.json") + " --width 48 --height 36 --shadows none --glass multi ";
+    auto renderWith = [&](const std::string& flags, const std::string& png) {
+        const auto r = test::runVoxfx(dir, base + flags + " -o " + dir.file(png));
+        EXPECT_EQ(r.exitCode, 0) << flags << ": " << r.err;
+        return readPng(dir.file(png));
+    };
+    const Image plain = renderWith("--glass-grid 24", "plain.png");
+    for (const char* flags : {"--glass-grid 12", "--glass-grid 24 --glass-coverage center",
+                              "--glass-grid 24 --max-events 1", "--glass-grid 24 --no-scene-behind"}) {
+        const Image other = renderWith(flags, "other.png");
+        EXPECT_NE(other.pixels, plain.pixels) << flags << " changed nothing";
+    }
+    // The defaults, given. (The angle threshold changes nothing on this gem: with the media stack a
+    // voxel of the surface just crossed is no new event whatever the threshold.)
+    EXPECT_EQ(renderWith("--glass-grid 24 --angle-threshold 0.35 --max-events 16 --scene-behind", "same.png")
+                  .pixels,
+              plain.pixels);
+    for (const auto& [flags, says] :
+         std::vector<std::pair<std::string, std::string>>{{"--angle-threshold abc", "--angle-threshold"},
+                                                          {"--angle-threshold 4", "angle"},
+                                                          {"--max-events 0", "max"},
+                                                          {"--glass-grid 1", "glass"},
+                                                          {"--glass-coverage most", "conservative"}}) {
+        const auto r = test::runVoxfx(dir, base + flags + " -o " + dir.file("bad.png"));
+        EXPECT_EQ(r.exitCode, 1) << flags << ": " << r.err; // "abc" aborted the program before
+        EXPECT_NE(r.err.find(says), std::string::npos) << flags << ": " << r.err;
+        EXPECT_FALSE(std::filesystem::exists(dir.file("bad.png"))) << flags;
+    }
 }
 
 TEST(GlassTest, ImageErrorIsTheMeanAbsoluteAndPsnrOverTheMask) {

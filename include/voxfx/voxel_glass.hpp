@@ -13,8 +13,12 @@
 //                skipped when its voxel has the material of the last surface and its normal is
 //                within angleThreshold of that surface's (CHANG's guard against refracting twice at
 //                one surface spread over neighbouring voxels); Beer–Lambert with the coefficient of
-//                the medium the ray is in, per voxel segment; until the ray leaves the grid, then the
-//                environment. Faces of two materials lying on each other share voxels whose averaged
+//                the medium the ray is in, per voxel segment; until the ray leaves the grid. What
+//                comes through is then looked up (the opaque scene or the environment) along the
+//                last direction from where the ray last left glass (the start of that boundary
+//                voxel), or from its last event if it never left (a missed exit): never from the
+//                grid's edge, which lies a voxel beyond the glass (below the ground under glass
+//                standing on it). Faces of two materials lying on each other share voxels whose averaged
 //                normals cancel: that interface is not seen (the ray keeps the first medium).
 //   two-surface  Wyman 2005 as CHANG's baseline: the same march stops at the first back surface: one
 //                refraction there (or the mirror direction under total internal reflection), then the

@@ -34,7 +34,12 @@ int main(int argc, char** argv) {
     }
     try {
         app.parse(argc, argv);
-    } catch (const CLI::ParseError& e) { return app.exit(e); }
+    } catch (const CLI::ParseError& e) { return app.exit(e); } catch (const voxfx::Error& e) {
+        // A flag's value checked while parsing (render flags: "--angle-threshold abc"); it aborted
+        // the program uncaught before.
+        std::cerr << "voxfx: error: " << e.what() << "\n";
+        return 1;
+    }
     try {
         for (auto& [sub, run] : runners)
             if (sub->parsed()) return run();

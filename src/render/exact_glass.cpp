@@ -15,10 +15,13 @@ namespace voxfx {
 std::span<const OptionField<ExactGlassOptions>> ExactGlassOptions::fields() {
     using O = ExactGlassOptions;
     static const std::vector<OptionField<O>> table = {
-        numberOption<O, &O::maxEvents>("maxEvents", "glass: refractions and reflections followed per ray", 1,
-                                       1024),
+        numberOption<O, &O::maxEvents>("maxEvents",
+                                       "glass: refractions and reflections followed per ray (then it leaves "
+                                       "along its current direction)",
+                                       1, 1024),
         flagOption<O, &O::sceneBehind>(
-            "sceneBehind", "glass: the light leaving it comes from the opaque scene (off: the environment)")};
+            "sceneBehind", "glass: the light leaving it comes from the opaque scene, traced exactly "
+                           "(off: the environment alone after the last exit, as CHANG)")};
     return table;
 }
 
@@ -89,9 +92,32 @@ GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents
     };
     std::vector<Face> faces;
     int crossings = 0; // every crossing, including ignored ones: bounds the loop
+    // The surface the ray was last at (a plane through o): the next hit skips only faces lying on it
+    // (the triangle just crossed, its coplanar neighbours, a touching medium's face on it), never
+    // every hit within epsilon: a sheet thinner than epsilon, or a face meeting the one just
+    // crossed, is a surface of its own.
+    bool onSurface = false;
+    Vec3d surfaceNormal{0, 0, 1};
+    const double planeTolerance = 0.1 * epsilon;
+    auto liesOnSurface = [&](uint32_t t, const Vec3d& at) {
+        const Vec3d nt = outwardNormal(t);
+        if (std::abs(dot(nt, surfaceNormal)) < 1 - 1e-6) return false;
+        const Vec3d a(mesh.positions[mesh.indices[3 * size_t(t)]]);
+        return std::abs(dot(at - a, nt)) < planeTolerance && std::abs(dot(o - a, nt)) < planeTolerance;
+    };
+    auto nextHit = [&]() {
+        double tNear = 0;
+        for (int skip = 0;; ++skip) {
+            const TriangleTracer::Hit h =
+                tracer_->intersect(o, d, tNear, std::numeric_limits<double>::infinity());
+            if (!h.hit || !onSurface || h.t >= epsilon || skip >= 16 ||
+                !liesOnSurface(h.triangle, o + d * h.t))
+                return h;
+            tNear = h.t + 1e-3 * epsilon;
+        }
+    };
     while (true) {
-        const TriangleTracer::Hit h =
-            tracer_->intersect(o, d, epsilon, std::numeric_limits<double>::infinity());
+        const TriangleTracer::Hit h = nextHit();
         if (!h.hit) {
             p.exitPoint = o;
             p.exitDir = d;
@@ -111,6 +137,8 @@ GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents
         const Vec3d x = o + d * h.t;
         thr = thr * beerLambert(mediumOf(stack).sigma, h.t);
         o = x;
+        onSurface = true;
+        surfaceNormal = ng;
         if (++crossings > 4 * maxEvents + 8 || p.events >= maxEvents) {
             if (!p.hit) return p;
             p.truncate(x, d, thr);

@@ -20,15 +20,23 @@ template <class O> std::vector<OptionField<O>> voxelGlassFields() {
         numberOption<O, &O::gridResolution>("glassGrid", "glass voxels along the glass's longest side", 2,
                                             4096),
         nameOption<O, parseCoverage, optionName<Coverage>, &O::coverage>(
-            "glassCoverage", "glass voxels: every voxel a triangle touches, or one per column",
+            "glassCoverage",
+            "glass voxels: every voxel a triangle touches (CHANG's widened slabs at their limit: no "
+            "holes on steep faces), or one per column (thinner boundary, holes where faces are steep)",
             "conservative | center"),
         numberOption<O, &O::angleThreshold>(
-            "angleThreshold", "glass: radians; a refraction this close to the last normal is skipped", 0,
-            3.2),
-        numberOption<O, &O::maxEvents>("maxEvents", "glass: refractions and reflections followed per ray", 1,
-                                       1024),
+            "angleThreshold",
+            "glass (CHANG's angle threshold, radians): a boundary voxel of the last surface's material "
+            "whose normal is this close to that surface's is the same surface, not a new event (0: "
+            "only the media stack guards against refracting twice at one surface)",
+            0, 3.2),
+        numberOption<O, &O::maxEvents>("maxEvents",
+                                       "glass: refractions and reflections followed per ray (then it leaves "
+                                       "along its current direction)",
+                                       1, 1024),
         flagOption<O, &O::sceneBehind>(
-            "sceneBehind", "glass: the light leaving it comes from the opaque scene (off: the environment)")};
+            "sceneBehind", "glass: the light leaving it comes from the opaque scene, traced exactly "
+                           "(off: the environment alone after the last exit, as CHANG)")};
 }
 
 } // namespace
@@ -113,6 +121,12 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
     const int64_t dims[3] = {grid_.frame.width(), grid_.frame.height(), grid_.frame.depth()};
     const int64_t D = dims[2];
     Vec3d pos = entry;
+    // Where the light leaving the glass is looked up from (the renderer's exact scene cast): the
+    // start of the boundary voxel where the ray last left glass, still on the glass's side of the
+    // surface, or, while the ray is inside glass, the last event. Never the grid's edge: the grid
+    // reaches a voxel beyond the glass, below the ground under glass standing on it, and the cast
+    // from there met only the environment.
+    Vec3d castFrom = entry;
     bool stop = false;
     while (!stop) {
         const Vec3d g = (pos - origin_) / voxel_;
@@ -147,6 +161,7 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                     const double tEvent = 0.5 * (tEnter + tLeave);
                     thr = thr * beerLambert(current().sigma, (tEvent - tEnter) * voxel_);
                     pos = origin_ + (g + d * tEvent) * voxel_;
+                    castFrom = leaving ? origin_ + (g + d * tEnter) * voxel_ : pos;
                     ++p.events;
                     std::vector<uint32_t> next = stack;
                     Vec3f tint{1, 1, 1};
@@ -183,7 +198,7 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
         }
         if (!restarted) break;
     }
-    p.exitPoint = pos;
+    p.exitPoint = castFrom;
     p.exitDir = d;
     p.throughput = thr;
     return p;
