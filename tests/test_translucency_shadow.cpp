@@ -19,8 +19,8 @@
 
 #include "cgal_oracle.hpp"
 #include "test_util.hpp"
-#include "voxfx/mesh_io.hpp"
 #include "voxfx/gbuffer.hpp"
+#include "voxfx/mesh_io.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/shadow.hpp"
 #include "voxfx/translucency_shadow.hpp"
