@@ -175,6 +175,12 @@ Scene cityScene(bool sun) {
     return s;
 }
 
+// Every culling and clamping switch on or off.
+void setSwitches(ShadowVolumeOptions& o, bool on) {
+    o.cullReceivers = o.cullOccluded = o.cullShadowedParts = o.dropShadowedReceivers = o.clamp = o.clampRuns =
+        on;
+}
+
 struct BenchRow {
     std::string name;
     Scene scene;
@@ -192,8 +198,8 @@ void runScene(const BenchRow& row, int64_t width, int64_t height) {
         const std::vector<uint8_t> receivers =
             shadowVolumeReceivers(gbuffer, geometry, scene.materials, light);
         ShadowVolumeOptions none, cull, both;
-        none.cullReceivers = none.cullOccluded = none.clamp = false;
-        cull.clamp = false;
+        setSwitches(none, false);
+        cull.clamp = cull.clampRuns = false;
         ShadowVolumeMask masks[3];
         double ms[3];
         const ShadowVolumeOptions* opts[3] = {&none, &cull, &both};
@@ -219,6 +225,61 @@ void runScene(const BenchRow& row, int64_t width, int64_t height) {
                     double(a.fragments) / double(std::max<int64_t>(1, b.fragments)),
                     double(a.fragments) / double(std::max<int64_t>(1, c.fragments)), ms[0], ms[1], ms[2],
                     c.cullMs, (long long)differ, adjacencyMs);
+    }
+    // Each switch on its own against none (ED06 §3.2, issue 25 item 7), then the three switches of
+    // issue 12 and all of them: fragments and the time of computeShadowVolumes, in one run.
+    for (const Light& light : scene.lights) {
+        const std::vector<uint8_t> receivers =
+            shadowVolumeReceivers(gbuffer, geometry, scene.materials, light);
+        ShadowVolumeOptions none;
+        setSwitches(none, false);
+        struct Config {
+            const char* name;
+            ShadowVolumeOptions o;
+        };
+        std::vector<Config> configs{{"none", none}};
+        for (bool ShadowVolumeOptions::*flag :
+             {&ShadowVolumeOptions::cullReceivers, &ShadowVolumeOptions::cullOccluded,
+              &ShadowVolumeOptions::cullShadowedParts, &ShadowVolumeOptions::clamp,
+              &ShadowVolumeOptions::clampRuns}) {
+            ShadowVolumeOptions o = none;
+            o.*flag = true;
+            configs.push_back({flag == &ShadowVolumeOptions::cullReceivers       ? "cullReceivers"
+                               : flag == &ShadowVolumeOptions::cullOccluded      ? "cullOccluded"
+                               : flag == &ShadowVolumeOptions::cullShadowedParts ? "cullShadowedParts"
+                               : flag == &ShadowVolumeOptions::clamp             ? "volumeClamping"
+                                                                                 : "clampRuns",
+                               o});
+        }
+        ShadowVolumeOptions receiversClamped = none;
+        receiversClamped.cullReceivers = receiversClamped.clamp = receiversClamped.clampRuns = true;
+        configs.push_back({"receivers+clamping", receiversClamped});
+        receiversClamped.dropShadowedReceivers = true;
+        configs.push_back({" +dropShadowedReceivers", receiversClamped});
+        ShadowVolumeOptions old = none;
+        old.cullReceivers = old.cullOccluded = old.clamp = true;
+        configs.push_back({"issue-12 three", old});
+        configs.push_back({"all", ShadowVolumeOptions{}});
+        ShadowVolumeMask reference;
+        for (const Config& c : configs) {
+            t0 = BenchClock::now();
+            const ShadowVolumeMask m =
+                computeShadowVolumes(casters, light, gbuffer, receivers, scene.bounds(), c.o);
+            const double ms = benchMs(t0);
+            if (reference.shadowed.empty()) reference = m;
+            int64_t differ = 0;
+            for (std::size_t i = 0; i < receivers.size(); ++i)
+                differ += receivers[i] && m.shadowed[i] != reference.shadowed[i];
+            const ShadowVolumeStats& st = m.stats;
+            std::printf(
+                "%-10s %-6s %-24s fragments %11lld (%.2fx)  culled %lld + %lld, %lld triangles, clamped %lld "
+                "(%lld near, %lld gaps), %lld receiver cells left  %.1f ms (cull %.1f)  differing %lld\n",
+                row.name.c_str(), light.name.c_str(), c.name, (long long)st.fragments,
+                double(reference.stats.fragments) / double(std::max<int64_t>(1, st.fragments)),
+                (long long)st.culledNoReceiver, (long long)st.culledOccluded, (long long)st.culledTriangles,
+                (long long)st.clamped, (long long)st.nearClamped, (long long)st.gaps,
+                (long long)st.droppedReceivers, ms, st.cullMs, (long long)differ);
+        }
     }
     // Whole frames: render() with shadow volumes, culling and clamping off and on.
     RenderOptions o;

@@ -28,19 +28,36 @@
 // caster when a ball around the eye (covering what the near clip cuts off) is lit by it
 // (conservatively, by its bounding sphere); it then needs no near cap. Depth-fail everywhere else.
 //
-// Culling and clamping (ED06 §3.2), both conservative, so the shadow is the same pixel for pixel:
+// Culling and clamping (ED06 §3.2), all conservative, so the shadow is the same pixel for pixel;
+// each switchable on its own (the options below) so each saving can be measured:
 //   receivers  the visible *receivers* (G-buffer points facing the light, or of a translucent
 //              material) voxelized into a slicemap in the light's views (makeLightViews fitted to
 //              casters and receivers). A caster whose unlit triangles' conservative footprint,
 //              dilated by one column and one slice, holds no receiver cell at or behind them is
-//              skipped; otherwise its far cap is clamped to the farthest such cell.
-//              Receivers outside every view turn both off for that light.
-//   occluded   then, among the casters left: a caster lying entirely in the shadow of the others.
-//              Its whole conservative footprint in the light's map must be *clean* (no other
-//              caster's silhouette edge touches the texel, so every ray through it meets the same
-//              other casters) and covered by another caster whose farthest lit fragment in the
-//              texel is in front of the caster's nearest one. Then every point of V is already in
-//              those casters' volumes (casters are assumed not to interpenetrate).
+//              skipped (cullReceivers). Receivers outside every view turn all of it off for that
+//              light.
+//   clamping   volumeClamping: the far cap ends at the farthest such cell. clampRuns: the volume
+//              is cut into *layers*, one per run of depth (along the caster's axis) holding such
+//              cells: the near end moves from the caster to the first run (when that run lies
+//              wholly behind the caster) and gaps between runs are left out. Behind the caster's
+//              deepest vertex the volume's cross-section is the unlit triangles projected from the
+//              light, so a layer [a, b] is closed by those projections at a and b and the
+//              silhouette quads between them (both caps drawn in either counting mode).
+//   shadowed receivers  dropShadowedReceivers: a receiver cell in a texel that another caster B
+//              covers (texel clean, as below) with B's farthest fragment in front of both the cell
+//              and this caster's nearest unlit depth around it is left to B (ED06 fig. 8, right):
+//              it lies in B's volume, and "strictly in front" is acyclic for casters that do not
+//              interpenetrate, so the front-most such caster keeps it.
+//   occluded   then, among the casters left: a caster lying entirely in the shadow of the others
+//              (cullOccluded), and with cullShadowedParts the unlit triangles of the others that lie
+//              in the shadow of the others (ED06 fig. 8, left). An unlit triangle's whole
+//              conservative footprint in the light's map must be *clean* (no other caster's
+//              silhouette edge touches the texel, so every ray through it meets the same other
+//              casters) and covered by another caster whose farthest lit fragment in the texel is in
+//              front of the triangle's nearest one. Then the triangle's shadow prism is already in
+//              those casters' volumes (casters are assumed not to interpenetrate); the volume of the
+//              triangles kept is closed by quads on the edges between kept and dropped triangles.
+//              A caster with every unlit triangle dropped is culled whole.
 // Culling costs rasterizations into the light's views per caster; on the CPU that can exceed the
 // fill it saves (BENCHMARKS.md).
 //
@@ -96,13 +113,17 @@ struct ShadowVolumeOptions {
         "exact hard shadows: shadow volumes of the closed casters counted per pixel (open casters "
         "are refused), culled and clamped against what the camera sees (ED06 3.2; the same image "
         "without: --no-volume-culling)";
-    bool cullReceivers = true;    ///< skip volumes holding no visible receiver
-    bool cullOccluded = true;     ///< skip casters entirely in other casters' shadow
-    bool clamp = true;            ///< end each volume at its last receiver slab
-    int64_t mapResolution = 256;  ///< light views for culling: columns along the longer side
-    int64_t receiverSlices = 128; ///< receiver slicemap: slices
-    /// volumeCulling (all three of culling and clamping), cullReceivers, cullOccluded,
-    /// volumeClamping, cullResolution, receiverSlices.
+    bool cullReceivers = true;         ///< skip volumes holding no visible receiver
+    bool cullOccluded = true;          ///< skip casters entirely in other casters' shadow
+    bool clamp = true;                 ///< end each volume at its last receiver slab
+    bool clampRuns = true;             ///< also cut the volume to the runs of receiver slabs (near end, gaps)
+    bool cullShadowedParts = true;     ///< drop unlit triangles lying in other casters' shadow
+    bool dropShadowedReceivers = true; ///< a receiver in another caster's shadow is left to it
+    int64_t mapResolution = 256;       ///< light views for culling: columns along the longer side
+    int64_t receiverSlices = 128;      ///< receiver slicemap: slices
+    /// volumeCulling (every switch of culling and clamping), cullReceivers, cullOccluded,
+    /// cullShadowedParts, dropShadowedReceivers, volumeClamping, clampRuns, cullResolution,
+    /// receiverSlices.
     static std::span<const OptionField<ShadowVolumeOptions>> fields();
 };
 
@@ -111,6 +132,10 @@ struct ShadowVolumeStats {
     int64_t culledNoReceiver = 0; ///< skipped: no visible receiver in the volume
     int64_t culledOccluded = 0;   ///< skipped: entirely in other casters' shadow
     int64_t clamped = 0;          ///< volumes ended before the scene's far bound
+    int64_t nearClamped = 0;      ///< volumes whose first layer starts behind the caster
+    int64_t gaps = 0;             ///< gaps left out between layers of one volume
+    int64_t culledTriangles = 0;  ///< unlit triangles dropped from drawn volumes (in others' shadow)
+    int64_t droppedReceivers = 0; ///< receiver cells left to a caster in front (summed over casters)
     int64_t depthPass = 0, depthFail = 0;
     int64_t silhouetteEdges = 0;
     int64_t volumeTriangles = 0;

@@ -80,6 +80,18 @@ private:
     VoxelGrid grid_;
 };
 
+/// GI08 §7 for the camera's view of a translucent solid: per pixel (column) of `camera` (a
+/// perspective frame, e.g. a G-buffer's), the world length of solid matter along the pixel's centre
+/// ray behind view depth depth[pixel] (the visible surface; not finite: 0). `solids` are voxelized
+/// as a solid (`fill`, as the translucency shadow) in the camera's own frame with `slices` slices
+/// over their depth range; the filled cells from the one holding the surface on, times a slice's
+/// world length along the ray, give the length: it differs from the exact chords by less than one
+/// slice per entry into the solid. The camera must lie outside the solids (what lies in front of
+/// its near plane is not counted). Throws voxfx::Error for an orthographic frame, slices < 1 or a
+/// depth of another size than the frame's columns.
+std::vector<double> viewMatterBehind(const Frame& camera, const MeshView& solids,
+                                     std::span<const float> depth, Fill fill, int64_t slices);
+
 /// The shadow of one light: one solid grid per light view.
 class TranslucencyShadow {
 public:

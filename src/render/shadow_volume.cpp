@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 #include <unordered_map>
 
 #include "voxfx/bitgrid.hpp"
@@ -94,6 +95,8 @@ struct SvCasterLight {
     bool directional = false;
     double maxVertexDepth = 0; // max over vertices of dot(v - origin, axis)
     double far = 0;            // unclamped: past the scene
+    double radius = 0;         // the caster's bounding sphere: radius, depth of its centre
+    double centreDepth = 0;
     bool depthPass = false;
 };
 
@@ -127,6 +130,8 @@ SvCasterLight svSetup(const ShadowCaster& c, const Light& light, const Box3d& sc
         const Vec3d toLight = s.directional ? -s.axis : light.position - a;
         s.unlit[t] = !(dot(n, toLight) > 0);
     }
+    s.radius = c.sphereRadius;
+    s.centreDepth = dot(c.sphereCentre - s.origin, s.axis);
     s.maxVertexDepth = -std::numeric_limits<double>::infinity();
     for (const Vec3f& p : c.positions) {
         const Vec3d q = Vec3d(p) - s.origin;
@@ -163,6 +168,8 @@ SvCasterLight svSetup(const ShadowCaster& c, const Light& light, const Box3d& sc
     return s;
 }
 
+constexpr double kSvInfD = std::numeric_limits<double>::infinity();
+
 Vec3d svExtrude(const Vec3d& v, const SvCasterLight& s, double far) {
     const Vec3d q = v - s.origin;
     const double d = dot(q, s.axis);
@@ -170,32 +177,51 @@ Vec3d svExtrude(const Vec3d& v, const SvCasterLight& s, double far) {
     return s.origin + q * (far / d);
 }
 
-// Appends the volume of caster c (ending on `far`) to `out`; mode 1 per depth-fail triangle.
-void svAppendVolume(const ShadowCaster& c, const SvCasterLight& s, double far, Mesh& out,
-                    std::vector<uint8_t>& mode, int64_t& silhouettes) {
-    const auto base = uint32_t(out.positions.size());
+// One layer of a volume along the caster's axis: [lo, hi]; lo = -inf starts at the caster.
+struct SvRun {
+    double lo, hi;
+};
+
+// Appends the volume of caster c over the unlit triangles flagged in `cap` (s.unlit, less those
+// dropped as shadowed), one closed piece per run (the caster to `far` when `runs` is empty); mode 1
+// per depth-fail triangle. A piece that starts behind the caster has its near cap at the
+// projection of the triangles on its start plane, drawn in both counting modes.
+void svAppendVolume(const ShadowCaster& c, const SvCasterLight& s, const std::vector<uint8_t>& cap,
+                    double far, const std::vector<SvRun>& runs, Mesh& out, std::vector<uint8_t>& mode,
+                    int64_t& silhouettes) {
+    const std::vector<SvRun> pieces = runs.empty() ? std::vector<SvRun>{{-kSvInfD, far}} : runs;
     const auto n = uint32_t(c.positions.size());
-    out.positions.insert(out.positions.end(), c.positions.begin(), c.positions.end());
-    for (const Vec3f& p : c.positions) out.positions.push_back(Vec3f(svExtrude(Vec3d(p), s, far)));
     const uint8_t m = s.depthPass ? 0 : 1;
     auto tri = [&](uint32_t a, uint32_t b, uint32_t cc) {
         out.indices.insert(out.indices.end(), {a, b, cc});
         mode.push_back(m);
     };
     const std::size_t T = c.indices.size() / 3;
-    for (std::size_t t = 0; t < T; ++t) {
-        if (!s.unlit[t]) continue;
-        const uint32_t a = base + c.indices[3 * t], b = base + c.indices[3 * t + 1],
-                       cc = base + c.indices[3 * t + 2];
-        if (!s.depthPass) tri(a, cc, b); // near cap, reversed: V lies behind the unlit side
-        tri(a + n, b + n, cc + n);       // far cap
-        for (int k = 0; k < 3; ++k) {
-            const uint32_t e = uint32_t(3 * t + k);
-            if (s.unlit[c.twin[e] / 3]) continue;
-            const uint32_t p = base + c.indices[e], q = base + c.indices[3 * t + (k + 1) % 3];
-            tri(p, q, q + n);
-            tri(p, q + n, p + n);
-            ++silhouettes;
+    for (std::size_t piece = 0; piece < pieces.size(); ++piece) {
+        const bool fromCaster = !(pieces[piece].lo > -kSvInfD);
+        const auto base = uint32_t(out.positions.size());
+        if (fromCaster)
+            out.positions.insert(out.positions.end(), c.positions.begin(), c.positions.end());
+        else
+            for (const Vec3f& p : c.positions)
+                out.positions.push_back(Vec3f(svExtrude(Vec3d(p), s, pieces[piece].lo)));
+        for (const Vec3f& p : c.positions)
+            out.positions.push_back(Vec3f(svExtrude(Vec3d(p), s, pieces[piece].hi)));
+        for (std::size_t t = 0; t < T; ++t) {
+            if (!cap[t]) continue;
+            const uint32_t a = base + c.indices[3 * t], b = base + c.indices[3 * t + 1],
+                           cc = base + c.indices[3 * t + 2];
+            // Near cap, reversed: V lies behind the unlit side (on the caster, depth-pass needs none).
+            if (!fromCaster || !s.depthPass) tri(a, cc, b);
+            tri(a + n, b + n, cc + n); // far cap
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t e = uint32_t(3 * t + k);
+                if (cap[c.twin[e] / 3]) continue;
+                const uint32_t p = base + c.indices[e], q = base + c.indices[3 * t + (k + 1) % 3];
+                tri(p, q, q + n);
+                tri(p, q + n, p + n);
+                if (piece == 0) ++silhouettes;
+            }
         }
     }
 }
@@ -254,12 +280,18 @@ template <class Op> struct SvTexelConsumer {
             x1 = std::max(x1, x);
             y1 = std::max(y1, y);
         }
-        void span(int64_t x, int64_t y, double dmin, double dmax, uint32_t) {
-            op(y * width + x, dmin, dmax);
+        void call(int64_t texel, double dmin, double dmax, uint32_t triangle) {
+            if constexpr (std::is_invocable_v<Op&, int64_t, double, double, uint32_t>)
+                op(texel, dmin, dmax, triangle);
+            else
+                op(texel, dmin, dmax);
+        }
+        void span(int64_t x, int64_t y, double dmin, double dmax, uint32_t triangle) {
+            call(y * width + x, dmin, dmax, triangle);
             touch(x, y);
         }
-        void fragment(int64_t x, int64_t y, double depth, uint32_t, bool) {
-            op(y * width + x, depth, depth);
+        void fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool) {
+            call(y * width + x, depth, depth, triangle);
             touch(x, y);
         }
         void finish() {
@@ -306,30 +338,19 @@ struct SvReceiverView {
     BitGrid bits;
 };
 
-// Highest set slice of column c in [from, D), or -1.
-int64_t svHighestSlice(const BitGrid& g, int64_t c, int64_t from) {
-    const int64_t D = g.depth();
-    if (from >= D) return -1;
-    from = std::max<int64_t>(from, 0);
-    const uint64_t* w = g.column(c);
-    for (int64_t k = (D - 1) >> 6; k >= (from >> 6); --k) {
-        uint64_t bits = w[k];
-        if (k == (from >> 6)) bits &= ~uint64_t(0) << (from & 63);
-        if (bits) return k * 64 + 63 - std::countl_zero(bits);
-    }
-    return -1;
-}
-
-// World depth (dot(x - origin, axis)) of the far end of cell (x, y, s) of a view: max over corners.
-double svCellFar(const Frame& f, int64_t x, int64_t y, int64_t s, const Vec3d& origin, const Vec3d& axis) {
+// World depth range (dot(x - origin, axis)) of cell (x, y, s) of a view: min and max over corners.
+std::pair<double, double> svCellRange(const Frame& f, int64_t x, int64_t y, int64_t s, const Vec3d& origin,
+                                      const Vec3d& axis) {
     const DepthToSlice m = f.depthToSlice(y * f.width() + x);
-    double best = -std::numeric_limits<double>::infinity();
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     for (int k = 0; k < 8; ++k) {
         const double depth = m.near + double(s + ((k >> 2) & 1)) / m.scale;
         const Vec3d p = f.worldFromGrid({double(x + (k & 1)), double(y + ((k >> 1) & 1)), depth});
-        best = std::max(best, dot(p - origin, axis));
+        const double d = dot(p - origin, axis);
+        lo = std::min(lo, d);
+        hi = std::max(hi, d);
     }
-    return best;
+    return {lo, hi};
 }
 
 } // namespace
@@ -401,7 +422,7 @@ Mesh shadowVolumeMesh(const ShadowCasterSet& casters, const Light& light, const 
     for (const ShadowCaster& c : casters.casters) {
         SvCasterLight s = svSetup(c, light, sceneBounds, probe);
         s.depthPass = false;
-        svAppendVolume(c, s, s.far, out, mode, silhouettes);
+        svAppendVolume(c, s, s.unlit, s.far, {}, out, mode, silhouettes);
     }
     return out;
 }
@@ -431,20 +452,29 @@ template <class T> void svReset(std::vector<T>& map, int64_t W, const SvRect& re
         std::fill(map.begin() + y * W + rect.v[0].load(), map.begin() + y * W + rect.v[2].load() + 1, value);
 }
 
-// ED06 §3.2, first test: marks casters lying entirely in other casters' shadow in one light view
-// (see the file comment of shadow_volume.hpp): clears occluded[i] for casters that this view does
-// not show to be in shadow.
-void svOccludedInView(const std::vector<ShadowCaster>& casters, const std::vector<SvCasterLight>& setup,
-                      const std::vector<uint8_t>& keep, const LightView& view, bool cubeFace,
-                      std::vector<uint8_t>& occluded) {
+// One light view's map of the casters: per texel the silhouette owner (-1 none, caster index, -2
+// several) and the two smallest "farthest lit depth" of distinct casters covering the texel centre
+// (with the caster of the smallest). A texel whose owner is -1 or caster i is *clean* for i: every
+// ray through it meets the same other casters, so one covering the centre covers it whole.
+struct SvCover {
+    std::vector<int32_t> owner;
+    std::vector<float> best1, best2;
+    std::vector<int32_t> best1Id;
+    /// The farthest lit depth of a caster other than i covering texel k (+inf: none), if k is clean
+    /// for i.
+    float frontOther(std::size_t k, int32_t i) const {
+        if (owner[k] != -1 && owner[k] != i) return kSvInf;
+        return best1Id[k] != i ? best1[k] : best2[k];
+    }
+};
+
+SvCover svCoverMap(const std::vector<ShadowCaster>& casters, const std::vector<SvCasterLight>& setup,
+                   const std::vector<uint8_t>& keep, const LightView& view) {
     const Frame& f = view.frame;
     const int64_t W = f.width(), H = f.height();
     const std::size_t N = casters.size();
-    // Per texel: the silhouette owner (-1 none, caster index, -2 several), and the two smallest
-    // "farthest lit depth" of distinct casters covering the texel centre.
-    std::vector<int32_t> owner(size_t(W * H), -1);
-    std::vector<float> best1(size_t(W * H), kSvInf), best2(size_t(W * H), kSvInf);
-    std::vector<int32_t> best1Id(size_t(W * H), -1);
+    SvCover cv{std::vector<int32_t>(size_t(W * H), -1), std::vector<float>(size_t(W * H), kSvInf),
+               std::vector<float>(size_t(W * H), kSvInf), std::vector<int32_t>(size_t(W * H), -1)};
     std::vector<float> far(size_t(W * H), -kSvInf);
     std::vector<uint8_t> covered(size_t(W * H), 0);
     for (std::size_t i = 0; i < N; ++i) {
@@ -468,7 +498,7 @@ void svOccludedInView(const std::vector<ShadowCaster>& casters, const std::vecto
         }
         SvRect silRect;
         const auto id = int32_t(i);
-        int32_t* own = owner.data();
+        int32_t* own = cv.owner.data();
         svRasterTexels<Coverage::Conservative>(
             f, sil,
             [own, id](int64_t texel, double, double) {
@@ -492,23 +522,35 @@ void svOccludedInView(const std::vector<ShadowCaster>& casters, const std::vecto
                 for (int64_t x = coverRect.v[0].load(); x <= coverRect.v[2].load(); ++x) {
                     const auto k = size_t(y * W + x);
                     if (!covered[k]) continue;
-                    // Round the far depth up: the test compares it strictly below another's near.
+                    // Round the far depth up: the tests compare it strictly below another's near.
                     const float v = std::nextafter(far[k], kSvInf);
-                    if (v < best1[k]) {
-                        best2[k] = best1[k];
-                        best1[k] = v;
-                        best1Id[k] = id;
-                    } else if (v < best2[k]) {
-                        best2[k] = v;
+                    if (v < cv.best1[k]) {
+                        cv.best2[k] = cv.best1[k];
+                        cv.best1[k] = v;
+                        cv.best1Id[k] = id;
+                    } else if (v < cv.best2[k]) {
+                        cv.best2[k] = v;
                     }
                 }
         svReset(far, W, farRect, -kSvInf);
         svReset(covered, W, coverRect, uint8_t(0));
     }
-    std::vector<float> near(size_t(W * H), kSvInf);
+    return cv;
+}
+
+// ED06 §3.2, first test, in one light view (see the file comment of shadow_volume.hpp): clears
+// shadowed[i][t] for the unlit triangles t of caster i that this view does not show to lie in other
+// casters' shadow (entries start at 1).
+void svOccludedInView(const std::vector<ShadowCaster>& casters, const std::vector<SvCasterLight>& setup,
+                      const std::vector<uint8_t>& keep, const LightView& view, bool cubeFace,
+                      std::vector<std::vector<uint8_t>>& shadowed) {
+    const Frame& f = view.frame;
+    const std::size_t N = casters.size();
+    const SvCover cv = svCoverMap(casters, setup, keep, view);
     for (std::size_t i = 0; i < N; ++i) {
-        if (!occluded[i]) continue;
+        if (!keep[i]) continue;
         const ShadowCaster& c = casters[i];
+        std::vector<uint8_t>& sh = shadowed[i];
         // A single view must hold the caster whole (else part of it goes untested); cube faces
         // each test their own part of it.
         if (cubeFace && !svMayTouch(view, c)) continue; // not in this face: nothing to test here
@@ -516,34 +558,26 @@ void svOccludedInView(const std::vector<ShadowCaster>& casters, const std::vecto
             bool inside = true;
             for (const Vec3f& p : c.positions) inside = inside && view.covers(Vec3d(p));
             if (!inside) {
-                occluded[i] = 0;
+                std::fill(sh.begin(), sh.end(), uint8_t(0));
                 continue;
             }
         }
-        Mesh all;
-        all.positions = c.positions;
-        all.indices = c.indices;
+        // The unlit triangles (their index in the sub-mesh maps back through `which`), each
+        // fragment span tested against the others in front.
+        std::vector<uint32_t> which;
+        const Mesh back = svSubMesh(c, [&](std::size_t t) {
+            if (setup[i].unlit[t]) which.push_back(uint32_t(t));
+            return setup[i].unlit[t] != 0;
+        });
         SvRect rect;
-        float* np = near.data();
+        const auto id = int32_t(i);
         svRasterTexels<Coverage::Conservative>(
-            f, all,
-            [np](int64_t texel, double dmin, double) { np[texel] = std::min(np[texel], float(dmin)); }, rect);
-        bool ok = true;
-        if (!rect.empty())
-            for (int64_t y = rect.v[1].load(); y <= rect.v[3].load() && ok; ++y)
-                for (int64_t x = rect.v[0].load(); x <= rect.v[2].load() && ok; ++x) {
-                    const auto k = size_t(y * W + x);
-                    if (!(near[k] < kSvInf)) continue;
-                    const int32_t o = owner[k];
-                    if (o != -1 && o != int32_t(i)) {
-                        ok = false;
-                        break;
-                    }
-                    const float other = best1Id[k] != int32_t(i) ? best1[k] : best2[k];
-                    ok = other < near[k];
-                }
-        svReset(near, W, rect, kSvInf);
-        if (!ok) occluded[i] = 0;
+            f, back,
+            [&cv, &sh, &which, id](int64_t texel, double dmin, double, uint32_t tri) {
+                uint8_t& flag = sh[which[tri]];
+                if (flag && !(double(cv.frontOther(size_t(texel), id)) < dmin)) flag = 0;
+            },
+            rect);
     }
 }
 
@@ -556,6 +590,8 @@ namespace {
 struct SvDecision {
     std::vector<uint8_t> keep;
     std::vector<double> far;
+    std::vector<std::vector<SvRun>> runs;  ///< per caster; empty: one piece, caster to far
+    std::vector<std::vector<uint8_t>> cap; ///< per caster: the unlit triangles drawn
 };
 
 // The visible receivers (G-buffer points flagged in `receivers`) in world space, and the light's
@@ -598,19 +634,37 @@ bool svReceiverSlicemaps(const std::vector<LightView>& views, const std::vector<
     return true;
 }
 
-// The farthest receiver cell (world depth along the caster's axis) at or behind the conservative
-// footprint of `back` (one caster's unlit triangles) in one view, dilated by one column and one
-// slice; -inf when there is none. `minDepth` is a W x H scratch map of +inf, left so.
-double svFarthestReceiver(const Frame& f, const BitGrid& bits, const Mesh& back, const SvCasterLight& setup,
-                          std::vector<float>& minDepth) {
+// Bits of column c set in [from, D), in increasing order, handed to op(slice).
+template <class Op> void svForSlices(const BitGrid& g, int64_t c, int64_t from, Op op) {
+    const int64_t D = g.depth();
+    from = std::max<int64_t>(from, 0);
+    if (from >= D) return;
+    const uint64_t* w = g.column(c);
+    for (int64_t k = from >> 6; k <= (D - 1) >> 6; ++k) {
+        uint64_t bits = w[k];
+        if (k == (from >> 6)) bits &= ~uint64_t(0) << (from & 63);
+        while (bits) {
+            op(k * 64 + std::countr_zero(bits));
+            bits &= bits - 1;
+        }
+    }
+}
+
+// The receiver cells at or behind the conservative footprint of `back` (one caster's unlit
+// triangles) in one view, dilated by one column and one slice, as depth intervals along the
+// caster's axis appended to `cells`. With `cover`, a cell another caster covers in front of it and
+// of this caster (SvCover::frontOther) is left to that caster and counted in `dropped`.
+// `minDepth` is a W x H scratch map of +inf, left so.
+void svReceiverCells(const Frame& f, const BitGrid& bits, const Mesh& back, const SvCasterLight& setup,
+                     const SvCover* cover, int32_t id, std::vector<float>& minDepth,
+                     std::vector<std::pair<double, double>>& cells, int64_t& dropped) {
     const int64_t VW = f.width(), VH = f.height();
     SvRect rect;
     float* mp = minDepth.data();
     svRasterTexels<Coverage::Conservative>(
         f, back, [mp](int64_t texel, double dmin, double) { mp[texel] = std::min(mp[texel], float(dmin)); },
         rect);
-    double zmax = -std::numeric_limits<double>::infinity();
-    if (rect.empty()) return zmax;
+    if (rect.empty()) return;
     const int64_t x0 = std::max<int64_t>(0, rect.v[0] - 1), y0 = std::max<int64_t>(0, rect.v[1] - 1);
     const int64_t x1 = std::min<int64_t>(VW - 1, rect.v[2] + 1),
                   y1 = std::min<int64_t>(VH - 1, rect.v[3] + 1);
@@ -622,16 +676,72 @@ double svFarthestReceiver(const Frame& f, const BitGrid& bits, const Mesh& back,
                     m = std::min(m, minDepth[size_t(yy * VW + xx)]);
             if (!(m < kSvInf)) continue;
             const int64_t col = y * VW + x;
-            const int64_t s0 = int64_t(std::floor(f.depthToSlice(col)(double(m)))) - 1;
-            const int64_t top = svHighestSlice(bits, col, s0);
-            if (top >= 0) zmax = std::max(zmax, svCellFar(f, x, y, top, setup.origin, setup.axis));
+            const DepthToSlice ds = f.depthToSlice(col);
+            const int64_t s0 = int64_t(std::floor(ds(double(m)))) - 1;
+            // Another caster wholly in front of this one's unlit side here takes the cells behind it.
+            const double front = cover ? double(cover->frontOther(size_t(col), id)) : kSvInfD;
+            const bool mayDrop = front < double(m);
+            svForSlices(bits, col, s0, [&](int64_t slice) {
+                if (mayDrop && front < ds.near + double(slice) / ds.scale) {
+                    ++dropped;
+                    return;
+                }
+                cells.push_back(svCellRange(f, x, y, slice, setup.origin, setup.axis));
+            });
         }
     svReset(minDepth, VW, rect, kSvInf);
-    return zmax;
 }
 
-// ED06 §3.2 against the receivers: a caster whose footprint holds no receiver is culled, the far
-// cap of the others ends at their farthest receiver.
+// The layers of one volume from its receiver cells (depth intervals along the caster's axis):
+// runs of overlapping cells, each padded; a run that reaches the caster's deepest vertex starts at
+// the caster. `far` on: the last run ends at the last cell, else at the unclamped far plane.
+// `runs` off: one run from the caster (the far end only).
+std::vector<SvRun> svLayers(std::vector<std::pair<double, double>>& cells, const SvCasterLight& s, bool far,
+                            bool runs) {
+    auto pad = [](double v) { return 1e-6 * std::abs(v) + 1e-9; };
+    std::sort(cells.begin(), cells.end());
+    std::vector<SvRun> out;
+    const double md = s.maxVertexDepth + pad(s.maxVertexDepth);
+    // A gap is left out only when it is longer than twice the volume's width there (the caster's
+    // bounding diameter, scaled by the depth for a point light): the two caps it adds cost about
+    // the width squared in fill, the side quads it saves the width times its length.
+    auto worth = [&](double from, double to) {
+        const double width = 2 * s.radius * (s.directional ? 1.0 : to / std::max(s.centreDepth, 1e-300));
+        return to - from > 2 * width;
+    };
+    for (const auto& [lo0, hi0] : cells) {
+        const double lo = lo0 - pad(lo0), hi = hi0 + pad(hi0);
+        if (out.empty() ? !(runs && lo > md && worth(md, lo))
+                        : !(runs && lo > out.back().hi && worth(out.back().hi, lo))) {
+            if (out.empty())
+                out.push_back({-kSvInfD, hi});
+            else
+                out.back().hi = std::max(out.back().hi, hi);
+        } else {
+            out.push_back({lo, hi});
+        }
+    }
+    if (out.empty()) return out;
+    if (!runs) out.front().lo = -kSvInfD; // the near end stays on the caster
+    // At most 8 layers: every layer costs two caps of fill; close the narrowest gaps first.
+    while (out.size() > 8) {
+        std::size_t best = 1;
+        for (std::size_t k = 2; k < out.size(); ++k)
+            if (out[k].lo - out[k - 1].hi < out[best].lo - out[best - 1].hi) best = k;
+        out[best - 1].hi = out[best].hi;
+        out.erase(out.begin() + std::ptrdiff_t(best));
+    }
+    out.front().hi = std::max(out.front().hi, md);
+    if (!far) {
+        out.back().hi = s.far;
+    } else {
+        for (SvRun& r : out) r.hi = std::min(r.hi, s.far);
+    }
+    return out;
+}
+
+// ED06 §3.2 against the receivers: a caster whose footprint holds no receiver is culled; the
+// volumes of the others are clamped to the runs of depth holding their receivers.
 void svCullByReceivers(const ShadowCasterSet& casters, const std::vector<SvCasterLight>& setup,
                        const std::vector<LightView>& views, const std::vector<BitGrid>& slicemaps,
                        const ShadowVolumeOptions& options, SvDecision& d, ShadowVolumeMask& out) {
@@ -642,23 +752,28 @@ void svCullByReceivers(const ShadowCasterSet& casters, const std::vector<SvCaste
         for (std::size_t i = size_t(c0); i < size_t(c1); ++i)
             backs[i] = svSubMesh(casters.casters[i], [&](std::size_t t) { return setup[i].unlit[t] != 0; });
     });
-    // Views share the light: the farthest receiver over all of them. Casters run in parallel, each
-    // chunk with its own scratch map; each caster writes only its own entry.
-    std::vector<double> receiverFar(N, -std::numeric_limits<double>::infinity());
+    // Views share the light: the receiver cells over all of them. Casters run in parallel, each
+    // chunk with its own scratch map; each caster writes only its own entries.
+    std::vector<std::vector<std::pair<double, double>>> cells(N);
+    std::vector<int64_t> dropped(N, 0);
     for (std::size_t v = 0; v < views.size(); ++v) {
         const Frame& f = views[v].frame;
+        SvCover cover;
+        if (options.dropShadowedReceivers) cover = svCoverMap(casters.casters, setup, d.keep, views[v]);
         parallelFor(0, int64_t(N), 4, [&](int64_t c0, int64_t c1) {
             std::vector<float> minDepth(size_t(f.width() * f.height()), kSvInf);
             for (std::size_t i = size_t(c0); i < size_t(c1); ++i)
                 if (d.keep[i] && svMayTouch(views[v], casters.casters[i]))
-                    receiverFar[i] = std::max(
-                        receiverFar[i], svFarthestReceiver(f, slicemaps[v], backs[i], setup[i], minDepth));
+                    svReceiverCells(f, slicemaps[v], backs[i], setup[i],
+                                    options.dropShadowedReceivers ? &cover : nullptr, int32_t(i), minDepth,
+                                    cells[i], dropped[i]);
         });
     }
     ShadowVolumeStats& st = out.stats;
     for (std::size_t i = 0; i < N; ++i) {
         if (!d.keep[i]) continue;
-        if (!(receiverFar[i] > -std::numeric_limits<double>::infinity())) { // no receiver in the volume
+        st.droppedReceivers += dropped[i];
+        if (cells[i].empty()) { // no receiver in the volume
             if (options.cullReceivers) {
                 d.keep[i] = 0;
                 out.culled[i] = 1;
@@ -666,35 +781,54 @@ void svCullByReceivers(const ShadowCasterSet& casters, const std::vector<SvCaste
             }
             continue;
         }
-        if (!options.clamp) continue;
-        const double md = setup[i].maxVertexDepth;
-        const double clamped = std::max(receiverFar[i] + 1e-6 * std::abs(receiverFar[i]) + 1e-9,
-                                        md + 1e-6 * std::abs(md) + 1e-9);
-        if (clamped < setup[i].far) {
-            d.far[i] = clamped;
-            ++st.clamped;
-        }
+        if (!options.clamp && !options.clampRuns) continue;
+        std::vector<SvRun> runs = svLayers(cells[i], setup[i], options.clamp, options.clampRuns);
+        if (runs.back().hi < setup[i].far) ++st.clamped;
+        if (runs.front().lo > -kSvInfD) ++st.nearClamped;
+        st.gaps += int64_t(runs.size()) - 1;
+        d.far[i] = runs.back().hi;
+        if (runs.size() > 1 || runs.front().lo > -kSvInfD) d.runs[i] = std::move(runs);
     }
 }
 
-// ED06 §3.2, second test, among the casters left: the light's map shows a caster in other casters'
-// shadow. Views (cube faces) run in parallel, each clearing its own flags.
+// ED06 §3.2, second test, among the casters left: the light's map shows unlit triangles (or a
+// whole caster) in other casters' shadow. Views (cube faces) run in parallel, each clearing its own
+// flags.
 void svCullOccluded(const ShadowCasterSet& casters, const std::vector<SvCasterLight>& setup,
-                    const std::vector<LightView>& views, SvDecision& d, ShadowVolumeMask& out) {
+                    const std::vector<LightView>& views, const ShadowVolumeOptions& options, SvDecision& d,
+                    ShadowVolumeMask& out) {
     const std::size_t N = casters.casters.size();
-    std::vector<std::vector<uint8_t>> perView(views.size(), std::vector<uint8_t>(N, 1));
+    std::vector<std::vector<std::vector<uint8_t>>> perView(views.size());
+    for (auto& pv : perView) {
+        pv.resize(N);
+        for (std::size_t i = 0; i < N; ++i) pv[i] = setup[i].unlit;
+    }
     parallelFor(0, int64_t(views.size()), 1, [&](int64_t v0, int64_t v1) {
         for (int64_t v = v0; v < v1; ++v)
             svOccludedInView(casters.casters, setup, d.keep, views[size_t(v)], views.size() > 1,
                              perView[size_t(v)]);
     });
     for (std::size_t i = 0; i < N; ++i) {
-        bool occluded = d.keep[i] != 0;
-        for (const std::vector<uint8_t>& o : perView) occluded = occluded && o[i];
-        if (occluded) {
+        if (!d.keep[i]) continue;
+        std::vector<uint8_t> cap = setup[i].unlit;
+        int64_t shadowed = 0, unlit = 0;
+        for (std::size_t t = 0; t < cap.size(); ++t) {
+            if (!cap[t]) continue;
+            ++unlit;
+            bool all = true;
+            for (const auto& pv : perView) all = all && pv[i][t];
+            if (all) {
+                cap[t] = 0;
+                ++shadowed;
+            }
+        }
+        if (shadowed == unlit && options.cullOccluded) {
             d.keep[i] = 0;
             out.culled[i] = 2;
             ++out.stats.culledOccluded;
+        } else if (shadowed > 0 && options.cullShadowedParts) {
+            d.cap[i] = std::move(cap);
+            out.stats.culledTriangles += shadowed;
         }
     }
 }
@@ -709,7 +843,8 @@ void svCount(const ShadowCasterSet& casters, const std::vector<SvCasterLight>& s
     for (std::size_t i = 0; i < casters.casters.size(); ++i) {
         if (!d.keep[i]) continue;
         (setup[i].depthPass ? st.depthPass : st.depthFail)++;
-        svAppendVolume(casters.casters[i], setup[i], d.far[i], volumes, mode, st.silhouetteEdges);
+        svAppendVolume(casters.casters[i], setup[i], d.cap[i].empty() ? setup[i].unlit : d.cap[i], d.far[i],
+                       d.runs[i], volumes, mode, st.silhouetteEdges);
     }
     st.volumeTriangles = int64_t(mode.size());
     st.buildMs = svMsSince(t0);
@@ -752,19 +887,22 @@ ShadowVolumeMask computeShadowVolumes(const ShadowCasterSet& casters, const Ligh
     std::vector<SvCasterLight> setup;
     setup.reserve(N);
     for (const ShadowCaster& c : casters.casters) setup.push_back(svSetup(c, light, sceneBounds, cam));
-    SvDecision d{std::vector<uint8_t>(N, 1), std::vector<double>(N)};
+    SvDecision d{std::vector<uint8_t>(N, 1), std::vector<double>(N), std::vector<std::vector<SvRun>>(N),
+                 std::vector<std::vector<uint8_t>>(N)};
     for (std::size_t i = 0; i < N; ++i) d.far[i] = setup[i].far;
-    if (options.cullReceivers || options.clamp || options.cullOccluded) {
+    const bool byReceivers = options.cullReceivers || options.clamp || options.clampRuns;
+    const bool byOccluders = options.cullOccluded || options.cullShadowedParts;
+    if (byReceivers || byOccluders) {
         std::vector<Vec3d> points;
         const std::vector<LightView> views =
             svReceiverViews(casters, light, gbuffer, receivers, options, points);
-        if (options.cullReceivers || options.clamp) {
+        if (byReceivers) {
             std::vector<BitGrid> slicemaps;
             out.stats.receiversCovered = svReceiverSlicemaps(views, points, slicemaps);
             if (out.stats.receiversCovered)
                 svCullByReceivers(casters, setup, views, slicemaps, options, d, out);
         }
-        if (options.cullOccluded) svCullOccluded(casters, setup, views, d, out);
+        if (byOccluders) svCullOccluded(casters, setup, views, options, d, out);
     }
     out.stats.cullMs = svMsSince(t0);
     svCount(casters, setup, d, gbuffer, out);
@@ -780,16 +918,29 @@ std::span<const OptionField<ShadowVolumeOptions>> ShadowVolumeOptions::fields() 
                            "shadow volumes: ED06 culling and clamping (the same image; off: more fragments)",
                            OptionType::Flag);
         all.store = +[](O& o, const OptionValue& v) {
-            o.cullReceivers = o.cullOccluded = o.clamp = std::get<bool>(v);
+            o.cullReceivers = o.cullOccluded = o.clamp = o.clampRuns = o.cullShadowedParts =
+                o.dropShadowedReceivers = std::get<bool>(v);
         };
-        all.get = +[](const O& o) { return OptionValue(o.cullReceivers && o.cullOccluded && o.clamp); };
+        all.get = +[](const O& o) {
+            return OptionValue(o.cullReceivers && o.cullOccluded && o.clamp && o.clampRuns &&
+                               o.cullShadowedParts && o.dropShadowedReceivers);
+        };
         t.push_back(all);
         t.push_back(flagOption<O, &O::cullReceivers>(
             "cullReceivers", "shadow volumes: skip volumes holding no visible receiver"));
         t.push_back(flagOption<O, &O::cullOccluded>(
             "cullOccluded", "shadow volumes: skip casters entirely in other casters' shadow"));
+        t.push_back(flagOption<O, &O::cullShadowedParts>(
+            "cullShadowedParts",
+            "shadow volumes: drop the unlit triangles of a caster lying in other casters' shadow"));
+        t.push_back(flagOption<O, &O::dropShadowedReceivers>(
+            "dropShadowedReceivers", "shadow volumes: leave a receiver in another caster's shadow to that "
+                                     "caster (culling, clamping)"));
         t.push_back(flagOption<O, &O::clamp>("volumeClamping",
                                              "shadow volumes: end each volume at its last receiver slab"));
+        t.push_back(flagOption<O, &O::clampRuns>(
+            "clampRuns",
+            "shadow volumes: cut each volume to its runs of receiver slabs (near end and gaps)"));
         t.push_back(numberOption<O, &O::mapResolution>(
             "cullResolution", "shadow volumes: culling light views, columns along the longer side", 1,
             16384));
@@ -805,6 +956,10 @@ ShadowVolumeStats& ShadowVolumeStats::operator+=(const ShadowVolumeStats& o) {
     culledNoReceiver += o.culledNoReceiver;
     culledOccluded += o.culledOccluded;
     clamped += o.clamped;
+    nearClamped += o.nearClamped;
+    gaps += o.gaps;
+    culledTriangles += o.culledTriangles;
+    droppedReceivers += o.droppedReceivers;
     depthPass += o.depthPass;
     depthFail += o.depthFail;
     silhouetteEdges += o.silhouetteEdges;
@@ -819,8 +974,11 @@ ShadowVolumeStats& ShadowVolumeStats::operator+=(const ShadowVolumeStats& o) {
 
 std::string ShadowVolumeStats::summary() const {
     return countText(fragments) + " volume fragments; " + countText(culledNoReceiver + culledOccluded) +
-           " of " + countText(casters) + " casters culled, " + countText(clamped) + " clamped; culling " +
-           msText(cullMs) + ", volumes " + msText(buildMs) + ", counting " + msText(rasterMs);
+           " of " + countText(casters) + " casters culled, " + countText(culledTriangles) +
+           " shadowed triangles dropped, " + countText(clamped) + " clamped (" + countText(nearClamped) +
+           " near ends, " + countText(gaps) + " gaps); " + countText(droppedReceivers) +
+           " shadowed receiver cells left; culling " + msText(cullMs) + ", volumes " + msText(buildMs) +
+           ", counting " + msText(rasterMs);
 }
 
 VolumeShadow VolumeShadow::build(const Scene& scene, const Light& light, const ShadowVolumeOptions& options,

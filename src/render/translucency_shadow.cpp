@@ -9,11 +9,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "render/light_grid_lookup.hpp"
 #include "render/shadow_casters.hpp"
 #include "voxfx/grid_query.hpp"
+#include "voxfx/parallel.hpp"
 #include "voxfx/text.hpp"
 
 namespace voxfx {
@@ -85,6 +87,53 @@ Vec3f TranslucencyShadowMap::transmittanceBilinear(const Vec3d& world, int64_t s
         view_, world, Vec3f{1, 1, 1}, [&](const detail::ColumnAt& c) {
             return beerLambert(sigma, columnPath(c.column, c.depth, skipCells));
         });
+}
+
+std::vector<double> viewMatterBehind(const Frame& camera, const MeshView& solids,
+                                     std::span<const float> depth, Fill fill, int64_t slices) {
+    const int64_t W = camera.width(), H = camera.height();
+    if (!camera.isPerspective()) fail("view translucency: the camera frame must be perspective");
+    if (slices < 1) fail("view translucency: slices must be >= 1, got ", slices);
+    if (depth.size() != size_t(W * H))
+        fail("view translucency: ", depth.size(), " depths for ", W * H, " pixels");
+    std::vector<double> out(size_t(W * H), 0.0);
+    if (solids.triangleCount == 0) return out;
+    // The solids' view-depth range, in front of the camera.
+    const Box3d b = computeBounds(solids);
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int k = 0; k < 8; ++k) {
+        const Vec3d q{(k & 1) ? b.hi.x : b.lo.x, (k & 2) ? b.hi.y : b.lo.y, (k & 4) ? b.hi.z : b.lo.z};
+        const double d = dot(q - camera.eye(), camera.forward());
+        lo = std::min(lo, d);
+        hi = std::max(hi, d);
+    }
+    lo = std::max(lo, camera.nearDepth());
+    if (!(hi > lo)) return out;
+    const Frame f = Frame::perspective(camera.eye(), camera.eye() + camera.forward(), camera.up(),
+                                       2 * std::atan(camera.tanHalfFovY()), W, H, lo, hi, slices);
+    VoxelizeOptions vo;
+    vo.mode = VoxelizeMode::Solid;
+    vo.fill = fill;
+    const VoxelGrid grid = voxelize(solids, f, vo);
+    const DepthToSlice ds = f.depthToSlice(0);
+    parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < W; ++x) {
+                const auto i = size_t(y * W + x);
+                const double g = double(depth[i]);
+                if (!std::isfinite(g)) continue;
+                const double t = ds(g);
+                const int64_t from = t <= 0 ? 0 : t >= double(slices) ? slices : int64_t(t);
+                const int64_t n = countColumnRange(grid.bits.column(int64_t(i)), slices, from, slices);
+                if (n == 0) continue;
+                // A slice's world length along the pixel's centre ray (depth is along the axis).
+                const double gx = double(x) + 0.5, gy = double(y) + 0.5;
+                const double perDepth =
+                    length(f.worldFromGrid({gx, gy, lo + 1}) - f.worldFromGrid({gx, gy, lo}));
+                out[i] = double(n) * perDepth / ds.scale;
+            }
+    });
+    return out;
 }
 
 std::span<const OptionField<TranslucencyShadowOptions>> TranslucencyShadowOptions::fields() {
