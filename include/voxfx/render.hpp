@@ -106,6 +106,14 @@ inline constexpr EnumName<VolumeShading> kVolumeShadingNames[] = {{"none", Volum
 const char* toString(VolumeShading v);
 VolumeShading parseVolumeShading(const std::string& name);
 
+/// Ambient occlusion of the ambient light (RenderOptions::ambientOcclusion): off, or field (cone
+/// tracing the opaque geometry's distance field, voxfx/ambient_occlusion.hpp).
+enum class Occlusion : uint8_t { Off, Field };
+inline constexpr EnumName<Occlusion> kOcclusionNames[] = {{"off", Occlusion::Off},
+                                                          {"field", Occlusion::Field}};
+const char* toString(Occlusion o);
+Occlusion parseOcclusion(const std::string& name);
+
 struct RenderOptions {
     int64_t width = 1280, height = 720;        ///< output pixels, 1..65536
     int supersample = 1;                       ///< k: render k*width x k*height, box-filter down (1..8)
@@ -145,10 +153,21 @@ struct RenderOptions {
     /// Meshes without normals of their own: faces meeting at more than this angle (degrees, 0..180)
     /// have a crease between them, smaller angles are smoothed over (flattenScene, gbuffer.hpp).
     double creaseAngle = kDefaultCreaseAngle;
+    /// The ambient light (sky irradiance and `ambient`) is multiplied by how much of the hemisphere
+    /// a point sees past the opaque geometry within `occlusionRadius` (voxfx/ambient_occlusion.hpp):
+    /// dark creases, contact shadows under objects. Direct light is not affected.
+    Occlusion ambientOcclusion = Occlusion::Field;
+    /// World units; 0: a tenth of the median diagonal of the opaque meshes that are not flat (a
+    /// floor is flat), so an object darkens the ground around it about a tenth of its size away.
+    double occlusionRadius = 0;
+    /// Cells along the longest side of the occlusion field (the opaque non-flat meshes' bounds grown
+    /// by the radius), at least 4 per radius, at most 2^24 cells in all.
+    int64_t occlusionResolution = 128;
 
     /// The named fields of RenderOptions itself: width, height, supersample, antiAliasing,
     /// adaptiveSamples, toneMap, exposure, ambient, skyLight, sky, background, volumeStep,
-    /// emptySpaceSkipping, volumeShading, defaultLights, creaseAngle.
+    /// emptySpaceSkipping, volumeShading, defaultLights, creaseAngle, ambientOcclusion,
+    /// occlusionRadius, occlusionResolution.
     static std::span<const OptionField<RenderOptions>> fields();
 };
 
