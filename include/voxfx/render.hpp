@@ -9,9 +9,12 @@
 //   G-buffer  the camera is a perspective Frame whose columns are pixels; a consumer of the one
 //             rasterizer keeps the nearest centre-sampled fragment per pixel (ties to the lower
 //             triangle index, so the result does not depend on the thread count).
+//   occlusion the ambient light's occlusion field over the opaque triangles
+//             (RenderOptions::ambientOcclusion, voxfx/ambient_occlusion.hpp); nothing when off.
 //   shadows   one LightShadow per light, built by the chosen technique (voxfx/shadow.hpp) and, for
 //             techniques that count over the camera's G-buffer, prepared with it.
-//   shading   deferred, tile rows in parallel: ambient + per light Blinn–Phong times the light's RGB
+//   shading   deferred, tile rows in parallel: ambient (times its occlusion) + per light Blinn–Phong times
+//   the light's RGB
 //             visibility. Surfaces are lit on both sides; the side facing away from a light receives
 //             the light that crosses the surface (crossingTransmittance: back-lit leaves glow). With
 //             an environment, background pixels show it along their ray.
@@ -219,7 +222,7 @@ struct PassTime {
 struct RenderTimings {
     std::vector<PassTime> passes; ///< every pass, in the order they ran (see the file comment)
     double totalMs = 0;
-    /// The time of the pass called `name` ("flatten", "G-buffer", "shadows", "shading", "glass",
+    /// The time of the pass called `name` ("flatten", "G-buffer", "occlusion", "shadows", "shading", "glass",
     /// "volumes", "resolve"); 0 for one that did not run.
     double ms(std::string_view name) const;
 };
