@@ -120,6 +120,7 @@ TEST(EnumNamesTest, EveryEnumeratorHasOneNameThatParsesBackInAnyCase) {
     expectOneNamePerValue<ToneMap>(kToneMapNames);
     expectOneNamePerValue<SkyKind>(kSkyKindNames);
     expectOneNamePerValue<VolumeShading>(kVolumeShadingNames);
+    expectOneNamePerValue<Occlusion>(kOcclusionNames);
     expectOneNamePerValue<VolumeFormat>(kVolumeFormatNames);
     expectOneNamePerValue<ScalarType>(kScalarTypeNames);
     expectOneNamePerValue<BatchStatus>(kBatchStatusNames);

@@ -9,9 +9,12 @@
 //   G-buffer  the camera is a perspective Frame whose columns are pixels; a consumer of the one
 //             rasterizer keeps the nearest centre-sampled fragment per pixel (ties to the lower
 //             triangle index, so the result does not depend on the thread count).
+//   occlusion the ambient light's occlusion field over the opaque triangles
+//             (RenderOptions::ambientOcclusion, voxfx/ambient_occlusion.hpp); nothing when off.
 //   shadows   one LightShadow per light, built by the chosen technique (voxfx/shadow.hpp) and, for
 //             techniques that count over the camera's G-buffer, prepared with it.
-//   shading   deferred, tile rows in parallel: ambient + per light Blinn–Phong times the light's RGB
+//   shading   deferred, tile rows in parallel: ambient (times its occlusion) + per light Blinn–Phong times
+//   the light's RGB
 //             visibility. Surfaces are lit on both sides; the side facing away from a light receives
 //             the light that crosses the surface (crossingTransmittance: back-lit leaves glow). With
 //             an environment, background pixels show it along their ray.
@@ -106,6 +109,14 @@ inline constexpr EnumName<VolumeShading> kVolumeShadingNames[] = {{"none", Volum
 const char* toString(VolumeShading v);
 VolumeShading parseVolumeShading(const std::string& name);
 
+/// Ambient occlusion of the ambient light (RenderOptions::ambientOcclusion): off, or field (cone
+/// tracing the opaque geometry's distance field, voxfx/ambient_occlusion.hpp).
+enum class Occlusion : uint8_t { Off, Field };
+inline constexpr EnumName<Occlusion> kOcclusionNames[] = {{"off", Occlusion::Off},
+                                                          {"field", Occlusion::Field}};
+const char* toString(Occlusion o);
+Occlusion parseOcclusion(const std::string& name);
+
 struct RenderOptions {
     int64_t width = 1280, height = 720;        ///< output pixels, 1..65536
     int supersample = 1;                       ///< k: render k*width x k*height, box-filter down (1..8)
@@ -145,10 +156,21 @@ struct RenderOptions {
     /// Meshes without normals of their own: faces meeting at more than this angle (degrees, 0..180)
     /// have a crease between them, smaller angles are smoothed over (flattenScene, gbuffer.hpp).
     double creaseAngle = kDefaultCreaseAngle;
+    /// The ambient light (sky irradiance and `ambient`) is multiplied by how much of the hemisphere
+    /// a point sees past the opaque geometry within `occlusionRadius` (voxfx/ambient_occlusion.hpp):
+    /// dark creases, contact shadows under objects. Direct light is not affected.
+    Occlusion ambientOcclusion = Occlusion::Field;
+    /// World units; 0: a tenth of the median diagonal of the opaque meshes that are not flat (a
+    /// floor is flat), so an object darkens the ground around it about a tenth of its size away.
+    double occlusionRadius = 0;
+    /// Cells along the longest side of the occlusion field (the opaque non-flat meshes' bounds grown
+    /// by the radius), at least 4 per radius, at most 2^24 cells in all.
+    int64_t occlusionResolution = 128;
 
     /// The named fields of RenderOptions itself: width, height, supersample, antiAliasing,
     /// adaptiveSamples, toneMap, exposure, ambient, skyLight, sky, background, volumeStep,
-    /// emptySpaceSkipping, volumeShading, defaultLights, creaseAngle.
+    /// emptySpaceSkipping, volumeShading, defaultLights, creaseAngle, ambientOcclusion,
+    /// occlusionRadius, occlusionResolution.
     static std::span<const OptionField<RenderOptions>> fields();
 };
 
@@ -200,7 +222,7 @@ struct PassTime {
 struct RenderTimings {
     std::vector<PassTime> passes; ///< every pass, in the order they ran (see the file comment)
     double totalMs = 0;
-    /// The time of the pass called `name` ("flatten", "G-buffer", "shadows", "shading", "glass",
+    /// The time of the pass called `name` ("flatten", "G-buffer", "occlusion", "shadows", "shading", "glass",
     /// "volumes", "resolve"); 0 for one that did not run.
     double ms(std::string_view name) const;
 };

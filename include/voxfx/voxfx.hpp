@@ -58,6 +58,7 @@
 // render: the renderer (G-buffer, passes), its shadow techniques and glass methods, one room each,
 // environment light and the exact tracer.
 #include "voxfx/absorption_shadow.hpp"
+#include "voxfx/ambient_occlusion.hpp"
 #include "voxfx/environment.hpp"
 #include "voxfx/exact_glass.hpp"
 #include "voxfx/exact_shadow.hpp"

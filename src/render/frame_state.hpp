@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "voxfx/ambient_occlusion.hpp"
 #include "voxfx/render.hpp"
 
 namespace voxfx::detail {
@@ -27,7 +28,9 @@ struct FrameState {
     std::vector<uint8_t> refined;
     SceneGeometry geometry;
     GBuffer gbuffer;
-    std::vector<LightShadow> shadows;  ///< one per light of `lit`
+    std::vector<LightShadow> shadows; ///< one per light of `lit`
+    /// The ambient light's occlusion (no field, so visibility 1 everywhere, when off).
+    AmbientOcclusion occlusion;
     std::vector<Vec3f> shaded;         ///< linear radiance per sample, row-major, y up
     std::vector<uint8_t> glassSamples; ///< per sample: 1 where it shows glass (empty without glass)
     RenderResult& result;

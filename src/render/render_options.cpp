@@ -52,7 +52,21 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
                                          "light a scene without lights by a sun and the environment"),
         numberOption<O, &O::creaseAngle>(
             "creaseAngle",
-            "meshes without normals: faces meeting at a wider angle (degrees) are not smoothed", 0, 180)};
+            "meshes without normals: faces meeting at a wider angle (degrees) are not smoothed", 0, 180),
+        nameOption<O, parseOcclusion, optionName<Occlusion>, &O::ambientOcclusion>(
+            "ambientOcclusion",
+            "ambient occlusion: field darkens the sky's and the constant ambient light by how much of the "
+            "hemisphere the opaque geometry hides within --occlusion-radius (cone tracing its distance "
+            "field); off lights every point by the whole sky",
+            "off | field", "ao"),
+        numberOption<O, &O::occlusionRadius>(
+            "occlusionRadius",
+            "ambient occlusion: occluders farther than this (world units) do not darken; 0: a tenth of "
+            "the median size of the opaque meshes that are not flat",
+            0, 1e30),
+        numberOption<O, &O::occlusionResolution>(
+            "occlusionResolution", "ambient occlusion: distance field cells along its longest side", 8,
+            2048)};
     return table;
 }
 

@@ -15,6 +15,11 @@
 
 namespace voxfx {
 
+const char* toString(Occlusion o) { return enumName(o, kOcclusionNames); }
+Occlusion parseOcclusion(const std::string& name) {
+    return parseEnum<Occlusion>(name, "ambient occlusion", kOcclusionNames);
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -48,6 +53,77 @@ void shadowPass(FrameState& f, Progress* progress) {
         prepareLightShadow(f.shadows.back(), f.gbuffer, f.geometry);
         accumulate(f.result.shadowStats, shadowStats(f.shadows.back()));
     }
+}
+
+// The ambient light's occlusion field over the opaque triangles (see RenderOptions::ambientOcclusion).
+void occlusionPass(FrameState& f, Progress* progress) {
+    const RenderOptions& o = f.options;
+    const bool ambientLight = o.skyLight > 0 || o.ambient.x > 0 || o.ambient.y > 0 || o.ambient.z > 0;
+    if (o.ambientOcclusion == Occlusion::Off || !ambientLight) return;
+    const SceneGeometry& g = f.geometry;
+    const Mesh& mesh = g.mesh;
+    // Opaque triangles occlude; per mesh, its bounds and whether it is flat (every vertex on the
+    // plane of its largest triangle, to 1e-6 of its size): a flat mesh never occludes itself.
+    std::vector<uint32_t> indices;
+    struct PerMesh {
+        Box3d box;
+        Vec3d normal, point;
+        double area2 = 0;
+        bool flat = true;
+    };
+    std::vector<PerMesh> meshes(f.lit.meshes.size());
+    std::vector<std::size_t> opaque;
+    for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
+        const uint32_t mat = g.triangleMaterial[t];
+        if (mat >= f.lit.materials.size() || !f.lit.materials[mat].isOpaque()) continue;
+        opaque.push_back(t);
+        PerMesh& m = meshes[g.triangleMesh[t]];
+        const Vec3d a = Vec3d(mesh.positions[mesh.indices[3 * t]]),
+                    b = Vec3d(mesh.positions[mesh.indices[3 * t + 1]]),
+                    c = Vec3d(mesh.positions[mesh.indices[3 * t + 2]]);
+        m.box.extend(a), m.box.extend(b), m.box.extend(c);
+        const Vec3d n = cross(b - a, c - a);
+        if (dot(n, n) > m.area2) m.area2 = dot(n, n), m.normal = n, m.point = a;
+    }
+    if (opaque.empty()) return;
+    for (const std::size_t t : opaque) {
+        PerMesh& m = meshes[g.triangleMesh[t]];
+        if (!m.flat || m.area2 <= 0) continue;
+        const double tol = 1e-6 * length(m.box.extent());
+        const Vec3d n = m.normal / std::sqrt(m.area2);
+        for (int k = 0; k < 3; ++k)
+            if (std::fabs(dot(Vec3d(mesh.positions[mesh.indices[3 * t + k]]) - m.point, n)) > tol)
+                m.flat = false;
+    }
+    indices.reserve(3 * opaque.size());
+    for (const std::size_t t : opaque)
+        for (int k = 0; k < 3; ++k) indices.push_back(mesh.indices[3 * t + k]);
+    // The region: the non-flat opaque meshes (all of them when every one is flat); the radius a
+    // tenth of their median diagonal unless given.
+    std::vector<double> diagonals;
+    Box3d region;
+    for (int pass = 0; pass < 2 && region.empty(); ++pass)
+        for (const PerMesh& m : meshes)
+            if (!m.box.empty() && (pass == 1 || !m.flat)) {
+                region.extend(m.box.lo), region.extend(m.box.hi);
+                diagonals.push_back(length(m.box.extent()));
+            }
+    std::sort(diagonals.begin(), diagonals.end());
+    AmbientOcclusionOptions ao;
+    ao.radius = o.occlusionRadius > 0 ? o.occlusionRadius : 0.1 * diagonals[diagonals.size() / 2];
+    if (!(ao.radius > 0)) return;
+    const Vec3d extent = region.extent() + Vec3d{2, 2, 2} * ao.radius;
+    const double longest = std::max({extent.x, extent.y, extent.z});
+    ao.resolution = std::clamp<int64_t>(
+        std::max<int64_t>(o.occlusionResolution, int64_t(std::ceil(4 * longest / ao.radius))), 8, 2048);
+    ao.threads = o.threads;
+    ao.progress = progress;
+    MeshView view;
+    view.positions = &mesh.positions[0].x;
+    view.vertexCount = mesh.positions.size();
+    view.indices = indices.data();
+    view.triangleCount = opaque.size();
+    f.occlusion = AmbientOcclusion(view, region, ao);
 }
 
 void shadingPass(FrameState& f, Progress* progress) { detail::shadeGBuffer(f, progress); }
@@ -138,10 +214,10 @@ struct RenderPass {
 };
 
 // The frame, in order. A pass reads what the passes before it left in the frame state.
-constexpr RenderPass kPasses[] = {{"flatten", 0.0, flattenPass}, {"G-buffer", 0.2, gbufferPass},
-                                  {"shadows", 0.5, shadowPass},  {"shading", 1.0, shadingPass},
-                                  {"glass", 1.0, glassPass},     {"volumes", 1.0, volumePass},
-                                  {"resolve", 1.0, resolvePass}};
+constexpr RenderPass kPasses[] = {{"flatten", 0.0, flattenPass},     {"G-buffer", 0.2, gbufferPass},
+                                  {"occlusion", 0.3, occlusionPass}, {"shadows", 0.5, shadowPass},
+                                  {"shading", 1.0, shadingPass},     {"glass", 1.0, glassPass},
+                                  {"volumes", 1.0, volumePass},      {"resolve", 1.0, resolvePass}};
 
 void checkRender(const Scene& scene, const RenderOptions& options) {
     if (options.width <= 0 || options.height <= 0 || options.width > 65536 || options.height > 65536)
@@ -198,6 +274,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
                      options.width * k,
                      options.height * k,
                      adaptive,
+                     {},
                      {},
                      {},
                      {},

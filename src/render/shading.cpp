@@ -50,6 +50,8 @@ Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material&
     Vec3f ambient = options.ambient;
     if (options.skyLight > 0)
         ambient += frame.environment->irradiance(s.normal) * float(options.skyLight / M_PI);
+    if (options.ambientOcclusion == Occlusion::Field)
+        ambient = ambient * float(frame.occlusion.visibility(s.position, s.normal));
     Vec3f out = ambient * m.baseColor;
     const Vec3d toEye = normalize(eye - s.position);
     for (std::size_t k = 0; k < scene.lights.size(); ++k) {
