@@ -816,9 +816,8 @@ TEST(GlassTest, ASceneWithoutLightsIsLitByTheDefaultSunAndSkyAmbient) {
             << c;
 }
 
-TEST(GlassTest, CommandLineRendersGlassAndComparesTheVoxelMethodsWithTheExactTracer) {
-    test::TempDir dir;
-    // An octahedron of blue glass over a ground quad, in a JSON scene without lights.
+// An octahedron of blue glass over a ground quad, in a JSON scene without lights: DIR/scene.json.
+void writeGemScene(const test::TempDir& dir) {
     test::writeFile(dir.file("gem.off"),
                     "OFF\n6 8 0\n1 0 0\n-1 0 0\n0 1 0\n0 -1 0\n0 0 1\n0 0 -1\n"
                     "3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n");
@@ -829,6 +828,11 @@ TEST(GlassTest, CommandLineRendersGlassAndComparesTheVoxelMethodsWithTheExactTra
                                                                          "baseColor": [0.6, 0.8, 1] } },
                                      { "file": "ground.off" } ],
                          "cameras": [ { "position": [0, 1, 4], "target": [0, 0, 0], "fovYDegrees": 50 } ] })");
+}
+
+TEST(GlassTest, CommandLineRendersGlassAndComparesTheVoxelMethodsWithTheExactTracer) {
+    test::TempDir dir;
+    writeGemScene(dir);
     const auto r =
         test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + dir.file("a.png") +
                                 " --width 64 --height 48 --glass multi --glass-grid 32 --shadows exact");
@@ -852,18 +856,9 @@ TEST(GlassTest, CommandLineGlassKnobsChangeTheImageAndBadValuesSayWhich) {
     // CHANG's knobs on the render command line (--glass-grid, --glass-coverage, --angle-threshold,
     // --max-events, --no-scene-behind: CHANG's environment-only lookup after the last exit): each
     // is parsed, most change the multi image of a glass octahedron over a ground quad, and a bad
-    // value exits 1 naming the flag, with no image written.
+    // value exits non-zero naming the flag, with no image written.
     test::TempDir dir;
-    test::writeFile(dir.file("gem.off"),
-                    "OFF\n6 8 0\n1 0 0\n-1 0 0\n0 1 0\n0 -1 0\n0 0 1\n0 0 -1\n"
-                    "3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n");
-    test::writeFile(dir.file("ground.off"),
-                    "OFF\n4 2 0\n-4 -1.2 -4\n4 -1.2 -4\n4 -1.2 4\n-4 -1.2 4\n3 0 2 1\n3 0 3 2\n");
-    test::writeFile(dir.file("scene.json"),
-                    R"({ "meshes": [ { "file": "gem.off", "material": { "transmission": 1, "ior": 1.5,
-                                                                         "baseColor": [0.6, 0.8, 1] } },
-                                     { "file": "ground.off" } ],
-                         "cameras": [ { "position": [0, 1, 4], "target": [0, 0, 0], "fovYDegrees": 50 } ] })");
+    writeGemScene(dir);
     const std::string base =
         "render " + dir.file("scene.json") + " --width 48 --height 36 --shadows none --glass multi ";
     auto renderWith = [&](const std::string& flags, const std::string& png) {
