@@ -7,12 +7,15 @@
 //                (material ids). A boundary voxel whose stored normal faces the ray enters the
 //                voxel's material (unless the ray is in it already); one whose normal points along
 //                the ray leaves its material (or, where the ray is not in that material, the
-//                innermost one). Snell with the voxel's averaged normal and n_from / n_to of the media
-//                on both sides, (1 - F(n_from, n_to)), the tint of a medium entered; total internal
-//                reflection where there is no solution (the media unchanged); a refraction is
-//                skipped when its voxel has the material of the last surface and its normal is
-//                within angleThreshold of that surface's (CHANG's guard against refracting twice at
-//                one surface spread over neighbouring voxels); Beer–Lambert with the coefficient of
+//                innermost one). Snell with the normal at the event (mid-voxel), trilinear over the
+//                eight voxel centres around it that hold a normal of that material within 30 degrees
+//                of the voxel's own (a voxel's averaged normal alone is a staircase of the faces
+//                touching it: a few degrees off, enough for a false total reflection near the
+//                critical angle), and n_from / n_to of the media on both sides, (1 - F(n_from, n_to)), the
+//                tint of a medium entered; total internal reflection where there is no solution (the media
+//                unchanged); a refraction is skipped when its voxel has the material of the last surface and
+//                its normal is within angleThreshold of that surface's (CHANG's guard against refracting
+//                twice at one surface spread over neighbouring voxels); Beer–Lambert with the coefficient of
 //                the medium the ray is in, per voxel segment; until the ray leaves the grid. What
 //                comes through is then looked up (the opaque scene or the environment) along the
 //                last direction from where the ray last left glass (the start of that boundary

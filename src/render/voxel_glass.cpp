@@ -92,6 +92,40 @@ VoxelGlass::VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMediu
     grid_ = voxelizeAttributes(mesh, Frame::orthographic(grid, Axis::Z, dims[0], dims[1], dims[2]), {}, ao);
 }
 
+namespace voxel_glass_detail {
+
+// Neighbouring voxels whose normals differ from the crossing voxel's by more than this are another
+// surface (a crease, as the renderer's crease angle: a box's side is not blended into its bottom).
+const double kCosBlend = std::cos(30 * M_PI / 180);
+
+// The unit normal at grid point g of the surface whose voxel there has the unit normal `own`:
+// trilinear over the eight voxel centres around g, weighting only written voxels of `material`
+// whose normals are within 30 degrees of `own` (the others lie outside the surface's layer or
+// belong to another surface); `own` where none does.
+Vec3d normalAt(const AttributeGrid& grid, const Vec3d& g, uint32_t material, const Vec3d& own) {
+    const int64_t dims[3] = {grid.frame.width(), grid.frame.height(), grid.frame.depth()};
+    const Vec3d b{std::floor(g.x - 0.5), std::floor(g.y - 0.5), std::floor(g.z - 0.5)};
+    const Vec3d f = g - Vec3d{0.5, 0.5, 0.5} - b;
+    Vec3d sum{0, 0, 0};
+    for (int k = 0; k < 8; ++k) {
+        const int64_t c[3] = {int64_t(b.x) + (k & 1), int64_t(b.y) + ((k >> 1) & 1),
+                              int64_t(b.z) + ((k >> 2) & 1)};
+        if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= dims[0] || c[1] >= dims[1] || c[2] >= dims[2])
+            continue;
+        const int64_t i = grid.index(c[0], c[1], c[2]);
+        if (!grid.written(i)) continue;
+        if (!grid.material.empty() && grid.material[size_t(i)] != material) continue;
+        const Vec3d n(grid.normal(i));
+        if (dot(n, own) < kCosBlend) continue;
+        const double w =
+            ((k & 1) ? f.x : 1 - f.x) * (((k >> 1) & 1) ? f.y : 1 - f.y) * (((k >> 2) & 1) ? f.z : 1 - f.z);
+        sum = sum + n * w;
+    }
+    const double len = length(sum);
+    return len > 1e-12 ? sum / len : own;
+}
+} // namespace voxel_glass_detail
+
 GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t medium, const Vec3d& dir,
                             const VoxelGlassOptions& options, bool twoSurface) const {
     GlassPath p;
@@ -174,7 +208,11 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                     }
                     const double etaFrom = current().ior,
                                  etaTo = next.empty() ? 1.0 : media_[next.back()].ior;
-                    const Vec3d nf = leaving ? -n : n; // facing the ray
+                    // The normal at the crossing: trilinear over the surface's voxels around it (the
+                    // voxel's own averaged normal is a staircase of the faces that touch it).
+                    Vec3d ns = voxel_glass_detail::normalAt(grid_, g + d * tEvent, mid, n);
+                    if ((dot(d, ns) > 0) != leaving) ns = n;
+                    const Vec3d nf = leaving ? -ns : ns; // facing the ray
                     if (refractDirection(d, nf, etaFrom / etaTo, r)) {
                         thr = thr * tint * float(1 - fresnelDielectric(-dot(d, nf), etaFrom, etaTo));
                         d = r;
