@@ -89,8 +89,12 @@ private:
 /// slice per entry into the solid. The camera must lie outside the solids (what lies in front of
 /// its near plane is not counted). Throws voxfx::Error for an orthographic frame, slices < 1 or a
 /// depth of another size than the frame's columns.
+/// `until`, when not empty (one view depth per pixel, like `depth`), ends each pixel's count there:
+/// the matter between the visible surface and an opaque surface behind it (the cells whose centre
+/// lies in front of until[pixel]); a depth that is not finite counts to the end.
 std::vector<double> viewMatterBehind(const Frame& camera, const MeshView& solids,
-                                     std::span<const float> depth, Fill fill, int64_t slices);
+                                     std::span<const float> depth, Fill fill, int64_t slices,
+                                     std::span<const float> until = {});
 
 /// The shadow of one light: one solid grid per light view.
 class TranslucencyShadow {

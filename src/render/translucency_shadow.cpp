@@ -90,12 +90,15 @@ Vec3f TranslucencyShadowMap::transmittanceBilinear(const Vec3d& world, int64_t s
 }
 
 std::vector<double> viewMatterBehind(const Frame& camera, const MeshView& solids,
-                                     std::span<const float> depth, Fill fill, int64_t slices) {
+                                     std::span<const float> depth, Fill fill, int64_t slices,
+                                     std::span<const float> until) {
     const int64_t W = camera.width(), H = camera.height();
     if (!camera.isPerspective()) fail("view translucency: the camera frame must be perspective");
     if (slices < 1) fail("view translucency: slices must be >= 1, got ", slices);
     if (depth.size() != size_t(W * H))
         fail("view translucency: ", depth.size(), " depths for ", W * H, " pixels");
+    if (!until.empty() && until.size() != depth.size())
+        fail("view translucency: ", until.size(), " end depths for ", W * H, " pixels");
     std::vector<double> out(size_t(W * H), 0.0);
     if (solids.triangleCount == 0) return out;
     // The solids' view-depth range, in front of the camera.
@@ -124,7 +127,13 @@ std::vector<double> viewMatterBehind(const Frame& camera, const MeshView& solids
                 if (!std::isfinite(g)) continue;
                 const double t = ds(g);
                 const int64_t from = t <= 0 ? 0 : t >= double(slices) ? slices : int64_t(t);
-                const int64_t n = countColumnRange(grid.bits.column(int64_t(i)), slices, from, slices);
+                int64_t to = slices;
+                if (!until.empty() && std::isfinite(until[i])) {
+                    // Cells whose centre (k + 0.5) lies in front of the end depth.
+                    const double e = std::ceil(ds(double(until[i])) - 0.5);
+                    to = e <= double(from) ? from : e >= double(slices) ? slices : int64_t(e);
+                }
+                const int64_t n = countColumnRange(grid.bits.column(int64_t(i)), slices, from, to);
                 if (n == 0) continue;
                 // A slice's world length along the pixel's centre ray (depth is along the axis).
                 const double gx = double(x) + 0.5, gy = double(y) + 0.5;
