@@ -24,11 +24,14 @@
 //             what the G-buffer without the translucent meshes shows there (shaded, or the
 //             environment) times diffuseTransmission times exp(-sigma_c L) per channel, sigma =
 //             attenuationCoefficient (-ln(attenuationColor) / attenuationDistance) and L the solid
-//             matter along the sample's ray from the surface to what lies behind, counted in a
-//             solid voxelization of the translucent meshes in the camera's frame
-//             (viewMatterBehind, voxfx/translucency_shadow.hpp; within one slice of
-//             translucencySlices per entry into the solid of the exact chord). Thin parts show the
-//             light behind, thick parts are dark; nothing when no sample shows a translucent solid.
+//             matter from the sample's surface depth to the depth of what lies behind, counted
+//             along its output pixel's centre ray in a solid voxelization of the translucent meshes
+//             in the camera's frame at the output resolution (ViewMatter,
+//             voxfx/translucency_shadow.hpp; within one slice of translucencySlices per entry into
+//             the solid of the exact chord). Thin parts show the light behind, thick parts are
+//             dark; the lights' light through the solid is the shading pass's (diffuse
+//             transmission times the shadow: with `translucency` shadows, Beer-Lambert over the
+//             matter the light crossed). Nothing when no sample shows a translucent solid.
 //   glass     the pixels showing glass (Material::isGlass) get the light through it by the chosen
 //             method (voxfx/glass.hpp).
 //   volumes   scenes with volume objects, Boolean shapes (scene.volumeScene) or meshes of blended

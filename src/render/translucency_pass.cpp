@@ -53,8 +53,11 @@ void compositeTranslucency(FrameState& f) {
     solids.vertexCount = g.mesh.positions.size();
     solids.indices = solid.data();
     solids.triangleCount = solid.size() / 3;
-    const std::vector<double> matter =
-        viewMatterBehind(gb.frame, solids, front, Fill::Auto, f.options.translucencySlices, back.depth);
+    // One column per output pixel: the samples of a pixel share its centre ray's cells (each from
+    // its own depths), so supersampling does not multiply the grid.
+    const int64_t k = W / f.options.width;
+    const ViewMatter matter = ViewMatter::build(cameraFrame(f.camera, f.options.width, f.options.height),
+                                                solids, Fill::Auto, f.options.translucencySlices);
     const Vec3d eye = gb.frame.eye();
     parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
@@ -69,8 +72,8 @@ void compositeTranslucency(FrameState& f) {
                         : f.environment->lookup(
                               gb.frame.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - eye) *
                               f.options.exposure;
-                f.shaded[i] +=
-                    light * beerLambert(attenuationCoefficient(m), matter[i]) * m.diffuseTransmission;
+                const double L = matter.between(x / k, y / k, double(front[i]), double(back.depth[i]));
+                f.shaded[i] += light * beerLambert(attenuationCoefficient(m), L) * m.diffuseTransmission;
             }
     });
 }

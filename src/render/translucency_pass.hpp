@@ -9,8 +9,9 @@ namespace voxfx::detail {
 /// Adds to every shaded sample showing a translucent solid the light from behind it: what the
 /// G-buffer without the translucent meshes shows there (shaded, or the environment along the ray)
 /// times diffuseTransmission times beerLambert(attenuationCoefficient(material), L), L the world
-/// length of translucent matter along the sample's ray between the surface and what lies behind
-/// (viewMatterBehind, RenderOptions::translucencySlices slices). Nothing when no sample shows one.
+/// length of translucent matter between the surface and what lies behind, counted along the
+/// centre ray of the sample's output pixel (ViewMatter at the output resolution,
+/// RenderOptions::translucencySlices slices). Nothing when no sample shows one.
 void compositeTranslucency(FrameState& frame);
 
 } // namespace voxfx::detail
