@@ -18,6 +18,20 @@
 //             visibility. Surfaces are lit on both sides; the side facing away from a light receives
 //             the light that crosses the surface (crossingTransmittance: back-lit leaves glow). With
 //             an environment, background pixels show it along their ray.
+//   translucency  the samples showing a translucent solid (Material::isTranslucent: diffuse
+//             transmission without specular transmission; glTF KHR_materials_diffuse_transmission
+//             with KHR_materials_volume's attenuation) add the light from behind them (GI08 §7):
+//             what the G-buffer without the translucent meshes shows there (shaded, or the
+//             environment) times diffuseTransmission times exp(-sigma_c L) per channel, sigma =
+//             attenuationCoefficient (-ln(attenuationColor) / attenuationDistance) and L the solid
+//             matter from the sample's surface depth to the depth of what lies behind, counted
+//             along its output pixel's centre ray in a solid voxelization of the translucent meshes
+//             in the camera's frame at the output resolution (ViewMatter,
+//             voxfx/translucency_shadow.hpp; within one slice of translucencySlices per entry into
+//             the solid of the exact chord). Thin parts show the light behind, thick parts are
+//             dark; the lights' light through the solid is the shading pass's (diffuse
+//             transmission times the shadow: with `translucency` shadows, Beer-Lambert over the
+//             matter the light crossed). Nothing when no sample shows a translucent solid.
 //   glass     the pixels showing glass (Material::isGlass) get the light through it by the chosen
 //             method (voxfx/glass.hpp).
 //   volumes   scenes with volume objects, Boolean shapes (scene.volumeScene) or meshes of blended
@@ -166,11 +180,14 @@ struct RenderOptions {
     /// Cells along the longest side of the occlusion field (the opaque non-flat meshes' bounds grown
     /// by the radius), at least 4 per radius, at most 2^24 cells in all.
     int64_t occlusionResolution = 128;
+    /// The translucency pass: slices of the camera-space solid grid over the translucent meshes'
+    /// depth range (1..65536); the matter along a ray is within one slice per entry of the chord.
+    int64_t translucencySlices = 256;
 
     /// The named fields of RenderOptions itself: width, height, supersample, antiAliasing,
     /// adaptiveSamples, toneMap, exposure, ambient, skyLight, sky, background, volumeStep,
     /// emptySpaceSkipping, volumeShading, defaultLights, creaseAngle, ambientOcclusion,
-    /// occlusionRadius, occlusionResolution.
+    /// occlusionRadius, occlusionResolution, translucencySlices.
     static std::span<const OptionField<RenderOptions>> fields();
 };
 
@@ -222,8 +239,8 @@ struct PassTime {
 struct RenderTimings {
     std::vector<PassTime> passes; ///< every pass, in the order they ran (see the file comment)
     double totalMs = 0;
-    /// The time of the pass called `name` ("flatten", "G-buffer", "occlusion", "shadows", "shading", "glass",
-    /// "volumes", "resolve"); 0 for one that did not run.
+    /// The time of the pass called `name` ("flatten", "G-buffer", "occlusion", "shadows", "shading",
+    /// "translucency", "glass", "volumes", "resolve"); 0 for one that did not run.
     double ms(std::string_view name) const;
 };
 

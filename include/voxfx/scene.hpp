@@ -7,7 +7,8 @@
 //   glTF 2.0 (.gltf, .glb)  meshes under their node transforms (a mesh used by two nodes becomes two
 //                           SceneMeshes), cameras, KHR_lights_punctual (point, spot, directional),
 //                           materials: baseColorFactor, alphaMode/alpha, doubleSided, roughness,
-//                           KHR_materials_transmission, _ior, _volume. Geometry, node transforms,
+//                           KHR_materials_transmission, _diffuse_transmission, _ior, _volume.
+//                           Geometry, node transforms,
 //                           cameras and lights come through Assimp; the material extensions and the
 //                           lights' exact parameters are read from the file's JSON (Assimp 5.2 does
 //                           not expose KHR_materials_ior nor the volume attenuation).
@@ -65,6 +66,18 @@ struct Material {
     /// light to the shadows but which the eye sees as a leaf; glTF alphaMode MASK). Shadows are the
     /// same either way.
     bool blend = false;
+    /// KHR_materials_diffuse_transmission diffuseTransmissionFactor, [0, 1]: the fraction of the
+    /// diffuse response that passes through the surface instead of being reflected. With
+    /// transmission 0, opacity 1 and no blend, a material with diffuseTransmission > 0 is a
+    /// translucent solid (isTranslucent: jade, wax, marble; GI08 §7): its diffuse reflection is
+    /// scaled by 1 - diffuseTransmission, light from a light on its far side passes with
+    /// diffuseTransmissionColor times the light's shadow visibility (with `--shadows translucency`:
+    /// Beer-Lambert over the matter the light crossed), and the camera sees what lies behind it
+    /// through the solid, attenuated by beerLambert(attenuationCoefficient(), matter along the ray)
+    /// (KHR_materials_volume's attenuationDistance and attenuationColor; the render pass
+    /// "translucency", voxfx/render.hpp). Glass (transmission > 0) keeps its own path.
+    float diffuseTransmission = 0;
+    Vec3f diffuseTransmissionColor{1, 1, 1}; ///< KHR_materials_diffuse_transmission, linear RGB
 
     /// RGB fraction of the light that passes one crossing of the surface:
     ///   (1 - opacity) + opacity * transmission * baseColor
@@ -78,6 +91,9 @@ struct Material {
     /// (opacity < 1) and transmission, such as a leaf, is a sheet: light passes its gaps and its
     /// tissue unbent.
     bool isGlass() const;
+    /// A translucent solid: diffuseTransmission > 0, not glass, opacity 1 and not blended (see
+    /// diffuseTransmission). Shadow methods other than translucency treat it as opaque.
+    bool isTranslucent() const;
     /// What one crossing passes for the shadow methods that multiply crossings (transmittance,
     /// absorption, deep shadow maps). A sheet: crossingTransmittance. Glass, crossed twice per
     /// passage: each crossing passes 1 - F0 (Fresnel at normal incidence, ((ior - 1) / (ior + 1))^2)

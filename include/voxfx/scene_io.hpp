@@ -21,7 +21,10 @@ namespace voxfx {
 ///                     "rotate": [ax,ay,az, degrees],
 ///                     "material": { "name": "fur", "baseColor": [r,g,b], "opacity": 1,
 ///                                   "transmission": 0, "ior": 1.5, "specular": 0.2,
-///                                   "shininess": 32 },
+///                                   "shininess": 32,
+///                                   "diffuseTransmission": 0, "diffuseTransmissionColor": [r,g,b],
+///                                   "attenuationDistance": d, "attenuationColor": [r,g,b] },
+///                     (diffuseTransmission > 0: a translucent solid, Material::diffuseTransmission)
 ///                     "castsShadow": true } ],
 ///       "lights":  [ { "type": "directional|spot|point", "name": "sun", "position": [..],
 ///                      "direction": [..], "target": [..] (instead of direction),

@@ -89,8 +89,34 @@ private:
 /// slice per entry into the solid. The camera must lie outside the solids (what lies in front of
 /// its near plane is not counted). Throws voxfx::Error for an orthographic frame, slices < 1 or a
 /// depth of another size than the frame's columns.
+/// `until`, when not empty (one view depth per pixel, like `depth`), ends each pixel's count there:
+/// the matter between the visible surface and an opaque surface behind it (the cells whose centre
+/// lies in front of until[pixel]); a depth that is not finite counts to the end.
 std::vector<double> viewMatterBehind(const Frame& camera, const MeshView& solids,
-                                     std::span<const float> depth, Fill fill, int64_t slices);
+                                     std::span<const float> depth, Fill fill, int64_t slices,
+                                     std::span<const float> until = {});
+
+/// The solid grid behind viewMatterBehind, kept for lookups at any depths: the renderer's
+/// translucency pass builds it at the output pixels and looks it up per sample (voxfx/render.hpp).
+class ViewMatter {
+public:
+    ViewMatter() = default; ///< no solids: 0 everywhere
+    /// `solids` voxelized as a solid (`fill`) in `camera`'s frame (same eye, field of view and
+    /// columns) with `slices` slices over their depth range in front of the near plane. Throws
+    /// voxfx::Error for an orthographic frame or slices < 1.
+    static ViewMatter build(const Frame& camera, const MeshView& solids, Fill fill, int64_t slices);
+    /// World length of solid matter along the centre ray of column (x, y) from view depth `from`
+    /// (the cell holding it included) to view depth `until` (the cells whose centre lies in front of
+    /// it; not finite: to the end). 0 for a `from` that is not finite, or a column outside.
+    double between(int64_t x, int64_t y, double from, double until) const;
+    const VoxelGrid& grid() const { return grid_; } ///< empty without solids
+
+private:
+    VoxelGrid grid_;
+    DepthToSlice ds_;
+    int64_t slices_ = 0;
+    double lo_ = 0;
+};
 
 /// The shadow of one light: one solid grid per light view.
 class TranslucencyShadow {

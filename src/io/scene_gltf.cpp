@@ -1,5 +1,6 @@
 // voxfx — glTF 2.0 scene loading (Khronos glTF 2.0 specification; KHR_lights_punctual,
-// KHR_materials_transmission, KHR_materials_ior, KHR_materials_volume).
+// KHR_materials_transmission, KHR_materials_diffuse_transmission, KHR_materials_ior,
+// KHR_materials_volume).
 //
 // Geometry comes through Assimp (accessors, buffers, data URIs, GLB, sparse data, node tree) in
 // the voxfx_assimp module, whose one conversion (shared with loadMesh) gives every mesh instance
@@ -130,6 +131,11 @@ Material readMaterial(const json& j, std::size_t index, const std::string& path)
     if (ext.contains("KHR_materials_transmission"))
         m.transmission = float(std::clamp(
             number(ext["KHR_materials_transmission"], "transmissionFactor", 0.0, where), 0.0, 1.0));
+    if (ext.contains("KHR_materials_diffuse_transmission")) {
+        const json& d = ext["KHR_materials_diffuse_transmission"];
+        m.diffuseTransmission = float(number(d, "diffuseTransmissionFactor", 0.0, where));
+        m.diffuseTransmissionColor = colour(d, "diffuseTransmissionColorFactor", {1, 1, 1}, where);
+    }
     if (ext.contains("KHR_materials_ior")) m.ior = float(number(ext["KHR_materials_ior"], "ior", 1.5, where));
     if (ext.contains("KHR_materials_volume")) {
         const json& v = ext["KHR_materials_volume"];

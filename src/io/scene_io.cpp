@@ -97,7 +97,8 @@ std::string str(const json& j, const char* key, const std::string& where) {
 Material wrapperMaterial(const json& j, const std::string& where) {
     allowKeys(j,
               {"name", "baseColor", "opacity", "transmission", "ior", "specular", "shininess", "doubleSided",
-               "blend"},
+               "blend", "diffuseTransmission", "diffuseTransmissionColor", "attenuationDistance",
+               "attenuationColor"},
               where);
     Material m;
     m.name = j.contains("name") ? str(j, "name", where) : "material";
@@ -108,6 +109,12 @@ Material wrapperMaterial(const json& j, const std::string& where) {
     m.specular = float(num(j, "specular", m.specular, where));
     m.shininess = float(num(j, "shininess", m.shininess, where));
     m.doubleSided = j.value("doubleSided", false);
+    // A translucent solid (Material::diffuseTransmission) and its volume attenuation.
+    m.diffuseTransmission = float(num(j, "diffuseTransmission", m.diffuseTransmission, where));
+    m.diffuseTransmissionColor =
+        Vec3f(vec3Or(j, "diffuseTransmissionColor", Vec3d(m.diffuseTransmissionColor), where));
+    m.attenuationDistance = float(num(j, "attenuationDistance", m.attenuationDistance, where));
+    m.attenuationColor = Vec3f(vec3Or(j, "attenuationColor", Vec3d(m.attenuationColor), where));
     // A material the author made see-through is drawn see-through, unless "blend": false (foliage).
     if (j.contains("blend") && !j["blend"].is_boolean()) fail(where, ": \"blend\" must be true or false");
     m.blend = j.value("blend", m.opacity < 1);
@@ -609,7 +616,7 @@ struct GltfWriter {
         nodes.push_back(node);
     }
 
-    // A material with its extensions (transmission, ior, volume).
+    // A material with its extensions (transmission, diffuse transmission, ior, volume).
     void material(const Material& m) {
         // roughness from the Blinn–Phong exponent (inverse of the loader's mapping).
         const double a = std::sqrt(2.0 / (double(m.shininess) + 2.0));
@@ -627,6 +634,13 @@ struct GltfWriter {
         if (m.transmission > 0) {
             matExt["KHR_materials_transmission"] = {{"transmissionFactor", m.transmission}};
             used.insert("KHR_materials_transmission");
+        }
+        if (m.diffuseTransmission > 0) {
+            matExt["KHR_materials_diffuse_transmission"] = {
+                {"diffuseTransmissionFactor", m.diffuseTransmission},
+                {"diffuseTransmissionColorFactor",
+                 {m.diffuseTransmissionColor.x, m.diffuseTransmissionColor.y, m.diffuseTransmissionColor.z}}};
+            used.insert("KHR_materials_diffuse_transmission");
         }
         if (m.ior != 1.5f) {
             matExt["KHR_materials_ior"] = {{"ior", m.ior}};

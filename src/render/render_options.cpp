@@ -65,8 +65,12 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
             "the median size of the opaque meshes that are not flat",
             0, 1e30),
         numberOption<O, &O::occlusionResolution>(
-            "occlusionResolution", "ambient occlusion: distance field cells along its longest side", 8,
-            2048)};
+            "occlusionResolution", "ambient occlusion: distance field cells along its longest side", 8, 2048),
+        numberOption<O, &O::translucencySlices>(
+            "translucencySlices",
+            "translucent solids (diffuse transmission): slices of the camera-space solid grid that "
+            "measures the matter along each ray (GI08 sec. 7)",
+            1, 65536)};
     return table;
 }
 

@@ -10,6 +10,7 @@
 #include "render/glass_pass.hpp"
 #include "render/shading.hpp"
 #include "render/technique_list.hpp"
+#include "render/translucency_pass.hpp"
 #include "render/volume_pass.hpp"
 #include "voxfx/render.hpp"
 
@@ -128,6 +129,8 @@ void occlusionPass(FrameState& f, Progress* progress) {
 
 void shadingPass(FrameState& f, Progress* progress) { detail::shadeGBuffer(f, progress); }
 
+void translucencyPass(FrameState& f, Progress*) { detail::compositeTranslucency(f); }
+
 void glassPass(FrameState& f, Progress*) {
     f.result.glass.method = glassName(f.options.glass);
     detail::shadeGlass(f);
@@ -214,10 +217,10 @@ struct RenderPass {
 };
 
 // The frame, in order. A pass reads what the passes before it left in the frame state.
-constexpr RenderPass kPasses[] = {{"flatten", 0.0, flattenPass},     {"G-buffer", 0.2, gbufferPass},
-                                  {"occlusion", 0.3, occlusionPass}, {"shadows", 0.5, shadowPass},
-                                  {"shading", 1.0, shadingPass},     {"glass", 1.0, glassPass},
-                                  {"volumes", 1.0, volumePass},      {"resolve", 1.0, resolvePass}};
+constexpr RenderPass kPasses[] = {
+    {"flatten", 0.0, flattenPass}, {"G-buffer", 0.2, gbufferPass}, {"occlusion", 0.3, occlusionPass},
+    {"shadows", 0.5, shadowPass},  {"shading", 1.0, shadingPass},  {"translucency", 1.0, translucencyPass},
+    {"glass", 1.0, glassPass},     {"volumes", 1.0, volumePass},   {"resolve", 1.0, resolvePass}};
 
 void checkRender(const Scene& scene, const RenderOptions& options) {
     if (options.width <= 0 || options.height <= 0 || options.width > 65536 || options.height > 65536)

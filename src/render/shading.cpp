@@ -2,7 +2,8 @@
 // Akenine-Möller et al., Real-Time Rendering) per light, times the light's RGB shadow visibility.
 //
 // Surfaces are lit on both sides. The side facing away from a light receives what crosses the
-// surface (Material::crossingTransmittance): back-lit leaves glow, opaque surfaces stay dark.
+// surface (Material::crossingTransmittance): back-lit leaves glow, opaque surfaces stay dark; a
+// translucent solid (Material::isTranslucent) passes diffuseTransmission of it, times the shadow.
 #include "render/shading.hpp"
 
 #include <algorithm>
@@ -52,7 +53,10 @@ Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material&
         ambient += frame.environment->irradiance(s.normal) * float(options.skyLight / M_PI);
     if (options.ambientOcclusion == Occlusion::Field)
         ambient = ambient * float(frame.occlusion.visibility(s.position, s.normal));
-    Vec3f out = ambient * m.baseColor;
+    // A translucent solid reflects 1 - t of its diffuse light and passes t (KHR_materials_diffuse_
+    // transmission): the light from behind is the translucency pass's, the lights' below.
+    const float t = m.isTranslucent() ? m.diffuseTransmission : 0.0f;
+    Vec3f out = t > 0 ? ambient * m.baseColor * (1 - t) : ambient * m.baseColor;
     const Vec3d toEye = normalize(eye - s.position);
     for (std::size_t k = 0; k < scene.lights.size(); ++k) {
         Vec3d l;
@@ -67,7 +71,15 @@ Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material&
             const Vec3d h = normalize(l + toEye);
             const double spec = m.specular * (m.shininess + 8) / (8 * M_PI) *
                                 std::pow(std::max(0.0, dot(s.normal, h)), double(m.shininess));
-            radiance = (m.baseColor * float(1.0 / M_PI) + Vec3f{1, 1, 1} * float(spec)) * float(ndl);
+            const Vec3f diffuse =
+                t > 0 ? m.baseColor * float((1 - t) / M_PI) : m.baseColor * float(1.0 / M_PI);
+            radiance = (diffuse + Vec3f{1, 1, 1} * float(spec)) * float(ndl);
+        } else if (t > 0) {
+            // Diffuse transmission through a translucent solid; the shadow (translucency: Beer-Lambert
+            // over the matter the light crossed) says how much reaches this side.
+            const double ndl = std::max(0.0, -dot(s.normal, l));
+            if (ndl <= 0) continue;
+            radiance = m.diffuseTransmissionColor * float(t * ndl / M_PI);
         } else {
             if (m.isOpaque()) continue;
             const double ndl = std::max(0.0, -dot(s.normal, l));

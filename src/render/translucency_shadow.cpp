@@ -89,14 +89,10 @@ Vec3f TranslucencyShadowMap::transmittanceBilinear(const Vec3d& world, int64_t s
         });
 }
 
-std::vector<double> viewMatterBehind(const Frame& camera, const MeshView& solids,
-                                     std::span<const float> depth, Fill fill, int64_t slices) {
-    const int64_t W = camera.width(), H = camera.height();
+ViewMatter ViewMatter::build(const Frame& camera, const MeshView& solids, Fill fill, int64_t slices) {
     if (!camera.isPerspective()) fail("view translucency: the camera frame must be perspective");
     if (slices < 1) fail("view translucency: slices must be >= 1, got ", slices);
-    if (depth.size() != size_t(W * H))
-        fail("view translucency: ", depth.size(), " depths for ", W * H, " pixels");
-    std::vector<double> out(size_t(W * H), 0.0);
+    ViewMatter out;
     if (solids.triangleCount == 0) return out;
     // The solids' view-depth range, in front of the camera.
     const Box3d b = computeBounds(solids);
@@ -110,27 +106,56 @@ std::vector<double> viewMatterBehind(const Frame& camera, const MeshView& solids
     lo = std::max(lo, camera.nearDepth());
     if (!(hi > lo)) return out;
     const Frame f = Frame::perspective(camera.eye(), camera.eye() + camera.forward(), camera.up(),
-                                       2 * std::atan(camera.tanHalfFovY()), W, H, lo, hi, slices);
+                                       2 * std::atan(camera.tanHalfFovY()), camera.width(), camera.height(),
+                                       lo, hi, slices);
     VoxelizeOptions vo;
     vo.mode = VoxelizeMode::Solid;
     vo.fill = fill;
-    const VoxelGrid grid = voxelize(solids, f, vo);
-    const DepthToSlice ds = f.depthToSlice(0);
+    out.grid_ = voxelize(solids, f, vo);
+    out.ds_ = f.depthToSlice(0);
+    out.slices_ = slices;
+    out.lo_ = lo;
+    return out;
+}
+
+double ViewMatter::between(int64_t x, int64_t y, double from, double until) const {
+    const Frame& f = grid_.frame;
+    if (slices_ == 0 || !std::isfinite(from) || x < 0 || y < 0 || x >= f.width() || y >= f.height()) return 0;
+    const int64_t S = slices_;
+    const double t = ds_(from);
+    const int64_t s0 = t <= 0 ? 0 : t >= double(S) ? S : int64_t(t);
+    int64_t s1 = S;
+    if (std::isfinite(until)) {
+        // Cells whose centre (k + 0.5) lies in front of the end depth.
+        const double e = std::ceil(ds_(until) - 0.5);
+        s1 = e <= double(s0) ? s0 : e >= double(S) ? S : int64_t(e);
+    }
+    const int64_t n = countColumnRange(grid_.bits.column(y * f.width() + x), S, s0, s1);
+    if (n == 0) return 0;
+    // A slice's world length along the column's centre ray (depth is along the axis).
+    const double gx = double(x) + 0.5, gy = double(y) + 0.5;
+    const double perDepth = length(f.worldFromGrid({gx, gy, lo_ + 1}) - f.worldFromGrid({gx, gy, lo_}));
+    return double(n) * perDepth / ds_.scale;
+}
+
+std::vector<double> viewMatterBehind(const Frame& camera, const MeshView& solids,
+                                     std::span<const float> depth, Fill fill, int64_t slices,
+                                     std::span<const float> until) {
+    const int64_t W = camera.width(), H = camera.height();
+    if (!camera.isPerspective()) fail("view translucency: the camera frame must be perspective");
+    if (slices < 1) fail("view translucency: slices must be >= 1, got ", slices);
+    if (depth.size() != size_t(W * H))
+        fail("view translucency: ", depth.size(), " depths for ", W * H, " pixels");
+    if (!until.empty() && until.size() != depth.size())
+        fail("view translucency: ", until.size(), " end depths for ", W * H, " pixels");
+    std::vector<double> out(size_t(W * H), 0.0);
+    const ViewMatter matter = ViewMatter::build(camera, solids, fill, slices);
+    const double none = std::numeric_limits<double>::infinity();
     parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
                 const auto i = size_t(y * W + x);
-                const double g = double(depth[i]);
-                if (!std::isfinite(g)) continue;
-                const double t = ds(g);
-                const int64_t from = t <= 0 ? 0 : t >= double(slices) ? slices : int64_t(t);
-                const int64_t n = countColumnRange(grid.bits.column(int64_t(i)), slices, from, slices);
-                if (n == 0) continue;
-                // A slice's world length along the pixel's centre ray (depth is along the axis).
-                const double gx = double(x) + 0.5, gy = double(y) + 0.5;
-                const double perDepth =
-                    length(f.worldFromGrid({gx, gy, lo + 1}) - f.worldFromGrid({gx, gy, lo}));
-                out[i] = double(n) * perDepth / ds.scale;
+                out[i] = matter.between(x, y, double(depth[i]), until.empty() ? none : double(until[i]));
             }
     });
     return out;

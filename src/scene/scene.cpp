@@ -28,6 +28,9 @@ Vec3f attenuationCoefficient(const Material& m) {
 }
 
 bool Material::isGlass() const { return transmission > 0 && opacity >= 1; }
+bool Material::isTranslucent() const {
+    return diffuseTransmission > 0 && !isGlass() && opacity >= 1 && !blend;
+}
 
 Vec3f beerLambert(const Vec3f& sigma, double length) {
     Vec3f out;
@@ -87,6 +90,18 @@ void Scene::validate() const {
         if (!isFinite(m.baseColor) || !(m.opacity >= 0 && m.opacity <= 1) ||
             !(m.transmission >= 0 && m.transmission <= 1))
             fail(where, ": base colour must be finite and opacity, transmission in [0, 1]");
+        if (!(m.diffuseTransmission >= 0 && m.diffuseTransmission <= 1) ||
+            !isFinite(m.diffuseTransmissionColor))
+            fail(where, ": diffuse transmission must lie in [0, 1] with a finite colour, got ",
+                 m.diffuseTransmission);
+        if (m.diffuseTransmission > 0 && !(m.attenuationDistance > 0))
+            fail(where,
+                 ": attenuation distance of a translucent material must be > 0 (infinite: no "
+                 "attenuation), got ",
+                 m.attenuationDistance);
+        if (m.diffuseTransmission > 0 && !(isFinite(m.attenuationColor) && m.attenuationColor.x >= 0 &&
+                                           m.attenuationColor.y >= 0 && m.attenuationColor.z >= 0))
+            fail(where, ": attenuation colour of a translucent material must be finite and >= 0");
         if (!(m.ior >= 1) || !std::isfinite(m.ior))
             fail(where, ": index of refraction must be >= 1, got ", m.ior);
         if (!(m.shininess >= 0) || !std::isfinite(m.shininess) || !std::isfinite(m.specular))
