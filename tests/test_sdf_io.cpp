@@ -4,6 +4,7 @@
 // centres computed here, every voxel's value against the field's), the .nrrd and .npy decoded
 // from their format descriptions (not by voxfx), and the command's files against the library's
 // field; bad input leaves one error line and no file.
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -79,6 +80,103 @@ TEST(SdfIo, VdbIsALevelSetWithTheFieldsValuesAndTheVoxelCentres) {
             }
     EXPECT_EQ(wrong, 0);
     EXPECT_GT(inside, 1000); // inside voxels beyond the band: tiles at -background
+}
+
+/// The FloatGrid "sdf" of a .vdb file, read by plain OpenVDB.
+openvdb::FloatGrid::Ptr sdfIoReadGrid(const std::string& path) {
+    openvdb::initialize();
+    openvdb::io::File file(path);
+    file.open();
+    const auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("sdf"));
+    file.close();
+    return grid;
+}
+
+/// Counts the differences between two level-set files' trees, voxel for voxel: every leaf (origin,
+/// active mask, the 512 values bit for bit, sign of zero included) and every tile (level, origin,
+/// value bit for bit, state), in both directions, and the grids' class, background, transform and
+/// "voxfx_dims".
+int64_t sdfIoTreeDifferences(const openvdb::FloatGrid& a, const openvdb::FloatGrid& b) {
+    int64_t diff = 0;
+    diff += a.getGridClass() != b.getGridClass();
+    diff += std::memcmp(&a.background(), &b.background(), sizeof(float)) != 0;
+    diff += a.transform() != b.transform();
+    diff += a.metaValue<openvdb::Vec3i>("voxfx_dims") != b.metaValue<openvdb::Vec3i>("voxfx_dims");
+    diff += a.tree().leafCount() != b.tree().leafCount();
+    diff += a.tree().activeVoxelCount() != b.tree().activeVoxelCount();
+    const auto leavesOf = [&](const openvdb::FloatGrid& x, const openvdb::FloatGrid& y) {
+        for (auto leaf = x.tree().cbeginLeaf(); leaf; ++leaf) {
+            const auto* other = y.tree().probeConstLeaf(leaf->origin());
+            if (!other || other->getValueMask() != leaf->getValueMask() ||
+                std::memcmp(other->buffer().data(), leaf->buffer().data(), 512 * sizeof(float)) != 0)
+                ++diff;
+        }
+    };
+    leavesOf(a, b);
+    leavesOf(b, a);
+    struct Tile {
+        int level;
+        openvdb::Coord origin;
+        uint32_t bits;
+        bool on;
+        bool operator==(const Tile&) const = default;
+    };
+    const auto tilesOf = [](const openvdb::FloatGrid& x) {
+        std::vector<Tile> tiles;
+        for (auto it = x.tree().cbeginValueAll(); it; ++it)
+            if (it.isTileValue()) {
+                uint32_t bits = 0;
+                std::memcpy(&bits, &*it, sizeof bits);
+                tiles.push_back({int(it.getLevel()), it.getBoundingBox().min(), bits, it.isValueOn()});
+            }
+        return tiles;
+    };
+    const std::vector<Tile> ta = tilesOf(a), tb = tilesOf(b);
+    diff += ta != tb;
+    return diff;
+}
+
+TEST(SdfIo, StreamedVdbIsTheFieldsVdbVoxelForVoxel) {
+    // writeSdf(mesh, ...) puts each brick into the tree as it is made (bricks of 16 voxels on
+    // every thread, so insertions interleave); the oracle is the file of the whole field, read by
+    // plain OpenVDB, whose values the other tests check against CGAL. Parity is the tiled sign,
+    // flood the dense one (the two ways the bricks are made).
+    VOXFX_REQUIRE_DATA("meshes/bunny00.off");
+    const Mesh mesh = loadMesh(test::dataPath("meshes/bunny00.off"));
+    FitOptions fo;
+    fo.resolution = 64;
+    fo.marginCells = 3;
+    const Frame frame = fitFrame(computeBounds(mesh.view()), fo);
+    test::TempDir dir;
+    SignedDistanceField parity;
+    for (const Fill fill : {Fill::Parity, Fill::Flood}) {
+        SCOPED_TRACE(toString(fill));
+        SdfOptions o;
+        o.fill = fill;
+        o.brickSize = 16;
+        const SignedDistanceField whole = signedDistanceField(mesh.view(), frame, o);
+        ASSERT_FALSE(whole.insideRuns.empty());
+        writeSdf(whole, dir.file("whole.vdb"));
+        const SdfWriteReport streamed = writeSdf(mesh.view(), frame, o, dir.file("streamed.vdb"));
+        EXPECT_TRUE(streamed.field.leaves.empty());
+        EXPECT_EQ(streamed.activeCount, whole.activeCount());
+        EXPECT_EQ(streamed.field.background, whole.background);
+        EXPECT_EQ(streamed.field.fill, whole.fill);
+        const auto a = sdfIoReadGrid(dir.file("whole.vdb")), b = sdfIoReadGrid(dir.file("streamed.vdb"));
+        ASSERT_TRUE(a && b);
+        EXPECT_GT(a->tree().leafCount(), 200u);
+        EXPECT_EQ(int64_t(b->activeVoxelCount()), whole.activeCount());
+        EXPECT_EQ(sdfIoTreeDifferences(*a, *b), 0);
+        if (fill == Fill::Parity) parity = whole;
+    }
+    // The comparison sees a single changed value (its own check).
+    const SignedDistanceField& whole = parity;
+    SignedDistanceField changed = whole;
+    changed.leaves[changed.leaves.size() / 2].values[100] =
+        std::nextafter(changed.leaves[changed.leaves.size() / 2].values[100], 1e9f);
+    writeSdf(whole, dir.file("a.vdb"));
+    writeSdf(changed, dir.file("b.vdb"));
+    EXPECT_EQ(sdfIoTreeDifferences(*sdfIoReadGrid(dir.file("a.vdb")), *sdfIoReadGrid(dir.file("b.vdb"))), 2);
 }
 
 TEST(SdfIo, NrrdAndNpyHoldEveryVoxelInTheirFormatsOrder) {

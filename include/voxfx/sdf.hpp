@@ -33,8 +33,10 @@
 // The solid bits come brick by brick from the tiled voxelizer (voxfx/tiled.hpp: parity, winding
 // and gwn carried down each stack of bricks), the same bits as the dense voxelization's, so no
 // grid of the whole volume is made: memory ~ a few bricks per thread plus the result (the band's
-// leaves, 2 KiB per 8^3 block), growing with the surface. The flood and vote fills need the whole
-// grid (voxfx::wholeGridReason) and take them from one dense solid voxelization, N^3 / 8 bytes.
+// leaves, 2 KiB per 8^3 block), growing with the surface (to a file, voxfx/sdf_io.hpp's
+// writeSdf(mesh, ...) streams a .vdb brick by brick into its tree instead of keeping the
+// result). The flood and vote fills need the whole grid (voxfx::wholeGridReason) and take them
+// from one dense solid voxelization, N^3 / 8 bytes.
 // Thread-safety: pure functions; blocks of a layer are spread over worker threads, one owner per
 // block, so the result does not depend on the thread count. A SignedDistanceField is a value.
 #pragma once

@@ -68,12 +68,11 @@ int runSdf(const SdfArgs& a) {
     ProgressLine progress("distances", !a.quiet);
     so.progress = &progress;
     const auto ts = Clock::now();
-    const SignedDistanceField field = signedDistanceField(mesh.view(), frame, so);
-    const double sdfMs = msSince(ts);
+    // Computed and written in one call: a .vdb takes the field brick by brick into its tree.
+    const SdfWriteReport made = writeSdf(mesh.view(), frame, so, a.output);
+    const SignedDistanceField& field = made.field; // its description; the values are in the file
+    const double writeMs = made.writeSeconds * 1000, sdfMs = msSince(ts) - writeMs;
     progress.done();
-    const auto tw = Clock::now();
-    writeSdf(field, a.output);
-    const double writeMs = msSince(tw);
 
     if (!a.quiet) {
         const Vec3i d = field.dims();
@@ -88,7 +87,7 @@ int runSdf(const SdfArgs& a) {
         else
             std::cout << "band " << fmt(field.bandVoxels, 4) << " voxels (" << fmt(field.background, 4)
                       << ")";
-        std::cout << ", sign from " << toString(field.fill) << ": " << withCommas(field.activeCount())
+        std::cout << ", sign from " << toString(field.fill) << ": " << withCommas(made.activeCount)
                   << " active voxels\n";
         std::cout << "time: load " << fmtMs(loadMs) << ", distances " << fmtMs(sdfMs) << ", write "
                   << fmtMs(writeMs) << ", total " << fmtMs(msSince(t0)) << " -> " << a.output << " ("

@@ -539,6 +539,13 @@ void sdfBrick(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& buil
 
 namespace {
 
+// A brick's piece to the sink (if any), then freed: with a sink the pieces are not kept.
+void sdfDeliver(SdfPiece& piece, SdfSink* sink) {
+    if (!sink) return;
+    sink->add(piece.leaves, piece.runs);
+    piece = {};
+}
+
 /// The grid's bricks of p.brick^3 voxels: n of them along each axis, brick i at (i % n.x,
 /// (i / n.x) % n.y, i / (n.x n.y)), one piece each.
 struct Bricks {
@@ -590,7 +597,7 @@ std::pair<std::vector<SdfLeaf>, std::vector<SdfInsideRun>> joinPieces(std::vecto
 // triangles; the pieces joined in (z, y, x) order.
 std::pair<std::vector<SdfLeaf>, std::vector<SdfInsideRun>>
 sdfTiles(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& builder, const SlabBits& solid,
-         Progress* progress) {
+         Progress* progress, SdfSink* sink) {
     const Bricks bricks(p);
     std::vector<SdfPiece> pieces{std::size_t(bricks.count())};
     ProgressSteps steps(progress, bricks.count());
@@ -600,6 +607,7 @@ sdfTiles(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& builder, 
                 Vec3i{i % bricks.n.x, (i / bricks.n.x) % bricks.n.y, i / (bricks.n.x * bricks.n.y)} * p.brick;
             sdfBrick(p, bvh, builder, lo, min(lo + Vec3i{p.brick, p.brick, p.brick}, p.dims), solid,
                      pieces[std::size_t(i)]);
+            sdfDeliver(pieces[std::size_t(i)], sink);
             steps.step();
         }
     });
@@ -614,7 +622,7 @@ sdfTiles(const SdfParams& p, const TriangleBvh& bvh, const SdfBuilder& builder, 
 std::pair<std::vector<SdfLeaf>, std::vector<SdfInsideRun>>
 sdfTilesStreamed(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& vo, const SdfParams& p,
                  const TriangleBvh& bvh, const SdfBuilder& builder, Progress* progress,
-                 uint64_t* workingBytes) {
+                 uint64_t* workingBytes, SdfSink* sink) {
     const Bricks bricks(p);
     std::vector<SdfPiece> pieces{std::size_t(bricks.count())};
     ProgressSteps steps(progress, bricks.count());
@@ -644,8 +652,10 @@ sdfTilesStreamed(const MeshView& mesh, const Frame& frame, const VoxelizeOptions
                     // The voxelizer stops at the first exception and rethrows it.
                     if (steps.cancelled()) fail("cancelled");
                     const Vec3i lo{x, y, z};
+                    SdfPiece& piece = pieces[std::size_t(bricks.index(lo))];
                     sdfBrick(p, bvh, builder, lo, min(lo + Vec3i{p.brick, p.brick, p.brick}, end), solid,
-                             pieces[std::size_t(bricks.index(lo))]);
+                             piece);
+                    sdfDeliver(piece, sink);
                     steps.step();
                 }
     });
@@ -735,7 +745,7 @@ SignedDistanceField signedDistanceField(const MeshView& mesh, const Frame& frame
 
 SignedDistanceField detail::signedDistanceField(const MeshView& mesh, const Frame& frame,
                                                 const SdfOptions& options, SdfSign sign,
-                                                SdfSignReport* report) {
+                                                SdfSignReport* report, SdfSink* sink) {
     validateMesh(mesh, "signed distance field");
     if (frame.isPerspective() || frame.isOriented())
         fail("signed distance fields need an axis-aligned orthographic frame");
@@ -782,12 +792,13 @@ SignedDistanceField detail::signedDistanceField(const MeshView& mesh, const Fram
     const bool tiled = sign == SdfSign::Auto && wholeGridReason(f.frame, vo).empty();
     SdfSignReport used;
     used.tiled = tiled;
+    if (sink) sink->begin(f);
     const auto run = [&] {
         const detail::TriangleBvh bvh(mesh);
         const detail::SdfBuilder builder(p, bvh);
         if (tiled) {
             auto [leaves, runs] = detail::sdfTilesStreamed(mesh, f.frame, vo, p, bvh, builder,
-                                                           options.progress, &used.workingBytes);
+                                                           options.progress, &used.workingBytes, sink);
             f.leaves = std::move(leaves);
             f.insideRuns = std::move(runs);
             return;
@@ -800,7 +811,7 @@ SignedDistanceField detail::signedDistanceField(const MeshView& mesh, const Fram
         used.workingBytes = solid.bits.byteCount();
         const detail::SlabBits solidBits{
             solid.bits.words(), dims.x, solid.bits.wordsPerColumn(), 0, dims.z, 0, 0};
-        auto [leaves, runs] = detail::sdfTiles(p, bvh, builder, solidBits, brickProgress.get());
+        auto [leaves, runs] = detail::sdfTiles(p, bvh, builder, solidBits, brickProgress.get(), sink);
         f.leaves = std::move(leaves);
         f.insideRuns = std::move(runs);
     };

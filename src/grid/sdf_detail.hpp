@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "voxfx/sdf.hpp"
 
@@ -26,8 +27,24 @@ struct SdfSignReport {
     uint64_t workingBytes = 0;
 };
 
-/// signedDistanceField with the sign's source chosen; `report` (optional) says what was used.
+/// Receives the field brick by brick as it is made, instead of the field holding it (so that a
+/// writer can move each brick into its own structure and free it: one copy of the band at a time).
+/// begin() once, with the field's description (no leaves or runs yet), before any brick; then
+/// add() with each brick's leaves and inside runs, on the worker thread that made them: several
+/// at once (add must be thread-safe) and in no fixed order. The bricks' blocks are disjoint and
+/// together are the field's leaves and inside runs (runs that meet at a brick's side not joined).
+/// add() may move from the vectors; they are freed after it returns.
+class SdfSink {
+public:
+    virtual ~SdfSink() = default;
+    virtual void begin(const SignedDistanceField& description) = 0;
+    virtual void add(std::vector<SdfLeaf>& leaves, std::vector<SdfInsideRun>& runs) = 0;
+};
+
+/// signedDistanceField with the sign's source chosen; `report` (optional) says what was used. With
+/// a `sink`, the bricks go to it and the result holds no leaves and no inside runs.
 SignedDistanceField signedDistanceField(const MeshView& mesh, const Frame& frame, const SdfOptions& options,
-                                        SdfSign sign, SdfSignReport* report = nullptr);
+                                        SdfSign sign, SdfSignReport* report = nullptr,
+                                        SdfSink* sink = nullptr);
 
 } // namespace voxfx::detail

@@ -20,7 +20,7 @@
 namespace voxfx::detail {
 
 /// Bump when a table below changes.
-inline constexpr uint32_t kModuleAbi = 8;
+inline constexpr uint32_t kModuleAbi = 9;
 
 /// The library's parallel-for handed to a module (so that modules follow withThreads and name no
 /// thread library): calls call(body, b, e) over chunks of `grain` items covering [begin, end).
@@ -193,6 +193,23 @@ struct VdbModule {
     bool (*writeDenseGrids)(const char* path, const int64_t dims[3], const uint8_t* active,
                             const VdbDenseGrid* grids, std::size_t gridCount, const VdbPlacement& placement,
                             std::string* error);
+
+    // ---- A level set streamed into its tree (voxfx/sdf_io.hpp's writeSdf of a mesh): the blocks
+    // of writeLevelSet added brick by brick as they are made, then written. The tree is the one
+    // writeLevelSet makes of the same blocks.
+
+    /// A new empty FloatGrid with background `background`; null (and *error) on failure.
+    void* (*levelSetCreate)(float background, std::string* error);
+    void (*levelSetDestroy)(void* grid);
+    /// Adds leaves and inside runs (disjoint from those added before). May be called from several
+    /// threads at once on one grid: the leaves are built on the calling thread and inserted under
+    /// the handle's lock; the caller may free its arrays when it returns.
+    bool (*levelSetAdd)(void* grid, const VdbLevelSetLeaf* leaves, std::size_t leafCount,
+                        const VdbInsideRun* runs, std::size_t runCount, std::string* error);
+    /// After the last add: writeLevelSet's pruning, transform, class, name and "voxfx_dims", and
+    /// the file.
+    bool (*levelSetWrite)(const char* path, void* grid, const VdbPlacement& placement, const int64_t dims[3],
+                          const char* gridName, std::string* error);
 };
 
 // ---- voxfx_assimp: Assimp (glTF 2.0 and the long tail) ----------------------------------------

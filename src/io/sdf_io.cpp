@@ -2,10 +2,14 @@
 // voxfx_vdb module, NRRD and NumPy dense floats here.
 #include "voxfx/sdf_io.hpp"
 
+#include <atomic>
+#include <bit>
+#include <chrono>
 #include <cstddef>
 #include <cstring>
 
 #include "core/atomic_file.hpp"
+#include "grid/sdf_detail.hpp"
 #include "io/grid_formats.hpp"
 #include "io/module_api.hpp"
 #include "voxfx/error.hpp"
@@ -31,11 +35,15 @@ void sdfParallelFor(int64_t begin, int64_t end, int64_t grain, void* body,
     parallelFor(begin, end, grain, [&](int64_t b, int64_t e) { call(body, b, e); });
 }
 
-void writeSdfVdb(const SignedDistanceField& f, AtomicFile& file, const SdfWriteOptions& options) {
-    const VdbModule& vdb = vdbModule();
+VdbPlacement sdfPlacement(const SignedDistanceField& f) {
     const Vec3d cell = f.frame.cellSize();
     const Vec3d centre0 = f.frame.box().lo + cell * 0.5;
-    const VdbPlacement placement{{cell.x, cell.y, cell.z}, {centre0.x, centre0.y, centre0.z}};
+    return {{cell.x, cell.y, cell.z}, {centre0.x, centre0.y, centre0.z}};
+}
+
+void writeSdfVdb(const SignedDistanceField& f, AtomicFile& file, const SdfWriteOptions& options) {
+    const VdbModule& vdb = vdbModule();
+    const VdbPlacement placement = sdfPlacement(f);
     const Vec3i d = f.dims();
     VdbLevelSet ls;
     ls.dims[0] = d.x;
@@ -51,6 +59,48 @@ void writeSdfVdb(const SignedDistanceField& f, AtomicFile& file, const SdfWriteO
                            &error))
         fail("cannot write '", file.targetPath().string(), "': ", error);
 }
+
+// The field's bricks straight into the module's level-set tree (SdfSink), each freed once added.
+class SdfVdbSink final : public SdfSink {
+public:
+    explicit SdfVdbSink(const std::string& path) : vdb_(vdbModule()), path_(path) {}
+    ~SdfVdbSink() override {
+        if (grid_) vdb_.levelSetDestroy(grid_);
+    }
+    SdfVdbSink(const SdfVdbSink&) = delete;
+    SdfVdbSink& operator=(const SdfVdbSink&) = delete;
+
+    void begin(const SignedDistanceField& f) override {
+        std::string error;
+        grid_ = vdb_.levelSetCreate(float(f.background), &error);
+        if (!grid_) fail("cannot write '", path_, "': ", error);
+    }
+    void add(std::vector<SdfLeaf>& leaves, std::vector<SdfInsideRun>& runs) override {
+        int64_t n = 0;
+        for (const SdfLeaf& l : leaves)
+            for (const uint64_t w : l.active) n += std::popcount(w);
+        active_ += n;
+        std::string error;
+        if (!vdb_.levelSetAdd(grid_, reinterpret_cast<const VdbLevelSetLeaf*>(leaves.data()), leaves.size(),
+                              reinterpret_cast<const VdbInsideRun*>(runs.data()), runs.size(), &error))
+            fail("cannot write '", path_, "': ", error);
+    }
+    void write(const SignedDistanceField& f, AtomicFile& file, const SdfWriteOptions& options) {
+        const Vec3i d = f.dims();
+        const int64_t dims[3] = {d.x, d.y, d.z};
+        std::string error;
+        if (!vdb_.levelSetWrite(file.tempPath().c_str(), grid_, sdfPlacement(f), dims,
+                                options.gridName.c_str(), &error))
+            fail("cannot write '", file.targetPath().string(), "': ", error);
+    }
+    int64_t activeCount() const { return active_; }
+
+private:
+    const VdbModule& vdb_;
+    std::string path_;
+    void* grid_ = nullptr;
+    std::atomic<int64_t> active_{0};
+};
 
 void writeSdfNrrd(const SignedDistanceField& f, const std::vector<float>& values, std::ostream& out) {
     const Vec3i n = f.dims();
@@ -111,6 +161,33 @@ void writeSdf(const SignedDistanceField& field, const std::string& path, const S
     else
         detail::writeSdfNpy(field, dense, file.stream());
     file.commit();
+}
+
+SdfWriteReport writeSdf(const MeshView& mesh, const Frame& frame, const SdfOptions& options,
+                        const std::string& path, const SdfWriteOptions& writeOptions) {
+    const SdfFormat format = sdfFormatFromPath(path);
+    SdfWriteReport report;
+    if (format != SdfFormat::Vdb) {
+        report.field = signedDistanceField(mesh, frame, options);
+        report.activeCount = report.field.activeCount();
+        const auto t = std::chrono::steady_clock::now();
+        writeSdf(report.field, path, writeOptions);
+        report.writeSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+        report.field.leaves = {};
+        report.field.insideRuns = {};
+        return report;
+    }
+    if (frame.width() <= 0 || frame.height() <= 0 || frame.depth() <= 0)
+        fail("cannot write '", path, "': the distance field is empty");
+    detail::AtomicFile file(path); // checks the path before the work
+    detail::SdfVdbSink sink(path);
+    report.field = detail::signedDistanceField(mesh, frame, options, detail::SdfSign::Auto, nullptr, &sink);
+    report.activeCount = sink.activeCount();
+    const auto t = std::chrono::steady_clock::now();
+    sink.write(report.field, file, writeOptions);
+    file.commit();
+    report.writeSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    return report;
 }
 
 } // namespace voxfx

@@ -602,45 +602,102 @@ bool writeDenseGrids(const char* path, const int64_t dims[3], const uint8_t* act
     });
 }
 
+// ---- Level sets -----------------------------------------------------------------------------
+
+using FloatLeaf = openvdb::FloatGrid::TreeType::LeafNodeType;
+static_assert(FloatLeaf::SIZE == 512 && FloatLeaf::NodeMaskType::WORD_COUNT == 8);
+
+std::unique_ptr<FloatLeaf> levelSetLeaf(const VdbLevelSetLeaf& in, float background) {
+    auto leaf = std::make_unique<FloatLeaf>(
+        openvdb::Coord(int(in.origin[0]), int(in.origin[1]), int(in.origin[2])), background, false);
+    typename FloatLeaf::NodeMaskType mask;
+    for (int i = 0; i < 8; ++i) mask.template getWord<uint64_t>(openvdb::Index(i)) = in.active[i];
+    leaf->setValueMask(mask);
+    std::copy(in.values, in.values + 512, leaf->buffer().data());
+    return leaf;
+}
+
+// Leaf-sized inactive tiles at -background for the inside runs. The tree does not depend on the
+// order of addLeaf and addTile calls (disjoint blocks; nodes are made with background tiles), so
+// streamed and whole insertion give the same tree.
+void addInsideRuns(openvdb::FloatTree& tree, const VdbInsideRun* runs, std::size_t count, float background) {
+    for (std::size_t r = 0; r < count; ++r)
+        for (int32_t x = runs[r].x0; x < runs[r].x1; ++x)
+            tree.addTile(1, openvdb::Coord(8 * x, 8 * runs[r].y, 8 * runs[r].z), -background, false);
+}
+
+// Nodes made only of equal inactive tiles (inside: -background) become one tile; then the
+// transform, class, name and dimensions, and the file.
+void finishLevelSet(openvdb::FloatGrid& grid, const VdbPlacement& placement, const int64_t dims[3],
+                    const char* gridName) {
+    grid.tree().prune();
+    grid.setTransform(transformFor(placement));
+    grid.setName(gridName);
+    grid.setGridClass(openvdb::GRID_LEVEL_SET);
+    grid.insertMeta(kDimsMeta,
+                    openvdb::Vec3IMetadata(openvdb::Vec3i(int(dims[0]), int(dims[1]), int(dims[2]))));
+}
+
 bool writeLevelSet(const char* path, const VdbLevelSet& ls, const VdbPlacement& placement,
                    const char* gridName, ParallelFor parallelFor, std::string* error) {
     return guarded(error, [&] {
         initializeOpenVdb();
-        using LeafT = openvdb::FloatGrid::TreeType::LeafNodeType;
-        static_assert(LeafT::SIZE == 512 && LeafT::NodeMaskType::WORD_COUNT == 8);
         auto grid = openvdb::FloatGrid::create(ls.background);
         // The leaves are made on worker threads and handed to the tree in their order (a
         // deterministic tree, single-threaded insertion), as for bit grids.
-        std::vector<std::unique_ptr<LeafT>> leaves(ls.leafCount);
+        std::vector<std::unique_ptr<FloatLeaf>> leaves(ls.leafCount);
         auto body = [&](int64_t b, int64_t e) {
-            for (int64_t l = b; l < e; ++l) {
-                const VdbLevelSetLeaf& in = ls.leaves[l];
-                auto leaf = std::make_unique<LeafT>(
-                    openvdb::Coord(int(in.origin[0]), int(in.origin[1]), int(in.origin[2])), ls.background,
-                    false);
-                typename LeafT::NodeMaskType mask;
-                for (int i = 0; i < 8; ++i) mask.template getWord<uint64_t>(openvdb::Index(i)) = in.active[i];
-                leaf->setValueMask(mask);
-                std::copy(in.values, in.values + 512, leaf->buffer().data());
-                leaves[std::size_t(l)] = std::move(leaf);
-            }
+            for (int64_t l = b; l < e; ++l)
+                leaves[std::size_t(l)] = levelSetLeaf(ls.leaves[l], ls.background);
         };
         forChunks(parallelFor, 0, int64_t(ls.leafCount), 64, body);
         auto& tree = grid->tree();
         for (auto& leaf : leaves) tree.addLeaf(leaf.release());
-        for (std::size_t r = 0; r < ls.insideRunCount; ++r) {
-            const VdbInsideRun& run = ls.insideRuns[r];
-            for (int32_t x = run.x0; x < run.x1; ++x)
-                tree.addTile(1, openvdb::Coord(8 * x, 8 * run.y, 8 * run.z), -ls.background, false);
-        }
-        // Nodes made only of equal inactive tiles (inside: -background) become one tile.
-        tree.prune();
-        grid->setTransform(transformFor(placement));
-        grid->setName(gridName);
-        grid->setGridClass(openvdb::GRID_LEVEL_SET);
-        grid->insertMeta(kDimsMeta, openvdb::Vec3IMetadata(
-                                        openvdb::Vec3i(int(ls.dims[0]), int(ls.dims[1]), int(ls.dims[2]))));
+        addInsideRuns(tree, ls.insideRuns, ls.insideRunCount, ls.background);
+        finishLevelSet(*grid, placement, ls.dims, gridName);
         writeFile(path, grid);
+    });
+}
+
+struct LevelSetHandle {
+    openvdb::FloatGrid::Ptr grid;
+    std::mutex mutex; // levelSetAdd's insertions
+};
+
+void* levelSetCreate(float background, std::string* error) {
+    LevelSetHandle* h = nullptr;
+    guarded(error, [&] {
+        initializeOpenVdb();
+        auto owned = std::make_unique<LevelSetHandle>();
+        owned->grid = openvdb::FloatGrid::create(background);
+        h = owned.release();
+    });
+    return h;
+}
+
+void levelSetDestroy(void* g) { delete static_cast<LevelSetHandle*>(g); }
+
+bool levelSetAdd(void* g, const VdbLevelSetLeaf* leaves, std::size_t leafCount, const VdbInsideRun* runs,
+                 std::size_t runCount, std::string* error) {
+    return guarded(error, [&] {
+        LevelSetHandle& h = *static_cast<LevelSetHandle*>(g);
+        const float background = h.grid->background();
+        // Made on the calling thread, inserted under the lock.
+        std::vector<std::unique_ptr<FloatLeaf>> made(leafCount);
+        for (std::size_t l = 0; l < leafCount; ++l) made[l] = levelSetLeaf(leaves[l], background);
+        std::lock_guard<std::mutex> lock(h.mutex);
+        auto& tree = h.grid->tree();
+        for (auto& leaf : made) tree.addLeaf(leaf.release());
+        addInsideRuns(tree, runs, runCount, background);
+    });
+}
+
+bool levelSetWrite(const char* path, void* g, const VdbPlacement& placement, const int64_t dims[3],
+                   const char* gridName, std::string* error) {
+    return guarded(error, [&] {
+        LevelSetHandle& h = *static_cast<LevelSetHandle*>(g);
+        finishLevelSet(*h.grid, placement, dims, gridName);
+        writeFile(path, h.grid);
     });
 }
 
@@ -1024,12 +1081,12 @@ void* sparseRead(const uint8_t* data, std::size_t size, VdbReadBox* box, int64_t
     return h;
 }
 
-constexpr VdbModule kTable{kModuleAbi,     sizeof(VdbModule), writeBits,     writeFloats,      readBits,
-                           readFloats,     sparseCreate,      sparseDestroy, sparseCopy,       sparseAddBrick,
-                           sparseFinish,   sparseFromBits,    sparseToBits,  sparseCount,      sparseBounds,
-                           sparseMemory,   sparseGet,         sparseCombine, sparseMorphology, sparseFill,
-                           sparseClip,     sparseCoordinates, sparseWrite,   sparseRead,       writeLevelSet,
-                           writeDenseGrids};
+constexpr VdbModule kTable{
+    kModuleAbi,       sizeof(VdbModule), writeBits,      writeFloats,       readBits,     readFloats,
+    sparseCreate,     sparseDestroy,     sparseCopy,     sparseAddBrick,    sparseFinish, sparseFromBits,
+    sparseToBits,     sparseCount,       sparseBounds,   sparseMemory,      sparseGet,    sparseCombine,
+    sparseMorphology, sparseFill,        sparseClip,     sparseCoordinates, sparseWrite,  sparseRead,
+    writeLevelSet,    writeDenseGrids,   levelSetCreate, levelSetDestroy,   levelSetAdd,  levelSetWrite};
 
 } // namespace
 } // namespace voxfx::detail
