@@ -216,7 +216,8 @@ TEST(LevelSetCsg, OperandOnAnotherLatticeIsResampledWithinAVoxel) {
             }
     EXPECT_GT(checked, 5000);
     EXPECT_EQ(wrongSign, 0);
-    // A level-set rebuild: the resampled box's edges and corners are rounded by up to about a voxel.
+    // A level-set rebuild: the resampled box's edges and corners are rounded by up to about a voxel
+    // (0.87 voxel measured here).
     EXPECT_LT(maxError, h) << "max error " << maxError;
 }
 
@@ -315,8 +316,9 @@ TEST(LevelSetOffset, OpenVdbFilterMovesASphereByTheDistance) {
             maxError = std::max(maxError, std::abs(double(values[n]) - expected));
         }
         EXPECT_GT(near, 1000);
-        // Approximate (the tracker's finite differences): a fifth of a voxel on a sphere.
-        EXPECT_LT(maxError, 0.2 * h) << "offset " << d << ": max error " << maxError;
+        // Approximate (the tracker's finite differences; 0.018 voxel measured here, the faceted
+        // sphere's own error included): within a twentieth of a voxel on a sphere.
+        EXPECT_LT(maxError, 0.05 * h) << "offset " << d << ": max error " << maxError;
     }
 }
 
