@@ -297,9 +297,9 @@ max(a, b) and max(a, -b). The sign is exact (the combined solid's, where the inp
 value is the exact distance where the nearest surface point lies on one input's part of the
 result (outside a union, inside an intersection) and a lower bound near the creases where the
 surfaces meet. The result has the first leaf's transform and band. A leaf with another
-transform (another voxel size, or a grid not offset by whole voxels, e.g. fitted to another
-mesh) is resampled onto it with OpenVDB's resampleToMatch (a level-set rebuild: approximate,
-within about a voxel, edges slightly rounded; a note says so). For exact results make the
+transform (another voxel size or origin, e.g. fitted to another mesh) is resampled onto it
+with OpenVDB's resampleToMatch (a level-set rebuild: approximate, within about a voxel, edges
+slightly rounded, and much slower; a note says so). For exact results make the
 level sets on one grid: voxfx sdf with the same --bounds and -r or --voxel-size. Level sets
 combine only with level sets: a mesh or an occupancy grid among the leaves is an error.)";
 
