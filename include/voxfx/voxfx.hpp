@@ -85,6 +85,7 @@
 #include "voxfx/environment_io.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/image_io.hpp"
+#include "voxfx/level_set.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/particles_io.hpp"
 #include "voxfx/scene_io.hpp"

@@ -8,6 +8,7 @@
 #include "voxfx/csg.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/intersection_volume.hpp"
+#include "voxfx/level_set.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/sparse_grid.hpp"
 
@@ -93,6 +94,52 @@ bool runSparseCsg(const CsgArgs& a, const CsgNode& root, const std::vector<std::
     return true;
 }
 
+// Every leaf a level-set .vdb (voxfx sdf ... -o x.vdb): OpenVDB's level-set CSG to a level set.
+int runLevelSetCsg(const CsgArgs& a, const CsgNode& root, const std::vector<std::string>& paths) {
+    const auto t0 = Clock::now();
+    if (a.output.empty() || gridFormatFromPath(a.output) != GridFormat::Vdb)
+        fail("CSG of level sets writes a level set: give -o OUT.vdb");
+    if (a.volume) fail("--volume counts cells of occupancy grids; it does not take level sets");
+    std::map<std::string, LevelSet> sets;
+    for (const std::string& path : paths) {
+        if (!isGridFile(path) || gridFormatFromPath(path) != GridFormat::Vdb)
+            fail("CSG: '", paths.front(), "' is a level set but '", path,
+                 "' is not a .vdb file; level sets combine only with level sets (make one with "
+                 "`voxfx sdf MESH -o x.vdb`)");
+        std::string what;
+        if (!isLevelSetFile(path, &what))
+            fail("CSG: '", paths.front(), "' is a level set but '", path, "' is not: ", what,
+                 "; level sets combine only with level sets (make one with `voxfx sdf MESH -o x.vdb`)");
+        sets.emplace(path, readLevelSet(path));
+    }
+    const double loadMs = msSince(t0);
+    const auto tc = Clock::now();
+    int resampled = 0;
+    LevelSet result;
+    withThreads(a.threads, [&] {
+        result = evaluateLevelSetCsg(
+            root, [&](const std::string& path) { return sets.at(path); }, &resampled);
+    });
+    const double csgMs = msSince(tc);
+    if (resampled > 0 && !a.quiet)
+        std::cerr << "voxfx: " << resampled << " operand" << (resampled > 1 ? "s" : "")
+                  << " resampled onto the first level set's grid (OpenVDB's resampleToMatch: a level-set "
+                     "rebuild, approximate)\n";
+    const auto tw = Clock::now();
+    writeLevelSet(result, a.output);
+    const double writeMs = msSince(tw);
+    if (!a.quiet) {
+        std::cout << toString(root) << ": " << sets.size() << " level sets -> level set (voxel "
+                  << fmt(result.voxelSize().x, 4) << ", band " << fmt(result.bandVoxels(), 4) << " voxels ("
+                  << fmt(result.background(), 4) << ")), " << withCommas(result.activeCount())
+                  << " active voxels\n";
+        std::cout << "time: load " << fmtMs(loadMs) << ", csg " << fmtMs(csgMs)
+                  << " (OpenVDB level sets), write " << fmtMs(writeMs) << " -> " << a.output
+                  << " (vdb level set)\n";
+    }
+    return 0;
+}
+
 const FitChoices kCsgFit = [] {
     FitChoices c;
     c.voxelSize = true;
@@ -129,6 +176,14 @@ int runCsg(const CsgArgs& a) {
     {
         // Grid leaves all .vdb, output .vdb, no --volume: the sparse path.
         const std::vector<std::string> paths = csgMeshes(root);
+        // Level sets: when any leaf is one (then all must be).
+        for (const std::string& path : paths)
+            if (isGridFile(path) && gridFormatFromPath(path) == GridFormat::Vdb && isLevelSetFile(path)) {
+                std::vector<std::string> ordered{path};
+                for (const std::string& p : paths)
+                    if (p != path) ordered.push_back(p);
+                return runLevelSetCsg(a, root, ordered);
+            }
         bool anyGrid = false, allVdb = true;
         for (const std::string& path : paths)
             if (isGridFile(path)) {
@@ -234,7 +289,19 @@ When every grid leaf is a .vdb and so is the output (without --volume), and the 
 not fit in memory (or VOXFX_MEMORY_LIMIT), the grids stay sparse: OpenVDB's topology union,
 intersection and difference on their trees (xor as (a | b) - (a & b)), meshes voxelized into the
 grids' frame tile by tile, bit for bit the dense result, in memory that grows with the surface.
---sparse forces that path, --dense refuses it.)";
+--sparse forces that path, --dense refuses it.
+Level sets: when the leaves are level-set .vdb files (voxfx sdf MESH -o x.vdb, or any OpenVDB
+FloatGrid of class level set), the result is a level set .vdb by OpenVDB's csgUnion,
+csgIntersection and csgDifference (xor as union minus intersection): per voxel min(a, b),
+max(a, b) and max(a, -b). The sign is exact (the combined solid's, where the inputs' are); the
+value is the exact distance where the nearest surface point lies on one input's part of the
+result (outside a union, inside an intersection) and a lower bound near the creases where the
+surfaces meet. The result has the first leaf's transform and band. A leaf with another
+transform (another voxel size or origin, e.g. fitted to another mesh) is resampled onto it
+with OpenVDB's resampleToMatch (a level-set rebuild: approximate, within about a voxel, edges
+slightly rounded, and much slower; a note says so). For exact results make the
+level sets on one grid: voxfx sdf with the same --bounds and -r or --voxel-size. Level sets
+combine only with level sets: a mesh or an occupancy grid among the leaves is an error.)";
 
 const Command kCsg{
     "csg", "Voxelize a CSG expression of meshes into one grid", [](CLI::App& app) {

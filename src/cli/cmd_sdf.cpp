@@ -1,10 +1,12 @@
 // voxfx sdf MESH -o FIELD — the signed distance field of a mesh: an OpenVDB level set or dense
 // floats (voxfx/sdf.hpp, voxfx/sdf_io.hpp).
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 
 #include "cli_common.hpp"
 #include "grid_input.hpp"
+#include "voxfx/level_set.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/sdf.hpp"
 #include "voxfx/sdf_io.hpp"
@@ -17,6 +19,7 @@ struct SdfArgs {
     FitArgs fit;
     std::string band = "3";
     std::string fill = "auto";
+    double offset = 0;
     int threads = 0;
     bool quiet = false;
 };
@@ -58,18 +61,36 @@ int runSdf(const SdfArgs& a) {
     SdfOptions so = parseBand(a.band);
     so.threads = a.threads;
     so.fill = parseFill(a.fill);
+    if (!std::isfinite(a.offset)) fail("--offset: expected a finite distance, got ", a.offset);
     const int64_t margin =
         a.fit.margin >= 0 ? a.fit.margin : (so.full ? 0 : int64_t(std::ceil(so.bandVoxels)));
-    const FitOptions fo = toFitOptions(a.fit, sdfFitChoices(), margin);
+    FitOptions fo = toFitOptions(a.fit, sdfFitChoices(), margin);
 
     const Mesh mesh = loadMesh(a.input);
     const double loadMs = msSince(t0);
-    const Frame frame = fitFrame(computeBounds(mesh.view()), fo);
+    Frame frame = fitFrame(computeBounds(mesh.view()), fo);
+    if (a.offset > 0 && a.fit.margin < 0) {
+        // Room for the grown surface and its band: the cell size does not depend on the margin.
+        const Vec3d c = frame.cellSize();
+        fo.marginCells = margin + int64_t(std::ceil(a.offset / std::max({c.x, c.y, c.z})));
+        frame = fitFrame(computeBounds(mesh.view()), fo);
+    }
     ProgressLine progress("distances", !a.quiet);
     so.progress = &progress;
     const auto ts = Clock::now();
-    // Computed and written in one call: a .vdb takes the field brick by brick into its tree.
-    const SdfWriteReport made = writeSdf(mesh.view(), frame, so, a.output);
+    SdfWriteReport made;
+    if (a.offset != 0) {
+        // The offset surface's field is made whole (exact distances to the moved surface), then
+        // written.
+        made.field = offsetSignedDistanceField(mesh.view(), frame, a.offset, so);
+        made.activeCount = made.field.activeCount();
+        const auto tw = Clock::now();
+        writeSdf(made.field, a.output);
+        made.writeSeconds = msSince(tw) / 1000;
+    } else {
+        // Computed and written in one call: a .vdb takes the field brick by brick into its tree.
+        made = writeSdf(mesh.view(), frame, so, a.output);
+    }
     const SignedDistanceField& field = made.field; // its description; the values are in the file
     const double writeMs = made.writeSeconds * 1000, sdfMs = msSince(ts) - writeMs;
     progress.done();
@@ -87,6 +108,8 @@ int runSdf(const SdfArgs& a) {
         else
             std::cout << "band " << fmt(field.bandVoxels, 4) << " voxels (" << fmt(field.background, 4)
                       << ")";
+        if (a.offset != 0)
+            std::cout << ", offset by " << fmt(a.offset, 6) << (a.offset > 0 ? " (grown)" : " (shrunk)");
         std::cout << ", sign from " << toString(field.fill) << ": " << withCommas(made.activeCount)
                   << " active voxels\n";
         std::cout << "time: load " << fmtMs(loadMs) << ", distances " << fmtMs(sdfMs) << ", write "
@@ -129,6 +152,16 @@ The sign (--fill, default auto):
   decided brick by brick, so memory grows with the surface; flood and vote need the whole grid's
   solid in memory (one bit per voxel).
 
+Offset (--offset D, world units):
+  The field of the solid grown by D (D > 0) or shrunk by -D (D < 0): the distances are computed
+  with the band widened by |D| and D is subtracted, so the band stays W voxels around the new
+  surface, and --margin's default grows by D / cell. The zero level is exactly the offset
+  surface and the sign that of the offset solid; |value| is the exact distance to the new
+  surface on the side away from the mesh (outside when growing, inside when shrinking) and a
+  lower bound on the other side (equal wherever the offset surface is smooth; smaller near the
+  creases that growing makes in concave parts and shrinking at convex edges). To offset an
+  existing level-set .vdb (OpenVDB's LevelSetFilter, approximate): voxfx morph IN.vdb --offset D.
+
 Formats (by extension; written atomically):
   .vdb   OpenVDB FloatGrid "sdf", class level set, background = band width: sparse, opens in
          Houdini, Blender and openvdb.read(); index (i, j, k) maps to the voxel's centre.
@@ -151,6 +184,8 @@ const Command kSdf{
         app.add_option("--fill", a->fill,
                        "Inside test behind the sign: auto (parity if closed, else gwn), parity, "
                        "gwn, winding, flood, vote");
+        app.add_option("--offset", a->offset,
+                       "Grow (> 0) or shrink (< 0) the solid by this distance, world units (default 0)");
         app.add_option("-j,--threads", a->threads, "Worker threads, 0 = all (results are identical)")
             ->default_val(0)
             ->check(CLI::NonNegativeNumber);

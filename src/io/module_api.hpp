@@ -107,6 +107,18 @@ struct VdbDenseGrid {
     float background = 0;
 };
 
+/// What levelSetInfo reports about a level set (an openvdb::FloatGrid of class level set).
+struct VdbLevelSetInfo {
+    float background = 0;
+    double voxelSize[3] = {1, 1, 1};
+    double centre0[3] = {0, 0, 0}; ///< world position of index (0, 0, 0)
+    bool axisAligned = false;      ///< the transform is a scale and a translation: centre0 + ijk * voxelSize
+    int64_t activeCount = 0;
+    bool anyActive = false;
+    int64_t lo[3] = {0, 0, 0}, hi[3] = {-1, -1, -1}; ///< the active voxels' index box (inclusive)
+    std::string name;
+};
+
 struct VdbModule {
     uint32_t abi;
     uint32_t size; ///< sizeof(VdbModule) as the module was built
@@ -200,6 +212,7 @@ struct VdbModule {
 
     /// A new empty FloatGrid with background `background`; null (and *error) on failure.
     void* (*levelSetCreate)(float background, std::string* error);
+    /// Frees a grid made by levelSetCreate, levelSetRead, levelSetBuild or levelSetCopy.
     void (*levelSetDestroy)(void* grid);
     /// Adds leaves and inside runs (disjoint from those added before). May be called from several
     /// threads at once on one grid: the leaves are built on the calling thread and inserted under
@@ -208,8 +221,35 @@ struct VdbModule {
                         const VdbInsideRun* runs, std::size_t runCount, std::string* error);
     /// After the last add: writeLevelSet's pruning, transform, class, name and "voxfx_dims", and
     /// the file.
-    bool (*levelSetWrite)(const char* path, void* grid, const VdbPlacement& placement, const int64_t dims[3],
-                          const char* gridName, std::string* error);
+    bool (*levelSetStreamWrite)(const char* path, void* grid, const VdbPlacement& placement,
+                                const int64_t dims[3], const char* gridName, std::string* error);
+
+    // ---- Level sets (voxfx/level_set.hpp): an openvdb::FloatGrid of class level set the module
+    // owns, with its own transform. A handle is used by one thread at a time.
+
+    /// The first bool, float or double grid of a .vdb file's bytes (checked as readBits), when it
+    /// is a FloatGrid of class level set; null and *error saying what the grid is otherwise.
+    void* (*levelSetRead)(const uint8_t* data, std::size_t size, std::string* error);
+    /// 1 when the file's first bool, float or double grid is a float level set, 0 when it is
+    /// another grid (*what says which), -1 on an error (*error).
+    int (*levelSetProbe)(const uint8_t* data, std::size_t size, std::string* what, std::string* error);
+    /// The grid writeLevelSet writes, kept in memory.
+    void* (*levelSetBuild)(const VdbLevelSet& ls, const VdbPlacement& placement, const char* gridName,
+                           ParallelFor parallelFor, std::string* error);
+    void* (*levelSetCopy)(const void* grid, std::string* error);
+    bool (*levelSetInfo)(const void* grid, VdbLevelSetInfo* info, std::string* error);
+    float (*levelSetValue)(const void* grid, const int64_t ijk[3]);
+    /// The active voxels: three int32 indices and one value each, in the tree's order.
+    bool (*levelSetActive)(const void* grid, std::vector<int32_t>* ijk, std::vector<float>* values,
+                           std::string* error);
+    /// a = a op b by OpenVDB's csgUnion, csgIntersection, csgDifference on a copy of b; when the
+    /// transforms differ, the copy is b resampled onto a's transform (resampleToMatch: a level-set
+    /// rebuild with a's band) and *resampled is set.
+    bool (*levelSetCombine)(void* a, const void* b, SparseOp op, bool* resampled, std::string* error);
+    /// OpenVDB's LevelSetFilter::offset by -distance: the surface moves `distance` world units
+    /// outwards (inwards when negative), the band rebuilt by the tracker.
+    bool (*levelSetOffset)(void* grid, double distance, std::string* error);
+    bool (*levelSetWrite)(const char* path, const void* grid, std::string* error);
 };
 
 // ---- voxfx_assimp: Assimp (glTF 2.0 and the long tail) ----------------------------------------

@@ -89,8 +89,8 @@ public:
         const Vec3i d = f.dims();
         const int64_t dims[3] = {d.x, d.y, d.z};
         std::string error;
-        if (!vdb_.levelSetWrite(file.tempPath().c_str(), grid_, sdfPlacement(f), dims,
-                                options.gridName.c_str(), &error))
+        if (!vdb_.levelSetStreamWrite(file.tempPath().c_str(), grid_, sdfPlacement(f), dims,
+                                      options.gridName.c_str(), &error))
             fail("cannot write '", file.targetPath().string(), "': ", error);
     }
     int64_t activeCount() const { return active_; }

@@ -25,6 +25,9 @@
 
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Composite.h>
+#include <openvdb/tools/GridTransformer.h>
+#include <openvdb/tools/LevelSetFilter.h>
 #include <openvdb/tools/Morphology.h>
 #include <openvdb/tree/LeafNode.h>
 #include <openvdb/tree/ValueAccessor.h>
@@ -638,25 +641,28 @@ void finishLevelSet(openvdb::FloatGrid& grid, const VdbPlacement& placement, con
                     openvdb::Vec3IMetadata(openvdb::Vec3i(int(dims[0]), int(dims[1]), int(dims[2]))));
 }
 
+// The level set a SignedDistanceField describes (see writeLevelSet), kept in memory.
+openvdb::FloatGrid::Ptr buildLevelSet(const VdbLevelSet& ls, const VdbPlacement& placement,
+                                      const char* gridName, ParallelFor parallelFor) {
+    initializeOpenVdb();
+    auto grid = openvdb::FloatGrid::create(ls.background);
+    // The leaves are made on worker threads and handed to the tree in their order (a
+    // deterministic tree, single-threaded insertion), as for bit grids.
+    std::vector<std::unique_ptr<FloatLeaf>> leaves(ls.leafCount);
+    auto body = [&](int64_t b, int64_t e) {
+        for (int64_t l = b; l < e; ++l) leaves[std::size_t(l)] = levelSetLeaf(ls.leaves[l], ls.background);
+    };
+    forChunks(parallelFor, 0, int64_t(ls.leafCount), 64, body);
+    auto& tree = grid->tree();
+    for (auto& leaf : leaves) tree.addLeaf(leaf.release());
+    addInsideRuns(tree, ls.insideRuns, ls.insideRunCount, ls.background);
+    finishLevelSet(*grid, placement, ls.dims, gridName);
+    return grid;
+}
+
 bool writeLevelSet(const char* path, const VdbLevelSet& ls, const VdbPlacement& placement,
                    const char* gridName, ParallelFor parallelFor, std::string* error) {
-    return guarded(error, [&] {
-        initializeOpenVdb();
-        auto grid = openvdb::FloatGrid::create(ls.background);
-        // The leaves are made on worker threads and handed to the tree in their order (a
-        // deterministic tree, single-threaded insertion), as for bit grids.
-        std::vector<std::unique_ptr<FloatLeaf>> leaves(ls.leafCount);
-        auto body = [&](int64_t b, int64_t e) {
-            for (int64_t l = b; l < e; ++l)
-                leaves[std::size_t(l)] = levelSetLeaf(ls.leaves[l], ls.background);
-        };
-        forChunks(parallelFor, 0, int64_t(ls.leafCount), 64, body);
-        auto& tree = grid->tree();
-        for (auto& leaf : leaves) tree.addLeaf(leaf.release());
-        addInsideRuns(tree, ls.insideRuns, ls.insideRunCount, ls.background);
-        finishLevelSet(*grid, placement, ls.dims, gridName);
-        writeFile(path, grid);
-    });
+    return guarded(error, [&] { writeFile(path, buildLevelSet(ls, placement, gridName, parallelFor)); });
 }
 
 struct LevelSetHandle {
@@ -692,8 +698,8 @@ bool levelSetAdd(void* g, const VdbLevelSetLeaf* leaves, std::size_t leafCount, 
     });
 }
 
-bool levelSetWrite(const char* path, void* g, const VdbPlacement& placement, const int64_t dims[3],
-                   const char* gridName, std::string* error) {
+bool levelSetStreamWrite(const char* path, void* g, const VdbPlacement& placement, const int64_t dims[3],
+                         const char* gridName, std::string* error) {
     return guarded(error, [&] {
         LevelSetHandle& h = *static_cast<LevelSetHandle*>(g);
         finishLevelSet(*h.grid, placement, dims, gridName);
@@ -1081,12 +1087,202 @@ void* sparseRead(const uint8_t* data, std::size_t size, VdbReadBox* box, int64_t
     return h;
 }
 
+// ---- Level sets ------------------------------------------------------------------------------
+
+openvdb::FloatGrid& lsGrid(void* g) { return *static_cast<LevelSetHandle*>(g)->grid; }
+const openvdb::FloatGrid& lsGrid(const void* g) { return *static_cast<const LevelSetHandle*>(g)->grid; }
+
+const char* gridClassName(openvdb::GridClass c) {
+    switch (c) {
+    case openvdb::GRID_LEVEL_SET:
+        return "level set";
+    case openvdb::GRID_FOG_VOLUME:
+        return "fog volume";
+    case openvdb::GRID_STAGGERED:
+        return "staggered";
+    default:
+        return "unknown";
+    }
+}
+
+// The first bool, float or double grid of the file, and whether it is a float level set; *what
+// describes it otherwise.
+openvdb::GridBase::Ptr firstScalarGrid(const uint8_t* data, std::size_t size, bool* levelSet,
+                                       std::string* what) {
+    const openvdb::GridPtrVecPtr grids = readValidatedGrids(data, size);
+    for (const auto& gp : *grids) {
+        if (!gp) continue;
+        const std::string name = "grid '" + gp->getName() + "'";
+        if (gp->isType<openvdb::BoolGrid>()) {
+            *levelSet = false;
+            *what = name + " is a BoolGrid (occupancy), not a level set";
+            return gp;
+        }
+        if (gp->isType<openvdb::FloatGrid>() || gp->isType<openvdb::DoubleGrid>()) {
+            const bool isFloat = gp->isType<openvdb::FloatGrid>();
+            *levelSet = isFloat && gp->getGridClass() == openvdb::GRID_LEVEL_SET;
+            if (!*levelSet)
+                *what = name + " is a " + (isFloat ? "FloatGrid" : "DoubleGrid") + " of class " +
+                        gridClassName(gp->getGridClass()) +
+                        (isFloat ? ", not a level set" : " (level sets are read as FloatGrids)");
+            return gp;
+        }
+    }
+    fail("the file holds no bool, float or double grid");
+}
+
+void* levelSetRead(const uint8_t* data, std::size_t size, std::string* error) {
+    LevelSetHandle* h = nullptr;
+    guarded(error, [&] {
+        bool isLevelSet = false;
+        std::string what;
+        const openvdb::GridBase::Ptr base = firstScalarGrid(data, size, &isLevelSet, &what);
+        if (!isLevelSet) fail(what);
+        auto owned = std::make_unique<LevelSetHandle>();
+        owned->grid = openvdb::GridBase::grid<openvdb::FloatGrid>(base);
+        if (!(owned->grid->background() > 0))
+            fail("level set '", base->getName(), "' has background ", owned->grid->background(),
+                 " (a level set's background is its band width, > 0)");
+        h = owned.release();
+    });
+    return h;
+}
+
+int levelSetProbe(const uint8_t* data, std::size_t size, std::string* what, std::string* error) {
+    int result = -1;
+    guarded(error, [&] {
+        bool isLevelSet = false;
+        firstScalarGrid(data, size, &isLevelSet, what);
+        result = isLevelSet ? 1 : 0;
+    });
+    return result;
+}
+
+void* levelSetBuild(const VdbLevelSet& ls, const VdbPlacement& placement, const char* gridName,
+                    ParallelFor parallelFor, std::string* error) {
+    LevelSetHandle* h = nullptr;
+    guarded(error, [&] {
+        auto owned = std::make_unique<LevelSetHandle>();
+        owned->grid = buildLevelSet(ls, placement, gridName, parallelFor);
+        h = owned.release();
+    });
+    return h;
+}
+
+void* levelSetCopy(const void* g, std::string* error) {
+    LevelSetHandle* h = nullptr;
+    guarded(error, [&] {
+        auto owned = std::make_unique<LevelSetHandle>();
+        owned->grid = lsGrid(g).deepCopy();
+        h = owned.release();
+    });
+    return h;
+}
+
+bool levelSetInfo(const void* g, VdbLevelSetInfo* info, std::string* error) {
+    return guarded(error, [&] {
+        const openvdb::FloatGrid& grid = lsGrid(g);
+        info->background = grid.background();
+        const openvdb::Vec3d vs = grid.voxelSize();
+        const openvdb::Vec3d c0 = grid.indexToWorld(openvdb::Vec3d(0, 0, 0));
+        for (int a = 0; a < 3; ++a) {
+            info->voxelSize[a] = vs[a];
+            info->centre0[a] = c0[a];
+        }
+        const auto map = grid.transform().baseMap();
+        info->axisAligned = map->isLinear();
+        if (info->axisAligned) {
+            const openvdb::Mat4d m = map->getAffineMap()->getMat4();
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 3; ++c)
+                    if (r != c && m(r, c) != 0) info->axisAligned = false;
+        }
+        info->activeCount = int64_t(grid.tree().activeVoxelCount());
+        openvdb::CoordBBox box;
+        info->anyActive = grid.tree().evalActiveVoxelBoundingBox(box);
+        for (int a = 0; a < 3; ++a) {
+            info->lo[a] = info->anyActive ? box.min()[a] : 0;
+            info->hi[a] = info->anyActive ? box.max()[a] : -1;
+        }
+        info->name = grid.getName();
+    });
+}
+
+float levelSetValue(const void* g, const int64_t ijk[3]) {
+    return lsGrid(g).tree().getValue(openvdb::Coord(int(ijk[0]), int(ijk[1]), int(ijk[2])));
+}
+
+bool levelSetActive(const void* g, std::vector<int32_t>* ijk, std::vector<float>* values,
+                    std::string* error) {
+    return guarded(error, [&] {
+        const openvdb::FloatGrid& grid = lsGrid(g);
+        const std::size_t n = std::size_t(grid.tree().activeVoxelCount());
+        ijk->clear();
+        values->clear();
+        ijk->reserve(3 * n);
+        values->reserve(n);
+        for (auto it = grid.tree().cbeginValueOn(); it; ++it) {
+            if (it.isVoxelValue()) {
+                const openvdb::Coord c = it.getCoord();
+                ijk->insert(ijk->end(), {c.x(), c.y(), c.z()});
+                values->push_back(*it);
+                continue;
+            }
+            const openvdb::CoordBBox box = it.getBoundingBox(); // an active tile: each of its voxels
+            for (auto c = box.begin(); c; ++c) {
+                ijk->insert(ijk->end(), {(*c).x(), (*c).y(), (*c).z()});
+                values->push_back(*it);
+            }
+        }
+    });
+}
+
+bool levelSetCombine(void* a, const void* b, SparseOp op, bool* resampled, std::string* error) {
+    return guarded(error, [&] {
+        openvdb::FloatGrid& ga = lsGrid(a);
+        const openvdb::FloatGrid& gb = lsGrid(b);
+        openvdb::FloatGrid::Ptr copy;
+        *resampled = !(ga.constTransform() == gb.constTransform());
+        if (!*resampled) {
+            copy = gb.deepCopy();
+        } else {
+            copy = openvdb::FloatGrid::create(ga.background());
+            copy->setTransform(ga.transform().copy());
+            copy->setGridClass(openvdb::GRID_LEVEL_SET);
+            openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(gb, *copy);
+        }
+        try {
+            if (op == SparseOp::Union)
+                openvdb::tools::csgUnion(ga, *copy);
+            else if (op == SparseOp::Intersection)
+                openvdb::tools::csgIntersection(ga, *copy);
+            else
+                openvdb::tools::csgDifference(ga, *copy);
+        } catch (const openvdb::Exception& e) { fail("OpenVDB: ", e.what()); }
+    });
+}
+
+bool levelSetOffset(void* g, double distance, std::string* error) {
+    return guarded(error, [&] {
+        try {
+            openvdb::tools::LevelSetFilter<openvdb::FloatGrid> filter(lsGrid(g));
+            filter.offset(float(-distance)); // OpenVDB's offset adds to the values: > 0 shrinks
+        } catch (const openvdb::Exception& e) { fail("OpenVDB: ", e.what()); }
+    });
+}
+
+bool levelSetWrite(const char* path, const void* g, std::string* error) {
+    return guarded(error, [&] { writeFile(path, static_cast<const LevelSetHandle*>(g)->grid); });
+}
+
 constexpr VdbModule kTable{
     kModuleAbi,       sizeof(VdbModule), writeBits,      writeFloats,       readBits,     readFloats,
     sparseCreate,     sparseDestroy,     sparseCopy,     sparseAddBrick,    sparseFinish, sparseFromBits,
     sparseToBits,     sparseCount,       sparseBounds,   sparseMemory,      sparseGet,    sparseCombine,
     sparseMorphology, sparseFill,        sparseClip,     sparseCoordinates, sparseWrite,  sparseRead,
-    writeLevelSet,    writeDenseGrids,   levelSetCreate, levelSetDestroy,   levelSetAdd,  levelSetWrite};
+    writeLevelSet,    writeDenseGrids,   levelSetCreate, levelSetDestroy,   levelSetAdd,  levelSetStreamWrite,
+    levelSetRead,     levelSetProbe,     levelSetBuild,  levelSetCopy,      levelSetInfo, levelSetValue,
+    levelSetActive,   levelSetCombine,   levelSetOffset, levelSetWrite};
 
 } // namespace
 } // namespace voxfx::detail
