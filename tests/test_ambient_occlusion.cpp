@@ -3,7 +3,7 @@
 // nothing beyond the field), and the exact cosine-weighted fraction of directions that meet no
 // occluder within the radius, integrated numerically over the hemisphere with ray-plane
 // intersection in closed form (a floor beside a wall, not Embree) and counted with Embree rays for
-// a box on the ground.
+// a box on the ground. The field's distances against CGAL's AABB tree.
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -11,8 +11,10 @@
 
 #include <gtest/gtest.h>
 
+#include "cgal_oracle.hpp"
 #include "test_util.hpp"
 #include "voxfx/ambient_occlusion.hpp"
+#include "voxfx/mesh_io.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/triangle_tracer.hpp"
 
@@ -132,6 +134,48 @@ TEST(AmbientOcclusionTest, GroundAroundABoxAgreesWithCountedRays) {
         }
     }
     EXPECT_LT(sumError / count, 0.03);
+}
+
+// The field at every cell centre within the radius of a real mesh against CGAL's AABB tree: never
+// below the exact distance (every value is the distance to a point of the surface) and at most a
+// quarter of a cell above it, a fiftieth on average (the closest points carried outwards by the
+// sweeps miss a cell's own closest point where the surface curves; measured 0.22 and 0.013 cells
+// on the bunny, 0.19 and 0.009 on the elephant).
+TEST(AmbientOcclusionTest, FieldIsNeverBelowTheExactDistanceAndWithinAQuarterOfACellAbove) {
+    for (const char* name : {"meshes/bunny00.off", "meshes/elephant.off"}) {
+        VOXFX_REQUIRE_DATA(name);
+        const Mesh mesh = loadMesh(test::dataPath(name));
+        const Box3d bounds = computeBounds(mesh.view());
+        const Vec3d size = bounds.hi - bounds.lo;
+        AmbientOcclusionOptions o;
+        o.radius = 0.2 * std::max({size.x, size.y, size.z});
+        o.resolution = 48;
+        const AmbientOcclusion ao(mesh.view(), bounds, o);
+        const Vec3i d = ao.dims();
+        const double cell = ao.cellSize();
+        std::vector<Vec3d> centres;
+        for (int64_t k = 0; k < d.z; ++k)
+            for (int64_t j = 0; j < d.y; ++j)
+                for (int64_t i = 0; i < d.x; ++i)
+                    centres.push_back(ao.origin() + Vec3d{i + 0.5, j + 0.5, k + 0.5} * cell);
+        const std::vector<test::OracleNearest> exact = test::oracleNearest(mesh.view(), centres, false);
+        double maxOver = 0, sumOver = 0, minOver = 0;
+        int64_t within = 0;
+        for (std::size_t c = 0; c < centres.size(); ++c) {
+            if (exact[c].distance >= o.radius) continue;
+            const double over = ao.distance(centres[c]) - exact[c].distance;
+            maxOver = std::max(maxOver, over);
+            minOver = std::min(minOver, over);
+            sumOver += over;
+            ++within;
+        }
+        ASSERT_GT(within, 10000) << name;
+        EXPECT_GE(minOver, -1e-5 * cell) << name; // float rounding of the stored values only
+        EXPECT_LE(maxOver, 0.25 * cell) << name;
+        EXPECT_LE(sumOver / double(within), 0.02 * cell) << name;
+        std::printf("%s: %lld centres within the radius, field - exact: max %.4f, mean %.5f cells\n", name,
+                    (long long)within, maxOver / cell, sumOver / double(within) / cell);
+    }
 }
 
 TEST(AmbientOcclusionTest, BadOptionsAreRejected) {

@@ -1,10 +1,14 @@
 // voxfx — ambient occlusion from a distance field: how much of the sky a surface point sees past the
 // geometry near it, for the renderer's ambient light (RenderOptions::ambientOcclusion).
 //
-// Field: the exact distance from the centres of a grid of cells to the occluding triangles (the
-// magnitude of voxfx::signedDistanceField, narrow band as wide as the occlusion radius plus two
-// cells, so every distance below the radius is exact at the centres), trilinear between centres.
-// The band grows with the surface, so the cost is that of the occluders' surface, not of the volume.
+// Field: the distance from the centres of a grid of cells to the occluding triangles, clamped to the
+// occlusion radius plus two cells, trilinear between centres. Exact (the closest-point hierarchy of
+// voxfx/distance.hpp) at the cells a conservative voxelization of the occluders touches and their
+// neighbours; beyond them the closest points are carried outwards by two raster sweeps (a vector
+// distance transform), so each value is the distance to a point of the surface: never below the
+// exact distance, and above it by a small part of a cell (tested against CGAL's AABB tree). The cost
+// is one query per surface cell plus a few operations per cell, not the triangles within the
+// radius of every cell (what an exact band as wide as the radius cost: seconds on a dense mesh).
 //
 // Occlusion: cone tracing the distance field (the distance-field ambient occlusion of Wright, "Dynamic
 // occlusion with signed distance fields", SIGGRAPH 2015 course; Evans 2006). Seven cones of
@@ -60,15 +64,20 @@ public:
     /// Fraction of the cosine-weighted hemisphere around the unit normal `n` at `p` that sees no
     /// occluder within the radius, in [0, 1] (1 without occluders).
     double visibility(const Vec3d& p, const Vec3d& n) const;
-    /// Distance from p to the nearest occluder, trilinear between cell centres; the band's width
-    /// (at least the radius) where farther or outside the field.
+    /// Distance from p to the nearest occluder, trilinear between cell centres (the outermost
+    /// centres' values in the field's outer half cell); the band's width (at least the radius)
+    /// where farther or outside the field.
     double distance(const Vec3d& p) const;
 
     double radius() const { return radius_; }
     double cellSize() const { return cell_; }
     Vec3i dims() const { return dims_; }
+    /// The corner of cell (0, 0, 0): cell (i, j, k) is centred at origin() + (i + 1/2, j + 1/2, k + 1/2) *
+    /// cellSize().
+    Vec3d origin() const { return lo_; }
 
 private:
+    void buildField(const MeshView& occluders, const AmbientOcclusionOptions& options);
     Vec3d lo_;        ///< corner of cell (0, 0, 0)
     double cell_ = 1; ///< cubic cells
     Vec3i dims_{0, 0, 0};
