@@ -240,6 +240,40 @@ TEST(GlassTest, VoxelMarchThroughASlabExitsParallelLikeTheExactTracer) {
     }
 }
 
+// #25 item 2, the angle threshold on a thin sheet: a glass sheet a third of a voxel thick has its
+// front and back faces in the same voxels, with opposite normals. Both voxel methods must take them
+// as two interfaces (in and out: parallel exit, two Fresnel passes, the sheet's attenuation), not
+// one surface (a single refraction that leaves the ray bent) or none.
+TEST(GlassTest, VoxelMarchCrossesASheetThinnerThanAVoxelAsTwoInterfaces) {
+    const double sigma = 2;
+    GlassMedium medium;
+    medium.ior = float(kGlassIor);
+    medium.sigma = {float(sigma), float(sigma), float(sigma)};
+    VoxelGlassOptions o;
+    o.gridResolution = 64;
+    const double voxel = 2.0 / 64, h = voxel / 3;
+    const Mesh sheet = test::makeBox({-1, -1, -h / 2}, {1, 1, h / 2});
+    for (const bool twoSurface : {false, true}) {
+        const char* kind = twoSurface ? "two-surface" : "multi";
+        VoxelGlass glass(sheet.view(), std::vector<uint32_t>(sheet.triangleCount(), 0), {medium}, o);
+        for (const double a : {0.0, 0.3, 0.7}) {
+            const Vec3d d = glassDirAt(a);
+            const GlassPath p = glass.trace({0.05, 0.02, h / 2}, {0, 0, 1}, 0, d, o, twoSurface);
+            ASSERT_TRUE(p.hit) << kind << " at " << a;
+            EXPECT_EQ(p.events, 2) << kind << " at " << a;
+            EXPECT_NEAR(length(p.exitDir - d), 0, 1e-6) << kind << " at " << a;
+            const double tt = std::asin(std::sin(a) / kGlassIor), L = h / std::cos(tt);
+            const double fresnel = (1 - fresnelDielectric(std::cos(a), 1, kGlassIor)) *
+                                   (1 - fresnelDielectric(std::cos(tt), kGlassIor, 1));
+            // Through less than a voxel: the length is known to about a voxel, so the attenuation
+            // lies between none and a voxel's.
+            EXPECT_LE(p.throughput.x, fresnel * 1.0001) << kind << " at " << a;
+            EXPECT_GE(p.throughput.x, fresnel * std::exp(-sigma * (L + 2 * glass.voxelSize())))
+                << kind << " at " << a;
+        }
+    }
+}
+
 // Snell in closed form for the tests below (unit d, unit n facing d, eta = n_from / n_to).
 Vec3d snell(const Vec3d& d, const Vec3d& n, double eta) {
     const double c = -dot(d, n);

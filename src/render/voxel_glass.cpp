@@ -87,7 +87,10 @@ VoxelGlass::VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMediu
     origin_ = grid.lo;
     AttributeOptions ao;
     ao.coverage = options.coverage;
-    ao.channels = AttributeChannels::glass(); // normals and material id: 16 bytes per voxel
+    // Normals and material id, and the write count, which tells a voxel holding both faces of a sheet
+    // thinner than itself (its normals cancel) from one surface: 18 bytes per voxel.
+    ao.channels = AttributeChannels::glass();
+    ao.channels.count = true;
     ao.triangleMaterial = triangleMedium;
     grid_ = voxelizeAttributes(mesh, Frame::orthographic(grid, Axis::Z, dims[0], dims[1], dims[2]), {}, ao);
 }
@@ -161,6 +164,15 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
     // reaches a voxel beyond the glass, below the ground under glass standing on it, and the cast
     // from there met only the environment.
     Vec3d castFrom = entry;
+    // A sheet thinner than a voxel: its front and back faces write the same voxels, whose normals
+    // cancel (|sum of the unit normals| below half the writes). Met from inside its material, such a
+    // voxel is where the ray leaves, through a face parallel to the one it entered by; met from
+    // outside, the ray enters and leaves within the voxel (two Fresnel passes, the sheet's
+    // attenuation over half a voxel, its direction unchanged: a parallel-faced sheet). The sheet's
+    // voxels along the ray, and any other of its material's, are the same sheet until the ray
+    // reaches a voxel nothing (or another material) wrote.
+    bool inSheet = false;
+    uint32_t sheetMaterial = 0;
     bool stop = false;
     while (!stop) {
         const Vec3d g = (pos - origin_) / voxel_;
@@ -173,11 +185,56 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
             const int axis = walk.nextAxis();
             const double tLeave = std::min(walk.tMax[axis], clip.t1);
             const int64_t i = (walk.cell[1] * dims[0] + walk.cell[0]) * D + walk.cell[2];
-            if (grid_.written(i)) {
-                const Vec3d n = Vec3d(grid_.normal(i));
+            const bool written = grid_.written(i);
+            const uint32_t mid =
+                written ? uint32_t(std::min<size_t>(
+                              grid_.material.empty() ? medium : grid_.material[size_t(i)], media_.size() - 1))
+                        : 0;
+            const Vec3d sum = written ? Vec3d(grid_.normalSum[size_t(i)]) : Vec3d{0, 0, 0};
+            const bool sheet = written && !grid_.count.empty() && grid_.count[size_t(i)] >= 2 &&
+                               length(sum) < 0.5 * double(grid_.count[size_t(i)]);
+            if (!written || mid != sheetMaterial) inSheet = false;
+            const bool insideMid = !stack.empty() && stack.back() == mid;
+            if (sheet && !inSheet && !insideMid) {
+                // Through the whole sheet within this voxel.
+                if (p.events + 2 > options.maxEvents) {
+                    p.truncate(origin_ + (g + d * tEnter) * voxel_, d, thr);
+                    return p;
+                }
+                const double sl = length(sum);
+                const Vec3d across = sl > 1e-9 ? sum / sl : d;
+                const double cosIn = std::min(1.0, std::fabs(dot(d, across)));
+                const double etaOut = current().ior, etaIn = media_[mid].ior;
+                const double sinT = etaOut / etaIn * std::sqrt(std::max(0.0, 1 - cosIn * cosIn));
+                const double cosT = std::sqrt(std::max(0.0, 1 - sinT * sinT));
+                thr = thr * beerLambert(current().sigma, 0.5 * (tLeave - tEnter) * voxel_) *
+                      media_[mid].tint *
+                      float((1 - fresnelDielectric(cosIn, etaOut, etaIn)) *
+                            (1 - fresnelDielectric(cosT, etaIn, etaOut))) *
+                      beerLambert(media_[mid].sigma, 0.5 * voxel_ / std::max(cosT, 0.1));
+                thr = thr * beerLambert(current().sigma, 0.5 * (tLeave - tEnter) * voxel_);
+                p.events += 2;
+                inSheet = true;
+                sheetMaterial = mid;
+                tEnter = tLeave;
+                if (tLeave >= clip.t1 || !walk.advance(axis)) {
+                    pos = origin_ + (g + d * tLeave) * voxel_;
+                    break;
+                }
+                continue;
+            }
+            if (written && !inSheet) {
+                Vec3d n = Vec3d(grid_.normal(i));
+                if (sheet && insideMid) {
+                    // The sheet's far face: parallel to the face the ray entered by, else along the
+                    // voxel's remaining normal, facing away from the ray.
+                    const double sl = length(sum);
+                    n = lastMaterial == mid ? -lastNormal : (sl > 1e-9 ? sum / sl : d);
+                    if (dot(d, n) <= 0) n = -n;
+                    inSheet = true;
+                    sheetMaterial = mid;
+                }
                 const double dn = dot(d, n);
-                const uint32_t mid = uint32_t(std::min<size_t>(
-                    grid_.material.empty() ? medium : grid_.material[size_t(i)], media_.size() - 1));
                 // Leaving needs a medium to leave; entering a material the ray is already in is the
                 // same surface seen again.
                 const bool leaving = dn > 0 && !stack.empty();
