@@ -214,6 +214,32 @@ TEST(NestedGlassTest, VoxelMarchFollowsTheMediaThroughConcentricSpheres) {
     }
 }
 
+// Two slabs of different glass stacked face to face, with the voxel march: the coincident faces
+// write the same voxels and their normals cancel, as a sheet thinner than a voxel does, but they are
+// one interface between two media, not a sheet of either. The ray must still leave the lower slab
+// parallel to how it came, after the entry, at most one event at the touching faces (crossing them
+// or, where they are not seen, keeping the upper medium) and the exit, and never leave the upper
+// slab for air at the touching faces.
+TEST(NestedGlassTest, VoxelMarchThroughTwoTouchingSlabsLeavesParallel) {
+    const double hA = 0.4, hB = 0.5;
+    const TwoMedia s = nest(test::makeBox({-1, -1, -hA}, {1, 1, 0}), test::makeBox({-1, -1, 0}, {1, 1, hB}));
+    const GlassMedium A = nestedMedium(1.5, 0.3), B = nestedMedium(1.9, 1.0);
+    for (const int64_t res : {32, 64, 128}) {
+        VoxelGlassOptions o;
+        o.gridResolution = res;
+        const VoxelGlass glass(s.mesh.view(), s.medium, {A, B}, o);
+        for (const double a : {0.0, 0.4, 0.9}) {
+            const Vec3d d = nestedDirAt(a);
+            const GlassPath p = glass.trace({0.2, -0.1, hB}, {0, 0, 1}, 1, d, o, false);
+            ASSERT_TRUE(p.hit);
+            EXPECT_GE(p.events, 2) << res << " " << a;
+            EXPECT_LE(p.events, 3) << res << " " << a;
+            EXPECT_NEAR(length(p.exitDir - d), 0, 0.02) << res << " " << a;
+            EXPECT_LT(p.exitPoint.z, -hA + 2 * glass.voxelSize()) << res << " " << a; // left at the bottom
+        }
+    }
+}
+
 // A glass ball with a core of another glass (CHANG fig. 3's angel in a ball, as spheres) over a
 // ground, the camera looking at it.
 Scene nestedBallScene() {

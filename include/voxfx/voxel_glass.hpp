@@ -21,8 +21,14 @@
 //                last direction from where the ray last left glass (the start of that boundary
 //                voxel), or from its last event if it never left (a missed exit): never from the
 //                grid's edge, which lies a voxel beyond the glass (below the ground under glass
-//                standing on it). Faces of two materials lying on each other share voxels whose averaged
-//                normals cancel: that interface is not seen (the ray keeps the first medium).
+//                standing on it). A sheet thinner than a voxel writes its front and back faces into
+//                the same voxels, whose normals cancel (the write count tells it: |sum| below half
+//                the writes): met from inside its material such a voxel is the exit, through a face
+//                parallel to the entry face; met from outside, the ray crosses the whole sheet there
+//                (two Fresnel passes, half a voxel of attenuation, direction unchanged). Faces of two
+//                materials lying on each other also share voxels whose normals cancel, but they are no
+//                sheet (a second voxelization with the triangles in reverse order finds the voxels two
+//                materials wrote): that interface is not seen (the ray keeps the first medium).
 //   two-surface  Wyman 2005 as CHANG's baseline: the same march stops at the first back surface: one
 //                refraction there (or the mirror direction under total internal reflection), then the
 //                environment. It cannot see a second part of the object behind the first.
@@ -91,6 +97,10 @@ public:
 
 private:
     AttributeGrid grid_;
+    /// Per voxel, 1 where triangles of two materials wrote it (faces of two media lying on each
+    /// other): their normals cancel as a thin sheet's do, but they are not a sheet. Empty when the
+    /// glass is of one material.
+    std::vector<uint8_t> twoMaterials_;
     std::vector<GlassMedium> media_;
     Vec3d origin_;
     double voxel_ = 1;

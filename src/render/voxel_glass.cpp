@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <iterator>
 #include <limits>
 
@@ -92,7 +93,30 @@ VoxelGlass::VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMediu
     ao.channels = AttributeChannels::glass();
     ao.channels.count = true;
     ao.triangleMaterial = triangleMedium;
-    grid_ = voxelizeAttributes(mesh, Frame::orthographic(grid, Axis::Z, dims[0], dims[1], dims[2]), {}, ao);
+    const Frame frame = Frame::orthographic(grid, Axis::Z, dims[0], dims[1], dims[2]);
+    grid_ = voxelizeAttributes(mesh, frame, {}, ao);
+    // Where two materials wrote a voxel: its material is that of the lowest-indexed triangle written
+    // into it, so the same voxelization with the triangles in reverse order gives the highest one's.
+    if (std::adjacent_find(triangleMedium.begin(), triangleMedium.end(), std::not_equal_to<>()) !=
+        triangleMedium.end()) {
+        std::vector<uint32_t> reversed(mesh.triangleCount * 3);
+        std::vector<uint32_t> reversedMedium(mesh.triangleCount);
+        for (std::size_t t = 0; t < mesh.triangleCount; ++t) {
+            const std::size_t from = mesh.triangleCount - 1 - t;
+            for (int c = 0; c < 3; ++c)
+                reversed[3 * t + std::size_t(c)] = mesh.indices[3 * from + std::size_t(c)];
+            reversedMedium[t] = triangleMedium[from];
+        }
+        MeshView back = mesh;
+        back.indices = reversed.data();
+        AttributeOptions last = ao;
+        last.channels = {false, false, false, true, false, false}; // material id only
+        last.triangleMaterial = reversedMedium;
+        const AttributeGrid lastWriter = voxelizeAttributes(back, frame, {}, last);
+        twoMaterials_.resize(grid_.material.size());
+        for (std::size_t i = 0; i < twoMaterials_.size(); ++i)
+            twoMaterials_[i] = grid_.material[i] != lastWriter.material[i];
+    }
 }
 
 namespace voxel_glass_detail {
@@ -192,7 +216,8 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                         : 0;
             const Vec3d sum = written ? Vec3d(grid_.normalSum[size_t(i)]) : Vec3d{0, 0, 0};
             const bool sheet = written && !grid_.count.empty() && grid_.count[size_t(i)] >= 2 &&
-                               length(sum) < 0.5 * double(grid_.count[size_t(i)]);
+                               length(sum) < 0.5 * double(grid_.count[size_t(i)]) &&
+                               (twoMaterials_.empty() || !twoMaterials_[size_t(i)]);
             if (!written || mid != sheetMaterial) inSheet = false;
             const bool insideMid = !stack.empty() && stack.back() == mid;
             if (sheet && !inSheet && !insideMid) {
