@@ -943,9 +943,9 @@ TEST(GlassTest, CommandLineRendersGlassAndComparesTheVoxelMethodsWithTheExactTra
 
 TEST(GlassTest, CommandLineGlassKnobsChangeTheImageAndBadValuesSayWhich) {
     // CHANG's knobs on the render command line (--glass-grid, --glass-coverage, --angle-threshold,
-    // --max-events, --no-scene-behind: CHANG's environment-only lookup after the last exit): each
-    // is parsed, most change the multi image of a glass octahedron over a ground quad, and a bad
-    // value exits non-zero naming the flag, with no image written.
+    // --slab-overlap, --max-events, --no-scene-behind: CHANG's environment-only lookup after the last exit):
+    // each is parsed, most change the multi image of a glass octahedron over a ground quad, and a bad value
+    // exits non-zero naming the flag, with no image written.
     test::TempDir dir;
     writeGemScene(dir);
     const std::string base =
@@ -956,20 +956,24 @@ TEST(GlassTest, CommandLineGlassKnobsChangeTheImageAndBadValuesSayWhich) {
         return readPng(dir.file(png));
     };
     const Image plain = renderWith("--glass-grid 24", "plain.png");
-    for (const char* flags : {"--glass-grid 12", "--glass-grid 24 --glass-coverage center",
-                              "--glass-grid 24 --max-events 1", "--glass-grid 24 --no-scene-behind"}) {
+    for (const char* flags :
+         {"--glass-grid 12", "--glass-grid 24 --glass-coverage center", "--glass-grid 24 --max-events 1",
+          "--glass-grid 24 --no-scene-behind", "--glass-grid 24 --glass-coverage center --slab-overlap 1"}) {
         const Image other = renderWith(flags, "other.png");
         EXPECT_NE(other.pixels, plain.pixels) << flags << " changed nothing";
     }
     // The defaults, given. (The angle threshold changes nothing on this gem: with the media stack a
     // voxel of the surface just crossed is no new event whatever the threshold.)
-    EXPECT_EQ(renderWith("--glass-grid 24 --angle-threshold 0.35 --max-events 16 --scene-behind", "same.png")
-                  .pixels,
-              plain.pixels);
+    EXPECT_EQ(
+        renderWith("--glass-grid 24 --angle-threshold 0.35 --slab-overlap 0 --max-events 16 --scene-behind",
+                   "same.png")
+            .pixels,
+        plain.pixels);
     for (const auto& [flags, says] :
          std::vector<std::pair<std::string, std::string>>{{"--angle-threshold abc", "--angle-threshold"},
                                                           {"--angle-threshold 4", "angle"},
                                                           {"--max-events 0", "max"},
+                                                          {"--slab-overlap -1", "slab"},
                                                           {"--glass-grid 1", "glass"},
                                                           {"--glass-coverage most", "conservative"}}) {
         const auto r = test::runVoxfx(dir, base + flags + " -o " + dir.file("bad.png"));

@@ -61,13 +61,16 @@ struct VoxelGlassOptions : GlassPathOptions {
     /// CHANG's widened slabs taken to the limit), Center one voxel per column.
     Coverage coverage = Coverage::Conservative;
     double angleThreshold = 0.35; ///< radians: a refraction this close to the last normal is skipped
+    /// CHANG's widened slabs (AttributeOptions::slabOverlap): each slab grows by this many slices on
+    /// both sides, 0..4 (more voxels written, fewer holes where faces are steep under center coverage).
+    double slabOverlap = 0;
 };
 
 struct MultiGlassOptions : VoxelGlassOptions {
     static constexpr std::string_view kName = "multi";
     static constexpr std::string_view kSummary =
         "CHANG: march through an attribute grid, refract at boundary voxels";
-    /// glassGrid, glassCoverage, angleThreshold, maxEvents, sceneBehind.
+    /// glassGrid, glassCoverage, angleThreshold, slabOverlap, maxEvents, sceneBehind.
     static std::span<const OptionField<MultiGlassOptions>> fields();
 };
 
@@ -75,7 +78,7 @@ struct TwoSurfaceGlassOptions : VoxelGlassOptions {
     static constexpr std::string_view kName = "two-surface";
     static constexpr std::string_view kSummary =
         "Wyman 2005: refract at the front surface and at the first back surface";
-    /// glassGrid, glassCoverage, angleThreshold, maxEvents, sceneBehind.
+    /// glassGrid, glassCoverage, angleThreshold, slabOverlap, maxEvents, sceneBehind.
     static std::span<const OptionField<TwoSurfaceGlassOptions>> fields();
 };
 

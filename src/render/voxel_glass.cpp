@@ -31,6 +31,11 @@ template <class O> std::vector<OptionField<O>> voxelGlassFields() {
             "whose normal is this close to that surface's is the same surface, not a new event (0: "
             "only the media stack guards against refracting twice at one surface)",
             0, 3.2),
+        numberOption<O, &O::slabOverlap>(
+            "slabOverlap",
+            "glass voxels: CHANG's widened slabs, each slab grown by this many slices on both sides "
+            "(more voxels written, fewer holes where faces are steep under center coverage)",
+            0, 4),
         numberOption<O, &O::maxEvents>("maxEvents",
                                        "glass: refractions and reflections followed per ray (then it leaves "
                                        "along its current direction)",
@@ -88,6 +93,7 @@ VoxelGlass::VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMediu
     origin_ = grid.lo;
     AttributeOptions ao;
     ao.coverage = options.coverage;
+    ao.slabOverlap = options.slabOverlap;
     // Normals and material id, and the write count, which tells a voxel holding both faces of a sheet
     // thinner than itself (its normals cancel) from one surface: 18 bytes per voxel.
     ao.channels = AttributeChannels::glass();
