@@ -19,20 +19,6 @@ namespace {
 
 using test::randomBits;
 
-bool apply(CsgOp op, bool a, bool b) {
-    switch (op) {
-    case CsgOp::Union:
-        return a || b;
-    case CsgOp::Intersection:
-        return a && b;
-    case CsgOp::Difference:
-        return a && !b;
-    case CsgOp::Xor:
-        return a != b;
-    }
-    return false;
-}
-
 TEST(CsgTest, GridOperationsMatchCellwiseBooleansOnRandomGrids) {
     for (const int64_t D : {1, 63, 64, 65, 100, 129}) {
         const BitGrid a = randomBits(5, 3, D, 0.5, uint64_t(D)),
@@ -51,7 +37,7 @@ TEST(CsgTest, GridOperationsMatchCellwiseBooleansOnRandomGrids) {
             for (int64_t y = 0; y < 3; ++y)
                 for (int64_t x = 0; x < 5; ++x)
                     for (int64_t s = 0; s < D; ++s)
-                        wrong += r.get(x, y, s) != apply(op, a.get(x, y, s), b.get(x, y, s));
+                        wrong += r.get(x, y, s) != test::csgInside(op, a.get(x, y, s), b.get(x, y, s));
             EXPECT_EQ(wrong, 0) << toString(op) << " D " << D;
             EXPECT_TRUE(test::paddingIsZero(r)) << toString(op) << " D " << D;
         }
@@ -89,7 +75,7 @@ TEST(CsgTest, LargeGridsTakeTheStreamingPathAndStayExact) {
         for (int i = 0; i < 20000; ++i) {
             const int64_t x = int64_t(rng() % uint64_t(W)), y = int64_t(rng() % uint64_t(H)),
                           s = int64_t(rng() % uint64_t(D));
-            wrongCells += r.get(x, y, s) != apply(op, a.get(x, y, s), b.get(x, y, s));
+            wrongCells += r.get(x, y, s) != test::csgInside(op, a.get(x, y, s), b.get(x, y, s));
         }
         EXPECT_EQ(wrongCells, 0) << toString(op);
         EXPECT_TRUE(test::paddingIsZero(r)) << toString(op);
@@ -273,7 +259,7 @@ void expectCsgMatchesOracle(const std::string& expression, const std::map<std::s
         for (size_t i = 1; i < n.args.size(); ++i) {
             const test::WorldGrid next = eval(n.args[i]);
             for (size_t c = 0; c < acc.cells.size(); ++c)
-                acc.cells[c] = apply(n.op, acc.cells[c], next.cells[c]);
+                acc.cells[c] = test::csgInside(n.op, acc.cells[c], next.cells[c]);
         }
         return acc;
     };

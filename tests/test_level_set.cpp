@@ -86,20 +86,6 @@ double combine(CsgOp op, double a, double b) {
     return 0;
 }
 
-bool combineInside(CsgOp op, bool a, bool b) {
-    switch (op) {
-    case CsgOp::Union:
-        return a || b;
-    case CsgOp::Intersection:
-        return a && b;
-    case CsgOp::Difference:
-        return a && !b;
-    case CsgOp::Xor:
-        return a != b;
-    }
-    return false;
-}
-
 std::string writeOff(const test::TempDir& dir, const Mesh& m, const std::string& name) {
     std::string s =
         "OFF\n" + std::to_string(m.positions.size()) + " " + std::to_string(m.triangleCount()) + " 0\n";
@@ -143,7 +129,7 @@ TEST(LevelSetCsg, ValuesAreMinMaxOfTheBoxesDistancesAndSignsTheCombinedSolids) {
                     const Vec3d p = centreOf(frame, i, j, k);
                     const double da = kBoxA.distance(p), db = kBoxB.distance(p);
                     const float v = r.value(i, j, k);
-                    const bool in = combineInside(op, kBoxA.inside(p), kBoxB.inside(p));
+                    const bool in = test::csgInside(op, kBoxA.inside(p), kBoxB.inside(p));
                     inside += in;
                     wrongSign += (v < 0) != in;
                     // The band's edge decides active or not within a float ulp: skip it there.

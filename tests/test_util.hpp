@@ -249,6 +249,28 @@ inline bool insideByRay(const MeshView& mesh, const Vec3d& p) {
 
 } // namespace voxfx::test
 
+// ---- Boolean operations, cell by cell (the CSG and level-set tests' oracle) --------------------
+#include "voxfx/csg.hpp"
+
+namespace voxfx::test {
+
+/// Whether a point is inside `a op b`, from whether it is inside a and inside b.
+inline bool csgInside(CsgOp op, bool a, bool b) {
+    switch (op) {
+    case CsgOp::Union:
+        return a || b;
+    case CsgOp::Intersection:
+        return a && b;
+    case CsgOp::Difference:
+        return a && !b;
+    case CsgOp::Xor:
+        return a != b;
+    }
+    return false;
+}
+
+} // namespace voxfx::test
+
 // ---- Random voxel grids (grid I/O and re-slicing tests) ----------------------------------------
 #include <random>
 

@@ -21,6 +21,10 @@ namespace voxfx::detail {
 // tables) are written straight from memory.
 static_assert(std::endian::native == std::endian::little, "voxfx io assumes a little-endian host");
 
+/// The whole file at `path` (a grid or level-set file); voxfx::Error naming the path when it is a
+/// directory, cannot be opened or comes back short.
+std::vector<uint8_t> readFileBytes(const std::string& path);
+
 void writeBinvox(const VoxelGrid& grid, std::ostream& out);
 /// The same file in slabs along world x, for grids that are not held densely: the header of
 /// `frame` (world dims `n`), then cells(x0, x1) for x0 = 0, slab, 2 slab, ...: the cells

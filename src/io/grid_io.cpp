@@ -18,6 +18,9 @@ namespace voxfx {
 namespace {
 constexpr const char* kAllowedExtensions = ".binvox, .vdb, .nrrd, .ply, .obj";
 
+} // namespace
+
+namespace detail {
 std::vector<uint8_t> readFileBytes(const std::string& path) {
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) fail("cannot read '", path, "': it is a directory");
@@ -33,9 +36,7 @@ std::vector<uint8_t> readFileBytes(const std::string& path) {
     if (in.gcount() != size) fail("cannot read '", path, "': ", errno ? std::strerror(errno) : "short read");
     return bytes;
 }
-} // namespace
 
-namespace detail {
 std::string formatDouble(double v) {
     char buf[64];
     const auto r = std::to_chars(buf, buf + sizeof(buf), v);
@@ -111,13 +112,13 @@ VoxelGrid readGrid(const std::string& path) {
     try {
         switch (format) {
         case GridFormat::Binvox:
-            return detail::readBinvox(readFileBytes(path));
+            return detail::readBinvox(detail::readFileBytes(path));
         case GridFormat::Nrrd:
-            return detail::readNrrd(readFileBytes(path));
+            return detail::readNrrd(detail::readFileBytes(path));
         default: {
             // The module checks the bytes, then hands them to OpenVDB as a stream; they are freed
             // once parsed, before the grid is allocated.
-            std::vector<uint8_t> bytes = readFileBytes(path);
+            std::vector<uint8_t> bytes = detail::readFileBytes(path);
             return detail::readVdb(bytes, &bytes);
         }
         }
@@ -166,7 +167,7 @@ void writeGrid(const SparseGrid& grid, const std::string& path, const GridWriteO
 SparseGrid readSparseGrid(const std::string& path) {
     if (gridFormatFromPath(path) != GridFormat::Vdb) return SparseGrid::fromDense(readGrid(path));
     try {
-        return detail::readSparseVdb(readFileBytes(path));
+        return detail::readSparseVdb(detail::readFileBytes(path));
     } catch (const Error& e) {
         const std::string what = e.what();
         if (what.find(path) != std::string::npos) throw;

@@ -4,13 +4,11 @@
 #include "voxfx/level_set.hpp"
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
-#include <fstream>
 #include <utility>
 
 #include "core/atomic_file.hpp"
+#include "io/grid_formats.hpp"
 #include "io/module_api.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/parallel.hpp"
@@ -36,19 +34,6 @@ detail::VdbLevelSetInfo info(const void* grid) {
     std::string error;
     check(module().levelSetInfo(grid, &i, &error), error, "level set");
     return i;
-}
-
-std::vector<uint8_t> fileBytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) fail("cannot read '", path, "': ", errno ? std::strerror(errno) : "cannot open the file");
-    in.seekg(0, std::ios::end);
-    const std::streamoff size = in.tellg();
-    if (size < 0) fail("cannot read '", path, "': cannot determine the file size");
-    in.seekg(0, std::ios::beg);
-    std::vector<uint8_t> bytes(static_cast<size_t>(size));
-    in.read(reinterpret_cast<char*>(bytes.data()), size);
-    if (in.gcount() != size) fail("cannot read '", path, "': short read");
-    return bytes;
 }
 
 detail::SparseOp sparseOp(CsgOp op) {
@@ -177,7 +162,7 @@ void LevelSet::activeVoxels(std::vector<std::array<int32_t, 3>>& indices, std::v
 std::string LevelSet::name() const { return lsd::info(grid_).name; }
 
 LevelSet readLevelSet(const std::string& path) {
-    const std::vector<uint8_t> bytes = lsd::fileBytes(path);
+    const std::vector<uint8_t> bytes = detail::readFileBytes(path);
     std::string error;
     void* g = lsd::module().levelSetRead(bytes.data(), bytes.size(), &error);
     if (!g) fail("cannot read '", path, "' as a level set: ", error);
@@ -185,7 +170,7 @@ LevelSet readLevelSet(const std::string& path) {
 }
 
 bool isLevelSetFile(const std::string& path, std::string* what) {
-    const std::vector<uint8_t> bytes = lsd::fileBytes(path);
+    const std::vector<uint8_t> bytes = detail::readFileBytes(path);
     std::string w, error;
     const int r = lsd::module().levelSetProbe(bytes.data(), bytes.size(), &w, &error);
     if (r < 0) fail("cannot read '", path, "': ", error);

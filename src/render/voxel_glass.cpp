@@ -238,12 +238,12 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                 const double etaOut = current().ior, etaIn = media_[mid].ior;
                 const double sinT = etaOut / etaIn * std::sqrt(std::max(0.0, 1 - cosIn * cosIn));
                 const double cosT = std::sqrt(std::max(0.0, 1 - sinT * sinT));
-                thr = thr * beerLambert(current().sigma, 0.5 * (tLeave - tEnter) * voxel_) *
-                      media_[mid].tint *
+                // The medium around the sheet over the whole voxel segment, the sheet itself over
+                // half a voxel along the refracted direction inside it.
+                thr = thr * beerLambert(current().sigma, (tLeave - tEnter) * voxel_) * media_[mid].tint *
                       float((1 - fresnelDielectric(cosIn, etaOut, etaIn)) *
                             (1 - fresnelDielectric(cosT, etaIn, etaOut))) *
                       beerLambert(media_[mid].sigma, 0.5 * voxel_ / std::max(cosT, 0.1));
-                thr = thr * beerLambert(current().sigma, 0.5 * (tLeave - tEnter) * voxel_);
                 p.events += 2;
                 inSheet = true;
                 sheetMaterial = mid;
