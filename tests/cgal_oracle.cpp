@@ -7,12 +7,8 @@
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/IO/polygon_soup_io.h>
-#include <CGAL/Polygon_mesh_processing/corefinement.h>
-#include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
-#include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
-#include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/convex_hull_2.h>
@@ -625,30 +621,6 @@ bool oracleTriangleMeetsBox(const std::array<Vec3d, 3>& t, const Box3d& box) {
                             Point3(t[2].x, t[2].y, t[2].z));
     const K::Iso_cuboid_3 b(Point3(box.lo.x, box.lo.y, box.lo.z), Point3(box.hi.x, box.hi.y, box.hi.z));
     return CGAL::do_intersect(tri, b);
-}
-
-// See cgal_oracle.hpp.
-double oracleIntersectionVolume(const MeshView& a, const MeshView& b) {
-    namespace PMP = CGAL::Polygon_mesh_processing;
-    using Exact = CGAL::Exact_predicates_exact_constructions_kernel;
-    using ExactMesh = CGAL::Surface_mesh<Exact::Point_3>;
-    auto exactMesh = [](const MeshView& m, bool& ok) {
-        ExactMesh sm;
-        for (std::size_t i = 0; i < m.vertexCount; ++i) {
-            const Vec3d p = m.vertex(i);
-            sm.add_vertex(Exact::Point_3(p.x, p.y, p.z));
-        }
-        ok = true;
-        for (std::size_t t = 0; t < m.triangleCount && ok; ++t)
-            ok = sm.add_face(ExactMesh::Vertex_index(m.index(t, 0)), ExactMesh::Vertex_index(m.index(t, 1)),
-                             ExactMesh::Vertex_index(m.index(t, 2))) != ExactMesh::null_face();
-        ok = ok && CGAL::is_closed(sm) && !PMP::does_self_intersect(sm) && PMP::does_bound_a_volume(sm);
-        return sm;
-    };
-    bool okA = false, okB = false;
-    ExactMesh ma = exactMesh(a, okA), mb = exactMesh(b, okB), out;
-    if (!okA || !okB || !PMP::corefine_and_compute_intersection(ma, mb, out)) return std::nan("");
-    return CGAL::to_double(PMP::volume(out));
 }
 
 } // namespace voxfx::test
