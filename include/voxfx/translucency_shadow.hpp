@@ -69,8 +69,11 @@ public:
     double pathLength(const Vec3d& world, int64_t skipCells) const;
     /// exp(-sigma_c * pathLength) per channel.
     Vec3f transmittance(const Vec3d& world, int64_t skipCells, const Vec3d& sigma) const;
-    /// Bilinear interpolation of the transmittance of the four columns around p at p's depth.
-    Vec3f transmittanceBilinear(const Vec3d& world, int64_t skipCells, const Vec3d& sigma) const;
+    /// Bilinear interpolation of the transmittance of the four columns around p, each read at the
+    /// depth where the receiver's tangent plane (normal `normal`) crosses it; at p's depth for a
+    /// zero normal; beyond the grid's border, its border column.
+    Vec3f transmittanceBilinear(const Vec3d& world, int64_t skipCells, const Vec3d& sigma,
+                                const Vec3d& normal = {}) const;
     const LightView& view() const { return view_; }
     const VoxelGrid& grid() const { return grid_; }
 

@@ -81,9 +81,10 @@ public:
     /// prod_k crossingTransmittance_k ^ cellsBefore(k, p), times Beer–Lambert over the chords of
     /// the glass channels. 1 outside the view.
     Vec3f transmittance(const Vec3d& world, int64_t skipCells) const;
-    /// Bilinear interpolation of the transmittance of the four columns around p at p's depth;
-    /// columns outside the grid hold no caster (1).
-    Vec3f transmittanceBilinear(const Vec3d& world, int64_t skipCells) const;
+    /// Bilinear interpolation of the transmittance of the four columns around p, each read at the
+    /// depth where the receiver's tangent plane (normal `normal`) crosses it; at p's depth for a
+    /// zero normal; beyond the grid's border, its border column.
+    Vec3f transmittanceBilinear(const Vec3d& world, int64_t skipCells, const Vec3d& normal = {}) const;
     const LightView& view() const { return view_; }
     const std::vector<Channel>& channels() const { return channels_; }
 

@@ -146,13 +146,13 @@ Vec3f AbsorptionShadowMap::transmittance(const Vec3d& world, int64_t skipCells) 
     return absorptionExp(opticalDepth(world, skipCells));
 }
 
-Vec3f AbsorptionShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells) const {
+Vec3f AbsorptionShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells,
+                                                 const Vec3d& normal) const {
     if (grids_.empty() || !view_.covers(world)) return {1, 1, 1};
     const double lengthPerDepth = detail::worldLengthPerDepth(view_, world);
-    return detail::bilinearColumns<Vec3f, float>(
-        view_, world, Vec3f{1, 1, 1}, [&](const detail::ColumnAt& c) {
-            return absorptionExp(columnDepth(c.column, c.depth, skipCells, lengthPerDepth));
-        });
+    return detail::bilinearColumns<Vec3f, float>(view_, world, normal, [&](const detail::ColumnAt& c) {
+        return absorptionExp(columnDepth(c.column, c.depth, skipCells, lengthPerDepth));
+    });
 }
 
 std::span<const OptionField<AbsorptionShadowOptions>> AbsorptionShadowOptions::fields() {
@@ -252,7 +252,7 @@ Vec3f AbsorptionShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     if (i < 0) return {1, 1, 1};
     const AbsorptionShadowMap& m = maps_[size_t(i)];
     const int64_t skip = options_.grid.skipCells;
-    return options_.grid.bilinear ? m.transmittanceBilinear(q, skip) : m.transmittance(q, skip);
+    return options_.grid.bilinear ? m.transmittanceBilinear(q, skip, n) : m.transmittance(q, skip);
 }
 
 AbsorptionShadow::Stats AbsorptionShadow::stats() const {

@@ -53,24 +53,45 @@ inline double worldLengthPerDepth(const LightView& view, const Vec3d& world) {
     return depth > 0 ? length(world - view.frame.eye()) / depth : 1.0;
 }
 
+/// Where the plane through world point q with normal n crosses column (x, y)'s centre line, as a
+/// depth of the view's frame (receiver-plane depth): the receiver's own surface continued into a
+/// neighbouring column. Within two column footprints of q's depth (a plane nearly along the
+/// light's rays would send the lookup far along the column); q's own depth for a zero normal.
+inline double receiverPlaneDepth(const LightView& view, const Vec3d& q, const Vec3d& qGrid, const Vec3d& n,
+                                 double x, double y) {
+    const Vec3d a = view.frame.worldFromGrid({x, y, qGrid.z});
+    const Vec3d along = view.frame.worldFromGrid({x, y, qGrid.z + 1}) - a; // one depth unit
+    const double slope = dot(n, along);
+    if (!(std::abs(slope) > 0)) return qGrid.z;
+    const double reach = 2 * length(view.frame.worldFromGrid({x + 1, y, qGrid.z}) - a) / length(along);
+    return qGrid.z + std::clamp(dot(n, q - a) / slope, -reach, reach);
+}
+
 /// Bilinear interpolation of value(ColumnAt) over the four columns whose centres (x + 0.5)
-/// surround p, at p's depth; columns outside the frame hold no caster and give `empty`.
+/// surround p; beyond the frame's border the border column stands in (what lies there is the
+/// neighbouring cube face of a point light, or no caster at all). Each column is read at
+/// the depth where the receiver's tangent plane (through p, normal n) crosses it, so a receiver
+/// tilted against the light is not shadowed by its own cells in the neighbouring columns (a
+/// percentage-closer filter's receiver-plane depth); with a zero n, at p's depth.
 /// Weights are computed in double and applied as S (float for colours, double for scalars).
 /// Precondition: view.covers(world).
 template <class T, class S, class Value>
-T bilinearColumns(const LightView& view, const Vec3d& world, const T& empty, const Value& value) {
+T bilinearColumns(const LightView& view, const Vec3d& world, const Vec3d& n, const Value& value) {
     const Vec3d p = view.gridFromWorld(world);
     const int64_t W = view.frame.width(), H = view.frame.height();
     const double fx = p.x - 0.5, fy = p.y - 0.5;
     const int64_t x0 = int64_t(std::floor(fx)), y0 = int64_t(std::floor(fy));
     const double wx = fx - double(x0), wy = fy - double(y0);
+    const bool plane = n.x != 0 || n.y != 0 || n.z != 0;
     T out{};
     for (int dy = 0; dy < 2; ++dy)
         for (int dx = 0; dx < 2; ++dx) {
-            const int64_t x = x0 + dx, y = y0 + dy;
+            const int64_t x = std::clamp<int64_t>(x0 + dx, 0, W - 1),
+                          y = std::clamp<int64_t>(y0 + dy, 0, H - 1);
             const S w = S((dx ? wx : 1 - wx) * (dy ? wy : 1 - wy));
-            const bool inside = x >= 0 && y >= 0 && x < W && y < H;
-            out += (inside ? value(ColumnAt{y * W + x, p.z}) : empty) * w;
+            const double depth =
+                plane ? receiverPlaneDepth(view, world, p, n, double(x) + 0.5, double(y) + 0.5) : p.z;
+            out += value(ColumnAt{y * W + x, depth}) * w;
         }
     return out;
 }
@@ -110,7 +131,8 @@ template <class O> void appendLightGridFields(std::vector<OptionField<O>>& out) 
     out.push_back(numberOption<O, &O::grid, &LightGridOptions::skipCells>(
         "skipCells", "cells ending at a point's own cell that its lookup leaves out", 0, 16384));
     out.push_back(flagOption<O, &O::grid, &LightGridOptions::bilinear>(
-        "bilinear", "interpolate light-grid lookups between the four columns around a point (softer)"));
+        "bilinear", "interpolate light-grid lookups between the four columns around a point, each at the "
+                    "receiver's plane (off: the point's own column, ED06's stair-stepped edges)"));
 }
 
 } // namespace voxfx::detail

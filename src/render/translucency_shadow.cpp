@@ -80,13 +80,12 @@ Vec3f TranslucencyShadowMap::transmittance(const Vec3d& world, int64_t skipCells
     return beerLambert(sigma, pathLength(world, skipCells));
 }
 
-Vec3f TranslucencyShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells,
-                                                   const Vec3d& sigma) const {
+Vec3f TranslucencyShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells, const Vec3d& sigma,
+                                                   const Vec3d& normal) const {
     if (grid_.bits.empty() || !view_.covers(world)) return {1, 1, 1};
-    return detail::bilinearColumns<Vec3f, float>(
-        view_, world, Vec3f{1, 1, 1}, [&](const detail::ColumnAt& c) {
-            return beerLambert(sigma, columnPath(c.column, c.depth, skipCells));
-        });
+    return detail::bilinearColumns<Vec3f, float>(view_, world, normal, [&](const detail::ColumnAt& c) {
+        return beerLambert(sigma, columnPath(c.column, c.depth, skipCells));
+    });
 }
 
 ViewMatter ViewMatter::build(const Frame& camera, const MeshView& solids, Fill fill, int64_t slices) {
@@ -219,7 +218,7 @@ Vec3f TranslucencyShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     if (i < 0) return {1, 1, 1};
     const TranslucencyShadowMap& m = maps_[size_t(i)];
     const int64_t skip = options_.grid.skipCells;
-    return options_.grid.bilinear ? m.transmittanceBilinear(q, skip, sigma_)
+    return options_.grid.bilinear ? m.transmittanceBilinear(q, skip, sigma_, n)
                                   : m.transmittance(q, skip, sigma_);
 }
 

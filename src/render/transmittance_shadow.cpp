@@ -169,13 +169,13 @@ Vec3f TransmittanceShadowMap::transmittance(const Vec3d& world, int64_t skipCell
     return columnTransmittance(c.column, c.depth, skipCells, detail::worldLengthPerDepth(view_, world));
 }
 
-Vec3f TransmittanceShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells) const {
+Vec3f TransmittanceShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells,
+                                                    const Vec3d& normal) const {
     if (channels_.empty() || !view_.covers(world)) return {1, 1, 1};
     const double lengthPerDepth = detail::worldLengthPerDepth(view_, world);
-    return detail::bilinearColumns<Vec3f, float>(
-        view_, world, Vec3f{1, 1, 1}, [&](const detail::ColumnAt& c) {
-            return columnTransmittance(c.column, c.depth, skipCells, lengthPerDepth);
-        });
+    return detail::bilinearColumns<Vec3f, float>(view_, world, normal, [&](const detail::ColumnAt& c) {
+        return columnTransmittance(c.column, c.depth, skipCells, lengthPerDepth);
+    });
 }
 
 std::span<const OptionField<TransmittanceShadowOptions>> TransmittanceShadowOptions::fields() {
@@ -257,7 +257,7 @@ Vec3f TransmittanceShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     if (i < 0) return v;
     const TransmittanceShadowMap& m = maps_[size_t(i)];
     const int64_t skip = options_.grid.skipCells;
-    return v * (options_.grid.bilinear ? m.transmittanceBilinear(q, skip) : m.transmittance(q, skip));
+    return v * (options_.grid.bilinear ? m.transmittanceBilinear(q, skip, n) : m.transmittance(q, skip));
 }
 
 TransmittanceShadow::Stats TransmittanceShadow::stats() const {
