@@ -197,6 +197,14 @@ Scene makeGlassScene(const std::string& meshesDir) {
     close.target = ballCentre;
     close.fovY = 30 * M_PI / 180;
     scene.cameras.push_back(close);
+    // A third camera on the block of two glasses (render --camera 2): where they touch, a ray
+    // passes from one medium straight into the other.
+    Camera block = cam;
+    block.name = "Block-view";
+    block.position = {2.9, 1.5, 2.3};
+    block.target = {1.65, 0.6, -0.1};
+    block.fovY = 36 * M_PI / 180;
+    scene.cameras.push_back(block);
     scene.validate();
     return scene;
 }
