@@ -178,6 +178,33 @@ TEST(LevelSetCsg, WrittenFileIsALevelSetWithTheBandAndVoxelSize) {
         ASSERT_EQ(back.value(idx[n][0], idx[n][1], idx[n][2]), values[n]);
 }
 
+TEST(LevelSetCsg, CopiesKeepTheTransformSoLatticesFarFromTheOriginCombineWithoutResampling) {
+    // OpenVDB's Grid::deepCopy rebuilds the transform's map (simplify), which moved the voxel size
+    // of a lattice 2000 units away by 1e-12 relative and made it non-uniform: the copy that CSG
+    // works on no longer equalled the other operand's transform, and identical lattices were
+    // resampled.
+    const Vec3d far{1000.3, -2000.1, 500.7};
+    const Frame frame = cubeFrame(2, 40, far);
+    Mesh ma = kBoxA.mesh(), mb = kBoxB.mesh();
+    for (Mesh* m : {&ma, &mb})
+        for (Vec3f& p : m->positions) p = Vec3f(Vec3d(p) + far);
+    const LevelSet a = LevelSet::fromField(signedDistanceField(ma.view(), frame));
+    const LevelSet b = LevelSet::fromField(signedDistanceField(mb.view(), frame));
+    const LevelSet copy = a;
+    EXPECT_EQ(copy.voxelSize().x, a.voxelSize().x);
+    EXPECT_EQ(copy.voxelSize().z, a.voxelSize().z);
+    EXPECT_EQ(copy.indexOrigin().y, a.indexOrigin().y);
+    bool resampled = true;
+    const LevelSet u = levelSetCsg(a, b, CsgOp::Union, &resampled);
+    EXPECT_FALSE(resampled);
+    EXPECT_EQ(u.voxelSize().y, a.voxelSize().y);
+    resampled = true;
+    levelSetCsg(copy, b, CsgOp::Difference, &resampled);
+    EXPECT_FALSE(resampled);
+    // A copy's offset still sees cubic voxels.
+    EXPECT_NO_THROW(offsetLevelSet(copy, 0.05));
+}
+
 TEST(LevelSetCsg, OperandOnAnotherLatticeIsResampledWithinAVoxel) {
     const Frame frame = cubeFrame(2, 40);
     const Frame shifted = cubeFrame(2, 40, {0.037, -0.021, 0.05});

@@ -610,6 +610,22 @@ bool writeDenseGrids(const char* path, const int64_t dims[3], const uint8_t* act
 using FloatLeaf = openvdb::FloatGrid::TreeType::LeafNodeType;
 static_assert(FloatLeaf::SIZE == 512 && FloatLeaf::NodeMaskType::WORD_COUNT == 8);
 
+// A copy of a grid's transform with the same numbers: Transform's copy constructor shares the
+// (immutable) map, where Transform::copy() and Grid::deepCopy() rebuild it through simplify(),
+// which recomputes the scale as the difference of two translated points (off by 1e-12 relative
+// for a grid 1000 voxels from the origin, and no longer uniform) so that the copy and the original
+// no longer compare equal and CSG between them resampled.
+openvdb::math::Transform::Ptr sameTransform(const openvdb::GridBase& grid) {
+    return std::make_shared<openvdb::math::Transform>(grid.constTransform());
+}
+
+// A deep copy of a level set with its transform unchanged (see sameTransform).
+openvdb::FloatGrid::Ptr copyLevelSet(const openvdb::FloatGrid& grid) {
+    openvdb::FloatGrid::Ptr copy = grid.deepCopy();
+    copy->setTransform(sameTransform(grid));
+    return copy;
+}
+
 std::unique_ptr<FloatLeaf> levelSetLeaf(const VdbLevelSetLeaf& in, float background) {
     auto leaf = std::make_unique<FloatLeaf>(
         openvdb::Coord(int(in.origin[0]), int(in.origin[1]), int(in.origin[2])), background, false);
@@ -1173,7 +1189,7 @@ void* levelSetCopy(const void* g, std::string* error) {
     LevelSetHandle* h = nullptr;
     guarded(error, [&] {
         auto owned = std::make_unique<LevelSetHandle>();
-        owned->grid = lsGrid(g).deepCopy();
+        owned->grid = copyLevelSet(lsGrid(g));
         h = owned.release();
     });
     return h;
@@ -1244,10 +1260,10 @@ bool levelSetCombine(void* a, const void* b, SparseOp op, bool* resampled, std::
         openvdb::FloatGrid::Ptr copy;
         *resampled = !(ga.constTransform() == gb.constTransform());
         if (!*resampled) {
-            copy = gb.deepCopy();
+            copy = copyLevelSet(gb);
         } else {
             copy = openvdb::FloatGrid::create(ga.background());
-            copy->setTransform(ga.transform().copy());
+            copy->setTransform(sameTransform(ga));
             copy->setGridClass(openvdb::GRID_LEVEL_SET);
             openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(gb, *copy);
         }
