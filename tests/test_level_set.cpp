@@ -1,5 +1,5 @@
 // voxfx — operations on level sets (voxfx/level_set.hpp) and the commands over them (`voxfx csg`
-// of level-set .vdb files, `voxfx sdf --offset`, `voxfx morph --offset`).
+// of level-set .vdb files and meshes, `voxfx sdf --offset`, `voxfx morph --offset`).
 //
 // Oracles: closed forms. Boxes have an analytic signed distance (the distance to a box's surface,
 // which is also the distance to its triangles), so the CSG of two boxes' fields is compared, at
@@ -585,14 +585,17 @@ TEST(LevelSetCli, CsgOfTwoSdfFilesWritesALevelSetAndRefusesOccupancy) {
             }
     EXPECT_EQ(wrong, 0);
 
-    // A level set with an occupancy grid, a mesh, or a missing file: one error line, no file.
+    // A level set with an occupancy grid (.vdb or another format) or a missing file: one error
+    // line, no file.
     writeGrid(voxelize(kBoxB.mesh().view(), frame), dir.file("occ.vdb"));
+    writeGrid(voxelize(kBoxB.mesh().view(), frame), dir.file("occ.binvox"));
     const std::pair<std::string, std::string> cases[] = {
         {"union(" + dir.file("a.vdb") + ", " + dir.file("occ.vdb") + ")",
          "BoolGrid (occupancy), not a level set"},
         {"union(" + dir.file("occ.vdb") + ", " + dir.file("a.vdb") + ")",
          "BoolGrid (occupancy), not a level set"},
-        {"union(" + dir.file("a.vdb") + ", " + mb + ")", "not a .vdb file"},
+        {"union(" + dir.file("a.vdb") + ", " + dir.file("occ.binvox") + ")", "is an occupancy grid"},
+        {"union(" + dir.file("a.vdb") + ", " + dir.file("missing.off") + ")", "missing.off"},
         {"union(" + dir.file("a.vdb") + ", " + dir.file("missing.vdb") + ")", "missing.vdb"},
     };
     for (const auto& [expr, needle] : cases) {
@@ -601,6 +604,48 @@ TEST(LevelSetCli, CsgOfTwoSdfFilesWritesALevelSetAndRefusesOccupancy) {
         EXPECT_NE(e.err.find("voxfx: error:"), std::string::npos) << e.err;
         EXPECT_NE(e.err.find(needle), std::string::npos) << expr << ": " << e.err;
         EXPECT_FALSE(std::filesystem::exists(dir.file("x.vdb")));
+    }
+}
+
+TEST(LevelSetCli, CsgOfALevelSetAndAMeshIsExactOnTheLevelSetsLattice) {
+    test::TempDir dir;
+    const std::string ma = writeOff(dir, kBoxA.mesh(), "a.off"), mb = writeOff(dir, kBoxOut.mesh(), "b.off");
+    const std::string a = dir.file("a.vdb");
+    ASSERT_EQ(test::runVoxfx(dir, "sdf " + ma + " -o " + a + " --bounds -2 -2 -2 2 2 2 -r 40 --margin 0 -q")
+                  .exitCode,
+              0);
+    const Frame frame = cubeFrame(2, 40);
+    const double w = 0.3;
+    for (const bool meshFirst : {false, true}) {
+        const std::string out = dir.file(meshFirst ? "m.vdb" : "d.vdb");
+        const std::string expr =
+            meshFirst ? "difference(" + mb + ", " + a + ")" : "difference(" + a + ", " + mb + ")";
+        const test::CommandRun r = test::runVoxfx(dir, "csg '" + expr + "' -o " + out);
+        ASSERT_EQ(r.exitCode, 0) << r.err;
+        EXPECT_NE(r.out.find("1 level set, 1 mesh on the first's lattice -> level set"), std::string::npos)
+            << r.out;
+        EXPECT_NE(r.out.find("mesh distances"), std::string::npos) << r.out;
+        EXPECT_EQ(r.err.find("resampled"), std::string::npos) << r.err;
+        const openvdb::FloatGrid::Ptr g = readByOpenVdb(out);
+        ASSERT_TRUE(g);
+        EXPECT_EQ(g->getGridClass(), openvdb::GRID_LEVEL_SET);
+        EXPECT_EQ(g->transform(), readByOpenVdb(a)->transform());
+        // The analytic boxes at every index around both (the mesh reaches past a.vdb's 40^3).
+        const auto acc = g->getConstAccessor();
+        int64_t wrong = 0, checked = 0;
+        for (int k = -4; k < 44; ++k)
+            for (int j = -10; j < 44; ++j)
+                for (int i = -4; i < 52; ++i) {
+                    const Vec3d p = centreOf(frame, i, j, k);
+                    double da = kBoxA.distance(p), db = kBoxOut.distance(p);
+                    if (meshFirst) std::swap(da, db);
+                    if (std::abs(std::abs(da) - w) < 1e-5 || std::abs(std::abs(db) - w) < 1e-5) continue;
+                    ++checked;
+                    const double expected = combine(CsgOp::Difference, clampBand(da, w), clampBand(db, w));
+                    wrong += std::abs(double(acc.getValue(openvdb::Coord(i, j, k))) - expected) > 2e-6;
+                }
+        EXPECT_EQ(wrong, 0) << expr;
+        EXPECT_GT(checked, 100000);
     }
 }
 
