@@ -1,13 +1,15 @@
 // voxfx — operations on level sets (voxfx/level_set.hpp) and the commands over them (`voxfx csg`
-// of level-set .vdb files, `voxfx sdf --offset`, `voxfx morph --offset`).
+// of level-set .vdb files and meshes, `voxfx sdf --offset`, `voxfx morph --offset`).
 //
 // Oracles: closed forms. Boxes have an analytic signed distance (the distance to a box's surface,
 // which is also the distance to its triangles), so the CSG of two boxes' fields is compared, at
 // every voxel, with min / max / max(a, -b) of the analytic distances, each clamped to the band
 // as a level set holds it, and its sign with the analytic inside test of the combined solid; the
 // offset cube with the rounded box's distance (grown) and the smaller box's (shrunk); OpenVDB's
-// approximate offset of a sphere with the sphere of the offset radius. Files are read back with
-// plain OpenVDB (class, background, voxel size).
+// approximate offset of a sphere with the sphere of the offset radius. A mesh on a level set's
+// lattice (levelSetOfMesh) is checked the same way with boxes (at indices beyond the lattice's own
+// grid too), and on real meshes against CGAL's distances and inside tests at sampled voxels.
+// Files are read back with plain OpenVDB (class, background, voxel size, transform).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -19,9 +21,11 @@
 #include <gtest/gtest.h>
 #include <openvdb/openvdb.h>
 
+#include "cgal_oracle.hpp"
 #include "test_util.hpp"
 #include "voxfx/grid_io.hpp"
 #include "voxfx/level_set.hpp"
+#include "voxfx/mesh_io.hpp"
 #include "voxfx/sdf.hpp"
 #include "voxfx/sdf_io.hpp"
 #include "voxfx/voxelize.hpp"
@@ -178,6 +182,33 @@ TEST(LevelSetCsg, WrittenFileIsALevelSetWithTheBandAndVoxelSize) {
         ASSERT_EQ(back.value(idx[n][0], idx[n][1], idx[n][2]), values[n]);
 }
 
+TEST(LevelSetCsg, CopiesKeepTheTransformSoLatticesFarFromTheOriginCombineWithoutResampling) {
+    // OpenVDB's Grid::deepCopy rebuilds the transform's map (simplify), which moved the voxel size
+    // of a lattice 2000 units away by 1e-12 relative and made it non-uniform: the copy that CSG
+    // works on no longer equalled the other operand's transform, and identical lattices were
+    // resampled.
+    const Vec3d far{1000.3, -2000.1, 500.7};
+    const Frame frame = cubeFrame(2, 40, far);
+    Mesh ma = kBoxA.mesh(), mb = kBoxB.mesh();
+    for (Mesh* m : {&ma, &mb})
+        for (Vec3f& p : m->positions) p = Vec3f(Vec3d(p) + far);
+    const LevelSet a = LevelSet::fromField(signedDistanceField(ma.view(), frame));
+    const LevelSet b = LevelSet::fromField(signedDistanceField(mb.view(), frame));
+    const LevelSet copy = a;
+    EXPECT_EQ(copy.voxelSize().x, a.voxelSize().x);
+    EXPECT_EQ(copy.voxelSize().z, a.voxelSize().z);
+    EXPECT_EQ(copy.indexOrigin().y, a.indexOrigin().y);
+    bool resampled = true;
+    const LevelSet u = levelSetCsg(a, b, CsgOp::Union, &resampled);
+    EXPECT_FALSE(resampled);
+    EXPECT_EQ(u.voxelSize().y, a.voxelSize().y);
+    resampled = true;
+    levelSetCsg(copy, b, CsgOp::Difference, &resampled);
+    EXPECT_FALSE(resampled);
+    // A copy's offset still sees cubic voxels.
+    EXPECT_NO_THROW(offsetLevelSet(copy, 0.05));
+}
+
 TEST(LevelSetCsg, OperandOnAnotherLatticeIsResampledWithinAVoxel) {
     const Frame frame = cubeFrame(2, 40);
     const Frame shifted = cubeFrame(2, 40, {0.037, -0.021, 0.05});
@@ -205,6 +236,195 @@ TEST(LevelSetCsg, OperandOnAnotherLatticeIsResampledWithinAVoxel) {
     // A level-set rebuild: the resampled box's edges and corners are rounded by up to about a voxel
     // (0.87 voxel measured here).
     EXPECT_LT(maxError, h) << "max error " << maxError;
+}
+
+// A box overlapping kBoxA and partly outside the lattice's frame (x > 2, y < -2: negative indices
+// and indices past the frame's 40), corners multiples of 1/32 that no centre of the lattices below
+// meets.
+const AnalyticBox kBoxOut = box({0.40625, -2.59375, -0.28125}, {2.71875, 0.40625, 1.09375});
+
+TEST(LevelSetOfMesh, CsgWithABoxIsMinMaxOfTheAnalyticDistancesWithoutResampling) {
+    // The lattice: a level set on a frame whose centres are not multiples of anything simple.
+    const Frame frame = cubeFrame(2, 40, {0.037, -0.021, 0.05});
+    const LevelSet a = LevelSet::fromField(signedDistanceField(kBoxA.mesh().view(), frame), "a");
+    const LevelSet b = levelSetOfMesh(kBoxOut.mesh().view(), a);
+    const double w = 0.3;
+    EXPECT_EQ(b.background(), a.background());
+    EXPECT_EQ(b.name(), "a");
+    EXPECT_TRUE(b.axisAligned());
+    EXPECT_EQ(b.indexOrigin().x, a.indexOrigin().x);
+    EXPECT_EQ(b.voxelSize().z, a.voxelSize().z);
+
+    // The mesh's level set alone: active exactly where the box's distance is below the band.
+    std::vector<std::array<int32_t, 3>> idx;
+    std::vector<float> vals;
+    b.activeVoxels(idx, vals);
+    Vec3i lo, hi;
+    b.activeBounds(lo, hi);
+    EXPECT_LT(lo.y, 0);  // the band below y = -2 lies at negative indices
+    EXPECT_GT(hi.x, 40); // and past the frame along x
+    int64_t wrongActive = 0;
+    for (std::size_t n = 0; n < idx.size(); ++n) {
+        const double d = kBoxOut.distance(centreOf(frame, idx[n][0], idx[n][1], idx[n][2]));
+        wrongActive += !(std::abs(d) < w + 1e-6) || std::abs(double(vals[n]) - d) > 2e-6;
+    }
+    EXPECT_EQ(wrongActive, 0);
+    EXPECT_GT(idx.size(), 10000u);
+
+    // Every index of a box around both solids and their bands, each operand first.
+    std::vector<std::array<int32_t, 3>> all;
+    for (int32_t k = -6; k < 46; ++k)
+        for (int32_t j = -12; j < 46; ++j)
+            for (int32_t i = -6; i < 56; ++i) all.push_back({i, j, k});
+    std::vector<float> got(all.size());
+    for (CsgOp op : {CsgOp::Union, CsgOp::Intersection, CsgOp::Difference, CsgOp::Xor})
+        for (bool meshFirst : {false, true}) {
+            bool resampled = true;
+            const LevelSet r =
+                meshFirst ? levelSetCsg(b, a, op, &resampled) : levelSetCsg(a, b, op, &resampled);
+            EXPECT_FALSE(resampled) << toString(op);
+            r.values(all, got);
+            int64_t checked = 0, wrongValue = 0, wrongSign = 0, inside = 0;
+            for (std::size_t n = 0; n < all.size(); ++n) {
+                const Vec3d p = centreOf(frame, all[n][0], all[n][1], all[n][2]);
+                double da = kBoxA.distance(p), db = kBoxOut.distance(p);
+                bool inA = kBoxA.inside(p), inB = kBoxOut.inside(p);
+                if (meshFirst) {
+                    std::swap(da, db);
+                    std::swap(inA, inB);
+                }
+                const float v = got[n];
+                const bool in = test::csgInside(op, inA, inB);
+                inside += in;
+                wrongSign += (v < 0) != in;
+                if (std::abs(std::abs(da) - w) < 1e-5 || std::abs(std::abs(db) - w) < 1e-5) continue;
+                ++checked;
+                const double expected = combine(op, clampBand(da, w), clampBand(db, w));
+                if (std::abs(double(v) - expected) > 2e-6 && wrongValue++ < 5)
+                    ADD_FAILURE() << toString(op) << (meshFirst ? " (mesh first)" : "") << " index ("
+                                  << all[n][0] << ", " << all[n][1] << ", " << all[n][2] << "): " << v
+                                  << ", expected " << expected;
+            }
+            EXPECT_EQ(wrongValue, 0) << toString(op);
+            EXPECT_EQ(wrongSign, 0) << toString(op);
+            EXPECT_GT(checked, 150000) << toString(op);
+            EXPECT_GT(inside, 100) << toString(op);
+        }
+}
+
+TEST(LevelSetOfMesh, CsgOfRealMeshesMatchesCgalDistancesAndSides) {
+    const char* names[] = {"meshes/bunny00.off", "meshes/armadillo.off"};
+    for (const char* name : names) VOXFX_REQUIRE_DATA(name);
+    const Mesh bunny = loadMesh(test::dataPath(names[0]));
+    Mesh armadillo = loadMesh(test::dataPath(names[1]));
+    // The armadillo scaled to 0.8 of the bunny's size and moved so that it sticks out of the
+    // bunny's grid (+x, -z): the mesh's level set reaches indices the lattice's field never had.
+    const Box3d bb = computeBounds(bunny.view()), ba = computeBounds(armadillo.view());
+    const double scale = 0.8 * std::max({bb.extent().x, bb.extent().y, bb.extent().z}) /
+                         std::max({ba.extent().x, ba.extent().y, ba.extent().z});
+    for (Vec3f& q : armadillo.positions)
+        q = Vec3f((Vec3d(q) - ba.center()) * scale + bb.center() + Vec3d{0.35, 0.05, -0.2});
+    FitOptions fo;
+    fo.resolution = 96;
+    fo.marginCells = 4;
+    const Frame frame = fitFrame(bb, fo);
+    const LevelSet a = LevelSet::fromField(signedDistanceField(bunny.view(), frame));
+    const LevelSet b = levelSetOfMesh(armadillo.view(), a);
+    bool resampled = true;
+    const LevelSet r = levelSetCsg(a, b, CsgOp::Difference, &resampled);
+    EXPECT_FALSE(resampled);
+    // A few hundred voxels of the result's band and of the armadillo's, spread evenly.
+    std::vector<std::array<int32_t, 3>> ir, ib, sample;
+    std::vector<float> vr, vb;
+    r.activeVoxels(ir, vr);
+    b.activeVoxels(ib, vb);
+    ASSERT_GT(ir.size(), 1000u);
+    for (std::size_t n = 0; n < ir.size(); n += ir.size() / 300) sample.push_back(ir[n]);
+    for (std::size_t n = 0; n < ib.size(); n += ib.size() / 300) sample.push_back(ib[n]);
+    std::vector<Vec3d> points;
+    int64_t outsideFrame = 0;
+    for (const auto& c : sample) {
+        points.push_back(centreOf(frame, c[0], c[1], c[2]));
+        outsideFrame += c[0] >= frame.width() || c[2] < 0;
+    }
+    EXPECT_GT(outsideFrame, 10);
+    const auto nearA = test::oracleNearest(bunny.view(), points, false);
+    const auto nearB = test::oracleNearest(armadillo.view(), points, false);
+    const std::vector<int> sideA = test::sideOfClosedMeshPerturbed(bunny.view(), points);
+    const std::vector<int> sideB = test::sideOfClosedMeshPerturbed(armadillo.view(), points);
+    ASSERT_EQ(sideA.size(), points.size());
+    ASSERT_EQ(sideB.size(), points.size());
+    std::vector<float> got(sample.size());
+    r.values(sample, got);
+    const double w = r.background();
+    int64_t wrong = 0, checked = 0;
+    for (std::size_t n = 0; n < sample.size(); ++n) {
+        ASSERT_EQ(got[n], r.value(sample[n][0], sample[n][1], sample[n][2]));
+        // sideOf...: 1 inside, -1 outside.
+        const double da = -sideA[n] * nearA[n].distance, db = -sideB[n] * nearB[n].distance;
+        // The band's edge decides active or not within a float ulp: skipped.
+        if (std::abs(std::abs(da) - w) < 1e-6 * w || std::abs(std::abs(db) - w) < 1e-6 * w) continue;
+        ++checked;
+        const double expected = combine(CsgOp::Difference, clampBand(da, w), clampBand(db, w));
+        // One float rounding of the exact distance (plus CGAL's double).
+        if (!(std::abs(double(got[n]) - expected) <= 2 * std::abs(expected) * 0x1p-24 + 1e-12) && wrong++ < 5)
+            ADD_FAILURE() << "index (" << sample[n][0] << ", " << sample[n][1] << ", " << sample[n][2]
+                          << "): " << got[n] << ", expected " << expected;
+    }
+    EXPECT_EQ(wrong, 0);
+    EXPECT_GT(checked, 500);
+}
+
+TEST(LevelSetOfMesh, LatticesItCannotUseAreClearErrors) {
+    test::TempDir dir;
+    const Mesh mesh = kBoxA.mesh();
+    const auto message = [&](const LevelSet& lattice, const SdfOptions& o = {}) -> std::string {
+        try {
+            levelSetOfMesh(mesh.view(), lattice, o);
+        } catch (const Error& e) { return e.what(); }
+        return "no error";
+    };
+    EXPECT_NE(message(LevelSet()).find("empty"), std::string::npos);
+    // Non-cubic voxels (voxfx's own field), a rotated and a mirrored transform (OpenVDB files).
+    const Frame flat = Frame::orthographic({{-2, -2, -2}, {2, 2, 2}}, Axis::Z, 40, 40, 20);
+    const std::string m1 = message(LevelSet::fromField(signedDistanceField(mesh.view(), flat)));
+    EXPECT_NE(m1.find("cubic voxels"), std::string::npos) << m1;
+    openvdb::initialize();
+    for (int kind = 0; kind < 2; ++kind) {
+        auto g = openvdb::FloatGrid::create(0.3f);
+        g->setName("turned");
+        g->setGridClass(openvdb::GRID_LEVEL_SET);
+        auto xf = openvdb::math::Transform::createLinearTransform(0.1);
+        if (kind == 0)
+            xf->preRotate(0.3, openvdb::math::Y_AXIS);
+        else
+            xf->preScale(openvdb::Vec3d(-1, 1, 1));
+        g->setTransform(xf);
+        g->tree().setValue(openvdb::Coord(0, 0, 0), 0.05f);
+        const std::string path = dir.file("turned" + std::to_string(kind) + ".vdb");
+        openvdb::io::File(path).write({g});
+        const LevelSet turned = readLevelSet(path);
+        EXPECT_FALSE(turned.axisAligned());
+        const std::string m = message(turned);
+        EXPECT_NE(m.find("not a positive scale and a translation"), std::string::npos) << m;
+        EXPECT_NE(m.find("turned"), std::string::npos) << m;
+    }
+    const LevelSet lattice = LevelSet::fromField(signedDistanceField(mesh.view(), cubeFrame(2, 40)));
+    SdfOptions full;
+    full.full = true;
+    EXPECT_NE(message(lattice, full).find("narrow band"), std::string::npos);
+    // A broken mesh: signedDistanceField's own error.
+    Mesh broken = mesh;
+    broken.indices[4] = 999;
+    EXPECT_THROW(levelSetOfMesh(broken.view(), lattice), Error);
+    // A mesh without triangles: no active voxel, outside everywhere.
+    const LevelSet none = levelSetOfMesh(MeshView{}, lattice);
+    EXPECT_EQ(none.activeCount(), 0);
+    EXPECT_EQ(none.value(20, 20, 20), lattice.background());
+    // values() wants one output per index.
+    const std::array<int32_t, 3> ijk[2] = {{0, 0, 0}, {1, 2, 3}};
+    float out[1];
+    EXPECT_THROW(lattice.values(ijk, out), Error);
 }
 
 TEST(SdfOffset, GrownCubeIsTheRoundedBoxDistance) {
@@ -365,14 +585,17 @@ TEST(LevelSetCli, CsgOfTwoSdfFilesWritesALevelSetAndRefusesOccupancy) {
             }
     EXPECT_EQ(wrong, 0);
 
-    // A level set with an occupancy grid, a mesh, or a missing file: one error line, no file.
+    // A level set with an occupancy grid (.vdb or another format) or a missing file: one error
+    // line, no file.
     writeGrid(voxelize(kBoxB.mesh().view(), frame), dir.file("occ.vdb"));
+    writeGrid(voxelize(kBoxB.mesh().view(), frame), dir.file("occ.binvox"));
     const std::pair<std::string, std::string> cases[] = {
         {"union(" + dir.file("a.vdb") + ", " + dir.file("occ.vdb") + ")",
          "BoolGrid (occupancy), not a level set"},
         {"union(" + dir.file("occ.vdb") + ", " + dir.file("a.vdb") + ")",
          "BoolGrid (occupancy), not a level set"},
-        {"union(" + dir.file("a.vdb") + ", " + mb + ")", "not a .vdb file"},
+        {"union(" + dir.file("a.vdb") + ", " + dir.file("occ.binvox") + ")", "is an occupancy grid"},
+        {"union(" + dir.file("a.vdb") + ", " + dir.file("missing.off") + ")", "missing.off"},
         {"union(" + dir.file("a.vdb") + ", " + dir.file("missing.vdb") + ")", "missing.vdb"},
     };
     for (const auto& [expr, needle] : cases) {
@@ -381,6 +604,48 @@ TEST(LevelSetCli, CsgOfTwoSdfFilesWritesALevelSetAndRefusesOccupancy) {
         EXPECT_NE(e.err.find("voxfx: error:"), std::string::npos) << e.err;
         EXPECT_NE(e.err.find(needle), std::string::npos) << expr << ": " << e.err;
         EXPECT_FALSE(std::filesystem::exists(dir.file("x.vdb")));
+    }
+}
+
+TEST(LevelSetCli, CsgOfALevelSetAndAMeshIsExactOnTheLevelSetsLattice) {
+    test::TempDir dir;
+    const std::string ma = writeOff(dir, kBoxA.mesh(), "a.off"), mb = writeOff(dir, kBoxOut.mesh(), "b.off");
+    const std::string a = dir.file("a.vdb");
+    ASSERT_EQ(test::runVoxfx(dir, "sdf " + ma + " -o " + a + " --bounds -2 -2 -2 2 2 2 -r 40 --margin 0 -q")
+                  .exitCode,
+              0);
+    const Frame frame = cubeFrame(2, 40);
+    const double w = 0.3;
+    for (const bool meshFirst : {false, true}) {
+        const std::string out = dir.file(meshFirst ? "m.vdb" : "d.vdb");
+        const std::string expr =
+            meshFirst ? "difference(" + mb + ", " + a + ")" : "difference(" + a + ", " + mb + ")";
+        const test::CommandRun r = test::runVoxfx(dir, "csg '" + expr + "' -o " + out);
+        ASSERT_EQ(r.exitCode, 0) << r.err;
+        EXPECT_NE(r.out.find("1 level set, 1 mesh on the first's lattice -> level set"), std::string::npos)
+            << r.out;
+        EXPECT_NE(r.out.find("mesh distances"), std::string::npos) << r.out;
+        EXPECT_EQ(r.err.find("resampled"), std::string::npos) << r.err;
+        const openvdb::FloatGrid::Ptr g = readByOpenVdb(out);
+        ASSERT_TRUE(g);
+        EXPECT_EQ(g->getGridClass(), openvdb::GRID_LEVEL_SET);
+        EXPECT_EQ(g->transform(), readByOpenVdb(a)->transform());
+        // The analytic boxes at every index around both (the mesh reaches past a.vdb's 40^3).
+        const auto acc = g->getConstAccessor();
+        int64_t wrong = 0, checked = 0;
+        for (int k = -4; k < 44; ++k)
+            for (int j = -10; j < 44; ++j)
+                for (int i = -4; i < 52; ++i) {
+                    const Vec3d p = centreOf(frame, i, j, k);
+                    double da = kBoxA.distance(p), db = kBoxOut.distance(p);
+                    if (meshFirst) std::swap(da, db);
+                    if (std::abs(std::abs(da) - w) < 1e-5 || std::abs(std::abs(db) - w) < 1e-5) continue;
+                    ++checked;
+                    const double expected = combine(CsgOp::Difference, clampBand(da, w), clampBand(db, w));
+                    wrong += std::abs(double(acc.getValue(openvdb::Coord(i, j, k))) - expected) > 2e-6;
+                }
+        EXPECT_EQ(wrong, 0) << expr;
+        EXPECT_GT(checked, 100000);
     }
 }
 

@@ -10,7 +10,8 @@
 // +background outside and -background inside (background = the band's half-width in world units),
 // and the grid's own transform from index (i, j, k) to world. voxfx's signed distance fields
 // (voxfx/sdf.hpp) become one with LevelSet::fromField (the grid writeSdf writes to .vdb, with the
-// same transform: index (i, j, k) is voxel (i, j, k), its centre at lo + (i + 0.5) * cell).
+// same transform: index (i, j, k) is voxel (i, j, k), its centre at lo + (i + 0.5) * cell), and a
+// mesh becomes one on another level set's lattice with levelSetOfMesh.
 //
 // What is exact:
 //   - CSG (levelSetCsg): OpenVDB's csgUnion, csgIntersection and csgDifference take, voxel by
@@ -23,6 +24,14 @@
 //     differ, b is first resampled onto a's by OpenVDB's resampleToMatch, which rebuilds a level
 //     set (meshes the zero crossing, then measures distances to that mesh): approximate, within
 //     about a voxel of the surface's position and slightly rounding sharp edges.
+//   - A mesh on a level set's lattice (levelSetOfMesh): the mesh's signed distance field
+//     (voxfx/sdf.hpp: exact distances, the sign of its solid voxelization) evaluated at the
+//     lattice's own voxel centres, with the lattice's band and background, in a grid whose transform
+//     is a copy of the lattice's. So the CSG of a level set and a mesh (levelSetCsg with the
+//     mesh's level set, or evaluateLevelSetCsg with mesh leaves) needs no resampling: it is exact
+//     as above, voxel by voxel min / max of the level set's values and the mesh's exact distances.
+//     The centres are computed as lo + (i + 0.5) * cell in a frame that tiles the lattice's voxels,
+//     so they lie within a few double ulps of indexOrigin() + (i, j, k) * voxelSize().
 //   - Offset of a mesh's field (offsetSignedDistanceField): the field is computed with the band
 //     widened by |distance| and `distance` subtracted from every value, so the band keeps its width
 //     around the new surface. The zero level is exactly the offset surface (the points at
@@ -44,6 +53,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -85,6 +95,10 @@ public:
     void activeBounds(Vec3i& lo, Vec3i& hi) const;
     /// The value at index (i, j, k) (any index; +-background away from the band).
     float value(int64_t i, int64_t j, int64_t k) const;
+    /// value() at many indices: out[n] is the value at indices[n] (out.size() == indices.size(),
+    /// else voxfx::Error). In parallel, with OpenVDB's cached accessors: much cheaper per index
+    /// than value(), cheapest when neighbouring entries are nearby voxels.
+    void values(std::span<const std::array<int32_t, 3>> indices, std::span<float> out) const;
     /// The active voxels: indices and values, in the tree's order.
     void activeVoxels(std::vector<std::array<int32_t, 3>>& indices, std::vector<float>& values) const;
     /// The grid's name.
@@ -114,9 +128,28 @@ void writeLevelSet(const LevelSet& levelSet, const std::string& path);
 /// csgIntersection, csgDifference; Xor as union minus intersection. The result has a's transform
 /// and background; *resampled (when given) is set when b had to be resampled onto a's transform.
 LevelSet levelSetCsg(const LevelSet& a, const LevelSet& b, CsgOp op, bool* resampled = nullptr);
+/// The level set of `mesh` on the lattice of `lattice`: its signed distance field
+/// (signedDistanceField) at the lattice's voxel centres, index (i, j, k) at lattice.indexOrigin() +
+/// (i, j, k) * voxelSize(), in the voxels within the mesh's bounds plus the band (the rest is +-the
+/// background: outside the mesh it is +, which is right since the band does not reach there). The
+/// band and background are the lattice's (options.bandVoxels is ignored): active exactly where the
+/// distance is below lattice.background(). The transform is a copy of the lattice's, so
+/// levelSetCsg(lattice, result) and the reverse combine without resampling (see the file comment
+/// for what is exact); the name is the lattice's. options.fill, threads, brickSize and progress are
+/// signedDistanceField's (Fill::Auto: parity for closed meshes, the generalized winding number for
+/// open ones). `meshOrigin` is the world position of the mesh's coordinate origin (world = meshOrigin
+/// + position: for a mesh kept relative to a point near it). Throws voxfx::Error for an empty
+/// lattice, one that is not axis-aligned (LevelSet::axisAligned) or whose voxels are not cubes, a
+/// full SDF (options.full), a mesh signedDistanceField refuses, or one that lies beyond OpenVDB's
+/// 32-bit indices on the lattice. A mesh without triangles gives a level set without active voxels.
+/// Cost: signedDistanceField's over the mesh's bounds on the lattice's cells.
+LevelSet levelSetOfMesh(const MeshView& mesh, const LevelSet& lattice, const SdfOptions& options = {},
+                        const Vec3d& meshOrigin = {0, 0, 0});
+
 /// A CSG expression (voxfx/csg.hpp) over level sets, folded left as voxfx::evaluateCsg; the
 /// first leaf's transform is the result's. *resampledLeaves (when given) receives the number of
-/// operands resampled onto it.
+/// operands resampled onto it. Mesh operands: `leaf` returns levelSetOfMesh on the lattice of
+/// a level-set leaf, and nothing is resampled.
 LevelSet evaluateLevelSetCsg(const CsgNode& node, const std::function<LevelSet(const std::string&)>& leaf,
                              int* resampledLeaves = nullptr);
 

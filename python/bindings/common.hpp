@@ -24,6 +24,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <pybind11/numpy.h>
@@ -132,6 +133,13 @@ py::str utf8Text(const std::string& s);
 /// A path argument: str, bytes or os.PathLike (os.fspath, then os.fsdecode). TypeError for other
 /// types, ArgumentError for a NUL byte (the C library would open the path up to it: another file).
 std::string pathString(const py::handle& p);
+
+/// voxfx.sdf: the signed distance field of a mesh argument on a grid fitted as voxelize() fits it
+/// (band: a width in voxels or "full"), in world coordinates (a recentred mesh's origin added back).
+std::shared_ptr<SignedDistanceField>
+makeSdf(const py::object& meshObj, const py::object& faces, std::optional<int64_t> resolution,
+        std::optional<double> voxelSize, const py::object& bounds, std::optional<int64_t> margin, bool cube,
+        const std::variant<double, std::string>& band, const std::string& fill, int threads);
 
 /// Grid.save and SparseGrid.save: writeGrid with the GIL released (by extension, atomically).
 template <class G>

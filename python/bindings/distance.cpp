@@ -93,42 +93,6 @@ py::array_t<double> signedDistances(const py::object& meshObj, const py::object&
                              });
 }
 
-SdfPtr makeSdf(const py::object& meshObj, const py::object& faces, std::optional<int64_t> resolution,
-               std::optional<double> voxelSize, const py::object& bounds, std::optional<int64_t> margin,
-               bool cube, const std::variant<double, std::string>& band, const std::string& fill,
-               int threads) {
-    checkThreads(threads);
-    SdfOptions o;
-    o.threads = threads;
-    if (const auto* s = std::get_if<std::string>(&band)) {
-        if (*s != "full")
-            throw ArgumentError("band must be a width in voxels (>= 1) or 'full', got '" + *s + "'");
-        o.full = true;
-    } else {
-        o.bandVoxels = std::get<double>(band);
-        if (!(o.bandVoxels >= 1) || !std::isfinite(o.bandVoxels))
-            throw ArgumentError("band must be a width in voxels (>= 1) or 'full'");
-    }
-    o.fill = asArgument([&] { return parseFill(fill); });
-    // The margin defaults to the band rounded up, so the band outside the mesh is not cut.
-    const int64_t m = margin.value_or(o.full ? 0 : int64_t(std::ceil(o.bandVoxels)));
-    FitOptions fo = fitOptions(resolution, voxelSize, std::nullopt, bounds, m, "z", cube);
-    const auto mesh = meshArgument(meshObj, faces);
-    if (!fo.bounds.empty() && mesh->shifted()) {
-        fo.bounds.lo = fo.bounds.lo - mesh->origin;
-        fo.bounds.hi = fo.bounds.hi - mesh->origin;
-    }
-    asArgument([&] { validateMesh(mesh->mesh.view(), "mesh"); });
-    SdfPtr out;
-    interruptible([&](Cancel& cancel) {
-        const Frame frame = fitFrame(computeBounds(mesh->mesh.view()), fo);
-        o.progress = &cancel;
-        out = std::make_shared<SignedDistanceField>(signedDistanceField(mesh->mesh.view(), frame, o));
-    });
-    if (mesh->shifted()) out->frame = out->frame.translated(mesh->origin);
-    return out;
-}
-
 /// 4 x 4 matrix mapping (i, j, k, 1) to the centre of voxel (i, j, k).
 py::array_t<double> sdfAffine(const SignedDistanceField& f) {
     py::array_t<double> a({py::ssize_t(4), py::ssize_t(4)});
@@ -172,6 +136,42 @@ py::tuple sdfActive(const SignedDistanceField& f) {
 }
 
 } // namespace
+
+std::shared_ptr<SignedDistanceField>
+makeSdf(const py::object& meshObj, const py::object& faces, std::optional<int64_t> resolution,
+        std::optional<double> voxelSize, const py::object& bounds, std::optional<int64_t> margin, bool cube,
+        const std::variant<double, std::string>& band, const std::string& fill, int threads) {
+    if (threads < 0) throw ArgumentError("threads must be >= 0");
+    SdfOptions o;
+    o.threads = threads;
+    if (const auto* s = std::get_if<std::string>(&band)) {
+        if (*s != "full")
+            throw ArgumentError("band must be a width in voxels (>= 1) or 'full', got '" + *s + "'");
+        o.full = true;
+    } else {
+        o.bandVoxels = std::get<double>(band);
+        if (!(o.bandVoxels >= 1) || !std::isfinite(o.bandVoxels))
+            throw ArgumentError("band must be a width in voxels (>= 1) or 'full'");
+    }
+    o.fill = asArgument([&] { return parseFill(fill); });
+    // The margin defaults to the band rounded up, so the band outside the mesh is not cut.
+    const int64_t m = margin.value_or(o.full ? 0 : int64_t(std::ceil(o.bandVoxels)));
+    FitOptions fo = fitOptions(resolution, voxelSize, std::nullopt, bounds, m, "z", cube);
+    const auto mesh = meshArgument(meshObj, faces);
+    if (!fo.bounds.empty() && mesh->shifted()) {
+        fo.bounds.lo = fo.bounds.lo - mesh->origin;
+        fo.bounds.hi = fo.bounds.hi - mesh->origin;
+    }
+    asArgument([&] { validateMesh(mesh->mesh.view(), "mesh"); });
+    std::shared_ptr<SignedDistanceField> out;
+    interruptible([&](Cancel& cancel) {
+        const Frame frame = fitFrame(computeBounds(mesh->mesh.view()), fo);
+        o.progress = &cancel;
+        out = std::make_shared<SignedDistanceField>(signedDistanceField(mesh->mesh.view(), frame, o));
+    });
+    if (mesh->shifted()) out->frame = out->frame.translated(mesh->origin);
+    return out;
+}
 
 void bindDistance(py::module_& m) {
     m.attr("ClosestPoints") =

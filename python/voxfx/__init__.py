@@ -10,6 +10,7 @@
     inside = voxfx.contains(mesh, points)          # exact point occupancy, (K,) bool
     d = voxfx.signed_distance(mesh, points)        # exact distance, negative inside, (K,) float64
     field = voxfx.sdf(mesh, resolution=128)        # narrow-band signed distance field
+    ls = voxfx.read_level_set("a.vdb") - mesh      # OpenVDB level-set CSG, a mesh on its lattice: exact
     report = voxfx.batch("meshes.txt", "out/", resolution=64)   # many meshes, as `voxfx batch`
     image = voxfx.render("scene.json", shadows="deep", epsilon=0.02)  # (H, W, 3) float32, linear RGB
 
@@ -23,7 +24,7 @@ import __future__
 from . import _voxfx
 from ._voxfx import (ArgumentError, Density, Error, Grid, Mesh, PointClassifier, Scene, SparseGrid, SurfaceMesh,
                      VolumeEstimate, __version__)
-from ._voxfx import ClosestPoints, SignedDistanceField
+from ._voxfx import ClosestPoints, LevelSet, SignedDistanceField
 
 # The I/O modules (voxfx_vdb.so, ...) lie next to _voxfx (the library looks there): nothing is
 # set in os.environ.
@@ -61,7 +62,8 @@ _FUNCTIONS = [
     "closing", "compute_density", "contains", "csg", "cuda_status", "dilate", "erode", "extract_surface",
     "from_numpy", "intersection_volume", "load_mesh", "morphology", "opening", "read_grid", "resample_to_uniform",
     "reslice", "voxelize", "batch_jobs", "glass_methods", "load_scene", "read_sparse_grid", "render", "render_options",
-    "shadow_kinds", "closest_points", "signed_distance", "sdf",
+    "shadow_kinds", "closest_points", "signed_distance", "sdf", "read_level_set", "level_set", "level_set_csg",
+    "offset_level_set",
 ]
 for _name in _FUNCTIONS:
     globals()[_name] = _with_signature(getattr(_voxfx, _name))
@@ -118,6 +120,6 @@ if hasattr(_batch, "__wrapped__"):
 #: File extension of each grid format that Grid.save writes.
 GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj")
 
-__all__ = ["ArgumentError", "ClosestPoints", "Density", "Error", "Grid", "Mesh", "PointClassifier", "Scene",
-           "SignedDistanceField", "SparseGrid", "SurfaceMesh", "VolumeEstimate", "GRID_FORMATS",
+__all__ = ["ArgumentError", "ClosestPoints", "Density", "Error", "Grid", "LevelSet", "Mesh", "PointClassifier",
+           "Scene", "SignedDistanceField", "SparseGrid", "SurfaceMesh", "VolumeEstimate", "GRID_FORMATS",
            "batch", *sorted(_FUNCTIONS)]

@@ -94,25 +94,63 @@ bool runSparseCsg(const CsgArgs& a, const CsgNode& root, const std::vector<std::
     return true;
 }
 
-// Every leaf a level-set .vdb (voxfx sdf ... -o x.vdb): OpenVDB's level-set CSG to a level set.
+// A level-set .vdb among the leaves (voxfx sdf ... -o x.vdb): OpenVDB's level-set CSG to a level
+// set. paths[0] is the first level set: its lattice is the result's, and each mesh leaf becomes a
+// level set on it (levelSetOfMesh: exact, nothing resampled).
 int runLevelSetCsg(const CsgArgs& a, const CsgNode& root, const std::vector<std::string>& paths) {
     const auto t0 = Clock::now();
     if (a.output.empty() || gridFormatFromPath(a.output) != GridFormat::Vdb)
         fail("CSG of level sets writes a level set: give -o OUT.vdb");
     if (a.volume) fail("--volume counts cells of occupancy grids; it does not take level sets");
+    SdfOptions so;
+    so.fill = parseFill(a.fill);
+    so.threads = a.threads;
     std::map<std::string, LevelSet> sets;
+    std::map<std::string, Mesh> meshes;
     for (const std::string& path : paths) {
-        if (!isGridFile(path) || gridFormatFromPath(path) != GridFormat::Vdb)
+        if (!isGridFile(path)) {
+            meshes.emplace(path, loadMesh(path));
+            continue;
+        }
+        if (gridFormatFromPath(path) != GridFormat::Vdb)
             fail("CSG: '", paths.front(), "' is a level set but '", path,
-                 "' is not a .vdb file; level sets combine only with level sets (make one with "
+                 "' is an occupancy grid; level sets combine with level sets and meshes (make one with "
                  "`voxfx sdf MESH -o x.vdb`)");
         std::string what;
         if (!isLevelSetFile(path, &what))
             fail("CSG: '", paths.front(), "' is a level set but '", path, "' is not: ", what,
-                 "; level sets combine only with level sets (make one with `voxfx sdf MESH -o x.vdb`)");
+                 "; level sets combine with level sets and meshes (make one with `voxfx sdf MESH -o x.vdb`)");
         sets.emplace(path, readLevelSet(path));
     }
     const double loadMs = msSince(t0);
+    const LevelSet& lattice = sets.at(paths.front());
+    if (!meshes.empty()) {
+        // Checked before the distances are computed: what levelSetOfMesh needs of the lattice.
+        const Vec3d vs = lattice.voxelSize();
+        if (!lattice.axisAligned() || !(vs.x == vs.y && vs.y == vs.z))
+            fail("CSG: meshes join level set '", paths.front(),
+                 "' on its lattice, which needs axis-aligned cubic "
+                 "voxels; its voxels are ",
+                 vs.x, " x ", vs.y, " x ", vs.z,
+                 lattice.axisAligned() ? "" : " in a rotated, sheared, mirrored or non-linear transform",
+                 " (make the mesh's level set with `voxfx sdf` and combine the two: resampled)");
+    }
+    // The meshes' exact fields on the lattice.
+    const auto ts = Clock::now();
+    ProgressLine progress("distances", !a.quiet && !meshes.empty());
+    so.progress = &progress;
+    std::vector<std::string> notes;
+    withThreads(a.threads, [&] {
+        for (const auto& [path, mesh] : meshes) {
+            if (so.fill == Fill::Auto && !a.quiet && !analyzeTopology(mesh.view()).closed())
+                notes.push_back(path +
+                                ": not closed: the sign is the generalized winding number's (gwn >= 1/2)");
+            sets.emplace(path, levelSetOfMesh(mesh.view(), lattice, so));
+        }
+    });
+    progress.done();
+    for (const std::string& note : notes) std::cerr << "voxfx: " << note << "\n";
+    const double sdfMs = msSince(ts);
     const auto tc = Clock::now();
     int resampled = 0;
     LevelSet result;
@@ -129,13 +167,18 @@ int runLevelSetCsg(const CsgArgs& a, const CsgNode& root, const std::vector<std:
     writeLevelSet(result, a.output);
     const double writeMs = msSince(tw);
     if (!a.quiet) {
-        std::cout << toString(root) << ": " << sets.size() << " level sets -> level set (voxel "
-                  << fmt(result.voxelSize().x, 4) << ", band " << fmt(result.bandVoxels(), 4) << " voxels ("
-                  << fmt(result.background(), 4) << ")), " << withCommas(result.activeCount())
-                  << " active voxels\n";
-        std::cout << "time: load " << fmtMs(loadMs) << ", csg " << fmtMs(csgMs)
-                  << " (OpenVDB level sets), write " << fmtMs(writeMs) << " -> " << a.output
-                  << " (vdb level set)\n";
+        std::cout << toString(root) << ": " << sets.size() - meshes.size() << " level set"
+                  << (sets.size() - meshes.size() > 1 ? "s" : "");
+        if (!meshes.empty())
+            std::cout << ", " << meshes.size() << " mesh" << (meshes.size() > 1 ? "es" : "")
+                      << " on the first's lattice";
+        std::cout << " -> level set (voxel " << fmt(result.voxelSize().x, 4) << ", band "
+                  << fmt(result.bandVoxels(), 4) << " voxels (" << fmt(result.background(), 4) << ")), "
+                  << withCommas(result.activeCount()) << " active voxels\n";
+        std::cout << "time: load " << fmtMs(loadMs);
+        if (!meshes.empty()) std::cout << ", mesh distances " << fmtMs(sdfMs);
+        std::cout << ", csg " << fmtMs(csgMs) << " (OpenVDB level sets), write " << fmtMs(writeMs) << " -> "
+                  << a.output << " (vdb level set)\n";
     }
     return 0;
 }
@@ -176,7 +219,7 @@ int runCsg(const CsgArgs& a) {
     {
         // Grid leaves all .vdb, output .vdb, no --volume: the sparse path.
         const std::vector<std::string> paths = csgMeshes(root);
-        // Level sets: when any leaf is one (then all must be).
+        // Level sets: when any leaf is one (the others must be level sets or meshes).
         for (const std::string& path : paths)
             if (isGridFile(path) && gridFormatFromPath(path) == GridFormat::Vdb && isLevelSetFile(path)) {
                 std::vector<std::string> ordered{path};
@@ -300,8 +343,13 @@ surfaces meet. The result has the first leaf's transform and band. A leaf with a
 transform (another voxel size or origin, e.g. fitted to another mesh) is resampled onto it
 with OpenVDB's resampleToMatch (a level-set rebuild: approximate, within about a voxel, edges
 slightly rounded, and much slower; a note says so). For exact results make the
-level sets on one grid: voxfx sdf with the same --bounds and -r or --voxel-size. Level sets
-combine only with level sets: a mesh or an occupancy grid among the leaves is an error.)";
+level sets on one grid: voxfx sdf with the same --bounds and -r or --voxel-size.
+Meshes may join level sets: each mesh leaf becomes the level set of its exact signed distance
+field on the first level set's lattice (its voxel centres, band and transform; the voxels
+around the mesh, wherever it lies), so nothing is resampled and the result is exact as above
+(difference(a.vdb, b.obj): max(a, -distance to b) at every voxel). That lattice needs cubic,
+axis-aligned voxels. --fill picks the meshes' sign (auto: parity when closed, else the
+generalized winding number). An occupancy grid among level-set leaves is an error.)";
 
 const Command kCsg{
     "csg", "Voxelize a CSG expression of meshes into one grid", [](CLI::App& app) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include "core/atomic_file.hpp"
@@ -112,7 +113,8 @@ LevelSet LevelSet::fromField(const SignedDistanceField& f, const std::string& na
     ls.insideRuns = reinterpret_cast<const detail::VdbInsideRun*>(f.insideRuns.data());
     ls.insideRunCount = f.insideRuns.size();
     std::string error;
-    void* g = lsd::module().levelSetBuild(ls, placement, name.c_str(), lsd::levelSetParallelFor, &error);
+    void* g =
+        lsd::module().levelSetBuild(ls, placement, nullptr, name.c_str(), lsd::levelSetParallelFor, &error);
     lsd::check(g != nullptr, error, "cannot make a level set");
     return adopt(g);
 }
@@ -148,6 +150,17 @@ float LevelSet::value(int64_t i, int64_t j, int64_t k) const {
     if (!grid_) fail("the level set is empty (no grid)");
     const int64_t ijk[3] = {i, j, k};
     return lsd::module().levelSetValue(grid_, ijk);
+}
+
+void LevelSet::values(std::span<const std::array<int32_t, 3>> indices, std::span<float> out) const {
+    if (!grid_) fail("the level set is empty (no grid)");
+    if (out.size() != indices.size())
+        fail("level-set values: ", indices.size(), " indices but room for ", out.size(), " values");
+    if (indices.empty()) return;
+    std::string error;
+    lsd::check(lsd::module().levelSetValues(grid_, indices.data()->data(), indices.size(), out.data(),
+                                            lsd::levelSetParallelFor, &error),
+               error, "level set");
 }
 
 void LevelSet::activeVoxels(std::vector<std::array<int32_t, 3>>& indices, std::vector<float>& values) const {
@@ -199,6 +212,99 @@ LevelSet levelSetCsg(const LevelSet& a, const LevelSet& b, CsgOp op, bool* resam
     lsd::combine(out, b, CsgOp::Union, resampled);
     lsd::combine(out, both, CsgOp::Difference, nullptr); // same transform as out: no resampling
     return out;
+}
+
+LevelSet levelSetOfMesh(const MeshView& mesh, const LevelSet& lattice, const SdfOptions& options,
+                        const Vec3d& meshOrigin) {
+    if (!lattice.valid()) fail("level set of a mesh: the lattice level set is empty (no grid)");
+    if (options.full)
+        fail("level set of a mesh: a level set is a narrow band, not a full field (SdfOptions::full)");
+    const detail::VdbLevelSetInfo info = lsd::info(lattice.handle());
+    if (!info.axisAligned)
+        fail(
+            "level set of a mesh: level set '", info.name,
+            "' has a transform that is not a positive scale and a translation (rotated, sheared, mirrored or "
+            "non-linear); a mesh's distance field needs axis-aligned voxels");
+    const double h = info.voxelSize[0];
+    if (!(info.voxelSize[1] == h && info.voxelSize[2] == h))
+        fail("level set of a mesh: level set '", info.name, "' has voxels of ", info.voxelSize[0], " x ",
+             info.voxelSize[1], " x ", info.voxelSize[2], "; a mesh's level set needs cubic voxels");
+    if (!isFinite(meshOrigin)) fail("level set of a mesh: the mesh's origin is not finite");
+    validateMesh(mesh, "level set of a mesh");
+    const float background = info.background;
+    const std::string name = info.name;
+
+    detail::VdbLevelSet ls;
+    ls.background = background;
+    const Box3d bounds = computeBounds(mesh);
+    SignedDistanceField f;
+    if (!bounds.empty()) {
+        // The lattice in the mesh's coordinates: index (i, j, k) at c0 + (i, j, k) * h.
+        const Vec3d c0 = Vec3d{info.centre0[0], info.centre0[1], info.centre0[2]} - meshOrigin;
+        // Computed a little wider than the lattice's band (at least signedDistanceField's 1 voxel),
+        // then cut to it below: active exactly where |value| < background, whatever the rounding
+        // of the frame's cell size.
+        SdfOptions o = options;
+        o.bandVoxels = std::max(1.0, double(background) / h) * (1 + 1e-6);
+        // The voxels within the band of the mesh's bounds (plus a voxel for rounding), from a
+        // multiple of 8 so that the field's leaves are the tree's.
+        const double margin = std::ceil(o.bandVoxels) + 1;
+        const double limit = double(std::numeric_limits<int32_t>::max()) - 64;
+        Vec3i first, count;
+        for (int a = 0; a < 3; ++a) {
+            const double lo = std::floor((bounds.lo[a] - c0[a]) / h) - margin;
+            const double hi = std::ceil((bounds.hi[a] - c0[a]) / h) + margin;
+            if (!(lo > -limit && hi < limit))
+                fail("level set of a mesh: the mesh's bounds lie at indices [", lo, ", ", hi, "] along ",
+                     "xyz"[a], " of level set '", name, "', beyond OpenVDB's 32-bit indices");
+            first[a] = int64_t(std::floor(lo / 8)) * 8;
+            count[a] = int64_t(hi) - first[a] + 1;
+        }
+        // Voxel (i, j, k) of the frame is lattice index first + (i, j, k): its centre is
+        // lo + (i + 0.5) * cell = c0 + (first + i) * h, up to rounding.
+        Box3d box;
+        for (int a = 0; a < 3; ++a) {
+            box.lo[a] = c0[a] + (double(first[a]) - 0.5) * h;
+            box.hi[a] = c0[a] + (double(first[a] + count[a]) - 0.5) * h;
+        }
+        f = signedDistanceField(mesh, Frame::orthographic(box, Axis::Z, count.x, count.y, count.z), o);
+        // Cut to the lattice's band: inactive values are +-background, with their sign.
+        std::vector<SdfLeaf> kept;
+        kept.reserve(f.leaves.size());
+        for (SdfLeaf& leaf : f.leaves) {
+            bool anyActive = false, allOutside = true;
+            for (int n = 0; n < 512; ++n) {
+                float& v = leaf.values[std::size_t(n)];
+                uint64_t& word = leaf.active[std::size_t(n >> 6)];
+                const uint64_t bit = uint64_t(1) << (n & 63);
+                const bool inside = std::signbit(v);
+                if ((word & bit) && std::abs(v) < background) {
+                    anyActive = true;
+                    allOutside = false;
+                    continue;
+                }
+                word &= ~bit;
+                v = inside ? -background : background;
+                allOutside = allOutside && !inside;
+            }
+            // A block wholly outside the band and the solid is the background: no leaf.
+            if (anyActive || !allOutside) kept.push_back(leaf);
+        }
+        f.leaves = std::move(kept);
+        for (int a = 0; a < 3; ++a) {
+            ls.dims[a] = count[a];
+            ls.indexOffset[a] = first[a];
+        }
+    }
+    ls.leaves = reinterpret_cast<const detail::VdbLevelSetLeaf*>(f.leaves.data());
+    ls.leafCount = f.leaves.size();
+    ls.insideRuns = reinterpret_cast<const detail::VdbInsideRun*>(f.insideRuns.data());
+    ls.insideRunCount = f.insideRuns.size();
+    std::string error;
+    void* g = lsd::module().levelSetBuild(ls, detail::VdbPlacement{}, lattice.handle(), name.c_str(),
+                                          lsd::levelSetParallelFor, &error);
+    lsd::check(g != nullptr, error, "cannot make the level set of a mesh");
+    return LevelSet::adopt(g);
 }
 
 LevelSet evaluateLevelSetCsg(const CsgNode& node, const std::function<LevelSet(const std::string&)>& leaf,

@@ -20,7 +20,7 @@
 namespace voxfx::detail {
 
 /// Bump when a table below changes.
-inline constexpr uint32_t kModuleAbi = 9;
+inline constexpr uint32_t kModuleAbi = 10;
 
 /// The library's parallel-for handed to a module (so that modules follow withThreads and name no
 /// thread library): calls call(body, b, e) over chunks of `grain` items covering [begin, end).
@@ -87,9 +87,12 @@ struct VdbInsideRun {
     int32_t x0, x1, y, z;
 };
 
-/// A narrow-band level set as the library computed it (see voxfx/sdf.hpp).
+/// A narrow-band level set as the library computed it (see voxfx/sdf.hpp). Its voxel (i, j, k) is
+/// index indexOffset + (i, j, k) of the tree: indexOffset (multiples of 8, so that the leaves stay
+/// OpenVDB's leaves) is added to every leaf origin and, in blocks, to every inside run.
 struct VdbLevelSet {
     int64_t dims[3] = {0, 0, 0};
+    int64_t indexOffset[3] = {0, 0, 0};
     float background = 0;
     const VdbLevelSetLeaf* leaves = nullptr;
     std::size_t leafCount = 0;
@@ -112,7 +115,8 @@ struct VdbLevelSetInfo {
     float background = 0;
     double voxelSize[3] = {1, 1, 1};
     double centre0[3] = {0, 0, 0}; ///< world position of index (0, 0, 0)
-    bool axisAligned = false;      ///< the transform is a scale and a translation: centre0 + ijk * voxelSize
+    /// The transform is a positive scale and a translation: centre0 + ijk * voxelSize.
+    bool axisAligned = false;
     int64_t activeCount = 0;
     bool anyActive = false;
     int64_t lo[3] = {0, 0, 0}, hi[3] = {-1, -1, -1}; ///< the active voxels' index box (inclusive)
@@ -233,12 +237,19 @@ struct VdbModule {
     /// 1 when the file's first bool, float or double grid is a float level set, 0 when it is
     /// another grid (*what says which), -1 on an error (*error).
     int (*levelSetProbe)(const uint8_t* data, std::size_t size, std::string* what, std::string* error);
-    /// The grid writeLevelSet writes, kept in memory.
-    void* (*levelSetBuild)(const VdbLevelSet& ls, const VdbPlacement& placement, const char* gridName,
-                           ParallelFor parallelFor, std::string* error);
+    /// The grid writeLevelSet writes, kept in memory. With `transformOf` (a level-set handle) the
+    /// grid takes that grid's transform (a copy sharing its map: the same numbers, equal under
+    /// OpenVDB's Transform ==, so that levelSetCombine does not resample) instead of the
+    /// placement's, and no "voxfx_dims".
+    void* (*levelSetBuild)(const VdbLevelSet& ls, const VdbPlacement& placement, const void* transformOf,
+                           const char* gridName, ParallelFor parallelFor, std::string* error);
     void* (*levelSetCopy)(const void* grid, std::string* error);
     bool (*levelSetInfo)(const void* grid, VdbLevelSetInfo* info, std::string* error);
     float (*levelSetValue)(const void* grid, const int64_t ijk[3]);
+    /// The values at `count` indices (three int32 each) into out[count], through value accessors
+    /// over chunks of the indices in parallel.
+    bool (*levelSetValues)(const void* grid, const int32_t* ijk, std::size_t count, float* out,
+                           ParallelFor parallelFor, std::string* error);
     /// The active voxels: three int32 indices and one value each, in the tree's order.
     bool (*levelSetActive)(const void* grid, std::vector<int32_t>* ijk, std::vector<float>* values,
                            std::string* error);

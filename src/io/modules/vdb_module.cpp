@@ -610,9 +610,30 @@ bool writeDenseGrids(const char* path, const int64_t dims[3], const uint8_t* act
 using FloatLeaf = openvdb::FloatGrid::TreeType::LeafNodeType;
 static_assert(FloatLeaf::SIZE == 512 && FloatLeaf::NodeMaskType::WORD_COUNT == 8);
 
-std::unique_ptr<FloatLeaf> levelSetLeaf(const VdbLevelSetLeaf& in, float background) {
+// A copy of a grid's transform with the same numbers: Transform's copy constructor shares the
+// (immutable) map, where Transform::copy() and Grid::deepCopy() rebuild it through simplify(),
+// which recomputes the scale as the difference of two translated points (off by 1e-12 relative
+// for a grid 1000 voxels from the origin, and no longer uniform) so that the copy and the original
+// no longer compare equal and CSG between them resampled.
+openvdb::math::Transform::Ptr sameTransform(const openvdb::GridBase& grid) {
+    return std::make_shared<openvdb::math::Transform>(grid.constTransform());
+}
+
+// A deep copy of a level set with its transform unchanged (see sameTransform).
+openvdb::FloatGrid::Ptr copyLevelSet(const openvdb::FloatGrid& grid) {
+    openvdb::FloatGrid::Ptr copy = grid.deepCopy();
+    copy->setTransform(sameTransform(grid));
+    return copy;
+}
+
+// One leaf at its origin plus `offset` (the level set's indexOffset; multiples of 8).
+std::unique_ptr<FloatLeaf> levelSetLeaf(const VdbLevelSetLeaf& in, float background,
+                                        const int64_t offset[3] = nullptr) {
+    const int64_t zero[3] = {0, 0, 0};
+    const int64_t* o = offset ? offset : zero;
     auto leaf = std::make_unique<FloatLeaf>(
-        openvdb::Coord(int(in.origin[0]), int(in.origin[1]), int(in.origin[2])), background, false);
+        openvdb::Coord(int(in.origin[0] + o[0]), int(in.origin[1] + o[1]), int(in.origin[2] + o[2])),
+        background, false);
     typename FloatLeaf::NodeMaskType mask;
     for (int i = 0; i < 8; ++i) mask.template getWord<uint64_t>(openvdb::Index(i)) = in.active[i];
     leaf->setValueMask(mask);
@@ -623,10 +644,16 @@ std::unique_ptr<FloatLeaf> levelSetLeaf(const VdbLevelSetLeaf& in, float backgro
 // Leaf-sized inactive tiles at -background for the inside runs. The tree does not depend on the
 // order of addLeaf and addTile calls (disjoint blocks; nodes are made with background tiles), so
 // streamed and whole insertion give the same tree.
-void addInsideRuns(openvdb::FloatTree& tree, const VdbInsideRun* runs, std::size_t count, float background) {
+void addInsideRuns(openvdb::FloatTree& tree, const VdbInsideRun* runs, std::size_t count, float background,
+                   const int64_t offset[3] = nullptr) {
+    const int64_t zero[3] = {0, 0, 0};
+    const int64_t* o = offset ? offset : zero;
     for (std::size_t r = 0; r < count; ++r)
         for (int32_t x = runs[r].x0; x < runs[r].x1; ++x)
-            tree.addTile(1, openvdb::Coord(8 * x, 8 * runs[r].y, 8 * runs[r].z), -background, false);
+            tree.addTile(1,
+                         openvdb::Coord(int(8 * int64_t(x) + o[0]), int(8 * int64_t(runs[r].y) + o[1]),
+                                        int(8 * int64_t(runs[r].z) + o[2])),
+                         -background, false);
 }
 
 // Nodes made only of equal inactive tiles (inside: -background) become one tile; then the
@@ -641,22 +668,41 @@ void finishLevelSet(openvdb::FloatGrid& grid, const VdbPlacement& placement, con
                     openvdb::Vec3IMetadata(openvdb::Vec3i(int(dims[0]), int(dims[1]), int(dims[2]))));
 }
 
-// The level set a SignedDistanceField describes (see writeLevelSet), kept in memory.
+// The level set a SignedDistanceField describes (see writeLevelSet), kept in memory; with
+// `transformOf`, that grid's transform (a copy) and no dimensions (see levelSetBuild).
 openvdb::FloatGrid::Ptr buildLevelSet(const VdbLevelSet& ls, const VdbPlacement& placement,
-                                      const char* gridName, ParallelFor parallelFor) {
+                                      const char* gridName, ParallelFor parallelFor,
+                                      const openvdb::FloatGrid* transformOf = nullptr) {
     initializeOpenVdb();
+    const int64_t* o = ls.indexOffset;
+    for (int a = 0; a < 3; ++a)
+        if (o[a] % 8 != 0)
+            fail("level set: the index offset (", o[0], ", ", o[1], ", ", o[2], ") is not a multiple of 8");
+    // Every index of the tree must fit OpenVDB's int32 coordinates.
+    const int64_t limit = int64_t(std::numeric_limits<int32_t>::max()) - 8;
+    for (int a = 0; a < 3; ++a)
+        if (o[a] < -limit || o[a] + ls.dims[a] > limit)
+            fail("level set: index offset ", o[a], " with ", ls.dims[a],
+                 " voxels leaves OpenVDB's 32-bit indices");
     auto grid = openvdb::FloatGrid::create(ls.background);
     // The leaves are made on worker threads and handed to the tree in their order (a
     // deterministic tree, single-threaded insertion), as for bit grids.
     std::vector<std::unique_ptr<FloatLeaf>> leaves(ls.leafCount);
     auto body = [&](int64_t b, int64_t e) {
-        for (int64_t l = b; l < e; ++l) leaves[std::size_t(l)] = levelSetLeaf(ls.leaves[l], ls.background);
+        for (int64_t l = b; l < e; ++l) leaves[std::size_t(l)] = levelSetLeaf(ls.leaves[l], ls.background, o);
     };
     forChunks(parallelFor, 0, int64_t(ls.leafCount), 64, body);
     auto& tree = grid->tree();
     for (auto& leaf : leaves) tree.addLeaf(leaf.release());
-    addInsideRuns(tree, ls.insideRuns, ls.insideRunCount, ls.background);
-    finishLevelSet(*grid, placement, ls.dims, gridName);
+    addInsideRuns(tree, ls.insideRuns, ls.insideRunCount, ls.background, o);
+    if (!transformOf) {
+        finishLevelSet(*grid, placement, ls.dims, gridName);
+        return grid;
+    }
+    grid->tree().prune();
+    grid->setTransform(sameTransform(*transformOf));
+    grid->setName(gridName);
+    grid->setGridClass(openvdb::GRID_LEVEL_SET);
     return grid;
 }
 
@@ -1158,12 +1204,13 @@ int levelSetProbe(const uint8_t* data, std::size_t size, std::string* what, std:
     return result;
 }
 
-void* levelSetBuild(const VdbLevelSet& ls, const VdbPlacement& placement, const char* gridName,
-                    ParallelFor parallelFor, std::string* error) {
+void* levelSetBuild(const VdbLevelSet& ls, const VdbPlacement& placement, const void* transformOf,
+                    const char* gridName, ParallelFor parallelFor, std::string* error) {
     LevelSetHandle* h = nullptr;
     guarded(error, [&] {
         auto owned = std::make_unique<LevelSetHandle>();
-        owned->grid = buildLevelSet(ls, placement, gridName, parallelFor);
+        owned->grid =
+            buildLevelSet(ls, placement, gridName, parallelFor, transformOf ? &lsGrid(transformOf) : nullptr);
         h = owned.release();
     });
     return h;
@@ -1173,7 +1220,7 @@ void* levelSetCopy(const void* g, std::string* error) {
     LevelSetHandle* h = nullptr;
     guarded(error, [&] {
         auto owned = std::make_unique<LevelSetHandle>();
-        owned->grid = lsGrid(g).deepCopy();
+        owned->grid = copyLevelSet(lsGrid(g));
         h = owned.release();
     });
     return h;
@@ -1192,10 +1239,11 @@ bool levelSetInfo(const void* g, VdbLevelSetInfo* info, std::string* error) {
         const auto map = grid.transform().baseMap();
         info->axisAligned = map->isLinear();
         if (info->axisAligned) {
+            // A positive scale per axis: a mirrored axis runs against voxelSize (a length).
             const openvdb::Mat4d m = map->getAffineMap()->getMat4();
             for (int r = 0; r < 3; ++r)
                 for (int c = 0; c < 3; ++c)
-                    if (r != c && m(r, c) != 0) info->axisAligned = false;
+                    if (r != c ? m(r, c) != 0 : !(m(r, c) > 0)) info->axisAligned = false;
         }
         info->activeCount = int64_t(grid.tree().activeVoxelCount());
         openvdb::CoordBBox box;
@@ -1210,6 +1258,23 @@ bool levelSetInfo(const void* g, VdbLevelSetInfo* info, std::string* error) {
 
 float levelSetValue(const void* g, const int64_t ijk[3]) {
     return lsGrid(g).tree().getValue(openvdb::Coord(int(ijk[0]), int(ijk[1]), int(ijk[2])));
+}
+
+bool levelSetValues(const void* g, const int32_t* ijk, std::size_t count, float* out, ParallelFor parallelFor,
+                    std::string* error) {
+    return guarded(error, [&] {
+        const openvdb::FloatTree& tree = lsGrid(g).tree();
+        // One accessor per chunk (accessors cache the path to the last leaf: nearby indices are
+        // cheap); each chunk writes only its own outputs.
+        auto body = [&](int64_t b, int64_t e) {
+            openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(tree);
+            for (int64_t n = b; n < e; ++n) {
+                const int32_t* c = ijk + 3 * n;
+                out[n] = acc.getValue(openvdb::Coord(c[0], c[1], c[2]));
+            }
+        };
+        forChunks(parallelFor, 0, int64_t(count), 4096, body);
+    });
 }
 
 bool levelSetActive(const void* g, std::vector<int32_t>* ijk, std::vector<float>* values,
@@ -1244,10 +1309,10 @@ bool levelSetCombine(void* a, const void* b, SparseOp op, bool* resampled, std::
         openvdb::FloatGrid::Ptr copy;
         *resampled = !(ga.constTransform() == gb.constTransform());
         if (!*resampled) {
-            copy = gb.deepCopy();
+            copy = copyLevelSet(gb);
         } else {
             copy = openvdb::FloatGrid::create(ga.background());
-            copy->setTransform(ga.transform().copy());
+            copy->setTransform(sameTransform(ga));
             copy->setGridClass(openvdb::GRID_LEVEL_SET);
             openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(gb, *copy);
         }
@@ -1276,13 +1341,15 @@ bool levelSetWrite(const char* path, const void* g, std::string* error) {
 }
 
 constexpr VdbModule kTable{
-    kModuleAbi,       sizeof(VdbModule), writeBits,      writeFloats,       readBits,     readFloats,
-    sparseCreate,     sparseDestroy,     sparseCopy,     sparseAddBrick,    sparseFinish, sparseFromBits,
-    sparseToBits,     sparseCount,       sparseBounds,   sparseMemory,      sparseGet,    sparseCombine,
-    sparseMorphology, sparseFill,        sparseClip,     sparseCoordinates, sparseWrite,  sparseRead,
-    writeLevelSet,    writeDenseGrids,   levelSetCreate, levelSetDestroy,   levelSetAdd,  levelSetStreamWrite,
-    levelSetRead,     levelSetProbe,     levelSetBuild,  levelSetCopy,      levelSetInfo, levelSetValue,
-    levelSetActive,   levelSetCombine,   levelSetOffset, levelSetWrite};
+    kModuleAbi,      sizeof(VdbModule), writeBits,       writeFloats,      readBits,
+    readFloats,      sparseCreate,      sparseDestroy,   sparseCopy,       sparseAddBrick,
+    sparseFinish,    sparseFromBits,    sparseToBits,    sparseCount,      sparseBounds,
+    sparseMemory,    sparseGet,         sparseCombine,   sparseMorphology, sparseFill,
+    sparseClip,      sparseCoordinates, sparseWrite,     sparseRead,       writeLevelSet,
+    writeDenseGrids, levelSetCreate,    levelSetDestroy, levelSetAdd,      levelSetStreamWrite,
+    levelSetRead,    levelSetProbe,     levelSetBuild,   levelSetCopy,     levelSetInfo,
+    levelSetValue,   levelSetValues,    levelSetActive,  levelSetCombine,  levelSetOffset,
+    levelSetWrite};
 
 } // namespace
 } // namespace voxfx::detail
