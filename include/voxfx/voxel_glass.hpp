@@ -7,8 +7,13 @@
 //                (material ids). A boundary voxel whose stored normal faces the ray enters the
 //                voxel's material (unless the ray is in it already); one whose normal points along
 //                the ray leaves its material (or, where the ray is not in that material, the
-//                innermost one). Snell with the normal at the event (mid-voxel), trilinear over the
-//                eight voxel centres around it that hold a normal of that material within 30 degrees
+//                innermost one). Snell with the normal where the surface crosses the ray: the middle
+//                of the run of that surface's voxels along the ray (written, of its material, facing
+//                the same way, within 30 degrees of the first; up to 6 past the first), not the
+//                first voxel met (leaving a convex surface, the normal there is tilted further from
+//                the ray: false total reflections near the critical angle); the event itself stays
+//                mid-way through the first voxel. That normal is trilinear over the eight voxel
+//                centres around the crossing that hold a normal of that material within 30 degrees
 //                of the voxel's own (a voxel's averaged normal alone is a staircase of the faces
 //                touching it: a few degrees off, enough for a false total reflection near the
 //                critical angle), and n_from / n_to of the media on both sides, (1 - F(n_from, n_to)), the

@@ -131,6 +131,9 @@ namespace voxel_glass_detail {
 // surface (a crease, as the renderer's crease angle: a box's side is not blended into its bottom).
 const double kCosBlend = std::cos(30 * M_PI / 180);
 
+// The most voxels past the first that the run of a surface's voxels along the ray is followed for.
+constexpr int kMaxRun = 6;
+
 // The unit normal at grid point g of the surface whose voxel there has the unit normal `own`:
 // trilinear over the eight voxel centres around g, weighting only written voxels of `material`
 // whose normals are within 30 degrees of `own` (the others lie outside the surface's layer or
@@ -296,9 +299,36 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                     }
                     const double etaFrom = current().ior,
                                  etaTo = next.empty() ? 1.0 : media_[next.back()].ior;
+                    // Where the surface crosses the ray: conservative coverage writes every voxel the
+                    // surface touches, so the ray meets a run of its voxels and the surface lies
+                    // about the run's middle, up to a few voxels past the first one at a grazing
+                    // crossing. The normal is taken there, not at this first voxel: leaving a convex
+                    // surface, the normal before the crossing is tilted further from the ray (at a
+                    // crossing near the critical angle, a false total reflection). The event itself
+                    // stays at this voxel (the march and the exit point are unchanged).
+                    double tRunEnd = tLeave;
+                    {
+                        Dda look = walk;
+                        int lookAxis = axis;
+                        for (int k = 0;
+                             k < voxel_glass_detail::kMaxRun && tRunEnd < clip.t1 && look.advance(lookAxis);
+                             ++k) {
+                            const int64_t j = (look.cell[1] * dims[0] + look.cell[0]) * D + look.cell[2];
+                            if (!grid_.written(j) ||
+                                (!grid_.material.empty() && grid_.material[size_t(j)] != mid))
+                                break;
+                            const Vec3d nj(grid_.normal(j));
+                            if (!(length(nj) > 0) || (dot(d, nj) > 0) != leaving ||
+                                dot(nj, n) < voxel_glass_detail::kCosBlend)
+                                break;
+                            lookAxis = look.nextAxis();
+                            tRunEnd = std::min(look.tMax[lookAxis], clip.t1);
+                        }
+                    }
                     // The normal at the crossing: trilinear over the surface's voxels around it (the
                     // voxel's own averaged normal is a staircase of the faces that touch it).
-                    Vec3d ns = voxel_glass_detail::normalAt(grid_, g + d * tEvent, mid, n);
+                    Vec3d ns =
+                        voxel_glass_detail::normalAt(grid_, g + d * (0.5 * (tEnter + tRunEnd)), mid, n);
                     if ((dot(d, ns) > 0) != leaving) ns = n;
                     const Vec3d nf = leaving ? -ns : ns; // facing the ray
                     if (refractDirection(d, nf, etaFrom / etaTo, r)) {
