@@ -808,13 +808,18 @@ TEST(GlassTest, VoxelGlassStandingOnTheGroundShowsTheGroundNotTheSky) {
     // environment through the top; the voxel methods now look the scene up from where the ray left
     // glass: two-surface none, multi 86 / 17 / 7 (rays bent by averaged normals at the cube's
     // edges and corners, a voxel's worth of the top, shrinking with the grid); 94 / 20 / 7 since
-    // the normal is interpolated at the event (#26 item 4).
+    // the normal is interpolated at the event (#26 item 4), 97 / 17 / 7 since it is taken at the
+    // middle of the surface's run of voxels (#25 item 2). Those were rays reflected by a side
+    // towards the bottom edge, whose voxels hold the 45-degree mean of the side's and the bottom's
+    // normals: a second, false total reflection there sent them up through the far side. Since a
+    // crease voxel is passed where the ray goes on into a voxel of one surface (and otherwise takes
+    // the normal of the face the ray heads into): 7 / 0 / 0, bounded here by 16 / 2 / 2.
     for (const int64_t res : {16, 32, 64}) {
         MultiGlassOptions multi;
         multi.gridResolution = res;
         const TopPixels m = glassCubeOnTheGround(multi);
         EXPECT_GT(m.top, 600);
-        EXPECT_LT(m.sky, m.top * 8 / res) << "multi " << res << "³: of " << m.top << " pixels of the top";
+        EXPECT_LE(m.sky, res == 16 ? 16 : 2) << "multi " << res << "³: of " << m.top << " pixels of the top";
         TwoSurfaceGlassOptions two;
         two.gridResolution = res;
         const TopPixels t = glassCubeOnTheGround(two);
