@@ -7,11 +7,22 @@
 //                (material ids). A boundary voxel whose stored normal faces the ray enters the
 //                voxel's material (unless the ray is in it already); one whose normal points along
 //                the ray leaves its material (or, where the ray is not in that material, the
-//                innermost one). Snell with the normal at the event (mid-voxel), trilinear over the
-//                eight voxel centres around it that hold a normal of that material within 30 degrees
+//                innermost one). Snell with the normal where the surface crosses the ray: the middle
+//                of the run of that surface's voxels along the ray (written, of its material, facing
+//                the same way, within 30 degrees of the first; up to 6 past the first), not the
+//                first voxel met (leaving a convex surface, the normal there is tilted further from
+//                the ray: false total reflections near the critical angle); the event itself stays
+//                mid-way through the first voxel. That normal is trilinear over the eight voxel
+//                centres around the crossing that hold a normal of that material within 30 degrees
 //                of the voxel's own (a voxel's averaged normal alone is a staircase of the faces
 //                touching it: a few degrees off, enough for a false total reflection near the
-//                critical angle), and n_from / n_to of the media on both sides, (1 - F(n_from, n_to)), the
+//                critical angle). A crease voxel (faces of two surfaces meeting at an edge: the mean
+//                of their normals is no face's, 45 degrees off at a box's edge; told by the length
+//                of the normal sum, below cos 30 degrees of the writes) is no crossing where the ray
+//                goes on into a voxel of one surface that it crosses (within 6 voxels of the
+//                material); otherwise, leaving, it takes the normal of its one-surface neighbour
+//                closest to the ray's direction (the face the ray heads into most directly). Snell
+//                with n_from / n_to of the media on both sides, (1 - F(n_from, n_to)), the
 //                tint of a medium entered; total internal reflection where there is no solution (the media
 //                unchanged); a refraction is skipped when its voxel has the material of the last surface and
 //                its normal is within angleThreshold of that surface's (CHANG's guard against refracting

@@ -131,6 +131,27 @@ namespace voxel_glass_detail {
 // surface (a crease, as the renderer's crease angle: a box's side is not blended into its bottom).
 const double kCosBlend = std::cos(30 * M_PI / 180);
 
+// The most voxels past the first that the run of a surface's voxels along the ray is followed for.
+constexpr int kMaxRun = 6;
+
+// What was written into a voxel, told by its write count and the length of its sum of unit normals:
+// nothing; both faces of a sheet thinner than the voxel (the normals cancel: the length is below
+// half the writes); faces of two surfaces meeting at a crease, a box's edge (the length is below
+// cos 30 degrees of the writes: the faces lie further from their mean than the normal
+// interpolation blends, so the mean is no face's normal; a box's edge voxel holds the 45-degree
+// mean of its side and bottom); or one surface. A voxel two materials wrote (twoMaterials, one byte
+// per voxel or empty) is one surface: its normals cancel, but it is no sheet (see trace).
+enum class VoxelKind : uint8_t { Empty, Sheet, Crease, Surface };
+VoxelKind voxelKind(const AttributeGrid& grid, const std::vector<uint8_t>& twoMaterials, int64_t i) {
+    if (!grid.written(i)) return VoxelKind::Empty;
+    if (grid.count.empty() || grid.count[size_t(i)] < 2 || (!twoMaterials.empty() && twoMaterials[size_t(i)]))
+        return VoxelKind::Surface;
+    const double sum = length(Vec3d(grid.normalSum[size_t(i)])), writes = double(grid.count[size_t(i)]);
+    if (sum < 0.5 * writes) return VoxelKind::Sheet;
+    if (sum < kCosBlend * writes) return VoxelKind::Crease;
+    return VoxelKind::Surface;
+}
+
 // The unit normal at grid point g of the surface whose voxel there has the unit normal `own`:
 // trilinear over the eight voxel centres around g, weighting only written voxels of `material`
 // whose normals are within 30 degrees of `own` (the others lie outside the surface's layer or
@@ -221,9 +242,8 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                               grid_.material.empty() ? medium : grid_.material[size_t(i)], media_.size() - 1))
                         : 0;
             const Vec3d sum = written ? Vec3d(grid_.normalSum[size_t(i)]) : Vec3d{0, 0, 0};
-            const bool sheet = written && !grid_.count.empty() && grid_.count[size_t(i)] >= 2 &&
-                               length(sum) < 0.5 * double(grid_.count[size_t(i)]) &&
-                               (twoMaterials_.empty() || !twoMaterials_[size_t(i)]);
+            const voxel_glass_detail::VoxelKind kind = voxel_glass_detail::voxelKind(grid_, twoMaterials_, i);
+            const bool sheet = kind == voxel_glass_detail::VoxelKind::Sheet;
             if (!written || mid != sheetMaterial) inSheet = false;
             const bool insideMid = !stack.empty() && stack.back() == mid;
             if (sheet && !inSheet && !insideMid) {
@@ -265,16 +285,80 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                     inSheet = true;
                     sheetMaterial = mid;
                 }
-                const double dn = dot(d, n);
+                // Whether the ray crosses a surface of this voxel's material with normal nv here.
                 // Leaving needs a medium to leave; entering a material the ray is already in is the
-                // same surface seen again.
-                const bool leaving = dn > 0 && !stack.empty();
-                const bool entering = dn < 0 && (stack.empty() || stack.back() != mid);
-                // The angle threshold guards against refracting twice at one surface spread over
-                // neighbouring voxels: a surface of another material is another surface (an
-                // embedded object's faces can be nearly parallel to the one just crossed).
-                const bool candidate = length(n) > 0 && (leaving || entering) &&
-                                       (mid != lastMaterial || dot(n, lastNormal) < cosThreshold);
+                // same surface seen again. The angle threshold guards against refracting twice at one
+                // surface spread over neighbouring voxels: a surface of another material is another
+                // surface (an embedded object's faces can be nearly parallel to the one just crossed).
+                auto crosses = [&](const Vec3d& nv) {
+                    const double dv = dot(d, nv);
+                    const bool out = dv > 0 && !stack.empty();
+                    const bool in = dv < 0 && (stack.empty() || stack.back() != mid);
+                    return length(nv) > 0 && (out || in) &&
+                           (mid != lastMaterial || dot(nv, lastNormal) < cosThreshold);
+                };
+                bool candidate = crosses(n);
+                const bool leaving = dot(d, n) > 0 && !stack.empty();
+                // The voxels after this one along the ray while they are written with its material (up
+                // to kMaxRun of them): visit(j, the parameter where the ray leaves j) returns false to
+                // stop.
+                auto alongRay = [&](auto&& visit) {
+                    Dda look = walk;
+                    int lookAxis = axis;
+                    double tLook = tLeave;
+                    for (int k = 0;
+                         k < voxel_glass_detail::kMaxRun && tLook < clip.t1 && look.advance(lookAxis); ++k) {
+                        const int64_t j = (look.cell[1] * dims[0] + look.cell[0]) * D + look.cell[2];
+                        if (!grid_.written(j) ||
+                            (!grid_.material.empty() && grid_.material[size_t(j)] != mid))
+                            return;
+                        lookAxis = look.nextAxis();
+                        tLook = std::min(look.tMax[lookAxis], clip.t1);
+                        if (!visit(j, tLook)) return;
+                    }
+                };
+                if (candidate && kind == voxel_glass_detail::VoxelKind::Crease) {
+                    // A crease voxel's normal is the mean of two surfaces' (a box's edge: 45 degrees
+                    // between its side and its bottom), a face that is not there: a ray reflected by
+                    // a glass cube's side towards its bottom edge was reflected again there, and left
+                    // upwards through the far side. Where the ray goes on into a voxel of one surface
+                    // that it crosses, the crossing is there: this voxel is passed. Otherwise (the
+                    // ray runs along the edge and out), leaving, it takes the normal of the
+                    // neighbouring one-surface voxel whose normal is closest to the ray's direction:
+                    // the face it heads into most directly, which it meets first leaving a convex
+                    // edge from within a voxel of both faces.
+                    bool surfaceAhead = false;
+                    alongRay([&](int64_t j, double) {
+                        const voxel_glass_detail::VoxelKind kj =
+                            voxel_glass_detail::voxelKind(grid_, twoMaterials_, j);
+                        if (kj == voxel_glass_detail::VoxelKind::Crease) return true;
+                        surfaceAhead =
+                            kj == voxel_glass_detail::VoxelKind::Surface && crosses(Vec3d(grid_.normal(j)));
+                        return false;
+                    });
+                    if (surfaceAhead) {
+                        candidate = false;
+                    } else if (leaving) {
+                        double best = 0;
+                        for (int k = 0; k < 27; ++k) {
+                            const int64_t c[3] = {walk.cell[0] + k % 3 - 1, walk.cell[1] + (k / 3) % 3 - 1,
+                                                  walk.cell[2] + k / 9 - 1};
+                            if (k == 13 || c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= dims[0] ||
+                                c[1] >= dims[1] || c[2] >= dims[2])
+                                continue;
+                            const int64_t j = (c[1] * dims[0] + c[0]) * D + c[2];
+                            if (voxel_glass_detail::voxelKind(grid_, twoMaterials_, j) !=
+                                    voxel_glass_detail::VoxelKind::Surface ||
+                                (!grid_.material.empty() && grid_.material[size_t(j)] != mid))
+                                continue;
+                            const Vec3d nj(grid_.normal(j));
+                            if (dot(d, nj) > best) {
+                                best = dot(d, nj);
+                                n = nj;
+                            }
+                        }
+                    }
+                }
                 if (candidate) {
                     if (p.events >= options.maxEvents) {
                         p.truncate(origin_ + (g + d * tEnter) * voxel_, d, thr);
@@ -296,9 +380,26 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                     }
                     const double etaFrom = current().ior,
                                  etaTo = next.empty() ? 1.0 : media_[next.back()].ior;
+                    // Where the surface crosses the ray: conservative coverage writes every voxel the
+                    // surface touches, so the ray meets a run of its voxels and the surface lies
+                    // about the run's middle, up to a few voxels past the first one at a grazing
+                    // crossing. The normal is taken there, not at this first voxel: leaving a convex
+                    // surface, the normal before the crossing is tilted further from the ray (at a
+                    // crossing near the critical angle, a false total reflection). The event itself
+                    // stays at this voxel (the march and the exit point are unchanged).
+                    double tRunEnd = tLeave;
+                    alongRay([&](int64_t j, double tOut) {
+                        const Vec3d nj(grid_.normal(j));
+                        if (!(length(nj) > 0) || (dot(d, nj) > 0) != leaving ||
+                            dot(nj, n) < voxel_glass_detail::kCosBlend)
+                            return false;
+                        tRunEnd = tOut;
+                        return true;
+                    });
                     // The normal at the crossing: trilinear over the surface's voxels around it (the
                     // voxel's own averaged normal is a staircase of the faces that touch it).
-                    Vec3d ns = voxel_glass_detail::normalAt(grid_, g + d * tEvent, mid, n);
+                    Vec3d ns =
+                        voxel_glass_detail::normalAt(grid_, g + d * (0.5 * (tEnter + tRunEnd)), mid, n);
                     if ((dot(d, ns) > 0) != leaving) ns = n;
                     const Vec3d nf = leaving ? -ns : ns; // facing the ray
                     if (refractDirection(d, nf, etaFrom / etaTo, r)) {
