@@ -140,7 +140,7 @@ py::tuple activeVoxels(const LevelSet& ls) {
 }
 
 /// 4 x 4 matrix from (i, j, k, 1) to the world centre of index (i, j, k) (axis-aligned lattices).
-py::array_t<double> affine(const LevelSet& ls) {
+py::array_t<double> levelSetAffine(const LevelSet& ls) {
     if (!ls.axisAligned())
         throw Error("level set '" + ls.name() +
                     "': its transform is not a positive scale and a translation, so no affine is given");
@@ -233,7 +233,7 @@ void bindLevelSet(py::module_& m) {
             "World position of index (0, 0, 0)")
         .def_property_readonly("axis_aligned", &LevelSet::axisAligned,
                                "Whether index (i, j, k) lies at index_origin + (i, j, k) * voxel_size")
-        .def_property_readonly("affine", &affine,
+        .def_property_readonly("affine", &levelSetAffine,
                                "4 x 4 matrix from (i, j, k, 1) to the world position of index (i, j, k) "
                                "(axis-aligned level sets; voxfx.Error otherwise)")
         .def_property_readonly("active_count", &LevelSet::activeCount)
