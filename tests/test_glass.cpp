@@ -552,6 +552,64 @@ Scene glassTestScene() {
     return s;
 }
 
+// CHANG's absorption constant (#25 item 2): a constant k on the method is the material's
+// attenuation coefficient times k, for the exact tracer and the voxel march alike: k = 2 renders
+// as the same glass with half the attenuation distance, k = 0 as glass without attenuation, and
+// more absorption never brightens a glass pixel.
+TEST(GlassTest, AbsorptionConstantScalesEveryMediumsAttenuation) {
+    RenderOptions o;
+    o.width = 64;
+    o.height = 48;
+    o.shadow = NoShadowOptions{};
+    o.antiAliasing = AntiAliasing::Off;
+    MultiGlassOptions multi;
+    multi.gridResolution = 48;
+    for (const GlassOptions base : {GlassOptions(ExactGlassOptions{}), GlassOptions(multi)}) {
+        const auto withConstant = [&](double k) {
+            GlassOptions g = base;
+            std::visit(
+                [&](auto& m) {
+                    if constexpr (requires { m.absorptionConstant; }) m.absorptionConstant = k;
+                },
+                g);
+            return g;
+        };
+        const Scene s = glassTestScene();
+        o.glass = withConstant(2);
+        const RenderResult doubled = render(s, s.cameras[0], o);
+        Scene half = s;
+        half.materials[1].attenuationDistance = 0.5f;
+        o.glass = base;
+        const RenderResult byMaterial = render(half, half.cameras[0], o);
+        o.glass = withConstant(0);
+        const RenderResult none = render(s, s.cameras[0], o);
+        Scene clear = s;
+        clear.materials[1].attenuationDistance = std::numeric_limits<float>::infinity();
+        o.glass = base;
+        const RenderResult clearGlass = render(clear, clear.cameras[0], o);
+        const RenderResult plain = render(s, s.cameras[0], o);
+        int64_t glassPixels = 0, darker = 0;
+        for (size_t i = 0; i < plain.image.pixels.size(); ++i) {
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_NEAR(doubled.image.pixels[i][c], byMaterial.image.pixels[i][c], 1e-5f) << i;
+                EXPECT_NEAR(none.image.pixels[i][c], clearGlass.image.pixels[i][c], 1e-5f) << i;
+                EXPECT_LE(doubled.image.pixels[i][c], plain.image.pixels[i][c] + 1e-6f) << i;
+                EXPECT_LE(plain.image.pixels[i][c], none.image.pixels[i][c] + 1e-6f) << i;
+            }
+            if (plain.glassMask.empty() || !plain.glassMask[i]) continue;
+            ++glassPixels;
+            darker += doubled.image.pixels[i].x < plain.image.pixels[i].x - 1e-3f;
+        }
+        EXPECT_GT(glassPixels, 300);
+        EXPECT_GT(darker, glassPixels / 2); // the constant does act
+    }
+    GlassOptions bad = ExactGlassOptions{};
+    std::get<ExactGlassOptions>(bad).absorptionConstant = std::nan("");
+    o.glass = bad;
+    const Scene s = glassTestScene();
+    EXPECT_THROW(render(s, s.cameras[0], o), Error);
+}
+
 TEST(GlassTest, GlassBallCastsAColouredShadowUnderExactShadows) {
     // The sun straight above the glass ball of glassTestScene (radius 0.7): the ground point under
     // its centre sees the light through a diameter (1.4 units) at nearly normal incidence, so the

@@ -36,7 +36,7 @@ struct ExactGlassOptions : GlassPathOptions {
     static constexpr std::string_view kSummary =
         "ray tracing on the triangles (Embree): Snell, Fresnel, total internal reflection, "
         "Beer-Lambert over true lengths; the reference";
-    /// maxEvents, sceneBehind.
+    /// maxEvents, absorptionConstant, sceneBehind.
     static std::span<const OptionField<ExactGlassOptions>> fields();
 };
 

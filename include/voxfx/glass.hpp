@@ -103,6 +103,8 @@ std::string_view glassSummary(std::string_view name);
 GlassOptions defaultGlass(const Scene& scene);
 /// Whether the light leaving the glass comes from the opaque scene (GlassSceneOptions).
 bool glassSeesSceneBehind(const GlassOptions& options);
+/// The method's absorption constant (GlassSceneOptions::absorptionConstant; 1 for none).
+double glassAbsorptionConstant(const GlassOptions& options);
 
 /// Builds the method `options` holds.
 BuiltGlass buildGlass(const GlassInput& input, const GlassOptions& options);

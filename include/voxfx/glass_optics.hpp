@@ -72,6 +72,10 @@ struct GlassSceneOptions {
     /// where the ray meets it (found exactly, with Embree, for every method, and shaded with the
     /// lights and shadows), else from the environment. False: always the environment (CHANG).
     bool sceneBehind = true;
+    /// CHANG's absorption constant: every glass medium's attenuation coefficient (its material's
+    /// KHR_materials_volume attenuation, per world unit) is multiplied by it. 1 (the default): the
+    /// materials as given; 0: no absorption inside glass; must be finite and >= 0.
+    double absorptionConstant = 1.0;
 };
 
 /// What the methods that follow a path take.

@@ -81,7 +81,7 @@ struct MultiGlassOptions : VoxelGlassOptions {
     static constexpr std::string_view kName = "multi";
     static constexpr std::string_view kSummary =
         "CHANG: march through an attribute grid, refract at boundary voxels";
-    /// glassGrid, glassCoverage, angleThreshold, slabOverlap, maxEvents, sceneBehind.
+    /// glassGrid, glassCoverage, angleThreshold, slabOverlap, maxEvents, absorptionConstant, sceneBehind.
     static std::span<const OptionField<MultiGlassOptions>> fields();
 };
 
@@ -89,7 +89,7 @@ struct TwoSurfaceGlassOptions : VoxelGlassOptions {
     static constexpr std::string_view kName = "two-surface";
     static constexpr std::string_view kSummary =
         "Wyman 2005: refract at the front surface and at the first back surface";
-    /// glassGrid, glassCoverage, angleThreshold, slabOverlap, maxEvents, sceneBehind.
+    /// glassGrid, glassCoverage, angleThreshold, slabOverlap, maxEvents, absorptionConstant, sceneBehind.
     static std::span<const OptionField<TwoSurfaceGlassOptions>> fields();
 };
 

@@ -27,6 +27,11 @@ std::span<const OptionField<FrostedGlassOptions>> FrostedGlassOptions::fields() 
                                         "frosted glass: refraction offset through a thickness of the glass's "
                                         "diagonal, as a multiple of the front surface's",
                                         0, 100),
+        numberOption<O, &O::absorptionConstant>(
+            "absorptionConstant",
+            "glass (CHANG's absorption constant): every glass material's attenuation per world unit "
+            "(KHR_materials_volume) times this (0: no absorption inside glass)",
+            0, 1e6),
         flagOption<O, &O::sceneBehind>(
             "sceneBehind", "glass: the light leaving it comes from the opaque scene (off: the environment)")};
     return table;

@@ -37,6 +37,17 @@ bool glassSeesSceneBehind(const GlassOptions& options) {
         options);
 }
 
+double glassAbsorptionConstant(const GlassOptions& options) {
+    return std::visit(
+        [](const auto& o) {
+            if constexpr (requires { o.absorptionConstant; })
+                return o.absorptionConstant;
+            else
+                return 1.0;
+        },
+        options);
+}
+
 BuiltGlass buildGlass(const GlassInput& input, const GlassOptions& options) {
     return std::visit(
         [&]<class O>(const O& o) -> BuiltGlass { return detail::BuiltFor<BuiltGlass, O>::build(input, o); },

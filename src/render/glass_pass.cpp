@@ -4,6 +4,7 @@
 #include "render/glass_pass.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <memory>
 
@@ -27,9 +28,13 @@ void shadeGlass(FrameState& frame) {
     sampleMask.assign(shaded.size(), 0);
     std::vector<uint8_t> isGlass(scene.materials.size());
     std::vector<GlassMedium> media(scene.materials.size());
+    const double absorption = glassAbsorptionConstant(method);
+    if (!(absorption >= 0) || !std::isfinite(absorption))
+        fail("glass: the absorption constant must be finite and >= 0, got ", absorption);
     for (size_t m = 0; m < scene.materials.size(); ++m) {
         isGlass[m] = scene.materials[m].isGlass();
         media[m] = glassMedium(scene.materials[m]);
+        media[m].sigma = media[m].sigma * float(absorption);
     }
     // The glass triangles, on the scene's vertices.
     Mesh glass;

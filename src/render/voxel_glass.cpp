@@ -40,6 +40,11 @@ template <class O> std::vector<OptionField<O>> voxelGlassFields() {
                                        "glass: refractions and reflections followed per ray (then it leaves "
                                        "along its current direction)",
                                        1, 1024),
+        numberOption<O, &O::absorptionConstant>(
+            "absorptionConstant",
+            "glass (CHANG's absorption constant): every glass material's attenuation per world unit "
+            "(KHR_materials_volume) times this (0: no absorption inside glass)",
+            0, 1e6),
         flagOption<O, &O::sceneBehind>(
             "sceneBehind", "glass: the light leaving it comes from the opaque scene, traced exactly "
                            "(off: the environment alone after the last exit, as CHANG)")};
