@@ -241,6 +241,24 @@ py::array_t<double> pointsArgument(const py::object& points, const Vec3d& origin
 py::tuple vec3(const Vec3d& v) { return py::make_tuple(v.x, v.y, v.z); }
 py::tuple vec3(const Vec3i& v) { return py::make_tuple(v.x, v.y, v.z); }
 
+py::tuple activeVoxelArrays(
+    const std::function<void(std::vector<std::array<int32_t, 3>>&, std::vector<float>&)>& collect) {
+    std::vector<std::array<int32_t, 3>> idx;
+    std::vector<float> vals;
+    {
+        py::gil_scoped_release release;
+        collect(idx, vals);
+    }
+    const py::ssize_t n = py::ssize_t(idx.size());
+    py::array_t<int32_t> indices({n, py::ssize_t(3)});
+    py::array_t<float> values(n);
+    if (n > 0) {
+        std::memcpy(indices.mutable_data(), idx.data(), idx.size() * sizeof(idx[0]));
+        std::memcpy(values.mutable_data(), vals.data(), vals.size() * sizeof(float));
+    }
+    return py::make_tuple(indices, values);
+}
+
 void requireOrthographic(const VoxelGrid& g, const char* what) {
     if (g.frame.isPerspective()) fail(what, " needs an orthographic grid");
 }

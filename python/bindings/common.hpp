@@ -17,6 +17,7 @@
 //     calls release the GIL and, on the main thread, stop at Ctrl-C (interruptible()).
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -111,6 +112,11 @@ py::array_t<double> pointsArgument(const py::object& points, const Vec3d& origin
 
 py::tuple vec3(const Vec3d& v);
 py::tuple vec3(const Vec3i& v);
+/// A narrow band's active voxels as NumPy arrays: (indices (N, 3) int32, values (N,) float32), the
+/// GIL released while `collect(indices, values)` gathers them (SignedDistanceField::activeVoxels,
+/// LevelSet::activeVoxels).
+py::tuple activeVoxelArrays(
+    const std::function<void(std::vector<std::array<int32_t, 3>>&, std::vector<float>&)>& collect);
 
 void requireOrthographic(const VoxelGrid& g, const char* what);
 

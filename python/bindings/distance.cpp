@@ -121,18 +121,7 @@ py::array_t<float> sdfDense(const SignedDistanceField& f) {
 }
 
 py::tuple sdfActive(const SignedDistanceField& f) {
-    std::vector<std::array<int32_t, 3>> idx;
-    std::vector<float> values;
-    {
-        py::gil_scoped_release release;
-        f.activeVoxels(idx, values);
-    }
-    const py::ssize_t n = py::ssize_t(idx.size());
-    py::array_t<int32_t> indices({n, py::ssize_t(3)});
-    py::array_t<float> vals(n);
-    std::copy_n(&idx[0][0], 3 * idx.size(), indices.mutable_data());
-    std::copy(values.begin(), values.end(), vals.mutable_data());
-    return py::make_tuple(indices, vals);
+    return activeVoxelArrays([&](auto& indices, auto& values) { f.activeVoxels(indices, values); });
 }
 
 } // namespace

@@ -123,20 +123,7 @@ py::object values(const LevelSet& ls, const py::object& indices) {
 }
 
 py::tuple activeVoxels(const LevelSet& ls) {
-    std::vector<std::array<int32_t, 3>> idx;
-    std::vector<float> vals;
-    {
-        py::gil_scoped_release release;
-        ls.activeVoxels(idx, vals);
-    }
-    const py::ssize_t n = py::ssize_t(idx.size());
-    py::array_t<int32_t> indices({n, py::ssize_t(3)});
-    py::array_t<float> v(n);
-    if (n > 0) {
-        std::memcpy(indices.mutable_data(), idx.data(), idx.size() * sizeof(idx[0]));
-        std::memcpy(v.mutable_data(), vals.data(), vals.size() * sizeof(float));
-    }
-    return py::make_tuple(indices, v);
+    return activeVoxelArrays([&](auto& indices, auto& values) { ls.activeVoxels(indices, values); });
 }
 
 /// 4 x 4 matrix from (i, j, k, 1) to the world centre of index (i, j, k) (axis-aligned lattices).

@@ -1,6 +1,8 @@
 // voxfx — the closed set of glass methods (voxfx/glass.hpp): names and dispatch.
 #include "voxfx/glass.hpp"
 
+#include <type_traits>
+
 #include "render/technique_list.hpp"
 
 namespace voxfx {
@@ -26,26 +28,30 @@ GlassOptions defaultGlass(const Scene& scene) {
     return NoGlassOptions{};
 }
 
-bool glassSeesSceneBehind(const GlassOptions& options) {
+namespace {
+
+// What every method but none takes (GlassSceneOptions), or null.
+const GlassSceneOptions* sceneOptions(const GlassOptions& options) {
     return std::visit(
-        [](const auto& o) {
-            if constexpr (requires { o.sceneBehind; })
-                return o.sceneBehind;
+        []<class O>(const O& o) -> const GlassSceneOptions* {
+            if constexpr (std::is_base_of_v<GlassSceneOptions, O>)
+                return &o;
             else
-                return false;
+                return nullptr;
         },
         options);
 }
 
+} // namespace
+
+bool glassSeesSceneBehind(const GlassOptions& options) {
+    const GlassSceneOptions* o = sceneOptions(options);
+    return o && o->sceneBehind;
+}
+
 double glassAbsorptionConstant(const GlassOptions& options) {
-    return std::visit(
-        [](const auto& o) {
-            if constexpr (requires { o.absorptionConstant; })
-                return o.absorptionConstant;
-            else
-                return 1.0;
-        },
-        options);
+    const GlassSceneOptions* o = sceneOptions(options);
+    return o ? o->absorptionConstant : 1.0;
 }
 
 BuiltGlass buildGlass(const GlassInput& input, const GlassOptions& options) {
