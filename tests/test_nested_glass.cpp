@@ -4,6 +4,7 @@
 // tracer on a nested scene.
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -214,28 +215,101 @@ TEST(NestedGlassTest, VoxelMarchFollowsTheMediaThroughConcentricSpheres) {
     }
 }
 
-// Two slabs of different glass stacked face to face, with the voxel march: the coincident faces
-// write the same voxels and their normals cancel, as a sheet thinner than a voxel does, but they are
-// one interface between two media, not a sheet of either. The ray must still leave the lower slab
-// parallel to how it came, after the entry, at most one event at the touching faces (crossing them
-// or, where they are not seen, keeping the upper medium) and the exit, and never leave the upper
-// slab for air at the touching faces.
-TEST(NestedGlassTest, VoxelMarchThroughTwoTouchingSlabsLeavesParallel) {
-    const double hA = 0.4, hB = 0.5;
-    const TwoMedia s = nest(test::makeBox({-1, -1, -hA}, {1, 1, 0}), test::makeBox({-1, -1, 0}, {1, 1, hB}));
-    const GlassMedium A = nestedMedium(1.5, 0.3), B = nestedMedium(1.9, 1.0);
-    for (const int64_t res : {32, 64, 128}) {
-        VoxelGlassOptions o;
-        o.gridResolution = res;
-        const VoxelGlass glass(s.mesh.view(), s.medium, {A, B}, o);
-        for (const double a : {0.0, 0.4, 0.9}) {
-            const Vec3d d = nestedDirAt(a);
-            const GlassPath p = glass.trace({0.2, -0.1, hB}, {0, 0, 1}, 1, d, o, false);
-            ASSERT_TRUE(p.hit);
-            EXPECT_GE(p.events, 2) << res << " " << a;
-            EXPECT_LE(p.events, 3) << res << " " << a;
-            EXPECT_NEAR(length(p.exitDir - d), 0, 0.02) << res << " " << a;
-            EXPECT_LT(p.exitPoint.z, -hA + 2 * glass.voxelSize()) << res << " " << a; // left at the bottom
+// Concentric spheres made as touching objects: a shell of A (the outer sphere, and the inner one
+// facing inwards) and a core of B whose sphere lies on the shell's inner one, face on face. The
+// optics are those of the nested spheres (the closed form above); the inner sphere is now a curved
+// face between two touching media, which the voxel march sees only through the material ids of the
+// voxels both wrote (their normals cancel). Tints 1: a medium re-entered across a touching face
+// applies its tint again, where a nested one is never left.
+TEST(NestedGlassTest, BothTracersCrossACoreTouchingItsShellAsTheConcentricClosedForm) {
+    const double R = 1, r = 0.5;
+    const GlassMedium A = nestedMedium(1.5, 0.4), B = nestedMedium(2.0, 1.5);
+    auto shellAndCore = [&](int rings, int segments) {
+        const Mesh outer = test::makeUvSphere({0, 0, 0}, R, rings, segments);
+        Mesh inner = test::makeUvSphere({0, 0, 0}, r, rings, segments);
+        TwoMedia t = nest(outer, inner); // A: outer and inner faces; B below gets its own inner
+        for (std::size_t k = outer.indices.size(); k < t.mesh.indices.size(); k += 3)
+            std::swap(t.mesh.indices[k + 1], t.mesh.indices[k + 2]); // the shell's inner sphere faces inwards
+        t.medium.assign(t.mesh.triangleCount(), 0);
+        const auto base = uint32_t(t.mesh.positions.size());
+        t.mesh.positions.insert(t.mesh.positions.end(), inner.positions.begin(), inner.positions.end());
+        for (const uint32_t i : inner.indices) t.mesh.indices.push_back(base + i);
+        t.medium.resize(t.mesh.triangleCount(), 1);
+        for (const Vec3f& p : t.mesh.positions) t.normals.push_back(Vec3f(normalize(Vec3d(p))));
+        return t;
+    };
+    const TwoMedia fine = shellAndCore(128, 256);
+    const ExactGlass exact(fine.mesh.view(), fine.normals, fine.medium, {A, B});
+    const TwoMedia s = shellAndCore(64, 128);
+    VoxelGlassOptions o;
+    o.gridResolution = 128;
+    const VoxelGlass glass(s.mesh.view(), s.medium, {A, B}, o);
+    for (const double b : {0.1, 0.3, 0.5, 0.65}) {
+        const SpherePath want = concentricClosedForm(b, R, r, A, B);
+        const GlassPath e = exact.trace({5, b, 0}, {-1, 0, 0}, 16);
+        ASSERT_TRUE(e.hit);
+        EXPECT_EQ(e.events, 4) << b;
+        EXPECT_NEAR(std::atan2(-e.exitDir.y, -e.exitDir.x), want.deviation, 3e-3) << b;
+        EXPECT_NEAR(e.throughput.x, want.throughput, 3e-3) << b;
+        const Vec3d entry{std::sqrt(R * R - b * b), b, 0};
+        const GlassPath p = glass.trace(entry, entry / R, 0, {-1, 0, 0}, o, false);
+        ASSERT_TRUE(p.hit);
+        EXPECT_EQ(p.events, 4) << b;
+        const double deviation = std::atan2(-p.exitDir.y, -p.exitDir.x);
+        EXPECT_NEAR(deviation, want.deviation, 0.05) << b;
+        EXPECT_NEAR(p.exitDir.z, 0, 0.01) << b;
+        EXPECT_NEAR(p.throughput.x, want.throughput, 0.05 * want.throughput) << b;
+    }
+}
+
+// The two touching slabs with the voxel march, against the closed form (as the exact tracer's test
+// above). The coincident faces write the same voxels and their normals cancel, as a sheet thinner
+// than a voxel does, but they are one face between two media, not a sheet of either: the march must
+// cross it from one medium into the other, bending by n_from / n_to and attenuating each slab with
+// its own coefficient, from above and from below, for either order of the two meshes (which
+// material a shared voxel records first must not matter). Before the march saw that face it kept
+// the first medium through both slabs: 2 events, the exit 0.06 units (4 voxels at 128) off along x
+// at 0.9 rad, and the throughput off by the lower slab's coefficient.
+TEST(NestedGlassTest, VoxelMarchCrossesTouchingGlassesAtTheClosedFormInterface) {
+    const double hA = 0.4, hB = 0.5, sA = 0.3, sB = 1.0;
+    const GlassMedium A = nestedMedium(1.5, sA), B = nestedMedium(1.9, sB);
+    const Mesh boxA = test::makeBox({-1, -1, -hA}, {1, 1, 0}), boxB = test::makeBox({-1, -1, 0}, {1, 1, hB});
+    for (const bool swapped : {false, true}) {
+        const TwoMedia s = swapped ? nest(boxB, boxA) : nest(boxA, boxB);
+        const std::vector<GlassMedium> media = swapped ? std::vector{B, A} : std::vector{A, B};
+        const uint32_t idA = swapped ? 1 : 0, idB = swapped ? 0 : 1;
+        for (const int64_t res : {32, 64, 128}) {
+            VoxelGlassOptions o;
+            o.gridResolution = res;
+            const VoxelGlass glass(s.mesh.view(), s.medium, media, o);
+            for (const bool down : {true, false}) {
+                // Down: into B from above, out of A below; up: the mirror image.
+                const double h1 = down ? hB : hA, h2 = down ? hA : hB, n1 = down ? 1.9 : 1.5,
+                             n2 = down ? 1.5 : 1.9, s1 = down ? sB : sA, s2 = down ? sA : sB;
+                for (const double a : {0.0, 0.4, 0.9}) {
+                    const Vec3d d = down ? nestedDirAt(a) : Vec3d{std::sin(a), 0, std::cos(a)};
+                    const Vec3d entry{0.2 - 0.3 * std::sin(a), -0.1, down ? hB : -hA};
+                    const GlassPath p =
+                        glass.trace(entry, {0, 0, down ? 1.0 : -1.0}, down ? idB : idA, d, o, false);
+                    const std::string at = std::to_string(res) + (swapped ? " swapped " : " ") +
+                                           (down ? "down " : "up ") + std::to_string(a);
+                    ASSERT_TRUE(p.hit) << at;
+                    EXPECT_EQ(p.events, 3) << at;
+                    EXPECT_NEAR(length(p.exitDir - d), 0, 0.02) << at;
+                    const double t1 = std::asin(std::sin(a) / n1), t2 = std::asin(std::sin(a) / n2);
+                    // Where the ray leaves the far face (the march reports the start of its exit
+                    // voxel: within about a voxel of it along the ray).
+                    const double shift = h1 * std::tan(t1) + h2 * std::tan(t2);
+                    const Vec3d exitPoint = entry + Vec3d{shift, 0, (down ? -1 : 1) * (h1 + h2)};
+                    EXPECT_NEAR(p.exitPoint.x, exitPoint.x, 1.5 * glass.voxelSize()) << at;
+                    EXPECT_NEAR(p.exitPoint.z, exitPoint.z, 1.5 * glass.voxelSize()) << at;
+                    const double fresnel = (1 - fresnelDielectric(std::cos(a), 1, n1)) *
+                                           (1 - fresnelDielectric(std::cos(t1), n1, n2)) *
+                                           (1 - fresnelDielectric(std::cos(t2), n2, 1));
+                    const double want = fresnel * std::exp(-s1 * h1 / std::cos(t1) - s2 * h2 / std::cos(t2));
+                    EXPECT_NEAR(p.throughput.x, want, 0.05 * want) << at;
+                }
+            }
         }
     }
 }
@@ -297,6 +371,59 @@ TEST(NestedGlassTest, VoxelGlassRendersANestedBallCloseToTheExactTracer) {
                 e.psnr, (long long)e.pixels);
     EXPECT_LT(e.mae, 0.035);
     EXPECT_GT(e.psnr, 19);
+}
+
+// Two boxes of different glass stacked face to face (the glass demo's block, with indices 1.5 and
+// 1.9 so that rays bend at the shared face) over a ground, seen from above at an angle: multi against
+// the exact tracer over the glass pixels. Multi measured MAE 0.0031 / PSNR 35.3 dB; before it saw the
+// shared face, MAE 0.0256 / PSNR 23.8 dB.
+TEST(NestedGlassTest, VoxelGlassRendersTouchingGlassesCloseToTheExactTracer) {
+    Scene s;
+    Material ground;
+    ground.baseColor = {0.6f, 0.6f, 0.6f};
+    ground.specular = 0;
+    Material lower;
+    lower.transmission = 1;
+    lower.ior = 1.5f;
+    lower.attenuationColor = {0.95f, 0.7f, 0.3f};
+    lower.attenuationDistance = 0.5f;
+    Material upper = lower;
+    upper.ior = 1.9f;
+    upper.attenuationColor = {0.3f, 0.6f, 0.95f};
+    const uint32_t g = s.addMaterial(ground), a = s.addMaterial(lower), b = s.addMaterial(upper);
+    SceneMesh floor;
+    test::appendQuad(floor.mesh, {0, 0, 0}, {0, 0, 3}, {3, 0, 0});
+    floor.material = g;
+    floor.castsShadow = false;
+    s.meshes.push_back(floor);
+    SceneMesh bottom, top;
+    bottom.mesh = test::makeBox({-0.6, 0, -0.4}, {0.6, 0.5, 0.4});
+    bottom.material = a;
+    top.mesh = test::makeBox({-0.6, 0.5, -0.4}, {0.6, 1.1, 0.4});
+    top.material = b;
+    s.meshes.push_back(bottom);
+    s.meshes.push_back(top);
+    Camera cam;
+    cam.position = {1.6, 2.2, 3};
+    cam.target = {0, 0.5, 0};
+    cam.fovY = 0.5;
+    RenderOptions o;
+    o.width = 96;
+    o.height = 72;
+    o.shadow = NoShadowOptions{};
+    o.glass = ExactGlassOptions{};
+    const RenderResult exact = render(s, cam, o);
+    int64_t glassPixels = 0;
+    for (const uint8_t m : exact.glassMask) glassPixels += m;
+    EXPECT_GT(glassPixels, 1000);
+    MultiGlassOptions multi;
+    multi.gridResolution = 128;
+    o.glass = multi;
+    const ImageError e = imageError(render(s, cam, o).image, exact.image, exact.glassMask);
+    std::printf("touching boxes, multi 128 against exact: MAE %.4f, PSNR %.2f dB over %lld pixels\n", e.mae,
+                e.psnr, (long long)e.pixels);
+    EXPECT_LT(e.mae, 0.008);
+    EXPECT_GT(e.psnr, 30);
 }
 
 TEST(NestedGlassTest, GlassDemoHoldsAnObjectOfOneGlassInsideAnother) {

@@ -37,9 +37,17 @@
 //                the writes): met from inside its material such a voxel is the exit, through a face
 //                parallel to the entry face; met from outside, the ray crosses the whole sheet there
 //                (two Fresnel passes, half a voxel of attenuation, direction unchanged). Faces of two
-//                materials lying on each other also share voxels whose normals cancel, but they are no
-//                sheet (a second voxelization with the triangles in reverse order finds the voxels two
-//                materials wrote): that interface is not seen (the ray keeps the first medium).
+//                materials lying on each other (touching glasses, CHANG §4.2) also share voxels whose
+//                normals cancel, but they are no sheet: they are one face between two media. A second
+//                voxelization with the triangles in reverse order finds the voxels two materials wrote
+//                (their first and last writers' materials), and a normals-only voxelization of the
+//                triangles of one of the two (those whose id has the lowest bit in which the two ids
+//                differ set) gives the face's normal there. Met from within one of the two media, the
+//                ray crosses into the other where it heads out of the one it is in (Snell with
+//                n_from / n_to and the face's normal trilinear over its voxels around the crossing, the
+//                entered medium's tint) and passes the face's other voxels. Along the edge where that
+//                face meets the outside, the glasses' outer faces share voxels too: a ray in either
+//                medium is inside such a voxel's material (its outer face is not a second entry).
 //   two-surface  Wyman 2005 as CHANG's baseline: the same march stops at the first back surface: one
 //                refraction there (or the mirror direction under total internal reflection), then the
 //                environment. It cannot see a second part of the object behind the first.
@@ -115,6 +123,18 @@ private:
     /// other): their normals cancel as a thin sheet's do, but they are not a sheet. Empty when the
     /// glass is of one material.
     std::vector<uint8_t> twoMaterials_;
+    /// A voxel two materials wrote: the materials of its first and last write (lo, hi); whether it
+    /// is on the face between two touching media (their normals cancel), and then lo's outward unit
+    /// normal there (zero where it could not be told). One per such voxel, sorted by voxel.
+    struct Interface {
+        int64_t voxel;
+        uint32_t lo, hi;
+        bool between;
+        Vec3f normalLo;
+    };
+    std::vector<Interface> interfaces_;
+    const Interface* interfaceAt(int64_t voxel) const;
+    Vec3d interfaceNormalAt(const Vec3d& g, const Interface& own) const;
     std::vector<GlassMedium> media_;
     Vec3d origin_;
     double voxel_ = 1;

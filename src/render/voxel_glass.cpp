@@ -3,6 +3,7 @@
 #include "voxfx/voxel_glass.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <functional>
 #include <iterator>
@@ -127,7 +128,53 @@ VoxelGlass::VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMediu
         twoMaterials_.resize(grid_.material.size());
         for (std::size_t i = 0; i < twoMaterials_.size(); ++i)
             twoMaterials_[i] = grid_.material[i] != lastWriter.material[i];
+        // The face between two touching media (CHANG §4.2): its voxels hold both media's faces, whose
+        // normals cancel (where they do not, the voxel is no such face: an object inside another
+        // touching its boundary, the edge where the face meets the outside). Which way the face
+        // points is told by the triangles of one of the two media alone: for the lowest bit in which
+        // the two ids differ, a normals-only voxelization of the triangles of the one whose id has
+        // that bit set (one pass per bit that is needed: a few for any number of media).
+        // side[k]: per medium, whether the pass for bit k voxelizes its triangles (only those of
+        // media on a face whose lowest differing bit is k: the pass costs what those faces do).
+        std::vector<std::vector<uint8_t>> side(32);
+        for (std::size_t i = 0; i < twoMaterials_.size(); ++i) {
+            if (!twoMaterials_[i]) continue;
+            const uint32_t lo = grid_.material[i], hi = lastWriter.material[i];
+            const bool between = length(Vec3d(grid_.normalSum[i])) < 0.5 * double(grid_.count[i]);
+            interfaces_.push_back({int64_t(i), lo, hi, between, {0, 0, 0}});
+            if (!between) continue;
+            const int k = std::countr_zero(lo ^ hi);
+            side[size_t(k)].resize(media_.size(), 0);
+            side[size_t(k)][((lo >> k) & 1) ? lo : hi] = 1;
+        }
+        for (int k = 0; k < 32; ++k) {
+            if (side[size_t(k)].empty()) continue;
+            std::vector<uint32_t> part;
+            for (std::size_t t = 0; t < mesh.triangleCount; ++t)
+                if (side[size_t(k)][triangleMedium[t]])
+                    for (int c = 0; c < 3; ++c) part.push_back(mesh.indices[3 * t + std::size_t(c)]);
+            MeshView ofOne = mesh;
+            ofOne.indices = part.data();
+            ofOne.triangleCount = part.size() / 3;
+            AttributeOptions normalsOnly = ao;
+            normalsOnly.channels = {false, false, true, false, false, false};
+            normalsOnly.triangleMaterial = {};
+            const AttributeGrid sideGrid = voxelizeAttributes(ofOne, frame, {}, normalsOnly);
+            for (Interface& f : interfaces_) {
+                if (!f.between || std::countr_zero(f.lo ^ f.hi) != k) continue;
+                const Vec3d nLo =
+                    Vec3d(sideGrid.normalSum[size_t(f.voxel)]) * (((f.lo >> k) & 1) ? 1.0 : -1.0);
+                const double len = length(nLo);
+                if (len > 1e-6) f.normalLo = Vec3f(nLo / len);
+            }
+        }
     }
+}
+
+const VoxelGlass::Interface* VoxelGlass::interfaceAt(int64_t voxel) const {
+    const auto it = std::lower_bound(interfaces_.begin(), interfaces_.end(), voxel,
+                                     [](const Interface& f, int64_t v) { return f.voxel < v; });
+    return it != interfaces_.end() && it->voxel == voxel ? &*it : nullptr;
 }
 
 namespace voxel_glass_detail {
@@ -184,6 +231,31 @@ Vec3d normalAt(const AttributeGrid& grid, const Vec3d& g, uint32_t material, con
     return len > 1e-12 ? sum / len : own;
 }
 } // namespace voxel_glass_detail
+
+// As normalAt, for the face between two touching media: lo's normal trilinear over the face's voxels
+// of the same two media around g that lie within 30 degrees of `own`'s.
+Vec3d VoxelGlass::interfaceNormalAt(const Vec3d& g, const Interface& own) const {
+    const int64_t dims[3] = {grid_.frame.width(), grid_.frame.height(), grid_.frame.depth()};
+    const Vec3d ownNormal(own.normalLo);
+    const Vec3d b{std::floor(g.x - 0.5), std::floor(g.y - 0.5), std::floor(g.z - 0.5)};
+    const Vec3d f = g - Vec3d{0.5, 0.5, 0.5} - b;
+    Vec3d sum{0, 0, 0};
+    for (int k = 0; k < 8; ++k) {
+        const int64_t c[3] = {int64_t(b.x) + (k & 1), int64_t(b.y) + ((k >> 1) & 1),
+                              int64_t(b.z) + ((k >> 2) & 1)};
+        if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= dims[0] || c[1] >= dims[1] || c[2] >= dims[2])
+            continue;
+        const Interface* near = interfaceAt(grid_.index(c[0], c[1], c[2]));
+        if (!near || !near->between || near->lo != own.lo || near->hi != own.hi ||
+            dot(Vec3d(near->normalLo), ownNormal) < voxel_glass_detail::kCosBlend)
+            continue;
+        const double w =
+            ((k & 1) ? f.x : 1 - f.x) * (((k >> 1) & 1) ? f.y : 1 - f.y) * (((k >> 2) & 1) ? f.z : 1 - f.z);
+        sum = sum + Vec3d(near->normalLo) * w;
+    }
+    const double len = length(sum);
+    return len > 1e-12 ? sum / len : ownNormal;
+}
 
 GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t medium, const Vec3d& dir,
                             const VoxelGlassOptions& options, bool twoSurface) const {
@@ -250,7 +322,12 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
             const voxel_glass_detail::VoxelKind kind = voxel_glass_detail::voxelKind(grid_, twoMaterials_, i);
             const bool sheet = kind == voxel_glass_detail::VoxelKind::Sheet;
             if (!written || mid != sheetMaterial) inSheet = false;
-            const bool insideMid = !stack.empty() && stack.back() == mid;
+            // A voxel two materials wrote: where the ray is in either, it is inside the voxel's material
+            // (the outer faces of two touching glasses share voxels along the edge of their face).
+            const Interface* two =
+                written && !twoMaterials_.empty() && twoMaterials_[size_t(i)] ? interfaceAt(i) : nullptr;
+            const bool insideMid =
+                !stack.empty() && (stack.back() == mid || (two && stack.back() == two->hi));
             if (sheet && !inSheet && !insideMid) {
                 // Through the whole sheet within this voxel.
                 if (p.events + 2 > options.maxEvents) {
@@ -279,7 +356,48 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                 }
                 continue;
             }
-            if (written && !inSheet) {
+            // The face between two touching media, met from within one of them: the ray crosses
+            // into the other where it heads out of the one it is in (n_from / n_to, the tint of the
+            // medium entered), and passes the face's voxels otherwise (it crossed already, or runs
+            // away from the face). Not the generic test below: the voxel's normals cancel.
+            bool throughFace = false;
+            if (!inSheet && two && two->between && insideMid) {
+                const Interface* face = two;
+                if (length(Vec3d(face->normalLo)) > 0) {
+                    throughFace = true;
+                    const bool fromLo = stack.back() == face->lo;
+                    const uint32_t to =
+                        uint32_t(std::min<size_t>(fromLo ? face->hi : face->lo, media_.size() - 1));
+                    const double tMid = 0.5 * (tEnter + tLeave);
+                    const Vec3d nOut = interfaceNormalAt(g + d * tMid, *face) * (fromLo ? 1.0 : -1.0);
+                    if (dot(d, nOut) > 0) {
+                        if (p.events >= options.maxEvents) {
+                            p.truncate(origin_ + (g + d * tEnter) * voxel_, d, thr);
+                            return p;
+                        }
+                        thr = thr * beerLambert(current().sigma, (tMid - tEnter) * voxel_);
+                        pos = origin_ + (g + d * tMid) * voxel_;
+                        castFrom = pos;
+                        ++p.events;
+                        const double etaFrom = current().ior, etaTo = media_[to].ior;
+                        if (refractDirection(d, -nOut, etaFrom / etaTo, r)) {
+                            thr = thr * media_[to].tint *
+                                  float(1 - fresnelDielectric(dot(d, nOut), etaFrom, etaTo));
+                            d = r;
+                            stack.back() = to;
+                            lastNormal = -nOut; // the entered medium's outward normal there
+                            lastMaterial = to;
+                        } else {
+                            d = reflectDirection(d, -nOut); // total internal reflection
+                            lastNormal = nOut;
+                            lastMaterial = stack.back();
+                        }
+                        restarted = true;
+                        break;
+                    }
+                }
+            }
+            if (written && !inSheet && !throughFace) {
                 Vec3d n = Vec3d(grid_.normal(i));
                 if (sheet && insideMid) {
                     // The sheet's far face: parallel to the face the ray entered by, else along the
@@ -298,7 +416,7 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                 auto crosses = [&](const Vec3d& nv) {
                     const double dv = dot(d, nv);
                     const bool out = dv > 0 && !stack.empty();
-                    const bool in = dv < 0 && (stack.empty() || stack.back() != mid);
+                    const bool in = dv < 0 && !insideMid;
                     return length(nv) > 0 && (out || in) &&
                            (mid != lastMaterial || dot(nv, lastNormal) < cosThreshold);
                 };
@@ -376,7 +494,9 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                     ++p.events;
                     std::vector<uint32_t> next = stack;
                     Vec3f tint{1, 1, 1};
-                    if (leaving) {
+                    if (leaving && insideMid) {
+                        next.pop_back();
+                    } else if (leaving) {
                         const auto it = std::find(next.rbegin(), next.rend(), mid);
                         next.erase(it == next.rend() ? next.end() - 1 : std::next(it).base());
                     } else {
