@@ -2,7 +2,9 @@
 // axis-aligned quads, a brute-force point-in-triangle count per column, occupancy against a
 // brute-force centre coverage and CGAL's exact triangle/box overlap, determinism across thread
 // counts, local slicing and bad input.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <iterator>
 #include <limits>
 #include <random>
@@ -296,6 +298,59 @@ TEST(AttributeGridTest, RejectsBadInput) {
     Mesh nan = quad;
     nan.positions[0].x = NAN;
     EXPECT_THROW(voxelizeAttributes(nan.view(), unitFrame(), {}), Error);
+    AttributeOptions short_;
+    const std::vector<Vec3f> threeNormals(3, Vec3f{0, 0, 1}); // the quad has 4 vertices
+    short_.vertexNormals = threeNormals;
+    EXPECT_THROW(voxelizeAttributes(quad.view(), unitFrame(), {}, short_), Error);
+}
+
+// With vertex normals the normal channel follows the smooth surface a renderer shades, not the
+// facets: on a coarse sphere (15-degree facets) each written voxel's normal against the sphere's
+// normal at the voxel's centre, with the UV sphere's exact vertex normals and without.
+TEST(AttributeGridTest, VertexNormalsMakeTheNormalChannelFollowTheSmoothSurface) {
+    const Vec3d c{8, 8, 8};
+    const double r = 6;
+    const Mesh sphere = test::makeUvSphere(c, r, 12, 24);
+    std::vector<Vec3f> normals;
+    for (const Vec3f& p : sphere.positions) normals.push_back(Vec3f(normalize(Vec3d(p) - c)));
+    AttributeOptions o;
+    o.coverage = Coverage::Conservative;
+    o.channels = {true, false, true, false, false, false};
+    const Frame frame = Frame::orthographic({{0, 0, 0}, {16, 16, 16}}, Axis::Z, 64, 64, 64);
+    const AttributeGrid faces = voxelizeAttributes(sphere.view(), frame, {}, o);
+    o.vertexNormals = normals;
+    const AttributeGrid smooth = voxelizeAttributes(sphere.view(), frame, {}, o);
+    ASSERT_EQ(faces.count, smooth.count); // the same writes
+    auto errors = [&](const AttributeGrid& g, double& mean, double& worst) {
+        double sum = 0;
+        int64_t n = 0;
+        worst = 0;
+        for (int64_t y = 0; y < 64; ++y)
+            for (int64_t x = 0; x < 64; ++x)
+                for (int64_t s = 0; s < 64; ++s) {
+                    const int64_t i = g.index(x, y, s);
+                    if (!g.written(i)) continue;
+                    const Vec3d p = frame.cellCenter(x, y, s);
+                    if (length(p - c) < 1e-9) continue;
+                    const double a =
+                        std::acos(std::clamp(dot(Vec3d(g.normal(i)), normalize(p - c)), -1.0, 1.0)) * 180 /
+                        M_PI;
+                    sum += a;
+                    worst = std::max(worst, a);
+                    ++n;
+                }
+        ASSERT_GT(n, 1000);
+        mean = sum / double(n);
+    };
+    double faceMean = 0, faceWorst = 0, smoothMean = 0, smoothWorst = 0;
+    errors(faces, faceMean, faceWorst);
+    errors(smooth, smoothMean, smoothWorst);
+    std::printf("normal channel against the sphere's: faces mean %.2f, max %.2f degrees; smooth mean %.2f, "
+                "max %.2f degrees\n",
+                faceMean, faceWorst, smoothMean, smoothWorst);
+    EXPECT_GT(faceMean, 3.0); // the facets are this far off: the test can tell
+    EXPECT_LT(smoothMean, 1.0);
+    EXPECT_LT(smoothWorst, 4.0);
 }
 
 TEST(AttributeGridTest, EmptyMeshGivesAnEmptyGrid) {

@@ -73,6 +73,11 @@ struct AttributeOptions {
     /// Material table indexed by the ids of triangleMaterial: needed by the ior and attenuation
     /// channels, ignored otherwise.
     std::span<const AttributeMaterial> materials;
+    /// One unit normal per vertex (smooth shading), or empty. With them the normals channel sums,
+    /// per write, the normal interpolated at the point of the triangle nearest the voxel's centre
+    /// (barycentric weights of its projection, negative ones clamped to 0) instead of the face
+    /// normal: the normal a renderer shades the surface with, not its facets'.
+    std::span<const Vec3f> vertexNormals;
     /// ED06 local slicing: each column's D slices cover only the depth range its geometry spans.
     Slicing slicing = Slicing::Uniform;
     int threads = 0;              ///< worker threads, 0 = all; results are identical for every value
@@ -124,7 +129,8 @@ uint64_t attributeGridBytes(const Frame& frame, const AttributeChannels& channel
 /// Voxelizes `mesh` into `frame`, storing per-voxel attributes. `triangleAbsorption` holds one
 /// value per triangle (any unit; e.g. optical depth per write) added to the voxel on each write,
 /// or is empty (no absorption channel). For local slicing the returned frame carries the per-column
-/// ranges. Throws voxfx::Error for an invalid mesh, a span of the wrong size, a material id outside
+/// ranges. Throws voxfx::Error for an invalid mesh, a span of the wrong size (absorption, materials,
+/// vertex normals), a material id outside
 /// the table, a negative or non-finite slabOverlap, or a grid larger than the available memory. Cost:
 /// O(triangles + writes + voxels) time, attributeGridBytes memory.
 AttributeGrid voxelizeAttributes(const MeshView& mesh, const Frame& frame,

@@ -67,14 +67,16 @@ std::span<const OptionField<TwoSurfaceGlassOptions>> TwoSurfaceGlassOptions::fie
 template <class O, bool kTwoSurface>
 VoxelGlassMethod<O, kTwoSurface> VoxelGlassMethod<O, kTwoSurface>::build(const GlassInput& input,
                                                                          const O& options) {
-    return VoxelGlassMethod(VoxelGlass(input.mesh, input.triangleMedium, input.media, options), options);
+    return VoxelGlassMethod(
+        VoxelGlass(input.mesh, input.triangleMedium, input.media, options, input.vertexNormals), options);
 }
 
 template class VoxelGlassMethod<MultiGlassOptions, false>;
 template class VoxelGlassMethod<TwoSurfaceGlassOptions, true>;
 
 VoxelGlass::VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMedium,
-                       std::vector<GlassMedium> media, const VoxelGlassOptions& options)
+                       std::vector<GlassMedium> media, const VoxelGlassOptions& options,
+                       std::span<const Vec3f> vertexNormals)
     : media_(std::move(media)) {
     validateMesh(mesh, "glass mesh");
     if (triangleMedium.size() != mesh.triangleCount) fail("voxel glass: one medium per triangle expected");
@@ -105,6 +107,7 @@ VoxelGlass::VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMediu
     ao.channels = AttributeChannels::glass();
     ao.channels.count = true;
     ao.triangleMaterial = triangleMedium;
+    ao.vertexNormals = vertexNormals;
     const Frame frame = Frame::orthographic(grid, Axis::Z, dims[0], dims[1], dims[2]);
     grid_ = voxelizeAttributes(mesh, frame, {}, ao);
     // Where two materials wrote a voxel: its material is that of the lowest-indexed triangle written

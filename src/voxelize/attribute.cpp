@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "voxelize/consumers.hpp"
 #include "voxfx/attribute_grid.hpp"
@@ -47,11 +48,57 @@ bool attributeSpanSlices(const FrameView& frame, int64_t column, double depthMin
     return s0 <= s1;
 }
 
+// Per triangle, what interpolating its vertex normals at a point needs: a corner, the two edges,
+// their Gram matrix inverted (barycentric weights of a point's projection), the three normals.
+struct SmoothNormals {
+    struct Triangle {
+        Vec3d a, e1, e2;
+        double i11, i12, i22; // inverse of [[e1.e1, e1.e2], [e1.e2, e2.e2]]
+        Vec3d n[3];
+        bool degenerate;
+    };
+    std::vector<Triangle> triangles;
+
+    SmoothNormals(const MeshView& mesh, std::span<const Vec3f> vertexNormals) {
+        triangles.resize(mesh.triangleCount);
+        for (std::size_t t = 0; t < mesh.triangleCount; ++t) {
+            Triangle& tr = triangles[t];
+            tr.a = mesh.vertex(mesh.index(t, 0));
+            tr.e1 = mesh.vertex(mesh.index(t, 1)) - tr.a;
+            tr.e2 = mesh.vertex(mesh.index(t, 2)) - tr.a;
+            const double g11 = dot(tr.e1, tr.e1), g12 = dot(tr.e1, tr.e2), g22 = dot(tr.e2, tr.e2);
+            const double det = g11 * g22 - g12 * g12;
+            tr.degenerate = !(det > 1e-30 * std::max(1.0, g11 * g22));
+            tr.i11 = tr.degenerate ? 0 : g22 / det;
+            tr.i12 = tr.degenerate ? 0 : -g12 / det;
+            tr.i22 = tr.degenerate ? 0 : g11 / det;
+            for (int k = 0; k < 3; ++k) tr.n[k] = Vec3d(vertexNormals[mesh.index(t, k)]);
+        }
+    }
+    // The unit normal of triangle t at the point nearest p (or `face` where it has no direction).
+    Vec3f at(uint32_t t, const Vec3d& p, const Vec3f& face) const {
+        const Triangle& tr = triangles[t];
+        double w1 = 1.0 / 3, w2 = 1.0 / 3;
+        if (!tr.degenerate) {
+            const Vec3d q = p - tr.a;
+            const double b1 = dot(q, tr.e1), b2 = dot(q, tr.e2);
+            w1 = tr.i11 * b1 + tr.i12 * b2;
+            w2 = tr.i12 * b1 + tr.i22 * b2;
+        }
+        double w0 = 1 - w1 - w2;
+        w0 = std::max(w0, 0.0), w1 = std::max(w1, 0.0), w2 = std::max(w2, 0.0);
+        const Vec3d n = tr.n[0] * w0 + tr.n[1] * w1 + tr.n[2] * w2;
+        const double len = length(n);
+        return len > 1e-12 ? Vec3f(n / len) : face;
+    }
+};
+
 struct AttributeConsumer {
     const Frame& frame;
     AttributeGrid& grid;
     std::span<const float> absorption;          // empty when the absorption channel is off
     const std::vector<Vec3f>& faceNormals;      // empty when normals are off
+    const SmoothNormals* smooth;                // vertex normals to interpolate, or null
     std::span<const uint32_t> triangleMaterial; // empty when no material channel is stored
     std::span<const AttributeMaterial> materials;
     double overlap;
@@ -78,7 +125,15 @@ struct AttributeConsumer {
             }
             if (!g.count.empty() && g.count[i] != 0xffff) ++g.count[i];
             if (!c.absorption.empty()) g.absorption[i] += c.absorption[triangle];
-            if (!c.faceNormals.empty()) g.normalSum[i] += c.faceNormals[triangle];
+            if (!c.faceNormals.empty()) {
+                if (c.smooth) {
+                    const int64_t W = c.frame.width();
+                    g.normalSum[i] += c.smooth->at(triangle, c.frame.cellCenter(column % W, column / W, s),
+                                                   c.faceNormals[triangle]);
+                } else {
+                    g.normalSum[i] += c.faceNormals[triangle];
+                }
+            }
         }
         void fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool) {
             const int64_t column = y * c.frame.width() + x;
@@ -162,6 +217,9 @@ void checkAbsorption(const MeshView& mesh, std::span<const float> triangleAbsorp
     if (!triangleAbsorption.empty() && triangleAbsorption.size() != mesh.triangleCount)
         fail("attribute voxelization: ", triangleAbsorption.size(), " absorption values for ",
              mesh.triangleCount, " triangles");
+    if (!options.vertexNormals.empty() && options.vertexNormals.size() != mesh.vertexCount)
+        fail("attribute voxelization: ", options.vertexNormals.size(), " vertex normals for ",
+             mesh.vertexCount, " vertices");
     if (!(options.slabOverlap >= 0 && std::isfinite(options.slabOverlap)))
         fail("attribute voxelization: slab overlap must be finite and >= 0, got ", options.slabOverlap);
 }
@@ -282,10 +340,13 @@ AttributeGrid voxelizeAttributes(const MeshView& mesh, const Frame& inFrame,
         ro.coverage = options.coverage;
         ro.progress = options.progress;
         const bool anyMaterial = ch.material || ch.ior || ch.attenuation;
+        std::optional<SmoothNormals> smooth;
+        if (ch.normals && !options.vertexNormals.empty()) smooth.emplace(mesh, options.vertexNormals);
         AttributeConsumer consumer{grid.frame,
                                    grid,
                                    ch.absorption ? triangleAbsorption : std::span<const float>{},
                                    faceNormals,
+                                   smooth ? &*smooth : nullptr,
                                    anyMaterial ? options.triangleMaterial : std::span<const uint32_t>{},
                                    options.materials,
                                    options.slabOverlap,
