@@ -328,33 +328,51 @@ TEST(GlassTest, VoxelMarchRefractsOutOfASphereJustBelowTheCriticalAngle) {
     // ray meets (inside the surface, where a convex surface's normal is tilted further from the
     // ray) 32 / 16 of these 72 rays each were totally reflected at 32³ (none at 64³); with the
     // normal at the middle of the run of the surface's voxels along the ray, none.
+    //
+    // Rays oblique to the grid, on coarser grids (the sphere 9 to 11 voxels in radius), leaving at
+    // 38 and 40 degrees: before the event moved past voxels the surface touches only at a corner
+    // the ray does not pass (the ray going on into unwritten voxels, then the same surface again),
+    // 5 / 8 rays of 72 were reflected at 20³, 7 / 14 at 24³, 1 / 1 at 32³.
     const Mesh sphere = test::makeUvSphere({0, 0, 0}, 1, 64, 128);
     GlassMedium medium;
     medium.ior = float(kGlassIor);
-    for (const int64_t res : {32, 64}) {
-        VoxelGlassOptions o;
-        o.gridResolution = res;
-        VoxelGlass glass(sphere.view(), std::vector<uint32_t>(sphere.triangleCount(), 0), {medium}, o);
-        for (const double degrees : {40.0, 40.5}) {
-            const double out = degrees * M_PI / 180, in = std::asin(kGlassIor * std::sin(out));
-            for (const bool twoSurface : {false, true}) {
-                int reflected = 0;
-                for (int k = 0; k < 72; ++k) {
-                    const double phi = (k + 0.5) * 2 * M_PI / 72;
-                    const Vec3d p{std::sin(in) * std::cos(phi), std::sin(in) * std::sin(phi), std::cos(in)};
-                    const Vec3d d{0, 0, -1};
-                    const Vec3d t = snell(d, p, 1 / kGlassIor);
-                    const Vec3d q = p - t * (2 * dot(p, t)); // where the ray leaves (as sphereExitError)
-                    const GlassPath path = glass.trace(p, p, 0, d, o, twoSurface);
-                    // Refracted out: two events, leaving away from the sphere (a total reflection
-                    // turns it back inside; two-surface stops there with two events).
-                    reflected += path.events != 2 || dot(path.exitDir, q) <= 0;
+    struct Case {
+        Vec3d dir;
+        std::vector<int64_t> resolutions;
+        std::vector<double> degrees;
+    };
+    const Case cases[] = {{{0, 0, -1}, {32, 64}, {40.0, 40.5}},
+                          {normalize(Vec3d{0.37, 0.21, -1}), {20, 24, 32}, {38.0, 40.0}}};
+    for (const Case& c : cases)
+        for (const int64_t res : c.resolutions) {
+            VoxelGlassOptions o;
+            o.gridResolution = res;
+            VoxelGlass glass(sphere.view(), std::vector<uint32_t>(sphere.triangleCount(), 0), {medium}, o);
+            const Vec3d d = c.dir;
+            const Vec3d u = normalize(cross(d, std::abs(d.y) < 0.9 ? Vec3d{0, 1, 0} : Vec3d{1, 0, 0}));
+            const Vec3d v = cross(d, u);
+            for (const double degrees : c.degrees) {
+                const double out = degrees * M_PI / 180, in = std::asin(kGlassIor * std::sin(out));
+                for (const bool twoSurface : {false, true}) {
+                    int reflected = 0;
+                    for (int k = 0; k < 72; ++k) {
+                        const double phi = (k + 0.5) * 2 * M_PI / 72;
+                        // Where the ray enters: at `in` degrees from the sphere's normal there.
+                        const Vec3d p =
+                            (u * std::cos(phi) + v * std::sin(phi)) * std::sin(in) - d * std::cos(in);
+                        const Vec3d t = snell(d, p, 1 / kGlassIor);
+                        const Vec3d q = p - t * (2 * dot(p, t)); // where the ray leaves (as sphereExitError)
+                        const GlassPath path = glass.trace(p, p, 0, d, o, twoSurface);
+                        // Refracted out: two events, leaving away from the sphere (a total reflection
+                        // turns it back inside; two-surface stops there with two events).
+                        reflected += path.events != 2 || dot(path.exitDir, q) <= 0;
+                    }
+                    EXPECT_EQ(reflected, 0)
+                        << (twoSurface ? "two-surface " : "multi ") << res << "³, direction (" << d.x << " "
+                        << d.y << " " << d.z << "), leaving at " << degrees << " degrees: of 72 rays";
                 }
-                EXPECT_EQ(reflected, 0) << (twoSurface ? "two-surface " : "multi ") << res << "³, leaving at "
-                                        << degrees << " degrees: of 72 rays";
             }
         }
-    }
 }
 
 // The right-angle prism of ExactTracerReflectsTotallyInsideAPrism (45-45-90, extruded along y), 2 long.
@@ -967,7 +985,9 @@ TEST(GlassTest, MultiIsNoFurtherFromExactThanTwoSurfaceWhereMostPathsCrossTwoInt
     two.gridResolution = 64;
     o.glass = two;
     const ImageError t = imageError(render(s, cam, o).image, exact.image, exact.glassMask);
-    EXPECT_LE(m.mae, t.mae + 0.001) << "multi " << m.mae << ", two-surface " << t.mae;
+    // Measured at 64³: multi 0.0103, two-surface 0.0110 (with face normals and events at corner
+    // voxels, 0.0153 and 0.0153; at 96³ 0.0146 and 0.0128).
+    EXPECT_LE(m.mae, t.mae) << "multi " << m.mae << ", two-surface " << t.mae;
 }
 
 TEST(GlassTest, ASceneWithoutLightsIsLitByTheDefaultSunAndSkyAmbient) {

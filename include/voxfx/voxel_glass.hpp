@@ -25,7 +25,10 @@
 //                of the normal sum, below cos 30 degrees of the writes) is no crossing where the ray
 //                goes on into a voxel of one surface that it crosses (within 6 voxels of the
 //                material); otherwise, leaving, it takes the normal of its one-surface neighbour
-//                closest to the ray's direction (the face the ray heads into most directly). Snell
+//                closest to the ray's direction (the face the ray heads into most directly). A voxel
+//                the surface touches only at a corner the ray does not pass is no crossing either:
+//                the ray goes on into voxels nothing wrote and then meets the same surface again,
+//                facing the same way (within 30 degrees), before any voxel of its other side. Snell
 //                with n_from / n_to of the media on both sides, (1 - F(n_from, n_to)), the
 //                tint of a medium entered; total internal reflection where there is no solution (the media
 //                unchanged); a refraction is skipped when its voxel has the material of the last surface and

@@ -485,6 +485,39 @@ GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t me
                         }
                     }
                 }
+                if (candidate && kind == voxel_glass_detail::VoxelKind::Surface) {
+                    // A voxel the surface touches only at a corner the ray does not pass: the ray
+                    // goes on into voxels nothing wrote (still on this side of the surface) and then
+                    // meets the same surface again facing the same way, with no voxel of its other
+                    // side between. The crossing is there, not here: leaving a curved tube near its
+                    // rim the event came up to 1.5 voxels early, where the normal had turned 10
+                    // degrees (a false total reflection near the critical angle).
+                    Dda look = walk;
+                    int lookAxis = axis;
+                    double tLook = tLeave;
+                    bool gap = false;
+                    for (int k = 0;
+                         k < 2 * voxel_glass_detail::kMaxRun && tLook < clip.t1 && look.advance(lookAxis);
+                         ++k) {
+                        const int64_t j = (look.cell[1] * dims[0] + look.cell[0]) * D + look.cell[2];
+                        lookAxis = look.nextAxis();
+                        tLook = std::min(look.tMax[lookAxis], clip.t1);
+                        if (!grid_.written(j)) {
+                            gap = true;
+                            continue;
+                        }
+                        if ((!grid_.material.empty() && grid_.material[size_t(j)] != mid) ||
+                            voxel_glass_detail::voxelKind(grid_, twoMaterials_, j) !=
+                                voxel_glass_detail::VoxelKind::Surface)
+                            break;
+                        const Vec3d nj(grid_.normal(j));
+                        if ((dot(d, nj) > 0) != leaving) break; // the surface's other side: crossed
+                        if (gap) {
+                            candidate = dot(nj, n) < voxel_glass_detail::kCosBlend;
+                            break;
+                        }
+                    }
+                }
                 if (candidate) {
                     if (p.events >= options.maxEvents) {
                         p.truncate(origin_ + (g + d * tEnter) * voxel_, d, thr);
