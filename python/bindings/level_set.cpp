@@ -280,6 +280,25 @@ void bindLevelSet(py::module_& m) {
                 return combine(self, other, CsgOp::Difference, "auto", 0);
             },
             py::is_operator())
+        // A mesh on the left (mesh | level_set): Python asks the level set on the right.
+        .def(
+            "__ror__",
+            [](const py::object& self, const py::object& other) {
+                return combine(other, self, CsgOp::Union, "auto", 0);
+            },
+            py::is_operator())
+        .def(
+            "__rand__",
+            [](const py::object& self, const py::object& other) {
+                return combine(other, self, CsgOp::Intersection, "auto", 0);
+            },
+            py::is_operator())
+        .def(
+            "__rsub__",
+            [](const py::object& self, const py::object& other) {
+                return combine(other, self, CsgOp::Difference, "auto", 0);
+            },
+            py::is_operator())
         .def("copy", [](const LevelSet& l) { return std::make_shared<LevelSet>(l); })
         .def("__copy__", [](const LevelSet& l) { return std::make_shared<LevelSet>(l); })
         .def(

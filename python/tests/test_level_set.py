@@ -127,6 +127,11 @@ def test_csg_with_a_box_mesh_is_exact_at_every_voxel_in_either_order():
                                    rtol=0, atol=2e-6, err_msg=op)
         np.testing.assert_allclose(ba.value(ijk)[~edge], combine(op, clamp(db, w), clamp(da, w))[~edge],
                                    rtol=0, atol=2e-6, err_msg=op)
+    # The operators with the mesh on the left (the level set's reflected operators).
+    for op, result in (("union", b | a), ("intersection", b & a), ("difference", b - a),
+                       ("difference", voxfx.Mesh(*b) - a)):
+        np.testing.assert_allclose(result.value(ijk)[~edge], combine(op, clamp(db, w), clamp(da, w))[~edge],
+                                   rtol=0, atol=2e-6, err_msg=op)
     # The box's own level set on a's lattice: active exactly within the band.
     lb = voxfx.level_set(b, like=a)
     idx, values = lb.active_voxels()
