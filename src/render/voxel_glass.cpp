@@ -208,11 +208,12 @@ VoxelKind voxelKind(const AttributeGrid& grid, const std::vector<uint8_t>& twoMa
 }
 
 // The unit normal at grid point g of the surface whose voxel there has the unit normal `own`:
-// trilinear over the eight voxel centres around g, weighting only written voxels of `material`
-// whose normals are within 30 degrees of `own` (the others lie outside the surface's layer or
-// belong to another surface); `own` where none does.
-Vec3d normalAt(const AttributeGrid& grid, const Vec3d& g, uint32_t material, const Vec3d& own) {
-    const int64_t dims[3] = {grid.frame.width(), grid.frame.height(), grid.frame.depth()};
+// trilinear over the eight voxel centres around g, weighting the normals normalOf(voxel index)
+// gives (zero: not the surface's) that lie within 30 degrees of `own` (the others lie outside the
+// surface's layer or belong to another surface); `own` where none does.
+template <class NormalOf>
+Vec3d trilinearNormal(const Frame& frame, const Vec3d& g, const Vec3d& own, NormalOf normalOf) {
+    const int64_t dims[3] = {frame.width(), frame.height(), frame.depth()};
     const Vec3d b{std::floor(g.x - 0.5), std::floor(g.y - 0.5), std::floor(g.z - 0.5)};
     const Vec3d f = g - Vec3d{0.5, 0.5, 0.5} - b;
     Vec3d sum{0, 0, 0};
@@ -221,11 +222,8 @@ Vec3d normalAt(const AttributeGrid& grid, const Vec3d& g, uint32_t material, con
                               int64_t(b.z) + ((k >> 2) & 1)};
         if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= dims[0] || c[1] >= dims[1] || c[2] >= dims[2])
             continue;
-        const int64_t i = grid.index(c[0], c[1], c[2]);
-        if (!grid.written(i)) continue;
-        if (!grid.material.empty() && grid.material[size_t(i)] != material) continue;
-        const Vec3d n(grid.normal(i));
-        if (dot(n, own) < kCosBlend) continue;
+        const Vec3d n = normalOf((c[1] * dims[0] + c[0]) * dims[2] + c[2]);
+        if (!(length(n) > 0) || dot(n, own) < kCosBlend) continue;
         const double w =
             ((k & 1) ? f.x : 1 - f.x) * (((k >> 1) & 1) ? f.y : 1 - f.y) * (((k >> 2) & 1) ? f.z : 1 - f.z);
         sum = sum + n * w;
@@ -233,31 +231,25 @@ Vec3d normalAt(const AttributeGrid& grid, const Vec3d& g, uint32_t material, con
     const double len = length(sum);
     return len > 1e-12 ? sum / len : own;
 }
+
+// trilinearNormal over the written voxels of `material`.
+Vec3d normalAt(const AttributeGrid& grid, const Vec3d& g, uint32_t material, const Vec3d& own) {
+    return trilinearNormal(grid.frame, g, own, [&](int64_t i) {
+        if (!grid.written(i) || (!grid.material.empty() && grid.material[size_t(i)] != material))
+            return Vec3d{0, 0, 0};
+        return Vec3d(grid.normal(i));
+    });
+}
 } // namespace voxel_glass_detail
 
-// As normalAt, for the face between two touching media: lo's normal trilinear over the face's voxels
-// of the same two media around g that lie within 30 degrees of `own`'s.
+// As normalAt, for the face between two touching media: lo's normal over the face's voxels of the
+// same two media around g.
 Vec3d VoxelGlass::interfaceNormalAt(const Vec3d& g, const Interface& own) const {
-    const int64_t dims[3] = {grid_.frame.width(), grid_.frame.height(), grid_.frame.depth()};
-    const Vec3d ownNormal(own.normalLo);
-    const Vec3d b{std::floor(g.x - 0.5), std::floor(g.y - 0.5), std::floor(g.z - 0.5)};
-    const Vec3d f = g - Vec3d{0.5, 0.5, 0.5} - b;
-    Vec3d sum{0, 0, 0};
-    for (int k = 0; k < 8; ++k) {
-        const int64_t c[3] = {int64_t(b.x) + (k & 1), int64_t(b.y) + ((k >> 1) & 1),
-                              int64_t(b.z) + ((k >> 2) & 1)};
-        if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= dims[0] || c[1] >= dims[1] || c[2] >= dims[2])
-            continue;
-        const Interface* near = interfaceAt(grid_.index(c[0], c[1], c[2]));
-        if (!near || !near->between || near->lo != own.lo || near->hi != own.hi ||
-            dot(Vec3d(near->normalLo), ownNormal) < voxel_glass_detail::kCosBlend)
-            continue;
-        const double w =
-            ((k & 1) ? f.x : 1 - f.x) * (((k >> 1) & 1) ? f.y : 1 - f.y) * (((k >> 2) & 1) ? f.z : 1 - f.z);
-        sum = sum + Vec3d(near->normalLo) * w;
-    }
-    const double len = length(sum);
-    return len > 1e-12 ? sum / len : ownNormal;
+    return voxel_glass_detail::trilinearNormal(grid_.frame, g, Vec3d(own.normalLo), [&](int64_t i) {
+        const Interface* near = interfaceAt(i);
+        return near && near->between && near->lo == own.lo && near->hi == own.hi ? Vec3d(near->normalLo)
+                                                                                 : Vec3d{0, 0, 0};
+    });
 }
 
 GlassPath VoxelGlass::trace(const Vec3d& entry, const Vec3d& normal, uint32_t medium, const Vec3d& dir,
