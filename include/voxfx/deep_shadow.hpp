@@ -81,6 +81,8 @@ struct DeepShadowOptions {
     /// The camera's eye, for clusters fitted to the view (see the file comment); not an option by
     /// name: the renderer sets it from the frame's camera. Unset: clusters ignore the camera.
     std::optional<Vec3d> camera;
+    /// Clusters fitted to the camera: a renderer's cache rebuilds the maps when the camera moves.
+    bool viewDependent() const { return clusters > 1 && camera.has_value(); }
     /// Volume bricks the transfer function leaves transparent are not sampled (EmptySpace in
     /// voxfx/segment_walker.hpp); the map is the same either way, only faster.
     bool skipEmptySpace = true;

@@ -57,6 +57,9 @@ struct FrostedGlassOptions : GlassSceneOptions {
     /// the front surface's refraction (proportional below it): the environment is looked up along
     /// d + refraction * L / diagonal * (t - d), d the eye ray, t the refracted ray.
     double refraction = 1.0;
+    /// Its slicemaps are the camera's view of the glass: a renderer's cache rebuilds them when the
+    /// camera moves.
+    static constexpr bool viewDependent() { return true; }
     /// glassGrid, frostedBlur, frostedRefraction, sceneBehind.
     static std::span<const OptionField<FrostedGlassOptions>> fields();
 };

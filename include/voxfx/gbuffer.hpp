@@ -49,6 +49,9 @@ struct GBuffer {
 /// The camera's frame for a width x height image.
 Frame cameraFrame(const Camera& camera, int64_t width, int64_t height);
 GBuffer renderGBuffer(const SceneGeometry& geometry, const Frame& camera, Progress* progress = nullptr);
+/// The same into `out`, reusing its memory (a renderer's next frame of the same size allocates nothing).
+void renderGBuffer(const SceneGeometry& geometry, const Frame& camera, GBuffer& out,
+                   Progress* progress = nullptr);
 
 /// What the shading pass knows about the surface seen through pixel (x, y) (y up).
 struct SurfacePoint {

@@ -234,6 +234,9 @@ std::vector<RenderOptionInfo> renderOptionCatalog();
 struct PassTime {
     std::string_view name;
     double ms = 0;
+    /// The pass reused what an earlier frame built (RenderCache) instead of building it: the
+    /// flattened scene, the lights' shadows, the occlusion field or the glass structures.
+    bool cached = false;
 };
 
 struct RenderTimings {
@@ -267,8 +270,41 @@ struct RenderResult {
     int64_t volumeSamples = 0; ///< volume samples the ray-casting pass took
 };
 
+namespace detail {
+struct RenderCacheData;
+}
+
+/// What the frames of a static scene share, kept between render() calls: the flattened scene, each
+/// light's shadow (light grids, shadow maps, deep shadow maps, BVHs), the ambient-occlusion field,
+/// the glass method's structures, and the frame buffers (so a frame of the same size allocates
+/// nothing large). Pass one cache to every frame of a scene: an orbiting camera, a viewer, the
+/// renders of several shadow kinds. Each part is keyed by what it was built from (the meshes,
+/// materials and lights by content, the options, the camera where a technique is fitted to it:
+/// frosted glass, clustered deep shadows), so a change to the scene or the options rebuilds just
+/// what it touches and a stale part is never used; RenderTimings marks the passes that reused
+/// one (PassTime::cached). Not thread-safe: one render at a time per cache. Movable, not copyable.
+class RenderCache {
+public:
+    RenderCache();
+    ~RenderCache();
+    RenderCache(RenderCache&&) noexcept;
+    RenderCache& operator=(RenderCache&&) noexcept;
+    RenderCache(const RenderCache&) = delete;
+    RenderCache& operator=(const RenderCache&) = delete;
+    /// Drops everything kept (the memory too).
+    void clear();
+    detail::RenderCacheData& data() { return *data_; } ///< internal (render/render_cache.hpp)
+
+private:
+    std::unique_ptr<detail::RenderCacheData> data_;
+};
+
 /// Renders the scene as seen by `camera`. Throws voxfx::Error for invalid options (size, supersample)
 /// or a scene without triangles; Scene::validate is called first.
 RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options);
+/// The same, reusing what `cache` holds from earlier frames and keeping what this frame built
+/// (see RenderCache). The image is identical to render() without a cache.
+RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options,
+                    RenderCache& cache);
 
 } // namespace voxfx

@@ -18,6 +18,13 @@ std::string fmt(double v, int precision) { return numberText(v, precision); }
 
 std::string fmtMs(double ms) { return msText(ms); }
 
+std::string passTimesText(const RenderTimings& timings) {
+    std::string out;
+    for (const PassTime& p : timings.passes)
+        out += " " + std::string(p.name) + " " + fmtMs(p.ms) + (p.cached ? " (cached)," : ",");
+    return out;
+}
+
 std::string boxString(const Box3d& b) {
     return "[" + fmt(b.lo.x, 6) + ", " + fmt(b.lo.y, 6) + ", " + fmt(b.lo.z, 6) + "] .. [" + fmt(b.hi.x, 6) +
            ", " + fmt(b.hi.y, 6) + ", " + fmt(b.hi.z, 6) + "]";

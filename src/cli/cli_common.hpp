@@ -19,6 +19,9 @@ std::string withCommas(int64_t v);
 std::string fmt(double v, int precision = 3);
 /// "12.3 ms" or "1.23 s".
 std::string fmtMs(double ms);
+/// A render's pass times as the time lines print them: " flatten 2.1 ms, G-buffer 9.8 ms (cached), ..."
+/// (each pass, then its comma; "(cached)" where the pass reused an earlier frame's build).
+std::string passTimesText(const RenderTimings& timings);
 std::string boxString(const Box3d& b);
 
 /// A one-line progress indicator on stderr, shown only on a terminal and only for long work.

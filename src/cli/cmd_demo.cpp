@@ -54,7 +54,8 @@ std::vector<std::string> splitList(const std::string& s, const std::vector<std::
 
 // Renders `scene` with one shadow kind into OUT/<name>-<kind>.png; a kind that refuses the scene
 // (shadow volumes refuse open casters) is reported and skipped.
-void renderDemo(const DemoArgs& a, const Scene& scene, const std::string& name, const std::string& kind) {
+void renderDemo(const DemoArgs& a, const Scene& scene, const std::string& name, const std::string& kind,
+                RenderCache& cache) {
     // --glass as given, else the scene's default (the glass demo renders its glass as glass).
     RenderOptions o = renderOptionsFor(scene, kind, a.flags.glass);
     demoImage(o);
@@ -64,7 +65,7 @@ void renderDemo(const DemoArgs& a, const Scene& scene, const std::string& name, 
     o.progress = &progress;
     RenderResult r;
     try {
-        r = render(scene, scene.cameras.at(0), o);
+        r = render(scene, scene.cameras.at(0), o, cache);
     } catch (const Error& e) {
         progress.done();
         if (!a.quiet) std::cout << "  " << kind << ": refused: " << e.what() << "\n";
@@ -75,7 +76,7 @@ void renderDemo(const DemoArgs& a, const Scene& scene, const std::string& name, 
     writePng(r.image, out);
     if (!a.quiet) {
         std::cout << "  " << kind << ":";
-        for (const PassTime& p : r.timings.passes) std::cout << " " << p.name << " " << fmtMs(p.ms) << ",";
+        std::cout << passTimesText(r.timings);
         std::cout << " total " << fmtMs(r.timings.totalMs) << " -> " << out << "\n";
     }
 }
@@ -100,7 +101,9 @@ int runDemo(const DemoArgs& a) {
             writeGltf(scene, path);
             if (!a.quiet) std::cout << "  scene -> " << path << "\n";
         }
-        for (const std::string& kind : kinds) renderDemo(a, scene, name, kind);
+        // One cache per scene: its kinds share the flattened scene and the glass structures.
+        RenderCache cache;
+        for (const std::string& kind : kinds) renderDemo(a, scene, name, kind, cache);
     }
     return 0;
 }

@@ -46,7 +46,7 @@ void printSummary(const RenderArgs& a, const Scene& scene, const Camera& camera,
     if (const std::string counters = summary(r.shadowStats); !counters.empty())
         std::cout << "shadows: " << counters << "\n";
     std::cout << "load " << fmtMs(loadMs) << "; time:";
-    for (const PassTime& p : r.timings.passes) std::cout << " " << p.name << " " << fmtMs(p.ms) << ",";
+    std::cout << passTimesText(r.timings);
     std::cout << " total " << fmtMs(r.timings.totalMs) << " -> " << a.output << "\n";
     if (!std::holds_alternative<NoGlassOptions>(o.glass)) {
         const std::string glass =

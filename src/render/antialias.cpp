@@ -33,8 +33,8 @@ void markRefinedCells(FrameState& f) {
     const int64_t W = f.width, cw = f.width / s, ch = f.height / s;
     f.refined.assign(size_t(cw * ch), 0);
     const bool glassShown = !std::holds_alternative<NoGlassOptions>(f.options.glass);
-    std::vector<uint8_t> glass(f.lit.materials.size(), 0);
-    for (std::size_t m = 0; m < glass.size(); ++m) glass[m] = glassShown && f.lit.materials[m].isGlass();
+    std::vector<uint8_t> glass(f.scene.materials.size(), 0);
+    for (std::size_t m = 0; m < glass.size(); ++m) glass[m] = glassShown && f.scene.materials[m].isGlass();
     auto faceNormal = [&](uint32_t t) {
         const Vec3d a(geo.mesh.positions[geo.mesh.indices[3 * size_t(t)]]),
             b(geo.mesh.positions[geo.mesh.indices[3 * size_t(t) + 1]]),
@@ -90,28 +90,6 @@ bool shadedSample(const FrameState& f, int64_t x, int64_t y) {
     default:
         return dx == a / 2 && dy == a / 2;
     }
-}
-
-void fillUnrefinedCells(FrameState& f) {
-    const int s = f.adaptive;
-    if (s <= 1) return;
-    const int64_t W = f.width, cw = f.width / s, ch = f.height / s;
-    parallelFor(0, ch, 8, [&](int64_t y0, int64_t y1) {
-        for (int64_t cy = y0; cy < y1; ++cy)
-            for (int64_t cx = 0; cx < cw; ++cx) {
-                const uint8_t kind = f.refined[size_t(cy * cw + cx)];
-                if (kind == kEveryRefinedSample) continue;
-                Vec3f c;
-                if (kind == kRookSamples) {
-                    for (int dy = 0; dy < s; ++dy)
-                        c += f.shaded[size_t((cy * s + dy) * W + cx * s + rookColumn(s, dy))];
-                    c = c * (1.0f / float(s));
-                } else
-                    c = f.shaded[size_t((cy * s + s / 2) * W + cx * s + s / 2)];
-                for (int dy = 0; dy < s; ++dy)
-                    for (int dx = 0; dx < s; ++dx) f.shaded[size_t((cy * s + dy) * W + cx * s + dx)] = c;
-            }
-    });
 }
 
 namespace {

@@ -24,9 +24,6 @@ void markRefinedCells(FrameState& frame);
 /// Whether the passes shade sample (x, y) (every sample when adaptive is 1).
 bool shadedSample(const FrameState& frame, int64_t x, int64_t y);
 
-/// Gives each cell not refined at every sample the value of its shaded samples (their mean).
-void fillUnrefinedCells(FrameState& frame);
-
 /// The column of the N-rooks sample in row dy of an s x s cell (a permutation of 0..s-1).
 int rookColumn(int s, int dy);
 

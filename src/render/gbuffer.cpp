@@ -158,17 +158,21 @@ Frame cameraFrame(const Camera& camera, int64_t width, int64_t height) {
 
 GBuffer renderGBuffer(const SceneGeometry& geometry, const Frame& camera, Progress* progress) {
     GBuffer g;
+    renderGBuffer(geometry, camera, g, progress);
+    return g;
+}
+
+void renderGBuffer(const SceneGeometry& geometry, const Frame& camera, GBuffer& g, Progress* progress) {
     g.frame = camera;
     g.depth.assign(size_t(camera.columnCount()), std::numeric_limits<float>::infinity());
     g.triangle.assign(size_t(camera.columnCount()), GBuffer::kNone);
-    if (geometry.drawnTriangles == 0) return g;
+    if (geometry.drawnTriangles == 0) return;
     NearestFragmentConsumer consumer{camera.width(), camera.nearDepth(), g};
     RasterOptions ro;
     ro.progress = progress;
     MeshView drawn = geometry.mesh.view();
     drawn.triangleCount = geometry.drawnTriangles;
     rasterize(camera, drawn, ro, consumer);
-    return g;
 }
 
 bool surfaceAt(const GBuffer& gbuffer, const SceneGeometry& geometry, int64_t x, int64_t y,

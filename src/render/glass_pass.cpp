@@ -14,19 +14,15 @@
 
 namespace voxfx::detail {
 
-void shadeGlass(FrameState& frame) {
-    using Clock = std::chrono::steady_clock;
-    const GlassOptions& method = frame.options.glass;
-    if (std::holds_alternative<NoGlassOptions>(method)) return;
-    const Scene& scene = frame.lit;
+namespace {
+
+// The glass method's structures and the opaque scene's tracer (`any` false when no triangle is glass).
+std::shared_ptr<const GlassSetup> setUpGlass(const FrameState& frame, const GlassOptions& method) {
+    const Scene& scene = frame.scene;
     const SceneGeometry& geometry = frame.geometry;
-    const GBuffer& gbuffer = frame.gbuffer;
-    const RenderOptions& options = frame.options;
-    const Environment& env = *frame.environment;
-    std::vector<Vec3f>& shaded = frame.shaded;
-    std::vector<uint8_t>& sampleMask = frame.glassSamples;
-    sampleMask.assign(shaded.size(), 0);
-    std::vector<uint8_t> isGlass(scene.materials.size());
+    auto setup = std::make_shared<GlassSetup>();
+    std::vector<uint8_t>& isGlass = setup->isGlass;
+    isGlass.resize(scene.materials.size());
     std::vector<GlassMedium> media(scene.materials.size());
     const double absorption = glassAbsorptionConstant(method);
     if (!(absorption >= 0) || !std::isfinite(absorption))
@@ -41,7 +37,7 @@ void shadeGlass(FrameState& frame) {
     glass.positions = geometry.mesh.positions;
     Mesh opaque;
     opaque.positions = geometry.mesh.positions;
-    std::vector<uint32_t> medium, opaqueTriangle;
+    std::vector<uint32_t> medium;
     for (size_t t = 0; t < geometry.mesh.triangleCount(); ++t) {
         const bool g = isGlass[geometry.triangleMaterial[t]];
         for (int k = 0; k < 3; ++k)
@@ -49,22 +45,58 @@ void shadeGlass(FrameState& frame) {
         if (g)
             medium.push_back(geometry.triangleMaterial[t]);
         else
-            opaqueTriangle.push_back(uint32_t(t));
+            setup->opaqueTriangle.push_back(uint32_t(t));
     }
-    if (medium.empty()) return;
-
-    const auto t0 = Clock::now();
-    const BuiltGlass built =
-        buildGlass(GlassInput{glass.view(), geometry.normals, medium, media, gbuffer.frame}, method);
+    if (medium.empty()) return setup; // no glass: `any` stays false
+    setup->any = true;
+    setup->built =
+        buildGlass(GlassInput{glass.view(), geometry.normals, medium, media, frame.gbuffer.frame}, method);
     // What the light leaving the glass (and the reflection) comes from: the opaque scene, traced
     // exactly for every method, else the environment.
-    std::unique_ptr<TriangleTracer> behind;
-    double epsilon = 1e-6;
-    if (glassSeesSceneBehind(method) && !opaqueTriangle.empty()) {
-        behind = std::make_unique<TriangleTracer>(opaque.view());
+    if (glassSeesSceneBehind(method) && !setup->opaqueTriangle.empty()) {
+        setup->behind = std::make_unique<TriangleTracer>(opaque.view());
         const Box3d box = computeBounds(geometry.mesh.view());
-        epsilon = std::max(1e-9, 1e-5 * length(box.extent()));
+        setup->epsilon = std::max(1e-9, 1e-5 * length(box.extent()));
     }
+    return setup;
+}
+
+} // namespace
+
+void shadeGlass(FrameState& frame) {
+    using Clock = std::chrono::steady_clock;
+    const GlassOptions& method = frame.options.glass;
+    if (std::holds_alternative<NoGlassOptions>(method)) return;
+    const Scene& scene = frame.scene;
+    const SceneGeometry& geometry = frame.geometry;
+    const GBuffer& gbuffer = frame.gbuffer;
+    const RenderOptions& options = frame.options;
+    const Environment& env = *frame.environment;
+    std::vector<Vec3f>& shaded = frame.shaded;
+    std::vector<uint8_t>& sampleMask = frame.glassSamples;
+    sampleMask.assign(shaded.size(), 0);
+
+    const auto t0 = Clock::now();
+    // Built from the meshes, materials, normals (crease angle) and options, and the camera for a
+    // method fitted to the view: reused from the cache while those stay the same.
+    Hasher key;
+    key.value(frame.meshesKey), key.value(frame.materialsKey), key.value(options.creaseAngle);
+    key.options(method);
+    if (viewDependent(method)) hashCamera(key, frame.camera);
+    std::shared_ptr<const GlassSetup> cached = frame.cache.glass.find(key.get());
+    if (cached) {
+        frame.cachedPass = true;
+    } else {
+        cached = setUpGlass(frame, method);
+        frame.cache.glass.insert(key.get(), cached);
+    }
+    if (!cached->any) return;
+    const GlassSetup& setup = *cached;
+    const std::vector<uint8_t>& isGlass = setup.isGlass;
+    const BuiltGlass& built = setup.built;
+    const TriangleTracer* behind = setup.behind.get();
+    const double epsilon = setup.epsilon;
+    const std::vector<uint32_t>& opaqueTriangle = setup.opaqueTriangle;
     auto incoming = [&](const Vec3d& from, const Vec3d& dir, double blur) -> Vec3f {
         if (behind) {
             // The opaque scene holds no glass triangle, so `from` (on the glass) left none of its

@@ -2,9 +2,25 @@
 // with the light that comes through them (voxfx/glass.hpp).
 #pragma once
 
+#include <memory>
+#include <vector>
+
 #include "render/frame_state.hpp"
+#include "voxfx/triangle_tracer.hpp"
 
 namespace voxfx::detail {
+
+/// What the glass pass builds from the scene before tracing: the method's structures, the tracer of
+/// the opaque scene behind the glass, and the media. Kept by the RenderCache while the meshes,
+/// materials and glass options (and, for a view-dependent method, the camera) stay the same.
+struct GlassSetup {
+    bool any = false;                     ///< some triangle is glass (otherwise nothing below is built)
+    std::vector<uint8_t> isGlass;         ///< per material
+    std::vector<uint32_t> opaqueTriangle; ///< per triangle of `behind`: its index in the scene
+    BuiltGlass built;
+    std::unique_ptr<TriangleTracer> behind; ///< null: the environment alone behind the glass
+    double epsilon = 1e-6;
+};
 
 /// With a glass method other than none: shades the glass samples of frame.shaded with it, marks them
 /// in frame.glassSamples (one entry per sample) and records the method's times in frame.result.glass.

@@ -30,30 +30,60 @@ double msSince(Clock::time_point t0) {
 
 using detail::FrameState;
 
-void flattenPass(FrameState& f, Progress*) { f.geometry = flattenScene(f.scene, f.options.creaseAngle); }
+// The scene as one mesh, unless the cache holds it for the same meshes, materials (blended meshes
+// go last) and crease angle.
+void flattenPass(FrameState& f, Progress*) {
+    detail::Hasher h;
+    h.value(f.meshesKey), h.value(f.materialsKey), h.value(f.options.creaseAngle);
+    if (f.cache.geometryKey == h.get()) {
+        f.cachedPass = true;
+        return;
+    }
+    f.cache.geometryKey.reset();
+    f.geometry = flattenScene(f.scene, f.options.creaseAngle);
+    f.cache.geometryKey = h.get();
+}
 
 void gbufferPass(FrameState& f, Progress* progress) {
-    f.gbuffer = renderGBuffer(f.geometry, cameraFrame(f.camera, f.width, f.height), progress);
-    for (const uint32_t tri : f.gbuffer.triangle) f.result.coveredPixels += tri != GBuffer::kNone;
+    renderGBuffer(f.geometry, cameraFrame(f.camera, f.width, f.height), f.gbuffer, progress);
+    int64_t covered = 0;
+    for (const uint32_t tri : f.gbuffer.triangle) covered += tri != GBuffer::kNone;
+    f.result.coveredPixels = covered;
     detail::markRefinedCells(f);
 }
 
-// One shadow per light, each built by the chosen technique with its share of the progress, then
-// given the G-buffer where the technique counts over it; their counters summed.
+// One shadow per light, each built by the chosen technique with its share of the progress (or
+// reused from the cache when built from the same meshes, materials, light and options), then given
+// the G-buffer where the technique counts over it; their counters summed.
 void shadowPass(FrameState& f, Progress* progress) {
-    const std::size_t n = f.lit.lights.size();
+    const std::size_t n = f.lights.size();
     f.result.shadowStats = std::visit(
         []<class O>(const O&) -> ShadowStats { return typename detail::BuiltFor<LightShadow, O>::Stats{}; },
         f.options.shadow);
     // Deep shadows fit their clusters to the camera (DeepShadowOptions::camera).
     ShadowOptions options = f.options.shadow;
     if (auto* deep = std::get_if<DeepShadowOptions>(&options)) deep->camera = f.camera.position;
+    // Room for two techniques' shadows of every light.
+    f.cache.shadows.setCapacity(std::max<std::size_t>(8, 2 * n));
+    bool allCached = n > 0;
     for (std::size_t i = 0; i < n; ++i) {
-        detail::ProgressRange sp(progress, double(i) / double(n), double(i + 1) / double(n));
-        f.shadows.push_back(buildLightShadow(f.lit, f.lit.lights[i], options, sp.get()));
-        prepareLightShadow(f.shadows.back(), f.gbuffer, f.geometry);
-        accumulate(f.result.shadowStats, shadowStats(f.shadows.back()));
+        detail::Hasher h;
+        h.value(f.meshesKey), h.value(f.materialsKey);
+        detail::hashLight(h, f.lights[i]);
+        h.options(options);
+        if (detail::viewDependent(options)) detail::hashCamera(h, f.camera);
+        std::shared_ptr<LightShadow> shadow = f.cache.shadows.find(h.get());
+        if (!shadow) {
+            allCached = false;
+            detail::ProgressRange sp(progress, double(i) / double(n), double(i + 1) / double(n));
+            shadow = std::make_shared<LightShadow>(buildLightShadow(f.scene, f.lights[i], options, sp.get()));
+            f.cache.shadows.insert(h.get(), shadow);
+        }
+        prepareLightShadow(*shadow, f.gbuffer, f.geometry);
+        accumulate(f.result.shadowStats, shadowStats(*shadow));
+        f.shadows.push_back(std::move(shadow));
     }
+    f.cachedPass = allCached;
 }
 
 // The ambient light's occlusion field over the opaque triangles (see RenderOptions::ambientOcclusion).
@@ -61,6 +91,15 @@ void occlusionPass(FrameState& f, Progress* progress) {
     const RenderOptions& o = f.options;
     const bool ambientLight = o.skyLight > 0 || o.ambient.x > 0 || o.ambient.y > 0 || o.ambient.z > 0;
     if (o.ambientOcclusion == Occlusion::Off || !ambientLight) return;
+    detail::Hasher key;
+    key.value(f.meshesKey), key.value(f.materialsKey), key.value(o.creaseAngle);
+    key.value(o.occlusionRadius), key.value(o.occlusionResolution);
+    f.occlusion = f.cache.occlusion.find(key.get());
+    if (f.occlusion) {
+        f.cachedPass = true;
+        return;
+    }
+    const auto none = std::make_shared<const AmbientOcclusion>(); // visibility 1 everywhere
     const SceneGeometry& g = f.geometry;
     const Mesh& mesh = g.mesh;
     // Opaque triangles occlude; per mesh, its bounds and whether it is flat (every vertex on the
@@ -72,11 +111,11 @@ void occlusionPass(FrameState& f, Progress* progress) {
         double area2 = 0;
         bool flat = true;
     };
-    std::vector<PerMesh> meshes(f.lit.meshes.size());
+    std::vector<PerMesh> meshes(f.scene.meshes.size());
     std::vector<std::size_t> opaque;
     for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
         const uint32_t mat = g.triangleMaterial[t];
-        if (mat >= f.lit.materials.size() || !f.lit.materials[mat].isOpaque()) continue;
+        if (mat >= f.scene.materials.size() || !f.scene.materials[mat].isOpaque()) continue;
         opaque.push_back(t);
         PerMesh& m = meshes[g.triangleMesh[t]];
         const Vec3d a = Vec3d(mesh.positions[mesh.indices[3 * t]]),
@@ -86,7 +125,10 @@ void occlusionPass(FrameState& f, Progress* progress) {
         const Vec3d n = cross(b - a, c - a);
         if (dot(n, n) > m.area2) m.area2 = dot(n, n), m.normal = n, m.point = a;
     }
-    if (opaque.empty()) return;
+    if (opaque.empty()) {
+        f.cache.occlusion.insert(key.get(), none); // nothing occludes
+        return;
+    }
     for (const std::size_t t : opaque) {
         PerMesh& m = meshes[g.triangleMesh[t]];
         if (!m.flat || m.area2 <= 0) continue;
@@ -112,7 +154,10 @@ void occlusionPass(FrameState& f, Progress* progress) {
     std::sort(diagonals.begin(), diagonals.end());
     AmbientOcclusionOptions ao;
     ao.radius = o.occlusionRadius > 0 ? o.occlusionRadius : 0.1 * diagonals[diagonals.size() / 2];
-    if (!(ao.radius > 0)) return;
+    if (!(ao.radius > 0)) {
+        f.cache.occlusion.insert(key.get(), none);
+        return;
+    }
     const Vec3d extent = region.extent() + Vec3d{2, 2, 2} * ao.radius;
     const double longest = std::max({extent.x, extent.y, extent.z});
     ao.resolution = std::clamp<int64_t>(
@@ -124,7 +169,8 @@ void occlusionPass(FrameState& f, Progress* progress) {
     view.vertexCount = mesh.positions.size();
     view.indices = indices.data();
     view.triangleCount = opaque.size();
-    f.occlusion = AmbientOcclusion(view, region, ao);
+    f.occlusion = std::make_shared<const AmbientOcclusion>(view, region, ao);
+    f.cache.occlusion.insert(key.get(), f.occlusion);
 }
 
 void shadingPass(FrameState& f, Progress* progress) { detail::shadeGBuffer(f, progress); }
@@ -134,7 +180,6 @@ void translucencyPass(FrameState& f, Progress*) { detail::compositeTranslucency(
 void glassPass(FrameState& f, Progress*) {
     f.result.glass.method = glassName(f.options.glass);
     detail::shadeGlass(f);
-    detail::fillUnrefinedCells(f); // the samples adaptive anti-aliasing left out take their cell's
 }
 
 void volumePass(FrameState& f, Progress*) { detail::compositeVolumes(f); }
@@ -145,42 +190,56 @@ Vec3f toneMapped(const Vec3f& c, ToneMap t) {
     return {filmicToneMap(c.x), filmicToneMap(c.y), filmicToneMap(c.z)};
 }
 
+// The tone-mapped sum of the samples of cell (cx, cy) that the passes shaded: all a x a of a refined
+// cell; the mean of its N-rooks samples (glass inside), or its one representative sample, a x a
+// times, elsewhere (adaptive anti-aliasing left the others unshaded).
+Vec3f cellSum(const FrameState& f, int64_t cx, int64_t cy, ToneMap t) {
+    const int a = f.adaptive;
+    const int64_t W = f.width, sx = cx * a, sy = cy * a;
+    const uint8_t kind =
+        f.refined.empty() ? detail::kEveryRefinedSample : f.refined[size_t(cy * (W / a) + cx)];
+    Vec3f sum;
+    if (kind == detail::kEveryRefinedSample) {
+        for (int dy = 0; dy < a; ++dy)
+            for (int dx = 0; dx < a; ++dx) sum += toneMapped(f.shaded[size_t((sy + dy) * W + sx + dx)], t);
+        return sum;
+    }
+    if (kind == detail::kRookSamples) {
+        Vec3f mean;
+        for (int dy = 0; dy < a; ++dy)
+            mean += f.shaded[size_t((sy + dy) * W + sx + detail::rookColumn(a, dy))];
+        return toneMapped(mean * (1.0f / float(a)), t) * float(a * a);
+    }
+    return toneMapped(f.shaded[size_t((sy + a / 2) * W + sx + a / 2)], t) * float(a * a);
+}
+
 // Box filter of the k x k (times adaptive) samples of each pixel, each tone-mapped first (so an edge
 // against a bright sky keeps its coverage), and flip: frame rows run up, image rows down. Then the
 // post-process anti-aliasing on the pixels adaptive sampling did not refine (nor touch).
 void resolvePass(FrameState& f, Progress*) {
     const RenderOptions& o = f.options;
     const int k = o.supersample * f.adaptive, a = f.adaptive;
-    const int64_t W = f.width, cw = f.width / std::max(a, 1);
+    const int64_t W = f.width, cw = f.width / std::max(a, 1), w = o.width, h = o.height;
     RenderResult& r = f.result;
-    r.image = Image(o.width, o.height);
-    std::vector<uint8_t> refined(size_t(o.width * o.height), 0);
+    r.image = Image(w, h);
+    // Per output pixel (image rows): 1 where a cell of it was shaded at every sample.
+    std::vector<uint8_t> refined(size_t(w * h), 0);
     const float norm = 1.0f / float(k * k);
     const int cells = o.supersample; // cells of a x a samples per pixel side
-    parallelFor(0, o.height, 16, [&](int64_t y0, int64_t y1) {
+    parallelFor(0, h, 16, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = 0; x < o.width; ++x) {
+            for (int64_t x = 0; x < w; ++x) {
                 Vec3f sum;
+                uint8_t every = 0;
                 for (int cy = 0; cy < cells; ++cy)
                     for (int cx = 0; cx < cells; ++cx) {
-                        const int64_t sx = (x * cells + cx) * a, sy = (y * cells + cy) * a;
-                        // A cell not shaded at every sample holds one value a x a times.
-                        if (!f.refined.empty() && f.refined[size_t((y * cells + cy) * cw + x * cells + cx)] !=
-                                                      detail::kEveryRefinedSample) {
-                            sum += toneMapped(f.shaded[size_t(sy * W + sx)], o.toneMap) * float(a * a);
-                            continue;
-                        }
-                        for (int dy = 0; dy < a; ++dy)
-                            for (int dx = 0; dx < a; ++dx)
-                                sum += toneMapped(f.shaded[size_t((sy + dy) * W + sx + dx)], o.toneMap);
+                        sum += cellSum(f, x * cells + cx, y * cells + cy, o.toneMap);
+                        if (!f.refined.empty())
+                            every |= f.refined[size_t((y * cells + cy) * cw + x * cells + cx)] ==
+                                     detail::kEveryRefinedSample;
                     }
-                r.image.at(x, o.height - 1 - y) = sum * norm;
-                if (f.refined.empty()) continue;
-                uint8_t any = 0;
-                for (int dy = 0; dy < o.supersample; ++dy)
-                    for (int dx = 0; dx < o.supersample; ++dx)
-                        any |= f.refined[size_t((y * o.supersample + dy) * cw + x * o.supersample + dx)];
-                refined[size_t((o.height - 1 - y) * o.width + x)] = any;
+                r.image.at(x, h - 1 - y) = sum * norm;
+                refined[size_t((h - 1 - y) * w + x)] = every;
             }
     });
     for (const uint8_t v : refined) r.refinedPixels += v;
@@ -188,26 +247,31 @@ void resolvePass(FrameState& f, Progress*) {
         // Pixels next to a refined one keep their samples' coverage too.
         std::vector<uint8_t> skip(refined.size(), 0);
         if (r.refinedPixels > 0)
-            for (int64_t y = 0; y < o.height; ++y)
-                for (int64_t x = 0; x < o.width; ++x) {
-                    uint8_t any = 0;
-                    for (int64_t v = std::max<int64_t>(0, y - 1); v <= std::min(o.height - 1, y + 1); ++v)
-                        for (int64_t u = std::max<int64_t>(0, x - 1); u <= std::min(o.width - 1, x + 1); ++u)
-                            any |= refined[size_t(v * o.width + u)];
-                    skip[size_t(y * o.width + x)] = any;
-                }
+            parallelFor(0, h, 32, [&](int64_t y0, int64_t y1) {
+                for (int64_t y = y0; y < y1; ++y)
+                    for (int64_t x = 0; x < w; ++x) {
+                        uint8_t any = 0;
+                        for (int64_t v = std::max<int64_t>(0, y - 1); v <= std::min(h - 1, y + 1); ++v)
+                            for (int64_t u = std::max<int64_t>(0, x - 1); u <= std::min(w - 1, x + 1); ++u)
+                                any |= refined[size_t(v * w + u)];
+                        skip[size_t(y * w + x)] = any;
+                    }
+            });
         r.image = detail::postAntiAlias(r.image, skip);
     }
     if (f.glassSamples.empty()) return;
-    r.glassMask.assign(size_t(o.width * o.height), 0);
-    for (int64_t y = 0; y < o.height; ++y)
-        for (int64_t x = 0; x < o.width; ++x) {
-            uint8_t any = 0;
-            for (int dy = 0; dy < k; ++dy)
-                for (int dx = 0; dx < k; ++dx) any |= f.glassSamples[size_t((y * k + dy) * W + x * k + dx)];
-            r.glassMask[size_t((o.height - 1 - y) * o.width + x)] = any;
-            r.glass.pixels += any;
-        }
+    r.glassMask.assign(size_t(w * h), 0);
+    parallelFor(0, h, 32, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < w; ++x) {
+                uint8_t any = 0;
+                for (int dy = 0; dy < k; ++dy)
+                    for (int dx = 0; dx < k; ++dx)
+                        any |= f.glassSamples[size_t((y * k + dy) * W + x * k + dx)];
+                r.glassMask[size_t((h - 1 - y) * w + x)] = any;
+            }
+    });
+    for (const uint8_t v : r.glassMask) r.glass.pixels += v;
 }
 
 struct RenderPass {
@@ -238,6 +302,12 @@ void checkRender(const Scene& scene, const RenderOptions& options) {
 } // namespace
 
 RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
+    RenderCache cache; // this frame's alone
+    return render(scene, camera, options, cache);
+}
+
+RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options,
+                    RenderCache& cache) {
     checkRender(scene, options);
     const auto t0 = Clock::now();
     // The one environment: given, else the procedural sky or the flat background. A scene without
@@ -247,17 +317,16 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     const Environment* env = options.environment.get();
     if (!env)
         env = options.sky == SkyKind::Flat ? &flat.emplace(Image(1, 1, options.background)) : &defaultSky;
-    const bool addSun = scene.lights.empty() && options.defaultLights;
-    std::optional<Scene> sunlit;
-    if (addSun) {
-        Light sun;
+    std::span<const Light> lights = scene.lights;
+    Light sun;
+    if (scene.lights.empty() && options.defaultLights) {
         sun.name = "default sun";
         const Vec3d towards =
             length(env->sunDirection()) > 0 ? env->sunDirection() : SkyOptions{}.sunDirection;
         sun.direction = -normalize(towards);
         sun.color = {1.0f, 0.96f, 0.9f};
         sun.intensity = 3;
-        sunlit.emplace(scene).lights.push_back(sun);
+        lights = {&sun, 1};
     }
     // Adaptive anti-aliasing, except where the volume pass draws (it casts a ray per sample).
     const bool volumes = (scene.volumeScene && !scene.volumeScene->objects.empty()) ||
@@ -269,29 +338,39 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     const int adaptive = adaptiveOn && !volumes ? options.adaptiveSamples : 1;
     RenderResult result;
     const int k = options.supersample * adaptive;
+    detail::RenderCacheData& c = cache.data();
     FrameState frame{scene,
-                     sunlit ? *sunlit : scene,
+                     lights,
                      camera,
                      options,
                      env,
                      options.width * k,
                      options.height * k,
                      adaptive,
+                     c,
+                     detail::meshesKey(scene),
+                     detail::materialsKey(scene.materials),
+                     c.refined,
+                     c.geometry,
+                     c.gbuffer,
                      {},
                      {},
+                     c.screenOcclusion,
                      {},
-                     {},
-                     {},
-                     {},
-                     {},
+                     c.shaded,
+                     c.glassSamples,
                      result};
+    frame.refined.clear();
+    frame.glassSamples.clear();
+    frame.screenOcclusion.clear();
     withThreads(options.threads, [&] {
         double done = 0;
         for (const RenderPass& pass : kPasses) {
             detail::ProgressRange progress(options.progress, done, pass.progressEnd);
             const auto tp = Clock::now();
+            frame.cachedPass = false;
             pass.run(frame, progress.get());
-            result.timings.passes.push_back({pass.name, msSince(tp)});
+            result.timings.passes.push_back({pass.name, msSince(tp), frame.cachedPass});
             done = pass.progressEnd;
         }
     });

@@ -7,6 +7,7 @@
 #include "render/shading.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <mutex>
@@ -39,105 +40,188 @@ Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight) {
     return e * float(falloff);
 }
 
-Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Vec3d& eye) {
-    return shadePoint(frame, s, frame.lit.materials[s.material], eye);
+SurfaceShader::SurfaceShader(const FrameState& frame)
+    : environment_(frame.environment), field_(frame.occlusion.get()), exposure_(frame.options.exposure),
+      ambient_(frame.options.ambient) {
+    const RenderOptions& o = frame.options;
+    // Irradiance from the environment's order-2 harmonics (Environment::irradiance, in float): the
+    // clamped cosine's coefficients per band pi, 2 pi / 3, pi / 4, times skyLight / pi (Lambert).
+    sky_ = o.skyLight > 0;
+    constexpr double band[9] = {M_PI,     2 * M_PI / 3, 2 * M_PI / 3, 2 * M_PI / 3, M_PI / 4,
+                                M_PI / 4, M_PI / 4,     M_PI / 4,     M_PI / 4};
+    for (int b = 0; b < 9; ++b)
+        sh_[size_t(b)] = environment_->sphericalHarmonics()[size_t(b)] * float(band[b] * o.skyLight / M_PI);
+    for (std::size_t k = 0; k < frame.lights.size(); ++k) {
+        const Light& l = frame.lights[k];
+        LightTerm t;
+        t.light = &l;
+        t.shadow = k < frame.shadows.size() ? frame.shadows[k].get() : nullptr;
+        t.directional = l.type == LightType::Directional;
+        t.irradiance = l.color * l.intensity;
+        if (t.directional) t.toLight = -normalize(l.direction);
+        if (t.irradiance.x <= 0 && t.irradiance.y <= 0 && t.irradiance.z <= 0) continue;
+        lights_.push_back(t);
+    }
 }
 
-Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material& m, const Vec3d& eye) {
-    const Scene& scene = frame.lit;
-    const RenderOptions& options = frame.options;
-    const std::vector<LightShadow>& shadows = frame.shadows;
-    // Ambient: the constant plus the environment's irradiance around the normal (Lambert: / pi).
-    Vec3f ambient = options.ambient;
-    if (options.skyLight > 0)
-        ambient += frame.environment->irradiance(s.normal) * float(options.skyLight / M_PI);
-    if (options.ambientOcclusion == Occlusion::Field)
-        ambient = ambient * float(frame.occlusion.visibility(s.position, s.normal));
+Vec3f SurfaceShader::skyIrradiance(const Vec3d& normal) const {
+    const Vec3f n(normalize(normal));
+    const float x = n.x, y = n.y, z = n.z;
+    const float basis[9] = {0.282095f,
+                            0.488603f * y,
+                            0.488603f * z,
+                            0.488603f * x,
+                            1.092548f * x * y,
+                            1.092548f * y * z,
+                            0.315392f * (3 * z * z - 1),
+                            1.092548f * x * z,
+                            0.546274f * (x * x - y * y)};
+    Vec3f e;
+    for (int b = 0; b < 9; ++b) e += sh_[size_t(b)] * basis[b];
+    return {std::max(0.0f, e.x), std::max(0.0f, e.y), std::max(0.0f, e.z)};
+}
+
+Vec3f SurfaceShader::shade(const SurfacePoint& s, const Material& m, const Vec3d& eye,
+                           float occlusion) const {
+    // Ambient: the constant plus the environment's irradiance around the normal (Lambert: / pi),
+    // times its occlusion (the field's, or the screen-space one the caller gives).
+    Vec3f ambient = ambient_;
+    if (sky_) ambient += skyIrradiance(s.normal);
+    if (field_) occlusion *= float(field_->visibility(s.position, s.normal));
+    ambient = ambient * occlusion;
     // A translucent solid reflects 1 - t of its diffuse light and passes t (KHR_materials_diffuse_
     // transmission): the light from behind is the translucency pass's, the lights' below.
     const float t = m.isTranslucent() ? m.diffuseTransmission : 0.0f;
     Vec3f out = t > 0 ? ambient * m.baseColor * (1 - t) : ambient * m.baseColor;
+    if (lights_.empty()) return out * exposure_;
     const Vec3d toEye = normalize(eye - s.position);
-    for (std::size_t k = 0; k < scene.lights.size(); ++k) {
-        Vec3d l;
-        const Vec3f e = lightIrradiance(scene.lights[k], s.position, l);
+    const bool opaque = m.isOpaque();
+    for (const LightTerm& lt : lights_) {
+        Vec3d l = lt.toLight;
+        const Vec3f e = lt.directional ? lt.irradiance : lightIrradiance(*lt.light, s.position, l);
         if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
         // Which side of the surface the light is on decides lit front vs. transmitted back light.
         const bool front = dot(s.geometricNormal, l) > 0;
         Vec3f radiance;
         if (front) {
-            const double ndl = std::max(0.0, dot(s.normal, l));
+            const double ndl = dot(s.normal, l);
             if (ndl <= 0) continue;
-            const Vec3d h = normalize(l + toEye);
-            const double spec = m.specular * (m.shininess + 8) / (8 * M_PI) *
-                                std::pow(std::max(0.0, dot(s.normal, h)), double(m.shininess));
+            float spec = 0;
+            if (m.specular > 0) {
+                const Vec3d h = normalize(l + toEye);
+                const float ndh = float(std::max(0.0, dot(s.normal, h)));
+                spec = m.specular * (m.shininess + 8) / float(8 * M_PI) * std::pow(ndh, m.shininess);
+            }
             const Vec3f diffuse =
                 t > 0 ? m.baseColor * float((1 - t) / M_PI) : m.baseColor * float(1.0 / M_PI);
-            radiance = (diffuse + Vec3f{1, 1, 1} * float(spec)) * float(ndl);
+            radiance = (diffuse + Vec3f{spec, spec, spec}) * float(ndl);
         } else if (t > 0) {
             // Diffuse transmission through a translucent solid; the shadow (translucency: Beer-Lambert
             // over the matter the light crossed) says how much reaches this side.
-            const double ndl = std::max(0.0, -dot(s.normal, l));
+            const double ndl = -dot(s.normal, l);
             if (ndl <= 0) continue;
             radiance = m.diffuseTransmissionColor * float(t * ndl / M_PI);
         } else {
-            if (m.isOpaque()) continue;
-            const double ndl = std::max(0.0, -dot(s.normal, l));
+            if (opaque) continue;
+            const double ndl = -dot(s.normal, l);
             if (ndl <= 0) continue;
             radiance = m.baseColor * m.crossingTransmittance() * float(ndl / M_PI);
         }
         // The shadow lookup's normal offset goes towards the light's side of the surface.
-        const Vec3d n = front ? s.geometricNormal : -s.geometricNormal;
-        const Vec3f vis = k < shadows.size() ? shadowVisibility(shadows[k], s.position, n) : Vec3f{1, 1, 1};
-        out += radiance * e * vis;
+        if (lt.shadow)
+            radiance = radiance * shadowVisibility(*lt.shadow, s.position,
+                                                   front ? s.geometricNormal : -s.geometricNormal);
+        out += radiance * e;
     }
-    return out * options.exposure;
+    return out * exposure_;
+}
+
+Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Vec3d& eye) {
+    return shadePoint(frame, s, frame.scene.materials[s.material], eye);
+}
+
+Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material& m, const Vec3d& eye) {
+    return frame.shader->shade(s, m, eye);
 }
 
 namespace {
 
-// Background pixels show the environment along their ray.
-void shadeBackground(FrameState& frame) {
-    const Environment* env = frame.environment;
-    const GBuffer& gbuffer = frame.gbuffer;
-    const Frame& cam = gbuffer.frame;
-    const int64_t W = frame.width;
-    parallelFor(0, frame.height, 16, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = 0; x < W; ++x)
-                if (gbuffer.triangle[size_t(y * W + x)] == GBuffer::kNone && shadedSample(frame, x, y))
-                    frame.shaded[size_t(y * W + x)] =
-                        env->lookup(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - cam.eye()) *
-                        frame.options.exposure;
-    });
+// The samples of cell (cx, cy) the passes shade (antialias.hpp): every one of an edge cell, the
+// N-rooks samples of a glass cell, else the representative; as sample indices.
+int cellSamples(const FrameState& f, int64_t cx, int64_t cy, std::array<std::size_t, 64>& out) {
+    const int a = f.adaptive;
+    const int64_t W = f.width;
+    if (a <= 1) {
+        out[0] = std::size_t(cy * W + cx);
+        return 1;
+    }
+    const uint8_t kind = f.refined[size_t(cy * (W / a) + cx)];
+    int n = 0;
+    for (int dy = 0; dy < a; ++dy)
+        for (int dx = 0; dx < a; ++dx) {
+            const bool shaded = kind == kEveryRefinedSample ? true
+                                : kind == kRookSamples      ? dx == rookColumn(a, dy)
+                                                            : dx == a / 2 && dy == a / 2;
+            if (shaded) out[size_t(n++)] = std::size_t((cy * a + dy) * W + cx * a + dx);
+        }
+    return n;
 }
 
 } // namespace
 
 void shadeGBuffer(FrameState& frame, Progress* progress) {
+    frame.shader = std::make_shared<const SurfaceShader>(frame);
+    const SurfaceShader& shader = *frame.shader;
     const GBuffer& gbuffer = frame.gbuffer;
     const SceneGeometry& geometry = frame.geometry;
-    const RenderOptions& options = frame.options;
-    const int64_t W = gbuffer.frame.width(), H = gbuffer.frame.height();
-    // Exposure scales the whole linear image, the background included.
+    const std::vector<Material>& materials = frame.scene.materials;
+    const Environment& env = *frame.environment;
+    const Frame& cam = gbuffer.frame;
+    const Vec3d eye = cam.eye();
+    const int a = frame.adaptive;
+    const int64_t W = frame.width, H = frame.height, cw = W / a, ch = H / a;
+    const float exposure = frame.options.exposure;
+    // Every sample the passes read is written below (the others, left out by adaptive
+    // anti-aliasing, are never read): no need to clear.
     std::vector<Vec3f>& out = frame.shaded;
-    out.assign(size_t(W * H), options.background * options.exposure);
-    constexpr int64_t kRows = 8;
-    const int64_t blocks = (H + kRows - 1) / kRows;
+    out.resize(size_t(W * H));
+    const std::vector<float>& screenOcclusion = frame.screenOcclusion;
+    constexpr int64_t kRows = 4; // cell rows per step
+    const int64_t blocks = (ch + kRows - 1) / kRows;
     ProgressSteps steps(progress, blocks);
     parallelFor(0, blocks, 1, [&](int64_t b0, int64_t b1) {
+        std::array<std::size_t, 64> samples;
         for (int64_t b = b0; b < b1 && !steps.cancelled(); ++b) {
-            for (int64_t y = b * kRows; y < std::min(H, (b + 1) * kRows); ++y)
-                for (int64_t x = 0; x < W; ++x) {
-                    SurfacePoint s;
-                    if (shadedSample(frame, x, y) && surfaceAt(gbuffer, geometry, x, y, s))
-                        out[size_t(y * W + x)] = shadePoint(frame, s, gbuffer.frame.eye());
+            for (int64_t cy = b * kRows; cy < std::min(ch, (b + 1) * kRows); ++cy)
+                for (int64_t cx = 0; cx < cw; ++cx) {
+                    const int n = cellSamples(frame, cx, cy, samples);
+                    const float occlusion =
+                        screenOcclusion.empty() ? 1.0f : screenOcclusion[size_t(cy * cw + cx)];
+                    for (int k = 0; k < n; ++k) {
+                        const std::size_t i = samples[size_t(k)];
+                        const uint32_t tri = gbuffer.triangle[i];
+                        // Samples of a cell showing one triangle (or the background) share its
+                        // shading, as multisampling does: the first one's.
+                        int same = 0;
+                        while (same < k && gbuffer.triangle[samples[size_t(same)]] != tri) ++same;
+                        if (same < k) {
+                            out[i] = out[samples[size_t(same)]];
+                            continue;
+                        }
+                        const int64_t x = int64_t(i % size_t(W)), y = int64_t(i / size_t(W));
+                        SurfacePoint s;
+                        if (tri != GBuffer::kNone && surfaceAt(gbuffer, geometry, x, y, s))
+                            out[i] = shader.shade(s, materials[s.material], eye, occlusion);
+                        else // the background shows the environment along the sample's ray
+                            out[i] =
+                                env.lookup(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - eye) *
+                                exposure;
+                    }
                 }
             steps.step();
         }
     });
     if (steps.cancelled()) fail("cancelled");
-    shadeBackground(frame);
 }
 
 } // namespace voxfx::detail

@@ -1,6 +1,7 @@
 // voxfx — the deferred shading pass (internal): Blinn–Phong per light times the light's shadow.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "render/frame_state.hpp"
@@ -11,8 +12,37 @@ namespace voxfx::detail {
 /// unit direction from p towards the light.
 Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight);
 
-/// Linear radiance of one surface point of frame.lit seen from `eye` (ambient + every light, each
-/// times its shadow's visibility).
+/// What every surface sample of a frame is shaded with: the lights (irradiance, direction of the
+/// directional ones, shadow), the environment's irradiance harmonics, the ambient constant and
+/// occlusion field, the exposure. Built by the shading pass once per frame (FrameState::shader).
+class SurfaceShader {
+public:
+    explicit SurfaceShader(const FrameState& frame);
+    /// Linear radiance (times the exposure) of surface point s of material m seen from `eye`: ambient
+    /// (times `occlusion`, and the occlusion field's visibility where the frame has one) plus every
+    /// light's normalized Blinn–Phong times its shadow's visibility.
+    Vec3f shade(const SurfacePoint& s, const Material& m, const Vec3d& eye, float occlusion = 1) const;
+
+private:
+    Vec3f skyIrradiance(const Vec3d& normal) const;
+    struct LightTerm {
+        const Light* light = nullptr;
+        const LightShadow* shadow = nullptr;
+        Vec3f irradiance; ///< colour times intensity
+        Vec3d toLight;    ///< directional: the unit direction towards it
+        bool directional = false;
+    };
+    const Environment* environment_;
+    const AmbientOcclusion* field_;
+    float exposure_;
+    Vec3f ambient_;
+    bool sky_ = false;
+    std::array<Vec3f, 9> sh_; ///< irradiance coefficients, times skyLight / pi
+    std::vector<LightTerm> lights_;
+};
+
+/// Linear radiance of one surface point of the frame's scene seen from `eye` (ambient + every light,
+/// each times its shadow's visibility): frame.shader's, which the shading pass builds.
 Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Vec3d& eye);
 /// The same with material `m` instead of lit.materials[s.material] (the volume pass's objects).
 Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material& m, const Vec3d& eye);

@@ -15,7 +15,7 @@
 namespace voxfx::detail {
 
 void compositeTranslucency(FrameState& f) {
-    const std::vector<Material>& materials = f.lit.materials;
+    const std::vector<Material>& materials = f.scene.materials;
     std::vector<uint8_t> translucent(materials.size(), 0);
     bool anyMaterial = false;
     for (std::size_t i = 0; i < materials.size(); ++i)

@@ -178,11 +178,11 @@ struct VolumeComposite {
     static constexpr double kFullShadingChange = 0.05;
 
     VolumeComposite(const FrameState& f, const VolumeScene& scene)
-        : frame(f), vs(scene), materials(objectMaterials(f.lit, scene)), surfaces(scene),
+        : frame(f), vs(scene), materials(objectMaterials(f.scene, scene)), surfaces(scene),
           emptySpace(f.options.skipEmptySpace ? emptySpaceOf(scene)
                                               : std::vector<EmptySpace>(scene.objects.size())),
           preintegrated(preintegrate(scene)), step(sampleStep(scene) * f.options.volumeStep),
-          shaded(f.options.volumeShading == VolumeShading::Phong && !f.lit.lights.empty()),
+          shaded(f.options.volumeShading == VolumeShading::Phong && !f.lights.empty()),
           fullGradient(shaded ? fullGradients(scene) : std::vector<double>()) {}
 
     static std::vector<double> fullGradients(const VolumeScene& vs) {
@@ -261,17 +261,17 @@ struct VolumeComposite {
     // shadow its own surface by the step over which the map's visibility falls. `unshaded` is the
     // ambient plus every light's irradiance / pi: the light a sample takes without a normal.
     Vec3f lightAt(const Vec3d& p, std::vector<LightSample>& lights, Vec3f& unshaded) const {
-        const Scene& scene = frame.lit;
+        const std::span<const Light> sceneLights = frame.lights;
         const Vec3f ambient = frame.options.ambient + frame.environment->sphericalHarmonics()[0] *
                                                           float(0.282095 * frame.options.skyLight);
         unshaded = ambient;
         lights.clear();
-        for (std::size_t l = 0; l < scene.lights.size(); ++l) {
+        for (std::size_t l = 0; l < sceneLights.size(); ++l) {
             Vec3d toLight;
-            const Vec3f e = lightIrradiance(scene.lights[l], p, toLight);
+            const Vec3f e = lightIrradiance(sceneLights[l], p, toLight);
             if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
             const Vec3f vis = l < frame.shadows.size()
-                                  ? shadowVisibility(frame.shadows[l], p + toLight * step, toLight)
+                                  ? shadowVisibility(*frame.shadows[l], p + toLight * step, toLight)
                                   : Vec3f{1, 1, 1};
             const Vec3f ev = e * vis;
             unshaded += ev * float(1.0 / M_PI);
@@ -400,7 +400,7 @@ struct VolumeComposite {
 } // namespace
 
 void compositeVolumes(FrameState& frame) {
-    const Scene& scene = frame.lit;
+    const Scene& scene = frame.scene;
     // What the camera draws here: the volume scene's objects, and the meshes of blended materials
     // (left out of the G-buffer) as translucent objects.
     const bool anyBlended = std::any_of(scene.meshes.begin(), scene.meshes.end(), [&](const SceneMesh& m) {
@@ -420,7 +420,7 @@ void compositeVolumes(FrameState& frame) {
         SegmentWalker walker(*chosen, pass.surfaces.flat.triangleLeaf);
         std::vector<ObjectInterval> objects(chosen->objects.size());
         std::vector<LightSample> lights;
-        lights.reserve(scene.lights.size());
+        lights.reserve(frame.lights.size());
         int64_t local = 0;
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
