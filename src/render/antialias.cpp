@@ -17,10 +17,11 @@ SkyKind parseSkyKind(const std::string& name) { return parseEnum<SkyKind>(name, 
 
 float filmicToneMap(float x) {
     if (!(x > 0)) return 0;
-    // Narkowicz 2015, "ACES Filmic Tone Mapping Curve", with its 0.6 exposure.
-    const double v = 0.6 * double(x);
-    const double y = v * (2.51 * v + 0.03) / (v * (2.43 * v + 0.59) + 0.14);
-    return float(std::min(1.0, y));
+    // Narkowicz 2015, "ACES Filmic Tone Mapping Curve", with its 0.6 exposure (float: every pixel
+    // of every frame goes through it).
+    const float v = 0.6f * x;
+    const float y = v * (2.51f * v + 0.03f) / (v * (2.43f * v + 0.59f) + 0.14f);
+    return std::min(1.0f, y);
 }
 
 namespace detail {
@@ -35,14 +36,8 @@ void markRefinedCells(FrameState& f) {
     const bool glassShown = !std::holds_alternative<NoGlassOptions>(f.options.glass);
     std::vector<uint8_t> glass(f.scene.materials.size(), 0);
     for (std::size_t m = 0; m < glass.size(); ++m) glass[m] = glassShown && f.scene.materials[m].isGlass();
-    auto faceNormal = [&](uint32_t t) {
-        const Vec3d a(geo.mesh.positions[geo.mesh.indices[3 * size_t(t)]]),
-            b(geo.mesh.positions[geo.mesh.indices[3 * size_t(t) + 1]]),
-            c(geo.mesh.positions[geo.mesh.indices[3 * size_t(t) + 2]]);
-        const Vec3d n = cross(b - a, c - a);
-        return length(n) > 0 ? normalize(n) : n;
-    };
-    const double cos30 = std::cos(30 * M_PI / 180);
+    auto faceNormal = [&](uint32_t t) { return f.triangleBases[t].normal; };
+    const float cos30 = float(std::cos(30 * M_PI / 180));
     parallelFor(0, ch, 8, [&](int64_t y0, int64_t y1) {
         for (int64_t cy = y0; cy < y1; ++cy)
             for (int64_t cx = 0; cx < cw; ++cx) {
@@ -103,11 +98,19 @@ float lumaOf(const Vec3f& c) {
 } // namespace
 
 Image postAntiAlias(const Image& in, const std::vector<uint8_t>& skip) {
-    const int64_t W = in.width, H = in.height;
     Image out = in;
-    if (W < 3 || H < 3) return out;
-    std::vector<float> luma(in.pixels.size());
-    for (std::size_t i = 0; i < luma.size(); ++i) luma[i] = lumaOf(in.pixels[i]);
+    std::vector<float> luma;
+    postAntiAlias(in, skip, out, luma);
+    return out;
+}
+
+void postAntiAlias(const Image& in, const std::vector<uint8_t>& skip, Image& out, std::vector<float>& luma) {
+    const int64_t W = in.width, H = in.height;
+    if (W < 3 || H < 3) return;
+    luma.resize(in.pixels.size());
+    parallelFor(0, H, 64, [&](int64_t y0, int64_t y1) {
+        for (std::size_t i = size_t(y0 * W); i < size_t(y1 * W); ++i) luma[i] = lumaOf(in.pixels[i]);
+    });
     auto L = [&](int64_t x, int64_t y) {
         return luma[size_t(std::clamp<int64_t>(y, 0, H - 1) * W + std::clamp<int64_t>(x, 0, W - 1))];
     };
@@ -173,7 +176,6 @@ Image postAntiAlias(const Image& in, const std::vector<uint8_t>& skip) {
                 out.at(x, y) = in.at(x, y) * (1 - offset) + across * offset;
             }
     });
-    return out;
 }
 
 } // namespace detail

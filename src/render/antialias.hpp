@@ -34,5 +34,9 @@ int rookColumn(int s, int dy);
 /// (or the sub-pixel aliasing estimate, whichever is larger). Luma is of values clamped to [0, 1].
 /// `skip` is empty or one byte per pixel (row-major). Deterministic; rows in parallel.
 Image postAntiAlias(const Image& image, const std::vector<uint8_t>& skip);
+/// The same into `out`, which holds `image`'s pixels on entry (those it does not blend stay);
+/// `luma` is scratch memory (reused between frames).
+void postAntiAlias(const Image& image, const std::vector<uint8_t>& skip, Image& out,
+                   std::vector<float>& luma);
 
 } // namespace voxfx::detail

@@ -36,6 +36,7 @@ struct FrameState {
     /// and copied to the others. Empty when adaptive is 1.
     std::vector<uint8_t>& refined;
     SceneGeometry& geometry;
+    std::vector<TriangleBasis>& triangleBases; ///< of `geometry` (render/shading.hpp)
     GBuffer& gbuffer;
     std::vector<std::shared_ptr<LightShadow>> shadows; ///< one per light (kept in the cache)
     /// The ambient light's occlusion field (RenderOptions::ambientOcclusion field); null otherwise.

@@ -108,12 +108,21 @@ private:
     std::vector<std::pair<uint64_t, std::shared_ptr<T>>> entries_;
 };
 
+/// Per triangle of the flattened scene, what reconstructing a surface point of it needs
+/// (render/shading.hpp, surfaceFromBasis): its first corner, barycentric duals (the weights of b
+/// and c at a point p of its plane are dot(p - a, toB) and dot(p - a, toC)), and its unit face
+/// normal (zero when degenerate).
+struct TriangleBasis {
+    Vec3f a, toB, toC, normal;
+};
+
 /// The glass pass's structures (render/glass_pass.cpp): built once per glass key.
 struct GlassSetup;
 
 struct RenderCacheData {
     std::optional<uint64_t> geometryKey;
     SceneGeometry geometry;
+    std::vector<TriangleBasis> triangleBases; ///< of `geometry`
     /// Built shadows of every light and technique used lately (several kinds per light).
     KeyedCache<LightShadow> shadows{8};
     KeyedCache<const AmbientOcclusion> occlusion{2};
@@ -123,6 +132,11 @@ struct RenderCacheData {
     std::vector<Vec3f> shaded;
     std::vector<float> screenOcclusion;
     std::vector<uint8_t> refined, glassSamples;
+    struct Resolve {
+        Image filtered; ///< the box-filtered image before the post-process
+        std::vector<uint8_t> refined, skip, rows;
+        std::vector<float> luma;
+    } resolve;
 };
 
 } // namespace voxfx::detail

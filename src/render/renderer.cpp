@@ -41,6 +41,7 @@ void flattenPass(FrameState& f, Progress*) {
     }
     f.cache.geometryKey.reset();
     f.geometry = flattenScene(f.scene, f.options.creaseAngle);
+    f.triangleBases = detail::triangleBases(f.geometry);
     f.cache.geometryKey = h.get();
 }
 
@@ -221,9 +222,18 @@ void resolvePass(FrameState& f, Progress*) {
     const int k = o.supersample * f.adaptive, a = f.adaptive;
     const int64_t W = f.width, cw = f.width / std::max(a, 1), w = o.width, h = o.height;
     RenderResult& r = f.result;
+    detail::RenderCacheData::Resolve& scratch = f.cache.resolve;
+    const bool post = o.antiAliasing == AntiAliasing::Post || o.antiAliasing == AntiAliasing::Full;
+    // The box-filtered image: the result, or (post-process) its input, kept between frames.
     r.image = Image(w, h);
+    Image& filtered = post ? scratch.filtered : r.image;
+    if (post) {
+        filtered.width = w, filtered.height = h;
+        filtered.pixels.resize(size_t(w * h));
+    }
     // Per output pixel (image rows): 1 where a cell of it was shaded at every sample.
-    std::vector<uint8_t> refined(size_t(w * h), 0);
+    std::vector<uint8_t>& refined = scratch.refined;
+    refined.resize(size_t(w * h));
     const float norm = 1.0f / float(k * k);
     const int cells = o.supersample; // cells of a x a samples per pixel side
     parallelFor(0, h, 16, [&](int64_t y0, int64_t y1) {
@@ -238,26 +248,40 @@ void resolvePass(FrameState& f, Progress*) {
                             every |= f.refined[size_t((y * cells + cy) * cw + x * cells + cx)] ==
                                      detail::kEveryRefinedSample;
                     }
-                r.image.at(x, h - 1 - y) = sum * norm;
+                const Vec3f c = sum * norm;
+                filtered.at(x, h - 1 - y) = c;
+                if (post) r.image.at(x, h - 1 - y) = c;
                 refined[size_t((h - 1 - y) * w + x)] = every;
             }
     });
     for (const uint8_t v : refined) r.refinedPixels += v;
-    if (o.antiAliasing == AntiAliasing::Post || o.antiAliasing == AntiAliasing::Full) {
+    if (post) {
         // Pixels next to a refined one keep their samples' coverage too.
-        std::vector<uint8_t> skip(refined.size(), 0);
-        if (r.refinedPixels > 0)
+        // The 3 x 3 dilation of `refined`, as a row pass then a column pass.
+        std::vector<uint8_t>& skip = scratch.skip;
+        std::vector<uint8_t>& rows = scratch.rows;
+        skip.assign(refined.size(), 0);
+        if (r.refinedPixels > 0) {
+            rows.resize(refined.size());
             parallelFor(0, h, 32, [&](int64_t y0, int64_t y1) {
-                for (int64_t y = y0; y < y1; ++y)
-                    for (int64_t x = 0; x < w; ++x) {
-                        uint8_t any = 0;
-                        for (int64_t v = std::max<int64_t>(0, y - 1); v <= std::min(h - 1, y + 1); ++v)
-                            for (int64_t u = std::max<int64_t>(0, x - 1); u <= std::min(w - 1, x + 1); ++u)
-                                any |= refined[size_t(v * w + u)];
-                        skip[size_t(y * w + x)] = any;
-                    }
+                for (int64_t y = y0; y < y1; ++y) {
+                    const uint8_t* in = &refined[size_t(y * w)];
+                    uint8_t* out = &rows[size_t(y * w)];
+                    for (int64_t x = 0; x < w; ++x)
+                        out[x] = in[x] | (x > 0 ? in[x - 1] : 0) | (x + 1 < w ? in[x + 1] : 0);
+                }
             });
-        r.image = detail::postAntiAlias(r.image, skip);
+            parallelFor(0, h, 32, [&](int64_t y0, int64_t y1) {
+                for (int64_t y = y0; y < y1; ++y) {
+                    const uint8_t* above = &rows[size_t(std::max<int64_t>(0, y - 1) * w)];
+                    const uint8_t* at = &rows[size_t(y * w)];
+                    const uint8_t* below = &rows[size_t(std::min(h - 1, y + 1) * w)];
+                    uint8_t* out = &skip[size_t(y * w)];
+                    for (int64_t x = 0; x < w; ++x) out[x] = above[x] | at[x] | below[x];
+                }
+            });
+        }
+        detail::postAntiAlias(filtered, skip, r.image, scratch.luma);
     }
     if (f.glassSamples.empty()) return;
     r.glassMask.assign(size_t(w * h), 0);
@@ -352,6 +376,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
                      detail::materialsKey(scene.materials),
                      c.refined,
                      c.geometry,
+                     c.triangleBases,
                      c.gbuffer,
                      {},
                      {},

@@ -51,6 +51,8 @@ SurfaceShader::SurfaceShader(const FrameState& frame)
                                 M_PI / 4, M_PI / 4,     M_PI / 4,     M_PI / 4};
     for (int b = 0; b < 9; ++b)
         sh_[size_t(b)] = environment_->sphericalHarmonics()[size_t(b)] * float(band[b] * o.skyLight / M_PI);
+    materials_.reserve(frame.scene.materials.size());
+    for (const Material& m : frame.scene.materials) materials_.push_back(prepare(m));
     for (std::size_t k = 0; k < frame.lights.size(); ++k) {
         const Light& l = frame.lights[k];
         LightTerm t;
@@ -81,21 +83,42 @@ Vec3f SurfaceShader::skyIrradiance(const Vec3d& normal) const {
     return {std::max(0.0f, e.x), std::max(0.0f, e.y), std::max(0.0f, e.z)};
 }
 
+ShadeMaterial SurfaceShader::prepare(const Material& m) {
+    // A translucent solid reflects 1 - t of its diffuse light and passes t (KHR_materials_diffuse_
+    // transmission): the light from behind is the translucency pass's, the lights' below.
+    ShadeMaterial out;
+    const float t = m.isTranslucent() ? m.diffuseTransmission : 0.0f;
+    out.ambientAlbedo = t > 0 ? m.baseColor * (1 - t) : m.baseColor;
+    out.diffuse = out.ambientAlbedo * float(1.0 / M_PI);
+    if (t > 0) // diffuse transmission through a translucent solid, times its shadow
+        out.behind = m.diffuseTransmissionColor * float(t / M_PI);
+    else if (!m.isOpaque()) // what crosses a sheet (back-lit leaves glow)
+        out.behind = m.baseColor * m.crossingTransmittance() * float(1.0 / M_PI);
+    out.specular = m.specular > 0 ? m.specular * (m.shininess + 8) / float(8 * M_PI) : 0.0f;
+    out.shininess = m.shininess;
+    return out;
+}
+
+Vec3f SurfaceShader::shade(const SurfacePoint& s, const Vec3d& eye, float occlusion) const {
+    return shadeWith(s, materials_[s.material], eye, occlusion);
+}
+
 Vec3f SurfaceShader::shade(const SurfacePoint& s, const Material& m, const Vec3d& eye,
                            float occlusion) const {
+    return shadeWith(s, prepare(m), eye, occlusion);
+}
+
+Vec3f SurfaceShader::shadeWith(const SurfacePoint& s, const ShadeMaterial& m, const Vec3d& eye,
+                               float occlusion) const {
     // Ambient: the constant plus the environment's irradiance around the normal (Lambert: / pi),
     // times its occlusion (the field's, or the screen-space one the caller gives).
     Vec3f ambient = ambient_;
     if (sky_) ambient += skyIrradiance(s.normal);
     if (field_) occlusion *= float(field_->visibility(s.position, s.normal));
-    ambient = ambient * occlusion;
-    // A translucent solid reflects 1 - t of its diffuse light and passes t (KHR_materials_diffuse_
-    // transmission): the light from behind is the translucency pass's, the lights' below.
-    const float t = m.isTranslucent() ? m.diffuseTransmission : 0.0f;
-    Vec3f out = t > 0 ? ambient * m.baseColor * (1 - t) : ambient * m.baseColor;
+    Vec3f out = ambient * m.ambientAlbedo * occlusion;
     if (lights_.empty()) return out * exposure_;
     const Vec3d toEye = normalize(eye - s.position);
-    const bool opaque = m.isOpaque();
+    const bool lightsBehind = m.behind.x > 0 || m.behind.y > 0 || m.behind.z > 0;
     for (const LightTerm& lt : lights_) {
         Vec3d l = lt.toLight;
         const Vec3f e = lt.directional ? lt.irradiance : lightIrradiance(*lt.light, s.position, l);
@@ -110,22 +133,16 @@ Vec3f SurfaceShader::shade(const SurfacePoint& s, const Material& m, const Vec3d
             if (m.specular > 0) {
                 const Vec3d h = normalize(l + toEye);
                 const float ndh = float(std::max(0.0, dot(s.normal, h)));
-                spec = m.specular * (m.shininess + 8) / float(8 * M_PI) * std::pow(ndh, m.shininess);
+                // x^s <= e^(s (x - 1)) (as ln x <= x - 1): below 1e-4 where s (1 - x) > 9.21, a lobe
+                // too faint to show, so most samples skip the pow.
+                if (m.shininess * (1 - ndh) < 9.21f) spec = m.specular * std::pow(ndh, m.shininess);
             }
-            const Vec3f diffuse =
-                t > 0 ? m.baseColor * float((1 - t) / M_PI) : m.baseColor * float(1.0 / M_PI);
-            radiance = (diffuse + Vec3f{spec, spec, spec}) * float(ndl);
-        } else if (t > 0) {
-            // Diffuse transmission through a translucent solid; the shadow (translucency: Beer-Lambert
-            // over the matter the light crossed) says how much reaches this side.
-            const double ndl = -dot(s.normal, l);
-            if (ndl <= 0) continue;
-            radiance = m.diffuseTransmissionColor * float(t * ndl / M_PI);
+            radiance = (m.diffuse + Vec3f{spec, spec, spec}) * float(ndl);
         } else {
-            if (opaque) continue;
+            if (!lightsBehind) continue; // an opaque surface's back stays dark
             const double ndl = -dot(s.normal, l);
             if (ndl <= 0) continue;
-            radiance = m.baseColor * m.crossingTransmittance() * float(ndl / M_PI);
+            radiance = m.behind * float(ndl);
         }
         // The shadow lookup's normal offset goes towards the light's side of the surface.
         if (lt.shadow)
@@ -136,8 +153,64 @@ Vec3f SurfaceShader::shade(const SurfacePoint& s, const Material& m, const Vec3d
     return out * exposure_;
 }
 
+std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry) {
+    const Mesh& mesh = geometry.mesh;
+    std::vector<TriangleBasis> out(mesh.triangleCount());
+    parallelFor(0, int64_t(out.size()), 4096, [&](int64_t t0, int64_t t1) {
+        for (int64_t t = t0; t < t1; ++t) {
+            const uint32_t* corner = &mesh.indices[3 * size_t(t)];
+            const Vec3d a(mesh.positions[corner[0]]), b(mesh.positions[corner[1]]),
+                c(mesh.positions[corner[2]]);
+            const Vec3d e1 = b - a, e2 = c - a, n = cross(e1, e2);
+            const double area2 = dot(n, n);
+            TriangleBasis& basis = out[size_t(t)];
+            basis.a = Vec3f(a);
+            if (area2 > 0) {
+                // p - a = wb e1 + wc e2 in the plane: wb = (p - a).(e2 x n) / |n|^2 and
+                // wc = (p - a).(n x e1) / |n|^2 (triple products of (p - a) x e2 = wb n).
+                basis.toB = Vec3f(cross(e2, n) / area2);
+                basis.toC = Vec3f(cross(n, e1) / area2);
+                basis.normal = Vec3f(n / std::sqrt(area2));
+            }
+        }
+    });
+    return out;
+}
+
+bool surfaceFromBasis(const GBuffer& gbuffer, const SceneGeometry& geometry,
+                      std::span<const TriangleBasis> bases, int64_t x, int64_t y, SurfacePoint& out) {
+    const auto i = size_t(y * gbuffer.frame.width() + x);
+    const uint32_t t = gbuffer.triangle[i];
+    if (t == GBuffer::kNone) return false;
+    const TriangleBasis& basis = bases[t];
+    // The pixel ray meets the triangle's plane where the interpolated depth says.
+    const Vec3d p = gbuffer.frame.worldFromGrid({double(x) + 0.5, double(y) + 0.5, double(gbuffer.depth[i])});
+    const Vec3f rel(p - Vec3d(basis.a));
+    // Barycentrics, clamped against rounding (a degenerate triangle: a third each).
+    float wb = 1.0f / 3, wc = 1.0f / 3;
+    Vec3f ng = basis.normal;
+    if (ng.x != 0 || ng.y != 0 || ng.z != 0) {
+        wb = std::max(0.0f, dot(rel, basis.toB));
+        wc = std::max(0.0f, dot(rel, basis.toC));
+    }
+    const float wa = std::max(0.0f, 1 - wb - wc);
+    const uint32_t* corner = &geometry.mesh.indices[3 * size_t(t)];
+    Vec3f n = geometry.normals[corner[0]] * wa + geometry.normals[corner[1]] * wb +
+              geometry.normals[corner[2]] * wc;
+    const float len = length(n);
+    n = len > 0 ? n / len : ng;
+    // Both sides are visible: turn the normals towards the viewer.
+    if (dot(Vec3d(ng), gbuffer.frame.eye() - p) < 0) ng = -ng;
+    if (dot(n, ng) < 0) n = -n;
+    out.position = p;
+    out.normal = Vec3d(n);
+    out.geometricNormal = Vec3d(ng);
+    out.material = geometry.triangleMaterial[t];
+    return true;
+}
+
 Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Vec3d& eye) {
-    return shadePoint(frame, s, frame.scene.materials[s.material], eye);
+    return frame.shader->shade(s, eye);
 }
 
 Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material& m, const Vec3d& eye) {
@@ -174,7 +247,7 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
     const SurfaceShader& shader = *frame.shader;
     const GBuffer& gbuffer = frame.gbuffer;
     const SceneGeometry& geometry = frame.geometry;
-    const std::vector<Material>& materials = frame.scene.materials;
+    const std::vector<TriangleBasis>& bases = frame.triangleBases;
     const Environment& env = *frame.environment;
     const Frame& cam = gbuffer.frame;
     const Vec3d eye = cam.eye();
@@ -210,8 +283,8 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                         }
                         const int64_t x = int64_t(i % size_t(W)), y = int64_t(i / size_t(W));
                         SurfacePoint s;
-                        if (tri != GBuffer::kNone && surfaceAt(gbuffer, geometry, x, y, s))
-                            out[i] = shader.shade(s, materials[s.material], eye, occlusion);
+                        if (tri != GBuffer::kNone && surfaceFromBasis(gbuffer, geometry, bases, x, y, s))
+                            out[i] = shader.shade(s, eye, occlusion);
                         else // the background shows the environment along the sample's ray
                             out[i] =
                                 env.lookup(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - eye) *

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <span>
 #include <vector>
 
 #include "render/frame_state.hpp"
@@ -12,18 +13,40 @@ namespace voxfx::detail {
 /// unit direction from p towards the light.
 Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight);
 
+/// What shading reads of a material, computed once (SurfaceShader::prepare).
+struct ShadeMaterial {
+    Vec3f ambientAlbedo;  ///< baseColor, times 1 - t for a translucent solid
+    Vec3f diffuse;        ///< the front's Lambert BRDF: ambientAlbedo / pi
+    Vec3f behind;         ///< radiance per unit irradiance and cosine from a light on the far side
+    float specular = 0;   ///< normalized Blinn–Phong factor: specular (s + 8) / 8 pi (0: none)
+    float shininess = 32; ///< s
+};
+
+/// Per triangle of the flattened scene, its TriangleBasis (render/render_cache.hpp).
+std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry);
+
+/// The surface seen through G-buffer sample (x, y), as surfaceAt (voxfx/gbuffer.hpp) gives it, from
+/// the precomputed bases. False for the background.
+bool surfaceFromBasis(const GBuffer& gbuffer, const SceneGeometry& geometry,
+                      std::span<const TriangleBasis> bases, int64_t x, int64_t y, SurfacePoint& out);
+
 /// What every surface sample of a frame is shaded with: the lights (irradiance, direction of the
 /// directional ones, shadow), the environment's irradiance harmonics, the ambient constant and
-/// occlusion field, the exposure. Built by the shading pass once per frame (FrameState::shader).
+/// occlusion field, the exposure, the scene's materials. Built by the shading pass once per frame
+/// (FrameState::shader).
 class SurfaceShader {
 public:
     explicit SurfaceShader(const FrameState& frame);
-    /// Linear radiance (times the exposure) of surface point s of material m seen from `eye`: ambient
-    /// (times `occlusion`, and the occlusion field's visibility where the frame has one) plus every
-    /// light's normalized Blinn–Phong times its shadow's visibility.
+    /// Linear radiance (times the exposure) of surface point s seen from `eye`, of the scene's
+    /// material s.material: ambient (times `occlusion`, and the occlusion field's visibility where
+    /// the frame has one) plus every light's normalized Blinn–Phong times its shadow's visibility.
+    Vec3f shade(const SurfacePoint& s, const Vec3d& eye, float occlusion = 1) const;
+    /// The same with material m instead (the volume pass's objects).
     Vec3f shade(const SurfacePoint& s, const Material& m, const Vec3d& eye, float occlusion = 1) const;
+    static ShadeMaterial prepare(const Material& m);
 
 private:
+    Vec3f shadeWith(const SurfacePoint& s, const ShadeMaterial& m, const Vec3d& eye, float occlusion) const;
     Vec3f skyIrradiance(const Vec3d& normal) const;
     struct LightTerm {
         const Light* light = nullptr;
@@ -39,6 +62,7 @@ private:
     bool sky_ = false;
     std::array<Vec3f, 9> sh_; ///< irradiance coefficients, times skyLight / pi
     std::vector<LightTerm> lights_;
+    std::vector<ShadeMaterial> materials_; ///< the scene's, prepared
 };
 
 /// Linear radiance of one surface point of the frame's scene seen from `eye` (ambient + every light,
