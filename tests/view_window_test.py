@@ -155,7 +155,12 @@ class Session:
     def run(self, *args, check=True):
         r = subprocess.run(list(args), env=self.env, cwd=self.workdir, capture_output=True, text=True)
         if check and r.returncode != 0:
-            fail(f"{' '.join(args)}: exit {r.returncode}\n{r.stdout}{r.stderr}")
+            state = ""
+            if self.viewer is not None:
+                code = self.viewer.poll()
+                state = (f"\nvoxfx view {'runs' if code is None else f'exited with {code}'}; its output:\n"
+                         + self.output())
+            fail(f"{' '.join(args)}: exit {r.returncode}\n{r.stdout}{r.stderr}{state}")
         return r
 
     def start_viewer(self, *args):
@@ -195,8 +200,8 @@ class Session:
     def xdotool(self, *args):
         self.run("xdotool", *args)
 
-    def key(self, name):
-        self.xdotool("mousemove", "--window", self.window, str(W // 2), str(H // 2), "key", name)
+    def key(self, name, check=True):
+        self.run("xdotool", "mousemove", "--window", self.window, str(W // 2), str(H // 2), "key", name, check=check)
 
     def drag(self, button, x0, y0, x1, y1, steps=8):
         self.xdotool("mousemove", "--window", self.window, str(x0), str(y0), "mousedown", str(button))
@@ -312,7 +317,8 @@ def main():
         session.key("i")                                    # overlay off
         time.sleep(0.3)
         shot = session.screenshot()
-        session.key("q")
+        # The window closes at the key's press: xdotool's release may then find it gone (BadWindow).
+        session.key("q", check=False)
         try:
             code = session.viewer.wait(timeout=20)
         except subprocess.TimeoutExpired:
