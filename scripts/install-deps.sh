@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs what voxfx needs to build, test and benchmark on Debian 12 (apt). Idempotent and quick
-# when everything is there already.
+# when everything is there already. libsdl2-dev is the window of `voxfx view` (optional: without it the
+# rest builds); xvfb, xdotool and x11-apps (xwd) run its test (tests/view_window_test.py).
 set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
@@ -11,6 +12,7 @@ packages=(
   clang libclang-rt-14-dev
   python3-dev pybind11-dev python3-numpy python3-pytest python3-distributed python3-openvdb
   python3-pip python3-setuptools python3-wheel python3-venv python3-mypy
+  libsdl2-dev xvfb xdotool x11-apps
 )
 missing=()
 for p in "${packages[@]}"; do

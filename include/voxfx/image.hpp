@@ -25,4 +25,8 @@ struct Image {
 float linearToSrgb(float v);
 float srgbToLinear(float v);
 
+/// The image as 8-bit sRGB, three bytes (R, G, B) per pixel in row order: each channel
+/// lround(linearToSrgb(v) * 255), what writePng stores and what a viewer shows.
+std::vector<uint8_t> toSrgb8(const Image& image);
+
 } // namespace voxfx

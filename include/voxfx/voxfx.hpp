@@ -80,6 +80,9 @@
 #include "voxfx/moving_obstacle.hpp"
 #include "voxfx/particles.hpp"
 
+// view: interactive viewing: camera moves, previews, the options as a scene file's settings.
+#include "voxfx/view.hpp"
+
 // io: every function that reads or writes a file.
 #include "voxfx/attribute_io.hpp"
 #include "voxfx/environment_io.hpp"

@@ -13,6 +13,8 @@
     ls = voxfx.read_level_set("a.vdb") - mesh      # OpenVDB level-set CSG, a mesh on its lattice: exact
     report = voxfx.batch("meshes.txt", "out/", resolution=64)   # many meshes, as `voxfx batch`
     image = voxfx.render("scene.json", shadows="deep", epsilon=0.02)  # (H, W, 3) float32, linear RGB
+    r = voxfx.Renderer("scene.glb", width=640, height=360)       # frame after frame, as `voxfx view`
+    frame = r.render(r.camera().orbit(0.3), preview=True)          # (90, 160, 3) uint8 sRGB
 
 Errors raise voxfx.Error (a RuntimeError) with the library's message, bad arguments
 voxfx.ArgumentError (also a ValueError). Long calls release the GIL and stop at Ctrl-C. See also
@@ -24,6 +26,7 @@ import __future__
 from . import _voxfx
 from ._voxfx import (ArgumentError, Density, Error, Grid, Mesh, PointClassifier, Scene, SparseGrid, SurfaceMesh,
                      VolumeEstimate, __version__)
+from ._voxfx import Camera, Renderer
 from ._voxfx import ClosestPoints, LevelSet, SignedDistanceField
 
 # The I/O modules (voxfx_vdb.so, ...) lie next to _voxfx (the library looks there): nothing is
@@ -120,6 +123,6 @@ if hasattr(_batch, "__wrapped__"):
 #: File extension of each grid format that Grid.save writes.
 GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj")
 
-__all__ = ["ArgumentError", "ClosestPoints", "Density", "Error", "Grid", "LevelSet", "Mesh", "PointClassifier",
-           "Scene", "SignedDistanceField", "SparseGrid", "SurfaceMesh", "VolumeEstimate", "GRID_FORMATS",
+__all__ = ["ArgumentError", "Camera", "ClosestPoints", "Density", "Error", "Grid", "LevelSet", "Mesh",
+           "PointClassifier", "Renderer", "Scene", "SignedDistanceField", "SparseGrid", "SurfaceMesh", "VolumeEstimate", "GRID_FORMATS",
            "batch", *sorted(_FUNCTIONS)]

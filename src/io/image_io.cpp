@@ -38,11 +38,7 @@ void pngWarning(png_structp, png_const_charp) {}
 
 void writePng(const Image& image, const std::string& path) {
     if (image.width <= 0 || image.height <= 0) fail("cannot write an empty image to '", path, "'");
-    std::vector<unsigned char> rgb(size_t(image.width * image.height * 3));
-    for (size_t i = 0; i < image.pixels.size(); ++i)
-        for (int c = 0; c < 3; ++c)
-            rgb[3 * i + size_t(c)] =
-                static_cast<unsigned char>(std::lround(linearToSrgb(image.pixels[i][c]) * 255.0f));
+    std::vector<uint8_t> rgb = toSrgb8(image);
     detail::AtomicFile file(path);
     std::ostream& out = file.stream();
     std::string error;

@@ -416,7 +416,7 @@ void wrapperCameras(const json& doc, const std::string& path, Scene& scene) {
     for (std::size_t i = 0; i < cameras.size(); ++i) {
         const json& c = cameras[i];
         const std::string where = concat(path, ": cameras[", i, "]");
-        allowKeys(c, {"name", "position", "target", "up", "fovYDegrees", "near", "far"}, where);
+        allowKeys(c, {"name", "position", "target", "up", "fovYDegrees", "fovY", "near", "far"}, where);
         if (!c.contains("position") || !c.contains("target"))
             fail(where, ": needs \"position\" and \"target\"");
         Camera out;
@@ -424,7 +424,11 @@ void wrapperCameras(const json& doc, const std::string& path, Scene& scene) {
         out.position = vec3(c, "position", where);
         out.target = vec3(c, "target", where);
         out.up = vec3Or(c, "up", {0, 1, 0}, where);
-        out.fovY = num(c, "fovYDegrees", 45, where) * M_PI / 180;
+        // "fovY" in radians (what Camera holds: a saved view keeps it bit for bit), or "fovYDegrees".
+        if (c.contains("fovY") && c.contains("fovYDegrees"))
+            fail(where, ": give \"fovY\" (radians) or \"fovYDegrees\", not both");
+        out.fovY =
+            c.contains("fovY") ? num(c, "fovY", 0, where) : num(c, "fovYDegrees", 45, where) * M_PI / 180;
         out.nearDepth = num(c, "near", 0.01, where);
         out.farDepth = num(c, "far", 1.0e4, where);
         scene.cameras.insert(scene.cameras.begin() + std::ptrdiff_t(i), out);
@@ -451,11 +455,17 @@ void wrapperSettings(const json& doc, const std::string& path, const Resolve& re
         for (const auto& [key, value] : r.items()) {
             const OptionValue v = settingValue(value, concat(where, ".", key));
             checkRenderSetting(key, v, where);
+            // A setting of the scene this one adds to ("scene") gives way to this file's.
+            std::erase_if(scene.settings.render,
+                          [&](const auto& setting) { return camelCase(setting.first) == camelCase(key); });
             scene.settings.render.emplace_back(key, v);
         }
     }
-    if (doc.contains("environmentMap"))
-        scene.settings.environmentMap = resolve(str(doc, "environmentMap", path));
+    if (doc.contains("environmentMap")) {
+        // "sky" is the procedural sky (as loadEnvironment reads it), not a file beside the scene.
+        const std::string map = str(doc, "environmentMap", path);
+        scene.settings.environmentMap = map == "sky" ? map : resolve(map);
+    }
 }
 
 // "objects": volume objects and Boolean shapes, as one volume scene.
@@ -471,7 +481,10 @@ void wrapperObjects(const json& doc, const std::string& path, const Resolve& res
     if (!vs->objects.empty()) scene.volumeScene = std::move(vs);
 }
 
-Scene parseWrapper(std::string_view text, const std::string& path) {
+Scene loadSceneFile(const std::string& path, std::vector<std::filesystem::path>& chain);
+
+Scene parseWrapper(std::string_view text, const std::string& path,
+                   std::vector<std::filesystem::path>& chain) {
     json doc;
     try {
         doc = json::parse(text);
@@ -485,11 +498,21 @@ Scene parseWrapper(std::string_view text, const std::string& path) {
     };
     Scene scene;
     try {
-        allowKeys(
-            doc,
-            {"gltf", "meshes", "lights", "cameras", "receiversOnly", "render", "environmentMap", "objects"},
-            path);
+        allowKeys(doc,
+                  {"scene", "gltf", "meshes", "lights", "cameras", "receiversOnly", "render",
+                   "environmentMap", "objects"},
+                  path);
+        if (doc.contains("scene") && doc.contains("gltf"))
+            fail(path, ": give \"scene\" or \"gltf\", not both");
         if (doc.contains("gltf")) scene = detail::loadGltfScene(resolve(str(doc, "gltf", path)));
+        // "scene": any scene file this one adds to (glTF, another wrapper, a mesh).
+        if (doc.contains("scene")) {
+            const std::string base = resolve(str(doc, "scene", path));
+            scene = inScene(path + ": scene", [&] { return loadSceneFile(base, chain); });
+            if (doc.contains("objects") && scene.volumeScene)
+                fail(path, ": \"objects\": the scene '", base,
+                     "' has objects already (give them all in one of the two files)");
+        }
         wrapperMeshes(doc, path, resolve, scene);
         wrapperLights(doc, path, scene);
         wrapperCameras(doc, path, scene);
@@ -532,13 +555,24 @@ json orientedNodeMatrix(const Vec3d& position, const Vec3d& forward, const Vec3d
 
 } // namespace
 
-Scene loadScene(const std::string& path) {
+namespace {
+
+// loadScene, with the wrappers whose "scene" led here (`chain`, outermost first): a wrapper that
+// names itself, directly or through others, is refused instead of recursing without end.
+Scene loadSceneFile(const std::string& path, std::vector<std::filesystem::path>& chain) {
     const std::string ext = fileExtension(path);
     Scene scene;
     if (ext == ".gltf" || ext == ".glb") {
         scene = detail::loadGltfScene(path);
     } else if (ext == ".json") {
-        scene = parseWrapper(detail::readTextFile(path, "scene file"), path);
+        std::error_code ec;
+        std::filesystem::path canonical = std::filesystem::weakly_canonical(path, ec);
+        if (ec) canonical = std::filesystem::absolute(path);
+        for (const std::filesystem::path& p : chain)
+            if (p == canonical) fail(path, ": the scene includes itself (through \"scene\")");
+        chain.push_back(canonical);
+        scene = parseWrapper(detail::readTextFile(path, "scene file"), path, chain);
+        chain.pop_back();
     } else if (ext == ".off" || ext == ".obj" || ext == ".ply" || ext == ".stl" || ext == ".fbx" ||
                ext == ".dae" || ext == ".3ds") {
         SceneMesh m;
@@ -556,8 +590,16 @@ Scene loadScene(const std::string& path) {
     return scene;
 }
 
+} // namespace
+
+Scene loadScene(const std::string& path) {
+    std::vector<std::filesystem::path> chain;
+    return loadSceneFile(path, chain);
+}
+
 Scene parseSceneJson(std::string_view text, const std::string& path) {
-    Scene scene = parseWrapper(text, path);
+    std::vector<std::filesystem::path> chain;
+    Scene scene = parseWrapper(text, path, chain);
     scene.source = path;
     scene.validate();
     return scene;
@@ -756,6 +798,77 @@ void writeGltf(const Scene& scene, const std::string& path) {
     const bool glb = ext == ".glb";
     const json doc = w.document(glb);
     writeGltfFile(path, doc.dump(), w.bin, glb);
+}
+
+namespace {
+
+nlohmann::ordered_json vecJson(const Vec3d& v, const std::string& where) {
+    if (!isFinite(v)) fail(where, ": not a finite vector");
+    return nlohmann::ordered_json::array({v.x, v.y, v.z});
+}
+
+nlohmann::ordered_json numberJson(double v, const std::string& where) {
+    if (!std::isfinite(v)) fail(where, ": not a finite number (", v, ")");
+    return v;
+}
+
+} // namespace
+
+void writeSceneView(const SceneView& view, const std::string& path) {
+    using ojson = nlohmann::ordered_json;
+    if (fileExtension(path) != ".json")
+        fail(path, ": a scene view is a JSON wrapper: use the extension .json");
+    // Written by hand around compact values: one line per camera field and per setting.
+    auto quoted = [](const std::string& s) { return ojson(s).dump(); };
+    std::string text = "{";
+    const char* comma = "\n";
+    if (!view.scene.empty()) {
+        text += concat(comma, "  \"scene\": ", quoted(view.scene));
+        comma = ",\n";
+    }
+    if (!view.cameras.empty()) {
+        text += concat(comma, "  \"cameras\": [");
+        for (std::size_t i = 0; i < view.cameras.size(); ++i) {
+            const Camera& c = view.cameras[i];
+            const std::string where = concat(path, ": cameras[", i, "]");
+            text += concat(i ? ",\n" : "\n", "    {");
+            if (!c.name.empty()) text += concat("\"name\": ", quoted(c.name), ",\n     ");
+            text += concat("\"position\": ", vecJson(c.position, where + ".position").dump(), ",\n     ");
+            text += concat("\"target\": ", vecJson(c.target, where + ".target").dump(), ",\n     ");
+            text += concat("\"up\": ", vecJson(c.up, where + ".up").dump(), ",\n     ");
+            text += concat("\"fovY\": ", numberJson(c.fovY, where + ".fovY").dump(), ", ");
+            text += concat("\"near\": ", numberJson(c.nearDepth, where + ".near").dump(), ", ");
+            text += concat("\"far\": ", numberJson(c.farDepth, where + ".far").dump(), "}");
+        }
+        text += "\n  ]";
+        comma = ",\n";
+    }
+    if (!view.render.empty()) {
+        text += concat(comma, "  \"render\": {");
+        for (std::size_t i = 0; i < view.render.size(); ++i) {
+            const auto& [name, value] = view.render[i];
+            const std::string where = concat(path, ": render.", name);
+            const ojson v = std::visit(
+                [&]<class T>(const T& x) -> ojson {
+                    if constexpr (std::is_same_v<T, Vec3d>)
+                        return vecJson(x, where);
+                    else if constexpr (std::is_same_v<T, double>)
+                        return numberJson(x, where);
+                    else
+                        return x;
+                },
+                value);
+            text += concat(i ? ",\n" : "\n", "    ", quoted(name), ": ", v.dump());
+        }
+        text += "\n  }";
+        comma = ",\n";
+    }
+    if (!view.environmentMap.empty())
+        text += concat(comma, "  \"environmentMap\": ", quoted(view.environmentMap));
+    text += "\n}\n";
+    detail::AtomicFile file(path);
+    file.stream() << text;
+    file.commit();
 }
 
 } // namespace voxfx
