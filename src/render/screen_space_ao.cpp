@@ -1,0 +1,610 @@
+// voxfx — screen-space ambient occlusion (render/screen_space_ao.hpp): GTAO, Jimenez et al. 2016,
+// "Practical Real-Time Strategies for Accurate Indirect Occlusion", sections 4 (horizon search and
+// the per-slice integral, eq. 10) and 5 (spatial interleaving with a 4x4 pattern and a 4x4 blur;
+// the temporal part, which needs frames, is left out). Passes:
+//   1. working buffer: the samples themselves, or per 2x2 block the mean of its samples where they
+//      show one smooth surface, else the covered sample nearest the eye (a thin object in front
+//      keeps its samples; the surface behind it finds its own in the neighbouring blocks at the
+//      upsample);
+//   2. per working pixel, `directions` slices, each with two horizons found by `steps` samples per
+//      side, integrated in closed form;
+//   3. links between neighbouring working pixels on one smooth surface, and a separable blur over
+//      5 x 5 linked pixels, weights 1 2 2 2 1 (every phase of the 4x4 pattern gets the same weight,
+//      so the pattern cancels on a smooth surface);
+//   4. half resolution: a bilateral upsample (bilinear weights, where the four working pixels are
+//      linked; else times geometric similarity).
+#include "render/screen_space_ao.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "voxfx/error.hpp"
+#include "voxfx/parallel.hpp"
+
+namespace voxfx::detail {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979323846f;
+constexpr int kMaxDirections = 16, kMaxSteps = 32;
+// The horizon search reaches 1.2 radii (at p's depth) on screen, so that a sample usually lies
+// beyond the radius and the horizon is interpolated up to it (see occlusionAt); samples are spaced
+// as the 1.5th power of their index, denser near p where contact occlusion changes fastest. Both
+// chosen on the corner test (6 steps: mean error within the radius 0.027 with a reach of 1 and spacing
+// power 2, 0.007 with these).
+constexpr float kReach = 1.2f;
+constexpr double kSpacingPower = 1.5;
+
+// The 4x4 Bayer matrix: neighbouring pixels get distant pattern indices, so any 2x2 or 4x1 group
+// spreads over the slice angles.
+constexpr int kBayer[4][4] = {{0, 8, 2, 10}, {12, 4, 14, 6}, {3, 11, 1, 9}, {15, 7, 13, 5}};
+
+// A working buffer, as the passes read it: per pixel (row-major) the position, the normal, whether
+// it is covered and whether it occludes. Packed: position and flags in 16 bytes (the horizon search
+// reads them together at scattered pixels: one cache line per sample instead of three), normals
+// apart. Spans: the caller's buffers as they are (the upsample's rare fallback at full resolution).
+constexpr uint32_t kCovered = 1, kOccluder = 2;
+using Sample = ScreenSpaceSample;
+struct Packed {
+    int64_t width = 0, height = 0;
+    const Sample* sample = nullptr;
+    const Vec3f* normals = nullptr;
+    bool covered(int64_t i) const { return sample[i].flags & kCovered; }
+    bool occludes(int64_t i) const { return sample[i].flags == (kCovered | kOccluder); }
+    const Vec3f& position(int64_t i) const { return sample[i].position; }
+    const Vec3f& normal(int64_t i) const { return normals[i]; }
+};
+struct Spans {
+    int64_t width = 0, height = 0;
+    const Vec3f* positions = nullptr;
+    const Vec3f* normals = nullptr;
+    const uint8_t* coverage = nullptr;
+    const uint8_t* occluders = nullptr; ///< null: every covered sample occludes
+    bool covered(int64_t i) const { return coverage[i]; }
+    bool occludes(int64_t i) const { return coverage[i] && (!occluders || occluders[i]); }
+    const Vec3f& position(int64_t i) const { return positions[i]; }
+    const Vec3f& normal(int64_t i) const { return normals[i]; }
+};
+
+// What every pixel of one working buffer shares.
+struct Params {
+    Vec3f eye, right, up, forward;
+    float pixelsPerTan = 0; ///< working pixels per unit of (lateral offset / view depth)
+    float pixelSize = 0;    ///< 1 / pixelsPerTan: a working pixel's footprint per unit of depth
+    float radius = 0, radius2 = 0, sinBias2 = 0; ///< sinBias2: sin^2 of the bias angle
+    int directions = 0, steps = 0;
+    // Per pattern index: the slices' screen directions and the steps' distances as fractions of the
+    // radius in pixels.
+    std::array<std::array<float, kMaxDirections>, 16> dirX{}, dirY{};
+    std::array<std::array<float, kMaxSteps>, 16> stepFraction{};
+};
+
+Params makeParams(const Frame& camera, int scale, const ScreenSpaceOcclusionOptions& o) {
+    Params p;
+    p.eye = Vec3f(camera.eye());
+    p.right = Vec3f(camera.right());
+    p.up = Vec3f(camera.up());
+    p.forward = Vec3f(camera.forward());
+    p.pixelsPerTan = float(0.5 * double(camera.height()) / (camera.tanHalfFovY() * scale));
+    p.radius = float(o.radius);
+    p.pixelSize = 1 / p.pixelsPerTan;
+    p.radius2 = p.radius * p.radius;
+    p.sinBias2 = float(std::sin(o.bias) * std::sin(o.bias));
+    p.directions = o.directions;
+    p.steps = o.steps;
+    for (int k = 0; k < 16; ++k) {
+        // Slice angles: 16 rotations by sixteenths of the spacing pi / directions; step offsets: a
+        // second permutation of the pattern (5k + 3 mod 16), so angle and offset do not go together.
+        for (int s = 0; s < o.directions; ++s) {
+            const double phi = M_PI * (s + (k + 0.5) / 16) / o.directions;
+            p.dirX[size_t(k)][size_t(s)] = float(std::cos(phi));
+            p.dirY[size_t(k)][size_t(s)] = float(std::sin(phi));
+        }
+        const double jitter = (double((5 * k + 3) % 16) + 0.5) / 16;
+        for (int i = 0; i < o.steps; ++i) {
+            const double u = (i + jitter) / o.steps;
+            p.stepFraction[size_t(k)][size_t(i)] = float(std::pow(u, kSpacingPower));
+        }
+    }
+    return p;
+}
+
+// The slice's visible part between the tangent-side limit and horizon h (angle from the view vector,
+// cos h = ch, sin h = sh), for the projected normal at angle gamma (paper, eq. 10, one side):
+// (cos gamma + 2 h sin gamma - cos(2 h - gamma)) / 4, with cos(2h - gamma) expanded so that only
+// h itself needs an inverse cosine.
+inline float arc(float h, float ch, float sh, float cosG, float sinG) {
+    const float cos2hMinusG = (2 * ch * ch - 1) * cosG + 2 * sh * ch * sinG;
+    return 0.25f * (cosG + 2 * h * sinG - cos2hMinusG);
+}
+
+// acos on [-1, 1] to about 7e-5 radians (Abramowitz and Stegun 4.4.45); the horizons' angles enter
+// the integral linearly, so this is far below the method's own error.
+inline float fastAcos(float x) {
+    const float a = std::fabs(x);
+    const float r = std::sqrt(std::max(0.0f, 1 - a)) *
+                    (1.5707288f + a * (-0.2121144f + a * (0.0742610f - 0.0187293f * a)));
+    return x >= 0 ? r : kPi - r;
+}
+
+// GTAO at working pixel (x, y): the visibility in [0, 1], 1 for background.
+template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int64_t x, int64_t y) {
+    const int64_t here = y * b.width + x;
+    if (!b.covered(here)) return 1;
+    const Vec3f P = b.position(here), N = b.normal(here);
+    const Vec3f toEye = p.eye - P;
+    const float eyeDistance = length(toEye);
+    const float depth = dot(P - p.eye, p.forward);
+    if (!(eyeDistance > 0) || !(depth > 0)) return 1;
+    const Vec3f V = toEye / eyeDistance;
+    // The radius in working pixels at this depth; under a pixel nothing but p itself is in reach.
+    const float radiusPixels = p.radius * p.pixelsPerTan / depth;
+    if (!(radiusPixels >= 1)) return 1;
+    const int k = kBayer[y & 3][x & 3];
+    const auto& dirX = p.dirX[size_t(k)];
+    const auto& dirY = p.dirY[size_t(k)];
+    const auto& fraction = p.stepFraction[size_t(k)];
+    const float cx = float(x) + 0.5f, cy = float(y) + 0.5f, width = float(b.width), height = float(b.height);
+    const float reach = kReach * radiusPixels;
+    float sum = 0, sumOpen = 0;
+    for (int s = 0; s < p.directions; ++s) {
+        const float dx = dirX[size_t(s)], dy = dirY[size_t(s)];
+        // The slice: the plane through the eye ray and the screen direction (dx, dy), spanned by V
+        // and `axis` (the screen direction in world, made orthogonal to V). Angles are measured
+        // from V, positive towards axis (the side of +(dx, dy) on screen).
+        const Vec3f screen = p.right * dx + p.up * dy;
+        Vec3f axis = screen - V * dot(screen, V);
+        const float axisLength = length(axis);
+        if (!(axisLength > 1e-6f)) continue;
+        axis = axis / axisLength;
+        const Vec3f sliceNormal = cross(axis, V);
+        const Vec3f projected = N - sliceNormal * dot(N, sliceNormal);
+        const float weight = length(projected);
+        if (!(weight > 1e-6f)) continue;
+        float cosG = dot(projected, V) / weight, sinG = dot(projected, axis) / weight;
+        if (!(cosG > 0)) { // a normal turned away in this slice: taken as grazing
+            cosG = 0;
+            sinG = sinG >= 0 ? 1.0f : -1.0f;
+        }
+        const float gamma = sinG >= 0 ? fastAcos(cosG) : -fastAcos(cosG);
+        // Horizons as cosines of their angle from V, starting at the tangent plane (gamma -+ pi/2).
+        float horizon[2] = {sinG, -sinG}; // [0]: the -axis side, [1]: the +axis side
+        bool raised[2] = {false, false};
+        for (int side = 0; side < 2; ++side) {
+            const float sx = side ? dx : -dx, sy = side ? dy : -dy;
+            // A point d (from P) raises the horizon unless it lies at most `bias` above the tangent
+            // plane (the surface itself).
+            // Compared through squares with their signs (c > h iff c|c| > h|h|), so that only a
+            // sample that raises the horizon costs a square root.
+            const auto raise = [&](const Vec3f& d, float d2) {
+                const float dn = dot(d, N);
+                if (!(dn > 0 && dn * dn > p.sinBias2 * d2)) return;
+                const float dv = dot(d, V), h = horizon[side];
+                if (dv * std::fabs(dv) > h * std::fabs(h) * d2) {
+                    horizon[side] = dv / std::sqrt(d2);
+                    raised[side] = true;
+                }
+            };
+            Vec3f previous;
+            bool previousInside = false; // the last sample was an occluder within the radius
+            for (int i = 0; i < p.steps; ++i) {
+                const float t = reach * fraction[size_t(i)];
+                const float fx = cx + sx * t, fy = cy + sy * t;
+                // No data beyond the image (on it, truncation is the floor).
+                if (!(fx >= 0 && fy >= 0 && fx < width && fy < height)) break;
+                const int64_t q = int64_t(fy) * b.width + int64_t(fx);
+                if (q == here) continue;
+                if (!b.occludes(q)) {
+                    previousInside = false;
+                    continue;
+                }
+                const Vec3f d = b.position(q) - P;
+                const float d2 = dot(d, d);
+                if (d2 < p.radius2) {
+                    if (d2 > 0) raise(d, d2);
+                    previous = d;
+                    previousInside = true;
+                    continue;
+                }
+                // Beyond the radius after a sample within it: the highest occluder within the radius
+                // lies between them on a surface that rises with the distance (a wall), so the point
+                // where the segment between them crosses the sphere raises the horizon too. Without
+                // it the horizon stops at the last sample inside, short of the radius by up to a
+                // step, and walls occlude too little. Segments longer than the radius span a gap
+                // between surfaces, not a surface.
+                if (previousInside) {
+                    const Vec3f e = d - previous;
+                    const float a = dot(e, e);
+                    if (a < p.radius2) {
+                        const float bh = dot(previous, e), c = dot(previous, previous) - p.radius2;
+                        const float u = (-bh + std::sqrt(std::max(0.0f, bh * bh - a * c))) / a;
+                        const Vec3f crossing = previous + e * std::clamp(u, 0.0f, 1.0f);
+                        raise(crossing, dot(crossing, crossing));
+                    }
+                }
+                previousInside = false;
+            }
+        }
+        // The open slice (horizons at the tangent plane) and this one, through the same arithmetic so
+        // that a slice nothing occludes gives a == open exactly.
+        const float hMinus = gamma - 0.5f * kPi, hPlus = gamma + 0.5f * kPi;
+        const float openMinus = arc(hMinus, sinG, -cosG, cosG, sinG);
+        const float openPlus = arc(hPlus, -sinG, cosG, cosG, sinG);
+        float a = 0;
+        if (raised[0]) {
+            const float c = horizon[0];
+            a += arc(-fastAcos(c), c, -std::sqrt(std::max(0.0f, 1 - c * c)), cosG, sinG);
+        } else {
+            a += openMinus;
+        }
+        if (raised[1]) {
+            const float c = horizon[1];
+            a += arc(fastAcos(c), c, std::sqrt(std::max(0.0f, 1 - c * c)), cosG, sinG);
+        } else {
+            a += openPlus;
+        }
+        sum += weight * a;
+        sumOpen += weight * (openMinus + openPlus);
+    }
+    if (!(sumOpen > 0)) return 1;
+    return std::clamp(sum / sumOpen, 0.0f, 1.0f);
+}
+
+// How much neighbour (q, m) belongs to the surface of p with unit normal n, in [0, tolerance]
+// (tolerance at p itself; the weights around one p share the scale, which cancels): 0 beyond
+// `tolerance` from p's tangent plane or with normals more than 90 degrees apart.
+inline float similarity(const Vec3f& p, const Vec3f& n, float tolerance, const Vec3f& q, const Vec3f& m) {
+    const float planeDistance = std::fabs(dot(q - p, n));
+    const float c = dot(n, m);
+    if (!(planeDistance < tolerance) || !(c > 0)) return 0;
+    return (tolerance - planeDistance) * c * c;
+}
+
+// The blur's and the upsample's tolerance from p's tangent plane: a tenth of the radius (occlusion
+// changes over the radius) plus two pixels' footprint at p's depth (what a smooth surface seen at a
+// grazing angle curves away from its tangent plane over a pixel or two).
+inline float planeTolerance(const Params& p, const Vec3f& position) {
+    const float depth = std::max(dot(position - p.eye, p.forward), 0.0f);
+    return 0.1f * p.radius + 2 * depth * p.pixelSize;
+}
+
+// Per working pixel: kUniform (the upsample's fast path: its block's samples are one smooth surface
+// and it is their mean), kLinkRight and kLinkUp (it and its neighbour at x + 1, y + 1 lie on one
+// smooth surface: each within the tolerance of the other's tangent plane, normals within 25 deg).
+constexpr uint8_t kUniform = 1, kLinkRight = 2, kLinkUp = 4;
+constexpr float kLinkCos = 0.9f;
+
+void linkNeighbours(const Packed& b, const Params& p, std::vector<uint8_t>& links) {
+    const int64_t W = b.width, H = b.height;
+    const auto linked = [&](int64_t i, int64_t j, float toleranceI) {
+        if (!b.covered(j)) return false;
+        const Vec3f &P = b.position(i), &N = b.normal(i), &Q = b.position(j), &M = b.normal(j);
+        return std::fabs(dot(Q - P, N)) < toleranceI && std::fabs(dot(P - Q, M)) < planeTolerance(p, Q) &&
+               dot(N, M) > kLinkCos;
+    };
+    parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < W; ++x) {
+                const int64_t i = y * W + x;
+                uint8_t l = links[size_t(i)] & kUniform;
+                if (b.covered(i)) {
+                    const float tolerance = planeTolerance(p, b.position(i));
+                    if (x + 1 < W && linked(i, i + 1, tolerance)) l |= kLinkRight;
+                    if (y + 1 < H && linked(i, i + W, tolerance)) l |= kLinkUp;
+                }
+                links[size_t(i)] = l;
+            }
+    });
+}
+
+// Step 3: the separable blur, weights 1 2 2 2 1 over the pixels linked to the centre through a chain
+// of links (a binary bilateral filter: nothing crosses an edge or a crease), along x then y.
+void blur(const Packed& b, const std::vector<uint8_t>& links, std::span<const float> raw,
+          std::span<float> across, std::span<float> out) {
+    const int64_t W = b.width, H = b.height;
+    const auto pass = [&](std::span<const float> in, std::span<float> result, int64_t stride, uint8_t link) {
+        parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
+            for (auto i = std::size_t(y0 * W); i < std::size_t(y1 * W); ++i) {
+                if (!b.covered(int64_t(i))) {
+                    result[i] = 1;
+                    continue;
+                }
+                // Links are 0 at the image's sides, so no index leaves it.
+                float sum = 2 * in[i], weights = 2;
+                if (links[i] & link) {
+                    sum += 2 * in[i + size_t(stride)], weights += 2;
+                    if (links[i + size_t(stride)] & link) sum += in[i + size_t(2 * stride)], weights += 1;
+                }
+                if (i >= size_t(stride) && (links[i - size_t(stride)] & link)) {
+                    sum += 2 * in[i - size_t(stride)], weights += 2;
+                    if (i >= size_t(2 * stride) && (links[i - size_t(2 * stride)] & link))
+                        sum += in[i - size_t(2 * stride)], weights += 1;
+                }
+                result[i] = sum / weights;
+            }
+        });
+    };
+    pass(raw, across, 1, kLinkRight);
+    pass(across, out, W, kLinkUp);
+}
+
+} // namespace
+
+void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, std::span<const Vec3f> position,
+                          std::span<const Vec3f> normal, std::span<const uint8_t> covered,
+                          const ScreenSpaceOcclusionOptions& options, std::span<const uint8_t> occluder,
+                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch) {
+    if (!camera.isPerspective()) fail("screen-space ambient occlusion: the camera frame must be perspective");
+    if (width <= 0 || height <= 0 || camera.width() != width || camera.height() != height)
+        fail("screen-space ambient occlusion: the buffer is ", width, " x ", height,
+             " samples but the camera's is ", camera.width(), " x ", camera.height());
+    const auto count = std::size_t(width * height);
+    if (position.size() != count || normal.size() != count || covered.size() != count ||
+        (!occluder.empty() && occluder.size() != count) || visibility.size() != count)
+        fail("screen-space ambient occlusion: ", count, " samples, but ", position.size(), " positions, ",
+             normal.size(), " normals, ", covered.size(), " coverage flags, ", occluder.size(),
+             " occluder flags and room for ", visibility.size(), " results");
+    if (!(options.radius > 0 && std::isfinite(options.radius)))
+        fail("screen-space ambient occlusion: the radius must be positive and finite, got ", options.radius);
+    if (options.directions < 1 || options.directions > kMaxDirections)
+        fail("screen-space ambient occlusion: directions must be between 1 and ", kMaxDirections, ", got ",
+             options.directions);
+    if (options.steps < 1 || options.steps > kMaxSteps)
+        fail("screen-space ambient occlusion: steps must be between 1 and ", kMaxSteps, ", got ",
+             options.steps);
+    if (!(options.bias >= 0 && options.bias <= M_PI / 4))
+        fail("screen-space ambient occlusion: the bias must lie in [0, pi/4] radians, got ", options.bias);
+
+    const int64_t W = width, H = height;
+    const Spans full{
+        W, H, position.data(), normal.data(), covered.data(), occluder.empty() ? nullptr : occluder.data()};
+    const Params fullParams = makeParams(camera, 1, options);
+    if (!options.halfResolution) {
+        std::vector<Sample>& samples = scratch.samples;
+        samples.resize(count);
+        parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
+            for (int64_t i = y0 * W; i < y1 * W; ++i)
+                samples[size_t(i)] = {position[size_t(i)], (full.covered(i) ? kCovered : 0u) |
+                                                               (full.occludes(i) ? kOccluder : 0u)};
+        });
+        const Packed packed{W, H, samples.data(), normal.data()};
+        scratch.raw.resize(count);
+        parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
+            for (int64_t y = y0; y < y1; ++y)
+                for (int64_t x = 0; x < W; ++x)
+                    scratch.raw[size_t(y * W + x)] = occlusionAt(packed, fullParams, x, y);
+        });
+        scratch.links.assign(count, 0);
+        linkNeighbours(packed, fullParams, scratch.links);
+        scratch.across.resize(count);
+        blur(packed, scratch.links, scratch.raw, scratch.across, visibility);
+        return;
+    }
+
+    // Step 1: per 2x2 block, the mean of its samples where they all show one smooth surface (then
+    // the working pixel sits at the block's centre, where the upsample expects it), else the covered
+    // sample nearest the eye (ties: the first in row order), so that a thin object in front keeps it.
+    const int64_t w = (W + 1) / 2, h = (H + 1) / 2;
+    const auto lowCount = std::size_t(w * h);
+    std::vector<Sample>& lowSample = scratch.samples;
+    std::vector<Vec3f>& lowNormal = scratch.normals;
+    std::vector<uint8_t>& links = scratch.links;
+    lowSample.resize(lowCount);
+    lowNormal.resize(lowCount);
+    links.resize(lowCount);
+    const Vec3f eye(camera.eye()), forward(camera.forward());
+    parallelFor(0, h, 16, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < w; ++x) {
+                int64_t block[4], n = 0, best = -1;
+                float bestDepth = 0;
+                bool uniform = true;
+                for (int64_t j = 2 * y; j < std::min(H, 2 * y + 2); ++j)
+                    for (int64_t i = 2 * x; i < std::min(W, 2 * x + 2); ++i) {
+                        const int64_t s = j * W + i;
+                        block[n++] = s;
+                        if (!covered[size_t(s)]) {
+                            uniform = false;
+                            continue;
+                        }
+                        const float d = dot(position[size_t(s)] - eye, forward);
+                        if (best < 0 || d < bestDepth) best = s, bestDepth = d;
+                    }
+                const auto l = std::size_t(y * w + x);
+                links[l] = 0;
+                if (best < 0) {
+                    lowSample[l] = {};
+                    lowNormal[l] = {};
+                    continue;
+                }
+                const Vec3f P = position[size_t(best)], N = normal[size_t(best)];
+                // One smooth surface: all occluders or none, within a sample's footprint of the
+                // nearest sample's tangent plane, normals within about 18 degrees of its normal.
+                const float footprint = bestDepth * fullParams.pixelSize;
+                Vec3f sumPosition{0, 0, 0}, sumNormal{0, 0, 0};
+                for (int64_t k = 0; k < n && uniform; ++k) {
+                    const auto s = std::size_t(block[k]);
+                    uniform = full.occludes(int64_t(s)) == full.occludes(best) &&
+                              std::fabs(dot(position[s] - P, N)) <= footprint && dot(normal[s], N) >= 0.95f;
+                    sumPosition += position[s];
+                    sumNormal += normal[s];
+                }
+                lowSample[l].flags = kCovered | (full.occludes(best) ? kOccluder : 0u);
+                if (uniform && n == 4 && length(sumNormal) > 0) {
+                    lowSample[l].position = sumPosition * 0.25f;
+                    lowNormal[l] = normalize(sumNormal);
+                    links[l] = kUniform;
+                } else {
+                    lowSample[l].position = P;
+                    lowNormal[l] = N;
+                }
+            }
+    });
+    const Packed low{w, h, lowSample.data(), lowNormal.data()};
+    const Params p = makeParams(camera, 2, options);
+    scratch.raw.resize(lowCount);
+    parallelFor(0, h, 4, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < w; ++x) scratch.raw[size_t(y * w + x)] = occlusionAt(low, p, x, y);
+    });
+    linkNeighbours(low, p, links);
+    scratch.across.resize(lowCount);
+    scratch.smooth.resize(lowCount);
+    blur(low, links, scratch.raw, scratch.across, scratch.smooth);
+    const std::vector<float>& smooth = scratch.smooth;
+    std::span<float> out = visibility;
+
+    // Step 4: working pixel (a, b) is centred on sample (2a + 1, 2b + 1), so sample (x, y) lies
+    // between working pixels a0 = floor((x - 1) / 2) and a0 + 1 at 3/4 and 1/4 (x even) or 1/4 and
+    // 3/4 (x odd), and likewise in y. Where its own block is uniform and the four are linked, it
+    // takes their bilinear mean; elsewhere the four weighted by their similarity to its own surface
+    // too; where none is similar, the most similar of the 4x4 around it; where none is at all (a
+    // sliver no block kept), GTAO at the sample itself.
+    parallelFor(0, H, 8, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < W; ++x) {
+                const int64_t i = y * W + x;
+                if (!covered[size_t(i)]) {
+                    out[size_t(i)] = 1;
+                    continue;
+                }
+                const int64_t a0 = (x - 1) >> 1, b0 = (y - 1) >> 1; // arithmetic shift: floor
+                const float fx = (x & 1) ? 0.25f : 0.75f, fy = (y & 1) ? 0.25f : 0.75f;
+                if (a0 >= 0 && b0 >= 0 && a0 + 1 < w && b0 + 1 < h) {
+                    const auto l = std::size_t(b0 * w + a0), up = l + std::size_t(w);
+                    if ((links[std::size_t((y >> 1) * w + (x >> 1))] & kUniform) &&
+                        (links[l] & (kLinkRight | kLinkUp)) == (kLinkRight | kLinkUp) &&
+                        (links[l + 1] & kLinkUp) && (links[up] & kLinkRight)) {
+                        out[size_t(i)] = (1 - fy) * ((1 - fx) * smooth[l] + fx * smooth[l + 1]) +
+                                         fy * ((1 - fx) * smooth[up] + fx * smooth[up + 1]);
+                        continue;
+                    }
+                }
+                const Vec3f P = position[size_t(i)], N = normal[size_t(i)];
+                const float tolerance = planeTolerance(fullParams, P);
+                float sum = 0, weights = 0;
+                for (int db = 0; db < 2; ++db)
+                    for (int da = 0; da < 2; ++da) {
+                        const int64_t a = a0 + da, bb = b0 + db;
+                        if (a < 0 || bb < 0 || a >= w || bb >= h) continue;
+                        const auto l = std::size_t(bb * w + a);
+                        if (!low.covered(int64_t(l))) continue;
+                        const float wgt = (da ? fx : 1 - fx) * (db ? fy : 1 - fy) *
+                                          similarity(P, N, tolerance, lowSample[l].position, lowNormal[l]);
+                        sum += wgt * smooth[l];
+                        weights += wgt;
+                    }
+                if (weights > 1e-3f * tolerance) {
+                    out[size_t(i)] = sum / weights;
+                    continue;
+                }
+                float best = 0;
+                for (int64_t bb = std::max<int64_t>(0, b0 - 1); bb <= std::min(h - 1, b0 + 2); ++bb)
+                    for (int64_t a = std::max<int64_t>(0, a0 - 1); a <= std::min(w - 1, a0 + 2); ++a) {
+                        const auto l = std::size_t(bb * w + a);
+                        if (!low.covered(int64_t(l))) continue;
+                        const float s = similarity(P, N, tolerance, lowSample[l].position, lowNormal[l]);
+                        if (s > best) best = s, out[size_t(i)] = smooth[l];
+                    }
+                if (best == 0) out[size_t(i)] = occlusionAt(full, fullParams, x, y);
+            }
+    });
+}
+
+std::vector<float> screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height,
+                                        std::span<const Vec3f> position, std::span<const Vec3f> normal,
+                                        std::span<const uint8_t> covered,
+                                        const ScreenSpaceOcclusionOptions& options,
+                                        std::span<const uint8_t> occluder) {
+    std::vector<float> visibility(std::size_t(std::max<int64_t>(width, 0) * std::max<int64_t>(height, 0)));
+    ScreenSpaceOcclusionScratch scratch;
+    screenSpaceOcclusion(camera, width, height, position, normal, covered, options, occluder, visibility,
+                         scratch);
+    return visibility;
+}
+
+SurfaceBuffers gatherSurfaces(const GBuffer& gbuffer, const SceneGeometry& geometry,
+                              std::span<const Material> materials) {
+    const int64_t W = gbuffer.frame.width(), H = gbuffer.frame.height();
+    const auto count = std::size_t(W * H);
+    SurfaceBuffers s;
+    s.position.assign(count, Vec3f{0, 0, 0});
+    s.normal.assign(count, Vec3f{0, 0, 0});
+    s.covered.assign(count, 0);
+    s.occluder.assign(count, 0);
+    parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
+        SurfacePoint sp;
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < W; ++x) {
+                if (!surfaceAt(gbuffer, geometry, x, y, sp)) continue;
+                const auto i = std::size_t(y * W + x);
+                s.position[i] = Vec3f(sp.position);
+                s.normal[i] = Vec3f(sp.normal);
+                s.covered[i] = 1;
+                s.occluder[i] = sp.material < materials.size() && materials[sp.material].isOpaque();
+            }
+    });
+    return s;
+}
+
+FieldOcclusionSetup fieldOcclusionSetup(const SceneGeometry& g, std::span<const Material> materials,
+                                        std::size_t meshCount, double radius, int64_t resolution) {
+    FieldOcclusionSetup out;
+    const Mesh& mesh = g.mesh;
+    // Opaque triangles occlude; per mesh, its bounds and whether it is flat (every vertex on the
+    // plane of its largest triangle, to 1e-6 of its size).
+    struct PerMesh {
+        Box3d box;
+        Vec3d normal, point;
+        double area2 = 0;
+        bool flat = true;
+    };
+    std::vector<PerMesh> meshes(meshCount);
+    std::vector<std::size_t> opaque;
+    for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
+        const uint32_t mat = g.triangleMaterial[t];
+        if (mat >= materials.size() || !materials[mat].isOpaque() || g.triangleMesh[t] >= meshCount) continue;
+        opaque.push_back(t);
+        PerMesh& m = meshes[g.triangleMesh[t]];
+        const Vec3d a = Vec3d(mesh.positions[mesh.indices[3 * t]]),
+                    b = Vec3d(mesh.positions[mesh.indices[3 * t + 1]]),
+                    c = Vec3d(mesh.positions[mesh.indices[3 * t + 2]]);
+        m.box.extend(a), m.box.extend(b), m.box.extend(c);
+        const Vec3d n = cross(b - a, c - a);
+        if (dot(n, n) > m.area2) m.area2 = dot(n, n), m.normal = n, m.point = a;
+    }
+    if (opaque.empty()) return out;
+    for (const std::size_t t : opaque) {
+        PerMesh& m = meshes[g.triangleMesh[t]];
+        if (!m.flat || m.area2 <= 0) continue;
+        const double tol = 1e-6 * length(m.box.extent());
+        const Vec3d n = m.normal / std::sqrt(m.area2);
+        for (int k = 0; k < 3; ++k)
+            if (std::fabs(dot(Vec3d(mesh.positions[mesh.indices[3 * t + k]]) - m.point, n)) > tol)
+                m.flat = false;
+    }
+    out.indices.reserve(3 * opaque.size());
+    for (const std::size_t t : opaque)
+        for (int k = 0; k < 3; ++k) out.indices.push_back(mesh.indices[3 * t + k]);
+    std::vector<double> diagonals;
+    for (int pass = 0; pass < 2 && out.region.empty(); ++pass)
+        for (const PerMesh& m : meshes)
+            if (!m.box.empty() && (pass == 1 || !m.flat)) {
+                out.region.extend(m.box.lo), out.region.extend(m.box.hi);
+                diagonals.push_back(length(m.box.extent()));
+            }
+    std::sort(diagonals.begin(), diagonals.end());
+    out.radius = radius > 0 ? radius : 0.1 * diagonals[diagonals.size() / 2];
+    if (!(out.radius > 0)) {
+        out.radius = 0;
+        return out;
+    }
+    const Vec3d extent = out.region.extent() + Vec3d{2, 2, 2} * out.radius;
+    const double longest = std::max({extent.x, extent.y, extent.z});
+    out.resolution = std::clamp<int64_t>(
+        std::max<int64_t>(resolution, int64_t(std::ceil(4 * longest / out.radius))), 8, 2048);
+    return out;
+}
+
+} // namespace voxfx::detail
