@@ -9,8 +9,9 @@
 //   G-buffer  the camera is a perspective Frame whose columns are pixels; a consumer of the one
 //             rasterizer keeps the nearest centre-sampled fragment per pixel (ties to the lower
 //             triangle index, so the result does not depend on the thread count).
-//   occlusion the ambient light's occlusion field over the opaque triangles
-//             (RenderOptions::ambientOcclusion, voxfx/ambient_occlusion.hpp); nothing when off.
+//   occlusion the ambient light's occlusion (RenderOptions::ambientOcclusion): screen (the default),
+//             GTAO over the G-buffer's cells; field, the distance field of the opaque triangles
+//             (voxfx/ambient_occlusion.hpp, built once per scene with a RenderCache); nothing when off.
 //   shadows   one LightShadow per light, built by the chosen technique (voxfx/shadow.hpp) and, for
 //             techniques that count over the camera's G-buffer, prepared with it.
 //   shading   deferred, tile rows in parallel: ambient (times its occlusion) + per light Blinn–Phong times
@@ -123,11 +124,15 @@ inline constexpr EnumName<VolumeShading> kVolumeShadingNames[] = {{"none", Volum
 const char* toString(VolumeShading v);
 VolumeShading parseVolumeShading(const std::string& name);
 
-/// Ambient occlusion of the ambient light (RenderOptions::ambientOcclusion): off, or field (cone
-/// tracing the opaque geometry's distance field, voxfx/ambient_occlusion.hpp).
-enum class Occlusion : uint8_t { Off, Field };
-inline constexpr EnumName<Occlusion> kOcclusionNames[] = {{"off", Occlusion::Off},
-                                                          {"field", Occlusion::Field}};
+/// Ambient occlusion of the ambient light (RenderOptions::ambientOcclusion): off; screen
+/// (ground-truth ambient occlusion on the G-buffer, Jimenez et al. 2016: the horizons the visible
+/// surfaces make within the radius, at half resolution with a bilateral upsample; fast, blind to
+/// what the camera does not see); or field (cone tracing the opaque geometry's distance field,
+/// voxfx/ambient_occlusion.hpp: sees hidden and off-screen occluders, built once per scene, slower
+/// per pixel).
+enum class Occlusion : uint8_t { Off, Field, Screen };
+inline constexpr EnumName<Occlusion> kOcclusionNames[] = {
+    {"off", Occlusion::Off}, {"field", Occlusion::Field}, {"screen", Occlusion::Screen}};
 const char* toString(Occlusion o);
 Occlusion parseOcclusion(const std::string& name);
 
@@ -171,14 +176,16 @@ struct RenderOptions {
     /// have a crease between them, smaller angles are smoothed over (flattenScene, gbuffer.hpp).
     double creaseAngle = kDefaultCreaseAngle;
     /// The ambient light (sky irradiance and `ambient`) is multiplied by how much of the hemisphere
-    /// a point sees past the opaque geometry within `occlusionRadius` (voxfx/ambient_occlusion.hpp):
-    /// dark creases, contact shadows under objects. Direct light is not affected.
-    Occlusion ambientOcclusion = Occlusion::Field;
+    /// a point sees past the opaque geometry within `occlusionRadius`: dark creases, contact shadows
+    /// under objects. Direct light is not affected. Screen (the default) finds it from the G-buffer
+    /// (one evaluation per pixel, half resolution, bilateral upsample: see Occlusion); field from
+    /// the distance field (voxfx/ambient_occlusion.hpp), which also sees what the camera does not.
+    Occlusion ambientOcclusion = Occlusion::Screen;
     /// World units; 0: a tenth of the median diagonal of the opaque meshes that are not flat (a
     /// floor is flat), so an object darkens the ground around it about a tenth of its size away.
     double occlusionRadius = 0;
-    /// Cells along the longest side of the occlusion field (the opaque non-flat meshes' bounds grown
-    /// by the radius), at least 4 per radius, at most 2^24 cells in all.
+    /// Field occlusion: cells along the longest side of the field (the opaque non-flat meshes'
+    /// bounds grown by the radius), at least 4 per radius, at most 2^24 cells in all.
     int64_t occlusionResolution = 128;
     /// The translucency pass: slices of the camera-space solid grid over the translucent meshes'
     /// depth range (1..65536); the matter along a ray is within one slice per entry of the chord.

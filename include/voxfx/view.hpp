@@ -63,12 +63,15 @@ public:
     explicit FrameRenderer(std::shared_ptr<const Scene> scene);
     const Scene& scene() const { return *scene_; }
     const std::shared_ptr<const Scene>& scenePointer() const { return scene_; }
-    /// render(scene(), camera, options). Throws as render does (voxfx::Error, also when
-    /// options.progress cancels).
+    /// render(scene(), camera, options) with the object's RenderCache: what the scene's frames share
+    /// (flattened scene, shadows, occlusion field, glass setup, frame buffers) is built once and
+    /// reused while the camera moves or the options switch back and forth. Throws as render does
+    /// (voxfx::Error, also when options.progress cancels).
     RenderResult render(const Camera& camera, const RenderOptions& options);
 
 private:
     std::shared_ptr<const Scene> scene_;
+    RenderCache cache_;
 };
 
 } // namespace voxfx

@@ -17,6 +17,7 @@
 #include <variant>
 #include <vector>
 
+#include "render/screen_space_ao.hpp"
 #include "voxfx/ambient_occlusion.hpp"
 #include "voxfx/render.hpp"
 
@@ -125,6 +126,7 @@ struct RenderCacheData {
     std::vector<TriangleBasis> triangleBases; ///< of `geometry`
     /// Built shadows of every light and technique used lately (several kinds per light).
     KeyedCache<LightShadow> shadows{8};
+    KeyedCache<const FieldOcclusionSetup> occlusionSetup{2};
     KeyedCache<const AmbientOcclusion> occlusion{2};
     KeyedCache<const GlassSetup> glass{3};
     // Frame buffers: overwritten every frame, kept for their memory.
@@ -132,6 +134,11 @@ struct RenderCacheData {
     std::vector<Vec3f> shaded;
     std::vector<float> screenOcclusion;
     std::vector<uint8_t> refined, glassSamples;
+    struct ScreenOcclusion { ///< the screen-space occlusion's inputs per cell, and its scratch
+        std::vector<Vec3f> position, normal;
+        std::vector<uint8_t> covered, occluder;
+        ScreenSpaceOcclusionScratch scratch;
+    } screen;
     struct Resolve {
         Image filtered; ///< the box-filtered image before the post-process
         std::vector<uint8_t> refined, skip, rows;

@@ -55,10 +55,12 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
             "meshes without normals: faces meeting at a wider angle (degrees) are not smoothed", 0, 180),
         nameOption<O, parseOcclusion, optionName<Occlusion>, &O::ambientOcclusion>(
             "ambientOcclusion",
-            "ambient occlusion: field darkens the sky's and the constant ambient light by how much of the "
-            "hemisphere the opaque geometry hides within --occlusion-radius (cone tracing its distance "
-            "field); off lights every point by the whole sky",
-            "off | field", "ao"),
+            "ambient occlusion: darkens the sky's and the constant ambient light by how much of the "
+            "hemisphere the opaque geometry hides within --occlusion-radius; screen finds it on the "
+            "G-buffer (GTAO: fast, sees only what the camera sees), field cone-traces the geometry's "
+            "distance field (slower, sees hidden and off-screen occluders); off lights every point by "
+            "the whole sky",
+            "off | screen | field", "ao"),
         numberOption<O, &O::occlusionRadius>(
             "occlusionRadius",
             "ambient occlusion: occluders farther than this (world units) do not darken; 0: a tenth of "

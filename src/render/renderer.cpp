@@ -8,6 +8,7 @@
 #include "render/antialias.hpp"
 #include "render/frame_state.hpp"
 #include "render/glass_pass.hpp"
+#include "render/screen_space_ao.hpp"
 #include "render/shading.hpp"
 #include "render/technique_list.hpp"
 #include "render/translucency_pass.hpp"
@@ -87,7 +88,43 @@ void shadowPass(FrameState& f, Progress* progress) {
     f.cachedPass = allCached;
 }
 
-// The ambient light's occlusion field over the opaque triangles (see RenderOptions::ambientOcclusion).
+// Screen-space occlusion per cell of the G-buffer (adaptive x adaptive samples), from the sample the
+// shading pass shades for it: its surface point and whether it occludes (opaque), then GTAO over
+// the cells in the camera's frame at the cells' resolution, into f.screenOcclusion.
+void screenOcclusion(FrameState& f, double radius) {
+    const int a = f.adaptive;
+    const int64_t cw = f.width / a, ch = f.height / a;
+    detail::RenderCacheData::ScreenOcclusion& c = f.cache.screen;
+    c.position.resize(size_t(cw * ch));
+    c.normal.resize(size_t(cw * ch));
+    c.covered.resize(size_t(cw * ch));
+    c.occluder.resize(size_t(cw * ch));
+    std::vector<uint8_t> opaque(f.scene.materials.size());
+    for (std::size_t m = 0; m < opaque.size(); ++m) opaque[m] = f.scene.materials[m].isOpaque();
+    parallelFor(0, ch, 8, [&](int64_t y0, int64_t y1) {
+        for (int64_t cy = y0; cy < y1; ++cy)
+            for (int64_t cx = 0; cx < cw; ++cx) {
+                const auto i = size_t(cy * cw + cx);
+                SurfacePoint s;
+                const bool hit = detail::surfaceFromBasis(f.gbuffer, f.geometry, f.triangleBases, cx * a + a / 2,
+                                                          cy * a + a / 2, s);
+                c.covered[i] = hit;
+                c.occluder[i] = hit && s.material < opaque.size() && opaque[s.material];
+                if (!hit) continue;
+                c.position[i] = Vec3f(s.position);
+                c.normal[i] = Vec3f(s.normal);
+            }
+    });
+    f.screenOcclusion.resize(size_t(cw * ch));
+    detail::ScreenSpaceOcclusionOptions so;
+    so.radius = radius;
+    detail::screenSpaceOcclusion(cameraFrame(f.camera, cw, ch), cw, ch, c.position, c.normal, c.covered, so,
+                                 c.occluder, f.screenOcclusion, c.scratch);
+}
+
+// The ambient light's occlusion (RenderOptions::ambientOcclusion): its setup (opaque triangles,
+// region, radius) and, for the field method, the field, both kept in the cache; for the screen
+// method, GTAO over the G-buffer's cells (one sample each: the one the shading pass shades).
 void occlusionPass(FrameState& f, Progress* progress) {
     const RenderOptions& o = f.options;
     const bool ambientLight = o.skyLight > 0 || o.ambient.x > 0 || o.ambient.y > 0 || o.ambient.z > 0;
@@ -95,82 +132,39 @@ void occlusionPass(FrameState& f, Progress* progress) {
     detail::Hasher key;
     key.value(f.meshesKey), key.value(f.materialsKey), key.value(o.creaseAngle);
     key.value(o.occlusionRadius), key.value(o.occlusionResolution);
+    std::shared_ptr<const detail::FieldOcclusionSetup> setup = f.cache.occlusionSetup.find(key.get());
+    const bool setupCached = setup != nullptr;
+    if (!setup) {
+        setup = std::make_shared<const detail::FieldOcclusionSetup>(
+            detail::fieldOcclusionSetup(f.geometry, f.scene.materials, f.scene.meshes.size(), o.occlusionRadius,
+                                        o.occlusionResolution));
+        f.cache.occlusionSetup.insert(key.get(), setup);
+    }
+    if (!(setup->radius > 0)) { // nothing occludes
+        f.cachedPass = setupCached;
+        return;
+    }
+    if (o.ambientOcclusion == Occlusion::Screen) {
+        screenOcclusion(f, setup->radius);
+        return;
+    }
     f.occlusion = f.cache.occlusion.find(key.get());
     if (f.occlusion) {
         f.cachedPass = true;
         return;
     }
-    const auto none = std::make_shared<const AmbientOcclusion>(); // visibility 1 everywhere
     const SceneGeometry& g = f.geometry;
-    const Mesh& mesh = g.mesh;
-    // Opaque triangles occlude; per mesh, its bounds and whether it is flat (every vertex on the
-    // plane of its largest triangle, to 1e-6 of its size): a flat mesh never occludes itself.
-    std::vector<uint32_t> indices;
-    struct PerMesh {
-        Box3d box;
-        Vec3d normal, point;
-        double area2 = 0;
-        bool flat = true;
-    };
-    std::vector<PerMesh> meshes(f.scene.meshes.size());
-    std::vector<std::size_t> opaque;
-    for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
-        const uint32_t mat = g.triangleMaterial[t];
-        if (mat >= f.scene.materials.size() || !f.scene.materials[mat].isOpaque()) continue;
-        opaque.push_back(t);
-        PerMesh& m = meshes[g.triangleMesh[t]];
-        const Vec3d a = Vec3d(mesh.positions[mesh.indices[3 * t]]),
-                    b = Vec3d(mesh.positions[mesh.indices[3 * t + 1]]),
-                    c = Vec3d(mesh.positions[mesh.indices[3 * t + 2]]);
-        m.box.extend(a), m.box.extend(b), m.box.extend(c);
-        const Vec3d n = cross(b - a, c - a);
-        if (dot(n, n) > m.area2) m.area2 = dot(n, n), m.normal = n, m.point = a;
-    }
-    if (opaque.empty()) {
-        f.cache.occlusion.insert(key.get(), none); // nothing occludes
-        return;
-    }
-    for (const std::size_t t : opaque) {
-        PerMesh& m = meshes[g.triangleMesh[t]];
-        if (!m.flat || m.area2 <= 0) continue;
-        const double tol = 1e-6 * length(m.box.extent());
-        const Vec3d n = m.normal / std::sqrt(m.area2);
-        for (int k = 0; k < 3; ++k)
-            if (std::fabs(dot(Vec3d(mesh.positions[mesh.indices[3 * t + k]]) - m.point, n)) > tol)
-                m.flat = false;
-    }
-    indices.reserve(3 * opaque.size());
-    for (const std::size_t t : opaque)
-        for (int k = 0; k < 3; ++k) indices.push_back(mesh.indices[3 * t + k]);
-    // The region: the non-flat opaque meshes (all of them when every one is flat); the radius a
-    // tenth of their median diagonal unless given.
-    std::vector<double> diagonals;
-    Box3d region;
-    for (int pass = 0; pass < 2 && region.empty(); ++pass)
-        for (const PerMesh& m : meshes)
-            if (!m.box.empty() && (pass == 1 || !m.flat)) {
-                region.extend(m.box.lo), region.extend(m.box.hi);
-                diagonals.push_back(length(m.box.extent()));
-            }
-    std::sort(diagonals.begin(), diagonals.end());
     AmbientOcclusionOptions ao;
-    ao.radius = o.occlusionRadius > 0 ? o.occlusionRadius : 0.1 * diagonals[diagonals.size() / 2];
-    if (!(ao.radius > 0)) {
-        f.cache.occlusion.insert(key.get(), none);
-        return;
-    }
-    const Vec3d extent = region.extent() + Vec3d{2, 2, 2} * ao.radius;
-    const double longest = std::max({extent.x, extent.y, extent.z});
-    ao.resolution = std::clamp<int64_t>(
-        std::max<int64_t>(o.occlusionResolution, int64_t(std::ceil(4 * longest / ao.radius))), 8, 2048);
+    ao.radius = setup->radius;
+    ao.resolution = setup->resolution;
     ao.threads = o.threads;
     ao.progress = progress;
     MeshView view;
-    view.positions = &mesh.positions[0].x;
-    view.vertexCount = mesh.positions.size();
-    view.indices = indices.data();
-    view.triangleCount = opaque.size();
-    f.occlusion = std::make_shared<const AmbientOcclusion>(view, region, ao);
+    view.positions = &g.mesh.positions[0].x;
+    view.vertexCount = g.mesh.positions.size();
+    view.indices = setup->indices.data();
+    view.triangleCount = setup->indices.size() / 3;
+    f.occlusion = std::make_shared<const AmbientOcclusion>(view, setup->region, ao);
     f.cache.occlusion.insert(key.get(), f.occlusion);
 }
 

@@ -122,7 +122,7 @@ FrameRenderer::FrameRenderer(std::shared_ptr<const Scene> scene) : scene_(std::m
 }
 
 RenderResult FrameRenderer::render(const Camera& camera, const RenderOptions& options) {
-    return voxfx::render(*scene_, camera, options);
+    return voxfx::render(*scene_, camera, options, cache_);
 }
 
 } // namespace voxfx

@@ -98,7 +98,7 @@ private:
     size_t shadow_ = 0, glass_ = 0;
     bool aa_ = true, ao_ = true;
     AntiAliasing aaOn_ = AntiAliasing::Full; ///< what "aa on" means (the flags' or scene's choice)
-    Occlusion aoOn_ = Occlusion::Field;
+    Occlusion aoOn_ = Occlusion::Screen;
 };
 
 /// The overlay's lines: the state, the frame's size and its passes' times, and `message`.
