@@ -22,24 +22,26 @@
 //                                (yard_build_ms: the BVH, yard_trace_ms: the rays and shading) and
 //                                frame/yard, the ratio (target <= 2).
 //   BM_ForestShadows/<kind>/leavesPerTree:<L>
-//                                the forest of 64 trees of L leaf quads (2L triangles) each, the
-//                                default frame with shadows <kind> and with exact shadows,
-//                                alternating; kind_ms, exact_ms, exact/kind (target >= 1.5 for
-//                                transmittance and absorption), kind_shadows_ms and
-//                                kind_shading_ms (where lookups cost), exact_shading_ms (where the
-//                                shadow rays are traced), and mae: the mean absolute difference
-//                                of the linear images (tone map clamp, every channel of every
-//                                pixel) against the exact frame, with exact_mean (the exact
-//                                image's mean) for scale.
+//                                the forest of 64 trees of L leaf quads (2L triangles) each: the
+//                                default frame with shadows <kind>, with exact shadows and with
+//                                none, in turn. kind_ms, exact_ms, none_ms, exact/kind (the issue's
+//                                target: >= 1.5 for transmittance and absorption), kind_cost_ms
+//                                and exact_cost_ms (each frame less the unshadowed one: what the
+//                                shadows cost), the passes where they cost (kind_shadows_ms: the
+//                                build; *_shading_ms, *_volumes_ms: the lookups or shadow rays);
+//                                the error of the linear image (tone map clamp) against the exact
+//                                one: mae over every channel of every pixel, mae_shadowed over the
+//                                pixels the exact shadows change (`shadowed`: their fraction), and
+//                                exact_mean (the exact image's mean) for scale.
 //   BM_DsmDeepVsExact/epsilon_x1000:<1000 eps>
 //                                the DSM demo (examples/dsm-demo/scene.json) at 1280x720: deep
 //                                shadows at compression tolerance eps against exact shadows, which
 //                                march the skull and the smoke (voxfx/exact_shadow.hpp); the same
 //                                counters as the forest's.
 //
-//   ./build/bench/bench_frame --benchmark_filter='BM_Frame/' --benchmark_repetitions=3
-//   ./build/bench/bench_frame --benchmark_filter='BM_ForestShadows/.*:(100|1000)/'
-//   ./build/bench/bench_frame --benchmark_filter=BM_DsmDeepVsExact
+//   build/bench_frame --benchmark_filter='BM_Frame/' --benchmark_repetitions=3
+//   build/bench_frame --benchmark_filter='BM_ForestShadows/.*:(100|1000)/'
+//   build/bench_frame --benchmark_filter=BM_DsmDeepVsExact
 //
 // The machine is shared: compare ratios taken within one run (each iteration renders both sides),
 // not times across runs.
@@ -276,24 +278,18 @@ struct PassSums {
     }
 };
 
-// Calls a(timed) and b(timed) in each iteration, alternating which goes first, after one untimed
+// Calls every one of `frames` (frame(timed)) in each iteration, starting one further along each
+// time (two: alternating which goes first) so that load changes hit them alike, after one untimed
 // call of each where `warmUp` (the process's first large allocations fault their pages in; a cache
 // would fill).
-template <class A, class B> void interleaved(benchmark::State& state, A&& a, B&& b, bool warmUp = true) {
-    if (warmUp) {
-        a(false);
-        b(false);
-    }
-    bool aFirst = true;
+void interleaved(benchmark::State& state, const std::vector<std::function<void(bool)>>& frames,
+                 bool warmUp = true) {
+    if (warmUp)
+        for (const auto& f : frames) f(false);
+    std::size_t first = 0;
     for (auto _ : state) {
-        if (aFirst) {
-            a(true);
-            b(true);
-        } else {
-            b(true);
-            a(true);
-        }
-        aFirst = !aFirst;
+        for (std::size_t i = 0; i < frames.size(); ++i) frames[(first + i) % frames.size()](true);
+        first = (first + 1) % frames.size();
     }
 }
 
@@ -326,21 +322,19 @@ void BM_Frame(benchmark::State& state, const std::string& name) {
     const FrameFn frame = firstFrames(b, options);
     PassSums sums;
     double yard = 0, yardBuild = 0, yardTrace = 0;
-    interleaved(
-        state,
-        [&](bool timed) {
-            const RenderResult r = frame();
-            benchmark::DoNotOptimize(r.image.pixels.data());
-            if (timed) sums.add(r);
-        },
-        [&](bool timed) {
-            const Yardstick::Frame y = yardstick().render(b.scene, b.camera, kWidth, kHeight);
-            benchmark::DoNotOptimize(y.image.pixels.data());
-            if (!timed) return;
-            yard += y.totalMs;
-            yardBuild += y.buildMs;
-            yardTrace += y.traceMs;
-        });
+    interleaved(state, {[&](bool timed) {
+                            const RenderResult r = frame();
+                            benchmark::DoNotOptimize(r.image.pixels.data());
+                            if (timed) sums.add(r);
+                        },
+                        [&](bool timed) {
+                            const Yardstick::Frame y = yardstick().render(b.scene, b.camera, kWidth, kHeight);
+                            benchmark::DoNotOptimize(y.image.pixels.data());
+                            if (!timed) return;
+                            yard += y.totalMs;
+                            yardBuild += y.buildMs;
+                            yardTrace += y.traceMs;
+                        }});
     const double n = double(state.iterations());
     state.counters["frame_ms"] = sums.total / n;
     for (const auto& [pass, ms] : sums.passes) state.counters[counterName(pass)] = ms / n;
@@ -357,40 +351,74 @@ BENCHMARK_CAPTURE(BM_Frame, glass, std::string("glass"))->Unit(benchmark::kMilli
 BENCHMARK_CAPTURE(BM_Frame, dsm_demo, std::string("dsm-demo"))->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_Frame, forest, std::string("forest"))->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// One technique against the exact reference on one scene: both frames interleaved; the error of
-// the technique's linear image against the exact one, from one untimed pair with the tone map off
-// (which also serves as the warm-up).
+// The linear (tone map clamp) frames of a scene with exact shadows and with none, made once.
+struct LinearReferences {
+    Image exact, none;
+};
+const LinearReferences& linearReferences(const BenchScene& b, RenderOptions exact, RenderOptions none) {
+    static std::map<const BenchScene*, LinearReferences> made;
+    auto it = made.find(&b);
+    if (it != made.end()) return it->second;
+    exact.toneMap = none.toneMap = ToneMap::Clamp;
+    LinearReferences r;
+    r.exact = render(b.scene, b.camera, exact).image;
+    r.none = render(b.scene, b.camera, none).image;
+    return made.emplace(&b, std::move(r)).first->second;
+}
+
+// One technique against the exact reference on one scene: its frame, the exact one and one without
+// shadows, interleaved (the differences to the last are what each technique's shadows cost). The
+// error of the technique's linear image (tone map clamp) against the exact one, over every channel
+// of every pixel (mae) and over the pixels the exact shadows change (mae_shadowed: where the exact
+// and the unshadowed images differ by more than 1e-3 summed over the channels; `shadowed` the
+// fraction of such pixels), from untimed frames that also serve as the warm-up.
 void againstExact(benchmark::State& state, const BenchScene& b, const RenderOptions& kind,
                   const RenderOptions& exact) {
-    RenderOptions linearKind = kind, linearExact = exact;
-    linearKind.toneMap = linearExact.toneMap = ToneMap::Clamp;
-    const Image reference = render(b.scene, b.camera, linearExact).image;
-    const double mae = meanAbsDifference(render(b.scene, b.camera, linearKind).image, reference);
-    PassSums k, e;
-    interleaved(
-        state,
-        [&](bool timed) {
-            const RenderResult r = render(b.scene, b.camera, kind);
+    RenderOptions none = exact;
+    none.shadow = NoShadowOptions{};
+    const LinearReferences& ref = linearReferences(b, exact, none);
+    RenderOptions linearKind = kind;
+    linearKind.toneMap = ToneMap::Clamp;
+    const Image got = render(b.scene, b.camera, linearKind).image;
+    double shadowedSum = 0;
+    int64_t shadowed = 0;
+    for (std::size_t i = 0; i < got.pixels.size(); ++i) {
+        double touched = 0, err = 0;
+        for (int c = 0; c < 3; ++c) {
+            touched += std::abs(double(ref.exact.pixels[i][c]) - double(ref.none.pixels[i][c]));
+            err += std::abs(double(got.pixels[i][c]) - double(ref.exact.pixels[i][c]));
+        }
+        if (touched <= 1e-3) continue;
+        shadowedSum += err / 3;
+        ++shadowed;
+    }
+    PassSums k, e, o;
+    auto frameInto = [&](const RenderOptions& options, PassSums& sums) {
+        return [&](bool timed) {
+            const RenderResult r = render(b.scene, b.camera, options);
             benchmark::DoNotOptimize(r.image.pixels.data());
-            if (timed) k.add(r);
-        },
-        [&](bool timed) {
-            const RenderResult r = render(b.scene, b.camera, exact);
-            benchmark::DoNotOptimize(r.image.pixels.data());
-            if (timed) e.add(r);
-        },
-        false);
+            if (timed) sums.add(r);
+        };
+    };
+    interleaved(state, {frameInto(kind, k), frameInto(exact, e), frameInto(none, o)}, false);
     const double n = double(state.iterations());
     state.counters["kind_ms"] = k.total / n;
     state.counters["exact_ms"] = e.total / n;
+    state.counters["none_ms"] = o.total / n;
     state.counters["exact/kind"] = e.total / k.total;
+    state.counters["kind_cost_ms"] = (k.total - o.total) / n;
+    state.counters["exact_cost_ms"] = (e.total - o.total) / n;
     state.counters["kind_shadows_ms"] = k.pass("shadows") / n;
     state.counters["kind_shading_ms"] = k.pass("shading") / n;
     state.counters["kind_volumes_ms"] = k.pass("volumes") / n;
     state.counters["exact_shading_ms"] = e.pass("shading") / n;
     state.counters["exact_volumes_ms"] = e.pass("volumes") / n;
-    state.counters["mae"] = mae;
-    state.counters["exact_mean"] = meanValue(reference);
+    state.counters["none_shading_ms"] = o.pass("shading") / n;
+    state.counters["none_volumes_ms"] = o.pass("volumes") / n;
+    state.counters["mae"] = meanAbsDifference(got, ref.exact);
+    state.counters["mae_shadowed"] = shadowed ? shadowedSum / double(shadowed) : 0;
+    state.counters["shadowed"] = double(shadowed) / double(got.pixels.size());
+    state.counters["exact_mean"] = meanValue(ref.exact);
 }
 
 void BM_ForestShadows(benchmark::State& state, const std::string& kind) {
