@@ -467,8 +467,87 @@ TEST(RenderTest, DemoScenesFromTheMeshData) {
         // The glass demo has no lights: the renderer's default sun and sky light it.
         EXPECT_EQ(s.lights.empty(), name == "glass") << name;
     }
-    EXPECT_THROW(makeDemoScene("forest", dir), Error);
+    EXPECT_THROW(makeDemoScene("jungle", dir), Error);
     EXPECT_THROW(makeBunnyScene("/nonexistent"), Error);
+    // The forest is made by name but is not in the default list (a frame takes seconds).
+    const std::vector<std::string> defaults = demoSceneNames();
+    for (const std::string& name : largeDemoSceneNames()) {
+        EXPECT_EQ(std::count(defaults.begin(), defaults.end(), name), 0) << name;
+        EXPECT_GT(makeDemoScene(name, dir).triangleCount(), 100000u) << name;
+    }
+}
+
+TEST(RenderTest, DemoForestHasTheLeavesAskedForEveryTreeInViewAndOneSun) {
+    const Scene s = makeForestScene();
+    EXPECT_EQ(leafTriangleCount(s), 64 * 1000 * 2); // the "at least 100K leaf triangles"
+    ASSERT_EQ(s.lights.size(), 1u);
+    EXPECT_EQ(s.lights[0].type, LightType::Directional);
+    ASSERT_EQ(s.cameras.size(), 1u);
+    size_t receivers = 0;
+    for (const SceneMesh& m : s.meshes) receivers += !m.castsShadow;
+    EXPECT_EQ(receivers, 1u); // the ground
+    // Every trunk and branch vertex projects into the 16:9 image in front of the camera, and so
+    // do nearly all leaves (a crown may reach past the top edge).
+    const Frame view = cameraFrame(s.cameras[0], 1280, 720);
+    auto inView = [&](const Vec3f& p) {
+        const Vec3d g = view.gridFromWorld(Vec3d(p));
+        return g.z > 0 && g.x >= 0 && g.x <= 1280 && g.y >= 0 && g.y <= 720;
+    };
+    int64_t wood = 0, leaves = 0, leavesIn = 0;
+    for (const SceneMesh& m : s.meshes) {
+        if (!m.castsShadow) continue;
+        const bool isWood = s.materials[m.material].isOpaque();
+        for (const Vec3f& p : m.mesh.positions) {
+            if (isWood) {
+                EXPECT_TRUE(inView(p)) << p.x << " " << p.y << " " << p.z;
+                ++wood;
+            } else {
+                leavesIn += inView(p);
+                ++leaves;
+            }
+        }
+    }
+    EXPECT_GT(wood, 64 * 8 * 12);
+    EXPECT_GT(double(leavesIn), 0.99 * double(leaves));
+}
+
+TEST(RenderTest, DemoForestIsDeterministicAndTenTimesTheLeavesChangeOnlyTheLeaves) {
+    ForestOptions few;
+    few.trees = 9;
+    few.leavesPerTree = 40;
+    ForestOptions many = few;
+    many.leavesPerTree = 400;
+    const Scene a = makeForestScene(few), b = makeForestScene(few), c = makeForestScene(many);
+    ASSERT_EQ(a.meshes.size(), b.meshes.size());
+    for (size_t i = 0; i < a.meshes.size(); ++i) {
+        EXPECT_EQ(a.meshes[i].mesh.indices, b.meshes[i].mesh.indices);
+        ASSERT_EQ(a.meshes[i].mesh.positions.size(), b.meshes[i].mesh.positions.size());
+        for (size_t v = 0; v < a.meshes[i].mesh.positions.size(); ++v)
+            ASSERT_EQ(a.meshes[i].mesh.positions[v], b.meshes[i].mesh.positions[v]);
+    }
+    EXPECT_EQ(leafTriangleCount(a), 9 * 40 * 2);
+    EXPECT_EQ(leafTriangleCount(c), 10 * leafTriangleCount(a));
+    // The trunks are the same whatever the leaf count, and the leaves fill the same crowns.
+    Box3d leavesA, leavesC;
+    for (size_t i = 0; i < a.meshes.size(); ++i) {
+        ASSERT_EQ(a.meshes[i].name, c.meshes[i].name);
+        if (a.materials[a.meshes[i].material].isOpaque()) {
+            EXPECT_EQ(a.meshes[i].mesh.positions, c.meshes[i].mesh.positions) << a.meshes[i].name;
+        } else if (a.meshes[i].castsShadow) {
+            leavesA.extend(computeBounds(a.meshes[i].mesh.view()));
+            leavesC.extend(computeBounds(c.meshes[i].mesh.view()));
+        }
+    }
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_NEAR(leavesA.lo[k], leavesC.lo[k], 0.6);
+        EXPECT_NEAR(leavesA.hi[k], leavesC.hi[k], 0.6);
+    }
+    ForestOptions none;
+    none.trees = 0;
+    EXPECT_THROW(makeForestScene(none), Error);
+    none.trees = 4;
+    none.leavesPerTree = -1;
+    EXPECT_THROW(makeForestScene(none), Error);
 }
 
 TEST(RenderTest, CgalDemoSkipsMissingMeshesWithAWarningAndNeedsOne) {

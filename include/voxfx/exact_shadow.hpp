@@ -9,7 +9,22 @@
 // enters, and Beer–Lambert exp(-sigma * length) applies over the straight length between entering
 // and leaving (a front face, CCW towards the ray, enters). The shadow ray is not bent: light focused
 // or spread by refraction (caustics) is not modelled. The ray starts 10 epsilons off the surface
-// along its normal (epsilon: 1e-5 of the casters' diagonal).
+// along its normal (epsilon: 1e-5 of the casters' diagonal, or of the largest volume-scene leaf's).
+//
+// The scene's volume scene (Scene::volumeScene: Boolean shapes and volumes seen through transfer
+// functions, voxfx/volume_scene.hpp), what the deep shadow map sees besides the meshes, is crossed
+// along the same ray: every leaf a casting object's shape uses is traced on its own (Embree), its
+// crossings along the whole line through the leaves' bounds (so those behind the point say which
+// shapes it lies inside) walked in depth order by the deep shadow map's SegmentWalker. Where an
+// opaque object's shape is crossed the light is stopped; a translucent one passes its
+// shadowTransmittance per crossing and, glass, Beer–Lambert with its attenuation over the chord
+// inside. Inside volume objects the ray is marched at the midpoints of equal steps of at most
+// `volumeStep` smallest voxel spacings (default a quarter voxel), each step of length dl passing
+// exp(-sigma dl) with sigma the sum over the volumes there of -ln(1 - alpha(value)) / opacityLength
+// (alpha the transfer function's opacity at the trilinear sample, clamped to 1 - 1e-7): the
+// extinction the deep shadow map's pre-integrated intervals average, so the two agree as their steps
+// shrink. Samples in bricks whose opacity is certainly 0 (EmptySpace) are skipped: they add nothing.
+// A ray whose light falls to 1e-6 in every channel stops there.
 //
 // Thread-safety: read-only after construction; transmittance and visibility may run from any
 // number of threads.
@@ -30,13 +45,16 @@
 namespace voxfx {
 
 class TriangleTracer;
+struct VolumeScene;
 
 struct ExactShadowOptions {
     static constexpr std::string_view kName = "exact";
     static constexpr std::string_view kSummary =
         "ray traced on the triangles (Embree): the product of the transmittances of every surface "
-        "crossed towards the light (the reference)";
-    /// None: the reference has nothing to tune.
+        "crossed towards the light, volumes marched in fine steps (the reference)";
+    /// Step of the march through volume objects, in smallest voxel spacings of the scene's volumes.
+    double volumeStep = 0.25;
+    /// exactStep (volumeStep).
     static std::span<const OptionField<ExactShadowOptions>> fields();
 };
 
@@ -44,7 +62,9 @@ class ExactShadow {
 public:
     using Options = ExactShadowOptions;
     struct Stats {
-        int64_t triangles = 0; ///< caster triangles traced, summed over lights
+        int64_t triangles = 0;     ///< caster triangles traced, summed over lights
+        int64_t volumeObjects = 0; ///< casting objects of the volume scene, summed over lights
+        double volumeStep = 0;     ///< world step of the volume march (0: no volume objects)
         Stats& operator+=(const Stats& o);
         std::string summary() const;
     };
@@ -65,11 +85,13 @@ public:
     /// (Material::isGlass; ior, KHR_materials_volume attenuation, tint = crossingTransmittance).
     static ExactShadow fromMaterials(const MeshView& casters, std::span<const uint32_t> triangleMaterial,
                                      std::span<const Material> materials);
-    /// The scene's casters (SceneMesh::castsShadow), traced towards `light`.
+    /// The scene's casters (SceneMesh::castsShadow) and the casting objects of its volume scene,
+    /// traced towards `light`. Throws voxfx::Error for a volume step that is not positive, an
+    /// invalid volume scene, or when Embree fails.
     static ExactShadow build(const Scene& scene, const Light& light, const ExactShadowOptions& options,
                              Progress* progress = nullptr);
     /// Light fraction along p + t * dir, t in (epsilon, distance): the product over the crossed
-    /// triangles (and glass volumes) described above.
+    /// triangles (and glass volumes) and the volume scene's objects described above.
     Vec3f transmittance(const Vec3d& p, const Vec3d& dir, double distance) const;
     /// RGB fraction of the light (the one given to build) reaching p: transmittance from p, moved 10
     /// epsilons along `n` (the unit normal turned towards the light), towards the light.
@@ -79,10 +101,18 @@ public:
     Stats stats() const;
 
 private:
+    struct Volumes;
+    Vec3f meshTransmittance(const Vec3d& p, const Vec3d& dir, double distance) const;
+    Vec3f volumeTransmittance(const Vec3d& p, const Vec3d& dir, double distance) const;
+    /// Null when no object of `scene` casts shadows.
+    static std::shared_ptr<const Volumes> buildVolumes(std::shared_ptr<const VolumeScene> scene,
+                                                       double stepVoxels);
+
     std::vector<Vec3f> transmittance_;
     std::vector<uint32_t> triangleGlass_;
     std::vector<Glass> glass_;
     std::shared_ptr<const TriangleTracer> tracer_; ///< the casters (null: none)
+    std::shared_ptr<const Volumes> volumes_;       ///< the volume scene's casters (null: none)
     Light light_;                                  ///< the light visibility looks towards (build)
 };
 

@@ -1,6 +1,6 @@
 // voxfx demo — renders the procedural demo scenes (tree, bunny under leaves, CGAL meshes under a
-// pergola, glass) with one or more shadow kinds, and optionally saves the scenes as glTF. The scenes
-// are built through the public API (demo/demo_scenes.hpp); the render options are render's.
+// pergola, glass; a forest when named) with one or more shadow kinds, and optionally saves the scenes as
+// glTF. The scenes are built through the public API (demo/demo_scenes.hpp); the render options are render's.
 #include <filesystem>
 #include <iostream>
 
@@ -119,7 +119,10 @@ const Command kDemo{
                    ") or a comma list;\na kind that refuses a scene (volumes: open casters) is reported and "
                    "skipped.\n" +
                    RenderFlags::footer());
-        app.add_option("--scenes", a->scenes, "all, or a comma list of: " + demoNameList(demoSceneNames()))
+        app.add_option("--scenes", a->scenes,
+                       "all = " + demoNameList(demoSceneNames()) + "; or a comma list of those and " +
+                           demoNameList(largeDemoSceneNames()) +
+                           " (128,000 leaf triangles: made only when named)")
             ->default_val("all");
         app.add_option("-o,--out-dir", a->outDir, "Folder for <scene>-<shadows>.png")
             ->default_val("docs/images");

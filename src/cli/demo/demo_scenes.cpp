@@ -96,9 +96,8 @@ const Vec3f kLeafColours[4] = {
     {0.10f, 0.32f, 0.05f}, {0.33f, 0.42f, 0.04f}, {0.62f, 0.16f, 0.03f}, {0.55f, 0.40f, 0.05f}};
 const char* kLeafNames[4] = {"leaves-green", "leaves-lime", "leaves-red", "leaves-gold"};
 
-/// Leaves scattered in the given spheres (centre, radius), split over `groups` colour meshes.
-void addLeaves(Scene& scene, const std::vector<std::pair<Vec3d, double>>& clusters, int count, int groups,
-               double size, float opacity, float transmission, Rng& rng, double flatten = 1.0) {
+/// The leaf meshes of `groups` colour groups (1..4), empty, their materials added to the scene.
+std::vector<SceneMesh> leafMeshes(Scene& scene, int groups, float opacity, float transmission) {
     groups = std::clamp(groups, 1, 4);
     std::vector<SceneMesh> meshes(static_cast<std::size_t>(groups));
     for (int g = 0; g < groups; ++g) {
@@ -106,6 +105,13 @@ void addLeaves(Scene& scene, const std::vector<std::pair<Vec3d, double>>& cluste
         meshes[size_t(g)].material =
             scene.addMaterial(leafMaterial(kLeafNames[g], kLeafColours[g], opacity, transmission));
     }
+    return meshes;
+}
+
+/// `count` leaves scattered in the given spheres (centre, radius), split over the colour meshes.
+void scatterLeaves(std::vector<SceneMesh>& meshes, const std::vector<std::pair<Vec3d, double>>& clusters,
+                   int count, double size, Rng& rng, double flatten = 1.0) {
+    const int groups = int(meshes.size());
     for (int i = 0; i < count; ++i) {
         const auto& [centre, radius] = clusters[size_t(i) % clusters.size()];
         Vec3d offset;
@@ -127,8 +133,53 @@ void addLeaves(Scene& scene, const std::vector<std::pair<Vec3d, double>>& cluste
         while (g + 1 < groups && pick >= weights[g]) pick -= weights[g++];
         appendQuad(meshes[size_t(g)].mesh, centre + offset * radius, t * (0.5 * s), b * (0.32 * s));
     }
+}
+
+/// Moves the meshes that received triangles into the scene.
+void addNonEmpty(Scene& scene, std::vector<SceneMesh>& meshes) {
     for (SceneMesh& m : meshes)
         if (!m.mesh.indices.empty()) scene.meshes.push_back(std::move(m));
+}
+
+/// Leaves scattered in the given spheres (centre, radius), split over `groups` colour meshes.
+void addLeaves(Scene& scene, const std::vector<std::pair<Vec3d, double>>& clusters, int count, int groups,
+               double size, float opacity, float transmission, Rng& rng, double flatten = 1.0) {
+    std::vector<SceneMesh> meshes = leafMeshes(scene, groups, opacity, transmission);
+    scatterLeaves(meshes, clusters, count, size, rng, flatten);
+    addNonEmpty(scene, meshes);
+}
+
+/// One procedural tree about 4 units tall standing at the origin: the trunk and seven branches
+/// appended to `wood`, `leaves` leaf quads of edge `leafSize` at the branch tips and around the
+/// crown appended to the colour meshes. The branches are drawn from `rng` before the leaves, so
+/// the tree's shape does not depend on its leaf count.
+void growTree(Mesh& wood, std::vector<SceneMesh>& leafColours, int leaves, double leafSize, int trunkSides,
+              Rng& rng) {
+    const Vec3d top{0, 2.3, 0};
+    appendCylinder(wood, {0, -0.05, 0}, top, 0.16, 0.09, trunkSides);
+    std::vector<std::pair<Vec3d, double>> clusters{{{0, 3.0, 0}, 0.9}};
+    const int branches = 7;
+    for (int i = 0; i < branches; ++i) {
+        const double angle = 2 * M_PI * (i + uniform(rng, -0.2, 0.2)) / branches;
+        const double start = uniform(rng, 1.5, 2.2);
+        const Vec3d a{0, start, 0};
+        const Vec3d dir = normalize(Vec3d{std::cos(angle), uniform(rng, 0.5, 0.9), std::sin(angle)});
+        const double len = uniform(rng, 1.0, 1.5);
+        const Vec3d b = a + dir * len;
+        appendCylinder(wood, a, b, 0.06, 0.025, std::max(6, trunkSides / 2));
+        clusters.push_back({b, uniform(rng, 0.55, 0.75)});
+    }
+    scatterLeaves(leafColours, clusters, leaves, leafSize, rng);
+}
+
+/// Scales the vertices of `m` from index `first` on by `scale` about the origin, turns them by
+/// `yaw` radians about +y and moves them by `offset`.
+void placeVertices(Mesh& m, size_t first, const Vec3d& offset, double scale, double yaw) {
+    const double c = std::cos(yaw), s = std::sin(yaw);
+    for (size_t i = first; i < m.positions.size(); ++i) {
+        const Vec3d p = Vec3d(m.positions[i]) * scale;
+        m.positions[i] = Vec3f(offset + Vec3d{c * p.x + s * p.z, p.y, -s * p.x + c * p.z});
+    }
 }
 
 /// Rotates a mesh by `rotateX` degrees about x, scales it to `height` and stands it on the
@@ -219,25 +270,64 @@ Scene makeTreeScene(const TreeOptions& o) {
     SceneMesh wood;
     wood.name = "Trunk";
     wood.material = bark;
-    const Vec3d top{0, 2.3, 0};
-    appendCylinder(wood.mesh, {0, -0.05, 0}, top, 0.16, 0.09, o.trunkSides);
-    std::vector<std::pair<Vec3d, double>> clusters{{{0, 3.0, 0}, 0.9}};
-    const int branches = 7;
-    for (int i = 0; i < branches; ++i) {
-        const double angle = 2 * M_PI * (i + uniform(rng, -0.2, 0.2)) / branches;
-        const double start = uniform(rng, 1.5, 2.2);
-        const Vec3d a{0, start, 0};
-        const Vec3d dir = normalize(Vec3d{std::cos(angle), uniform(rng, 0.5, 0.9), std::sin(angle)});
-        const double len = uniform(rng, 1.0, 1.5);
-        const Vec3d b = a + dir * len;
-        appendCylinder(wood.mesh, a, b, 0.06, 0.025, std::max(6, o.trunkSides / 2));
-        clusters.push_back({b, uniform(rng, 0.55, 0.75)});
-    }
+    std::vector<SceneMesh> leaves = leafMeshes(scene, o.colourGroups, o.leafOpacity, o.leafTransmission);
+    growTree(wood.mesh, leaves, o.leaves, o.leafSize, o.trunkSides, rng);
     scene.meshes.push_back(std::move(wood));
-    addLeaves(scene, clusters, o.leaves, o.colourGroups, o.leafSize, o.leafOpacity, o.leafTransmission, rng);
+    addNonEmpty(scene, leaves);
 
     scene.lights.push_back(directionalLight("Sun", {0.55, -1.0, 0.35}, {1.0f, 0.95f, 0.85f}, 3.2f));
     return withView(std::move(scene), {-2.2, 1.9, 6.2}, {0.8, 1.55, 0.2}, 50);
+}
+
+Scene makeForestScene(const ForestOptions& o) {
+    if (o.trees < 1 || o.leavesPerTree < 0)
+        fail("demo 'forest': needs at least one tree and no negative leaf count, got ", o.trees, " trees of ",
+             o.leavesPerTree, " leaves");
+    Scene scene;
+    scene.source = "demo:forest";
+    const uint32_t bark = scene.addMaterial(solid("bark", {0.20f, 0.12f, 0.06f}, 0.05f, 8));
+    scene.meshes.push_back(
+        groundPlane(60.0, scene.addMaterial(solid("grass", {0.30f, 0.36f, 0.16f}, 0.05f, 8))));
+    SceneMesh wood;
+    wood.name = "Trunks";
+    wood.material = bark;
+    std::vector<SceneMesh> leaves = leafMeshes(scene, o.colourGroups, o.leafOpacity, o.leafTransmission);
+    // A square lattice of ceil(sqrt(trees)) columns centred on the origin, each tree moved by up to
+    // a quarter of the spacing, scaled and turned at random. The layout comes from one generator,
+    // each tree's shape and leaves from its own, so the trees stand where they stood whatever
+    // leavesPerTree is.
+    const int columns = int(std::ceil(std::sqrt(double(o.trees))));
+    const int rows = (o.trees + columns - 1) / columns;
+    Rng layout(o.seed);
+    for (int i = 0; i < o.trees; ++i) {
+        const int row = i / columns, column = i % columns;
+        const Vec3d at{(column - 0.5 * (columns - 1)) * o.spacing + uniform(layout, -0.25, 0.25) * o.spacing,
+                       0, (row - 0.5 * (rows - 1)) * o.spacing + uniform(layout, -0.25, 0.25) * o.spacing};
+        const double scale = uniform(layout, 0.8, 1.25), yaw = uniform(layout, 0, 2 * M_PI);
+        Rng rng(o.seed * 0x9E3779B97F4A7C15ull + uint64_t(i) + 1);
+        const size_t woodFirst = wood.mesh.positions.size();
+        std::vector<size_t> leafFirst;
+        for (const SceneMesh& m : leaves) leafFirst.push_back(m.mesh.positions.size());
+        growTree(wood.mesh, leaves, o.leavesPerTree, o.leafSize, o.trunkSides, rng);
+        placeVertices(wood.mesh, woodFirst, at, scale, yaw);
+        for (size_t g = 0; g < leaves.size(); ++g)
+            placeVertices(leaves[g].mesh, leafFirst[g], at, scale, yaw);
+    }
+    scene.meshes.push_back(std::move(wood));
+    addNonEmpty(scene, leaves);
+
+    // The tree scene's sun; the camera looks down the lattice's diagonal from outside a corner.
+    scene.lights.push_back(directionalLight("Sun", {0.55, -1.0, 0.35}, {1.0f, 0.95f, 0.85f}, 3.2f));
+    const double half = 0.5 * o.spacing * std::max(columns, rows);
+    return withView(std::move(scene), {-0.55 * half, 0.75 * half + 2, 1.9 * half + 3}, {0, 1.2, -0.1 * half},
+                    50);
+}
+
+int64_t leafTriangleCount(const Scene& scene) {
+    int64_t n = 0;
+    for (const SceneMesh& m : scene.meshes)
+        if (m.castsShadow && !scene.materials[m.material].isOpaque()) n += int64_t(m.mesh.triangleCount());
+    return n;
 }
 
 void appendBox(Mesh& m, const Vec3d& lo, const Vec3d& hi) {
@@ -334,12 +424,15 @@ Scene makeCgalScene(const std::string& meshesDir, int leaves, uint64_t seed) {
 
 std::vector<std::string> demoSceneNames() { return {"tree", "bunny", "cgal", "glass"}; }
 
+std::vector<std::string> largeDemoSceneNames() { return {"forest"}; }
+
 Scene makeDemoScene(const std::string& name, const std::string& meshesDir) {
     if (name == "tree") return makeTreeScene();
     if (name == "bunny") return makeBunnyScene(meshesDir);
     if (name == "cgal") return makeCgalScene(meshesDir);
     if (name == "glass") return makeGlassScene(meshesDir);
-    fail("unknown demo scene '", name, "' (allowed: tree, bunny, cgal, glass)");
+    if (name == "forest") return makeForestScene();
+    fail("unknown demo scene '", name, "' (allowed: tree, bunny, cgal, glass, forest)");
 }
 
 } // namespace voxfx::demo
