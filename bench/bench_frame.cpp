@@ -73,6 +73,7 @@
 #include "voxfx/parallel.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/scene_io.hpp"
+#include "voxfx/view.hpp"
 
 namespace {
 
@@ -269,13 +270,22 @@ const BenchScene& forest(int leavesPerTree) {
     return forests.emplace(leavesPerTree, makeBenchScene(demo::makeForestScene(fo))).first->second;
 }
 
-// How the loop gets a frame. Today every frame is rendered from nothing (render(scene, camera,
-// options)). Once the renderer keeps its builds across frames (issue #34: render(..., &cache)),
-// a repeat-frame variant is: a cache made here and filled by one untimed frame, a lambda that
-// passes it, and one more BENCHMARK_CAPTURE line per scene; the loop and the counters stay.
+// How the loop gets a frame: from nothing (render(scene, camera, options): every build made
+// again, a first frame), or as an interactive frame (a RenderCache kept across the frames, filled by
+// the untimed warm-up, and the camera orbiting a degree further about its target each frame, so
+// that the G-buffer, occlusion, shading and everything fitted to the view are made anew while the
+// scene's builds are reused, as in a viewer).
 using FrameFn = std::function<RenderResult()>;
 FrameFn firstFrames(const BenchScene& b, RenderOptions o) {
     return [&b, o] { return render(b.scene, b.camera, o); };
+}
+FrameFn cachedFrames(const BenchScene& b, RenderOptions o) {
+    auto cache = std::make_shared<RenderCache>();
+    auto frame = std::make_shared<int>(0);
+    return [&b, o, cache, frame] {
+        const double yaw = (M_PI / 180) * double((*frame)++ % 10);
+        return render(b.scene, orbitCamera(b.camera, yaw, 0), o, *cache);
+    };
 }
 
 // Per-pass sums of a series of frames, and their process CPU time.
@@ -331,10 +341,10 @@ double meanValue(const Image& a) {
     return sum / (3.0 * double(a.pixels.size()));
 }
 
-void BM_Frame(benchmark::State& state, const std::string& name) {
+void BM_Frame(benchmark::State& state, const std::string& name, bool cached) {
     const BenchScene& b = benchScene(name);
     const RenderOptions options = frameOptions(b.scene);
-    const FrameFn frame = firstFrames(b, options);
+    const FrameFn frame = cached ? cachedFrames(b, options) : firstFrames(b, options);
     PassSums sums;
     double yard = 0, yardBuild = 0, yardTrace = 0, yardCpu = 0;
     interleaved(state, {[&](bool timed) {
@@ -363,14 +373,20 @@ void BM_Frame(benchmark::State& state, const std::string& name) {
     state.counters["frame_cpu_ms"] = sums.cpu / n;
     state.counters["yard_cpu_ms"] = yardCpu / n;
     state.counters["frame/yard_cpu"] = sums.cpu / yardCpu;
-    state.SetLabel(name + ": " + b.label + ", 1280x720, shadows " + std::string(shadowName(options.shadow)));
+    state.SetLabel(name + ": " + b.label + ", 1280x720, shadows " + std::string(shadowName(options.shadow)) +
+                   (cached ? ", cached" : ", first frame"));
 }
-BENCHMARK_CAPTURE(BM_Frame, tree, std::string("tree"))->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_Frame, bunny, std::string("bunny"))->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_Frame, cgal, std::string("cgal"))->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_Frame, glass, std::string("glass"))->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_Frame, dsm_demo, std::string("dsm-demo"))->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_Frame, forest, std::string("forest"))->Unit(benchmark::kMillisecond)->UseRealTime();
+// BM_Frame/<scene>: first frames (every build made per frame); BM_Frame/<scene>_cached: interactive
+// frames (a RenderCache, the camera orbiting).
+#define VOXFX_FRAME_SCENE(id, name)                                                                          \
+    BENCHMARK_CAPTURE(BM_Frame, id, std::string(name), false)->Unit(benchmark::kMillisecond)->UseRealTime(); \
+    BENCHMARK_CAPTURE(BM_Frame, id##_cached, std::string(name), true)->Unit(benchmark::kMillisecond)->UseRealTime()
+VOXFX_FRAME_SCENE(tree, "tree");
+VOXFX_FRAME_SCENE(bunny, "bunny");
+VOXFX_FRAME_SCENE(cgal, "cgal");
+VOXFX_FRAME_SCENE(glass, "glass");
+VOXFX_FRAME_SCENE(dsm_demo, "dsm-demo");
+VOXFX_FRAME_SCENE(forest, "forest");
 
 // The linear (tone map clamp) frames of a scene with exact shadows and with none, made once.
 struct LinearReferences {
@@ -394,7 +410,7 @@ const LinearReferences& linearReferences(const BenchScene& b, RenderOptions exac
 // and the unshadowed images differ by more than 1e-3 summed over the channels; `shadowed` the
 // fraction of such pixels), from untimed frames that also serve as the warm-up.
 void againstExact(benchmark::State& state, const BenchScene& b, const RenderOptions& kind,
-                  const RenderOptions& exact) {
+                  const RenderOptions& exact, bool cached = false) {
     RenderOptions none = exact;
     none.shadow = NoShadowOptions{};
     const LinearReferences& ref = linearReferences(b, exact, none);
@@ -414,15 +430,17 @@ void againstExact(benchmark::State& state, const BenchScene& b, const RenderOpti
         ++shadowed;
     }
     PassSums k, e, o;
+    // Each its own frames: first frames, or interactive ones with a cache of its own.
     auto frameInto = [&](const RenderOptions& options, PassSums& sums) {
-        return [&](bool timed) {
+        FrameFn frame = cached ? cachedFrames(b, options) : firstFrames(b, options);
+        return [&sums, frame](bool timed) {
             const double cpu0 = processCpuMs();
-            const RenderResult r = render(b.scene, b.camera, options);
+            const RenderResult r = frame();
             benchmark::DoNotOptimize(r.image.pixels.data());
             if (timed) sums.add(r, processCpuMs() - cpu0);
         };
     };
-    interleaved(state, {frameInto(kind, k), frameInto(exact, e), frameInto(none, o)}, false);
+    interleaved(state, {frameInto(kind, k), frameInto(exact, e), frameInto(none, o)}, cached);
     const double n = double(state.iterations());
     state.counters["kind_ms"] = k.total / n;
     state.counters["exact_ms"] = e.total / n;
@@ -449,19 +467,19 @@ void againstExact(benchmark::State& state, const BenchScene& b, const RenderOpti
     state.counters["exact_mean"] = meanValue(ref.exact);
 }
 
-void BM_ForestShadows(benchmark::State& state, const std::string& kind) {
+void BM_ForestShadows(benchmark::State& state, const std::string& kind, bool cached) {
     const BenchScene& b = forest(int(state.range(0)));
-    againstExact(state, b, frameOptions(b.scene, kind), frameOptions(b.scene, "exact"));
-    state.SetLabel(kind + " against exact, forest of " + b.label + ", 1280x720");
+    againstExact(state, b, frameOptions(b.scene, kind), frameOptions(b.scene, "exact"), cached);
+    state.SetLabel(kind + " against exact, forest of " + b.label + ", 1280x720" +
+                   (cached ? ", cached" : ", first frames"));
 }
+// BM_ForestShadows/<kind>: first frames; BM_ForestShadows/<kind>_cached: interactive frames (each
+// technique's builds and exact's BVH kept in a cache of their own, the camera orbiting).
+#define VOXFX_FOREST_ARGS                                                                                    \
+    ->Arg(100)->Arg(1000)->Arg(10000)->ArgName("leavesPerTree")->Unit(benchmark::kMillisecond)->UseRealTime()
 #define VOXFX_FOREST_KIND(kind)                                                                              \
-    BENCHMARK_CAPTURE(BM_ForestShadows, kind, std::string(#kind))                                            \
-        ->Arg(100)                                                                                           \
-        ->Arg(1000)                                                                                          \
-        ->Arg(10000)                                                                                         \
-        ->ArgName("leavesPerTree")                                                                           \
-        ->Unit(benchmark::kMillisecond)                                                                      \
-        ->UseRealTime()
+    BENCHMARK_CAPTURE(BM_ForestShadows, kind, std::string(#kind), false) VOXFX_FOREST_ARGS;                  \
+    BENCHMARK_CAPTURE(BM_ForestShadows, kind##_cached, std::string(#kind), true) VOXFX_FOREST_ARGS
 VOXFX_FOREST_KIND(transmittance);
 VOXFX_FOREST_KIND(absorption);
 VOXFX_FOREST_KIND(map);

@@ -67,7 +67,10 @@ SurfaceShader::SurfaceShader(const FrameState& frame)
 }
 
 Vec3f SurfaceShader::skyIrradiance(const Vec3d& normal) const {
-    const Vec3f n(normalize(normal));
+    // The shading normal is unit already (surfaceAt, surfaceFromBasis); others are normalized.
+    Vec3f n(normal);
+    const float len2 = dot(n, n);
+    if (std::abs(len2 - 1) > 1e-5f) n = n / std::sqrt(len2);
     const float x = n.x, y = n.y, z = n.z;
     const float basis[9] = {0.282095f,
                             0.488603f * y,
