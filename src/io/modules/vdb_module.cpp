@@ -26,9 +26,11 @@
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Composite.h>
+#include <openvdb/tools/Dense.h>
 #include <openvdb/tools/GridTransformer.h>
 #include <openvdb/tools/LevelSetFilter.h>
 #include <openvdb/tools/Morphology.h>
+#include <openvdb/tools/VolumeToMesh.h>
 #include <openvdb/tree/LeafNode.h>
 #include <openvdb/tree/ValueAccessor.h>
 
@@ -1340,6 +1342,57 @@ bool levelSetWrite(const char* path, const void* g, std::string* error) {
     return guarded(error, [&] { writeFile(path, static_cast<const LevelSetHandle*>(g)->grid); });
 }
 
+// OpenVDB's polygons as plain arrays.
+void copyPolygons(const std::vector<openvdb::Vec3s>& points, const std::vector<openvdb::Vec3I>& triangles,
+                  const std::vector<openvdb::Vec4I>& quads, VdbPolygons* out) {
+    out->points.resize(3 * points.size());
+    for (std::size_t i = 0; i < points.size(); ++i)
+        for (int a = 0; a < 3; ++a) out->points[3 * i + std::size_t(a)] = points[i][a];
+    out->triangles.resize(3 * triangles.size());
+    for (std::size_t i = 0; i < triangles.size(); ++i)
+        for (int a = 0; a < 3; ++a) out->triangles[3 * i + std::size_t(a)] = triangles[i][a];
+    out->quads.resize(4 * quads.size());
+    for (std::size_t i = 0; i < quads.size(); ++i)
+        for (int a = 0; a < 4; ++a) out->quads[4 * i + std::size_t(a)] = quads[i][a];
+}
+
+void meshFloatGrid(const openvdb::FloatGrid& grid, double isovalue, double adaptivity, VdbPolygons* out) {
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec3I> triangles;
+    std::vector<openvdb::Vec4I> quads;
+    try {
+        openvdb::tools::volumeToMesh(grid, points, triangles, quads, isovalue, adaptivity);
+    } catch (const openvdb::Exception& e) { fail("OpenVDB: ", e.what()); }
+    copyPolygons(points, triangles, quads, out);
+}
+
+bool levelSetToMesh(const void* g, double isovalue, double adaptivity, VdbPolygons* out, std::string* error) {
+    return guarded(error, [&] { meshFloatGrid(lsGrid(g), isovalue, adaptivity, out); });
+}
+
+bool denseToMesh(const float* values, const int64_t dims[3], const VdbPlacement& placement, float background,
+                 double isovalue, double adaptivity, VdbPolygons* out, std::string* error) {
+    return guarded(error, [&] {
+        initializeOpenVdb();
+        auto grid = openvdb::FloatGrid::create(background);
+        auto xform = openvdb::math::Transform::createLinearTransform(1.0);
+        xform->preScale(openvdb::Vec3d(placement.cell[0], placement.cell[1], placement.cell[2]));
+        xform->postTranslate(
+            openvdb::Vec3d(placement.centre0[0], placement.centre0[1], placement.centre0[2]));
+        grid->setTransform(xform);
+        // volumeToMesh reads a level set's inside as below the iso value (other float grids as fog
+        // volumes: above it), which is this function's convention.
+        grid->setGridClass(openvdb::GRID_LEVEL_SET);
+        // x fastest is OpenVDB's LayoutXYZ. copyFromDense only reads the values; every voxel stays
+        // active (none equals the background, which lies above them all).
+        const openvdb::CoordBBox box(openvdb::Coord(0, 0, 0),
+                                     openvdb::Coord(int(dims[0]) - 1, int(dims[1]) - 1, int(dims[2]) - 1));
+        const openvdb::tools::Dense<float, openvdb::tools::LayoutXYZ> dense(box, const_cast<float*>(values));
+        openvdb::tools::copyFromDense(dense, *grid, 0.0f);
+        meshFloatGrid(*grid, isovalue, adaptivity, out);
+    });
+}
+
 constexpr VdbModule kTable{
     kModuleAbi,      sizeof(VdbModule), writeBits,       writeFloats,      readBits,
     readFloats,      sparseCreate,      sparseDestroy,   sparseCopy,       sparseAddBrick,
@@ -1349,7 +1402,7 @@ constexpr VdbModule kTable{
     writeDenseGrids, levelSetCreate,    levelSetDestroy, levelSetAdd,      levelSetStreamWrite,
     levelSetRead,    levelSetProbe,     levelSetBuild,   levelSetCopy,     levelSetInfo,
     levelSetValue,   levelSetValues,    levelSetActive,  levelSetCombine,  levelSetOffset,
-    levelSetWrite};
+    levelSetWrite,   levelSetToMesh,    denseToMesh};
 
 } // namespace
 } // namespace voxfx::detail
