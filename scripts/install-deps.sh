@@ -11,6 +11,7 @@ packages=(
   clang libclang-rt-14-dev
   python3-dev pybind11-dev python3-numpy python3-pytest python3-distributed python3-openvdb
   python3-pip python3-setuptools python3-wheel python3-venv python3-mypy
+  python3-torch
 )
 missing=()
 for p in "${packages[@]}"; do
