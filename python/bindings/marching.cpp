@@ -70,12 +70,17 @@ std::shared_ptr<SurfaceMesh> marchingCubes(const py::object& field, double iso, 
         throw py::type_error(
             "field must be a voxfx.LevelSet, a voxfx.SignedDistanceField or a 3-D array of numbers "
             "indexed [i, j, k]");
-    // [i, j, k] with i fastest in memory: Fortran order (a copy unless the array is already so, as
-    // SignedDistanceField.to_numpy() gives it).
-    const auto values = py::array_t<float, py::array::f_style | py::array::forcecast>::ensure(any);
+    // [i, j, k] in either memory order without a copy (C order: k fastest, as NumPy makes arrays;
+    // Fortran order: i fastest, as SignedDistanceField.to_numpy() gives them); anything else is
+    // copied into C order.
+    const bool fortran = (any.flags() & py::array::f_style) && !(any.flags() & py::array::c_style);
+    const py::array values =
+        fortran ? py::array(py::array_t<float, py::array::f_style | py::array::forcecast>::ensure(any))
+                : py::array(py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(any));
     ScalarFieldView view;
-    view.values = values.data();
+    view.values = static_cast<const float*>(values.data());
     view.dims = {int64_t(values.shape(0)), int64_t(values.shape(1)), int64_t(values.shape(2))};
+    view.zFastest = !fortran;
     view.spacing = marchingTriple(spacing, "spacing", 1.0);
     view.origin = marchingTriple(origin, "origin", 0.0);
     interruptible([&](Cancel&) {

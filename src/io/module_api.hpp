@@ -275,13 +275,14 @@ struct VdbModule {
     /// The level set handle's surface at `isovalue` (OpenVDB's adaptivity in [0, 1]).
     bool (*levelSetToMesh)(const void* grid, double isovalue, double adaptivity, VdbPolygons* out,
                            std::string* error);
-    /// The surface of dense values (x fastest, then y, then z) whose index (i, j, k) sits at
-    /// placement.centre0 + (i, j, k) * placement.cell, in a FloatGrid of class level set (inside
-    /// below the iso value, as OpenVDB reads level sets) whose voxels outside the box hold
-    /// `background` (above `isovalue`: outside, so surfaces close at the box).
-    bool (*denseToMesh)(const float* values, const int64_t dims[3], const VdbPlacement& placement,
-                        float background, double isovalue, double adaptivity, VdbPolygons* out,
-                        std::string* error);
+    /// The surface of dense values (x fastest, then y, then z; zFastest: z fastest, then y, then x)
+    /// whose index (i, j, k) sits at placement.centre0 + (i, j, k) * placement.cell, in a FloatGrid
+    /// of class level set (inside below the iso value, as OpenVDB reads level sets) whose voxels
+    /// beyond the box hold `background` (above `isovalue`: outside, so surfaces close at the box),
+    /// active only near the iso value.
+    bool (*denseToMesh)(const float* values, const int64_t dims[3], bool zFastest,
+                        const VdbPlacement& placement, float background, double isovalue, double adaptivity,
+                        ParallelFor parallelFor, VdbPolygons* out, std::string* error);
 };
 
 // ---- voxfx_assimp: Assimp (glTF 2.0 and the long tail) ----------------------------------------

@@ -54,6 +54,11 @@ SurfaceMesh toSurfaceMesh(const detail::VdbPolygons& p) {
     return m;
 }
 
+void volumeMeshParallelFor(int64_t begin, int64_t end, int64_t grain, void* body,
+                           void (*call)(void* body, int64_t b, int64_t e)) {
+    parallelFor(begin, end, grain, [&](int64_t b, int64_t e) { call(body, b, e); });
+}
+
 void checkBand(double isovalue, double background, const char* what) {
     if (!(std::abs(isovalue) < background))
         fail("marching cubes: the iso value ", isovalue, " lies outside the ", what, "'s band (|iso| < ",
@@ -114,7 +119,10 @@ SurfaceMesh volumeToMesh(const ScalarFieldView& field, const VolumeToMeshOptions
             return a;
         });
     if (extent.bad >= 0) {
-        const int64_t i = extent.bad % d.x, j = extent.bad / d.x % d.y, k = extent.bad / (d.x * d.y);
+        const int64_t n = extent.bad;
+        const int64_t i = field.zFastest ? n / (d.y * d.z) : n % d.x,
+                      j = field.zFastest ? n / d.z % d.y : n / d.x % d.y,
+                      k = field.zFastest ? n % d.z : n / (d.x * d.y);
         fail("marching cubes: the value at (", i, ", ", j, ", ", k, ") is ", field.values[extent.bad],
              " (values must be finite)");
     }
@@ -130,8 +138,8 @@ SurfaceMesh volumeToMesh(const ScalarFieldView& field, const VolumeToMeshOptions
     const int64_t dims[3] = {d.x, d.y, d.z};
     detail::VdbPolygons polygons;
     std::string error;
-    if (!detail::vdbModule().denseToMesh(values, dims, placement, background, iso, options.adaptivity,
-                                         &polygons, &error))
+    if (!detail::vdbModule().denseToMesh(values, dims, field.zFastest, placement, background, iso,
+                                         options.adaptivity, vmd::volumeMeshParallelFor, &polygons, &error))
         fail("marching cubes: ", error);
     return vmd::toSurfaceMesh(polygons);
 }
