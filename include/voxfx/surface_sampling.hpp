@@ -5,9 +5,10 @@
 // EXPERIMENTAL until #35 closes.
 //
 // Surface samples are area-weighted: triangle t is picked with probability area(t) / total area
-// (inverse transform over the running sum of the areas, in double), then a point uniformly inside
-// it (barycentric weights (1 - sqrt(u), sqrt(u) (1 - v), sqrt(u) v), Osada et al. 2002, §4.2), so
-// the points are uniform over the surface. Triangles of zero area are never picked.
+// (Walker's alias table of the areas, built by Vose's method in double: O(1) per sample), then a
+// point uniformly inside it (barycentric weights (1 - sqrt(u), sqrt(u) (1 - v), sqrt(u) v), Osada
+// et al. 2002, §4.2), so the points are uniform over the surface. Triangles of zero area are never
+// picked.
 //
 // Determinism: sample i draws its random numbers from a counter-based generator (SplitMix64's
 // mixing function over (seed, i, k)), not from a sequential stream, so sample i is the same

@@ -18,11 +18,13 @@ namespace {
 // Samples per task: enough to hide the task overhead, few enough to poll for cancellation.
 constexpr int64_t kSampleChunk = 16384;
 
-// Random numbers per sample: face, two barycentric, four for Gaussian offsets (Box-Muller pairs),
-// three for a uniform box point. Stream k of sample i is counter i * kSampleStreams + k.
+// Random numbers per sample: two for the face (alias table column and coin), two barycentric, four
+// for Gaussian offsets (Box-Muller pairs), three for a uniform box point. Stream k of sample i is
+// counter i * kSampleStreams + k.
 constexpr uint64_t kSampleStreams = 16;
 enum SampleStream : uint64_t {
     kStreamFace = 0,
+    kStreamCoin,
     kStreamBary1,
     kStreamBary2,
     kStreamGauss0,
@@ -61,10 +63,15 @@ struct SampleRng {
     }
 };
 
-/// The running sum of the triangles' areas (in double, in triangle order: the same table for any
-/// thread count), and the unit normals.
+/// The triangles' areas as Walker's alias table (Vose's construction, "A linear algorithm for
+/// generating random numbers with a given distribution", 1991): column t is kept with probability
+/// keep[t], else it gives alias[t], so one uniform column and one coin pick triangle t with
+/// probability area(t) / total in O(1) (a binary search over the running sum of the areas cost a
+/// cache miss per level on large meshes). Built serially in triangle order: the same table for any
+/// thread count. Triangles of zero area have keep 0 and are never picked.
 struct SampleAreaTable {
-    std::vector<double> cumulative; ///< cumulative[t] = area(0) + ... + area(t)
+    std::vector<double> keep;
+    std::vector<uint32_t> alias;
     std::vector<Vec3f> normals;
     double total = 0;
 };
@@ -72,7 +79,7 @@ struct SampleAreaTable {
 SampleAreaTable sampleAreaTable(const MeshView& mesh) {
     SampleAreaTable table;
     const auto T = int64_t(mesh.triangleCount);
-    table.cumulative.resize(std::size_t(T));
+    std::vector<double> area(static_cast<std::size_t>(T));
     table.normals.resize(std::size_t(T));
     parallelFor(0, T, 8192, [&](int64_t b, int64_t e) {
         for (int64_t t = b; t < e; ++t) {
@@ -80,26 +87,51 @@ SampleAreaTable sampleAreaTable(const MeshView& mesh) {
             const Vec3d n = cross(mesh.vertex(mesh.index(std::size_t(t), 1)) - a,
                                   mesh.vertex(mesh.index(std::size_t(t), 2)) - a);
             const double twice = length(n);
-            table.cumulative[std::size_t(t)] = 0.5 * twice;
+            area[std::size_t(t)] = 0.5 * twice;
             table.normals[std::size_t(t)] = twice > 0 ? Vec3f(n / twice) : Vec3f{};
         }
     });
-    double sum = 0;
-    for (double& c : table.cumulative) c = (sum += c);
-    table.total = sum;
+    for (const double a : area) table.total += a;
+    if (!(table.total > 0) || !std::isfinite(table.total)) return table;
+    // Vose: scaled areas (mean 1) split into columns below and above 1; each small column is
+    // topped up from a large one, which becomes small when it falls below 1.
+    table.keep.resize(std::size_t(T));
+    table.alias.resize(std::size_t(T));
+    std::vector<uint32_t> small, large;
+    uint32_t biggest = 0;
+    for (int64_t t = 0; t < T; ++t) {
+        const auto k = std::size_t(t);
+        table.keep[k] = area[k] * double(T) / table.total;
+        table.alias[k] = uint32_t(t);
+        (table.keep[k] < 1 ? small : large).push_back(uint32_t(t));
+        if (area[k] > area[biggest]) biggest = uint32_t(t);
+    }
+    while (!small.empty() && !large.empty()) {
+        const uint32_t s = small.back(), l = large.back();
+        small.pop_back();
+        table.alias[s] = l;
+        table.keep[l] = (table.keep[l] + table.keep[s]) - 1; // Vose's order of the operations
+        if (table.keep[l] < 1) {
+            large.pop_back();
+            small.push_back(l);
+        }
+    }
+    // What is left is 1 up to rounding; a zero-area triangle left over stays unpicked.
+    for (const std::vector<uint32_t>* rest : {&small, &large})
+        for (const uint32_t t : *rest) {
+            table.keep[t] = area[t] > 0 ? 1.0 : 0.0;
+            if (!(area[t] > 0)) table.alias[t] = biggest;
+        }
     return table;
 }
 
-/// Surface sample i: its face (the first whose running sum exceeds u * total, so a zero-area
-/// triangle, whose sum equals its predecessor's, is never picked) and point.
+/// Surface sample i: its face (alias table) and a uniform point in it.
 void surfaceSample(const MeshView& mesh, const SampleAreaTable& table, const SampleRng& rng, uint64_t i,
                    Vec3d& point, uint32_t& face) {
-    const double target = rng.uniform(i, kStreamFace) * table.total;
-    auto it = std::upper_bound(table.cumulative.begin(), table.cumulative.end(), target);
-    // u * total rounds up to total at most: then the last triangle of nonzero area.
-    if (it == table.cumulative.end())
-        it = std::lower_bound(table.cumulative.begin(), table.cumulative.end(), table.total);
-    face = uint32_t(it - table.cumulative.begin());
+    const auto T = table.keep.size();
+    // u * T < T for u < 1 in exact arithmetic; rounding may reach T: clamped.
+    const auto column = std::min(std::size_t(rng.uniform(i, kStreamFace) * double(T)), T - 1);
+    face = rng.uniform(i, kStreamCoin) < table.keep[column] ? uint32_t(column) : table.alias[column];
     const double r = std::sqrt(rng.uniform(i, kStreamBary1)), v = rng.uniform(i, kStreamBary2);
     const Vec3d a = mesh.vertex(mesh.index(face, 0)), b = mesh.vertex(mesh.index(face, 1)),
                 c = mesh.vertex(mesh.index(face, 2));
