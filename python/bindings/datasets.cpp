@@ -2,6 +2,7 @@
 // one (B, R, R, R) bool array, or the filled cells with their batch index as (N, 4) int32 rows
 // (b, i, j, k), the form sparse-convolution libraries take (MinkowskiEngine's batched coordinates,
 // spconv's indices: batch index first). The Python wrapper (voxfx/_datasets.py) adds torch tensors.
+#include <bit>
 #include <cstring>
 #include <exception>
 #include <mutex>
@@ -39,16 +40,27 @@ void manyDense(const VoxelGrid& g, bool* out) {
         }
 }
 
-/// The filled cells as (b, i, j, k) rows in np.argwhere's order of the dense array.
+/// The filled cells as (b, i, j, k) rows in np.argwhere's order of the dense array: counted
+/// first (popcounts), then written into an array of exactly that size.
 void manyCoordinates(const VoxelGrid& g, int32_t b, std::vector<int32_t>& out) {
     const Vec3i d = g.worldDims();
+    const int64_t words = (d.z + 63) / 64;
+    int64_t n = 0;
     for (int64_t x = 0; x < d.x; ++x)
         for (int64_t y = 0; y < d.y; ++y) {
             const uint64_t* col = g.bits.column(x, y);
-            for (int64_t w = 0; w < (d.z + 63) / 64; ++w)
+            for (int64_t w = 0; w < words; ++w) n += std::popcount(col[w]);
+        }
+    out.resize(std::size_t(4 * n));
+    int32_t* o = out.data();
+    for (int64_t x = 0; x < d.x; ++x)
+        for (int64_t y = 0; y < d.y; ++y) {
+            const uint64_t* col = g.bits.column(x, y);
+            for (int64_t w = 0; w < words; ++w)
                 for (uint64_t word = col[w]; word; word &= word - 1) {
-                    const int64_t s = w * 64 + std::countr_zero(word);
-                    out.insert(out.end(), {b, int32_t(x), int32_t(y), int32_t(s)});
+                    o[0] = b, o[1] = int32_t(x), o[2] = int32_t(y),
+                    o[3] = int32_t(w * 64 + std::countr_zero(word));
+                    o += 4;
                 }
         }
 }
