@@ -13,6 +13,7 @@ packages=(
   python3-dev pybind11-dev python3-numpy python3-pytest python3-distributed python3-openvdb
   python3-pip python3-setuptools python3-wheel python3-venv python3-mypy
   libsdl2-dev xvfb xdotool x11-apps
+  python3-torch
 )
 missing=()
 for p in "${packages[@]}"; do

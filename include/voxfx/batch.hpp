@@ -29,7 +29,8 @@ struct BatchJob {
     std::string output; ///< grid file (format from its extension)
 };
 
-/// The file extension (with the dot) of a grid format: ".binvox", ".vdb", ".nrrd", ".ply", ".obj".
+/// The file extension (with the dot) of a grid format: ".binvox", ".vdb", ".nrrd", ".ply", ".obj",
+/// ".npy", ".npz".
 const char* gridFormatExtension(GridFormat format);
 
 /// Reads a manifest: one mesh path per line, relative to the manifest's folder (absolute paths

@@ -20,6 +20,11 @@
 //           grid border) as quads, counter-clockwise seen from outside, in world coordinates
 //           (ply binary little endian, float x y z, list uchar int). Corners are shared: each
 //           lattice point is one vertex. Cost ~ a few passes over the grid plus the output.
+//   npy:    (for NumPy, write-only) the occupancy as a bool array (nx, ny, nz) indexed [x, y, z], C
+//           order: np.load(path) equals the Python module's grid.to_numpy().
+//   npz:    (write-only) a zip archive as np.savez_compressed writes it (deflate): "occupancy" (the
+//           .npy array), "origin" (world corner of voxel (0, 0, 0)) and "cell_size", float64 (3,).
+//           Below 4 GiB (no zip64).
 // All writers are atomic: they write a temporary file beside the target and rename it, so a
 // failure leaves no partial output and an existing file untouched.
 // Thread-safety: reads and writes of different paths may run concurrently (OpenVDB's one-time
@@ -36,12 +41,11 @@
 
 namespace voxfx {
 
-enum class GridFormat : uint8_t { Binvox, Vdb, Nrrd, Ply, Obj };
-inline constexpr EnumName<GridFormat> kGridFormatNames[] = {{"binvox", GridFormat::Binvox},
-                                                            {"vdb", GridFormat::Vdb},
-                                                            {"nrrd", GridFormat::Nrrd},
-                                                            {"ply", GridFormat::Ply},
-                                                            {"obj", GridFormat::Obj}};
+enum class GridFormat : uint8_t { Binvox, Vdb, Nrrd, Ply, Obj, Npy, Npz };
+inline constexpr EnumName<GridFormat> kGridFormatNames[] = {
+    {"binvox", GridFormat::Binvox}, {"vdb", GridFormat::Vdb}, {"nrrd", GridFormat::Nrrd},
+    {"ply", GridFormat::Ply},       {"obj", GridFormat::Obj}, {"npy", GridFormat::Npy},
+    {"npz", GridFormat::Npz}};
 
 /// Format from the file extension; throws voxfx::Error listing the allowed extensions.
 GridFormat gridFormatFromPath(const std::string& path);

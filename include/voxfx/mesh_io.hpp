@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <string>
+#include <vector>
 
 #include "voxfx/mesh.hpp"
 #include "voxfx/surface_mesh.hpp"
@@ -26,6 +27,14 @@ struct MeshLoadReport {
 /// malformed or truncated content (with the line or byte offset where known), NaN/Inf
 /// coordinates, out-of-range indices, and a file without any triangle.
 Mesh loadMesh(const std::string& path, MeshLoadReport* report = nullptr);
+
+/// loadMesh, keeping the file's per-vertex colours: `vertexColors` receives one RGB colour per
+/// vertex of the returned mesh (whose vertices are the file's, in order) from PLY red/green/blue
+/// properties (integer types over their largest value: uchar / 255) and COFF vertex lines (3 or 4
+/// components, integers on a 0..255 scale, decimals in 0..1; alpha dropped); it is left empty
+/// when the file has none, and for the other formats (OBJ, STL, Assimp's). A malformed colour
+/// (COFF: not 3 or 4 numbers) is an error naming the line, as for any other value.
+Mesh loadMesh(const std::string& path, MeshLoadReport* report, std::vector<Vec3f>* vertexColors);
 
 /// Writes the mesh by extension: .ply (binary little-endian, positions and normals, triangles
 /// as uchar-counted int lists) or .obj (v, vn and f a//a lines). Atomic. Throws voxfx::Error.

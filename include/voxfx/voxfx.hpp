@@ -43,6 +43,8 @@
 #include "voxfx/sdf.hpp"
 #include "voxfx/smoke.hpp"
 #include "voxfx/surface_mesh.hpp"
+#include "voxfx/surface_sampling.hpp"
+#include "voxfx/vertex_colors.hpp"
 
 // scene: scenes, lights, cameras, materials, light views, transfer functions, volume scenes.
 #include "voxfx/light_view.hpp"
@@ -95,6 +97,7 @@
 #include "voxfx/sdf_io.hpp"
 #include "voxfx/sparse_grid.hpp"
 #include "voxfx/volume_io.hpp"
+#include "voxfx/volume_to_mesh.hpp"
 
 // batch: many meshes in one process.
 #include "voxfx/batch.hpp"

@@ -74,14 +74,25 @@ void bindBatch(py::module_& m) {
         "batch",
         [](const py::object& manifestOrList, const py::object& outDirObj, const std::string& format,
            std::optional<int64_t> resolution, std::optional<double> voxelSize,
-           std::optional<std::vector<int64_t>> dims, const py::object& bounds, int64_t margin,
-           const std::string& mode, const std::string& fill, const std::string& axis,
+           std::optional<std::vector<int64_t>> dims, const py::object& bounds, int64_t margin, bool cube,
+           int64_t padding, const std::string& mode, const std::string& fill, const std::string& axis,
            const std::string& slicing, bool vdbFloat, int threads, bool nested, bool skipExisting,
            const py::object& report, const py::object& progress) {
             const std::string outDir = pathString(outDirObj);
             const GridFormat gridFormat = batchGridFormat(format);
             BatchOptions bo;
-            bo.fit = fitOptions(resolution, voxelSize, dims, bounds, margin, axis);
+            bo.fit = fitOptions(resolution, voxelSize, dims, bounds, margin, axis, cube);
+            // padding p: p empty cells kept inside the resolution, as voxelize() keeps them.
+            if (padding < 0) throw ArgumentError("padding must be >= 0");
+            if (padding > 0) {
+                if (bo.fit.resolution == 0)
+                    throw ArgumentError("padding needs a resolution (not voxel_size or dims)");
+                if (bo.fit.resolution <= 2 * padding)
+                    throw ArgumentError(
+                        "padding needs a resolution above 2 * padding (the cells left for the mesh)");
+                bo.fit.resolution -= 2 * padding;
+                bo.fit.marginCells += padding;
+            }
             asArgument([&] {
                 bo.voxelize.mode = parseVoxelizeMode(mode);
                 bo.voxelize.slicing = parseSlicing(slicing);
@@ -127,13 +138,15 @@ void bindBatch(py::module_& m) {
         },
         py::arg("meshes"), py::arg("out_dir"), py::kw_only(), py::arg("format") = ".binvox",
         py::arg("resolution") = py::none(), py::arg("voxel_size") = py::none(), py::arg("dims") = py::none(),
-        py::arg("bounds") = py::none(), py::arg("margin") = 0, py::arg("mode") = "solid",
-        py::arg("fill") = "auto", py::arg("axis") = "z", py::arg("slicing") = "uniform",
-        py::arg("vdb_float") = false, py::arg("threads") = 0, py::arg("nested") = false,
-        py::arg("skip_existing") = true, py::arg("report") = py::none(), py::arg("progress") = py::none(),
+        py::arg("bounds") = py::none(), py::arg("margin") = 0, py::arg("cube") = false,
+        py::arg("padding") = 0, py::arg("mode") = "solid", py::arg("fill") = "auto", py::arg("axis") = "z",
+        py::arg("slicing") = "uniform", py::arg("vdb_float") = false, py::arg("threads") = 0,
+        py::arg("nested") = false, py::arg("skip_existing") = true, py::arg("report") = py::none(),
+        py::arg("progress") = py::none(),
         "Voxelizes many meshes in this process, as `voxfx batch` does (the same outputs, byte for byte): "
         "meshes is a manifest file (one path per line, relative to its folder, '#' comments) or a list of "
-        "paths; mesh M is written to out_dir/<stem of M><format>. Options as voxelize; threads: workers for "
+        "paths; mesh M is written to out_dir/<stem of M><format> (.binvox .vdb .nrrd .ply .obj .npy .npz). "
+        "Options as voxelize (cube, padding included); threads: workers for "
         "the whole batch (0 = all), each mesh on one of them (nested=True: on all). A mesh that fails is "
         "recorded with its error and the rest go on; existing outputs are skipped (skip_existing=False "
         "redoes them). report: the JSON report's path (None: out_dir/report.json, False: none). progress: "

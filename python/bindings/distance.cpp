@@ -33,13 +33,13 @@ auto withMeshAndPoints(const py::object& meshObj, const py::object& faces, const
     return f(*mesh, p);
 }
 
-void checkThreads(int threads) {
+void checkDistanceThreads(int threads) {
     if (threads < 0) throw ArgumentError("threads must be >= 0");
 }
 
 py::object closestPoints(const py::object& meshObj, const py::object& faces, const py::object& points,
                          int threads) {
-    checkThreads(threads);
+    checkDistanceThreads(threads);
     return withMeshAndPoints(
         meshObj, faces, points, "closest_points", [&](const PyMesh& mesh, std::span<const Vec3d> p) {
             const py::ssize_t n = py::ssize_t(p.size());
@@ -74,7 +74,7 @@ py::object closestPoints(const py::object& meshObj, const py::object& faces, con
 py::array_t<double> signedDistances(const py::object& meshObj, const py::object& faces,
                                     const py::object& points, const std::string& sign, int threads,
                                     double windingBeta) {
-    checkThreads(threads);
+    checkDistanceThreads(threads);
     if (!(windingBeta >= 0)) throw ArgumentError("winding_beta must be >= 0");
     SignedDistanceOptions o;
     o.sign = asArgument([&] { return parseSignMethod(sign); });

@@ -13,8 +13,14 @@
     ls = voxfx.read_level_set("a.vdb") - mesh      # OpenVDB level-set CSG, a mesh on its lattice: exact
     report = voxfx.batch("meshes.txt", "out/", resolution=64)   # many meshes, as `voxfx batch`
     image = voxfx.render("scene.json", shadows="deep", epsilon=0.02)  # (H, W, 3) float32, linear RGB
+    s = voxfx.sample_near_surface(mesh, 100_000, sigma=0.01)  # points, exact sdf (negative inside), inside
+    batch = voxfx.voxelize_many(paths, 64, padding=2)          # (B, 64, 64, 64) bool, or sparse=True: (N, 4)
+    surface = voxfx.marching_cubes(field)          # OpenVDB's volumeToMesh of a level set, SDF or array
     r = voxfx.Renderer("scene.glb", width=640, height=360)       # frame after frame, as `voxfx view`
     frame = r.render(r.camera().orbit(0.3), preview=True)          # (90, 160, 3) uint8 sRGB
+
+Torch: every function takes CPU tensors where it takes arrays; a tensor that requires grad is
+detached (voxfx computes no gradients), and as_tensor=True returns tensors (see voxfx._datasets).
 
 Errors raise voxfx.Error (a RuntimeError) with the library's message, bad arguments
 voxfx.ArgumentError (also a ValueError). Long calls release the GIL and stop at Ctrl-C. See also
@@ -28,6 +34,9 @@ from ._voxfx import (ArgumentError, Density, Error, Grid, Mesh, PointClassifier,
                      VolumeEstimate, __version__)
 from ._voxfx import Camera, Renderer
 from ._voxfx import ClosestPoints, LevelSet, SignedDistanceField
+from ._voxfx import NearSurfaceSamples, SurfaceSamples
+from ._datasets import (AttributeGrid, attributes, marching_cubes, sample_near_surface, sample_surface, untensor_args,
+                        voxelize_many)
 
 # The I/O modules (voxfx_vdb.so, ...) lie next to _voxfx (the library looks there): nothing is
 # set in os.environ.
@@ -41,6 +50,7 @@ def _with_signature(f):
     name = f.__name__
 
     def call(*args, **kwargs):
+        args, kwargs = untensor_args(args, kwargs)  # CPU torch tensors: detached, as arrays
         return f(*args, **kwargs)
 
     call.__name__ = call.__qualname__ = name
@@ -71,6 +81,7 @@ _FUNCTIONS = [
 for _name in _FUNCTIONS:
     globals()[_name] = _with_signature(getattr(_voxfx, _name))
 _batch = _with_signature(_voxfx.batch)
+load_colored_mesh = _with_signature(_voxfx.load_colored_mesh)
 
 
 class _ProgressLine:
@@ -121,8 +132,11 @@ if hasattr(_batch, "__wrapped__"):
     batch.__wrapped__ = _batch.__wrapped__
 
 #: File extension of each grid format that Grid.save writes.
-GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj")
+GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj", ".npy", ".npz")
 
 __all__ = ["ArgumentError", "Camera", "ClosestPoints", "Density", "Error", "Grid", "LevelSet", "Mesh",
-           "PointClassifier", "Renderer", "Scene", "SignedDistanceField", "SparseGrid", "SurfaceMesh", "VolumeEstimate", "GRID_FORMATS",
-           "batch", *sorted(_FUNCTIONS)]
+           "PointClassifier", "Renderer", "Scene", "SignedDistanceField", "SparseGrid", "SurfaceMesh", "VolumeEstimate",
+           "GRID_FORMATS", "batch", *sorted(_FUNCTIONS),
+           # Dataset preparation (#35): samples, marching cubes on fields, batches, attributes.
+           "AttributeGrid", "NearSurfaceSamples", "SurfaceSamples", "attributes", "load_colored_mesh",
+           "marching_cubes", "sample_near_surface", "sample_surface", "voxelize_many"]

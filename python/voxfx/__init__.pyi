@@ -354,7 +354,8 @@ def extract_surface(grid: Grid, *, source: Literal["density", "occupancy"] = "de
                     iso: float = 0.5, threads: int = 0) -> SurfaceMesh: ...
 def batch(meshes: Union[PathLike, Sequence[PathLike]], out_dir: PathLike, *, format: str = ".binvox",
           resolution: Optional[int] = None, voxel_size: Optional[float] = None, dims: Optional[Sequence[int]] = None,
-          bounds: Optional[Bounds] = None, margin: int = 0, mode: Mode = "solid", fill: FillName = "auto",
+          bounds: Optional[Bounds] = None, margin: int = 0, cube: bool = False, padding: int = 0,
+          mode: Mode = "solid", fill: FillName = "auto",
           axis: AxisName = "z", slicing: Literal["uniform", "local"] = "uniform", vdb_float: bool = False,
           threads: int = 0, nested: bool = False, skip_existing: bool = True,
           report: Union[None, Literal[False], PathLike] = None,
@@ -368,3 +369,54 @@ def render(scene: Union[Scene, PathLike], *, shadows: str = "", glass: str = "",
 def render_options() -> List[Dict[str, Any]]: ...
 def shadow_kinds() -> List[Tuple[str, str]]: ...
 def glass_methods() -> List[Tuple[str, str]]: ...
+
+# ---- Dataset preparation (#35, items 7-10): samples with signed distances, marching cubes on
+# fields, batches as arrays (torch tensors in and out), attribute and colour grids.
+ArrayOrTensor = Any  # a NumPy array, or a CPU torch.Tensor (one that requires grad is detached)
+
+class SurfaceSamples(NamedTuple):
+    points: Any   # (n, 3) float64 (torch.Tensor with as_tensor=True)
+    normals: Any  # (n, 3) float32
+    faces: Any    # (n,) int64
+
+class NearSurfaceSamples(NamedTuple):
+    points: Any   # (n, 3) float64
+    sdf: Any      # (n,) float64, negative inside
+    inside: Any   # (n,) bool
+
+class AttributeGrid:
+    arrays: Dict[str, npt.NDArray[Any]]
+    origin: Vec3
+    cell_size: Vec3
+    dims: Tuple[int, int, int]
+    def __init__(self, arrays: Dict[str, npt.NDArray[Any]], origin: Sequence[float], cell_size: Sequence[float],
+                 dims: Sequence[int]) -> None: ...
+    @property
+    def channels(self) -> Tuple[str, ...]: ...
+    @property
+    def affine(self) -> npt.NDArray[np.float64]: ...
+    def __getitem__(self, name: str) -> npt.NDArray[Any]: ...
+    def __getattr__(self, name: str) -> npt.NDArray[Any]: ...
+    def occupancy(self) -> npt.NDArray[np.bool_]: ...
+    def save(self, path: PathLike, channel: Optional[str] = None) -> None: ...
+
+def sample_surface(mesh: MeshLike, n: int, seed: int = 0, *, threads: int = 0,
+                   as_tensor: bool = False) -> SurfaceSamples: ...
+def sample_near_surface(mesh: MeshLike, n: int, sigma: Union[float, Sequence[float]], seed: int = 0, *,
+                        uniform: float = 0.0, box_margin: float = 0.1,
+                        sign: Literal["auto", "parity", "winding"] = "auto", winding_beta: float = 3.0,
+                        threads: int = 0, as_tensor: bool = False) -> NearSurfaceSamples: ...
+def voxelize_many(meshes: Sequence[Union[PathLike, MeshLike]], resolution: Optional[int] = None, *,
+                  dims: Optional[Sequence[int]] = None, cube: bool = True, padding: int = 0, mode: Mode = "solid",
+                  fill: FillName = "auto", threads: int = 0, sparse: bool = False, as_tensor: bool = False) -> Any: ...
+def marching_cubes(field: Union[LevelSet, SignedDistanceField, ArrayOrTensor], iso: float = 0.0, *,
+                   spacing: Union[None, float, Sequence[float]] = None, origin: Optional[Sequence[float]] = None,
+                   adaptivity: float = 0.0, inside: Literal["below", "above"] = "below",
+                   threads: int = 0) -> SurfaceMesh: ...
+def attributes(mesh: Union[PathLike, MeshLike], *, channels: Union[None, str, Sequence[str]] = None,
+               colors: Optional[ArrayOrTensor] = None, resolution: Optional[int] = None,
+               voxel_size: Optional[float] = None, dims: Optional[Sequence[int]] = None,
+               bounds: Optional[Bounds] = None, margin: int = 1, cube: bool = False, padding: int = 0,
+               coverage: Literal["center", "conservative"] = "center", slab_overlap: float = 0.0,
+               threads: int = 0) -> AttributeGrid: ...
+def load_colored_mesh(path: PathLike) -> Tuple[Mesh, Optional[npt.NDArray[np.float32]]]: ...

@@ -23,8 +23,8 @@ import os
 import tempfile
 import time
 
-_BATCH_OPTIONS = ("resolution", "voxel_size", "dims", "bounds", "margin", "mode", "fill", "axis", "slicing",
-                  "vdb_float", "threads", "nested")
+_BATCH_OPTIONS = ("resolution", "voxel_size", "dims", "bounds", "margin", "cube", "padding", "mode", "fill", "axis",
+                  "slicing", "vdb_float", "threads", "nested")
 
 
 def run_chunk(meshes, outdir, fmt=".binvox", skip_existing=True, options=None):
@@ -68,9 +68,9 @@ def run_manifest(manifest, outdir, client=None, chunk=16, format=".binvox", skip
 
     client: a distributed.Client; None uses the current client (distributed.get_client) or, when
     there is none, a LocalCluster of worker processes on this machine for the duration of the call.
-    chunk: meshes per task. format: output extension (.binvox .vdb .nrrd .ply .obj).
+    chunk: meshes per task. format: output extension (.binvox .vdb .nrrd .ply .obj .npy .npz).
     batch_options: what voxfx.batch takes for each chunk (resolution, voxel_size, dims, bounds,
-    margin, mode, fill, axis, slicing, vdb_float; threads: workers per task, 0 = all cores, each
+    margin, cube, padding, mode, fill, axis, slicing, vdb_float; threads: workers per task, 0 = all cores, each
     mesh on one of them; nested). Returns the report (see the module docstring).
     """
     unknown = set(batch_options) - set(_BATCH_OPTIONS)

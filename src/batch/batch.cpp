@@ -124,6 +124,10 @@ const char* gridFormatExtension(GridFormat format) {
         return ".ply";
     case GridFormat::Obj:
         return ".obj";
+    case GridFormat::Npy:
+        return ".npy";
+    case GridFormat::Npz:
+        return ".npz";
     }
     return "";
 }

@@ -221,13 +221,15 @@ Formats (by extension): .binvox .vdb (BoolGrid "voxels", or float with --vdb-flo
   .nrrd (uint8) .ply/.obj (mesh of the filled voxels' exposed faces). Written atomically.)";
 
 const Command kVoxelize{
-    "voxelize", "Voxelize a mesh into a grid file (.binvox .vdb .nrrd .ply .obj)", [](CLI::App& app) {
+    "voxelize", "Voxelize a mesh into a grid file (.binvox .vdb .nrrd .ply .obj .npy .npz)",
+    [](CLI::App& app) {
         app.footer(kVoxelizeHelp);
         auto a = std::make_shared<VoxelizeArgs>();
         app.add_option("MESH", a->input,
                        "Mesh file (off, obj, ply, stl, gltf, glb, ...), or a volume with --threshold")
             ->required();
-        app.add_option("-o,--output", a->output, "Output grid: .binvox .vdb .nrrd .ply .obj")->required();
+        app.add_option("-o,--output", a->output, "Output grid: .binvox .vdb .nrrd .ply .obj .npy .npz")
+            ->required();
         addFitOptions(app, a->fit, voxelizeFitChoices());
         addVoxelizeChoiceOptions(app, a->choice);
         app.add_option("-j,--threads", a->threads, "Worker threads, 0 = all (results are identical)")

@@ -44,6 +44,15 @@ void addFitOptions(CLI::App& app, FitArgs& args, const FitChoices& choices) {
                                                      std::to_string(choices.defaultMargin) + ")")
                                               : choices.marginHelp)
         ->check(CLI::NonNegativeNumber);
+    if (choices.cube) {
+        app.add_flag("--cube", args.cube,
+                     help("R x R x R cubic cells for -r R, the mesh centred and never stretched (the grids "
+                          "learning code stacks)"));
+        app.add_option(
+               "--padding", args.padding,
+               help("Empty cells kept on every side within the resolution: the mesh gets R - 2P cells"))
+            ->check(CLI::NonNegativeNumber);
+    }
 }
 
 FitOptions toFitOptions(const FitArgs& args, const FitChoices& choices, int64_t margin) {
@@ -61,6 +70,18 @@ FitOptions toFitOptions(const FitArgs& args, const FitChoices& choices, int64_t 
     }
     if (fo.resolution == 0 && fo.voxelSize == 0 && args.dims.empty())
         fo.resolution = choices.defaultResolution;
+    if (args.cube && fo.resolution == 0) fail("--cube needs a resolution (not --voxel-size or --dims)");
+    fo.cube = args.cube;
+    // --padding P keeps P empty cells inside the resolution, as the Python module's padding does:
+    // resolution - 2P cells for the mesh, then P more on every side.
+    if (args.padding > 0) {
+        if (fo.resolution == 0) fail("--padding needs a resolution (not --voxel-size or --dims)");
+        if (fo.resolution <= 2 * args.padding)
+            fail("--padding ", args.padding, " needs a resolution above ", 2 * args.padding,
+                 " (the cells left for the mesh)");
+        fo.resolution -= 2 * args.padding;
+        fo.marginCells += args.padding;
+    }
     return fo;
 }
 
@@ -68,6 +89,7 @@ const FitChoices& voxelizeFitChoices() {
     static const FitChoices choices = [] {
         FitChoices c;
         c.voxelSize = c.dims = c.bounds = true;
+        c.cube = true;
         return c;
     }();
     return choices;

@@ -22,6 +22,7 @@ struct FitChoices {
     int64_t defaultResolution = 256; ///< -r when neither --voxel-size nor --dims is given
     int64_t defaultMargin = 0;       ///< < 0: --margin has no default; `marginHelp` says what happens
     bool voxelSize = false, dims = false, bounds = false;
+    bool cube = false;      ///< --cube and --padding (the grids learning code stacks)
     std::string prefix;     ///< help prefix, e.g. "Mesh input: "
     std::string marginHelp; ///< help of --margin when defaultMargin < 0
 };
@@ -33,6 +34,8 @@ struct FitArgs {
     std::vector<int64_t> dims;
     std::vector<double> bounds;
     int64_t margin = -1;
+    bool cube = false;
+    int64_t padding = 0;
 };
 
 /// Adds -r/--resolution, --margin and, as `choices` says, --voxel-size, --dims and --bounds

@@ -60,7 +60,14 @@ void writeVoxelMesh(const VoxelGrid& grid, std::ostream& out, GridFormat format)
 std::string formatDouble(double v);
 
 /// A NumPy .npy 1.0 header: magic, length, the dict padded to a multiple of 64 bytes; Fortran
-/// order. `descr` e.g. "<f4", `shape` e.g. "(3, 16, 16, 16)". The data follows.
-void writeNpyHeader(std::ostream& out, const std::string& descr, const std::string& shape);
+/// order unless `fortranOrder` is false (C order). `descr` e.g. "<f4", `shape` e.g.
+/// "(3, 16, 16, 16)". The data follows.
+void writeNpyHeader(std::ostream& out, const std::string& descr, const std::string& shape,
+                    bool fortranOrder = true);
+
+/// .npy: the occupancy as a bool array [x, y, z] in C order; .npz: a deflated zip of it
+/// ("occupancy") with "origin" and "cell_size" (float64 (3,)), as np.savez_compressed writes one.
+void writeGridNpy(const VoxelGrid& grid, std::ostream& out);
+void writeGridNpz(const VoxelGrid& grid, std::ostream& out);
 
 } // namespace voxfx::detail

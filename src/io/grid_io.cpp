@@ -16,7 +16,7 @@
 namespace voxfx {
 
 namespace {
-constexpr const char* kAllowedExtensions = ".binvox, .vdb, .nrrd, .ply, .obj";
+constexpr const char* kAllowedExtensions = ".binvox, .vdb, .nrrd, .ply, .obj, .npy, .npz";
 
 } // namespace
 
@@ -43,8 +43,10 @@ std::string formatDouble(double v) {
     return std::string(buf, r.ptr);
 }
 
-void writeNpyHeader(std::ostream& out, const std::string& descr, const std::string& shape) {
-    std::string dict = "{'descr': '" + descr + "', 'fortran_order': True, 'shape': " + shape + ", }";
+void writeNpyHeader(std::ostream& out, const std::string& descr, const std::string& shape,
+                    bool fortranOrder) {
+    std::string dict = "{'descr': '" + descr + "', 'fortran_order': " + (fortranOrder ? "True" : "False") +
+                       ", 'shape': " + shape + ", }";
     const std::size_t unpadded = 10 + dict.size() + 1;
     dict.append((64 - unpadded % 64) % 64, ' ');
     dict += '\n';
@@ -63,6 +65,8 @@ GridFormat gridFormatFromPath(const std::string& path) {
     if (ext == ".nrrd") return GridFormat::Nrrd;
     if (ext == ".ply") return GridFormat::Ply;
     if (ext == ".obj") return GridFormat::Obj;
+    if (ext == ".npy") return GridFormat::Npy;
+    if (ext == ".npz") return GridFormat::Npz;
     fail("'", path, "': unknown voxel grid extension '", ext, "' (allowed: ", kAllowedExtensions, ")");
 }
 
@@ -100,6 +104,12 @@ void writeGrid(const VoxelGrid& grid, const std::string& path, const GridWriteOp
     case GridFormat::Obj:
         detail::writeVoxelMesh(uniform, file.stream(), format);
         break;
+    case GridFormat::Npy:
+        detail::writeGridNpy(uniform, file.stream());
+        break;
+    case GridFormat::Npz:
+        detail::writeGridNpz(uniform, file.stream());
+        break;
     }
     file.commit();
 }
@@ -109,6 +119,9 @@ VoxelGrid readGrid(const std::string& path) {
     if (format == GridFormat::Ply || format == GridFormat::Obj)
         fail("cannot read '", path, "': ", toString(format),
              " voxel meshes are write-only (readable: .binvox, .vdb, .nrrd)");
+    if (format == GridFormat::Npy || format == GridFormat::Npz)
+        fail("cannot read '", path, "': ", toString(format),
+             " grids are written for NumPy (np.load) and not read back (readable: .binvox, .vdb, .nrrd)");
     try {
         switch (format) {
         case GridFormat::Binvox:
@@ -131,7 +144,8 @@ VoxelGrid readGrid(const std::string& path) {
 
 void writeGrid(const SparseGrid& grid, const std::string& path, const GridWriteOptions& options) {
     const GridFormat format = gridFormatFromPath(path);
-    if (format == GridFormat::Ply || format == GridFormat::Obj) {
+    if (format == GridFormat::Ply || format == GridFormat::Obj || format == GridFormat::Npy ||
+        format == GridFormat::Npz) {
         writeGrid(grid.toDense(), path, options);
         return;
     }

@@ -39,6 +39,8 @@ struct ParsedMesh {
     Mesh mesh;
     std::vector<std::pair<uint32_t, FileLocation>> nonFiniteVertices;
     uint32_t firstVertexNumber = 0; ///< how the format counts vertices in messages (OBJ: 1)
+    /// Per-vertex RGB colours (PLY red/green/blue, COFF), one per vertex, or empty.
+    std::vector<Vec3f> colors;
 };
 
 ParsedMesh parseOff(std::string_view bytes, const std::string& path);

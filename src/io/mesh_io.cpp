@@ -144,7 +144,10 @@ void checkNonFiniteVertices(const ParsedMesh& parsed, const std::string& path) {
 
 } // namespace
 
-Mesh loadMesh(const std::string& path, MeshLoadReport* report) {
+Mesh loadMesh(const std::string& path, MeshLoadReport* report) { return loadMesh(path, report, nullptr); }
+
+Mesh loadMesh(const std::string& path, MeshLoadReport* report, std::vector<Vec3f>* vertexColors) {
+    if (vertexColors) vertexColors->clear();
     std::string ext = fileExtension(path);
     if (!ext.empty()) ext.erase(0, 1);
     const Reader reader = readerFor(path, ext);
@@ -178,6 +181,9 @@ Mesh loadMesh(const std::string& path, MeshLoadReport* report) {
         }
         checkNonFiniteVertices(parsed, path);
         mesh = std::move(parsed.mesh);
+        // Degenerate triangles go below, vertices never: the colours stay one per vertex.
+        if (vertexColors && parsed.colors.size() == mesh.positions.size())
+            *vertexColors = std::move(parsed.colors);
     }
 
     validateMesh(mesh.view(), path);

@@ -2,11 +2,14 @@
 //
 //   ply
 //   format ascii|binary_little_endian|binary_big_endian 1.0
-//   element vertex N          with scalar properties x, y, z (any numeric type) among others
+//   element vertex N          with scalar properties x, y, z (any numeric type) among others,
+//                             and optionally red, green, blue (per-vertex colours)
 //   element face M            with a list property vertex_indices (or vertex_index)
 //   end_header
 //   body: the elements in header order, instance by instance, property by property
 //
+// Colours are kept when the vertex element has all three of red, green and blue as scalars: integer
+// types scaled by their largest value (uchar / 255, ushort / 65535), floating-point ones as they are.
 // Other elements and properties are read past and ignored; polygons are fan-triangulated. The
 // header's counts are checked against the bytes that remain before anything is reserved.
 #include <algorithm>
@@ -173,10 +176,13 @@ PlyHeader parseHeader(std::string_view bytes, const std::string& path) {
 struct ElementRoles {
     bool isVertex = false;
     bool isFace = false;
-    std::vector<int> axis;    // per property: 0, 1, 2 for x, y, z of a vertex; -1 otherwise
-    int indexList = -1;       // the face's vertex_indices property
-    std::size_t minBytes = 0; // smallest binary size of one instance (lists empty)
-    bool fixedSize = true;    // no list properties
+    std::vector<int> axis;          // per property: 0, 1, 2 for x, y, z of a vertex; -1 otherwise
+    std::vector<int> channel;       // per property: 0, 1, 2 for red, green, blue of a vertex; -1 otherwise
+    std::vector<double> colorScale; // per property: what a colour value is multiplied by
+    bool hasColor = false;          // all three of red, green, blue
+    int indexList = -1;             // the face's vertex_indices property
+    std::size_t minBytes = 0;       // smallest binary size of one instance (lists empty)
+    bool fixedSize = true;          // no list properties
 };
 
 ElementRoles rolesOf(const PlyElement& element, const std::string& path) {
@@ -184,7 +190,9 @@ ElementRoles rolesOf(const PlyElement& element, const std::string& path) {
     roles.isVertex = element.name == "vertex";
     roles.isFace = element.name == "face";
     roles.axis.assign(element.properties.size(), -1);
-    std::array<bool, 3> found{};
+    roles.channel.assign(element.properties.size(), -1);
+    roles.colorScale.assign(element.properties.size(), 1.0);
+    std::array<bool, 3> found{}, foundColor{};
     for (std::size_t j = 0; j < element.properties.size(); ++j) {
         const PlyProperty& p = element.properties[j];
         roles.minBytes += p.list ? sizeOf(p.countType) : sizeOf(p.type);
@@ -193,6 +201,18 @@ ElementRoles rolesOf(const PlyElement& element, const std::string& path) {
             roles.axis[j] = p.name[0] - 'x';
             found[std::size_t(roles.axis[j])] = true;
         }
+        if (roles.isVertex && !p.list && (p.name == "red" || p.name == "green" || p.name == "blue")) {
+            const int c = p.name == "red" ? 0 : p.name == "green" ? 1 : 2;
+            roles.channel[j] = c;
+            foundColor[std::size_t(c)] = true;
+            roles.colorScale[j] = p.type == PlyType::kUint8    ? 1.0 / 255
+                                  : p.type == PlyType::kUint16 ? 1.0 / 65535
+                                  : p.type == PlyType::kInt8   ? 1.0 / 127
+                                  : p.type == PlyType::kInt16  ? 1.0 / 32767
+                                  : p.type == PlyType::kUint32 ? 1.0 / 4294967295.0
+                                  : p.type == PlyType::kInt32  ? 1.0 / 2147483647.0
+                                                               : 1.0;
+        }
         if (roles.isFace && p.list && roles.indexList < 0 &&
             (p.name == "vertex_indices" || p.name == "vertex_index")) {
             if (!isInteger(p.type))
@@ -200,6 +220,8 @@ ElementRoles rolesOf(const PlyElement& element, const std::string& path) {
             roles.indexList = int(j);
         }
     }
+    roles.hasColor = foundColor[0] && foundColor[1] && foundColor[2];
+    if (!roles.hasColor) roles.channel.assign(element.properties.size(), -1);
     if (roles.isVertex && !(found[0] && found[1] && found[2]))
         fail(path, ":", element.line, ": the PLY vertex element lacks scalar x, y and z properties");
     if (roles.isFace && roles.indexList < 0)
@@ -227,6 +249,7 @@ public:
         if (!isFinite(p)) out_.nonFiniteVertices.emplace_back(uint32_t(out_.mesh.positions.size()), where);
         out_.mesh.positions.push_back(p);
     }
+    void color(const Vec3f& c) { out_.colors.push_back(c); }
 
 private:
     ParsedMesh& out_;
@@ -242,7 +265,7 @@ void readAsciiBody(std::string_view bytes, const std::string& path, const PlyHea
         const ElementRoles& role = roles[e];
         if (element.properties.empty()) continue; // nothing to read, whatever the count
         for (uint64_t i = 0; i < element.count; ++i) {
-            Vec3f p;
+            Vec3f p, color;
             for (std::size_t j = 0; j < element.properties.size(); ++j) {
                 const PlyProperty& property = element.properties[j];
                 in.skipSpace();
@@ -252,6 +275,9 @@ void readAsciiBody(std::string_view bytes, const std::string& path, const PlyHea
                 if (!property.list) {
                     if (role.axis[j] >= 0)
                         p[role.axis[j]] = in.readFloat(property.name, " of vertex ", i);
+                    else if (role.channel[j] >= 0)
+                        color[role.channel[j]] =
+                            float(in.readFloat(property.name, " of vertex ", i) * role.colorScale[j]);
                     else
                         in.word();
                     continue;
@@ -273,6 +299,7 @@ void readAsciiBody(std::string_view bytes, const std::string& path, const PlyHea
                 }
             }
             if (role.isVertex) build.vertex(p, in.location());
+            if (role.isVertex && role.hasColor) build.color(color);
         }
     }
 }
@@ -298,7 +325,7 @@ void readBinaryBody(std::string_view bytes, const std::string& path, const PlyHe
                  " of ", element.count, " (truncated?)");
         };
         for (uint64_t i = 0; i < element.count; ++i) {
-            Vec3f p;
+            Vec3f p, color;
             const std::size_t start = offset;
             for (std::size_t j = 0; j < element.properties.size(); ++j) {
                 const PlyProperty& property = element.properties[j];
@@ -307,6 +334,9 @@ void readBinaryBody(std::string_view bytes, const std::string& path, const PlyHe
                     if (size - offset < s) truncated(i);
                     if (role.axis[j] >= 0)
                         p[role.axis[j]] = toFloat(loadAsDouble(property.type, data + offset, bigEndian));
+                    else if (role.channel[j] >= 0)
+                        color[role.channel[j]] = toFloat(
+                            loadAsDouble(property.type, data + offset, bigEndian) * role.colorScale[j]);
                     offset += s;
                     continue;
                 }
@@ -330,6 +360,7 @@ void readBinaryBody(std::string_view bytes, const std::string& path, const PlyHe
                 offset += std::size_t(n) * itemBytes;
             }
             if (role.isVertex) build.vertex(p, {FileLocation::Kind::kByte, start});
+            if (role.isVertex && role.hasColor) build.color(color);
         }
     }
 }
@@ -358,6 +389,8 @@ ParsedMesh parsePly(std::string_view bytes, const std::string& path) {
         readAsciiBody(bytes, path, header, roles, build);
     else
         readBinaryBody(bytes, path, header, roles, build);
+    // Several vertex elements of which some lack colours: no colour is given for any vertex.
+    if (out.colors.size() != out.mesh.positions.size()) out.colors.clear();
     return out;
 }
 

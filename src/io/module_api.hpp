@@ -20,7 +20,7 @@
 namespace voxfx::detail {
 
 /// Bump when a table below changes.
-inline constexpr uint32_t kModuleAbi = 10;
+inline constexpr uint32_t kModuleAbi = 11;
 
 /// The library's parallel-for handed to a module (so that modules follow withThreads and name no
 /// thread library): calls call(body, b, e) over chunks of `grain` items covering [begin, end).
@@ -121,6 +121,13 @@ struct VdbLevelSetInfo {
     bool anyActive = false;
     int64_t lo[3] = {0, 0, 0}, hi[3] = {-1, -1, -1}; ///< the active voxels' index box (inclusive)
     std::string name;
+};
+
+/// A polygon mesh as OpenVDB's volumeToMesh makes it: world positions (three floats each),
+/// triangles (three indices) and quads (four), corners in OpenVDB's order.
+struct VdbPolygons {
+    std::vector<float> points;
+    std::vector<uint32_t> triangles, quads;
 };
 
 struct VdbModule {
@@ -261,6 +268,21 @@ struct VdbModule {
     /// outwards (inwards when negative), the band rebuilt by the tracker.
     bool (*levelSetOffset)(void* grid, double distance, std::string* error);
     bool (*levelSetWrite)(const char* path, const void* grid, std::string* error);
+
+    // ---- Marching cubes (voxfx/volume_to_mesh.hpp): OpenVDB's tools::volumeToMesh, the inside
+    // being where values are below `isovalue`.
+
+    /// The level set handle's surface at `isovalue` (OpenVDB's adaptivity in [0, 1]).
+    bool (*levelSetToMesh)(const void* grid, double isovalue, double adaptivity, VdbPolygons* out,
+                           std::string* error);
+    /// The surface of dense values (x fastest, then y, then z; zFastest: z fastest, then y, then x)
+    /// whose index (i, j, k) sits at placement.centre0 + (i, j, k) * placement.cell, in a FloatGrid
+    /// of class level set (inside below the iso value, as OpenVDB reads level sets) whose voxels
+    /// beyond the box hold `background` (above `isovalue`: outside, so surfaces close at the box),
+    /// active only near the iso value.
+    bool (*denseToMesh)(const float* values, const int64_t dims[3], bool zFastest,
+                        const VdbPlacement& placement, float background, double isovalue, double adaptivity,
+                        ParallelFor parallelFor, VdbPolygons* out, std::string* error);
 };
 
 // ---- voxfx_assimp: Assimp (glTF 2.0 and the long tail) ----------------------------------------
