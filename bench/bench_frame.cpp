@@ -380,7 +380,9 @@ void BM_Frame(benchmark::State& state, const std::string& name, bool cached) {
 // frames (a RenderCache, the camera orbiting).
 #define VOXFX_FRAME_SCENE(id, name)                                                                          \
     BENCHMARK_CAPTURE(BM_Frame, id, std::string(name), false)->Unit(benchmark::kMillisecond)->UseRealTime(); \
-    BENCHMARK_CAPTURE(BM_Frame, id##_cached, std::string(name), true)->Unit(benchmark::kMillisecond)->UseRealTime()
+    BENCHMARK_CAPTURE(BM_Frame, id##_cached, std::string(name), true)                                        \
+        ->Unit(benchmark::kMillisecond)                                                                      \
+        ->UseRealTime()
 VOXFX_FRAME_SCENE(tree, "tree");
 VOXFX_FRAME_SCENE(bunny, "bunny");
 VOXFX_FRAME_SCENE(cgal, "cgal");

@@ -106,8 +106,8 @@ void screenOcclusion(FrameState& f, double radius) {
             for (int64_t cx = 0; cx < cw; ++cx) {
                 const auto i = size_t(cy * cw + cx);
                 SurfacePoint s;
-                const bool hit = detail::surfaceFromBasis(f.gbuffer, f.geometry, f.triangleBases, cx * a + a / 2,
-                                                          cy * a + a / 2, s);
+                const bool hit = detail::surfaceFromBasis(f.gbuffer, f.geometry, f.triangleBases,
+                                                          cx * a + a / 2, cy * a + a / 2, s);
                 c.covered[i] = hit;
                 c.occluder[i] = hit && s.material < opaque.size() && opaque[s.material];
                 if (!hit) continue;
@@ -135,9 +135,8 @@ void occlusionPass(FrameState& f, Progress* progress) {
     std::shared_ptr<const detail::FieldOcclusionSetup> setup = f.cache.occlusionSetup.find(key.get());
     const bool setupCached = setup != nullptr;
     if (!setup) {
-        setup = std::make_shared<const detail::FieldOcclusionSetup>(
-            detail::fieldOcclusionSetup(f.geometry, f.scene.materials, f.scene.meshes.size(), o.occlusionRadius,
-                                        o.occlusionResolution));
+        setup = std::make_shared<const detail::FieldOcclusionSetup>(detail::fieldOcclusionSetup(
+            f.geometry, f.scene.materials, f.scene.meshes.size(), o.occlusionRadius, o.occlusionResolution));
         f.cache.occlusionSetup.insert(key.get(), setup);
     }
     if (!(setup->radius > 0)) { // nothing occludes
