@@ -23,11 +23,17 @@
 //                                frame/yard, the ratio (target <= 2); frame_cpu_ms,
 //                                yard_cpu_ms and frame/yard_cpu: the same in process CPU time (all
 //                                threads), which a shared machine's load does not inflate.
+//   BM_Frame/<scene>_cached      the same as an interactive frame: a RenderCache kept across frames
+//                                and the camera orbiting a degree per frame (the view-dependent
+//                                passes made anew, the scene's builds reused).
+//   BM_FrameCost/<scene>         cached frames with every default, with --aa off and with --ao off,
+//                                interleaved: aa_ratio (target <= 1.3), ao_share (target <= 0.15).
 //   BM_ForestShadows/<kind>/leavesPerTree:<L>
 //                                the forest of 64 trees of L leaf quads (2L triangles) each: the
 //                                default frame with shadows <kind>, with exact shadows and with
-//                                none, in turn. kind_ms, exact_ms, none_ms, exact/kind (the issue's
-//                                target: >= 1.5 for transmittance and absorption), kind_cost_ms
+//                                none, in turn (<kind>_cached: interactive frames, each with a cache
+//                                of its own, the camera orbiting). kind_ms, exact_ms, none_ms, exact/kind
+//                                (the target: >= 1.5 for transmittance and absorption), kind_cost_ms
 //                                and exact_cost_ms (each frame less the unshadowed one: what the
 //                                shadows cost), the same in process CPU time (*_cpu_ms,
 //                                exact/kind_cpu), the passes where they cost (kind_shadows_ms: the
@@ -43,6 +49,7 @@
 //                                counters as the forest's.
 //
 //   build/bench_frame --benchmark_filter='BM_Frame/' --benchmark_repetitions=3
+//   build/bench_frame --benchmark_filter=BM_FrameCost
 //   build/bench_frame --benchmark_filter='BM_ForestShadows/.*:(100|1000)/'
 //   build/bench_frame --benchmark_filter=BM_DsmDeepVsExact
 //
@@ -389,6 +396,46 @@ VOXFX_FRAME_SCENE(cgal, "cgal");
 VOXFX_FRAME_SCENE(glass, "glass");
 VOXFX_FRAME_SCENE(dsm_demo, "dsm-demo");
 VOXFX_FRAME_SCENE(forest, "forest");
+
+// What anti-aliasing and ambient occlusion cost in an interactive frame: the default frame, the
+// same with --aa off and with --ao off, each with a RenderCache of its own and the camera orbiting,
+// interleaved. aa_ratio = frame / aa_off (the target: <= 1.3), ao_share = (frame - ao_off) /
+// frame (target: <= 0.15; the occlusion pass and what the shading spends reading it), and
+// occlusion_share: the occlusion pass alone over the frame.
+void BM_FrameCost(benchmark::State& state, const std::string& name) {
+    const BenchScene& b = benchScene(name);
+    const RenderOptions options = frameOptions(b.scene);
+    RenderOptions aaOff = options, aoOff = options;
+    aaOff.antiAliasing = AntiAliasing::Off;
+    aoOff.ambientOcclusion = Occlusion::Off;
+    PassSums full, noAa, noAo;
+    auto into = [&](const RenderOptions& o, PassSums& sums) {
+        FrameFn frame = cachedFrames(b, o);
+        return [&sums, frame](bool timed) {
+            const double cpu0 = processCpuMs();
+            const RenderResult r = frame();
+            benchmark::DoNotOptimize(r.image.pixels.data());
+            if (timed) sums.add(r, processCpuMs() - cpu0);
+        };
+    };
+    interleaved(state, {into(options, full), into(aaOff, noAa), into(aoOff, noAo)});
+    const double n = double(state.iterations());
+    state.counters["frame_ms"] = full.total / n;
+    state.counters["aa_off_ms"] = noAa.total / n;
+    state.counters["ao_off_ms"] = noAo.total / n;
+    state.counters["occlusion_ms"] = full.pass("occlusion") / n;
+    state.counters["aa_ratio"] = full.total / noAa.total;
+    state.counters["aa_ratio_cpu"] = full.cpu / noAa.cpu;
+    state.counters["ao_share"] = (full.total - noAo.total) / full.total;
+    state.counters["ao_share_cpu"] = (full.cpu - noAo.cpu) / full.cpu;
+    state.counters["occlusion_share"] = full.pass("occlusion") / full.total;
+    state.SetLabel(name + ": default, --aa off, --ao off; 1280x720, cached, orbiting");
+}
+BENCHMARK_CAPTURE(BM_FrameCost, tree, std::string("tree"))->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_FrameCost, bunny, std::string("bunny"))->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_FrameCost, cgal, std::string("cgal"))->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_FrameCost, glass, std::string("glass"))->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_FrameCost, forest, std::string("forest"))->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The linear (tone map clamp) frames of a scene with exact shadows and with none, made once.
 struct LinearReferences {

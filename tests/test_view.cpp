@@ -380,9 +380,9 @@ TEST(ViewCommandTest, BadInputIsAClearErrorWithoutAWindow) {
     EXPECT_EQ(none.exitCode, 1);
     EXPECT_NE(none.err.find("give a scene file or --demo NAME (tree, bunny, cgal, glass)"), std::string::npos)
         << none.err;
-    const test::CommandRun unknown = test::runVoxfx(dir, "view --demo forest");
+    const test::CommandRun unknown = test::runVoxfx(dir, "view --demo meadow");
     EXPECT_EQ(unknown.exitCode, 1);
-    EXPECT_NE(unknown.err.find("forest"), std::string::npos) << unknown.err;
+    EXPECT_NE(unknown.err.find("unknown demo scene 'meadow'"), std::string::npos) << unknown.err;
 }
 
 TEST(ViewCommandTest, WithoutADisplayItSaysSoAndFails) {
@@ -476,12 +476,12 @@ TEST(ViewerTest, KeysCycleTheKindsAndTheSavedViewRendersTheSavedFrame) {
     test::TempDir dir;
     const auto scene = std::make_shared<const Scene>(demo::makeTreeScene(smallTree()));
     ViewState state(treeSetup(dir, scene));
-    EXPECT_EQ(state.stateText(), "shadows map, glass none, aa full, ao field");
+    EXPECT_EQ(state.stateText(), "shadows map, glass none, aa full, ao screen");
     state.cycleShadows(1);
     state.cycleGlass(-1); // wraps around to the last method
     state.toggleAntiAliasing();
     EXPECT_EQ(state.stateText(),
-              "shadows transmittance, glass " + std::string(glassNames().back()) + ", aa off, ao field");
+              "shadows transmittance, glass " + std::string(glassNames().back()) + ", aa off, ao screen");
     state.cycleGlass(1);
     state.camera = dollyCamera(orbitCamera(state.camera, 0.5, 0.1), 0.9);
     const RenderOptions preview = state.frameOptions(true);

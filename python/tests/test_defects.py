@@ -200,19 +200,25 @@ def write_cube_copies(folder, n):
 
 
 def test_ctrl_c_stops_batch_between_meshes(tmp_path):
-    meshes = write_cube_copies(tmp_path, 40)
+    # Enough meshes that the whole batch takes ten times the delay before Ctrl-C, whatever this
+    # machine's speed (a cube at 300^3 takes 10 ms on a fast one): finishing early means it was
+    # not stopped.
     out = tmp_path / "out"
+    probe = write_cube_copies(tmp_path, 2)
     start = time.perf_counter()
-    voxfx.batch(meshes[:2], out, resolution=300, threads=1, report=False)
+    voxfx.batch(probe, out, resolution=300, threads=1, report=False)
     per_mesh = (time.perf_counter() - start) / 2
     for p in out.iterdir():
         p.unlink()
+    delay = max(0.3, 2 * per_mesh)
+    n = max(40, int(10 * delay / per_mesh))
+    meshes = write_cube_copies(tmp_path, n)
     start = time.perf_counter()
-    with interrupt_after(max(0.3, 2 * per_mesh)), pytest.raises(Interrupted):
+    with interrupt_after(delay), pytest.raises(Interrupted):
         voxfx.batch(meshes, out, resolution=300, threads=1, report=False)
     elapsed = time.perf_counter() - start
     written = len(list(out.glob("*.binvox")))
-    assert elapsed < 40 * per_mesh / 2 and 1 <= written < 40
+    assert elapsed < n * per_mesh / 2 and 1 <= written < n
     assert not list(out.glob("*.tmp*"))  # the mesh under way was not left half-written
 
 
