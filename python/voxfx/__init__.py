@@ -30,7 +30,7 @@ command line.
 import __future__
 
 from . import _voxfx
-from ._voxfx import (ArgumentError, Density, Error, Grid, Mesh, PointClassifier, Scene, SparseGrid, SurfaceMesh,
+from ._voxfx import (ArgumentError, Density, Error, Grid, MemoryLimitError, Mesh, PointClassifier, Scene, SparseGrid, SurfaceMesh,
                      VolumeEstimate, __version__)
 from ._voxfx import Camera, Renderer
 from ._voxfx import ClosestPoints, LevelSet, SignedDistanceField
@@ -134,7 +134,7 @@ if hasattr(_batch, "__wrapped__"):
 #: File extension of each grid format that Grid.save writes.
 GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj", ".npy", ".npz")
 
-__all__ = ["ArgumentError", "Camera", "ClosestPoints", "Density", "Error", "Grid", "LevelSet", "Mesh",
+__all__ = ["ArgumentError", "Camera", "ClosestPoints", "Density", "Error", "Grid", "LevelSet", "MemoryLimitError", "Mesh",
            "PointClassifier", "Renderer", "Scene", "SignedDistanceField", "SparseGrid", "SurfaceMesh", "VolumeEstimate",
            "GRID_FORMATS", "batch", *sorted(_FUNCTIONS),
            # Dataset preparation (#35): samples, marching cubes on fields, batches, attributes.
