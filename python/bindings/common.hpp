@@ -60,7 +60,8 @@ namespace pybind11::detail {
 template <> struct type_caster<voxfx::python::Int> {
     PYBIND11_TYPE_CASTER(voxfx::python::Int, const_name("int"));
     bool load(handle src, bool convert) {
-        if (PyBool_Check(src.ptr())) throw type_error("expected an integer, got bool " + std::string(str(src)));
+        if (PyBool_Check(src.ptr()))
+            throw type_error("expected an integer, got bool " + std::string(str(src)));
         make_caster<int64_t> c;
         if (!c.load(src, convert)) return false;
         value.value = cast_op<int64_t>(c);

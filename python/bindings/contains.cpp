@@ -83,8 +83,9 @@ void bindContains(py::module_& m) {
             if (pointsArg.is_none()) std::swap(facesArg, pointsArg);
             if (pointsArg.is_none()) throw py::type_error("contains needs points: contains(mesh, points)");
             const auto mesh = meshArgument(meshObj, facesArg);
-            ContainsOptions co = containsOptions(
-                method, resolution ? std::optional<int64_t>(*resolution) : std::nullopt, int(threads), windingBeta);
+            ContainsOptions co =
+                containsOptions(method, resolution ? std::optional<int64_t>(*resolution) : std::nullopt,
+                                int(threads), windingBeta);
             if (co.resolution == 0)
                 co.resolution =
                     defaultContainsResolution(mesh->mesh.triangleCount(), std::size_t(py::len(pointsArg)));
@@ -104,8 +105,9 @@ void bindContains(py::module_& m) {
         .def(py::init([](const py::object& meshObj, const py::object& faces, const std::string& method,
                          std::optional<Int> resolution, Int threads, double windingBeta) {
                  const auto mesh = meshArgument(meshObj, faces);
-                 ContainsOptions co = containsOptions(
-                method, resolution ? std::optional<int64_t>(*resolution) : std::nullopt, int(threads), windingBeta);
+                 ContainsOptions co =
+                     containsOptions(method, resolution ? std::optional<int64_t>(*resolution) : std::nullopt,
+                                     int(threads), windingBeta);
                  if (co.resolution == 0)
                      co.resolution = defaultContainsResolution(mesh->mesh.triangleCount(), 1000000);
                  return makeClassifier(mesh, co);

@@ -26,9 +26,11 @@ py::tuple densityState(const PyDensity& d) {
 }
 
 std::shared_ptr<PyDensity> densityFromState(const py::tuple& t) {
-    if (t.size() != 12 || t[0].cast<int>() != 1) throw py::value_error("not a voxfx.Density pickle (version 1)");
+    if (t.size() != 12 || t[0].cast<int>() != 1)
+        throw py::value_error("not a voxfx.Density pickle (version 1)");
     auto out = std::make_shared<PyDensity>();
-    out->density = DensityGrid(t[1].cast<int>(), t[2].cast<int64_t>(), t[3].cast<int64_t>(), t[4].cast<int64_t>());
+    out->density =
+        DensityGrid(t[1].cast<int>(), t[2].cast<int64_t>(), t[3].cast<int64_t>(), t[4].cast<int64_t>());
     const auto lo = t[5].cast<std::vector<double>>(), hi = t[6].cast<std::vector<double>>();
     Box3d box;
     box.lo = {lo.at(0), lo.at(1), lo.at(2)};
@@ -85,7 +87,8 @@ void bindDensity(py::module_& m) {
             py::arg("path"), "Writes .nrrd (uint8/16 counts) or .vdb (FloatGrid \"density\")")
         .def("__eq__",
              [](const PyDensity& a, const py::object& b) -> py::object {
-                 if (!py::isinstance<PyDensity>(b)) return py::reinterpret_borrow<py::object>(Py_NotImplemented);
+                 if (!py::isinstance<PyDensity>(b))
+                     return py::reinterpret_borrow<py::object>(Py_NotImplemented);
                  const PyDensity& o = b.cast<const PyDensity&>();
                  return py::bool_(a.density == o.density && a.fine.sameGrid(o.fine));
              })

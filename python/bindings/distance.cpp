@@ -147,8 +147,8 @@ py::tuple sdfState(const SignedDistanceField& f) {
     }
     for (const SdfInsideRun& run : f.insideRuns) *r++ = run.x0, *r++ = run.x1, *r++ = run.y, *r++ = run.z;
     const Vec3i d = f.dims();
-    return py::make_tuple(1, vec3(f.frame.box().lo), vec3(f.frame.box().hi), vec3(d), f.background, f.bandVoxels,
-                          f.full, std::string(toString(f.fill)), origins, active, values, runs);
+    return py::make_tuple(1, vec3(f.frame.box().lo), vec3(f.frame.box().hi), vec3(d), f.background,
+                          f.bandVoxels, f.full, std::string(toString(f.fill)), origins, active, values, runs);
 }
 
 SdfPtr sdfFromState(const py::tuple& t) {
@@ -195,7 +195,8 @@ bool sdfEqual(const SignedDistanceField& a, const SignedDistanceField& b) {
         return false;
     for (std::size_t i = 0; i < a.leaves.size(); ++i)
         if (!(a.leaves[i].origin == b.leaves[i].origin) || a.leaves[i].active != b.leaves[i].active ||
-            std::memcmp(a.leaves[i].values.data(), b.leaves[i].values.data(), sizeof(a.leaves[i].values)) != 0)
+            std::memcmp(a.leaves[i].values.data(), b.leaves[i].values.data(), sizeof(a.leaves[i].values)) !=
+                0)
             return false;
     for (std::size_t i = 0; i < a.insideRuns.size(); ++i) {
         const SdfInsideRun &x = a.insideRuns[i], &y = b.insideRuns[i];
@@ -246,9 +247,10 @@ makeSdf(const py::object& meshObj, const py::object& faces, std::optional<int64_
     if (inner > 0) {
         if (fo.resolution == 0) throw ArgumentError("padding needs a resolution (not voxel_size)");
         if (fo.resolution <= 2 * inner)
-            throw ArgumentError("a resolution of " + std::to_string(fo.resolution) + " leaves no cells for the mesh "
-                                "inside a padding (or cube=True's band) of " + std::to_string(inner) +
-                                " cells on every side");
+            throw ArgumentError("a resolution of " + std::to_string(fo.resolution) +
+                                " leaves no cells for the mesh "
+                                "inside a padding (or cube=True's band) of " +
+                                std::to_string(inner) + " cells on every side");
         fo.resolution -= 2 * inner;
         fo.marginCells += inner;
     }
@@ -261,7 +263,8 @@ makeSdf(const py::object& meshObj, const py::object& faces, std::optional<int64_
             likeFrame = like.cast<const SignedDistanceField&>().frame;
         else
             throw py::type_error("like must be a voxfx.Grid or a voxfx.SignedDistanceField");
-        if (mesh->shifted()) likeFrame = asArgument([&] { return likeFrame->translated(mesh->origin * -1.0); });
+        if (mesh->shifted())
+            likeFrame = asArgument([&] { return likeFrame->translated(mesh->origin * -1.0); });
     }
     if (!fo.bounds.empty() && mesh->shifted()) {
         fo.bounds.lo = fo.bounds.lo - mesh->origin;
@@ -361,29 +364,31 @@ void bindDistance(py::module_& m) {
             s << ", sign from " << toString(f.fill) << ", " << f.activeCount() << " active>";
             return s.str();
         });
-    m.def("sdf",
-          [](const py::object& meshObj, const py::object& faces, std::optional<Int> resolution,
-             std::optional<double> voxelSize, const py::object& bounds, std::optional<Int> margin, bool cube,
-             const std::variant<double, std::string>& band, const std::string& fill, Int threads,
-             std::optional<Int> padding, const py::object& like) {
-              const auto opt = [](const std::optional<Int>& v) {
-                  return v ? std::optional<int64_t>(int64_t(*v)) : std::nullopt;
-              };
-              return makeSdf(meshObj, faces, opt(resolution), voxelSize, bounds, opt(margin), cube, band, fill,
-                             int(threads), opt(padding), like);
-          },
-          py::arg("mesh"), py::arg("faces") = py::none(), py::kw_only(), py::arg("resolution") = py::none(),
-          py::arg("voxel_size") = py::none(), py::arg("bounds") = py::none(), py::arg("margin") = py::none(),
-          py::arg("cube") = false, py::arg("band") = 3.0, py::arg("fill") = "auto", py::arg("threads") = 0,
-          py::arg("padding") = py::none(), py::arg("like") = py::none(),
-          "The signed distance field of a mesh (any mesh voxelize accepts) on the voxel centres of a grid "
-          "fitted like voxelize() (resolution, default 256, or voxel_size; bounds; cube=True for "
-          "resolution^3 cubic cells, the band's margin inside them; padding: cells kept inside the resolution on "
-          "every side; like=grid or field: that frame exactly; margin, default the band rounded up): exact "
-          "distances where they are below band voxels (band='full': everywhere), negative where "
-          "voxelize(mode='solid', fill=...) fills the voxel (fill auto: parity for closed meshes, gwn "
-          "otherwise). Returns a SignedDistanceField: .to_numpy() dense, .active() the band as indices and "
-          "values, .affine, .save(). The GIL is released; Ctrl-C stops it.");
+    m.def(
+        "sdf",
+        [](const py::object& meshObj, const py::object& faces, std::optional<Int> resolution,
+           std::optional<double> voxelSize, const py::object& bounds, std::optional<Int> margin, bool cube,
+           const std::variant<double, std::string>& band, const std::string& fill, Int threads,
+           std::optional<Int> padding, const py::object& like) {
+            const auto opt = [](const std::optional<Int>& v) {
+                return v ? std::optional<int64_t>(int64_t(*v)) : std::nullopt;
+            };
+            return makeSdf(meshObj, faces, opt(resolution), voxelSize, bounds, opt(margin), cube, band, fill,
+                           int(threads), opt(padding), like);
+        },
+        py::arg("mesh"), py::arg("faces") = py::none(), py::kw_only(), py::arg("resolution") = py::none(),
+        py::arg("voxel_size") = py::none(), py::arg("bounds") = py::none(), py::arg("margin") = py::none(),
+        py::arg("cube") = false, py::arg("band") = 3.0, py::arg("fill") = "auto", py::arg("threads") = 0,
+        py::arg("padding") = py::none(), py::arg("like") = py::none(),
+        "The signed distance field of a mesh (any mesh voxelize accepts) on the voxel centres of a grid "
+        "fitted like voxelize() (resolution, default 256, or voxel_size; bounds; cube=True for "
+        "resolution^3 cubic cells, the band's margin inside them; padding: cells kept inside the resolution "
+        "on "
+        "every side; like=grid or field: that frame exactly; margin, default the band rounded up): exact "
+        "distances where they are below band voxels (band='full': everywhere), negative where "
+        "voxelize(mode='solid', fill=...) fills the voxel (fill auto: parity for closed meshes, gwn "
+        "otherwise). Returns a SignedDistanceField: .to_numpy() dense, .active() the band as indices and "
+        "values, .affine, .save(). The GIL is released; Ctrl-C stops it.");
 }
 
 } // namespace voxfx::python

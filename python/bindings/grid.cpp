@@ -387,7 +387,8 @@ void bindGrid(py::module_& m) {
         py::arg("path"), "Reads a .binvox .vdb .nrrd grid");
     m.def("from_numpy", &fromNumpy, py::arg("array"), py::arg("origin") = std::vector<double>{0, 0, 0},
           py::arg("cell_size") = std::vector<double>{1, 1, 1},
-          "A grid from a bool array indexed [x, y, z] (numbers only when all are 0 or 1; else an ArgumentError: "
+          "A grid from a bool array indexed [x, y, z] (numbers only when all are 0 or 1; else an "
+          "ArgumentError: "
           "threshold them first); voxel (0, 0, 0) has its lower corner at origin");
 }
 

@@ -231,7 +231,8 @@ py::tuple levelSetState(const LevelSet& l) {
 }
 
 LevelSetPtr levelSetFromState(const py::tuple& t) {
-    if (t.size() != 2 || t[0].cast<int>() != 1) throw py::value_error("not a voxfx.LevelSet pickle (version 1)");
+    if (t.size() != 2 || t[0].cast<int>() != 1)
+        throw py::value_error("not a voxfx.LevelSet pickle (version 1)");
     const std::string bytes = t[1].cast<std::string>();
     const std::string path = scratchPath(".vdb");
     py::gil_scoped_release release;

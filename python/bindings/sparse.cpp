@@ -96,7 +96,8 @@ py::tuple sparseState(const SparseGrid& g) {
 }
 
 SparsePtr sparseFromState(const py::tuple& t) {
-    if (t.size() != 8 || t[0].cast<int>() != 1) throw py::value_error("not a voxfx.SparseGrid pickle (version 1)");
+    if (t.size() != 8 || t[0].cast<int>() != 1)
+        throw py::value_error("not a voxfx.SparseGrid pickle (version 1)");
     const auto lo = t[1].cast<std::vector<double>>(), hi = t[2].cast<std::vector<double>>();
     Box3d box;
     box.lo = {lo.at(0), lo.at(1), lo.at(2)};
@@ -108,7 +109,8 @@ SparsePtr sparseFromState(const py::tuple& t) {
     const int32_t* r = runs.data();
     const py::ssize_t n = runs.ndim() == 2 ? runs.shape(0) : 0;
     py::gil_scoped_release release;
-    for (py::ssize_t i = 0; i < n; ++i, r += 4) out->fill(IndexBox{Vec3i{r[0], r[1], r[2]}, Vec3i{r[0], r[1], r[3]}});
+    for (py::ssize_t i = 0; i < n; ++i, r += 4)
+        out->fill(IndexBox{Vec3i{r[0], r[1], r[2]}, Vec3i{r[0], r[1], r[3]}});
     return out;
 }
 

@@ -20,7 +20,8 @@ py::tuple surfaceState(const SurfaceMesh& s) {
 }
 
 std::shared_ptr<SurfaceMesh> surfaceFromState(const py::tuple& t) {
-    if (t.size() != 4 || t[0].cast<int>() != 1) throw py::value_error("not a voxfx.SurfaceMesh pickle (version 1)");
+    if (t.size() != 4 || t[0].cast<int>() != 1)
+        throw py::value_error("not a voxfx.SurfaceMesh pickle (version 1)");
     auto out = std::make_shared<SurfaceMesh>();
     const auto vecs = [](const py::handle& h, std::vector<Vec3f>& v) {
         const auto a = h.cast<py::array_t<float, py::array::c_style | py::array::forcecast>>();
@@ -54,7 +55,8 @@ void bindSurface(py::module_& m) {
         .def_property_readonly("faces", [](const SurfaceMesh& s) { return readOnly(facesArray(s.indices)); })
         .def("__eq__",
              [](const SurfaceMesh& a, const py::object& b) -> py::object {
-                 if (!py::isinstance<SurfaceMesh>(b)) return py::reinterpret_borrow<py::object>(Py_NotImplemented);
+                 if (!py::isinstance<SurfaceMesh>(b))
+                     return py::reinterpret_borrow<py::object>(Py_NotImplemented);
                  const SurfaceMesh& o = b.cast<const SurfaceMesh&>();
                  const auto same = [](const std::vector<Vec3f>& x, const std::vector<Vec3f>& y) {
                      return x.size() == y.size() &&

@@ -95,7 +95,8 @@ void bindVoxelize(py::module_& m) {
                     "bounds, margin, cube or padding with it");
             const FitOptions fo = fitOptions(resolution, voxelSize, dims, bounds, margin, axis, cube);
             if (threads < 0) throw ArgumentError("threads must be >= 0");
-            const VoxelizeRequest request{mode, fill, slicing, device, threads, sparse, like.is_none() ? int64_t(padding) : 0};
+            const VoxelizeRequest request{
+                mode, fill, slicing, device, threads, sparse, like.is_none() ? int64_t(padding) : 0};
             asArgument([&] {
                 parseVoxelizeMode(mode), parseSlicing(slicing), parseDevice(device);
                 parseFill(fill);
@@ -106,13 +107,13 @@ void bindVoxelize(py::module_& m) {
             if (like.is_none()) warnIfStretched(frame, dims);
             VoxelizeResult result;
             VoxelizeReport report;
-            interruptible([&](Cancel& cancel) {
-                result = voxelizeMesh(mesh->mesh, frame, request, &cancel, &report);
-            });
+            interruptible(
+                [&](Cancel& cancel) { result = voxelizeMesh(mesh->mesh, frame, request, &cancel, &report); });
             // A fill that cannot be trusted on this mesh says so (the CLI's line on stderr): an
             // open mesh filled by flood leaks where its holes are wider than a voxel.
             if (!report.fillNote.empty() &&
-                PyErr_WarnEx(PyExc_RuntimeWarning, ("voxelize: the mesh is " + report.fillNote).c_str(), 1) != 0)
+                PyErr_WarnEx(PyExc_RuntimeWarning, ("voxelize: the mesh is " + report.fillNote).c_str(), 1) !=
+                    0)
                 throw py::error_already_set();
             if (mesh->shifted() && result.sparse) {
                 result.sparse->translate(mesh->origin);

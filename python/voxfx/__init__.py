@@ -22,8 +22,9 @@
 Torch: every function takes CPU tensors where it takes arrays; a tensor that requires grad is
 detached (voxfx computes no gradients), and as_tensor=True returns tensors (see voxfx._datasets).
 
-Errors raise voxfx.Error (a RuntimeError) with the library's message, bad arguments
-voxfx.ArgumentError (also a ValueError). Long calls release the GIL and stop at Ctrl-C. See also
+Errors raise voxfx.Error (a RuntimeError) with the library's message, bad arguments (a bad
+mesh, a NaN query point, resolution=True) voxfx.ArgumentError (also a ValueError), refusals for
+want of memory voxfx.MemoryLimitError (also a MemoryError). Every result pickles. Long calls release the GIL and stop at Ctrl-C. See also
 voxfx.dask for voxelizing a manifest of meshes on a Dask cluster, and `python -m voxfx` for the
 command line.
 """

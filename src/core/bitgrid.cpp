@@ -98,7 +98,8 @@ uint64_t availableMemoryBytes() {
         if (pages > 0 && pageSize > 0) available = uint64_t(pages) * uint64_t(pageSize);
     }
     // In a container the cgroup's limit caps it (MemAvailable is the host's).
-    if (const std::optional<uint64_t> cgroup = cgroupAvailableBytes()) available = std::min(available, *cgroup);
+    if (const std::optional<uint64_t> cgroup = cgroupAvailableBytes())
+        available = std::min(available, *cgroup);
     return budget ? std::min(available, *budget) : available;
 }
 
@@ -106,7 +107,7 @@ void checkMemory(uint64_t bytes, const char* what) {
     const uint64_t available = availableMemoryBytes();
     if (bytes > available)
         failMemory(what, " needs ", gib(bytes), ", but only ", gib(available), " of memory is available",
-             memoryBudgetBytes() ? " (VOXFX_MEMORY_LIMIT)" : "");
+                   memoryBudgetBytes() ? " (VOXFX_MEMORY_LIMIT)" : "");
 }
 
 uint64_t BitGrid::requiredBytes(int64_t w, int64_t h, int64_t d) {

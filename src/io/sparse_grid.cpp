@@ -264,8 +264,8 @@ SparseGrid sparseOfDense(const MeshView& mesh, const Frame& frame, const Voxeliz
     const uint64_t need = 3 * one;
     if (need > budget)
         failMemory(why, ": a ", frame.width(), " x ", frame.height(), " x ", frame.depth(), " grid needs ",
-             detail::memoryText(need), " to voxelize and convert, but the memory budget is ",
-             detail::memoryText(budget), " (the parity, winding and gwn fills work tile by tile)");
+                   detail::memoryText(need), " to voxelize and convert, but the memory budget is ",
+                   detail::memoryText(budget), " (the parity, winding and gwn fills work tile by tile)");
     return SparseGrid::fromDense(voxelize(mesh, frame, o));
 }
 
@@ -374,9 +374,9 @@ SparseGrid voxelizeSparseUnpadded(const MeshView& mesh, const Frame& frame, cons
         // the process's growth): the budget holds the tree as the process sees it.
         if (total + total / 8 > treeBudget)
             failMemory("the sparse grid outgrew the memory budget (", detail::memoryText(budget),
-                 ", of which the tiles take ", detail::memoryText(working), ") at ",
-                 detail::memoryText(total),
-                 " of tree; raise the budget (--memory, VOXFX_MEMORY_LIMIT) or lower the resolution");
+                       ", of which the tiles take ", detail::memoryText(working), ") at ",
+                       detail::memoryText(total),
+                       " of tree; raise the budget (--memory, VOXFX_MEMORY_LIMIT) or lower the resolution");
     });
     std::string error;
     checkSparse(sparseModule().sparseFinish(tree, &error), error, "cannot build the sparse grid");
