@@ -165,11 +165,11 @@ SdfPtr sdfFromState(const py::tuple& t) {
     f->bandVoxels = t[5].cast<double>();
     f->full = t[6].cast<bool>();
     f->fill = parseFill(t[7].cast<std::string>());
-    using C = py::array::c_style;
-    const auto origins = t[8].cast<py::array_t<int64_t, C | py::array::forcecast>>();
-    const auto active = t[9].cast<py::array_t<uint64_t, C | py::array::forcecast>>();
-    const auto values = t[10].cast<py::array_t<float, C | py::array::forcecast>>();
-    const auto runs = t[11].cast<py::array_t<int32_t, C | py::array::forcecast>>();
+    constexpr int C = py::array::c_style | py::array::forcecast;
+    const auto origins = t[8].cast<py::array_t<int64_t, C>>();
+    const auto active = t[9].cast<py::array_t<uint64_t, C>>();
+    const auto values = t[10].cast<py::array_t<float, C>>();
+    const auto runs = t[11].cast<py::array_t<int32_t, C>>();
     const std::size_t L = std::size_t(origins.size() / 3);
     if (std::size_t(active.size()) != 8 * L || std::size_t(values.size()) != 512 * L || runs.size() % 4)
         throw py::value_error("voxfx.SignedDistanceField pickle: inconsistent arrays");
