@@ -26,7 +26,7 @@ std::shared_ptr<SurfaceMesh> surfaceFromState(const py::tuple& t) {
     const auto vecs = [](const py::handle& h, std::vector<Vec3f>& v) {
         const auto a = h.cast<py::array_t<float, py::array::c_style | py::array::forcecast>>();
         v.resize(std::size_t(a.size() / 3));
-        if (!v.empty()) std::memcpy(v.data(), a.data(), v.size() * sizeof(Vec3f));
+        if (!v.empty()) std::memcpy(static_cast<void*>(v.data()), a.data(), v.size() * sizeof(Vec3f));
     };
     vecs(t[1], out->positions);
     vecs(t[2], out->normals);
