@@ -92,6 +92,7 @@ void bindBatch(py::module_& m) {
                         "padding needs a resolution above 2 * padding (the cells left for the mesh)");
                 bo.fit.resolution -= 2 * padding;
                 bo.fit.marginCells += padding;
+                bo.voxelize.emptyBorder = padding; // empty in every mode
             }
             asArgument([&] {
                 bo.voxelize.mode = parseVoxelizeMode(mode);

@@ -86,7 +86,8 @@ py::object voxelizeMany(const py::object& meshes, std::optional<int64_t> resolut
         vo.fill = parseFill(fill);
     });
     vo.slicing = Slicing::Uniform;
-    vo.threads = 0; // nested in the loop over meshes: TBB shares the workers
+    vo.emptyBorder = padding; // the ring stays empty in every mode (the flood enters through it)
+    vo.threads = 0;           // nested in the loop over meshes: TBB shares the workers
 
     if (py::isinstance<py::str>(meshes) || py::isinstance<py::bytes>(meshes) ||
         !py::hasattr(meshes, "__iter__"))
