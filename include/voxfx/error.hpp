@@ -19,6 +19,14 @@ public:
     explicit Error(const std::string& message) : std::runtime_error(message) {}
 };
 
+/// A refusal for want of memory: a size checked against the memory available (or the budget,
+/// VOXFX_MEMORY_LIMIT) before allocating, or a budget a growing structure outgrew. The Python
+/// module raises it as voxfx.MemoryLimitError, a MemoryError.
+class MemoryLimitError : public Error {
+public:
+    using Error::Error;
+};
+
 namespace detail {
 template <class... Args> std::string concat(const Args&... args) {
     std::ostringstream out;
@@ -30,6 +38,11 @@ template <class... Args> std::string concat(const Args&... args) {
 
 /// Throws voxfx::Error with the arguments streamed into one message.
 template <class... Args> [[noreturn]] void fail(const Args&... args) { throw Error(detail::concat(args...)); }
+
+/// Throws voxfx::MemoryLimitError with the arguments streamed into one message.
+template <class... Args> [[noreturn]] void failMemory(const Args&... args) {
+    throw MemoryLimitError(detail::concat(args...));
+}
 
 } // namespace voxfx
 

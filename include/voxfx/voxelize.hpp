@@ -108,6 +108,11 @@ struct VoxelizeOptions {
     std::string* deviceNote = nullptr;
     /// Receives what was decided (the fill Auto chose, and why). Not owned.
     VoxelizeReport* report = nullptr;
+    /// Padding: the cells within this many of every side of an axis-aligned, uniformly sliced
+    /// frame stay empty in every mode. Surface cells there (a conservative cell of a face lying on
+    /// the fitted bounds) are dropped before the fill, so a flood enters from the border, and the
+    /// result is cleared there. 0: no such ring.
+    int64_t emptyBorder = 0;
 };
 
 /// How to fit an orthographic frame to a mesh. Cells are cubes unless `dims` is given.

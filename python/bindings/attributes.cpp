@@ -146,7 +146,7 @@ py::array_t<Out> attributeArray(const Frame& f, int components, const std::vecto
 }
 
 py::dict attributes(const py::object& meshObj, const py::object& channels, const py::object& colors,
-                    std::optional<int64_t> resolution, std::optional<double> voxelSize,
+                    std::optional<Int> resolution, std::optional<double> voxelSize,
                     std::optional<std::vector<int64_t>> dims, const py::object& bounds, int64_t margin,
                     bool cube, int64_t padding, const std::string& coverage, double slabOverlap,
                     int threads) {

@@ -73,9 +73,9 @@ void bindBatch(py::module_& m) {
     m.def(
         "batch",
         [](const py::object& manifestOrList, const py::object& outDirObj, const std::string& format,
-           std::optional<int64_t> resolution, std::optional<double> voxelSize,
+           std::optional<Int> resolution, std::optional<double> voxelSize,
            std::optional<std::vector<int64_t>> dims, const py::object& bounds, int64_t margin, bool cube,
-           int64_t padding, const std::string& mode, const std::string& fill, const std::string& axis,
+           Int padding, const std::string& mode, const std::string& fill, const std::string& axis,
            const std::string& slicing, bool vdbFloat, int threads, bool nested, bool skipExisting,
            const py::object& report, const py::object& progress) {
             const std::string outDir = pathString(outDirObj);
@@ -92,6 +92,7 @@ void bindBatch(py::module_& m) {
                         "padding needs a resolution above 2 * padding (the cells left for the mesh)");
                 bo.fit.resolution -= 2 * padding;
                 bo.fit.marginCells += padding;
+                bo.voxelize.emptyBorder = padding; // empty in every mode
             }
             asArgument([&] {
                 bo.voxelize.mode = parseVoxelizeMode(mode);

@@ -104,6 +104,29 @@ Vec3d recentringOrigin(const double* v, std::size_t n) {
     return (lo + hi) * 0.5;
 }
 
+/// Warns (UserWarning) when float32 positions lie so far from the origin for the part's size that
+/// float32 keeps fewer than 256 steps across it (a small part far away collapses towards a point).
+/// float64 input far away was recentred before, so its positions are near zero here.
+void warnIfCollapsed(const Mesh& m) {
+    if (m.positions.empty()) return;
+    double extent = 0, magnitude = 0;
+    for (int k = 0; k < 3; ++k) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (const Vec3f& p : m.positions)
+            if (std::isfinite(p[k])) lo = std::min(lo, p[k]), hi = std::max(hi, p[k]);
+        if (!(lo <= hi)) return;
+        extent = std::max(extent, double(hi) - double(lo));
+        magnitude = std::max({magnitude, std::abs(double(lo)), std::abs(double(hi))});
+    }
+    if (!(magnitude > 0) || extent >= magnitude * 0x1p-16) return;
+    const std::string text = "the mesh spans " + std::to_string(extent) + " but lies " +
+                             std::to_string(magnitude) +
+                             " from the origin: float32 positions keep fewer than 256 steps across it "
+                             "(it collapses towards a point); pass float64 vertices (recentred "
+                             "exactly) or move it to the origin";
+    if (PyErr_WarnEx(PyExc_UserWarning, text.c_str(), 2) != 0) throw py::error_already_set();
+}
+
 } // namespace
 
 namespace {
@@ -144,6 +167,7 @@ std::shared_ptr<PyMesh> meshFromArrays(const py::handle& verticesObj, const py::
             for (int k = 0; k < 3; ++k)
                 out->mesh.positions[i][k] = float(d[3 * i + std::size_t(k)] - out->origin[k]);
     }
+    warnIfCollapsed(out->mesh);
     const auto fi = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(f);
     const std::size_t m = std::size_t(fi.shape(0));
     out->mesh.indices.resize(3 * m);
@@ -222,6 +246,14 @@ py::array_t<int64_t> facesArray(const std::vector<uint32_t>& indices) {
     py::array_t<int64_t> out({py::ssize_t(indices.size() / 3), py::ssize_t(3)});
     std::copy(indices.begin(), indices.end(), out.mutable_data());
     return out;
+}
+
+void requireFinitePoints(const py::array_t<double>& points, const char* what) {
+    const double* p = points.data();
+    for (py::ssize_t i = 0; i < points.shape(0); ++i)
+        if (!std::isfinite(p[3 * i]) || !std::isfinite(p[3 * i + 1]) || !std::isfinite(p[3 * i + 2]))
+            throw ArgumentError(std::string(what) + ": point " + std::to_string(i) +
+                                " is not finite (NaN or infinite coordinates have no inside)");
 }
 
 py::array_t<double> pointsArgument(const py::object& points, const Vec3d& origin) {

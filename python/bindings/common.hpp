@@ -38,12 +38,42 @@ namespace voxfx::python {
 
 namespace py = pybind11;
 
+/// An integer argument (a resolution, a count, a padding) that refuses bool: resolution=True is a
+/// TypeError, not 1 (bool is an int in Python). Converts to int64_t.
+struct Int {
+    int64_t value = 0;
+    Int() = default;
+    Int(int64_t v) : value(v) {}
+    operator int64_t() const { return value; }
+};
+
 /// Binds one area of the library into the module (one definition per file, listed in areas.inc).
 #define VOXFX_PYTHON_AREA(Area) void bind##Area(py::module_& m);
 #include "areas.inc"
 #undef VOXFX_PYTHON_AREA
 
 using GridPtr = std::shared_ptr<VoxelGrid>;
+
+} // namespace voxfx::python
+
+namespace pybind11::detail {
+template <> struct type_caster<voxfx::python::Int> {
+    PYBIND11_TYPE_CASTER(voxfx::python::Int, const_name("int"));
+    bool load(handle src, bool convert) {
+        if (PyBool_Check(src.ptr()))
+            throw type_error("expected an integer, got bool " + std::string(str(src)));
+        make_caster<int64_t> c;
+        if (!c.load(src, convert)) return false;
+        value.value = cast_op<int64_t>(c);
+        return true;
+    }
+    static handle cast(const voxfx::python::Int& v, return_value_policy, handle) {
+        return PyLong_FromLongLong(v.value);
+    }
+};
+} // namespace pybind11::detail
+
+namespace voxfx::python {
 
 // ---- errors and interruption ----------------------------------------------------------------
 
@@ -57,6 +87,8 @@ struct ArgumentError : std::runtime_error {
 template <class F> auto asArgument(F&& f) -> decltype(f()) {
     try {
         return f();
+    } catch (const MemoryLimitError&) {
+        throw; // a refusal for want of memory stays one
     } catch (const Error& e) { throw ArgumentError(e.what()); }
 }
 
@@ -108,6 +140,16 @@ py::array_t<int64_t> facesArray(const std::vector<uint32_t>& indices);
 /// The array keeps the data alive.
 py::array_t<double> pointsArgument(const py::object& points, const Vec3d& origin = {0, 0, 0});
 
+/// ArgumentError naming the first point with a NaN or infinite coordinate (inside tests have no
+/// answer for them; distances give NaN instead).
+void requireFinitePoints(const py::array_t<double>& points, const char* what);
+
+/// `a` made read-only (writes would be lost: the arrays are copies) and returned.
+template <class A> A readOnly(A a) {
+    a.attr("setflags")(py::arg("write") = false);
+    return a;
+}
+
 // ---- grids ----------------------------------------------------------------------------------
 
 py::tuple vec3(const Vec3d& v);
@@ -145,7 +187,8 @@ std::string pathString(const py::handle& p);
 std::shared_ptr<SignedDistanceField>
 makeSdf(const py::object& meshObj, const py::object& faces, std::optional<int64_t> resolution,
         std::optional<double> voxelSize, const py::object& bounds, std::optional<int64_t> margin, bool cube,
-        const std::variant<double, std::string>& band, const std::string& fill, int threads);
+        const std::variant<double, std::string>& band, const std::string& fill, int threads,
+        std::optional<int64_t> padding = std::nullopt, const py::object& like = py::none());
 
 /// Grid.save and SparseGrid.save: writeGrid with the GIL released (by extension, atomically).
 template <class G>

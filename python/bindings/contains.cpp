@@ -31,6 +31,8 @@ ContainsOptions containsOptions(const std::string& method, std::optional<int64_t
 }
 
 std::shared_ptr<PyClassifier> makeClassifier(std::shared_ptr<PyMesh> mesh, const ContainsOptions& options) {
+    // A bad mesh is a bad argument, as in voxelize (voxfx.ArgumentError, a ValueError).
+    asArgument([&] { validateMesh(mesh->mesh.view(), "mesh"); });
     auto out = std::make_shared<PyClassifier>();
     out->mesh = std::move(mesh);
     out->options = options;
@@ -45,6 +47,7 @@ std::shared_ptr<PyClassifier> makeClassifier(std::shared_ptr<PyMesh> mesh, const
 /// (K,) bool answers for (K, 3) world points, moved into the mesh's coordinates.
 py::array_t<bool> classifyPoints(const PyClassifier& c, const py::object& pointsObj) {
     const auto pts = pointsArgument(pointsObj, c.mesh->origin);
+    requireFinitePoints(pts, "contains");
     const std::size_t n = std::size_t(pts.shape(0));
     py::array_t<bool> out(std::vector<py::ssize_t>{py::ssize_t(n)});
     static_assert(sizeof(bool) == 1);
@@ -74,13 +77,15 @@ void bindContains(py::module_& m) {
     m.def(
         "contains",
         [](const py::object& meshObj, const py::object& faces, const py::object& pointsObj,
-           const std::string& method, std::optional<int64_t> resolution, int threads, double windingBeta) {
+           const std::string& method, std::optional<Int> resolution, Int threads, double windingBeta) {
             // contains(mesh, points): the mesh object takes the faces' place.
             py::object facesArg = faces, pointsArg = pointsObj;
             if (pointsArg.is_none()) std::swap(facesArg, pointsArg);
             if (pointsArg.is_none()) throw py::type_error("contains needs points: contains(mesh, points)");
             const auto mesh = meshArgument(meshObj, facesArg);
-            ContainsOptions co = containsOptions(method, resolution, threads, windingBeta);
+            ContainsOptions co =
+                containsOptions(method, resolution ? std::optional<int64_t>(*resolution) : std::nullopt,
+                                int(threads), windingBeta);
             if (co.resolution == 0)
                 co.resolution =
                     defaultContainsResolution(mesh->mesh.triangleCount(), std::size_t(py::len(pointsArg)));
@@ -94,13 +99,15 @@ void bindContains(py::module_& m) {
         "contains(vertices, faces, points)): parity (exact, voxel centres' tie rule), winding (generalized "
         "winding number |w| >= 0.5, so meshes oriented inward work too; Barill et al.'s approximation with "
         "winding_beta, 0 = exact sum) or flood (cells sealed off from the border, for open meshes). "
-        "Ctrl-C stops it.");
+        "A point with a NaN or infinite coordinate is an ArgumentError (a ValueError). Ctrl-C stops it.");
     py::class_<PyClassifier, std::shared_ptr<PyClassifier>>(
         m, "PointClassifier", "A mesh prepared for repeated contains() queries (the grids are built once)")
         .def(py::init([](const py::object& meshObj, const py::object& faces, const std::string& method,
-                         std::optional<int64_t> resolution, int threads, double windingBeta) {
+                         std::optional<Int> resolution, Int threads, double windingBeta) {
                  const auto mesh = meshArgument(meshObj, faces);
-                 ContainsOptions co = containsOptions(method, resolution, threads, windingBeta);
+                 ContainsOptions co =
+                     containsOptions(method, resolution ? std::optional<int64_t>(*resolution) : std::nullopt,
+                                     int(threads), windingBeta);
                  if (co.resolution == 0)
                      co.resolution = defaultContainsResolution(mesh->mesh.triangleCount(), 1000000);
                  return makeClassifier(mesh, co);

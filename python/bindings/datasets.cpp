@@ -65,8 +65,8 @@ void manyCoordinates(const VoxelGrid& g, int32_t b, std::vector<int32_t>& out) {
         }
 }
 
-py::object voxelizeMany(const py::object& meshes, std::optional<int64_t> resolution,
-                        std::optional<std::vector<int64_t>> dims, bool cube, int64_t padding,
+py::object voxelizeMany(const py::object& meshes, std::optional<Int> resolution,
+                        std::optional<std::vector<int64_t>> dims, bool cube, Int padding,
                         const std::string& mode, const std::string& fill, int threads, bool sparse) {
     if (threads < 0) throw ArgumentError("threads must be >= 0");
     if (padding < 0) throw ArgumentError("padding must be >= 0");
@@ -86,7 +86,8 @@ py::object voxelizeMany(const py::object& meshes, std::optional<int64_t> resolut
         vo.fill = parseFill(fill);
     });
     vo.slicing = Slicing::Uniform;
-    vo.threads = 0; // nested in the loop over meshes: TBB shares the workers
+    vo.emptyBorder = padding; // the ring stays empty in every mode (the flood enters through it)
+    vo.threads = 0;           // nested in the loop over meshes: TBB shares the workers
 
     if (py::isinstance<py::str>(meshes) || py::isinstance<py::bytes>(meshes) ||
         !py::hasattr(meshes, "__iter__"))

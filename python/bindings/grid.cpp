@@ -36,6 +36,17 @@ py::array_t<bool> toNumpy(const VoxelGrid& g) {
 
 /// A grid from a bool array indexed [x, y, z], placed in the box lo + dims * cell.
 GridPtr fromNumpy(const py::array& arr, const std::vector<double>& origin, const std::vector<double>& cell) {
+    // Numbers other than 0 and 1 are refused, not cast (0.3 would be True): threshold them first.
+    if (!arr.dtype().is(py::dtype::of<bool>())) {
+        const auto v = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(arr);
+        if (!v) throw py::type_error("from_numpy needs a bool array (or numbers that are all 0 or 1)");
+        const double* d = v.data();
+        for (py::ssize_t i = 0; i < v.size(); ++i)
+            if (d[i] != 0 && d[i] != 1)
+                throw ArgumentError("from_numpy: value " + std::string(py::str(py::float_(d[i]))) +
+                                    " is neither 0 nor 1; threshold it first (from_numpy(a > 0.5)) or pass "
+                                    "a bool array");
+    }
     const auto a = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(arr);
     if (!a || a.ndim() != 3)
         throw py::value_error("from_numpy needs a 3-dimensional array indexed [x, y, z]");
@@ -204,6 +215,7 @@ template <class T> py::array_t<T> filledCells(const VoxelGrid& g) {
 py::array_t<bool> lookup(const VoxelGrid& g, const py::object& pointsObj) {
     requireAxisAligned(g, "Grid.contains");
     const auto pts = pointsArgument(pointsObj);
+    requireFinitePoints(pts, "Grid.contains");
     const std::size_t n = std::size_t(pts.shape(0));
     py::array_t<bool> out{py::ssize_t(n)};
     const auto* p = reinterpret_cast<const Vec3d*>(pts.data());
@@ -375,7 +387,9 @@ void bindGrid(py::module_& m) {
         py::arg("path"), "Reads a .binvox .vdb .nrrd grid");
     m.def("from_numpy", &fromNumpy, py::arg("array"), py::arg("origin") = std::vector<double>{0, 0, 0},
           py::arg("cell_size") = std::vector<double>{1, 1, 1},
-          "A grid from a bool array indexed [x, y, z]; voxel (0, 0, 0) has its lower corner at origin");
+          "A grid from a bool array indexed [x, y, z] (numbers only when all are 0 or 1; else an "
+          "ArgumentError: "
+          "threshold them first); voxel (0, 0, 0) has its lower corner at origin");
 }
 
 } // namespace voxfx::python

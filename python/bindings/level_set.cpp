@@ -3,14 +3,22 @@
 // the level set's lattice: exact), and offsets.
 #include "voxfx/level_set.hpp"
 
+#include <algorithm>
 #include <array>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <optional>
 #include <sstream>
 #include <variant>
+
+#include <unistd.h>
 
 #include "common.hpp"
 #include "voxfx/sdf.hpp"
@@ -197,6 +205,97 @@ LevelSetPtr makeLevelSet(const py::object& meshObj, const py::object& faces, con
     return std::make_shared<LevelSet>(LevelSet::fromField(*field, name));
 }
 
+/// A file name in the temporary folder no other call uses (pid, a counter, the time).
+std::string scratchPath(const char* suffix) {
+    static std::atomic<uint64_t> counter{0};
+    const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
+    return (std::filesystem::temp_directory_path() /
+            ("voxfx-pickle-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + "-" +
+             std::to_string(stamp) + suffix))
+        .string();
+}
+
+/// Pickle state: version and the .vdb file's bytes (the grid with its transform, class and name:
+/// OpenVDB's own serialization, written through a scratch file removed at once).
+py::tuple levelSetState(const LevelSet& l) {
+    const std::string path = scratchPath(".vdb");
+    std::string bytes;
+    {
+        py::gil_scoped_release release;
+        writeLevelSet(l, path);
+        std::ifstream in(path, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+        std::filesystem::remove(path);
+    }
+    return py::make_tuple(1, py::bytes(bytes));
+}
+
+LevelSetPtr levelSetFromState(const py::tuple& t) {
+    if (t.size() != 2 || t[0].cast<int>() != 1)
+        throw py::value_error("not a voxfx.LevelSet pickle (version 1)");
+    const std::string bytes = t[1].cast<std::string>();
+    const std::string path = scratchPath(".vdb");
+    py::gil_scoped_release release;
+    {
+        std::ofstream out(path, std::ios::binary);
+        out.write(bytes.data(), std::streamsize(bytes.size()));
+    }
+    try {
+        auto l = std::make_shared<LevelSet>(readLevelSet(path));
+        std::filesystem::remove(path);
+        return l;
+    } catch (...) {
+        std::filesystem::remove(path);
+        throw;
+    }
+}
+
+/// offsetLevelSet, clamped and stoppable. Inwards beyond the active voxels' extent (plus the band)
+/// the level set is empty whatever the distance: clamped there, as dense morphology clamps its
+/// radius. Outwards the band grows with the surface's area: refused up front (MemoryLimitError)
+/// when that area's band would not fit in the memory available. Offsets of more than 8 voxels run
+/// 8 voxels at a time, Ctrl-C polled between.
+LevelSetPtr offsetClamped(const LevelSet& l, double distance, int threads) {
+    const Vec3d vs = l.voxelSize();
+    Vec3i lo, hi;
+    l.activeBounds(lo, hi);
+    const double voxel = std::max({vs.x, vs.y, vs.z});
+    if (lo.x <= hi.x && voxel > 0) {
+        double extent = 0;
+        for (int a = 0; a < 3; ++a) extent = std::max(extent, double(hi[a] - lo[a] + 1) * vs[a]);
+        const double reach = extent + 2 * double(l.background()) + voxel;
+        if (distance < -reach) distance = -reach;
+        if (distance > 0) {
+            // The band's voxels scale with the area: (r + d)^2 / r^2 over a sphere of radius r.
+            const double r = std::max(0.5 * extent, voxel);
+            const double grow = (r + distance) / r;
+            const double bytes = double(l.activeCount()) * grow * grow * 8.0;
+            const uint64_t available = availableMemoryBytes();
+            if (bytes > double(available))
+                throw MemoryLimitError(detail::concat(
+                    "offset_level_set: an offset of ", distance, " (", distance / voxel,
+                    " voxels) grows the band to about ", uint64_t(std::min(bytes, 0x1p63)) >> 20,
+                    " MiB, but only ", available >> 20, " MiB of memory is available"));
+        }
+    }
+    LevelSetPtr out;
+    interruptible([&](Cancel& cancel) {
+        withThreads(threads, [&] {
+            const double step = 8 * voxel;
+            LevelSet cur = l;
+            double left = distance;
+            while (std::abs(left) > step && step > 0) {
+                const double d = left > 0 ? step : -step;
+                cur = offsetLevelSet(cur, d);
+                left -= d;
+                if (cancel.requested()) fail("cancelled");
+            }
+            out = std::make_shared<LevelSet>(offsetLevelSet(cur, left));
+        });
+    });
+    return out;
+}
+
 } // namespace
 
 void bindLevelSet(py::module_& m) {
@@ -223,6 +322,7 @@ void bindLevelSet(py::module_& m) {
         .def_property_readonly("affine", &levelSetAffine,
                                "4 x 4 matrix from (i, j, k, 1) to the world position of index (i, j, k) "
                                "(axis-aligned level sets; voxfx.Error otherwise)")
+        .def(py::pickle(&levelSetState, &levelSetFromState))
         .def_property_readonly("active_count", &LevelSet::activeCount)
         .def_property_readonly(
             "active_bounds",
@@ -348,19 +448,17 @@ void bindLevelSet(py::module_& m) {
         "The result has the lattice, band and name of a (of the level set, when a is a mesh).");
     m.def(
         "offset_level_set",
-        [](const LevelSet& l, double distance, int threads) {
-            checkThreads(threads);
+        [](const LevelSet& l, double distance, Int threads) {
+            checkThreads(int(threads));
             if (!std::isfinite(distance)) throw ArgumentError("distance must be finite");
-            py::gil_scoped_release release;
-            LevelSetPtr out;
-            withThreads(threads, [&] { out = std::make_shared<LevelSet>(offsetLevelSet(l, distance)); });
-            return out;
+            return offsetClamped(l, distance, int(threads));
         },
         py::arg("level_set"), py::arg("distance"), py::kw_only(), py::arg("threads") = 0,
         "OpenVDB's LevelSetFilter::offset: the surface moves `distance` world units outwards (inwards when "
         "negative); approximate (the tracker's finite differences, about a twentieth of a voxel on a "
-        "sphere). Needs cubic voxels. The exact offset of a mesh's field is `voxfx sdf --offset`. The GIL is "
-        "released.");
+        "sphere). Needs cubic voxels. The exact offset of a mesh's field is `voxfx sdf --offset`. Inward "
+        "offsets beyond the level set's extent are clamped (the result is empty); outward ones whose band "
+        "cannot fit raise voxfx.MemoryLimitError up front. The GIL is released; Ctrl-C stops it.");
 }
 
 } // namespace voxfx::python

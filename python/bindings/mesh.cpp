@@ -49,11 +49,12 @@ void bindMesh(py::module_& m) {
              py::arg("mesh"), py::arg("faces") = py::none(),
              "Mesh(vertices, faces), or Mesh(m) for any mesh object voxelize accepts (a copy)")
         .def_property_readonly(
-            "vertices", [](const PyMesh& s) { return verticesArray(s.mesh, s.origin); },
-            "(N, 3) float64 array: origin + the float32 positions (a copy)")
+            "vertices", [](const PyMesh& s) { return readOnly(verticesArray(s.mesh, s.origin)); },
+            "(N, 3) float64 array: origin + the float32 positions (a read-only copy: writes would be lost; "
+            "make a new Mesh from changed arrays)")
         .def_property_readonly(
-            "faces", [](const PyMesh& s) { return facesArray(s.mesh.indices); },
-            "(M, 3) int64 array (a copy)")
+            "faces", [](const PyMesh& s) { return readOnly(facesArray(s.mesh.indices)); },
+            "(M, 3) int64 array (a read-only copy)")
         .def_property_readonly(
             "origin", [](const PyMesh& s) { return vec3(s.origin); },
             "World position of the float32 positions' origin (0, 0, 0 unless float64 input was recentred)")

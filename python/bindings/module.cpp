@@ -21,11 +21,22 @@ PYBIND11_MODULE(_voxfx, m) {
         py::make_tuple(error, py::handle(PyExc_ValueError)).ptr(), nullptr);
     if (!argumentError) throw py::error_already_set();
     m.attr("ArgumentError") = argumentError;
+    // Refusals for want of memory (a size checked before allocating, a budget outgrown): a
+    // voxfx.Error that is also a MemoryError (except MemoryError catches them).
+    static py::handle memoryLimitError = PyErr_NewExceptionWithDoc(
+        "voxfx.MemoryLimitError",
+        "A refusal for want of memory (the size checked before allocating against the memory available, "
+        "the cgroup's limit or VOXFX_MEMORY_LIMIT): both a voxfx.Error and a MemoryError.",
+        py::make_tuple(error, py::handle(PyExc_MemoryError)).ptr(), nullptr);
+    if (!memoryLimitError) throw py::error_already_set();
+    m.attr("MemoryLimitError") = memoryLimitError;
     py::register_exception_translator([](std::exception_ptr p) {
         try {
             if (p) std::rethrow_exception(p);
         } catch (const python::ArgumentError& e) {
             PyErr_SetObject(argumentError.ptr(), python::utf8Text(e.what()).ptr());
+        } catch (const MemoryLimitError& e) {
+            PyErr_SetObject(memoryLimitError.ptr(), python::utf8Text(e.what()).ptr());
         } catch (const Error& e) {
             // Messages quote file contents, which need not be UTF-8: invalid bytes are replaced
             // (PyErr_SetString would raise UnicodeDecodeError instead of voxfx.Error).

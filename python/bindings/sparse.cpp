@@ -1,6 +1,9 @@
 // Sparse grids (voxfx/sparse_grid.hpp): voxfx.SparseGrid, whose cells come out as an (N, 3) int32
 // coordinate array with the grid's transform (what sparse-convolution libraries take) without a
 // dense array, and read_sparse_grid. voxfx.voxelize(..., sparse=True) returns one (voxelize.cpp).
+#include <algorithm>
+#include <cstring>
+
 #include "common.hpp"
 
 namespace voxfx::python {
@@ -34,6 +37,81 @@ py::array_t<double> transformMatrix(const Frame& f) {
         m(a, 3) = lo[a] + 0.5 * cell[a];
     }
     return t;
+}
+
+/// dilate or erode by `steps`, stoppable by Ctrl-C: OpenVDB's morphology runs 16 steps at a time,
+/// the cancel polled between. Steps beyond the grid's extent (its dims summed: any filled cell
+/// then reaches every cell of the grid, as dense morphology clamps its radius) are clamped to it,
+/// and a clamped dilation is clipped to the grid's cells [0, dims), which it then fills alike.
+SparseGrid& morphSteps(SparseGrid& g, int64_t steps, Neighbours n, bool erode) {
+    if (steps < 0) throw ArgumentError(std::string(erode ? "erosion" : "dilation") + " steps must be >= 0");
+    const Vec3i d = g.dims();
+    const int64_t limit = d.x + d.y + d.z;
+    const bool clamped = steps > limit;
+    int64_t left = std::min(steps, limit);
+    interruptible([&](Cancel& cancel) {
+        while (left > 0) {
+            const int k = int(std::min<int64_t>(left, 16));
+            if (erode)
+                g.erode(k, n);
+            else
+                g.dilate(k, n);
+            left -= k;
+            if (left > 0 && cancel.requested()) fail("cancelled");
+        }
+        if (clamped && !erode) g.clip(IndexBox{Vec3i{0, 0, 0}, Vec3i{d.x - 1, d.y - 1, d.z - 1}});
+    });
+    return g;
+}
+
+/// Pickle state: version, the frame (box lo, hi, axis, W H D) and the cells as runs along k:
+/// (N, 4) int32 rows (i, j, k0, k1) (inclusive), from coordinates().
+py::tuple sparseState(const SparseGrid& g) {
+    std::vector<int32_t> xyz;
+    {
+        py::gil_scoped_release release;
+        xyz = g.coordinates();
+    }
+    // Sorted by (i, j, k), then merged into runs.
+    const std::size_t n = xyz.size() / 3;
+    std::vector<std::size_t> order(n);
+    for (std::size_t i = 0; i < n; ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return std::lexicographical_compare(&xyz[3 * a], &xyz[3 * a + 3], &xyz[3 * b], &xyz[3 * b + 3]);
+    });
+    std::vector<int32_t> runs;
+    for (std::size_t r = 0; r < n; ++r) {
+        const int32_t* c = &xyz[3 * order[r]];
+        if (!runs.empty() && runs[runs.size() - 4] == c[0] && runs[runs.size() - 3] == c[1] &&
+            runs.back() + 1 == c[2])
+            runs.back() = c[2];
+        else
+            runs.insert(runs.end(), {c[0], c[1], c[2], c[2]});
+    }
+    py::array_t<int32_t> arr({py::ssize_t(runs.size() / 4), py::ssize_t(4)});
+    if (!runs.empty()) std::memcpy(arr.mutable_data(), runs.data(), runs.size() * sizeof(int32_t));
+    const Frame& f = g.frame();
+    return py::make_tuple(1, vec3(f.box().lo), vec3(f.box().hi), toString(f.axis()), f.width(), f.height(),
+                          f.depth(), arr);
+}
+
+SparsePtr sparseFromState(const py::tuple& t) {
+    if (t.size() != 8 || t[0].cast<int>() != 1)
+        throw py::value_error("not a voxfx.SparseGrid pickle (version 1)");
+    const auto lo = t[1].cast<std::vector<double>>(), hi = t[2].cast<std::vector<double>>();
+    Box3d box;
+    box.lo = {lo.at(0), lo.at(1), lo.at(2)};
+    box.hi = {hi.at(0), hi.at(1), hi.at(2)};
+    const Frame frame = Frame::orthographic(box, parseAxis(t[3].cast<std::string>()), t[4].cast<int64_t>(),
+                                            t[5].cast<int64_t>(), t[6].cast<int64_t>());
+    const auto runs = t[7].cast<py::array_t<int32_t, py::array::c_style | py::array::forcecast>>();
+    auto out = std::make_shared<SparseGrid>(frame);
+    const int32_t* r = runs.data();
+    const py::ssize_t n = runs.ndim() == 2 ? runs.shape(0) : 0;
+    py::gil_scoped_release release;
+    for (py::ssize_t i = 0; i < n; ++i, r += 4)
+        out->fill(IndexBox{Vec3i{r[0], r[1], r[2]}, Vec3i{r[0], r[1], r[3]}});
+    return out;
 }
 
 Neighbours neighboursOf(int n) {
@@ -97,19 +175,26 @@ void bindSparse(py::module_& m) {
         .def("subtract", &SparseGrid::subtract, py::arg("other"), py::return_value_policy::reference_internal)
         .def(
             "dilate",
-            [](SparseGrid& g, int steps, int neighbours) -> SparseGrid& {
-                return g.dilate(steps, neighboursOf(neighbours));
+            [](SparseGrid& g, Int steps, Int neighbours) -> SparseGrid& {
+                return morphSteps(g, steps, neighboursOf(int(neighbours)), false);
             },
             py::arg("steps") = 1, py::arg("neighbours") = 26, py::return_value_policy::reference_internal,
-            "In place: OpenVDB's dilation by `steps` over 6, 18 or 26 neighbours (26: a box)")
+            "In place: OpenVDB's dilation by `steps` over 6, 18 or 26 neighbours (26: a box). Steps beyond "
+            "the grid's extent (dims summed) are clamped to it and the result clipped to the grid's cells; "
+            "Ctrl-C stops it")
         .def(
             "erode",
-            [](SparseGrid& g, int steps, int neighbours) -> SparseGrid& {
-                return g.erode(steps, neighboursOf(neighbours));
+            [](SparseGrid& g, Int steps, Int neighbours) -> SparseGrid& {
+                return morphSteps(g, steps, neighboursOf(int(neighbours)), true);
             },
             py::arg("steps") = 1, py::arg("neighbours") = 26, py::return_value_policy::reference_internal,
-            "In place: OpenVDB's erosion (outside the grid counts as empty)")
+            "In place: OpenVDB's erosion (outside the grid counts as empty; steps clamped as dilate's); "
+            "Ctrl-C stops it")
         .def("copy", [](const SparseGrid& g) { return std::make_shared<SparseGrid>(g); })
+        .def("__copy__", [](const SparseGrid& g) { return std::make_shared<SparseGrid>(g); })
+        .def("__deepcopy__",
+             [](const SparseGrid& g, const py::object&) { return std::make_shared<SparseGrid>(g); })
+        .def(py::pickle(&sparseState, &sparseFromState))
         .def("__repr__", [](const SparseGrid& g) {
             const Vec3i d = g.dims();
             return "<voxfx.SparseGrid " + std::to_string(d.x) + " x " + std::to_string(d.y) + " x " +

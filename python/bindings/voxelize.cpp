@@ -8,6 +8,7 @@ struct VoxelizeRequest {
     std::string mode, fill, slicing, device;
     int threads = 0;
     bool sparse = false;
+    int64_t padding = 0;
 };
 
 struct VoxelizeResult {
@@ -20,7 +21,7 @@ struct VoxelizeResult {
 /// mesh's own coordinates); fill "auto" is the library's Fill::Auto (parity for closed meshes,
 /// flood otherwise).
 VoxelizeResult voxelizeMesh(const Mesh& mesh, const Frame& frame, const VoxelizeRequest& r,
-                            Progress* progress) {
+                            Progress* progress, VoxelizeReport* report) {
     VoxelizeOptions vo;
     vo.device = parseDevice(r.device);
     std::string note;
@@ -30,6 +31,8 @@ VoxelizeResult voxelizeMesh(const Mesh& mesh, const Frame& frame, const Voxelize
     vo.threads = r.threads;
     vo.progress = progress;
     vo.fill = parseFill(r.fill); // Fill::Auto: voxelize() decides, as the CLI's does
+    vo.emptyBorder = r.padding;  // the padding ring stays empty in every mode
+    vo.report = report;
     if (r.sparse)
         return {nullptr, std::make_shared<SparseGrid>(voxelizeSparse(mesh.view(), frame, vo)),
                 vo.device == Device::Cuda ? note : std::string()};
@@ -79,9 +82,9 @@ void warnIfStretched(const Frame& frame, const std::optional<std::vector<int64_t
 void bindVoxelize(py::module_& m) {
     m.def(
         "voxelize",
-        [](const py::object& meshObj, const py::object& faces, std::optional<int64_t> resolution,
+        [](const py::object& meshObj, const py::object& faces, std::optional<Int> resolution,
            std::optional<double> voxelSize, std::optional<std::vector<int64_t>> dims,
-           const py::object& bounds, int64_t margin, bool cube, int64_t padding, const py::object& like,
+           const py::object& bounds, Int margin, bool cube, Int padding, const py::object& like,
            const std::string& mode, const std::string& fill, const std::string& axis,
            const std::string& slicing, int threads, const std::string& device, bool sparse) -> py::object {
             const auto mesh = meshArgument(meshObj, faces);
@@ -92,7 +95,8 @@ void bindVoxelize(py::module_& m) {
                     "bounds, margin, cube or padding with it");
             const FitOptions fo = fitOptions(resolution, voxelSize, dims, bounds, margin, axis, cube);
             if (threads < 0) throw ArgumentError("threads must be >= 0");
-            const VoxelizeRequest request{mode, fill, slicing, device, threads, sparse};
+            const VoxelizeRequest request{
+                mode, fill, slicing, device, threads, sparse, like.is_none() ? int64_t(padding) : 0};
             asArgument([&] {
                 parseVoxelizeMode(mode), parseSlicing(slicing), parseDevice(device);
                 parseFill(fill);
@@ -102,8 +106,15 @@ void bindVoxelize(py::module_& m) {
             const Frame frame = voxelizeFrame(*mesh, fit, like, padding);
             if (like.is_none()) warnIfStretched(frame, dims);
             VoxelizeResult result;
+            VoxelizeReport report;
             interruptible(
-                [&](Cancel& cancel) { result = voxelizeMesh(mesh->mesh, frame, request, &cancel); });
+                [&](Cancel& cancel) { result = voxelizeMesh(mesh->mesh, frame, request, &cancel, &report); });
+            // A fill that cannot be trusted on this mesh says so (the CLI's line on stderr): an
+            // open mesh filled by flood leaks where its holes are wider than a voxel.
+            if (!report.fillNote.empty() &&
+                PyErr_WarnEx(PyExc_RuntimeWarning, ("voxelize: the mesh is " + report.fillNote).c_str(), 1) !=
+                    0)
+                throw py::error_already_set();
             if (mesh->shifted() && result.sparse) {
                 result.sparse->translate(mesh->origin);
             } else if (mesh->shifted()) {

@@ -84,7 +84,8 @@ def test_contains_and_indexing_look_up_cells(axis):
     expected[inside] = a[tuple(ijk[inside].T)]
     np.testing.assert_array_equal(g.contains(pts), expected)
     np.testing.assert_array_equal(g.world_to_index(pts), ijk)
-    assert not g.contains([[np.nan, 0, 0]])[0]
+    with pytest.raises(ValueError, match="not finite"):  # a NaN point has no inside: an error
+        g.contains([[np.nan, 0, 0]])
     for i, j, k in [(0, 0, 0), (5, 6, 69), (-1, -2, -3), (3, 1, 64)]:
         assert g[i, j, k] == a[i, j, k]
     with pytest.raises(IndexError):

@@ -22,15 +22,16 @@
 Torch: every function takes CPU tensors where it takes arrays; a tensor that requires grad is
 detached (voxfx computes no gradients), and as_tensor=True returns tensors (see voxfx._datasets).
 
-Errors raise voxfx.Error (a RuntimeError) with the library's message, bad arguments
-voxfx.ArgumentError (also a ValueError). Long calls release the GIL and stop at Ctrl-C. See also
+Errors raise voxfx.Error (a RuntimeError) with the library's message, bad arguments (a bad
+mesh, a NaN query point, resolution=True) voxfx.ArgumentError (also a ValueError), refusals for
+want of memory voxfx.MemoryLimitError (also a MemoryError). Every result pickles. Long calls release the GIL and stop at Ctrl-C. See also
 voxfx.dask for voxelizing a manifest of meshes on a Dask cluster, and `python -m voxfx` for the
 command line.
 """
 import __future__
 
 from . import _voxfx
-from ._voxfx import (ArgumentError, Density, Error, Grid, Mesh, PointClassifier, Scene, SparseGrid, SurfaceMesh,
+from ._voxfx import (ArgumentError, Density, Error, Grid, MemoryLimitError, Mesh, PointClassifier, Scene, SparseGrid, SurfaceMesh,
                      VolumeEstimate, __version__)
 from ._voxfx import Camera, Renderer
 from ._voxfx import ClosestPoints, LevelSet, SignedDistanceField
@@ -134,7 +135,7 @@ if hasattr(_batch, "__wrapped__"):
 #: File extension of each grid format that Grid.save writes.
 GRID_FORMATS = (".binvox", ".vdb", ".nrrd", ".ply", ".obj", ".npy", ".npz")
 
-__all__ = ["ArgumentError", "Camera", "ClosestPoints", "Density", "Error", "Grid", "LevelSet", "Mesh",
+__all__ = ["ArgumentError", "Camera", "ClosestPoints", "Density", "Error", "Grid", "LevelSet", "MemoryLimitError", "Mesh",
            "PointClassifier", "Renderer", "Scene", "SignedDistanceField", "SparseGrid", "SurfaceMesh", "VolumeEstimate",
            "GRID_FORMATS", "batch", *sorted(_FUNCTIONS),
            # Dataset preparation (#35): samples, marching cubes on fields, batches, attributes.

@@ -75,6 +75,7 @@ int runBatchCommand(const BatchArgs& a) {
     bo.voxelize = toVoxelizeOptions(a.choice);
     bo.fit = toFitOptions(a.fit, voxelizeFitChoices());
     bo.fit.axis = parseAxis(a.choice.axis);
+    bo.voxelize.emptyBorder = a.fit.padding; // --padding: the ring stays empty in every mode
     bo.write.vdbFloat = a.choice.vdbFloat;
     bo.threads = a.threads;
     bo.nested = a.nested;

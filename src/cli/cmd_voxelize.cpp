@@ -102,6 +102,7 @@ int runVoxelize(const VoxelizeArgs& a) {
     VoxelizeOptions vo = toVoxelizeOptions(a.choice);
     vo.threads = a.threads;
     vo.device = parseDevice(a.device);
+    vo.emptyBorder = a.fit.padding; // --padding: the ring stays empty in every mode
     FitOptions fo = toFitOptions(a.fit, voxelizeFitChoices());
     fo.axis = parseAxis(a.choice.axis);
     // .vdb goes tile by tile into a sparse tree unless the dense grid is asked for (--dense,

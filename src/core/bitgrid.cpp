@@ -52,6 +52,32 @@ std::optional<uint64_t> memoryBudgetBytes() {
              "'");
     return uint64_t(value * scale);
 }
+// A number of bytes from a cgroup file ("max" or unreadable: none).
+std::optional<uint64_t> cgroupValue(const char* path) {
+    std::ifstream in(path);
+    std::string text;
+    if (!(in >> text) || text.empty() || !std::isdigit(static_cast<unsigned char>(text[0])))
+        return std::nullopt;
+    errno = 0;
+    const unsigned long long v = std::strtoull(text.c_str(), nullptr, 10);
+    if (errno != 0) return std::nullopt;
+    return uint64_t(v);
+}
+
+// What the container's memory limit leaves: cgroup v2's memory.max less memory.current, or v1's
+// memory.limit_in_bytes less memory.usage_in_bytes (v1 writes a huge number for no limit).
+std::optional<uint64_t> cgroupAvailableBytes() {
+    std::optional<uint64_t> limit = cgroupValue("/sys/fs/cgroup/memory.max");
+    std::optional<uint64_t> used = cgroupValue("/sys/fs/cgroup/memory.current");
+    if (!limit) {
+        limit = cgroupValue("/sys/fs/cgroup/memory/memory.limit_in_bytes");
+        used = cgroupValue("/sys/fs/cgroup/memory/memory.usage_in_bytes");
+        if (limit && *limit >= (uint64_t(1) << 62)) limit.reset();
+    }
+    if (!limit) return std::nullopt;
+    const uint64_t u = used.value_or(0);
+    return *limit > u ? *limit - u : 0;
+}
 } // namespace
 
 uint64_t availableMemoryBytes() {
@@ -71,14 +97,17 @@ uint64_t availableMemoryBytes() {
         const long pages = sysconf(_SC_PHYS_PAGES), pageSize = sysconf(_SC_PAGE_SIZE);
         if (pages > 0 && pageSize > 0) available = uint64_t(pages) * uint64_t(pageSize);
     }
+    // In a container the cgroup's limit caps it (MemAvailable is the host's).
+    if (const std::optional<uint64_t> cgroup = cgroupAvailableBytes())
+        available = std::min(available, *cgroup);
     return budget ? std::min(available, *budget) : available;
 }
 
 void checkMemory(uint64_t bytes, const char* what) {
     const uint64_t available = availableMemoryBytes();
     if (bytes > available)
-        fail(what, " needs ", gib(bytes), ", but only ", gib(available), " of memory is available",
-             memoryBudgetBytes() ? " (VOXFX_MEMORY_LIMIT)" : "");
+        failMemory(what, " needs ", gib(bytes), ", but only ", gib(available), " of memory is available",
+                   memoryBudgetBytes() ? " (VOXFX_MEMORY_LIMIT)" : "");
 }
 
 uint64_t BitGrid::requiredBytes(int64_t w, int64_t h, int64_t d) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <limits>
 #include <utility>
 
@@ -262,22 +263,68 @@ SparseGrid sparseOfDense(const MeshView& mesh, const Frame& frame, const Voxeliz
     // The dense grid, the surface it may need, and the conversion's leaves (at most a grid again).
     const uint64_t need = 3 * one;
     if (need > budget)
-        fail(why, ": a ", frame.width(), " x ", frame.height(), " x ", frame.depth(), " grid needs ",
-             detail::memoryText(need), " to voxelize and convert, but the memory budget is ",
-             detail::memoryText(budget), " (the parity, winding and gwn fills work tile by tile)");
+        failMemory(why, ": a ", frame.width(), " x ", frame.height(), " x ", frame.depth(), " grid needs ",
+                   detail::memoryText(need), " to voxelize and convert, but the memory budget is ",
+                   detail::memoryText(budget), " (the parity, winding and gwn fills work tile by tile)");
     return SparseGrid::fromDense(voxelize(mesh, frame, o));
+}
+
+// A lower bound on the tree's bytes, known before any brick: the surface crosses at least area /
+// (sqrt(2) * 8^2) leaves of 8^3 cells (no plane cuts a cube of edge L in more than sqrt(2) L^2),
+// area in cells, of the triangles wholly inside the grid; a bool leaf takes more than 128 bytes.
+// Coincident triangles count twice (a bound too high for such meshes, by their share of the area).
+uint64_t sparseTreeLowerBound(const MeshView& mesh, const Frame& frame) {
+    if (frame.isPerspective()) return 0;
+    const Vec3d size{double(frame.width()), double(frame.height()), double(frame.depth())};
+    const auto inside = [&](const Vec3d& g) {
+        return g.x >= 0 && g.y >= 0 && g.z >= 0 && g.x <= size.x && g.y <= size.y && g.z <= size.z;
+    };
+    double area = 0;
+    for (std::size_t t = 0; t < mesh.triangleCount; ++t) {
+        const Vec3d a = frame.gridFromWorld(mesh.vertex(mesh.indices[3 * t])),
+                    b = frame.gridFromWorld(mesh.vertex(mesh.indices[3 * t + 1])),
+                    c = frame.gridFromWorld(mesh.vertex(mesh.indices[3 * t + 2]));
+        if (inside(a) && inside(b) && inside(c)) area += 0.5 * length(cross(b - a, c - a));
+    }
+    const double leaves = std::floor(area / (std::sqrt(2.0) * 64.0));
+    return leaves >= 0x1p56 ? ~uint64_t(0) : uint64_t(leaves) * 128;
 }
 
 } // namespace
 
+SparseGrid voxelizeSparseUnpadded(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& given,
+                                  const TileOptions& tiles);
+
 SparseGrid voxelizeSparse(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& given,
                           const TileOptions& tiles) {
+    SparseGrid out = voxelizeSparseUnpadded(mesh, frame, given, tiles);
+    // The padding ring stays empty (VoxelizeOptions::emptyBorder; a whole-grid fill kept its
+    // surface out of it already, so that a flood entered from the border).
+    const int64_t r = given.emptyBorder;
+    if (r > 0 && !frame.isPerspective() && !frame.isOriented() && frame.slicing() == Slicing::Uniform &&
+        given.slicing == Slicing::Uniform) {
+        const Vec3i d = out.dims();
+        IndexBox inner{Vec3i{r, r, r}, Vec3i{d.x - 1 - r, d.y - 1 - r, d.z - 1 - r}};
+        out.clip(inner);
+    }
+    return out;
+}
+
+SparseGrid voxelizeSparseUnpadded(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& given,
+                                  const TileOptions& tiles) {
     validateMesh(mesh, "mesh");
     // Fill::Auto decided once, here (the report is the caller's; the calls below see the fill).
     VoxelizeOptions options = given;
     options.fill = resolveFill(mesh, frame, given);
     options.report = nullptr;
     const uint64_t budget = tiles.memoryBytes ? tiles.memoryBytes : availableMemoryBytes();
+    // Refused before the first brick when the surface alone needs more leaves than the budget holds
+    // (at a resolution of 100,000 a tree of tens of GiB would otherwise grow until killed).
+    if (const uint64_t least = sparseTreeLowerBound(mesh, frame); least > budget)
+        failMemory("a sparse ", frame.width(), " x ", frame.height(), " x ", frame.depth(),
+                   " grid of this surface needs at least ", detail::memoryText(least),
+                   " of tree, but the memory budget is ", detail::memoryText(budget),
+                   "; raise the budget (--memory, VOXFX_MEMORY_LIMIT) or lower the resolution");
     if (options.deviceNote) options.deviceNote->clear();
     if (const std::string why = wholeGridReason(frame, options); !why.empty()) {
         if (options.slicing == Slicing::Local || frame.slicing() != Slicing::Uniform)
@@ -323,11 +370,13 @@ SparseGrid voxelizeSparse(const MeshView& mesh, const Frame& frame, const Voxeli
         checkSparse(sparseModule().sparseAddBrick(tree, b, &bytes, &error), error,
                     "cannot build the sparse grid");
         const uint64_t total = treeBytes += bytes;
-        if (total > treeBudget)
-            fail("the sparse grid outgrew the memory budget (", detail::memoryText(budget),
-                 ", of which the tiles take ", detail::memoryText(working), ") at ",
-                 detail::memoryText(total),
-                 " of tree; raise the budget (--memory, VOXFX_MEMORY_LIMIT) or lower the resolution");
+        // OpenVDB's count leaves out the allocator's overhead (about a tenth more, measured as
+        // the process's growth): the budget holds the tree as the process sees it.
+        if (total + total / 8 > treeBudget)
+            failMemory("the sparse grid outgrew the memory budget (", detail::memoryText(budget),
+                       ", of which the tiles take ", detail::memoryText(working), ") at ",
+                       detail::memoryText(total),
+                       " of tree; raise the budget (--memory, VOXFX_MEMORY_LIMIT) or lower the resolution");
     });
     std::string error;
     checkSparse(sparseModule().sparseFinish(tree, &error), error, "cannot build the sparse grid");

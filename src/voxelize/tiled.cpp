@@ -437,9 +437,9 @@ void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
         const detail::TileBins bins = detail::binTriangles(setup, coverage, B, B, halo, [&](int64_t entries) {
             const uint64_t need = workingBytes(mesh, entries, stacksX * stacksY, B);
             if (need > budget)
-                fail("tiled voxelization needs ", detail::memoryText(need), " for its triangle lists (",
-                     entries, " entries over ", stacksX * stacksY, " stacks of ", B, " x ", B,
-                     " columns) and bricks, but the memory budget is ", detail::memoryText(budget));
+                failMemory("tiled voxelization needs ", detail::memoryText(need), " for its triangle lists (",
+                           entries, " entries over ", stacksX * stacksY, " stacks of ", B, " x ", B,
+                           " columns) and bricks, but the memory budget is ", detail::memoryText(budget));
             if (tiles.workingBytes) *tiles.workingBytes = need;
         });
         const FrameView view = setup.frame;

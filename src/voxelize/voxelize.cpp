@@ -28,6 +28,32 @@ RasterOptions passOptions(const VoxelizeOptions& o) {
     return ro;
 }
 
+// Clears the cells within `ring` of every side (VoxelizeOptions::emptyBorder).
+void clearBorder(BitGrid& g, int64_t ring) {
+    if (ring <= 0 || g.empty()) return;
+    const int64_t W = g.width(), H = g.height(), D = g.depth(), P = g.wordsPerColumn();
+    parallelFor(0, W * H, 1024, [&](int64_t c0, int64_t c1) {
+        for (int64_t c = c0; c < c1; ++c) {
+            const int64_t x = c % W, y = c / W;
+            uint64_t* col = g.column(x, y);
+            if (x < ring || x >= W - ring || y < ring || y >= H - ring) {
+                std::fill(col, col + P, uint64_t(0));
+                continue;
+            }
+            for (int64_t s = 0; s < std::min(ring, D); ++s) col[s >> 6] &= ~(uint64_t(1) << (s & 63));
+            for (int64_t s = std::max<int64_t>(0, D - ring); s < D; ++s)
+                col[s >> 6] &= ~(uint64_t(1) << (s & 63));
+        }
+    });
+}
+
+// The padding ring of `o` in `frame` (VoxelizeOptions::emptyBorder): 0 where it does not apply.
+int64_t paddingRing(const Frame& frame, const VoxelizeOptions& o) {
+    const bool grid = !frame.isPerspective() && !frame.isOriented() && frame.slicing() == Slicing::Uniform &&
+                      o.slicing == Slicing::Uniform;
+    return grid ? std::max<int64_t>(0, o.emptyBorder) : 0;
+}
+
 BitGrid rasterizeInto(const Frame& frame, const MeshView& mesh, VoxelizeMode kind, const VoxelizeOptions& o) {
     BitGrid grid(frame.width(), frame.height(), frame.depth());
     const RasterOptions ro = passOptions(o);
@@ -45,6 +71,8 @@ BitGrid rasterizeInto(const Frame& frame, const MeshView& mesh, VoxelizeMode kin
     default:
         VOXFX_CHECK(false);
     }
+    // Surface cells in the padding ring are dropped: they would wall the border off from a flood.
+    clearBorder(grid, paddingRing(frame, o));
     return grid;
 }
 
@@ -113,6 +141,15 @@ void combine(BitGrid& a, const BitGrid& b, bool andNot) {
         else
             for (int64_t i = s; i < e; ++i) pa[i] |= pb[i];
     });
+}
+
+VoxelGrid voxelizeImpl(const MeshView& mesh, const Frame& inFrame, const VoxelizeOptions& o);
+
+// voxelizeImpl with the padding ring kept empty (see VoxelizeOptions::emptyBorder).
+VoxelGrid voxelizePadded(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& o) {
+    VoxelGrid g = voxelizeImpl(mesh, frame, o);
+    clearBorder(g.bits, paddingRing(frame, o));
+    return g;
 }
 
 VoxelGrid voxelizeImpl(const MeshView& mesh, const Frame& inFrame, const VoxelizeOptions& o) {
@@ -288,7 +325,7 @@ VoxelGrid voxelize(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
     if (frame.isPerspective() && (o.fill == Fill::Flood || o.fill == Fill::Vote) && needsFill(o.mode))
         fail("fill '", toString(o.fill), "' needs an orthographic frame");
     VoxelGrid result;
-    withThreads(o.threads, [&] { result = voxelizeImpl(mesh, frame, o); });
+    withThreads(o.threads, [&] { result = voxelizePadded(mesh, frame, o); });
     return result;
 }
 
