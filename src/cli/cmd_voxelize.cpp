@@ -1,6 +1,7 @@
 // voxfx voxelize MESH -o GRID — mesh to voxel grid in any mode, with the summary line; a volume
 // with --threshold T becomes a bit grid on its own lattice (voxelize_volume.cpp).
 #include <cstdlib>
+#include <future>
 #include <iostream>
 
 #include "cli_common.hpp"
@@ -41,7 +42,14 @@ struct VoxelizeRun {
     int64_t filled = 0;
     double voxelMs = 0, writeMs = 0;
     bool onGpu = false, sparse = false, tiled = false;
+    std::string path; ///< which path ran and why (dense or tiled), for .vdb and for tiles
 };
+
+// "1.50 GiB" from 1 GiB up, "64.0 MiB" below.
+std::string memoryText(uint64_t bytes) {
+    const bool gib = bytes >= (uint64_t(1) << 30);
+    return fmt(double(bytes) / double(uint64_t(1) << (gib ? 30 : 20)), 3) + (gib ? " GiB" : " MiB");
+}
 
 // .vdb without the dense grid: tiles straight into OpenVDB's tree (voxfx/sparse_grid.hpp).
 VoxelizeRun runSparse(const Mesh& mesh, const Frame& frame, const VoxelizeOptions& vo,
@@ -111,6 +119,16 @@ int runVoxelize(const VoxelizeArgs& a) {
     const bool streamable = format == GridFormat::Binvox || format == GridFormat::Nrrd;
     fo.checkDenseMemory = !canSparse || !(format == GridFormat::Vdb || streamable);
 
+    // The OpenVDB module loads on another thread while the mesh loads and voxelizes (a failure is
+    // left for the write, which loads it again and says why).
+    std::future<void> prepared;
+    if (format == GridFormat::Vdb)
+        prepared = std::async(std::launch::async, [format] {
+            try {
+                prepareGridFormat(format);
+            } catch (const Error&) {}
+        });
+
     MeshLoadReport report;
     const Mesh mesh = loadMesh(a.input, &report);
     const double loadMs = msSince(t0);
@@ -126,12 +144,31 @@ int runVoxelize(const VoxelizeArgs& a) {
                      "--fill vote)\n";
 
     const Frame frame = fitFrame(computeBounds(mesh.view()), fo);
-    bool sparse = canSparse && format == GridFormat::Vdb;
-    if (canSparse && streamable) {
+    // The whole grid when it fits the budget (the fast path), tiles into the sparse tree when it
+    // does not. For .vdb the whole grid's path also holds the tree built from it, which for a
+    // grid of surface (a leaf of 8^3 cells wherever the surface passes) can take about twice
+    // the grid's bytes: it is estimated at three times the grid's bytes.
+    bool sparse = false;
+    std::string why;
+    if (canSparse && (format == GridFormat::Vdb || streamable)) {
         const uint64_t denseBytes = BitGrid::requiredBytes(frame.width(), frame.height(), frame.depth());
-        sparse = denseBytes > availableMemoryBytes();
+        const uint64_t factor = format == GridFormat::Vdb ? 3 : 1;
+        const uint64_t need = denseBytes > ~uint64_t(0) / factor ? ~uint64_t(0) : factor * denseBytes;
+        const uint64_t budget = availableMemoryBytes();
+        sparse = need > budget;
+        why = detail::concat(memoryText(need), " for the whole grid",
+                             format == GridFormat::Vdb ? " and its tree" : "", sparse ? ", over" : ", within",
+                             " the budget of ", memoryText(budget));
+    } else if (format == GridFormat::Vdb) {
+        why = a.dense                          ? "--dense"
+              : vo.slicing != Slicing::Uniform ? "local slicing needs the whole grid"
+                                               : "--device needs the whole grid";
     }
-    const VoxelizeRun r = sparse ? runSparse(mesh, frame, vo, a) : runDense(mesh, frame, vo, a);
+    VoxelizeRun r = sparse ? runSparse(mesh, frame, vo, a) : runDense(mesh, frame, vo, a);
+    if (sparse)
+        r.path = detail::concat(r.tiled ? "tiled: " : "whole grid, then the tree: ", why);
+    else if (format == GridFormat::Vdb)
+        r.path = detail::concat("dense: ", why);
     if (!decided.fillNote.empty() && !a.quiet)
         std::cerr << "voxfx: " << a.input << ": " << decided.fillNote << "\n";
 
@@ -149,9 +186,9 @@ int runVoxelize(const VoxelizeArgs& a) {
         std::cout << ", " << withCommas(r.filled) << " filled voxels\n";
         std::cout << "time: load " << fmtMs(loadMs) << ", voxelize " << fmtMs(r.voxelMs)
                   << (r.onGpu ? " on " + cudaStatus().device : std::string())
-                  << (r.sparse ? (r.tiled ? " (tiled)" : " (whole grid)") : "") << ", write "
-                  << fmtMs(r.writeMs) << ", total " << fmtMs(msSince(t0)) << " -> " << a.output << " ("
-                  << toString(format) << (r.sparse ? ", sparse" : "") << ")\n";
+                  << (r.path.empty() ? std::string() : " (" + r.path + ")") << ", write " << fmtMs(r.writeMs)
+                  << ", total " << fmtMs(msSince(t0)) << " -> " << a.output << " (" << toString(format)
+                  << (r.sparse ? ", sparse" : "") << ")\n";
     }
     return 0;
 }
