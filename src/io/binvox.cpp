@@ -175,34 +175,35 @@ void writeBinvoxZ(const BitGrid& bits, std::ostream& out) {
     const int64_t chunks = (nx + kSlicesPerChunk - 1) / kSlicesPerChunk;
     std::vector<RunChunk> encoded(static_cast<size_t>(chunks));
     parallelFor(0, nx, kSlicesPerChunk, [&](int64_t x0, int64_t x1) {
+        const int64_t xs = x1 - x0;
         RunChunk& chunk = encoded[size_t(x0 / kSlicesPerChunk)];
         ChunkEncoder enc(chunk);
-        // zy[z * yBlocks + b]: bits y = 64 b .. 64 b + 63 of slice z.
-        std::vector<uint64_t> zy(size_t(wpc * 64 * yBlocks));
-        uint64_t block[64];
-        for (int64_t x = x0; x < x1; ++x) {
-            for (int64_t b = 0; b < yBlocks; ++b) {
-                const int64_t rows = std::min<int64_t>(64, ny - 64 * b);
-                for (int64_t w = 0; w < wpc; ++w) {
-                    uint64_t any = 0;
-                    for (int64_t j = 0; j < rows; ++j) {
-                        block[j] = bits.column((64 * b + j) * nx + x)[w];
-                        any |= block[j];
-                    }
-                    uint64_t* dst = &zy[size_t(w * 64 * yBlocks + b)];
-                    if (any == 0) {
-                        for (int k = 0; k < 64; ++k) dst[k * yBlocks] = 0;
-                        continue;
-                    }
-                    for (int64_t j = rows; j < 64; ++j) block[j] = 0;
-                    transpose64(block);
-                    for (int k = 0; k < 64; ++k) dst[k * yBlocks] = block[k];
-                }
+        // The chunk's columns of one row are consecutive in memory: each row of a block of 64 rows
+        // is read once, whole, into blocks[(xi * wpc + w) * 64 + j] (x0 + xi, row j, word w).
+        std::vector<uint64_t> blocks(size_t(xs * wpc * 64));
+        // zy[(xi * wpc * 64 + z) * yBlocks + b]: bits y = 64 b .. 64 b + 63 of slice z at x0 + xi.
+        std::vector<uint64_t> zy(size_t(xs * wpc * 64 * yBlocks));
+        for (int64_t b = 0; b < yBlocks; ++b) {
+            const int64_t rows = std::min<int64_t>(64, ny - 64 * b);
+            for (int64_t j = 0; j < 64; ++j) {
+                const uint64_t* row = j < rows ? bits.column((64 * b + j) * nx + x0) : nullptr;
+                for (int64_t i = 0; i < xs * wpc; ++i) blocks[size_t(i * 64 + j)] = row ? row[i] : 0;
             }
+            for (int64_t i = 0; i < xs * wpc; ++i) {
+                uint64_t* block = &blocks[size_t(i * 64)];
+                uint64_t any = 0;
+                for (int k = 0; k < 64; ++k) any |= block[k];
+                if (any != 0) transpose64(block);
+                // i = xi * wpc + w: slices z = 64 w + k of x0 + xi start at row i * 64 of zy.
+                uint64_t* dst = &zy[size_t(i * 64 * yBlocks + b)];
+                for (int k = 0; k < 64; ++k) dst[k * yBlocks] = block[k];
+            }
+        }
+        for (int64_t xi = 0; xi < xs; ++xi)
             for (int64_t z = 0; z < nz; ++z)
                 for (int64_t b = 0; b < yBlocks; ++b)
-                    enc.add(zy[size_t(z * yBlocks + b)], int(std::min<int64_t>(64, ny - 64 * b)));
-        }
+                    enc.add(zy[size_t((xi * wpc * 64 + z) * yBlocks + b)],
+                            int(std::min<int64_t>(64, ny - 64 * b)));
         enc.finish();
     });
     // Join the chunks: a chunk's head continues the run carried from before when the values match.
