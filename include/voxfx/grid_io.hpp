@@ -51,13 +51,6 @@ inline constexpr EnumName<GridFormat> kGridFormatNames[] = {
 GridFormat gridFormatFromPath(const std::string& path);
 const char* toString(GridFormat f);
 
-/// Loads what reading or writing `format` needs beyond the library now rather than at the first
-/// read or write: for .vdb the OpenVDB module (a shared library whose loading and relocation take
-/// tens of milliseconds), so that a caller can overlap it with other work (the command line loads
-/// it while it voxelizes); other formats need nothing. Thread-safe; throws voxfx::Error as
-/// writeGrid would when the module cannot be loaded.
-void prepareGridFormat(GridFormat format);
-
 struct GridWriteOptions {
     bool vdbFloat = false; ///< vdb: FloatGrid with 1.0 in filled voxels instead of BoolGrid
     std::string gridName = "voxels";

@@ -1,7 +1,6 @@
 // voxfx voxelize MESH -o GRID — mesh to voxel grid in any mode, with the summary line; a volume
 // with --threshold T becomes a bit grid on its own lattice (voxelize_volume.cpp).
 #include <cstdlib>
-#include <future>
 #include <iostream>
 
 #include "cli_common.hpp"
@@ -119,16 +118,6 @@ int runVoxelize(const VoxelizeArgs& a) {
     const bool streamable = format == GridFormat::Binvox || format == GridFormat::Nrrd;
     fo.checkDenseMemory = !canSparse || !(format == GridFormat::Vdb || streamable);
 
-    // The OpenVDB module loads on another thread while the mesh loads and voxelizes (a failure is
-    // left for the write, which loads it again and says why).
-    std::future<void> prepared;
-    if (format == GridFormat::Vdb)
-        prepared = std::async(std::launch::async, [format] {
-            try {
-                prepareGridFormat(format);
-            } catch (const Error&) {}
-        });
-
     MeshLoadReport report;
     const Mesh mesh = loadMesh(a.input, &report);
     const double loadMs = msSince(t0);
@@ -224,10 +213,11 @@ Fills (how inside is decided; default auto = parity for closed meshes, flood oth
            consistent orientation)
 
 Memory and tiles (--memory, VOXFX_MEMORY_LIMIT):
-  .vdb output is voxelized tile by tile (bricks of 128^3 cells, each column's parity carried
-  from brick to brick) straight into OpenVDB's sparse tree, never as a whole grid: memory
-  grows with the surface, not the volume (the bunny at -r 16384 fits in 4 GiB). The voxels are
-  the same bit for bit as the whole grid's.
+  .vdb output builds the whole grid and the tree from it when both fit the budget (estimated
+  at 3x the grid's bytes: the fast path), and otherwise is voxelized tile by tile (bricks of
+  128^3 cells, each column's parity carried from brick to brick) straight into OpenVDB's sparse
+  tree: memory grows with the surface, not the volume (the bunny at -r 16384 fits in 4 GiB).
+  The time line says which path ran and why. The voxels are the same bit for bit either way.
   Fills: parity, winding and gwn work tile by tile, in every mode. flood and vote need the
   whole grid: they voxelize it whole and convert it when that fits the budget. --fill auto
   picks flood for a mesh that is not closed, so for open meshes at large sizes give --fill gwn.

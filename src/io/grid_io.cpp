@@ -11,7 +11,6 @@
 
 #include "core/atomic_file.hpp"
 #include "io/grid_formats.hpp"
-#include "io/module_api.hpp"
 #include "voxfx/file_name.hpp"
 
 namespace voxfx {
@@ -72,10 +71,6 @@ GridFormat gridFormatFromPath(const std::string& path) {
 }
 
 const char* toString(GridFormat f) { return enumName(f, kGridFormatNames); }
-
-void prepareGridFormat(GridFormat format) {
-    if (format == GridFormat::Vdb) (void)detail::vdbModule();
-}
 
 void writeGrid(const VoxelGrid& grid, const std::string& path, const GridWriteOptions& options) {
     const GridFormat format = gridFormatFromPath(path);
