@@ -92,6 +92,34 @@ struct Recorder final : Progress {
     }
 };
 
+TEST(ParallelTest, InvokeRunsBothBodiesOnceAndReturnsAfterBoth) {
+    // Each body runs a parallelFor of its own (nesting), for every thread count; after the call
+    // both have finished: every index of both ranges is covered exactly once.
+    for (const int threads : {1, 2, 0}) {
+        SCOPED_TRACE(threads);
+        std::vector<std::atomic<int>> a(10000), b(777);
+        std::atomic<int> calls{0};
+        withThreads(threads, [&] {
+            parallelInvoke(
+                [&] {
+                    ++calls;
+                    parallelFor(0, int64_t(a.size()), 64, [&](int64_t s, int64_t e) {
+                        for (int64_t i = s; i < e; ++i) ++a[size_t(i)];
+                    });
+                },
+                [&] {
+                    ++calls;
+                    parallelFor(0, int64_t(b.size()), 10, [&](int64_t s, int64_t e) {
+                        for (int64_t i = s; i < e; ++i) ++b[size_t(i)];
+                    });
+                });
+        });
+        EXPECT_EQ(calls.load(), 2);
+        for (const auto& v : a) ASSERT_EQ(v.load(), 1);
+        for (const auto& v : b) ASSERT_EQ(v.load(), 1);
+    }
+}
+
 TEST(ParallelTest, ProgressStepsReportGrowingFractionsFromEveryThread) {
     // Steps finish on many threads at once; the fractions must still arrive in order (a count
     // taken outside the report's lock lets a later step report before an earlier one).

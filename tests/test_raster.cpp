@@ -3,6 +3,7 @@
 // vertices included), conservative spans hold the exact depth range of the triangle in the
 // column's closed prism, and the parallel schemes agree.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <mutex>
 #include <random>
@@ -442,12 +443,14 @@ TEST(RasterTest, CancellingThroughProgressFailsWithAnError) {
 // --- The consumer contract -----------------------------------------------------------------------
 
 struct OnlyFragments {
-    struct Sink {
-        int64_t* n;
-        void fragment(int64_t, int64_t, double, uint32_t, bool) { ++*n; }
+    struct Sink { // tiles run on several threads: the count is shared
+        std::atomic<int64_t>* n;
+        void fragment(int64_t, int64_t, double, uint32_t, bool) {
+            n->fetch_add(1, std::memory_order_relaxed);
+        }
         void finish() {}
     };
-    int64_t n = 0;
+    std::atomic<int64_t> n = 0;
     Sink tile(const Tile&) { return {&n}; }
 };
 struct OnlySpans {
@@ -500,11 +503,11 @@ TEST(RasterTest, AConsumerWithoutTheMemberTheCoverageNeedsFailsLoudly) {
     EXPECT_THROW(rasterize(frame, mesh.view(), o, spans), Error);
     // The supported coverage runs, also with the coverage fixed at compile time.
     EXPECT_NO_THROW(rasterize(frame, mesh.view(), o, fragments));
-    EXPECT_GT(fragments.n, 0);
-    const int64_t n = fragments.n;
+    EXPECT_GT(fragments.n.load(), 0);
+    const int64_t n = fragments.n.load();
     o.coverage = Coverage::Conservative; // ignored by rasterize<C>
     rasterize<Coverage::Center>(frame, mesh.view(), o, fragments);
-    EXPECT_EQ(fragments.n, 2 * n);
+    EXPECT_EQ(fragments.n.load(), 2 * n);
 }
 
 TEST(RasterTest, ConsumersAreHandedEachTileOnceWithItsIndexAndRows) {

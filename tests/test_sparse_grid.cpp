@@ -500,7 +500,7 @@ TEST(SparseGridTest, CliStreamsBinvoxAndNrrdThatDoNotFitAndWritesTheDenseBytes) 
         const test::CommandRun t =
             test::runVoxfx(dir, "voxelize " + bunnyPath + " -r 512 --memory 12M -o " + tiled);
         ASSERT_EQ(t.exitCode, 0) << t.err;
-        EXPECT_NE(t.out.find("(tiled)"), std::string::npos) << t.out;
+        EXPECT_NE(t.out.find("(tiled: "), std::string::npos) << t.out;
         EXPECT_NE(t.out.find(", sparse)"), std::string::npos) << t.out;
         EXPECT_TRUE(sparse_stream_test::fileBytes(dense) == sparse_stream_test::fileBytes(tiled));
         // --dense under the budget: the one-line refusal, no file.

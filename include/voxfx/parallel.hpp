@@ -21,6 +21,8 @@ namespace detail {
 /// Runs run(context, cb, ce) over disjoint sub-ranges covering chunk indices [0, chunks), in
 /// parallel (TBB, simple partitioner; kept out of this header).
 void parallelChunks(int64_t chunks, void* context, void (*run)(void*, int64_t, int64_t));
+/// Runs run(context, 0) and run(context, 1) concurrently (TBB's parallel_invoke).
+void parallelPair(void* context, void (*run)(void*, int));
 } // namespace detail
 
 /// Calls body(b, e) over disjoint sub-ranges covering [begin, end), in parallel where the range
@@ -47,6 +49,23 @@ template <class Body> void parallelFor(int64_t begin, int64_t end, int64_t grain
             const int64_t b = c.begin + k * c.grain;
             (*c.body)(b, std::min(c.end, b + c.grain));
         }
+    });
+}
+
+/// Runs a() and b() concurrently and returns when both have; each may use parallelFor inside. For
+/// independent work of unequal kinds (an analysis beside a raster pass). Neither may throw: catch
+/// inside and rethrow after the call.
+template <class A, class B> void parallelInvoke(A&& a, B&& b) {
+    struct Context {
+        std::remove_reference_t<A>* a;
+        std::remove_reference_t<B>* b;
+    } context{&a, &b};
+    detail::parallelPair(&context, [](void* p, int which) {
+        const Context& c = *static_cast<const Context*>(p);
+        if (which == 0)
+            (*c.a)();
+        else
+            (*c.b)();
     });
 }
 

@@ -41,7 +41,14 @@ struct VoxelizeRun {
     int64_t filled = 0;
     double voxelMs = 0, writeMs = 0;
     bool onGpu = false, sparse = false, tiled = false;
+    std::string path; ///< which path ran and why (dense or tiled), for .vdb and for tiles
 };
+
+// "1.50 GiB" from 1 GiB up, "64.0 MiB" below.
+std::string memoryText(uint64_t bytes) {
+    const bool gib = bytes >= (uint64_t(1) << 30);
+    return fmt(double(bytes) / double(uint64_t(1) << (gib ? 30 : 20)), 3) + (gib ? " GiB" : " MiB");
+}
 
 // .vdb without the dense grid: tiles straight into OpenVDB's tree (voxfx/sparse_grid.hpp).
 VoxelizeRun runSparse(const Mesh& mesh, const Frame& frame, const VoxelizeOptions& vo,
@@ -127,12 +134,31 @@ int runVoxelize(const VoxelizeArgs& a) {
                      "--fill vote)\n";
 
     const Frame frame = fitFrame(computeBounds(mesh.view()), fo);
-    bool sparse = canSparse && format == GridFormat::Vdb;
-    if (canSparse && streamable) {
+    // The whole grid when it fits the budget (the fast path), tiles into the sparse tree when it
+    // does not. For .vdb the whole grid's path also holds the tree built from it, which for a
+    // grid of surface (a leaf of 8^3 cells wherever the surface passes) can take about twice
+    // the grid's bytes: it is estimated at three times the grid's bytes.
+    bool sparse = false;
+    std::string why;
+    if (canSparse && (format == GridFormat::Vdb || streamable)) {
         const uint64_t denseBytes = BitGrid::requiredBytes(frame.width(), frame.height(), frame.depth());
-        sparse = denseBytes > availableMemoryBytes();
+        const uint64_t factor = format == GridFormat::Vdb ? 3 : 1;
+        const uint64_t need = denseBytes > ~uint64_t(0) / factor ? ~uint64_t(0) : factor * denseBytes;
+        const uint64_t budget = availableMemoryBytes();
+        sparse = need > budget;
+        why = detail::concat(memoryText(need), " for the whole grid",
+                             format == GridFormat::Vdb ? " and its tree" : "", sparse ? ", over" : ", within",
+                             " the budget of ", memoryText(budget));
+    } else if (format == GridFormat::Vdb) {
+        why = a.dense                          ? "--dense"
+              : vo.slicing != Slicing::Uniform ? "local slicing needs the whole grid"
+                                               : "--device needs the whole grid";
     }
-    const VoxelizeRun r = sparse ? runSparse(mesh, frame, vo, a) : runDense(mesh, frame, vo, a);
+    VoxelizeRun r = sparse ? runSparse(mesh, frame, vo, a) : runDense(mesh, frame, vo, a);
+    if (sparse)
+        r.path = detail::concat(r.tiled ? "tiled: " : "whole grid, then the tree: ", why);
+    else if (format == GridFormat::Vdb)
+        r.path = detail::concat("dense: ", why);
     if (!decided.fillNote.empty() && !a.quiet)
         std::cerr << "voxfx: " << a.input << ": " << decided.fillNote << "\n";
 
@@ -150,9 +176,9 @@ int runVoxelize(const VoxelizeArgs& a) {
         std::cout << ", " << withCommas(r.filled) << " filled voxels\n";
         std::cout << "time: load " << fmtMs(loadMs) << ", voxelize " << fmtMs(r.voxelMs)
                   << (r.onGpu ? " on " + cudaStatus().device : std::string())
-                  << (r.sparse ? (r.tiled ? " (tiled)" : " (whole grid)") : "") << ", write "
-                  << fmtMs(r.writeMs) << ", total " << fmtMs(msSince(t0)) << " -> " << a.output << " ("
-                  << toString(format) << (r.sparse ? ", sparse" : "") << ")\n";
+                  << (r.path.empty() ? std::string() : " (" + r.path + ")") << ", write " << fmtMs(r.writeMs)
+                  << ", total " << fmtMs(msSince(t0)) << " -> " << a.output << " (" << toString(format)
+                  << (r.sparse ? ", sparse" : "") << ")\n";
     }
     return 0;
 }
@@ -188,10 +214,11 @@ Fills (how inside is decided; default auto = parity for closed meshes, flood oth
            consistent orientation)
 
 Memory and tiles (--memory, VOXFX_MEMORY_LIMIT):
-  .vdb output is voxelized tile by tile (bricks of 128^3 cells, each column's parity carried
-  from brick to brick) straight into OpenVDB's sparse tree, never as a whole grid: memory
-  grows with the surface, not the volume (the bunny at -r 16384 fits in 4 GiB). The voxels are
-  the same bit for bit as the whole grid's.
+  .vdb output builds the whole grid and the tree from it when both fit the budget (estimated
+  at 3x the grid's bytes: the fast path), and otherwise is voxelized tile by tile (bricks of
+  128^3 cells, each column's parity carried from brick to brick) straight into OpenVDB's sparse
+  tree: memory grows with the surface, not the volume (the bunny at -r 16384 fits in 4 GiB).
+  The time line says which path ran and why. The voxels are the same bit for bit either way.
   Fills: parity, winding and gwn work tile by tile, in every mode. flood and vote need the
   whole grid: they voxelize it whole and convert it when that fits the budget. --fill auto
   picks flood for a mesh that is not closed, so for open meshes at large sizes give --fill gwn.

@@ -5,6 +5,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
 namespace voxfx {
@@ -18,6 +19,10 @@ void parallelChunks(int64_t chunks, void* context, void (*run)(void*, int64_t, i
         tbb::blocked_range<int64_t>(0, chunks, 1),
         [&](const tbb::blocked_range<int64_t>& r) { run(context, r.begin(), r.end()); },
         tbb::simple_partitioner());
+}
+
+void parallelPair(void* context, void (*run)(void*, int)) {
+    tbb::parallel_invoke([&] { run(context, 0); }, [&] { run(context, 1); });
 }
 
 } // namespace detail

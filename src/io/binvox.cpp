@@ -22,6 +22,7 @@
 
 #include "core/bitops.hpp"
 #include "io/grid_formats.hpp"
+#include "voxfx/parallel.hpp"
 
 namespace voxfx::detail {
 
@@ -97,8 +98,153 @@ private:
 
 } // namespace
 
+namespace {
+
+// The runs of one chunk of binvox's data: the first run and the last stay open (a neighbouring
+// chunk may continue them), the runs between are encoded already.
+struct RunChunk {
+    std::vector<uint8_t> middle; ///< (value, count) pairs of the closed runs after the first
+    uint8_t headValue = 0, tailValue = 0;
+    int64_t headLength = 0, tailLength = 0;
+    bool split = false; ///< more than one run (head and tail differ); else only the tail is set
+};
+
+void appendPairs(std::vector<uint8_t>& bytes, uint8_t value, int64_t count) {
+    for (; count > 0; count -= 255) {
+        bytes.push_back(value);
+        bytes.push_back(uint8_t(std::min<int64_t>(count, 255)));
+    }
+}
+
+// Runs from words of bits, in order, into a RunChunk.
+class ChunkEncoder {
+public:
+    explicit ChunkEncoder(RunChunk& chunk) : c_(chunk) {}
+    // The low `bits` bits of `word`, bit 0 first.
+    void add(uint64_t word, int bits) {
+        if (!started_) {
+            value_ = uint8_t(word & 1);
+            started_ = true;
+        }
+        // Whole words of the current value extend the run (most words of a solid grid).
+        if (bits == 64 && word == (value_ ? ~uint64_t(0) : 0)) {
+            run_ += 64;
+            return;
+        }
+        for (int pos = 0; pos < bits;) {
+            const uint64_t rest = word >> pos;
+            const int len = std::min(value_ ? std::countr_one(rest) : std::countr_zero(rest), bits - pos);
+            run_ += len;
+            pos += len;
+            if (pos < bits) {
+                close();
+                value_ ^= 1;
+                run_ = 0;
+            }
+        }
+    }
+    void finish() {
+        c_.tailValue = value_;
+        c_.tailLength = run_;
+    }
+
+private:
+    void close() {
+        if (!c_.split) {
+            c_.split = true;
+            c_.headValue = value_;
+            c_.headLength = run_;
+        } else {
+            appendPairs(c_.middle, value_, run_);
+        }
+    }
+    RunChunk& c_;
+    uint8_t value_ = 0;
+    int64_t run_ = 0;
+    bool started_ = false;
+};
+
+// binvox's data straight from a z-sliced grid (columns (x, y), bits along z): for each x, 64 x 64
+// bit blocks of (y, z) are transposed so that each word holds 64 consecutive y of one z, binvox's
+// fastest index; chunks of x are encoded in parallel and their runs joined in order, so the bytes
+// are those of one serial pass (maximal runs, each split into counts of 255 from its start).
+void writeBinvoxZ(const BitGrid& bits, std::ostream& out) {
+    const int64_t nx = bits.width(), ny = bits.height(), nz = bits.depth(), wpc = bits.wordsPerColumn();
+    const int64_t yBlocks = (ny + 63) / 64;
+    constexpr int64_t kSlicesPerChunk = 4;
+    const int64_t chunks = (nx + kSlicesPerChunk - 1) / kSlicesPerChunk;
+    std::vector<RunChunk> encoded(static_cast<size_t>(chunks));
+    parallelFor(0, nx, kSlicesPerChunk, [&](int64_t x0, int64_t x1) {
+        const int64_t xs = x1 - x0;
+        RunChunk& chunk = encoded[size_t(x0 / kSlicesPerChunk)];
+        ChunkEncoder enc(chunk);
+        // The chunk's columns of one row are consecutive in memory: each row of a block of 64 rows
+        // is read once, whole, into blocks[(xi * wpc + w) * 64 + j] (x0 + xi, row j, word w).
+        std::vector<uint64_t> blocks(size_t(xs * wpc * 64));
+        // zy[(xi * wpc * 64 + z) * yBlocks + b]: bits y = 64 b .. 64 b + 63 of slice z at x0 + xi.
+        std::vector<uint64_t> zy(size_t(xs * wpc * 64 * yBlocks));
+        for (int64_t b = 0; b < yBlocks; ++b) {
+            const int64_t rows = std::min<int64_t>(64, ny - 64 * b);
+            for (int64_t j = 0; j < 64; ++j) {
+                const uint64_t* row = j < rows ? bits.column((64 * b + j) * nx + x0) : nullptr;
+                for (int64_t i = 0; i < xs * wpc; ++i) blocks[size_t(i * 64 + j)] = row ? row[i] : 0;
+            }
+            for (int64_t i = 0; i < xs * wpc; ++i) {
+                uint64_t* block = &blocks[size_t(i * 64)];
+                uint64_t any = 0;
+                for (int k = 0; k < 64; ++k) any |= block[k];
+                if (any != 0) transpose64(block);
+                // i = xi * wpc + w: slices z = 64 w + k of x0 + xi start at row i * 64 of zy.
+                uint64_t* dst = &zy[size_t(i * 64 * yBlocks + b)];
+                for (int k = 0; k < 64; ++k) dst[k * yBlocks] = block[k];
+            }
+        }
+        for (int64_t xi = 0; xi < xs; ++xi)
+            for (int64_t z = 0; z < nz; ++z)
+                for (int64_t b = 0; b < yBlocks; ++b)
+                    enc.add(zy[size_t((xi * wpc * 64 + z) * yBlocks + b)],
+                            int(std::min<int64_t>(64, ny - 64 * b)));
+        enc.finish();
+    });
+    // Join the chunks: a chunk's head continues the run carried from before when the values match.
+    std::vector<uint8_t> pairs;
+    uint8_t value = 0;
+    int64_t run = 0;
+    auto carry = [&](uint8_t v, int64_t length) {
+        if (v == value) {
+            run += length;
+            return;
+        }
+        appendPairs(pairs, value, run);
+        value = v;
+        run = length;
+    };
+    for (const RunChunk& c : encoded) {
+        if (c.split) {
+            carry(c.headValue, c.headLength);
+            appendPairs(pairs, value, run);
+            out.write(reinterpret_cast<const char*>(pairs.data()), std::streamsize(pairs.size()));
+            pairs.clear();
+            out.write(reinterpret_cast<const char*>(c.middle.data()), std::streamsize(c.middle.size()));
+            value = c.tailValue;
+            run = c.tailLength;
+        } else {
+            carry(c.tailValue, c.tailLength);
+        }
+    }
+    appendPairs(pairs, value, run);
+    out.write(reinterpret_cast<const char*>(pairs.data()), std::streamsize(pairs.size()));
+}
+
+} // namespace
+
 void writeBinvox(const VoxelGrid& grid, std::ostream& out) {
     writeBinvoxHeader(grid.frame, grid.worldDims(), out);
+    if (grid.frame.axis() == Axis::Z && grid.frame.slicing() == Slicing::Uniform &&
+        !grid.frame.isPerspective() && !grid.frame.isOriented()) {
+        writeBinvoxZ(grid.bits, out);
+        return;
+    }
     BinvoxRuns runs(out);
     runs.columns(reslice(grid, Axis::Y).bits);
     runs.finish();

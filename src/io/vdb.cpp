@@ -23,9 +23,14 @@ VdbPlacement placementOf(const Frame& frame) {
 
 void writeVdb(const VoxelGrid& grid, AtomicFile& file, const GridWriteOptions& options) {
     const VdbModule& vdb = vdbModule();
-    const VoxelGrid g = reslice(grid, Axis::Z); // columns (x, y), bits along z
-    const VdbBits bits{g.bits.width(), g.bits.height(), g.bits.depth(), g.bits.wordsPerColumn(),
-                       g.bits.column(0)};
+    // Columns (x, y), bits along z: a grid sliced so already is read in place (no copy).
+    const Frame& f = grid.frame;
+    const bool zSliced =
+        f.axis() == Axis::Z && f.slicing() == Slicing::Uniform && !f.isPerspective() && !f.isOriented();
+    VoxelGrid resliced;
+    if (!zSliced) resliced = reslice(grid, Axis::Z);
+    const BitGrid& g = zSliced ? grid.bits : resliced.bits;
+    const VdbBits bits{g.width(), g.height(), g.depth(), g.wordsPerColumn(), g.column(0)};
     std::string error;
     if (!vdb.writeBits(file.tempPath().c_str(), bits, placementOf(grid.frame), options.gridName.c_str(),
                        options.vdbFloat, hostParallelFor, &error))

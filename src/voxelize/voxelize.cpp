@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <exception>
 #include <filesystem>
 #include <limits>
 
@@ -210,17 +211,17 @@ VoxelGrid voxelizeImpl(const MeshView& mesh, const Frame& inFrame, const Voxeliz
 
 } // namespace
 
-// Fill::Auto, decided once for every front end: parity is exact for a closed mesh; on an open
-// one it fills wrong cells, and flood is robust to holes narrower than a voxel. Flood walks an
-// axis-aligned grid (requireUniformOrthographic), so a frame it cannot run in (perspective,
-// oriented, locally sliced: light views) takes the generalized winding number instead.
-Fill resolveFill(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& o) {
+namespace {
+
+// resolveFill with the mesh's topology given (known) or analyzed here (null).
+Fill resolveFillWith(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& o,
+                     const MeshTopology* known) {
     VoxelizeReport r;
     r.fill = o.fill;
     if (o.fill == Fill::Auto) {
         r.fill = Fill::Parity;
         if (needsFill(o.mode)) {
-            r.topology = analyzeTopology(mesh);
+            r.topology = known ? *known : analyzeTopology(mesh);
             r.topologyAnalyzed = true;
             if (!r.topology.closed()) {
                 const bool gridWalk = !frame.isPerspective() && !frame.isOriented() &&
@@ -238,6 +239,16 @@ Fill resolveFill(const MeshView& mesh, const Frame& frame, const VoxelizeOptions
     }
     if (o.report) *o.report = r;
     return r.fill;
+}
+
+} // namespace
+
+// Fill::Auto, decided once for every front end: parity is exact for a closed mesh; on an open
+// one it fills wrong cells, and flood is robust to holes narrower than a voxel. Flood walks an
+// axis-aligned grid (requireUniformOrthographic), so a frame it cannot run in (perspective,
+// oriented, locally sliced: light views) takes the generalized winding number instead.
+Fill resolveFill(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& o) {
+    return resolveFillWith(mesh, frame, o, nullptr);
 }
 
 const char* toString(VoxelizeMode m) { return enumName(m, kVoxelizeModeNames); }
@@ -321,11 +332,33 @@ Frame fitFrame(const Box3d& meshBounds, const FitOptions& o) {
 VoxelGrid voxelize(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& options) {
     validateMesh(mesh, "mesh");
     VoxelizeOptions o = options;
-    o.fill = resolveFill(mesh, frame, options);
-    if (frame.isPerspective() && (o.fill == Fill::Flood || o.fill == Fill::Vote) && needsFill(o.mode))
-        fail("fill '", toString(o.fill), "' needs an orthographic frame");
     VoxelGrid result;
-    withThreads(o.threads, [&] { result = voxelizePadded(mesh, frame, o); });
+    withThreads(o.threads, [&] {
+        if (options.fill == Fill::Auto && needsFill(options.mode)) {
+            // The closed-mesh test of Fill::Auto and the parity fill it picks for closed meshes (the
+            // common case) run side by side; an open mesh drops the parity grid and runs its fill.
+            VoxelizeOptions parity = options;
+            parity.fill = Fill::Parity;
+            parity.report = nullptr;
+            MeshTopology topology;
+            std::exception_ptr failed;
+            parallelInvoke([&] { topology = analyzeTopology(mesh); },
+                           [&] {
+                               try {
+                                   result = voxelizePadded(mesh, frame, parity);
+                               } catch (...) { failed = std::current_exception(); }
+                           });
+            o.fill = resolveFillWith(mesh, frame, options, &topology);
+            if (failed) std::rethrow_exception(failed);
+            if (o.fill == Fill::Parity) return;
+            result = {};
+        } else {
+            o.fill = resolveFill(mesh, frame, options);
+        }
+        if (frame.isPerspective() && (o.fill == Fill::Flood || o.fill == Fill::Vote) && needsFill(o.mode))
+            fail("fill '", toString(o.fill), "' needs an orthographic frame");
+        result = voxelizePadded(mesh, frame, o);
+    });
     return result;
 }
 
