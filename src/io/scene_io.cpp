@@ -456,8 +456,10 @@ void wrapperSettings(const json& doc, const std::string& path, const Resolve& re
             const OptionValue v = settingValue(value, concat(where, ".", key));
             checkRenderSetting(key, v, where);
             // A setting of the scene this one adds to ("scene") gives way to this file's.
+            // (A copy of the name: clang 14 cannot capture a structured binding.)
+            const std::string name = camelCase(key);
             std::erase_if(scene.settings.render,
-                          [&](const auto& setting) { return camelCase(setting.first) == camelCase(key); });
+                          [&](const auto& setting) { return camelCase(setting.first) == name; });
             scene.settings.render.emplace_back(key, v);
         }
     }
