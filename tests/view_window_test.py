@@ -167,7 +167,8 @@ class Session:
         self.out = open(os.path.join(self.workdir, "viewer.out"), "w+")
         self.viewer = subprocess.Popen([self.voxfx, "view", *args], env=self.env, cwd=self.workdir,
                                        stdout=self.out, stderr=subprocess.STDOUT)
-        deadline = time.time() + 30
+        # 0.7 s alone; a sanitizer build beside the rest of the suite on 2 cores needs far more.
+        deadline = time.time() + 120
         while time.time() < deadline:
             r = self.run("xdotool", "search", "--name", "^voxfx view", check=False)
             if r.returncode == 0 and r.stdout.split():
@@ -176,7 +177,7 @@ class Session:
             if self.viewer.poll() is not None:
                 fail("voxfx view exited: " + self.output())
             time.sleep(0.1)
-        fail("no voxfx view window after 30 s: " + self.output())
+        fail("no voxfx view window after 120 s: " + self.output())
 
     def output(self):
         self.out.flush()
