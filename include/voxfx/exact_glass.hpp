@@ -30,6 +30,9 @@ namespace voxfx {
 
 class TriangleTracer;
 struct GlassInput;
+namespace detail {
+class MediaStack;
+}
 
 struct ExactGlassOptions : GlassPathOptions {
     static constexpr std::string_view kName = "exact";
@@ -67,6 +70,18 @@ private:
         std::shared_ptr<const TriangleTracer> tracer;
     };
     std::vector<MediumTriangles> byMedium_;
+    /// One face of a crossing: its medium and whether the ray enters its object there.
+    struct CrossedFace {
+        uint32_t medium;
+        bool entering;
+    };
+    /// Every face the ray from direction d crosses at x, where it hit triangle t: t's and those of
+    /// other media lying on it (two objects touching).
+    void facesAt(const Vec3d& x, const Vec3d& d, uint32_t t, std::vector<CrossedFace>& faces) const;
+    /// The media after crossing `faces` from `stack`, into `next`; multiplies `tint` by the tint of
+    /// each medium entered. False where no medium changes (the faces are passed through).
+    bool mediaAfter(const std::vector<CrossedFace>& faces, const detail::MediaStack& stack,
+                    detail::MediaStack& next, Vec3f& tint) const;
     int maxEvents_ = ExactGlassOptions{}.maxEvents;
 };
 

@@ -37,6 +37,7 @@
 #include <string_view>
 #include <vector>
 
+#include "voxfx/glass_optics.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/options.hpp"
 #include "voxfx/parallel.hpp"
@@ -69,11 +70,9 @@ public:
         std::string summary() const;
     };
     /// How glass triangles pass light (see the file comment).
-    struct Glass {
-        float ior = 1.5f;
-        Vec3f sigma{0.0f, 0.0f, 0.0f}; ///< Beer–Lambert coefficient per world unit
-        Vec3f tint{1.0f, 1.0f, 1.0f};  ///< applied once per entering crossing
-    };
+    /// (ior, Beer–Lambert coefficient per world unit, tint applied once per entering crossing: the
+    /// medium every glass method uses).
+    using Glass = GlassMedium;
     static constexpr uint32_t kNotGlass = 0xffffffffu;
 
     ExactShadow() = default; ///< no casters: visibility 1

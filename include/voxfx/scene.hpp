@@ -140,6 +140,13 @@ struct Light {
     double innerConeAngle = 0;        ///< spot: full intensity inside this angle (radians)
     double outerConeAngle = M_PI / 4; ///< spot: no light outside this angle, in (0, pi/2]
     double range = 0;                 ///< 0 = unlimited (glTF range: smooth cut-off, informative)
+
+    /// Spot and point lights are at a position; a directional light is at infinity.
+    bool positioned() const { return type != LightType::Directional; }
+    /// Towards the light from world point p: for a directional light the unit vector against its
+    /// direction; for a spot or point light position - p, not normalized (its length is the
+    /// distance to the light).
+    Vec3d towards(const Vec3d& p) const { return positioned() ? position - p : -normalize(direction); }
 };
 
 struct Camera {

@@ -147,6 +147,8 @@ private:
     std::vector<GlassMedium> media_;
     Vec3d origin_;
     double voxel_ = 1;
+    /// One ray's march (render/voxel_glass_march.cpp): the walk, and a function per kind of voxel.
+    struct March;
 };
 
 /// A voxel glass method: the march of VoxelGlass with the options O, stopping at the first back

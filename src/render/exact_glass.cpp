@@ -6,6 +6,7 @@
 #include <iterator>
 #include <limits>
 
+#include "render/media_stack.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/glass.hpp"
 #include "voxfx/triangle_tracer.hpp"
@@ -70,80 +71,106 @@ ExactGlass::ExactGlass(const MeshView& mesh, std::vector<Vec3f> vertexNormals,
 
 namespace {
 
-// One face of a crossing: the triangle and whether the ray enters its object there.
-struct Face {
-    uint32_t triangle;
-    bool entering;
+Vec3d outwardNormal(const Mesh& mesh, uint32_t t) {
+    const uint32_t ia = mesh.indices[3 * t], ib = mesh.indices[3 * t + 1], ic = mesh.indices[3 * t + 2];
+    const Vec3d a(mesh.positions[ia]), b(mesh.positions[ib]), c(mesh.positions[ic]);
+    return normalize(cross(b - a, c - a));
+}
+
+// The shading normal at hit h of the triangle with outward face normal ng: the vertex normals
+// interpolated (on ng's side), or ng without them.
+Vec3d shadingNormal(const Mesh& mesh, const std::vector<Vec3f>& normals, const TriangleTracer::Hit& h,
+                    const Vec3d& ng) {
+    if (normals.empty()) return ng;
+    const uint32_t t = h.triangle;
+    const uint32_t ia = mesh.indices[3 * t], ib = mesh.indices[3 * t + 1], ic = mesh.indices[3 * t + 2];
+    const Vec3d ns =
+        normalize(Vec3d(normals[ia]) * (1 - h.u - h.v) + Vec3d(normals[ib]) * h.u + Vec3d(normals[ic]) * h.v);
+    if (!(length(ns) > 0)) return ng;
+    return dot(ns, ng) < 0 ? -ns : ns;
+}
+
+// The surface the ray was last at (a plane through its origin): the next hit skips only faces lying
+// on it (the triangle just crossed, its coplanar neighbours, a touching medium's face on it), never
+// every hit within epsilon: a sheet thinner than epsilon, or a face meeting the one just crossed,
+// is a surface of its own.
+class SurfaceSkip {
+public:
+    explicit SurfaceSkip(const TriangleTracer& tracer) : tracer_(tracer), mesh_(tracer.mesh()) {}
+
+    // The ray's next hit from o along d, past faces of the last surface.
+    TriangleTracer::Hit nextHit(const Vec3d& o, const Vec3d& d) const {
+        const double epsilon = tracer_.epsilon();
+        double tNear = 0;
+        for (int skip = 0;; ++skip) {
+            const TriangleTracer::Hit h =
+                tracer_.intersect(o, d, tNear, std::numeric_limits<double>::infinity());
+            if (!h.hit || !onSurface_ || h.t >= epsilon || skip >= 16 ||
+                !liesOnSurface(h.triangle, o, o + d * h.t))
+                return h;
+            tNear = h.t + 1e-3 * epsilon;
+        }
+    }
+    // The ray is now at a surface with outward face normal ng.
+    void at(const Vec3d& ng) {
+        onSurface_ = true;
+        surfaceNormal_ = ng;
+    }
+
+private:
+    bool liesOnSurface(uint32_t t, const Vec3d& o, const Vec3d& at) const {
+        const double planeTolerance = 0.1 * tracer_.epsilon();
+        const Vec3d nt = outwardNormal(mesh_, t);
+        if (std::abs(dot(nt, surfaceNormal_)) < 1 - 1e-6) return false;
+        const Vec3d a(mesh_.positions[mesh_.indices[3 * size_t(t)]]);
+        return std::abs(dot(at - a, nt)) < planeTolerance && std::abs(dot(o - a, nt)) < planeTolerance;
+    }
+
+    const TriangleTracer& tracer_;
+    const Mesh& mesh_;
+    bool onSurface_ = false;
+    Vec3d surfaceNormal_{0, 0, 1};
 };
 
 } // namespace
 
-GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents) const {
+void ExactGlass::facesAt(const Vec3d& x, const Vec3d& d, uint32_t t, std::vector<CrossedFace>& faces) const {
     const Mesh& mesh = tracer_->mesh();
     const double epsilon = tracer_->epsilon();
-    static const GlassMedium kAir{1.0f, {0, 0, 0}, {1, 1, 1}};
+    faces.assign(1, CrossedFace{medium_[t], dot(d, outwardNormal(mesh, t)) < 0});
+    for (const MediumTriangles& mt : byMedium_) {
+        if (mt.medium == medium_[t]) continue;
+        const TriangleTracer::Hit c = mt.tracer->intersect(x - d * epsilon, d, 0, 2 * epsilon);
+        if (c.hit) {
+            const uint32_t ct = mt.triangle[c.triangle];
+            faces.push_back({medium_[ct], dot(d, outwardNormal(mesh, ct)) < 0});
+        }
+    }
+}
+
+GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents) const {
+    const Mesh& mesh = tracer_->mesh();
     GlassPath p;
     Vec3d o = origin, d = normalize(dir);
     Vec3f thr{1, 1, 1};
-    // The media the ray is in, innermost (last entered) on top; empty: air.
-    std::vector<uint32_t> stack, next;
-    auto mediumOf = [&](const std::vector<uint32_t>& s) -> const GlassMedium& {
-        return s.empty() ? kAir : media_[s.back()];
-    };
-    auto outwardNormal = [&](uint32_t t) {
-        const uint32_t ia = mesh.indices[3 * t], ib = mesh.indices[3 * t + 1], ic = mesh.indices[3 * t + 2];
-        const Vec3d a(mesh.positions[ia]), b(mesh.positions[ib]), c(mesh.positions[ic]);
-        return normalize(cross(b - a, c - a));
-    };
-    std::vector<Face> faces;
+    detail::MediaStack stack(media_), next(media_);
+    SurfaceSkip skip(*tracer_);
+    std::vector<CrossedFace> faces;
     int crossings = 0; // every crossing, including ignored ones: bounds the loop
-    // The surface the ray was last at (a plane through o): the next hit skips only faces lying on it
-    // (the triangle just crossed, its coplanar neighbours, a touching medium's face on it), never
-    // every hit within epsilon: a sheet thinner than epsilon, or a face meeting the one just
-    // crossed, is a surface of its own.
-    bool onSurface = false;
-    Vec3d surfaceNormal{0, 0, 1};
-    const double planeTolerance = 0.1 * epsilon;
-    auto liesOnSurface = [&](uint32_t t, const Vec3d& at) {
-        const Vec3d nt = outwardNormal(t);
-        if (std::abs(dot(nt, surfaceNormal)) < 1 - 1e-6) return false;
-        const Vec3d a(mesh.positions[mesh.indices[3 * size_t(t)]]);
-        return std::abs(dot(at - a, nt)) < planeTolerance && std::abs(dot(o - a, nt)) < planeTolerance;
-    };
-    auto nextHit = [&]() {
-        double tNear = 0;
-        for (int skip = 0;; ++skip) {
-            const TriangleTracer::Hit h =
-                tracer_->intersect(o, d, tNear, std::numeric_limits<double>::infinity());
-            if (!h.hit || !onSurface || h.t >= epsilon || skip >= 16 ||
-                !liesOnSurface(h.triangle, o + d * h.t))
-                return h;
-            tNear = h.t + 1e-3 * epsilon;
-        }
-    };
     while (true) {
-        const TriangleTracer::Hit h = nextHit();
+        const TriangleTracer::Hit h = skip.nextHit(o, d);
         if (!h.hit) {
             p.exitPoint = o;
             p.exitDir = d;
             p.throughput = thr;
             return p;
         }
-        const uint32_t t = h.triangle;
-        const Vec3d ng = outwardNormal(t);
-        Vec3d n = ng;
-        if (!normals_.empty()) {
-            const uint32_t ia = mesh.indices[3 * t], ib = mesh.indices[3 * t + 1],
-                           ic = mesh.indices[3 * t + 2];
-            const Vec3d ns = normalize(Vec3d(normals_[ia]) * (1 - h.u - h.v) + Vec3d(normals_[ib]) * h.u +
-                                       Vec3d(normals_[ic]) * h.v);
-            if (length(ns) > 0) n = dot(ns, ng) < 0 ? -ns : ns;
-        }
+        const Vec3d ng = outwardNormal(mesh, h.triangle);
+        const Vec3d n = shadingNormal(mesh, normals_, h, ng);
         const Vec3d x = o + d * h.t;
-        thr = thr * beerLambert(mediumOf(stack).sigma, h.t);
+        thr = thr * stack.attenuation(h.t);
         o = x;
-        onSurface = true;
-        surfaceNormal = ng;
+        skip.at(ng);
         if (++crossings > 4 * maxEvents + 8 || p.events >= maxEvents) {
             if (!p.hit) return p;
             p.truncate(x, d, thr);
@@ -151,38 +178,12 @@ GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents
         }
         // Every face at this point (within epsilon): the one hit and those of other media lying on it
         // (two objects touching). They are crossed together, as one interface.
-        faces.assign(1, Face{t, dot(d, ng) < 0});
-        for (const MediumTriangles& mt : byMedium_) {
-            if (mt.medium == medium_[t]) continue;
-            const TriangleTracer::Hit c = mt.tracer->intersect(x - d * epsilon, d, 0, 2 * epsilon);
-            if (c.hit) {
-                const uint32_t ct = mt.triangle[c.triangle];
-                faces.push_back({ct, dot(d, outwardNormal(ct)) < 0});
-            }
-        }
-        // The media after the interface: leave first (the innermost copy of each medium left), then
-        // enter. A face that leaves a medium the ray is not in (an open mesh's back face seen from
-        // outside) is passed through.
-        next = stack;
-        bool changed = false;
-        for (const Face& f : faces) {
-            if (f.entering) continue;
-            const auto it = std::find(next.rbegin(), next.rend(), medium_[f.triangle]);
-            if (it == next.rend()) continue;
-            next.erase(std::next(it).base());
-            changed = true;
-        }
+        facesAt(x, d, h.triangle, faces);
         Vec3f tint{1, 1, 1};
-        for (const Face& f : faces) {
-            if (!f.entering) continue;
-            next.push_back(medium_[f.triangle]);
-            tint = tint * media_[medium_[f.triangle]].tint;
-            changed = true;
-        }
-        if (!changed) continue;
+        if (!mediaAfter(faces, stack, next, tint)) continue;
         // Facing the ray: the shading normal unless it faces away (grazing), then the face's.
         const Vec3d nf = dot(d, ng) < 0 ? (dot(d, n) < 0 ? n : ng) : (dot(d, n) > 0 ? -n : -ng);
-        const double etaFrom = mediumOf(stack).ior, etaTo = mediumOf(next).ior;
+        const double etaFrom = stack.current().ior, etaTo = next.current().ior;
         const double F = fresnelDielectric(-dot(d, nf), etaFrom, etaTo);
         if (!p.hit) {
             p.hit = true;
@@ -193,12 +194,29 @@ GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents
         if (refractDirection(d, nf, etaFrom / etaTo, r)) {
             thr = thr * tint * float(1 - F);
             d = r;
-            stack.swap(next);
+            std::swap(stack, next);
         } else {
             d = reflectDirection(d, nf); // total internal reflection: the ray stays where it was
         }
         ++p.events;
     }
+}
+
+bool ExactGlass::mediaAfter(const std::vector<CrossedFace>& faces, const detail::MediaStack& stack,
+                            detail::MediaStack& next, Vec3f& tint) const {
+    // Leave first (the innermost copy of each medium left), then enter. A face that leaves a medium
+    // the ray is not in (an open mesh's back face seen from outside) is passed through.
+    next = stack;
+    bool changed = false;
+    for (const CrossedFace& f : faces)
+        if (!f.entering && next.leave(f.medium)) changed = true;
+    for (const CrossedFace& f : faces) {
+        if (!f.entering) continue;
+        next.enter(f.medium);
+        tint = tint * media_[f.medium].tint;
+        changed = true;
+    }
+    return changed;
 }
 
 } // namespace voxfx

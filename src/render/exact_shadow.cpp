@@ -13,6 +13,7 @@
 #include <limits>
 #include <optional>
 
+#include "render/media_stack.hpp"
 #include "render/shadow_casters.hpp"
 #include "voxfx/glass_optics.hpp"
 #include "voxfx/segment_walker.hpp"
@@ -221,14 +222,10 @@ Vec3f ExactShadow::meshTransmittance(const Vec3d& p, const Vec3d& dir, double di
     Vec3d o = p;
     double left = distance, travelled = 0;
     // Glass volumes the ray is inside: which one and where it entered (nested objects stack). One
-    // stack per thread, reused: this runs once per shadow ray, and a fresh vector would allocate
-    // on every ray that enters glass.
-    struct Inside {
-        uint32_t glass;
-        double t;
-    };
-    thread_local std::vector<Inside> inside;
-    inside.clear();
+    // stack per thread, reused: this runs once per shadow ray, and a fresh one would allocate on
+    // every ray that enters glass.
+    thread_local detail::MediaStack inside;
+    inside.reset(glass_);
     // Each crossing moves the origin to the hit; epsilon steps over the triangle just crossed.
     for (int crossings = 0; crossings < 100000; ++crossings) {
         const TriangleTracer::Hit h = tracer_->intersect(o, dir, epsilon, left);
@@ -247,16 +244,10 @@ Vec3f ExactShadow::meshTransmittance(const Vec3d& p, const Vec3d& dir, double di
             v = v * float(1 - fresnelDielectric(std::min(1.0, std::abs(cosine)), 1.0, glass.ior));
             if (cosine < 0) { // a front face: the ray enters
                 v = v * glass.tint;
-                inside.push_back({g, tHit});
+                inside.enter(g, tHit);
             } else { // leaves: Beer–Lambert since it entered (or since p, which was inside)
-                double entered = 0;
-                for (size_t i = inside.size(); i-- > 0;)
-                    if (inside[i].glass == g) {
-                        entered = inside[i].t;
-                        inside.erase(inside.begin() + std::ptrdiff_t(i));
-                        break;
-                    }
-                v = v * beerLambert(glass.sigma, tHit - entered);
+                const std::optional<detail::MediaStack::Entry> entered = inside.leave(g);
+                v = v * beerLambert(glass.sigma, tHit - (entered ? entered->t : 0.0));
             }
         }
         if (std::max({v.x, v.y, v.z}) <= 0) return v;
@@ -266,7 +257,8 @@ Vec3f ExactShadow::meshTransmittance(const Vec3d& p, const Vec3d& dir, double di
     }
     // A light inside glass: attenuated up to the light.
     if (std::isfinite(distance))
-        for (const Inside& i : inside) v = v * beerLambert(glass_[i.glass].sigma, distance - i.t);
+        for (const detail::MediaStack::Entry& i : inside.entries())
+            v = v * beerLambert(glass_[i.medium].sigma, distance - i.t);
     return v;
 }
 
@@ -346,12 +338,9 @@ Vec3f ExactShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     // Towards the light from p offset along n against self-intersection (to a point light from
     // the offset point: a light inside a volume is marched up to exactly where it is).
     const Vec3d o = p + n * (epsilon() * 10);
-    Vec3d l;
+    Vec3d l = light_.towards(o);
     double distance = std::numeric_limits<double>::infinity();
-    if (light_.type == LightType::Directional) {
-        l = -normalize(light_.direction);
-    } else {
-        l = light_.position - o;
+    if (light_.positioned()) {
         distance = length(l);
         l = l / std::max(distance, 1e-300);
     }

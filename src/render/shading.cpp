@@ -18,11 +18,11 @@ namespace voxfx::detail {
 
 Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight) {
     const Vec3f e = light.color * light.intensity;
-    if (light.type == LightType::Directional) {
-        toLight = -normalize(light.direction);
+    if (!light.positioned()) {
+        toLight = light.towards(p);
         return e;
     }
-    const Vec3d d = light.position - p;
+    const Vec3d d = light.towards(p);
     const double dist2 = std::max(dot(d, d), 1e-12);
     toLight = d / std::sqrt(dist2);
     double falloff = 1.0 / dist2;
@@ -58,9 +58,9 @@ SurfaceShader::SurfaceShader(const FrameState& frame)
         LightTerm t;
         t.light = &l;
         t.shadow = k < frame.shadows.size() ? frame.shadows[k].get() : nullptr;
-        t.directional = l.type == LightType::Directional;
+        t.directional = !l.positioned();
         t.irradiance = l.color * l.intensity;
-        if (t.directional) t.toLight = -normalize(l.direction);
+        if (t.directional) t.toLight = l.towards(Vec3d{0, 0, 0}); // the same from everywhere
         if (t.irradiance.x <= 0 && t.irradiance.y <= 0 && t.irradiance.z <= 0) continue;
         lights_.push_back(t);
     }
