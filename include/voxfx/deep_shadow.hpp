@@ -27,11 +27,12 @@
 // product over clusters. Directional lights: one map per cluster. Spot and point lights: one
 // perspective map aimed at the cluster when its objects lie within a cone of at most 120 degrees
 // around the light, else the spot's own frame or the cube faces its objects reach (so a point light
-// may need fewer than six maps). Where the camera is given (options.camera; the renderer sets it), distances
-// are scaled by how near the pair is to the camera against the casters' centre (the light-space perspective
-// idea: resolution where the viewer is close), so objects near the camera get clusters, and maps, of their
-// own. With clusterEqualTexels (default) the clustered maps share the texels of the unclustered maps (the
-// paper's 4 x 128^2 against 256^2): the trade is at equal memory.
+// may need fewer than six maps). Where the build context has a camera (voxfx/build_context.hpp; the
+// renderer passes its frame's), distances are scaled by how near the pair is to the camera against
+// the casters' centre (the light-space perspective idea: resolution where the viewer is close), so
+// objects near the camera get clusters, and maps, of their own. With clusterEqualTexels (default) the
+// clustered maps share the texels of the unclustered maps (the paper's 4 x 128^2 against 256^2): the trade is
+// at equal memory.
 //
 // Thread-safety: build uses worker threads; a built DeepShadow is read-only (lookups from any number
 // of threads).
@@ -44,6 +45,7 @@
 #include <string_view>
 #include <vector>
 
+#include "voxfx/build_context.hpp"
 #include "voxfx/dsm.hpp"
 #include "voxfx/light_view.hpp"
 #include "voxfx/options.hpp"
@@ -78,11 +80,9 @@ struct DeepShadowOptions {
     bool clusterEqualTexels = true;
     /// Filtering of lookups between texels.
     DsmFilter filter = DsmFilter::Bilinear;
-    /// The camera's eye, for clusters fitted to the view (see the file comment); not an option by
-    /// name: the renderer sets it from the frame's camera. Unset: clusters ignore the camera.
-    std::optional<Vec3d> camera;
-    /// Clusters fitted to the camera: a renderer's cache rebuilds the maps when the camera moves.
-    bool viewDependent() const { return clusters > 1 && camera.has_value(); }
+    /// Clusters, fitted to the build context's camera (see the file comment): a renderer's cache
+    /// rebuilds the maps when the camera moves.
+    bool viewDependent() const { return clusters > 1; }
     /// Volume bricks the transfer function leaves transparent are not sampled (EmptySpace in
     /// voxfx/segment_walker.hpp); the map is the same either way, only faster.
     bool skipEmptySpace = true;
@@ -145,6 +145,9 @@ public:
     /// castsShadow). Throws voxfx::Error for an invalid scene or options, or when progress cancels.
     static DeepShadow build(const VolumeScene& scene, const Light& light, const DeepShadowOptions& options,
                             Progress* progress = nullptr);
+    /// The same with clusters fitted to the context's camera, where it has one.
+    static DeepShadow build(const VolumeScene& scene, const Light& light, const DeepShadowOptions& options,
+                            const BuildContext& context, Progress* progress = nullptr);
     /// The same with given views (a fitted frustum per cluster, tests).
     static DeepShadow build(const VolumeScene& scene, std::vector<LightView> views,
                             const DeepShadowOptions& options, Progress* progress = nullptr);
@@ -152,6 +155,9 @@ public:
     /// 1) when nothing casts: no caster triangle and no volume scene.
     static DeepShadow build(const Scene& scene, const Light& light, const DeepShadowOptions& options,
                             Progress* progress = nullptr);
+    /// The same with clusters fitted to the context's camera, where it has one (the renderer's call).
+    static DeepShadow build(const Scene& scene, const Light& light, const DeepShadowOptions& options,
+                            const BuildContext& context, Progress* progress = nullptr);
 
     /// RGB fraction of the light reaching world point p (see the file comment); `n` the unit normal
     /// turned towards the light (zero: no offset), with the options' normalOffset and depthBias.

@@ -16,6 +16,8 @@
 //   O::fields()                     its named options (voxfx/options.hpp): what the CLI, scene files
 //                                   and Python set; the defaults are O's member initializers
 //   S::build(scene, light, o, p)    what it needs from the scene's casters for one light
+//   S::build(scene, light, o, context, p)  optional: the same fitted to the renderer's frame (its
+//                                   camera, voxfx/build_context.hpp); deep shadows' clusters
 //   s.prepare(gbuffer, geometry)    only where it needs the camera's G-buffer (volumes)
 //   s.visibility(p, n)              fraction of the light reaching world point p (grey float or RGB);
 //                                   n: unit geometric normal turned towards the light (zero: no
@@ -39,6 +41,7 @@
 #include <vector>
 
 #include "voxfx/absorption_shadow.hpp"
+#include "voxfx/build_context.hpp"
 #include "voxfx/deep_shadow.hpp"
 #include "voxfx/exact_shadow.hpp"
 #include "voxfx/gbuffer.hpp"
@@ -118,6 +121,10 @@ std::string_view shadowSummary(std::string_view name);
 /// Builds the technique `options` holds for `light` from the scene's casters.
 LightShadow buildLightShadow(const Scene& scene, const Light& light, const ShadowOptions& options,
                              Progress* progress = nullptr);
+/// The same for a frame: a technique whose build takes a BuildContext gets `context` (the renderer
+/// passes its camera), the others are built as above.
+LightShadow buildLightShadow(const Scene& scene, const Light& light, const ShadowOptions& options,
+                             const BuildContext& context, Progress* progress = nullptr);
 /// The technique's G-buffer step, where it has one (else nothing).
 void prepareLightShadow(LightShadow& shadow, const GBuffer& gbuffer, const SceneGeometry& geometry);
 /// RGB fraction of the light reaching p (grey techniques give three equal channels).

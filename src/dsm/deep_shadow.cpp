@@ -332,99 +332,106 @@ int64_t texelsOf(const std::vector<LightView>& views) {
 // frames spread their texels worse than the cube faces do).
 constexpr double kPointClusterHalfAngle = M_PI / 3;
 
-} // namespace detail_dsmcluster
+// The casting objects of a scene: their indices and world bounds, and the bounds of them all.
+struct Casters {
+    std::vector<std::size_t> objects;
+    std::vector<Box3d> boxes;
+    Box3d all;
+};
 
-DeepShadow DeepShadow::build(const VolumeScene& scene, const Light& light, const DeepShadowOptions& options,
-                             Progress* progress) {
-    namespace dc = detail_dsmcluster;
-    checkDeepShadowOptions(options);
-    scene.validate();
-    std::vector<LightView> all = makeLightViews(light, scene.bounds(true), options.resolution, 1);
-    if (options.clusters <= 1) return build(scene, all, options, progress);
-    // The casting objects' world bounds.
-    std::vector<std::size_t> casters;
-    std::vector<Box3d> worldBoxes;
-    Box3d allBounds;
+Casters castersOf(const VolumeScene& scene) {
+    Casters c;
     for (std::size_t o = 0; o < scene.objects.size(); ++o) {
         if (!scene.objects[o].castsShadow) continue;
         std::vector<int32_t> leaves;
-        dc::leavesOf(scene, scene.objects[o].shape, leaves);
+        leavesOf(scene, scene.objects[o].shape, leaves);
         Box3d wb;
         for (const int32_t l : leaves) wb.extend(computeBounds(scene.leaves[std::size_t(l)].view()));
         if (wb.empty()) continue;
-        casters.push_back(o);
-        worldBoxes.push_back(wb);
-        allBounds.extend(wb);
+        c.objects.push_back(o);
+        c.boxes.push_back(wb);
+        c.all.extend(wb);
     }
-    const std::size_t n = casters.size();
-    // d(A, B) in light space: the largest difference of the projected boxes' corners, in fractions
-    // of the view's side; for a point light the largest over the six cube directions (a face that
-    // one object reaches and the other does not counts as a whole side apart).
+    return c;
+}
+
+// The box of world box wb projected into the light's view `base` (fitted to every caster: a
+// corner outside it, behind a spot light, is clamped to the view's border), in fractions of its
+// sides.
+ProjectedBox projectedBox(const LightView& base, const Box3d& wb) {
+    ProjectedBox pb{{1e300, 1e300}, {-1e300, -1e300}};
+    for (int k = 0; k < 8; ++k) {
+        const Vec3d c{(k & 1) ? wb.hi.x : wb.lo.x, (k & 2) ? wb.hi.y : wb.lo.y, (k & 4) ? wb.hi.z : wb.lo.z};
+        Vec3d g = base.frame.isPerspective() && !(base.frame.viewDepth(c) > 0) ? Vec3d{0, 0, 0}
+                                                                               : base.gridFromWorld(c);
+        const double u = std::clamp(g.x / double(base.frame.width()), 0.0, 1.0),
+                     v = std::clamp(g.y / double(base.frame.height()), 0.0, 1.0);
+        pb.lo[0] = std::min(pb.lo[0], u);
+        pb.hi[0] = std::max(pb.hi[0], u);
+        pb.lo[1] = std::min(pb.lo[1], v);
+        pb.hi[1] = std::max(pb.hi[1], v);
+    }
+    return pb;
+}
+
+// d(A, B) for every pair of casters (n x n, row-major) in light space: the largest difference of
+// the projected boxes' corners, in fractions of the view's side; for a point light the largest over
+// the six cube directions (a face that one object reaches and the other does not counts as a whole
+// side apart). `base`: the unclustered view (directional and spot lights).
+std::vector<double> lightSpaceDistances(const Light& light, const LightView& base,
+                                        const std::vector<Box3d>& boxes) {
+    const std::size_t n = boxes.size();
     std::vector<double> dist(n * n, 0.0);
     if (light.type == LightType::Point) {
-        std::vector<dc::Faces> faces;
-        for (const Box3d& b : worldBoxes) faces.push_back(dc::cubeFacesOf(b, light.position));
+        std::vector<Faces> faces;
+        for (const Box3d& b : boxes) faces.push_back(cubeFacesOf(b, light.position));
         for (std::size_t a = 0; a < n; ++a)
             for (std::size_t b = 0; b < n; ++b)
                 for (int f = 0; f < 6; ++f) {
                     const bool pa = faces[a].present[f], pb = faces[b].present[f];
                     const double d =
-                        pa && pb ? dc::boxDistance(faces[a].box[f], faces[b].box[f]) : (pa || pb ? 1 : 0);
+                        pa && pb ? boxDistance(faces[a].box[f], faces[b].box[f]) : (pa || pb ? 1 : 0);
                     dist[a * n + b] = std::max(dist[a * n + b], d);
                 }
-    } else {
-        const LightView& base = all[0];
-        std::vector<ProjectedBox> boxes;
-        for (const Box3d& wb : worldBoxes) {
-            ProjectedBox pb{{1e300, 1e300}, {-1e300, -1e300}};
-            for (int k = 0; k < 8; ++k) {
-                const Vec3d c{(k & 1) ? wb.hi.x : wb.lo.x, (k & 2) ? wb.hi.y : wb.lo.y,
-                              (k & 4) ? wb.hi.z : wb.lo.z};
-                // The base view is fitted to every caster: a corner outside it (behind a spot
-                // light) is clamped to the view's border.
-                Vec3d g = base.frame.isPerspective() && !(base.frame.viewDepth(c) > 0)
-                              ? Vec3d{0, 0, 0}
-                              : base.gridFromWorld(c);
-                const double u = std::clamp(g.x / double(base.frame.width()), 0.0, 1.0),
-                             v = std::clamp(g.y / double(base.frame.height()), 0.0, 1.0);
-                pb.lo[0] = std::min(pb.lo[0], u);
-                pb.hi[0] = std::max(pb.hi[0], u);
-                pb.lo[1] = std::min(pb.lo[1], v);
-                pb.hi[1] = std::max(pb.hi[1], v);
-            }
-            boxes.push_back(pb);
-        }
-        for (std::size_t a = 0; a < n; ++a)
-            for (std::size_t b = 0; b < n; ++b) dist[a * n + b] = dc::boxDistance(boxes[a], boxes[b]);
+        return dist;
     }
-    // The camera: a pair's distance scaled by how much nearer the camera it is than the casters'
-    // centre (at most 4x), so that objects near the viewer get clusters (and texels) of their own.
-    if (options.camera && n > 0) {
-        const Vec3d eye = *options.camera;
-        const double ref = std::max(length(allBounds.center() - eye), 1e-12);
-        std::vector<double> weight(n);
-        for (std::size_t i = 0; i < n; ++i)
-            weight[i] = ref / std::max(length(worldBoxes[i].center() - eye), 0.25 * ref);
-        for (std::size_t a = 0; a < n; ++a)
-            for (std::size_t b = 0; b < n; ++b) dist[a * n + b] *= std::max(weight[a], weight[b]);
-    }
-    const std::vector<int> cluster = clusterByDistance(n, dist, options.clusters, options.clusterThreshold);
-    const int count = cluster.empty() ? 0 : *std::max_element(cluster.begin(), cluster.end()) + 1;
-    // Each cluster's views: a directional light one map fitted to the cluster; spot and point lights
-    // one map aimed at the cluster where its bounds fit a cone (a spot's own axis would leave a
-    // cluster off to the side spread over a frame as wide as the unclustered one), else the spot's
-    // own frame, or the cube faces the cluster reaches.
-    std::vector<dc::ClusterViews> specs(static_cast<std::size_t>(count));
+    std::vector<ProjectedBox> projected;
+    for (const Box3d& wb : boxes) projected.push_back(projectedBox(base, wb));
+    for (std::size_t a = 0; a < n; ++a)
+        for (std::size_t b = 0; b < n; ++b) dist[a * n + b] = boxDistance(projected[a], projected[b]);
+    return dist;
+}
+
+// The camera: a pair's distance scaled by how much nearer the camera it is than the casters'
+// centre (at most 4x), so that objects near the viewer get clusters (and texels) of their own.
+void weightByCamera(std::vector<double>& dist, const Casters& casters, const Vec3d& eye) {
+    const std::size_t n = casters.boxes.size();
+    const double ref = std::max(length(casters.all.center() - eye), 1e-12);
+    std::vector<double> weight(n);
+    for (std::size_t i = 0; i < n; ++i)
+        weight[i] = ref / std::max(length(casters.boxes[i].center() - eye), 0.25 * ref);
+    for (std::size_t a = 0; a < n; ++a)
+        for (std::size_t b = 0; b < n; ++b) dist[a * n + b] *= std::max(weight[a], weight[b]);
+}
+
+// Each cluster's views: a directional light one map fitted to the cluster; spot and point lights
+// one map aimed at the cluster where its bounds fit a cone (a spot's own axis would leave a cluster
+// off to the side spread over a frame as wide as the unclustered one), else the spot's own frame,
+// or the cube faces the cluster reaches.
+std::vector<ClusterViews> clusterViewsOf(const Light& light, const Casters& casters,
+                                         const std::vector<int>& cluster, int count) {
+    const std::size_t n = casters.boxes.size();
+    std::vector<ClusterViews> specs(static_cast<std::size_t>(count));
     for (int c = 0; c < count; ++c) {
-        dc::ClusterViews& spec = specs[std::size_t(c)];
+        ClusterViews& spec = specs[std::size_t(c)];
         spec.light = light;
         for (std::size_t i = 0; i < n; ++i)
-            if (cluster[i] == c) spec.bounds.extend(worldBoxes[i]);
+            if (cluster[i] == c) spec.bounds.extend(casters.boxes[i]);
         if (light.type == LightType::Directional) continue; // an orthographic frame fitted to the bounds
         const Vec3d toCentre = spec.bounds.center() - light.position;
         const double len = length(toCentre);
-        if (len > 0 && dc::minCosine(spec.bounds, light.position, toCentre * (1.0 / len)) >=
-                           std::cos(dc::kPointClusterHalfAngle)) {
+        if (len > 0 && minCosine(spec.bounds, light.position, toCentre * (1.0 / len)) >=
+                           std::cos(kPointClusterHalfAngle)) {
             spec.light.type = LightType::Spot;
             spec.light.direction = toCentre * (1.0 / len);
             spec.light.outerConeAngle = M_PI / 2; // makeLightViews narrows it to the bounds
@@ -434,34 +441,63 @@ DeepShadow DeepShadow::build(const VolumeScene& scene, const Light& light, const
         for (bool& k : spec.keep) k = false;
         for (std::size_t i = 0; i < n; ++i)
             if (cluster[i] == c) {
-                const dc::Faces f = dc::cubeFacesOf(worldBoxes[i], light.position);
+                const Faces f = cubeFacesOf(casters.boxes[i], light.position);
                 for (int k = 0; k < 6; ++k) spec.keep[k] = spec.keep[k] || f.present[k];
             }
     }
-    // Equal texels: the clustered views share those of the unclustered ones.
-    auto clusteredTexels = [&](int64_t columns) {
+    return specs;
+}
+
+// Equal texels: the columns of the clustered views so that they share the `budget` texels of the
+// unclustered ones, up or down from `columns` (fewer maps than the unclustered views get more
+// texels each).
+int64_t equalTexelColumns(const std::vector<ClusterViews>& specs, int64_t budget, int64_t columns) {
+    auto clusteredTexels = [&](int64_t c) {
         int64_t t = 0;
-        for (const dc::ClusterViews& spec : specs) t += dc::texelsOf(spec.make(columns));
+        for (const ClusterViews& spec : specs) t += texelsOf(spec.make(c));
         return t;
     };
+    const int64_t atFull = clusteredTexels(columns);
+    columns = std::clamp<int64_t>(
+        int64_t(std::floor(double(columns) * std::sqrt(double(budget) / double(atFull)))), 1, 16384);
+    while (columns > 1 && clusteredTexels(columns) > budget) --columns;
+    return columns;
+}
+
+} // namespace detail_dsmcluster
+
+DeepShadow DeepShadow::build(const VolumeScene& scene, const Light& light, const DeepShadowOptions& options,
+                             Progress* progress) {
+    return build(scene, light, options, BuildContext{}, progress);
+}
+
+DeepShadow DeepShadow::build(const VolumeScene& scene, const Light& light, const DeepShadowOptions& options,
+                             const BuildContext& context, Progress* progress) {
+    namespace dc = detail_dsmcluster;
+    checkDeepShadowOptions(options);
+    scene.validate();
+    std::vector<LightView> all = makeLightViews(light, scene.bounds(true), options.resolution, 1);
+    if (options.clusters <= 1) return build(scene, all, options, progress);
+    const dc::Casters casters = dc::castersOf(scene);
+    const std::size_t n = casters.objects.size();
+    std::vector<double> dist = dc::lightSpaceDistances(light, all[0], casters.boxes);
+    if (context.camera && n > 0) dc::weightByCamera(dist, casters, context.camera->position);
+    const std::vector<int> cluster = clusterByDistance(n, dist, options.clusters, options.clusterThreshold);
+    const int count = cluster.empty() ? 0 : *std::max_element(cluster.begin(), cluster.end()) + 1;
+    const std::vector<dc::ClusterViews> specs = dc::clusterViewsOf(light, casters, cluster, count);
     const int64_t budget = dc::texelsOf(all);
-    int64_t columns = options.resolution;
-    if (options.clusterEqualTexels && count > 0) {
-        // Up or down: fewer maps than the unclustered views get more texels each.
-        const int64_t atFull = clusteredTexels(columns);
-        columns = std::clamp<int64_t>(
-            int64_t(std::floor(double(columns) * std::sqrt(double(budget) / double(atFull)))), 1, 16384);
-        while (columns > 1 && clusteredTexels(columns) > budget) --columns;
-    }
+    const int64_t columns = options.clusterEqualTexels && count > 0
+                                ? dc::equalTexelColumns(specs, budget, options.resolution)
+                                : int64_t(options.resolution);
     DeepShadow out;
     out.options_ = options;
     out.objectClusters_.assign(scene.objects.size(), -1);
-    for (std::size_t i = 0; i < n; ++i) out.objectClusters_[casters[i]] = cluster[i];
+    for (std::size_t i = 0; i < n; ++i) out.objectClusters_[casters.objects[i]] = cluster[i];
     for (int c = 0; c < count; ++c) {
         VolumeScene part = scene;
         for (VolumeSceneObject& o : part.objects) o.castsShadow = false;
         for (std::size_t i = 0; i < n; ++i)
-            if (cluster[i] == c) part.objects[casters[i]].castsShadow = true;
+            if (cluster[i] == c) part.objects[casters.objects[i]].castsShadow = true;
         DeepShadow d = build(part, specs[std::size_t(c)].make(columns), options, progress);
         out.groupBegin_.push_back(out.views_.size());
         for (std::size_t i = 0; i < d.views_.size(); ++i) {
@@ -616,6 +652,11 @@ DeepShadowStats DeepShadow::stats() const {
 
 DeepShadow DeepShadow::build(const Scene& scene, const Light& light, const DeepShadowOptions& options,
                              Progress* progress) {
+    return build(scene, light, options, BuildContext{}, progress);
+}
+
+DeepShadow DeepShadow::build(const Scene& scene, const Light& light, const DeepShadowOptions& options,
+                             const BuildContext& context, Progress* progress) {
     checkDeepShadowOptions(options);
     bool casts = scene.volumeScene != nullptr;
     for (const SceneMesh& m : scene.meshes) casts = casts || (m.castsShadow && !m.mesh.indices.empty());
@@ -624,7 +665,7 @@ DeepShadow DeepShadow::build(const Scene& scene, const Light& light, const DeepS
         out.options_ = options;
         return out;
     }
-    return build(volumeSceneOf(scene), light, options, progress);
+    return build(volumeSceneOf(scene), light, options, context, progress);
 }
 
 std::span<const OptionField<DeepShadowOptions>> DeepShadowOptions::fields() {

@@ -23,9 +23,18 @@ std::string_view shadowSummary(std::string_view name) {
 
 LightShadow buildLightShadow(const Scene& scene, const Light& light, const ShadowOptions& options,
                              Progress* progress) {
+    return buildLightShadow(scene, light, options, BuildContext{}, progress);
+}
+
+LightShadow buildLightShadow(const Scene& scene, const Light& light, const ShadowOptions& options,
+                             const BuildContext& context, Progress* progress) {
     return std::visit(
         [&]<class O>(const O& o) -> LightShadow {
-            return detail::BuiltFor<LightShadow, O>::build(scene, light, o, progress);
+            using S = detail::BuiltFor<LightShadow, O>;
+            if constexpr (requires { S::build(scene, light, o, context, progress); })
+                return S::build(scene, light, o, context, progress);
+            else
+                return S::build(scene, light, o, progress);
         },
         options);
 }
