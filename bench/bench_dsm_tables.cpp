@@ -55,7 +55,7 @@ void dsmFrame(benchmark::State& state, const Scene& scene, const char* storage, 
         benchmark::DoNotOptimize(r.image.pixels.data());
         const double shadows = r.timings.ms("shadows");
         gen += shadows;
-        for (const char* pass : {"flatten", "G-buffer", "shading", "glass", "volumes", "resolve"})
+        for (const char* pass : {"flatten", "G-buffer", "shading", "glass", "ray casting", "resolve"})
             rest += r.timings.ms(pass);
         stats = std::get<DeepShadowStats>(r.shadowStats);
     }

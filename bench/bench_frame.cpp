@@ -18,7 +18,7 @@
 //                                alternating which goes first per iteration, after one untimed
 //                                frame of each. Counters (ms per frame): frame_ms, one per pass
 //                                (flatten_ms, gbuffer_ms, occlusion_ms, shadows_ms, shading_ms,
-//                                translucency_ms, glass_ms, volumes_ms, resolve_ms), yard_ms
+//                                translucency_ms, glass_ms, ray_casting_ms, resolve_ms), yard_ms
 //                                (yard_build_ms: the BVH, yard_trace_ms: the rays and shading) and
 //                                frame/yard, the ratio (target <= 2); frame_cpu_ms,
 //                                yard_cpu_ms and frame/yard_cpu: the same in process CPU time (all
@@ -37,7 +37,7 @@
 //                                and exact_cost_ms (each frame less the unshadowed one: what the
 //                                shadows cost), the same in process CPU time (*_cpu_ms,
 //                                exact/kind_cpu), the passes where they cost (kind_shadows_ms: the
-//                                build; *_shading_ms, *_volumes_ms: the lookups or shadow rays);
+//                                build; *_shading_ms, *_ray_casting_ms: the lookups or shadow rays);
 //                                the error of the linear image (tone map clamp) against the exact
 //                                one: mae over every channel of every pixel, mae_shadowed over the
 //                                pixels the exact shadows change (`shadowed`: their fraction), and
@@ -329,7 +329,7 @@ void interleaved(benchmark::State& state, const std::vector<std::function<void(b
 std::string counterName(std::string_view pass, std::string_view prefix = {}) {
     std::string s(prefix);
     for (const char c : pass)
-        if (c != '-') s += char(std::tolower(static_cast<unsigned char>(c)));
+        if (c != '-') s += c == ' ' ? '_' : char(std::tolower(static_cast<unsigned char>(c)));
     return s + "_ms";
 }
 
@@ -505,11 +505,11 @@ void againstExact(benchmark::State& state, const BenchScene& b, const RenderOpti
     state.counters["exact_cost_cpu_ms"] = (e.cpu - o.cpu) / n;
     state.counters["kind_shadows_ms"] = k.pass("shadows") / n;
     state.counters["kind_shading_ms"] = k.pass("shading") / n;
-    state.counters["kind_volumes_ms"] = k.pass("volumes") / n;
+    state.counters["kind_ray_casting_ms"] = k.pass("ray casting") / n;
     state.counters["exact_shading_ms"] = e.pass("shading") / n;
-    state.counters["exact_volumes_ms"] = e.pass("volumes") / n;
+    state.counters["exact_ray_casting_ms"] = e.pass("ray casting") / n;
     state.counters["none_shading_ms"] = o.pass("shading") / n;
-    state.counters["none_volumes_ms"] = o.pass("volumes") / n;
+    state.counters["none_ray_casting_ms"] = o.pass("ray casting") / n;
     state.counters["mae"] = meanAbsDifference(got, ref.exact);
     state.counters["mae_shadowed"] = shadowed ? shadowedSum / double(shadowed) : 0;
     state.counters["shadowed"] = double(shadowed) / double(got.pixels.size());

@@ -521,7 +521,7 @@ TEST(TranslucencyShadowTest, RenderedTranslucencyLeavesOtherPixelsAlone) {
     std::vector<std::string> names;
     for (const PassTime& p : after.timings.passes) names.emplace_back(p.name);
     EXPECT_EQ(names, (std::vector<std::string>{"flatten", "G-buffer", "occlusion", "shadows", "shading",
-                                               "translucency", "glass", "volumes", "resolve"}));
+                                               "translucency", "glass", "ray casting", "resolve"}));
 }
 
 // Back-lit (GI08 §7's jade): with translucency shadows the lights' diffusely transmitted light is

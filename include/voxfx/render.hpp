@@ -35,8 +35,8 @@
 //             matter the light crossed). Nothing when no sample shows a translucent solid.
 //   glass     the pixels showing glass (Material::isGlass) get the light through it by the chosen
 //             method (voxfx/glass.hpp).
-//   volumes   scenes with volume objects, Boolean shapes (scene.volumeScene) or meshes of blended
-//             materials: ray casting over fragment lists from the camera, composited over the shaded
+//   ray casting  scenes with volume objects, Boolean shapes (scene.volumeScene) or meshes of
+//             blended materials: ray casting over fragment lists from the camera, composited over the shaded
 //             image: volumes sampled (lit by Phong about their gradient normals unless
 //             RenderOptions::volumeShading is none), and the visible surfaces of opaque and translucent
 //             objects (where a Boolean's inside flag changes) and of blended meshes shaded like meshes and
@@ -250,7 +250,7 @@ struct RenderTimings {
     std::vector<PassTime> passes; ///< every pass, in the order they ran (see the file comment)
     double totalMs = 0;
     /// The time of the pass called `name` ("flatten", "G-buffer", "occlusion", "shadows", "shading",
-    /// "translucency", "glass", "volumes", "resolve"); 0 for one that did not run.
+    /// "translucency", "glass", "ray casting", "resolve"); 0 for one that did not run.
     double ms(std::string_view name) const;
 };
 

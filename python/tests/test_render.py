@@ -106,7 +106,7 @@ def test_scene_settings_apply_and_keywords_override_them(tmp_path):
     assert img.shape == (30, 40, 3)
     assert report["shadows"] == "transmittance" and "light grid" in report["shadow_stats"]
     assert set(report["passes_ms"]) == {"flatten", "G-buffer", "occlusion", "shadows", "shading",
-                                         "translucency", "glass", "volumes", "resolve"}
+                                         "translucency", "glass", "ray casting", "resolve"}
     wide = voxfx.render(scene, width=50)
     assert wide.shape == (30, 50, 3)
 

@@ -128,6 +128,77 @@ inline float fastAcos(float x) {
     return x >= 0 ? r : kPi - r;
 }
 
+// One side of a slice of GTAO at a working pixel: samples along the screen direction (sx, sy) up
+// to `reach` working pixels, spaced by `fraction`, raise the horizon from the pixel's point P (unit
+// normal N, unit direction to the eye V).
+template <class Buffer> struct HorizonWalk {
+    const Buffer& b;
+    const Params& p;
+    const std::array<float, kMaxSteps>& fraction;
+    int64_t here; // the pixel's index
+    float cx, cy; // its centre
+    float reach;  // working pixels
+    Vec3f P, N, V;
+
+    // A point d (from P) raises the horizon (the cosine of its angle from V) unless it lies at most
+    // `bias` above the tangent plane (the surface itself). Compared through squares with their signs
+    // (c > h iff c|c| > h|h|), so that only a sample that raises the horizon costs a square root.
+    void raiseBy(const Vec3f& d, float d2, float& horizon, bool& raised) const {
+        const float dn = dot(d, N);
+        if (!(dn > 0 && dn * dn > p.sinBias2 * d2)) return;
+        const float dv = dot(d, V), h = horizon;
+        if (dv * std::fabs(dv) > h * std::fabs(h) * d2) {
+            horizon = dv / std::sqrt(d2);
+            raised = true;
+        }
+    }
+
+    // Walks the side, raising `horizon`; whether it was raised.
+    bool raise(float sx, float sy, float& horizon) const {
+        const float width = float(b.width), height = float(b.height);
+        bool raised = false;
+        Vec3f previous;
+        bool previousInside = false; // the last sample was an occluder within the radius
+        for (int i = 0; i < p.steps; ++i) {
+            const float t = reach * fraction[size_t(i)];
+            const float fx = cx + sx * t, fy = cy + sy * t;
+            // No data beyond the image (on it, truncation is the floor).
+            if (!(fx >= 0 && fy >= 0 && fx < width && fy < height)) break;
+            const int64_t q = int64_t(fy) * b.width + int64_t(fx);
+            if (q == here) continue;
+            if (!b.occludes(q)) {
+                previousInside = false;
+                continue;
+            }
+            const Vec3f d = b.position(q) - P;
+            const float d2 = dot(d, d);
+            if (d2 < p.radius2) {
+                if (d2 > 0) raiseBy(d, d2, horizon, raised);
+                previous = d;
+                previousInside = true;
+                continue;
+            }
+            // Beyond the radius after a sample within it: the highest occluder within the radius lies
+            // between them on a surface that rises with the distance (a wall), so the point where the
+            // segment between them crosses the sphere raises the horizon too. Without it the horizon
+            // stops at the last sample inside, short of the radius by up to a step, and walls occlude
+            // too little. Segments longer than the radius span a gap between surfaces, not a surface.
+            if (previousInside) {
+                const Vec3f e = d - previous;
+                const float a = dot(e, e);
+                if (a < p.radius2) {
+                    const float bh = dot(previous, e), c = dot(previous, previous) - p.radius2;
+                    const float u = (-bh + std::sqrt(std::max(0.0f, bh * bh - a * c))) / a;
+                    const Vec3f crossing = previous + e * std::clamp(u, 0.0f, 1.0f);
+                    raiseBy(crossing, dot(crossing, crossing), horizon, raised);
+                }
+            }
+            previousInside = false;
+        }
+        return raised;
+    }
+};
+
 // GTAO at working pixel (x, y): the visibility in [0, 1], 1 for background.
 template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int64_t x, int64_t y) {
     const int64_t here = y * b.width + x;
@@ -144,9 +215,9 @@ template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int6
     const int k = kBayer[y & 3][x & 3];
     const auto& dirX = p.dirX[size_t(k)];
     const auto& dirY = p.dirY[size_t(k)];
-    const auto& fraction = p.stepFraction[size_t(k)];
-    const float cx = float(x) + 0.5f, cy = float(y) + 0.5f, width = float(b.width), height = float(b.height);
-    const float reach = kReach * radiusPixels;
+    const std::array<float, kMaxSteps>& fraction = p.stepFraction[size_t(k)];
+    const HorizonWalk<Buffer> walk{
+        b, p, fraction, here, float(x) + 0.5f, float(y) + 0.5f, kReach * radiusPixels, P, N, V};
     float sum = 0, sumOpen = 0;
     for (int s = 0; s < p.directions; ++s) {
         const float dx = dirX[size_t(s)], dy = dirY[size_t(s)];
@@ -171,61 +242,8 @@ template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int6
         // Horizons as cosines of their angle from V, starting at the tangent plane (gamma -+ pi/2).
         float horizon[2] = {sinG, -sinG}; // [0]: the -axis side, [1]: the +axis side
         bool raised[2] = {false, false};
-        for (int side = 0; side < 2; ++side) {
-            const float sx = side ? dx : -dx, sy = side ? dy : -dy;
-            // A point d (from P) raises the horizon unless it lies at most `bias` above the tangent
-            // plane (the surface itself).
-            // Compared through squares with their signs (c > h iff c|c| > h|h|), so that only a
-            // sample that raises the horizon costs a square root.
-            const auto raise = [&](const Vec3f& d, float d2) {
-                const float dn = dot(d, N);
-                if (!(dn > 0 && dn * dn > p.sinBias2 * d2)) return;
-                const float dv = dot(d, V), h = horizon[side];
-                if (dv * std::fabs(dv) > h * std::fabs(h) * d2) {
-                    horizon[side] = dv / std::sqrt(d2);
-                    raised[side] = true;
-                }
-            };
-            Vec3f previous;
-            bool previousInside = false; // the last sample was an occluder within the radius
-            for (int i = 0; i < p.steps; ++i) {
-                const float t = reach * fraction[size_t(i)];
-                const float fx = cx + sx * t, fy = cy + sy * t;
-                // No data beyond the image (on it, truncation is the floor).
-                if (!(fx >= 0 && fy >= 0 && fx < width && fy < height)) break;
-                const int64_t q = int64_t(fy) * b.width + int64_t(fx);
-                if (q == here) continue;
-                if (!b.occludes(q)) {
-                    previousInside = false;
-                    continue;
-                }
-                const Vec3f d = b.position(q) - P;
-                const float d2 = dot(d, d);
-                if (d2 < p.radius2) {
-                    if (d2 > 0) raise(d, d2);
-                    previous = d;
-                    previousInside = true;
-                    continue;
-                }
-                // Beyond the radius after a sample within it: the highest occluder within the radius
-                // lies between them on a surface that rises with the distance (a wall), so the point
-                // where the segment between them crosses the sphere raises the horizon too. Without
-                // it the horizon stops at the last sample inside, short of the radius by up to a
-                // step, and walls occlude too little. Segments longer than the radius span a gap
-                // between surfaces, not a surface.
-                if (previousInside) {
-                    const Vec3f e = d - previous;
-                    const float a = dot(e, e);
-                    if (a < p.radius2) {
-                        const float bh = dot(previous, e), c = dot(previous, previous) - p.radius2;
-                        const float u = (-bh + std::sqrt(std::max(0.0f, bh * bh - a * c))) / a;
-                        const Vec3f crossing = previous + e * std::clamp(u, 0.0f, 1.0f);
-                        raise(crossing, dot(crossing, crossing));
-                    }
-                }
-                previousInside = false;
-            }
-        }
+        for (int side = 0; side < 2; ++side)
+            raised[side] = walk.raise(side ? dx : -dx, side ? dy : -dy, horizon[side]);
         // The open slice (horizons at the tangent plane) and this one, through the same arithmetic so
         // that a slice nothing occludes gives a == open exactly.
         const float hMinus = gamma - 0.5f * kPi, hPlus = gamma + 0.5f * kPi;
@@ -329,12 +347,19 @@ void blur(const Packed& b, const std::vector<uint8_t>& links, std::span<const fl
     pass(across, out, W, kLinkUp);
 }
 
-} // namespace
+// The caller's buffers (width x height samples) and what every step reads of them.
+struct Input {
+    int64_t W, H;
+    std::span<const Vec3f> position, normal;
+    std::span<const uint8_t> covered;
+    Spans full;        // the buffers as they are
+    Params fullParams; // at full resolution
+};
 
-void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, std::span<const Vec3f> position,
-                          std::span<const Vec3f> normal, std::span<const uint8_t> covered,
-                          const ScreenSpaceOcclusionOptions& options, std::span<const uint8_t> occluder,
-                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch) {
+void checkArguments(const Frame& camera, int64_t width, int64_t height, std::span<const Vec3f> position,
+                    std::span<const Vec3f> normal, std::span<const uint8_t> covered,
+                    const ScreenSpaceOcclusionOptions& options, std::span<const uint8_t> occluder,
+                    std::span<float> visibility) {
     if (!camera.isPerspective()) fail("screen-space ambient occlusion: the camera frame must be perspective");
     if (width <= 0 || height <= 0 || camera.width() != width || camera.height() != height)
         fail("screen-space ambient occlusion: the buffer is ", width, " x ", height,
@@ -355,33 +380,43 @@ void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, st
              options.steps);
     if (!(options.bias >= 0 && options.bias <= M_PI / 4))
         fail("screen-space ambient occlusion: the bias must lie in [0, pi/4] radians, got ", options.bias);
+}
 
-    const int64_t W = width, H = height;
-    const Spans full{
-        W, H, position.data(), normal.data(), covered.data(), occluder.empty() ? nullptr : occluder.data()};
-    const Params fullParams = makeParams(camera, 1, options);
-    if (!options.halfResolution) {
-        std::vector<Sample>& samples = scratch.samples;
-        samples.resize(count);
-        parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
-            for (int64_t i = y0 * W; i < y1 * W; ++i)
-                samples[size_t(i)] = {position[size_t(i)], (full.covered(i) ? kCovered : 0u) |
-                                                               (full.occludes(i) ? kOccluder : 0u)};
-        });
-        const Packed packed{W, H, samples.data(), normal.data()};
-        scratch.raw.resize(count);
-        parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
-            for (int64_t y = y0; y < y1; ++y)
-                for (int64_t x = 0; x < W; ++x)
-                    scratch.raw[size_t(y * W + x)] = occlusionAt(packed, fullParams, x, y);
-        });
-        scratch.links.assign(count, 0);
-        linkNeighbours(packed, fullParams, scratch.links);
-        scratch.across.resize(count);
-        blur(packed, scratch.links, scratch.raw, scratch.across, visibility);
-        return;
-    }
+// Without halfResolution: GTAO at every sample, linked and blurred.
+void fullResolution(const Input& in, std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch) {
+    const int64_t W = in.W, H = in.H;
+    const auto count = std::size_t(W * H);
+    const std::span<const Vec3f> position = in.position, normal = in.normal;
+    const Spans& full = in.full;
+    const Params& fullParams = in.fullParams;
+    std::vector<Sample>& samples = scratch.samples;
+    samples.resize(count);
+    parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
+        for (int64_t i = y0 * W; i < y1 * W; ++i)
+            samples[size_t(i)] = {position[size_t(i)],
+                                  (full.covered(i) ? kCovered : 0u) | (full.occludes(i) ? kOccluder : 0u)};
+    });
+    const Packed packed{W, H, samples.data(), normal.data()};
+    scratch.raw.resize(count);
+    parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < W; ++x)
+                scratch.raw[size_t(y * W + x)] = occlusionAt(packed, fullParams, x, y);
+    });
+    scratch.links.assign(count, 0);
+    linkNeighbours(packed, fullParams, scratch.links);
+    scratch.across.resize(count);
+    blur(packed, scratch.links, scratch.raw, scratch.across, visibility);
+}
 
+// Step 1, the working buffer at half resolution (in scratch: samples, normals, and links, where
+// kUniform marks a block of one smooth surface).
+Packed downsample(const Input& in, const Frame& camera, ScreenSpaceOcclusionScratch& scratch) {
+    const int64_t W = in.W, H = in.H;
+    const std::span<const Vec3f> position = in.position, normal = in.normal;
+    const std::span<const uint8_t> covered = in.covered;
+    const Spans& full = in.full;
+    const Params& fullParams = in.fullParams;
     // Step 1: per 2x2 block, the mean of its samples where they all show one smooth surface (then
     // the working pixel sits at the block's centre, where the upsample expects it), else the covered
     // sample nearest the eye (ties: the first in row order), so that a thin object in front keeps it.
@@ -441,20 +476,19 @@ void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, st
                 }
             }
     });
-    const Packed low{w, h, lowSample.data(), lowNormal.data()};
-    const Params p = makeParams(camera, 2, options);
-    scratch.raw.resize(lowCount);
-    parallelFor(0, h, 4, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = 0; x < w; ++x) scratch.raw[size_t(y * w + x)] = occlusionAt(low, p, x, y);
-    });
-    linkNeighbours(low, p, links);
-    scratch.across.resize(lowCount);
-    scratch.smooth.resize(lowCount);
-    blur(low, links, scratch.raw, scratch.across, scratch.smooth);
-    const std::vector<float>& smooth = scratch.smooth;
-    std::span<float> out = visibility;
+    return Packed{w, h, lowSample.data(), lowNormal.data()};
+}
 
+// Step 4, back to full resolution: `smooth` (the blurred working pixels of `low`) into `out`.
+void upsample(const Input& in, const Packed& low, const std::vector<uint8_t>& links,
+              const std::vector<float>& smooth, std::span<float> out) {
+    const int64_t W = in.W, H = in.H, w = low.width, h = low.height;
+    const std::span<const Vec3f> position = in.position, normal = in.normal;
+    const std::span<const uint8_t> covered = in.covered;
+    const Spans& full = in.full;
+    const Params& fullParams = in.fullParams;
+    const Sample* lowSample = low.sample;
+    const Vec3f* lowNormal = low.normals;
     // Step 4: working pixel (a, b) is centred on sample (2a + 1, 2b + 1), so sample (x, y) lies
     // between working pixels a0 = floor((x - 1) / 2) and a0 + 1 at 3/4 and 1/4 (x even) or 1/4 and
     // 3/4 (x odd), and likewise in y. Where its own block is uniform and the four are linked, it
@@ -510,6 +544,42 @@ void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, st
                 if (best == 0) out[size_t(i)] = occlusionAt(full, fullParams, x, y);
             }
     });
+}
+
+} // namespace
+
+void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, std::span<const Vec3f> position,
+                          std::span<const Vec3f> normal, std::span<const uint8_t> covered,
+                          const ScreenSpaceOcclusionOptions& options, std::span<const uint8_t> occluder,
+                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch) {
+    checkArguments(camera, width, height, position, normal, covered, options, occluder, visibility);
+    const Input in{width,
+                   height,
+                   position,
+                   normal,
+                   covered,
+                   Spans{width, height, position.data(), normal.data(), covered.data(),
+                         occluder.empty() ? nullptr : occluder.data()},
+                   makeParams(camera, 1, options)};
+    if (!options.halfResolution) {
+        fullResolution(in, visibility, scratch);
+        return;
+    }
+    const Packed low = downsample(in, camera, scratch);
+    const int64_t w = low.width, h = low.height;
+    const auto lowCount = std::size_t(w * h);
+    std::vector<uint8_t>& links = scratch.links;
+    const Params p = makeParams(camera, 2, options);
+    scratch.raw.resize(lowCount);
+    parallelFor(0, h, 4, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < w; ++x) scratch.raw[size_t(y * w + x)] = occlusionAt(low, p, x, y);
+    });
+    linkNeighbours(low, p, links);
+    scratch.across.resize(lowCount);
+    scratch.smooth.resize(lowCount);
+    blur(low, links, scratch.raw, scratch.across, scratch.smooth);
+    upsample(in, low, links, scratch.smooth, visibility);
 }
 
 std::vector<float> screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height,
