@@ -18,6 +18,7 @@
 
 #include "demo/demo_scenes.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/shadow.hpp"
 
 namespace {
 

@@ -15,6 +15,7 @@
 
 #include "demo/demo_scenes.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/shadow.hpp"
 
 namespace {
 

@@ -19,6 +19,7 @@
 #include "voxfx/render.hpp"
 #include "voxfx/scene_io.hpp"
 #include "voxfx/segment_walker.hpp"
+#include "voxfx/shadow.hpp"
 #include "voxfx/smoke.hpp"
 #include "voxfx/volume_scene.hpp"
 

@@ -18,6 +18,7 @@
 
 #include "demo/demo_scenes.hpp"
 #include "test_util.hpp"
+#include "voxfx/gbuffer.hpp"
 #include "voxfx/image_io.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/scene_io.hpp"

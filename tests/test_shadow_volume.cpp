@@ -15,6 +15,7 @@
 #include "voxfx/error.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/shadow.hpp"
 #include "voxfx/shadow_volume.hpp"
 
 namespace voxfx {

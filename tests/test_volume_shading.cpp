@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "voxfx/gbuffer.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/volume_scene.hpp"
 

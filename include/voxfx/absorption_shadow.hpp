@@ -30,21 +30,9 @@
 #include "voxfx/options.hpp"
 #include "voxfx/raster.hpp"
 #include "voxfx/scene.hpp"
+#include "voxfx/shadow_options.hpp"
 
 namespace voxfx {
-
-struct AbsorptionShadowOptions {
-    static constexpr std::string_view kName = "absorption";
-    static constexpr std::string_view kSummary =
-        "CHANG: attribute voxelization from the light, absorption = write count x material constant, "
-        "summed along the light path";
-    LightGridOptions grid;
-    Coverage coverage = Coverage::Center; ///< CHANG's writes (see attribute_grid.hpp)
-    float opaqueAbsorption = 8;           ///< optical depth of one crossing of an opaque material
-    /// gridResolution (alias grid), gridDepth, slicing, skipCells, bilinear, normalOffset, coverage,
-    /// opaqueAbsorption.
-    static std::span<const OptionField<AbsorptionShadowOptions>> fields();
-};
 
 /// The absorption columns of one light view: per group of casters an attribute voxelization (its
 /// sparse form, voxelizeAttributeColumns: only written voxels are stored), reduced to inclusive
@@ -111,11 +99,7 @@ Vec3f absorptionPerCrossing(const Material& m, float opaqueAbsorption);
 class AbsorptionShadow {
 public:
     using Options = AbsorptionShadowOptions;
-    struct Stats {
-        int64_t grids = 0, writes = 0;
-        Stats& operator+=(const Stats& o);
-        std::string summary() const;
-    };
+    using Stats = AbsorptionShadowStats;
     AbsorptionShadow() = default; ///< no casters: visibility 1
     /// From the scene's casters (SceneMesh::castsShadow). Throws voxfx::Error for resolutions < 1
     /// or skipped cells < 0.

@@ -52,48 +52,10 @@
 #include "voxfx/parallel.hpp"
 #include "voxfx/scene.hpp"
 #include "voxfx/segment_walker.hpp"
+#include "voxfx/shadow_options.hpp"
 #include "voxfx/volume_scene.hpp"
 
 namespace voxfx {
-
-struct DeepShadowOptions {
-    static constexpr std::string_view kName = "deep";
-    static constexpr std::string_view kSummary =
-        "deep shadow maps (Bornik et al.): per texel an epsilon-compressed visibility function over "
-        "all fragments from the light; translucent surfaces are steps, volume objects attenuate "
-        "continuously";
-    int64_t resolution = 512; ///< texels along the longer side of each view
-    double epsilon = 0.05;    ///< compression tolerance (0: every node kept)
-    DsmStorage storage = DsmStorage::Chunked;
-    int32_t fixedNodes = 0;    ///< fixed storage: nodes per texel, 0 = sized by the worst texel
-    double stepVoxels = 1.0;   ///< volume sample step, in smallest voxel spacings
-    double termination = 1e-4; ///< early ray termination: V below this becomes 0
-    /// Clustering (Bornik et al. §4): at most this many clusters of casting objects per light,
-    /// each with its own maps (0 or 1: one set of maps fitted to all casters). See the file comment.
-    int clusters = 0;
-    /// d0: objects whose light-space projected boxes differ by at most this (fraction of the
-    /// light view's side) share a cluster.
-    double clusterThreshold = 0.2;
-    /// Clustered maps share the texels the unclustered maps would have (their resolution is
-    /// scaled, up or down, to fit); off: every clustered map has `resolution` texels along its
-    /// longer side.
-    bool clusterEqualTexels = true;
-    /// Filtering of lookups between texels.
-    DsmFilter filter = DsmFilter::Bilinear;
-    /// Clusters, fitted to the build context's camera (see the file comment): a renderer's cache
-    /// rebuilds the maps when the camera moves.
-    bool viewDependent() const { return clusters > 1; }
-    /// Volume bricks the transfer function leaves transparent are not sampled (EmptySpace in
-    /// voxfx/segment_walker.hpp); the map is the same either way, only faster.
-    bool skipEmptySpace = true;
-    /// Lookups by DeepShadow::visibility(p, n): offset along the normal, in texel footprints at p.
-    double normalOffset = 1.0;
-    /// Lookups by DeepShadow::visibility(p, n): depth bias, in texel footprints at p.
-    double depthBias = 1.0;
-    /// dsmResolution, epsilon, dsmStorage, fixedNodes, dsmStep, termination, clusters,
-    /// clusterThreshold, clusterEqualTexels, dsmFilter, emptySpaceSkipping, normalOffset, depthBias.
-    static std::span<const OptionField<DeepShadowOptions>> fields();
-};
 
 /// The paper's clustering heuristic on boxes (any 2D extent, e.g. light-space projected boxes):
 /// d(A, B) = the largest difference of their min and max corners; pairs are visited by increasing
@@ -108,33 +70,6 @@ std::vector<int> clusterBoxes(const std::vector<ProjectedBox>& boxes, int maxClu
 /// The same heuristic over any symmetric distance: dist[i * n + j] for n objects.
 std::vector<int> clusterByDistance(std::size_t n, const std::vector<double>& dist, int maxClusters,
                                    double d0);
-
-struct DeepShadowTimings {
-    double fragmentsMs = 0; ///< rasterizing the fragment lists
-    double buildMs = 0;     ///< walking the texels, compressing, storing
-};
-
-/// Node and memory statistics of the maps (summed over views and lights; maxNodes and maxEpsilon:
-/// the largest), their storage and build times.
-struct DeepShadowStats : DsmStats {
-    DsmStorage storage = DsmStorage::Chunked;
-    DeepShadowTimings timings;
-    int64_t clusteredLights = 0; ///< lights built with clusters > 1
-    int64_t clusterGroups = 0;   ///< clusters formed (summed over those lights)
-    int64_t clusterViews = 0;    ///< their light views (one map each, or three for coloured light)
-    /// Texels of the views the unclustered maps of those lights would have (the budget that
-    /// clusterEqualTexels keeps to), and of the clustered views.
-    int64_t unclusteredViewTexels = 0, clusteredViewTexels = 0;
-    /// Lights with clusters > 1 that have a single casting object: one cluster, the same maps as
-    /// without clusters (the summary says so).
-    int64_t singleObjectLights = 0;
-    DeepShadowStats& operator+=(const DeepShadowStats& o);
-    /// "T texels, nodes per texel mean M max X, B MiB chunked (fixed layout sized by the worst
-    /// texel: F MiB)", then for clusters ", K clusters in V maps (C texels per channel against
-    /// U unclustered)" and ", clusters asked but N light(s) have one casting object" where those
-    /// apply; empty without texels.
-    std::string summary() const;
-};
 
 class DeepShadow {
 public:

@@ -24,6 +24,7 @@
 #include "voxfx/enum_names.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/mesh.hpp"
+#include "voxfx/types.hpp"
 
 namespace voxfx {
 
@@ -33,11 +34,6 @@ namespace detail {
 struct CudaGridAccess;
 }
 
-/// Cpu: always the CPU. Cuda: the GPU, else the CPU with a note saying why. Auto: the GPU when
-/// one can take the job, else the CPU without a note.
-enum class Device : uint8_t { Cpu, Cuda, Auto };
-inline constexpr EnumName<Device> kDeviceNames[] = {
-    {"cpu", Device::Cpu}, {"cuda", Device::Cuda}, {"auto", Device::Auto}};
 const char* toString(Device d);
 /// Parses "cpu", "cuda", "auto"; throws voxfx::Error listing them otherwise.
 Device parseDevice(const std::string& name);

@@ -37,6 +37,8 @@
 
 #include "voxfx/enum_names.hpp"
 #include "voxfx/math.hpp"
+#include "voxfx/shadow_options.hpp"
+#include "voxfx/types.hpp"
 
 namespace voxfx {
 
@@ -139,17 +141,6 @@ void buildVisibility(std::span<const DsmEvent> events, double epsilon, std::vect
 /// finish). Must be deterministic; the map may call it more than once for a texel (fixed storage
 /// rebuilding with a larger ε) and from several threads at once for different texels.
 using DsmTexelFunction = std::function<void(int64_t x, int64_t y, VisibilityBuilder& builder)>;
-
-/// Node counts and memory of a built map.
-struct DsmStats {
-    int64_t texels = 0;
-    int64_t nodes = 0;          ///< total nodes stored
-    int64_t maxNodes = 0;       ///< largest texel
-    int64_t bytes = 0;          ///< bytes held by the storage (nodes, links, per-texel headers)
-    int64_t overflowTexels = 0; ///< fixed storage: texels rebuilt with a larger ε to fit
-    double maxEpsilon = 0;      ///< largest ε any texel was built with
-    double meanNodes() const { return texels ? double(nodes) / double(texels) : 0.0; }
-};
 
 /// Plain view of a fixed-size map: texel i = y * width + x holds counts[i] nodes at nodes[i * n].
 struct DsmFixedView {
@@ -306,19 +297,10 @@ private:
     DsmStats stats_;
 };
 
-enum class DsmStorage : uint8_t { Fixed, Chunked };
-inline constexpr EnumName<DsmStorage> kDsmStorageNames[] = {{"fixed", DsmStorage::Fixed},
-                                                            {"chunked", DsmStorage::Chunked}};
 const char* toString(DsmStorage s);
 /// Parses fixed | chunked (any case); throws voxfx::Error listing them otherwise.
 DsmStorage parseDsmStorage(const std::string& name);
 
-/// How a lookup between texels filters (`--dsm-filter`): Bilinear weighs the visibility functions of
-/// the four texels around the point (the paper's §3.2 filtering, a 2x2 PCF); None takes the one
-/// texel the point falls in (the unfiltered lookup of the paper's table 1).
-enum class DsmFilter : uint8_t { Bilinear, None };
-inline constexpr EnumName<DsmFilter> kDsmFilterNames[] = {{"bilinear", DsmFilter::Bilinear},
-                                                          {"none", DsmFilter::None}};
 const char* toString(DsmFilter f);
 /// Parses bilinear | none (any case); throws voxfx::Error listing them otherwise.
 DsmFilter parseDsmFilter(const std::string& name);

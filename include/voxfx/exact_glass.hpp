@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "voxfx/glass_optics.hpp"
+#include "voxfx/glass_options.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/options.hpp"
 
@@ -33,15 +34,6 @@ struct GlassInput;
 namespace detail {
 class MediaStack;
 }
-
-struct ExactGlassOptions : GlassPathOptions {
-    static constexpr std::string_view kName = "exact";
-    static constexpr std::string_view kSummary =
-        "ray tracing on the triangles (Embree): Snell, Fresnel, total internal reflection, "
-        "Beer-Lambert over true lengths; the reference";
-    /// maxEvents, absorptionConstant, sceneBehind.
-    static std::span<const OptionField<ExactGlassOptions>> fields();
-};
 
 class ExactGlass {
 public:

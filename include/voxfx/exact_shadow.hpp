@@ -42,33 +42,17 @@
 #include "voxfx/options.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/scene.hpp"
+#include "voxfx/shadow_options.hpp"
 
 namespace voxfx {
 
 class TriangleTracer;
 struct VolumeScene;
 
-struct ExactShadowOptions {
-    static constexpr std::string_view kName = "exact";
-    static constexpr std::string_view kSummary =
-        "ray traced on the triangles (Embree): the product of the transmittances of every surface "
-        "crossed towards the light, volumes marched in fine steps (the reference)";
-    /// Step of the march through volume objects, in smallest voxel spacings of the scene's volumes.
-    double volumeStep = 0.25;
-    /// exactStep (volumeStep).
-    static std::span<const OptionField<ExactShadowOptions>> fields();
-};
-
 class ExactShadow {
 public:
     using Options = ExactShadowOptions;
-    struct Stats {
-        int64_t triangles = 0;     ///< caster triangles traced, summed over lights
-        int64_t volumeObjects = 0; ///< casting objects of the volume scene, summed over lights
-        double volumeStep = 0;     ///< world step of the volume march (0: no volume objects)
-        Stats& operator+=(const Stats& o);
-        std::string summary() const;
-    };
+    using Stats = ExactShadowStats;
     /// How glass triangles pass light (see the file comment).
     /// (ior, Beer–Lambert coefficient per world unit, tint applied once per entering crossing: the
     /// medium every glass method uses).

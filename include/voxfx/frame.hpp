@@ -40,14 +40,12 @@
 
 #include "voxfx/enum_names.hpp"
 #include "voxfx/math.hpp"
+#include "voxfx/types.hpp"
 
 namespace voxfx {
 
 enum class Axis : uint8_t { X = 0, Y = 1, Z = 2 };
 inline constexpr EnumName<Axis> kAxisNames[] = {{"x", Axis::X}, {"y", Axis::Y}, {"z", Axis::Z}};
-enum class Slicing : uint8_t { Uniform, Local };
-inline constexpr EnumName<Slicing> kSlicingNames[] = {{"uniform", Slicing::Uniform},
-                                                      {"local", Slicing::Local}};
 
 /// World axis (0, 1, 2) of the grid's column-x, column-y and slice directions for an orthographic
 /// frame sliced along `a`.

@@ -29,6 +29,7 @@
 #include "voxfx/bitgrid.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/glass_optics.hpp"
+#include "voxfx/glass_options.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/options.hpp"
 
@@ -43,26 +44,6 @@ namespace detail {
 void frostedColumnIntervals(const uint64_t* front, const uint64_t* back, int64_t wordsPerColumn, int64_t D,
                             std::vector<double>& out);
 } // namespace detail
-
-struct FrostedGlassOptions : GlassSceneOptions {
-    static constexpr std::string_view kName = "frosted";
-    static constexpr std::string_view kSummary =
-        "ED06: thickness from front/back-face slicemaps drives a refraction offset, attenuation and a "
-        "blurred environment lookup";
-    int64_t gridResolution = kGlassGridResolution; ///< slicemap columns across and slices, 2..4096
-    /// Blur cone angle (radians) of the environment seen through a thickness equal to the glass
-    /// bounds' diagonal (proportional below it).
-    double blur = 0.6;
-    /// Refraction offset through a thickness equal to the glass bounds' diagonal, as a multiple of
-    /// the front surface's refraction (proportional below it): the environment is looked up along
-    /// d + refraction * L / diagonal * (t - d), d the eye ray, t the refracted ray.
-    double refraction = 1.0;
-    /// Its slicemaps are the camera's view of the glass: a renderer's cache rebuilds them when the
-    /// camera moves.
-    static constexpr bool viewDependent() { return true; }
-    /// glassGrid, frostedBlur, frostedRefraction, sceneBehind.
-    static std::span<const OptionField<FrostedGlassOptions>> fields();
-};
 
 class FrostedGlass {
 public:

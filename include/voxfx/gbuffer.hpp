@@ -15,6 +15,7 @@
 #include "voxfx/mesh.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/scene.hpp"
+#include "voxfx/types.hpp"
 
 namespace voxfx {
 
@@ -31,8 +32,6 @@ struct SceneGeometry {
     /// the fragment-list pass draws (they still cast shadows and refract in glass like the others).
     std::size_t drawnTriangles = 0;
 };
-/// The crease angle flattenScene splits normals at by default, degrees (RenderOptions::creaseAngle).
-inline constexpr double kDefaultCreaseAngle = 45;
 /// Faces around a vertex whose normals differ by at most `creaseAngle` degrees (0..180) share a
 /// smoothed normal; a wider angle is a crease (180: every vertex smooth; 0: flat faces). Cost
 /// O(degree^2) per vertex. Throws voxfx::Error for an angle outside [0, 180] or more than 2^32 - 1

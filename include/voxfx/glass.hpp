@@ -20,7 +20,9 @@
 // A method is an options type O and a built type G, G::Options = O, as the shadow techniques are
 // (voxfx/shadow.hpp): O::kName, O::kSummary, O::fields(); G::build(input, o) from the glass
 // triangles; g.trace(hit) -> GlassPath. GlassMethods lists them; GlassOptions and BuiltGlass are
-// variants over them. Adding a method is its own files and one entry in GlassMethods.
+// variants over them. The options and GlassOptions are in voxfx/glass_options.hpp, what
+// voxfx/render.hpp includes. Adding a method is its own files, its options in
+// voxfx/glass_options.hpp (and their entry in GlassOptions), and one entry in GlassMethods.
 //
 // Thread-safety: built methods are read-only; trace may run from any number of threads.
 #pragma once
@@ -30,6 +32,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -37,6 +40,7 @@
 #include "voxfx/frame.hpp"
 #include "voxfx/frosted_glass.hpp"
 #include "voxfx/glass_optics.hpp"
+#include "voxfx/glass_options.hpp"
 #include "voxfx/image.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/options.hpp"
@@ -54,12 +58,6 @@ struct GlassInput {
     std::vector<uint32_t> triangleMedium;
     std::vector<GlassMedium> media;
     Frame camera;
-};
-
-struct NoGlassOptions {
-    static constexpr std::string_view kName = "none";
-    static constexpr std::string_view kSummary = "shaded like any surface";
-    static std::span<const OptionField<NoGlassOptions>> fields() { return {}; }
 };
 
 class NoGlass {
@@ -84,27 +82,11 @@ template <GlassMethod... G> struct GlassMethodList {
 
 /// Every glass method, in the order the CLI lists them.
 using GlassMethods = GlassMethodList<NoGlass, ExactGlass, MultiGlass, TwoSurfaceGlass, FrostedGlass>;
-/// The options of one method (which one is the alternative held). Default: none.
-using GlassOptions = GlassMethods::Options;
+// GlassOptions (voxfx/glass_options.hpp) is the variant over this list's options.
+static_assert(std::is_same_v<GlassOptions, GlassMethods::Options>,
+              "GlassOptions (voxfx/glass_options.hpp) lists the methods of GlassMethods, in its order");
 /// A built method.
 using BuiltGlass = GlassMethods::Built;
-
-/// The method's name ("exact", "multi", ...).
-std::string_view glassName(const GlassOptions& options);
-/// Every method's name, in GlassMethods' order.
-std::vector<std::string_view> glassNames();
-/// The default options of the method called `name`; voxfx::Error listing the names otherwise.
-GlassOptions glassOptionsNamed(std::string_view name);
-/// The method's one-line summary (for help).
-std::string_view glassSummary(std::string_view name);
-/// The method a scene's glass renders with when none is asked for: exact where some mesh has a
-/// glass material (Material::isGlass: the reference, and on CPUs the fastest: see BENCHMARKS.md, the
-/// voxel methods are built for a GPU's texture fetches), else none.
-GlassOptions defaultGlass(const Scene& scene);
-/// Whether the light leaving the glass comes from the opaque scene (GlassSceneOptions).
-bool glassSeesSceneBehind(const GlassOptions& options);
-/// The method's absorption constant (GlassSceneOptions::absorptionConstant; 1 for none).
-double glassAbsorptionConstant(const GlassOptions& options);
 
 /// Builds the method `options` holds.
 BuiltGlass buildGlass(const GlassInput& input, const GlassOptions& options);

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 
+#include "voxfx/glass_options.hpp"
 #include "voxfx/math.hpp"
 #include "voxfx/scene.hpp"
 
@@ -65,25 +66,5 @@ struct GlassHit {
     Vec3d eye, dir, entry, normal;
     uint32_t medium = 0;
 };
-
-/// What every method takes: where the light leaving the glass comes from.
-struct GlassSceneOptions {
-    /// The light leaving the glass (and the first surface's reflection) comes from the opaque scene
-    /// where the ray meets it (found exactly, with Embree, for every method, and shaded with the
-    /// lights and shadows), else from the environment. False: always the environment (CHANG).
-    bool sceneBehind = true;
-    /// CHANG's absorption constant: every glass medium's attenuation coefficient (its material's
-    /// KHR_materials_volume attenuation, per world unit) is multiplied by it. 1 (the default): the
-    /// materials as given; 0: no absorption inside glass; must be finite and >= 0.
-    double absorptionConstant = 1.0;
-};
-
-/// What the methods that follow a path take.
-struct GlassPathOptions : GlassSceneOptions {
-    int maxEvents = 16; ///< refractions and reflections followed per ray
-};
-
-/// The glass grids' default resolution (voxel methods, frosted slicemaps).
-inline constexpr int64_t kGlassGridResolution = 128;
 
 } // namespace voxfx

@@ -12,7 +12,7 @@
 
 #include <cstdint>
 
-#include "voxfx/frame.hpp"
+#include "voxfx/types.hpp"
 
 namespace voxfx {
 

@@ -63,12 +63,10 @@
 #include "voxfx/frame.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/parallel.hpp"
+#include "voxfx/types.hpp"
 
 namespace voxfx {
 
-enum class Coverage : uint8_t { Center, Conservative };
-inline constexpr EnumName<Coverage> kCoverageNames[] = {{"center", Coverage::Center},
-                                                        {"conservative", Coverage::Conservative}};
 const char* toString(Coverage c);
 /// Parses center | conservative; throws voxfx::Error listing them otherwise.
 Coverage parseCoverage(const std::string& name);

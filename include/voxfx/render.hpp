@@ -77,15 +77,20 @@
 
 #include "voxfx/enum_names.hpp"
 #include "voxfx/environment.hpp"
-#include "voxfx/gbuffer.hpp"
-#include "voxfx/glass.hpp"
+#include "voxfx/glass_options.hpp"
 #include "voxfx/image.hpp"
 #include "voxfx/options.hpp"
-#include "voxfx/parallel.hpp"
 #include "voxfx/scene.hpp"
-#include "voxfx/shadow.hpp"
+#include "voxfx/shadow_options.hpp"
+#include "voxfx/types.hpp"
 
+// What a program that renders compiles: the options (of the render, of each shadow technique and
+// glass method: voxfx/shadow_options.hpp, voxfx/glass_options.hpp), the scene, the image and the
+// results; not the techniques themselves (voxfx/shadow.hpp, voxfx/glass.hpp and their rooms, which
+// the renderer's implementation includes). BENCHMARKS.md measures what including this costs.
 namespace voxfx {
+
+class Progress; // voxfx/parallel.hpp
 
 /// Anti-aliasing of render(): off (one sample per pixel), post (FXAA-style post-process only),
 /// adaptive (edge and glass pixels supersampled only), full (both; the default).

@@ -25,9 +25,12 @@
 //   s.stats(), S::Stats             its counters; Stats += Stats (the lights of a frame) and
 //                                   Stats::summary() (one line)
 // ShadowTechniques lists the techniques; ShadowOptions, LightShadow and ShadowStats are variants
-// over them, and the functions below dispatch with std::visit. Adding a technique is its own files
-// and one entry in ShadowTechniques: the concept ShadowTechnique checks its interface, and the
-// renderer, the CLI and the Python module find it through these functions.
+// over them, and the functions below dispatch with std::visit. The options, the counters and their
+// variants are in voxfx/shadow_options.hpp, what voxfx/render.hpp includes (the built shadows stay
+// here and in the techniques' headers). Adding a technique is its own files, its options and Stats
+// in voxfx/shadow_options.hpp (and their entries in ShadowOptions and ShadowStats), and one entry in
+// ShadowTechniques: the concept ShadowTechnique checks its interface, and the renderer, the CLI and
+// the Python module find it through these functions.
 //
 // Thread-safety: built shadows are read-only: visibility may run concurrently from any number of
 // threads (the renderer does); build and prepare use worker threads.
@@ -37,6 +40,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -48,25 +52,17 @@
 #include "voxfx/options.hpp"
 #include "voxfx/scene.hpp"
 #include "voxfx/shadow_map.hpp"
+#include "voxfx/shadow_options.hpp"
 #include "voxfx/shadow_volume.hpp"
 #include "voxfx/translucency_shadow.hpp"
 #include "voxfx/transmittance_shadow.hpp"
 
 namespace voxfx {
 
-struct NoShadowOptions {
-    static constexpr std::string_view kName = "none";
-    static constexpr std::string_view kSummary = "no shadows";
-    static std::span<const OptionField<NoShadowOptions>> fields() { return {}; }
-};
-
 class NoShadow {
 public:
     using Options = NoShadowOptions;
-    struct Stats {
-        Stats& operator+=(const Stats&) { return *this; }
-        std::string summary() const { return {}; }
-    };
+    using Stats = NoShadowStats;
     static NoShadow build(const Scene&, const Light&, const NoShadowOptions&, Progress* = nullptr) {
         return {};
     }
@@ -102,21 +98,15 @@ template <ShadowTechnique... S> struct TechniqueList {
 using ShadowTechniques = TechniqueList<NoShadow, MapShadow, TransmittanceShadow, AbsorptionShadow,
                                        TranslucencyShadow, VolumeShadow, ExactShadow, DeepShadow>;
 
-/// The options of one technique (which one is the alternative held). Default: the standard map.
-using ShadowOptions = ShadowTechniques::Options;
+// ShadowOptions and ShadowStats (voxfx/shadow_options.hpp) are the variants over this list.
+static_assert(
+    std::is_same_v<ShadowOptions, ShadowTechniques::Options>,
+    "ShadowOptions (voxfx/shadow_options.hpp) lists the techniques of ShadowTechniques, in its order");
+static_assert(
+    std::is_same_v<ShadowStats, ShadowTechniques::Stats>,
+    "ShadowStats (voxfx/shadow_options.hpp) lists the techniques of ShadowTechniques, in its order");
 /// The built shadow of one light.
 using LightShadow = ShadowTechniques::Built;
-/// The counters of one technique, summed over the lights of a frame.
-using ShadowStats = ShadowTechniques::Stats;
-
-/// The technique's name ("map", "deep", ...).
-std::string_view shadowName(const ShadowOptions& options);
-/// Every technique's name, in ShadowTechniques' order.
-std::vector<std::string_view> shadowNames();
-/// The default options of the technique called `name`; voxfx::Error listing the names otherwise.
-ShadowOptions shadowOptionsNamed(std::string_view name);
-/// The technique's one-line summary (for help).
-std::string_view shadowSummary(std::string_view name);
 
 /// Builds the technique `options` holds for `light` from the scene's casters.
 LightShadow buildLightShadow(const Scene& scene, const Light& light, const ShadowOptions& options,
@@ -130,9 +120,5 @@ void prepareLightShadow(LightShadow& shadow, const GBuffer& gbuffer, const Scene
 /// RGB fraction of the light reaching p (grey techniques give three equal channels).
 Vec3f shadowVisibility(const LightShadow& shadow, const Vec3d& p, const Vec3d& n);
 ShadowStats shadowStats(const LightShadow& shadow);
-/// Adds `more` to `sum` when they are of one technique; else `sum` becomes `more`.
-void accumulate(ShadowStats& sum, const ShadowStats& more);
-/// The technique's one line about its counters ("" for none).
-std::string summary(const ShadowStats& stats);
 
 } // namespace voxfx

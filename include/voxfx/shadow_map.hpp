@@ -24,19 +24,9 @@
 #include "voxfx/options.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/scene.hpp"
+#include "voxfx/shadow_options.hpp"
 
 namespace voxfx {
-
-struct ShadowMapOptions {
-    static constexpr std::string_view kName = "map";
-    static constexpr std::string_view kSummary = "standard shadow map with PCF (binary: leaves are opaque)";
-    int64_t resolution = 2048; ///< texels along the longer side of each light view
-    int pcfRadius = 1;         ///< PCF over (2r+1)^2 texels (0 = one tap)
-    double normalOffset = 1.0; ///< lookup offset along the normal, in column footprints at p
-    double depthBias = 1.0;    ///< depth bias, in texel footprints at p
-    /// mapResolution (alias shadowMapResolution), pcf, normalOffset, depthBias.
-    static std::span<const OptionField<ShadowMapOptions>> fields();
-};
 
 /// One depth map in one light view.
 class ShadowMap {
@@ -60,11 +50,7 @@ private:
 class MapShadow {
 public:
     using Options = ShadowMapOptions;
-    struct Stats {
-        int64_t maps = 0, texels = 0;
-        Stats& operator+=(const Stats& o);
-        std::string summary() const;
-    };
+    using Stats = MapShadowStats;
     MapShadow() = default; ///< no casters: visibility 1
     /// The maps of `casters` (world space) fitted to them. Throws voxfx::Error for a resolution
     /// < 1 or a PCF radius < 0.

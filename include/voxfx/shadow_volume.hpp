@@ -83,6 +83,7 @@
 #include "voxfx/light_view.hpp"
 #include "voxfx/options.hpp"
 #include "voxfx/scene.hpp"
+#include "voxfx/shadow_options.hpp"
 
 namespace voxfx {
 
@@ -105,46 +106,6 @@ struct ShadowCasterSet {
     /// Every SceneMesh with castsShadow. Throws voxfx::Error naming the first open or non-manifold
     /// caster (with its count of unmatched edges).
     static ShadowCasterSet build(const Scene& scene);
-};
-
-struct ShadowVolumeOptions {
-    static constexpr std::string_view kName = "volumes";
-    static constexpr std::string_view kSummary =
-        "exact hard shadows: shadow volumes of the closed casters counted per pixel (open casters "
-        "are refused), culled and clamped against what the camera sees (ED06 3.2; the same image "
-        "without: --no-volume-culling)";
-    bool cullReceivers = true;         ///< skip volumes holding no visible receiver
-    bool cullOccluded = true;          ///< skip casters entirely in other casters' shadow
-    bool clamp = true;                 ///< end each volume at its last receiver slab
-    bool clampRuns = true;             ///< also cut the volume to the runs of receiver slabs (near end, gaps)
-    bool cullShadowedParts = true;     ///< drop unlit triangles lying in other casters' shadow
-    bool dropShadowedReceivers = true; ///< a receiver in another caster's shadow is left to it
-    int64_t mapResolution = 256;       ///< light views for culling: columns along the longer side
-    int64_t receiverSlices = 128;      ///< receiver slicemap: slices
-    /// volumeCulling (every switch of culling and clamping), cullReceivers, cullOccluded,
-    /// cullShadowedParts, dropShadowedReceivers, volumeClamping, clampRuns, cullResolution,
-    /// receiverSlices.
-    static std::span<const OptionField<ShadowVolumeOptions>> fields();
-};
-
-struct ShadowVolumeStats {
-    int64_t casters = 0;
-    int64_t culledNoReceiver = 0; ///< skipped: no visible receiver in the volume
-    int64_t culledOccluded = 0;   ///< skipped: entirely in other casters' shadow
-    int64_t clamped = 0;          ///< volumes ended before the scene's far bound
-    int64_t nearClamped = 0;      ///< volumes whose first layer starts behind the caster
-    int64_t gaps = 0;             ///< gaps left out between layers of one volume
-    int64_t culledTriangles = 0;  ///< unlit triangles dropped from drawn volumes (in others' shadow)
-    int64_t droppedReceivers = 0; ///< receiver cells left to a caster in front (summed over casters)
-    int64_t depthPass = 0, depthFail = 0;
-    int64_t silhouetteEdges = 0;
-    int64_t volumeTriangles = 0;
-    int64_t fragments = 0;        ///< volume fragments the rasterizer emitted in the camera frame
-    bool receiversCovered = true; ///< false: some receiver lay outside the light views (no culling)
-    double cullMs = 0, buildMs = 0, rasterMs = 0;
-    /// Sums (receiversCovered: both), for the lights of a frame.
-    ShadowVolumeStats& operator+=(const ShadowVolumeStats& o);
-    std::string summary() const;
 };
 
 /// Per pixel of a G-buffer: whether its surface point lies in some caster's shadow for one light.

@@ -35,26 +35,11 @@
 #include "voxfx/light_view.hpp"
 #include "voxfx/options.hpp"
 #include "voxfx/scene.hpp"
+#include "voxfx/shadow_options.hpp"
 #include "voxfx/voxel_grid.hpp"
 #include "voxfx/voxelize.hpp"
 
 namespace voxfx {
-
-struct TranslucencyShadowOptions {
-    static constexpr std::string_view kName = "translucency";
-    static constexpr std::string_view kSummary =
-        "GI08: solid voxelization from the light, Beer-Lambert over the matter crossed (filled cells "
-        "counted along the light's column)";
-    LightGridOptions grid;
-    double extinction = 1; ///< sigma, per world unit of matter crossed (>= 0)
-    Vec3f tint{1, 1, 1};   ///< per channel relative mean free path, each in (0, 1]
-    /// How the casters' inside is decided (voxfx/voxelize.hpp): Auto is parity when the casters are
-    /// closed (analyzeTopology), else Gwn; Flood and Vote cannot run in light views (refused).
-    Fill fill = Fill::Auto;
-    /// gridResolution (alias grid), gridDepth, slicing, skipCells, bilinear, normalOffset,
-    /// extinction, tint, fill.
-    static std::span<const OptionField<TranslucencyShadowOptions>> fields();
-};
 
 /// The solid grid of one light view and its lookups.
 class TranslucencyShadowMap {
@@ -125,11 +110,7 @@ private:
 class TranslucencyShadow {
 public:
     using Options = TranslucencyShadowOptions;
-    struct Stats {
-        int64_t grids = 0, filledCells = 0;
-        Stats& operator+=(const Stats& o);
-        std::string summary() const;
-    };
+    using Stats = TranslucencyShadowStats;
     TranslucencyShadow() = default; ///< no casters: visibility 1
     /// From the scene's casters (SceneMesh::castsShadow). Throws voxfx::Error for resolutions < 1,
     /// skipped cells < 0, a negative or non-finite extinction or a tint outside (0, 1].

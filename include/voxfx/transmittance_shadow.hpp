@@ -30,28 +30,11 @@
 #include "voxfx/options.hpp"
 #include "voxfx/scene.hpp"
 #include "voxfx/shadow_map.hpp"
+#include "voxfx/shadow_options.hpp"
 #include "voxfx/voxel_grid.hpp"
 #include "voxfx/voxelize.hpp"
 
 namespace voxfx {
-
-struct TransmittanceShadowOptions {
-    static constexpr std::string_view kName = "transmittance";
-    static constexpr std::string_view kSummary =
-        "ED06: partial occluders (leaves, glass) voxelized from the light; light is attenuated per "
-        "filled cell, one channel per leaf colour group; opaque objects keep a standard shadow map";
-    LightGridOptions grid;
-    /// Surface (ED06, one cell per triangle and column) or Conservative.
-    VoxelizeMode voxelMode = VoxelizeMode::Surface;
-    /// Where the light-space voxelizations run (voxfx/device.hpp); the grids are the same on each.
-    /// Cuda without a usable GPU runs on the CPU.
-    Device device = Device::Cpu;
-    /// The standard map of the opaque casters (its normalOffset is the grids' too).
-    ShadowMapOptions opaque;
-    /// gridResolution (alias grid), gridDepth, slicing, skipCells, bilinear, normalOffset,
-    /// voxelMode, device, mapResolution, pcf, depthBias.
-    static std::span<const OptionField<TransmittanceShadowOptions>> fields();
-};
 
 /// The slicemaps of one light view, one per channel.
 class TransmittanceShadowMap {
@@ -107,12 +90,7 @@ private:
 class TransmittanceShadow {
 public:
     using Options = TransmittanceShadowOptions;
-    struct Stats {
-        int64_t grids = 0, channels = 0, filledCells = 0; ///< light grids (views x channels)
-        MapShadow::Stats opaque;
-        Stats& operator+=(const Stats& o);
-        std::string summary() const;
-    };
+    using Stats = TransmittanceShadowStats;
     TransmittanceShadow() = default; ///< no casters: visibility 1
     /// From the scene's casters (SceneMesh::castsShadow). Throws voxfx::Error for resolutions < 1,
     /// skipped cells < 0 or a voxel mode other than surface and conservative.

@@ -72,6 +72,7 @@
 
 #include "voxfx/attribute_grid.hpp"
 #include "voxfx/glass_optics.hpp"
+#include "voxfx/glass_options.hpp"
 #include "voxfx/mesh.hpp"
 #include "voxfx/options.hpp"
 #include "voxfx/raster.hpp"
@@ -79,34 +80,6 @@
 namespace voxfx {
 
 struct GlassInput;
-
-/// What both voxel methods take.
-struct VoxelGlassOptions : GlassPathOptions {
-    int64_t gridResolution = kGlassGridResolution; ///< cubic voxels along the glass's longest side, 2..4096
-    /// Coverage::Conservative writes every voxel a triangle touches (no holes on steep triangles:
-    /// CHANG's widened slabs taken to the limit), Center one voxel per column.
-    Coverage coverage = Coverage::Conservative;
-    double angleThreshold = 0.35; ///< radians: a refraction this close to the last normal is skipped
-    /// CHANG's widened slabs (AttributeOptions::slabOverlap): each slab grows by this many slices on
-    /// both sides, 0..4 (more voxels written, fewer holes where faces are steep under center coverage).
-    double slabOverlap = 0;
-};
-
-struct MultiGlassOptions : VoxelGlassOptions {
-    static constexpr std::string_view kName = "multi";
-    static constexpr std::string_view kSummary =
-        "CHANG: march through an attribute grid, refract at boundary voxels";
-    /// glassGrid, glassCoverage, angleThreshold, slabOverlap, maxEvents, absorptionConstant, sceneBehind.
-    static std::span<const OptionField<MultiGlassOptions>> fields();
-};
-
-struct TwoSurfaceGlassOptions : VoxelGlassOptions {
-    static constexpr std::string_view kName = "two-surface";
-    static constexpr std::string_view kSummary =
-        "Wyman 2005: refract at the front surface and at the first back surface";
-    /// glassGrid, glassCoverage, angleThreshold, slabOverlap, maxEvents, absorptionConstant, sceneBehind.
-    static std::span<const OptionField<TwoSurfaceGlassOptions>> fields();
-};
 
 /// The attribute grid (normals and material channel) of the glass triangles, and the march.
 class VoxelGlass {

@@ -44,23 +44,10 @@
 #include "voxfx/mesh.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/raster.hpp"
+#include "voxfx/types.hpp"
 #include "voxfx/voxel_grid.hpp"
 
 namespace voxfx {
-
-enum class VoxelizeMode : uint8_t { Surface, Conservative, Solid, SolidConservative, Interior };
-inline constexpr EnumName<VoxelizeMode> kVoxelizeModeNames[] = {
-    {"surface", VoxelizeMode::Surface},
-    {"conservative", VoxelizeMode::Conservative},
-    {"solid", VoxelizeMode::Solid},
-    {"solid-conservative", VoxelizeMode::SolidConservative},
-    {"interior", VoxelizeMode::Interior}};
-/// How the inside is decided (see the file comment); Auto: Parity for a closed mesh, Flood for
-/// any other (VoxelizeReport says which and why).
-enum class Fill : uint8_t { Parity, Flood, Vote, Winding, Gwn, Auto };
-inline constexpr EnumName<Fill> kFillNames[] = {{"auto", Fill::Auto},       {"parity", Fill::Parity},
-                                                {"flood", Fill::Flood},     {"vote", Fill::Vote},
-                                                {"winding", Fill::Winding}, {"gwn", Fill::Gwn}};
 
 const char* toString(VoxelizeMode m);
 const char* toString(Fill f);

@@ -16,6 +16,7 @@
 #include "voxfx/options.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/text.hpp"
+#include "voxfx/types.hpp"
 #include "voxfx/volume.hpp"
 #include "voxfx/voxel_grid.hpp"
 
@@ -46,9 +47,12 @@
 #include "voxfx/surface_sampling.hpp"
 #include "voxfx/vertex_colors.hpp"
 
-// scene: scenes, lights, cameras, materials, light views, transfer functions, volume scenes.
+// scene: scenes, lights, cameras, materials, light views, transfer functions, volume scenes; the
+// shadow techniques' options and counters.
+#include "voxfx/light_grid.hpp"
 #include "voxfx/light_view.hpp"
 #include "voxfx/scene.hpp"
+#include "voxfx/shadow_options.hpp"
 #include "voxfx/transfer_function.hpp"
 #include "voxfx/volume_scene.hpp"
 
@@ -68,7 +72,7 @@
 #include "voxfx/gbuffer.hpp"
 #include "voxfx/glass.hpp"
 #include "voxfx/glass_optics.hpp"
-#include "voxfx/light_grid.hpp"
+#include "voxfx/glass_options.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/shadow.hpp"
 #include "voxfx/shadow_map.hpp"

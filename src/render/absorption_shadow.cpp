@@ -180,13 +180,13 @@ Vec3f absorptionPerCrossing(const Material& m, float opaqueAbsorption) {
     return out;
 }
 
-AbsorptionShadow::Stats& AbsorptionShadow::Stats::operator+=(const Stats& o) {
+AbsorptionShadowStats& AbsorptionShadowStats::operator+=(const AbsorptionShadowStats& o) {
     grids += o.grids;
     writes += o.writes;
     return *this;
 }
 
-std::string AbsorptionShadow::Stats::summary() const {
+std::string AbsorptionShadowStats::summary() const {
     return countText(grids) + (grids == 1 ? " light grid, " : " light grids, ") + countText(writes) +
            " attribute writes";
 }

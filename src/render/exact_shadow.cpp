@@ -272,14 +272,14 @@ std::span<const OptionField<ExactShadowOptions>> ExactShadowOptions::fields() {
     return table;
 }
 
-ExactShadow::Stats& ExactShadow::Stats::operator+=(const Stats& o) {
+ExactShadowStats& ExactShadowStats::operator+=(const ExactShadowStats& o) {
     triangles += o.triangles;
     volumeObjects += o.volumeObjects;
     volumeStep = std::max(volumeStep, o.volumeStep);
     return *this;
 }
 
-std::string ExactShadow::Stats::summary() const {
+std::string ExactShadowStats::summary() const {
     std::string s = countText(triangles) + " caster triangles traced (Embree)";
     if (volumeObjects > 0) {
         s += ", " + countText(volumeObjects) + " volume-scene objects";

@@ -9,7 +9,9 @@
 
 #include "render/render_cache.hpp"
 #include "voxfx/ambient_occlusion.hpp"
+#include "voxfx/gbuffer.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/shadow.hpp"
 
 namespace voxfx::detail {
 

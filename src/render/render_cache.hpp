@@ -19,7 +19,10 @@
 
 #include "render/screen_space_ao.hpp"
 #include "voxfx/ambient_occlusion.hpp"
+#include "voxfx/gbuffer.hpp"
+#include "voxfx/glass.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/shadow.hpp"
 
 namespace voxfx::detail {
 

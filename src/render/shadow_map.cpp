@@ -80,13 +80,13 @@ std::span<const OptionField<ShadowMapOptions>> ShadowMapOptions::fields() {
     return table;
 }
 
-MapShadow::Stats& MapShadow::Stats::operator+=(const Stats& o) {
+MapShadowStats& MapShadowStats::operator+=(const MapShadowStats& o) {
     maps += o.maps;
     texels += o.texels;
     return *this;
 }
 
-std::string MapShadow::Stats::summary() const {
+std::string MapShadowStats::summary() const {
     return countText(maps) + (maps == 1 ? " shadow map, " : " shadow maps, ") + countText(texels) + " texels";
 }
 

@@ -179,13 +179,13 @@ std::span<const OptionField<TranslucencyShadowOptions>> TranslucencyShadowOption
     return table;
 }
 
-TranslucencyShadow::Stats& TranslucencyShadow::Stats::operator+=(const Stats& o) {
+TranslucencyShadowStats& TranslucencyShadowStats::operator+=(const TranslucencyShadowStats& o) {
     grids += o.grids;
     filledCells += o.filledCells;
     return *this;
 }
 
-std::string TranslucencyShadow::Stats::summary() const {
+std::string TranslucencyShadowStats::summary() const {
     return countText(grids) + (grids == 1 ? " solid light grid, " : " solid light grids, ") +
            countText(filledCells) + " filled cells";
 }

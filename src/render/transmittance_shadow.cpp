@@ -208,7 +208,7 @@ std::span<const OptionField<TransmittanceShadowOptions>> TransmittanceShadowOpti
     return table;
 }
 
-TransmittanceShadow::Stats& TransmittanceShadow::Stats::operator+=(const Stats& o) {
+TransmittanceShadowStats& TransmittanceShadowStats::operator+=(const TransmittanceShadowStats& o) {
     grids += o.grids;
     channels += o.channels;
     filledCells += o.filledCells;
@@ -216,7 +216,7 @@ TransmittanceShadow::Stats& TransmittanceShadow::Stats::operator+=(const Stats& 
     return *this;
 }
 
-std::string TransmittanceShadow::Stats::summary() const {
+std::string TransmittanceShadowStats::summary() const {
     return countText(grids) + (grids == 1 ? " light grid (" : " light grids (") + countText(channels) +
            (channels == 1 ? " channel), " : " channels), ") + countText(filledCells) +
            " filled cells; opaque casters: " + opaque.summary();
