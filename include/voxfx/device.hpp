@@ -29,9 +29,6 @@ namespace voxfx {
 
 enum class VoxelizeMode : uint8_t;
 class CudaGrid;
-namespace detail {
-struct CudaGridAccess;
-}
 
 /// Cpu: always the CPU. Cuda: the GPU, else the CPU with a note saying why. Auto: the GPU when
 /// one can take the job, else the CPU without a note.
@@ -113,10 +110,12 @@ public:
     int64_t count() const;
     /// Milliseconds of the last operation that wrote this grid (CUDA events; transfers excluded).
     double lastKernelMs() const { return kernelMs_; }
+    /// The CUDA module's handle of the grid (opaque; null when empty) and the timing of the
+    /// operation that wrote it: what the library's GPU operations (csg, morphology) read and set.
+    void* deviceHandle() const { return handle_; }
+    void setLastKernelMs(double ms) { kernelMs_ = ms; }
 
 private:
-    friend class CudaVoxelizer;
-    friend struct detail::CudaGridAccess; // the grid layer's operations (csg.hpp, morphology.hpp)
     void* handle_ = nullptr;
     int64_t w_ = 0, h_ = 0, d_ = 0;
     double kernelMs_ = 0;
