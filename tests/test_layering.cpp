@@ -2,7 +2,8 @@
 // "## Layers" lists the layers bottom up, each with its source folders and public headers. Every
 // #include "..." of src/ and include/voxfx/ is resolved to a layer, and a file may include only its
 // own layer and the layers below it (which also rules out cycles between folders of different
-// layers: every edge of such a cycle cannot point downwards). The document is the oracle: a folder
+// layers: every edge of such a cycle cannot point downwards); folders of one row may include each
+// other, but not in a cycle (cuda -> voxelize -> cuda). The document is the oracle: a folder
 // or public header it does not place, an upward include, or a listed exception that no longer
 // occurs fails the test, so the document and the code cannot drift apart. The umbrella header must
 // reach every public header.
@@ -145,6 +146,65 @@ struct Resolver {
     }
 };
 
+/// The folder under src/ of a tree file ("" for a public header).
+std::string srcFolderOf(const std::string& rel) {
+    if (rel.rfind("src/", 0) != 0) return {};
+    return rel.substr(4, rel.find('/', 4) - 4);
+}
+
+/// Includes between two distinct folders of one layer row: folder -> folder it includes, with the
+/// first include seen for each edge ("src/cuda/a.cu includes voxelize/b.hpp").
+struct RowFolderGraph {
+    std::map<std::string, std::map<std::string, std::string>> edges;
+
+    /// Adds the edge of `file` including `inc` (resolved to `target`) when both are in src/, in
+    /// different folders of one row.
+    void add(const Layering& l, const std::string& file, const std::string& inc, const std::string& target) {
+        const std::string from = srcFolderOf(file), to = srcFolderOf(target);
+        if (from.empty() || to.empty() || from == to) return;
+        const auto a = l.folderLayer.find(from), b = l.folderLayer.find(to);
+        if (a == l.folderLayer.end() || b == l.folderLayer.end() || a->second != b->second) return;
+        edges[from].emplace(to, file + " includes " + inc);
+    }
+
+    /// A cycle of folders, first folder repeated at the end ("cuda", "voxelize", "cuda"); empty when
+    /// there is none. Depth-first, in name order, so the answer is the same on every run.
+    std::vector<std::string> findCycle() const {
+        std::map<std::string, int> state; // 1: on the path, 2: done
+        std::vector<std::string> path;
+        std::vector<std::string> cycle;
+        const auto visit = [&](const auto& self, const std::string& f) -> void {
+            state[f] = 1;
+            path.push_back(f);
+            if (const auto it = edges.find(f); it != edges.end())
+                for (const auto& [to, why] : it->second) {
+                    if (!cycle.empty()) break;
+                    if (state[to] == 1) {
+                        cycle.assign(std::find(path.begin(), path.end(), to), path.end());
+                        cycle.push_back(to);
+                    } else if (state[to] == 0) {
+                        self(self, to);
+                    }
+                }
+            path.pop_back();
+            state[f] = 2;
+        };
+        for (const auto& [f, out] : edges)
+            if (cycle.empty() && state[f] == 0) visit(visit, f);
+        return cycle;
+    }
+
+    /// "cuda -> voxelize -> cuda (src/cuda/a.cu includes ...; src/voxelize/b.cpp includes ...)".
+    std::string describe(const std::vector<std::string>& cycle) const {
+        std::string names, why;
+        for (std::size_t i = 0; i < cycle.size(); ++i) {
+            names += (i ? " -> " : "") + cycle[i];
+            if (i + 1 < cycle.size()) why += (i ? "; " : "") + edges.at(cycle[i]).at(cycle[i + 1]);
+        }
+        return names + " (" + why + ")";
+    }
+};
+
 TEST(LayeringTest, EveryIncludeGoesToTheSameOrALowerLayerAsArchitectureMdStates) {
     const Layering l = parseArchitecture(readText(kRoot / "docs/ARCHITECTURE.md"));
     ASSERT_GE(l.layers.size(), 8u) << "no layer table under \"## Layers\" in docs/ARCHITECTURE.md";
@@ -173,6 +233,38 @@ TEST(LayeringTest, EveryIncludeGoesToTheSameOrALowerLayerAsArchitectureMdStates)
         EXPECT_TRUE(seenExceptions.count(e))
             << "docs/ARCHITECTURE.md lists " << e.first << " includes " << e.second
             << " as a known upward include, but it no longer is one";
+}
+
+TEST(LayeringTest, NoCycleBetweenTheFoldersOfOneLayerRow) {
+    // The row check lets a folder include another of its own row either way, so a row of several
+    // folders could hide a cycle between them: none may have one.
+    const Layering l = parseArchitecture(readText(kRoot / "docs/ARCHITECTURE.md"));
+    const Resolver r{l};
+    RowFolderGraph g;
+    for (const std::string& file : sourceFiles())
+        for (const std::string& inc : includesOf(kRoot / file))
+            if (const std::string target = r.resolve(file, inc); !target.empty()) g.add(l, file, inc, target);
+    const std::vector<std::string> cycle = g.findCycle();
+    EXPECT_TRUE(cycle.empty()) << "a cycle between folders of one layer row of docs/ARCHITECTURE.md: "
+                               << g.describe(cycle);
+}
+
+TEST(LayeringTest, TheCycleCheckFindsACycle) {
+    // A made-up row of two folders that include each other, and a third folder in a row above.
+    const Layering l = parseArchitecture("## Layers\n\n| layer | folders | public headers |\n|---|---|---|\n"
+                                         "| voxelize | `voxelize`, `cuda` | `voxelize.hpp` |\n"
+                                         "| grid | `grid` | `csg.hpp` |\n");
+    RowFolderGraph g;
+    g.add(l, "src/cuda/cuda_module.cu", "voxelize/consumers.hpp", "src/voxelize/consumers.hpp");
+    g.add(l, "src/grid/ops.cpp", "cuda/cuda_api.hpp", "src/cuda/cuda_api.hpp");      // another row: no edge
+    g.add(l, "src/voxelize/fill.cpp", "voxelize/fill.hpp", "src/voxelize/fill.hpp"); // one folder: none
+    EXPECT_TRUE(g.findCycle().empty());
+    g.add(l, "src/voxelize/device.cpp", "cuda/cuda_api.hpp", "src/cuda/cuda_api.hpp");
+    const std::vector<std::string> cycle = g.findCycle();
+    EXPECT_EQ(cycle, (std::vector<std::string>{"cuda", "voxelize", "cuda"}));
+    EXPECT_EQ(g.describe(cycle),
+              "cuda -> voxelize -> cuda (src/cuda/cuda_module.cu includes "
+              "voxelize/consumers.hpp; src/voxelize/device.cpp includes cuda/cuda_api.hpp)");
 }
 
 TEST(LayeringTest, EveryPublicHeaderIsPlacedAndTheUmbrellaHeaderReachesIt) {

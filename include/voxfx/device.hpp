@@ -30,9 +30,6 @@ namespace voxfx {
 
 enum class VoxelizeMode : uint8_t;
 class CudaGrid;
-namespace detail {
-struct CudaGridAccess;
-}
 
 const char* toString(Device d);
 /// Parses "cpu", "cuda", "auto"; throws voxfx::Error listing them otherwise.
@@ -109,10 +106,12 @@ public:
     int64_t count() const;
     /// Milliseconds of the last operation that wrote this grid (CUDA events; transfers excluded).
     double lastKernelMs() const { return kernelMs_; }
+    /// The CUDA module's handle of the grid (opaque; null when empty) and the timing of the
+    /// operation that wrote it: what the library's GPU operations (csg, morphology) read and set.
+    void* deviceHandle() const { return handle_; }
+    void setLastKernelMs(double ms) { kernelMs_ = ms; }
 
 private:
-    friend class CudaVoxelizer;
-    friend struct detail::CudaGridAccess; // the grid layer's operations (csg.hpp, morphology.hpp)
     void* handle_ = nullptr;
     int64_t w_ = 0, h_ = 0, d_ = 0;
     double kernelMs_ = 0;

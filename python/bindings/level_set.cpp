@@ -296,17 +296,10 @@ LevelSetPtr offsetClamped(const LevelSet& l, double distance, int threads) {
     return out;
 }
 
-} // namespace
+using LevelSetClass = py::class_<LevelSet, LevelSetPtr>;
 
-void bindLevelSet(py::module_& m) {
-    py::class_<LevelSet, LevelSetPtr> ls(
-        m, "LevelSet",
-        "A narrow-band level set: an OpenVDB FloatGrid of class level set (signed distances in world units, "
-        "negative inside, active within the band, +-background beyond) with its own index-to-world "
-        "transform. "
-        "Read with voxfx.read_level_set, made with voxfx.level_set, combined with voxfx.level_set_csg (or | "
-        "& "
-        "-) and offset with voxfx.offset_level_set. A value: operations return new level sets.");
+/// voxfx.LevelSet's properties, queries, pickling and files.
+void bindLevelSetQueries(LevelSetClass& ls) {
     ls.def_property_readonly(
           "voxel_size", [](const LevelSet& l) { return vec3(l.voxelSize()); },
           "World size of a voxel along the index axes")
@@ -340,14 +333,18 @@ void bindLevelSet(py::module_& m) {
              "The values at integer indices: an (N, 3) array gives (N,) float32, one (3,) index a float; any "
              "index (+-background away from the band)")
         .def("save", &save, py::arg("path"), "Writes the level set as a .vdb file (atomically)")
-        .def("write", &save, py::arg("path"), "save(), under the name of voxfx::writeLevelSet")
-        .def(
-            "union",
-            [](const py::object& self, const py::object& other, const std::string& fill, int threads) {
-                return combine(self, other, CsgOp::Union, fill, threads);
-            },
-            py::arg("other"), py::kw_only(), py::arg("fill") = "auto", py::arg("threads") = 0,
-            "level_set_csg(self, other, 'union')")
+        .def("write", &save, py::arg("path"), "save(), under the name of voxfx::writeLevelSet");
+}
+
+/// voxfx.LevelSet's CSG (methods and operators, a mesh on either side) and copies.
+void bindLevelSetCsg(LevelSetClass& ls) {
+    ls.def(
+          "union",
+          [](const py::object& self, const py::object& other, const std::string& fill, int threads) {
+              return combine(self, other, CsgOp::Union, fill, threads);
+          },
+          py::arg("other"), py::kw_only(), py::arg("fill") = "auto", py::arg("threads") = 0,
+          "level_set_csg(self, other, 'union')")
         .def(
             "intersection",
             [](const py::object& self, const py::object& other, const std::string& fill, int threads) {
@@ -406,7 +403,10 @@ void bindLevelSet(py::module_& m) {
             [](const LevelSet& l, const py::object&) { return std::make_shared<LevelSet>(l); },
             py::arg("memo"))
         .def("__repr__", &repr);
+}
 
+/// The module's level set functions: read, make, CSG, offset.
+void bindLevelSetFunctions(py::module_& m) {
     m.def(
         "read_level_set",
         [](const py::object& pathObj) {
@@ -459,6 +459,22 @@ void bindLevelSet(py::module_& m) {
         "sphere). Needs cubic voxels. The exact offset of a mesh's field is `voxfx sdf --offset`. Inward "
         "offsets beyond the level set's extent are clamped (the result is empty); outward ones whose band "
         "cannot fit raise voxfx.MemoryLimitError up front. The GIL is released; Ctrl-C stops it.");
+}
+
+} // namespace
+
+void bindLevelSet(py::module_& m) {
+    LevelSetClass ls(
+        m, "LevelSet",
+        "A narrow-band level set: an OpenVDB FloatGrid of class level set (signed distances in world units, "
+        "negative inside, active within the band, +-background beyond) with its own index-to-world "
+        "transform. "
+        "Read with voxfx.read_level_set, made with voxfx.level_set, combined with voxfx.level_set_csg (or | "
+        "& "
+        "-) and offset with voxfx.offset_level_set. A value: operations return new level sets.");
+    bindLevelSetQueries(ls);
+    bindLevelSetCsg(ls);
+    bindLevelSetFunctions(m);
 }
 
 } // namespace voxfx::python

@@ -250,11 +250,8 @@ void bindScene(py::module_& m) {
         py::arg("path"), "Loads a scene: .gltf .glb, the JSON wrapper .json, or a mesh file");
 }
 
-} // namespace
-
-void bindRender(py::module_& m) {
-    bindCamera(m);
-    bindScene(m);
+/// voxfx.render and voxfx.render_options.
+void bindRenderFunction(py::module_& m) {
     m.def(
         "render",
         [](const py::object& sceneOrPath, const std::string& shadows, const std::string& glass,
@@ -307,6 +304,10 @@ technique's counters, the options it ran with and the passes' times).)");
         },
         "Every option render() takes besides shadows and glass: name, type, help, range or choices, and "
         "who uses it (render, a shadow kind, a glass method) with its default");
+}
+
+/// voxfx.Renderer: a scene kept for frame after frame, with the viewer's preview.
+void bindRendererClass(py::module_& m) {
     py::class_<PyRenderer>(m, "Renderer", R"(A scene kept for frame after frame: voxfx view's renderer.
 
     r = voxfx.Renderer("scene.glb", shadows="map", width=640, height=360)
@@ -393,12 +394,26 @@ report plus width, height, refined_pixels (pixels shaded at every sample) and pr
                    std::string(shadowName(r.options.shadow)) + ", glass " +
                    std::string(glassName(r.options.glass)) + ">";
         });
+}
+
+/// voxfx.shadow_kinds and voxfx.glass_methods.
+void bindRenderCatalogs(py::module_& m) {
     m.def(
         "shadow_kinds", [] { return namesAndSummaries(shadowNames(), shadowSummary); },
         "The shadow kinds, (name, summary) each");
     m.def(
         "glass_methods", [] { return namesAndSummaries(glassNames(), glassSummary); },
         "The glass methods, (name, summary) each");
+}
+
+} // namespace
+
+void bindRender(py::module_& m) {
+    bindCamera(m);
+    bindScene(m);
+    bindRenderFunction(m);
+    bindRendererClass(m);
+    bindRenderCatalogs(m);
 }
 
 } // namespace voxfx::python

@@ -50,7 +50,7 @@ struct CudaMesh {
 
 // The library's enums as they cross the module boundary: the same values, spelled out here because
 // the module uses no voxfx header above frame.hpp. The library casts its enums to these and
-// static_asserts every value where it does (voxelize/device.cpp, grid/cuda_grid_ops.cpp), so a
+// static_asserts every value where it does (cuda/device.cpp, cuda/cuda_grid_ops.cpp), so a
 // reordering on either side stops the build.
 /// The voxelization modes, with VoxelizeMode's values (parity fill for the inside ones).
 enum class CudaMode : int { Surface = 0, Conservative = 1, Solid = 2, SolidConservative = 3, Interior = 4 };

@@ -1,4 +1,4 @@
-// voxfx_vdb — checks a .vdb file's bytes before OpenVDB reads them (io/modules/vdb_module.cpp).
+// voxfx_vdb — checks a .vdb file's bytes before OpenVDB reads them (io/modules/vdb_read.cpp).
 //
 // OpenVDB trusts the counts and sizes in a file: a corrupt one makes it allocate what a field
 // says (hundreds of GB), load bytes that are not 0 or 1 as bool, overflow int32 coordinates, and

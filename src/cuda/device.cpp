@@ -8,7 +8,7 @@
 
 #include "core/module_loader.hpp"
 #include "cuda/cuda_api.hpp"
-#include "voxelize/cuda_context.hpp"
+#include "cuda/cuda_context.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/voxelize.hpp"
 
@@ -185,7 +185,7 @@ CudaGrid CudaVoxelizer::grid() {
     if (!impl_->haveGrid) fail("CudaVoxelizer::grid: nothing voxelized yet");
     CudaGrid g(impl_->width, impl_->height, impl_->depth);
     std::string error;
-    checkCuda(impl_->module->copyVoxelized(impl_->context, g.handle_, &error), error);
+    checkCuda(impl_->module->copyVoxelized(impl_->context, g.deviceHandle(), &error), error);
     return g;
 }
 

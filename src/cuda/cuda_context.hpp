@@ -1,13 +1,12 @@
-// voxfx — the CUDA module's shared context for CudaGrid operations (internal): the voxelize
-// layer owns the module and CudaGrid (device.cpp); the grid layer's GPU operations (CSG and
-// morphology, grid/cuda_grid_ops.cpp) reach the module and a grid's device handle through this.
+// voxfx — the CUDA module's shared context for CudaGrid operations (internal): device.cpp owns
+// the module and CudaGrid; the GPU's CSG and morphology (cuda_grid_ops.cpp) reach the module
+// through this, and a grid's device handle through CudaGrid::deviceHandle.
 #pragma once
 
 #include <mutex>
 #include <string>
 
 #include "cuda/cuda_api.hpp"
-#include "voxfx/device.hpp"
 
 namespace voxfx::detail {
 
@@ -24,11 +23,5 @@ CudaSharedContext& cudaSharedContext();
 void checkCuda(bool ok, const std::string& error);
 /// Milliseconds of the shared context's last kernels (call with its lock held).
 double lastCudaKernelMs(CudaSharedContext& s);
-
-/// A CudaGrid's device handle and timing, for the grid layer's operations.
-struct CudaGridAccess {
-    static void* handle(const CudaGrid& g) { return g.handle_; }
-    static void setKernelMs(CudaGrid& g, double ms) { g.kernelMs_ = ms; }
-};
 
 } // namespace voxfx::detail

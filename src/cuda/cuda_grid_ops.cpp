@@ -1,12 +1,13 @@
 // voxfx — CSG and morphology of grids kept on the GPU (CudaGrid, voxfx/device.hpp), through the
-// voxfx_cuda module; the same results as csg.cpp and morphology.cpp, bit for bit.
+// voxfx_cuda module; the same results as grid/csg.cpp and grid/morphology.cpp, bit for bit.
 #include <cstdint>
 #include <mutex>
 #include <string>
 
 #include "cuda/cuda_api.hpp"
-#include "voxelize/cuda_context.hpp"
+#include "cuda/cuda_context.hpp"
 #include "voxfx/csg.hpp"
+#include "voxfx/device.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/morphology.hpp"
 
@@ -25,8 +26,6 @@ static_assert(int(MorphBorder::Neutral) == int(detail::CudaMorphBorder::Neutral)
               int(MorphBorder::Empty) == int(detail::CudaMorphBorder::Empty) &&
               int(MorphBorder::Filled) == int(detail::CudaMorphBorder::Filled));
 
-using detail::CudaGridAccess;
-
 CudaGrid csg(const CudaGrid& a, const CudaGrid& b, CsgOp op) {
     if (a.width() != b.width() || a.height() != b.height() || a.depth() != b.depth())
         fail("csg: the grids differ in size (", a.width(), " x ", a.height(), " x ", a.depth(), " and ",
@@ -36,10 +35,10 @@ CudaGrid csg(const CudaGrid& a, const CudaGrid& b, CsgOp op) {
     detail::CudaSharedContext& s = detail::cudaSharedContext();
     const std::lock_guard lock(s.mutex);
     std::string error;
-    detail::checkCuda(s.module->csgGrid(s.context, CudaGridAccess::handle(a), CudaGridAccess::handle(b),
-                                        detail::CudaCsgOp(int(op)), CudaGridAccess::handle(out), &error),
+    detail::checkCuda(s.module->csgGrid(s.context, a.deviceHandle(), b.deviceHandle(),
+                                        detail::CudaCsgOp(int(op)), out.deviceHandle(), &error),
                       error);
-    CudaGridAccess::setKernelMs(out, detail::lastCudaKernelMs(s));
+    out.setLastKernelMs(detail::lastCudaKernelMs(s));
     return out;
 }
 
@@ -53,12 +52,11 @@ CudaGrid morphology(const CudaGrid& grid, MorphOp op, const MorphologyOptions& o
     const std::lock_guard lock(s.mutex);
     const int64_t radii[3] = {options.rx, options.ry, options.rz};
     std::string error;
-    detail::checkCuda(
-        s.module->morphologyGrid(s.context, CudaGridAccess::handle(grid), detail::CudaMorphOp(int(op)), radii,
-                                 detail::CudaMorphBorder(int(options.border)), CudaGridAccess::handle(out),
-                                 CudaGridAccess::handle(scratch), &error),
-        error);
-    CudaGridAccess::setKernelMs(out, detail::lastCudaKernelMs(s));
+    detail::checkCuda(s.module->morphologyGrid(s.context, grid.deviceHandle(), detail::CudaMorphOp(int(op)),
+                                               radii, detail::CudaMorphBorder(int(options.border)),
+                                               out.deviceHandle(), scratch.deviceHandle(), &error),
+                      error);
+    out.setLastKernelMs(detail::lastCudaKernelMs(s));
     return out;
 }
 
