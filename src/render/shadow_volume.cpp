@@ -108,12 +108,9 @@ float VolumeShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     if (mask_.shadowed.empty() || mask_.atSurface(p) || !tracer_) return mask_.visibility(p); // 1 unprepared
     // Off the G-buffer's surfaces (blended surfaces, volume samples, refracted points): whether
     // the segment towards the light crosses a caster, from p moved 10 epsilons along n.
-    Vec3d l;
+    Vec3d l = light_.towards(p);
     double distance = std::numeric_limits<double>::infinity();
-    if (light_.type == LightType::Directional) {
-        l = -normalize(light_.direction);
-    } else {
-        l = light_.position - p;
+    if (light_.positioned()) {
         distance = length(l);
         l = l / std::max(distance, 1e-300);
     }

@@ -22,8 +22,7 @@ std::vector<uint8_t> shadowVolumeReceivers(const GBuffer& gbuffer, const SceneGe
             for (int64_t x = 0; x < W; ++x) {
                 SurfacePoint s;
                 if (!surfaceAt(gbuffer, geometry, x, y, s)) continue;
-                const Vec3d toLight = light.type == LightType::Directional ? -normalize(light.direction)
-                                                                           : light.position - s.position;
+                const Vec3d toLight = light.towards(s.position);
                 // Outside a spot light's outer cone nothing arrives (shading's falloff is 0).
                 if (light.type == LightType::Spot && dot(-normalize(toLight), normalize(light.direction)) <
                                                          std::cos(light.outerConeAngle) - 1e-9)
