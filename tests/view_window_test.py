@@ -170,9 +170,9 @@ class Session:
         # 0.7 s alone; a sanitizer build beside the rest of the suite on 2 cores needs far more.
         deadline = time.time() + 120
         while time.time() < deadline:
-            r = self.run("xdotool", "search", "--name", "^voxfx view", check=False)
-            if r.returncode == 0 and r.stdout.split():
-                self.window = r.stdout.split()[0]
+            window = self.find_window()
+            if window:
+                self.window = window
                 return
             if self.viewer.poll() is not None:
                 fail("voxfx view exited: " + self.output())
@@ -184,8 +184,19 @@ class Session:
         self.out.seek(0)
         return self.out.read()
 
+    def find_window(self):
+        r = self.run("xdotool", "search", "--name", "^voxfx view", check=False)
+        return r.stdout.split()[0] if r.returncode == 0 and r.stdout.split() else None
+
     def title(self):
-        return self.run("xdotool", "getwindowname", self.window).stdout.strip()
+        r = self.run("xdotool", "getwindowname", self.window, check=False)
+        if r.returncode != 0:
+            # The window found first can be gone a moment later (the viewer's first X window
+            # replaced while it starts: BadWindow, seen once in a loaded run): find it again.
+            time.sleep(0.2)
+            self.window = self.find_window() or self.window
+            r = self.run("xdotool", "getwindowname", self.window)
+        return r.stdout.strip()
 
     def wait_ready(self, what, seconds=60):
         deadline = time.time() + seconds
