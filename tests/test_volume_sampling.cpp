@@ -27,6 +27,8 @@ namespace {
 
 using test::dsmrGroundAndSmoke;
 using test::dsmrSmokeTransfer;
+using test::homogeneousSlabScene;
+using test::linearBlackOptions;
 
 TEST(DeepShadowRenderTest, RayCastingCompositesVolumesOverTheImageAndOnlyThere) {
     RenderOptions o;
@@ -75,56 +77,33 @@ TEST(DeepShadowRenderTest, RayCastingCompositesVolumesOverTheImageAndOnlyThere) 
 constexpr double kUniformOpacity = 0.3, kUniformSun = 3;
 
 Scene dsmrUniformScene(bool ball, double opacityLength) {
-    Scene s;
-    Light sun;
-    sun.direction = normalize(Vec3d{0.5, -1, 0.3});
-    sun.intensity = float(kUniformSun);
-    s.lights.push_back(sun);
-    Camera c;
-    c.position = {0, 5, 2.5};
-    c.target = {0, 0.25, 0};
-    c.fovY = ball ? 0.45 : 0.3;
-    s.cameras.push_back(c);
-    auto vs = std::make_shared<VolumeScene>();
+    Scene s = homogeneousSlabScene(kUniformOpacity, opacityLength, kUniformSun);
+    if (!ball) return s;
+    s.cameras[0].fovY = 0.45;
     const double h = 1.0 / 16;
-    auto v = ball ? std::make_shared<Volume>(Vec3i{32, 32, 32}, Vec3d{-1, -0.75, -1}, Vec3d{h, h, h})
-                  : std::make_shared<Volume>(Vec3i{32, 8, 32}, Vec3d{-1, 0, -1}, Vec3d{h, h, h});
+    auto v = std::make_shared<Volume>(Vec3i{32, 32, 32}, Vec3d{-1, -0.75, -1}, Vec3d{h, h, h});
     std::fill(v->values().begin(), v->values().end(), 1.0f);
-    const TransferFunction tf({{0, {1, 1, 1}}, {2, {1, 1, 1}}}, {{0, kUniformOpacity}, {2, kUniformOpacity}});
-    if (ball) {
-        VolumeSceneObject o;
-        o.name = "ball";
-        o.kind = ObjectKind::Volume;
-        o.shape = vs->addLeaf(test::makeUvSphere({0, 0.25, 0}, 0.9, 48, 96));
-        vs->volumes.push_back(v);
-        o.volume = 0;
-        o.transfer = tf;
-        o.opacityLength = opacityLength;
-        vs->addObject(o);
-    } else {
-        vs->addVolumeBox(v, tf, opacityLength, "slab");
-    }
+    auto vs = std::make_shared<VolumeScene>();
+    VolumeSceneObject o;
+    o.name = "ball";
+    o.kind = ObjectKind::Volume;
+    o.shape = vs->addLeaf(test::makeUvSphere({0, 0.25, 0}, 0.9, 48, 96));
+    vs->volumes.push_back(v);
+    o.volume = 0;
+    o.transfer =
+        TransferFunction({{0, {1, 1, 1}}, {2, {1, 1, 1}}}, {{0, kUniformOpacity}, {2, kUniformOpacity}});
+    o.opacityLength = opacityLength;
+    vs->addObject(o);
     s.volumeScene = vs;
     return s;
 }
 
 RenderOptions dsmrUniformOptions(bool deep) {
-    RenderOptions o;
-    o.width = 96;
-    o.height = 72;
-    // The linear image without sky light, tone map or anti-aliasing: what the closed form describes.
-    o.ambient = {0, 0, 0};
-    o.skyLight = 0;
-    o.sky = SkyKind::Flat;
-    o.background = {0, 0, 0};
-    o.antiAliasing = AntiAliasing::Off;
-    o.toneMap = ToneMap::Clamp;
+    RenderOptions o = linearBlackOptions(96, 72); // what the closed form describes
     if (deep) {
         DeepShadowOptions d;
         d.resolution = 96;
         o.shadow = d;
-    } else {
-        o.shadow = NoShadowOptions{};
     }
     return o;
 }

@@ -2,7 +2,8 @@
 // crossings, the Boolean shapes evaluated on leaf flags (apart from VolumeScene::evalShape), and a
 // dense ray march from the light (dsmrReferenceTransmittance) that shares no code with the deep
 // shadow map or the exact tracer; the scenes the deep shadow, exact shadow, fragment list and volume
-// tests build on (the elephant, the knot and smoke, smoke over a ground).
+// tests build on (the elephant, the knot and smoke, smoke over a ground, a homogeneous slab) and the
+// render options of the volume pass's closed forms.
 #pragma once
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include "support/ground_scenes.hpp"
 #include "test_util.hpp"
 #include "voxfx/mesh_io.hpp"
+#include "voxfx/render.hpp"
 #include "voxfx/scene.hpp"
 #include "voxfx/smoke.hpp"
 #include "voxfx/volume_scene.hpp"
@@ -206,6 +208,50 @@ inline Scene dsmrGroundAndSmoke(bool withVolume) {
         vs->addVolumeBox(std::make_shared<Volume>(makeSmoke(sp)), dsmrSmokeTransfer(), 0.05, "smoke");
         s.volumeScene = vs;
     }
+    return s;
+}
+
+// ---- The volume pass's closed forms ---------------------------------------------------------------
+
+/// The linear one-sample image over black, without ambient or sky light, tone map, anti-aliasing or
+/// shadows: what the closed forms of the volume pass describe.
+inline RenderOptions linearBlackOptions(int64_t width, int64_t height) {
+    RenderOptions o;
+    o.width = width;
+    o.height = height;
+    o.ambient = {0, 0, 0};
+    o.skyLight = 0;
+    o.sky = SkyKind::Flat;
+    o.background = {0, 0, 0};
+    o.antiAliasing = AntiAliasing::Off;
+    o.toneMap = ToneMap::Clamp;
+    o.shadow = NoShadowOptions{};
+    return o;
+}
+
+/// A homogeneous slab: every voxel 1 (white, opacity `opacity` per `opacityLength` world units) in
+/// the volume's own box [-1, 1] x [0, 0.5] x [-1, 1] (32 x 8 x 32 voxels of 1/16), under a sun of
+/// intensity `sun` slanted along (0.5, -1, 0.3), seen from above (from (0, 5, 2.5) towards
+/// (0, 0.25, 0), fovY 0.3). `zeroCorner`: voxel (0, 0, 0) holds 0 (same colour and opacity).
+inline Scene homogeneousSlabScene(double opacity, double opacityLength, double sun, bool zeroCorner = false) {
+    Scene s;
+    Light light;
+    light.direction = normalize(Vec3d{0.5, -1, 0.3});
+    light.intensity = float(sun);
+    s.lights.push_back(light);
+    Camera c;
+    c.position = {0, 5, 2.5};
+    c.target = {0, 0.25, 0};
+    c.fovY = 0.3;
+    s.cameras.push_back(c);
+    const double h = 1.0 / 16;
+    auto v = std::make_shared<Volume>(Vec3i{32, 8, 32}, Vec3d{-1, 0, -1}, Vec3d{h, h, h});
+    std::fill(v->values().begin(), v->values().end(), 1.0f);
+    if (zeroCorner) v->at(0, 0, 0) = 0;
+    const TransferFunction tf({{0, {1, 1, 1}}, {2, {1, 1, 1}}}, {{0, opacity}, {2, opacity}});
+    auto vs = std::make_shared<VolumeScene>();
+    vs->addVolumeBox(v, tf, opacityLength, "slab");
+    s.volumeScene = vs;
     return s;
 }
 
