@@ -2,7 +2,6 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
-#include <optional>
 #include <random>
 #include <string>
 #include <type_traits>
@@ -148,26 +147,10 @@ TEST(BitGridTest, BadDimensionsAndImpossibleSizesFailWithAnError) {
     EXPECT_GT(availableMemoryBytes(), 0u);
 }
 
-// Sets an environment variable for one scope (the test process's own environment).
-struct BitGridScopedEnv {
-    BitGridScopedEnv(const char* name, const char* value) : name(name) {
-        if (const char* old = std::getenv(name)) saved = old;
-        setenv(name, value, 1);
-    }
-    ~BitGridScopedEnv() {
-        if (saved)
-            setenv(name, saved->c_str(), 1);
-        else
-            unsetenv(name);
-    }
-    const char* name;
-    std::optional<std::string> saved;
-};
-
 TEST(BitGridTest, TheMemoryBudgetInTheEnvironmentCapsWhatMayBeAllocated) {
     const uint64_t machine = availableMemoryBytes();
     {
-        BitGridScopedEnv env("VOXFX_MEMORY_LIMIT", "1M");
+        test::ScopedEnv env("VOXFX_MEMORY_LIMIT", "1M");
         EXPECT_EQ(availableMemoryBytes(), uint64_t(1) << 20);
         // 256^3 cells = 2 MiB of words: over the budget, refused before allocating, and the
         // message names the budget.
@@ -181,12 +164,12 @@ TEST(BitGridTest, TheMemoryBudgetInTheEnvironmentCapsWhatMayBeAllocated) {
     }
     for (const auto& [text, bytes] : std::initializer_list<std::pair<const char*, uint64_t>>{
              {"4096", 4096}, {"2k", 2048}, {"3MiB", 3u << 20}, {"1.5G", 3u << 29}, {"1gb", 1u << 30}}) {
-        BitGridScopedEnv env("VOXFX_MEMORY_LIMIT", text);
+        test::ScopedEnv env("VOXFX_MEMORY_LIMIT", text);
         // The budget, or what the machine has when that is less.
         if (bytes < machine / 2) { EXPECT_EQ(availableMemoryBytes(), bytes) << text; }
     }
     for (const char* bad : {"lots", "-1M", "12Q", "1e30T", "nan", "5 M"}) {
-        BitGridScopedEnv env("VOXFX_MEMORY_LIMIT", bad);
+        test::ScopedEnv env("VOXFX_MEMORY_LIMIT", bad);
         EXPECT_THROW(availableMemoryBytes(), Error) << bad;
     }
 }

@@ -4,9 +4,9 @@
 // Oracle: every camera ray is intersected with every triangle of every leaf by brute force
 // (Möller–Trumbore, written here), and the inside of each leaf between consecutive crossings is
 // decided by CGAL::Side_of_triangle_mesh (exact predicates, tests/cgal_oracle.hpp); the Boolean
-// shapes are evaluated on those flags here. The visible surfaces are where an object's shape
-// changes from one interval to the next; the compositing reference is the definition of α
-// blending front to back over those surfaces.
+// shapes are evaluated on those flags (shapeInside, tests/support/volume_reference.hpp). The
+// visible surfaces are where an object's shape changes from one interval to the next; the
+// compositing reference is the definition of α blending front to back over those surfaces.
 #include <algorithm>
 #include <cmath>
 
@@ -14,12 +14,15 @@
 
 #include "cgal_oracle.hpp"
 #include "render/volume_pass.hpp"
+#include "support/volume_reference.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/segment_walker.hpp"
 #include "voxfx/volume_scene.hpp"
 
 namespace voxfx {
 namespace {
+
+using test::shapeInside;
 
 // A box rotated by `angle` about `axis` around `pivot`.
 Mesh brenRotatedBox(const Box3d& box, const Vec3d& axis, double angle, const Vec3d& pivot) {
@@ -76,15 +79,6 @@ Camera brenCamera() {
     c.target = {0.6, 0, 0.3};
     c.fovY = 0.75;
     return c;
-}
-
-bool brenShape(const VolumeScene& s, int32_t n, const std::vector<int>& inside) {
-    const ShapeNode& node = s.nodes[std::size_t(n)];
-    if (node.op == ShapeOp::Leaf) return inside[std::size_t(node.leaf)] > 0;
-    const bool a = brenShape(s, node.a, inside), b = brenShape(s, node.b, inside);
-    if (node.op == ShapeOp::Union) return a || b;
-    if (node.op == ShapeOp::Intersection) return a && b;
-    return a && !b;
 }
 
 struct BrenExpected {
@@ -146,7 +140,7 @@ std::vector<std::optional<std::vector<BrenExpected>>> brenOracle(const VolumeSce
                 leafInside.push_back(sd[firstPoint[px] + g]);
             }
             for (std::size_t o = 0; o < s.objects.size() && !stopped; ++o) {
-                const bool after = brenShape(s, s.objects[o].shape, leafInside);
+                const bool after = shapeInside(s, s.objects[o].shape, leafInside);
                 if (after == bool(before[o])) continue;
                 before[o] = after;
                 surfaces.push_back({groups[px][g], o, after});
@@ -199,7 +193,7 @@ TEST(BooleanRenderTest, VisibleSurfacesAndOutwardNormalsAgreeWithExactInsideTest
             in.push_back(sd[2 * k + 1]);
         }
         const int32_t shape = s.objects[probeObject[k]].shape;
-        wrong += brenShape(s, shape, out) || !brenShape(s, shape, in);
+        wrong += shapeInside(s, shape, out) || !shapeInside(s, shape, in);
         // Surfaces of the notch: outside the block's leaf a just behind, inside the subtracted leaf b.
         subtracted += probeObject[k] == 0 && out[1] > 0;
     }

@@ -23,25 +23,7 @@ namespace {
 
 using test::TempDir;
 
-// Sets an environment variable for the scope of a test.
-class ScopedEnv {
-public:
-    ScopedEnv(const char* name, const std::string& value) : name_(name) {
-        if (const char* old = std::getenv(name)) old_ = old, had_ = true;
-        ::setenv(name, value.c_str(), 1);
-    }
-    ~ScopedEnv() {
-        if (had_)
-            ::setenv(name_, old_.c_str(), 1);
-        else
-            ::unsetenv(name_);
-    }
-
-private:
-    const char* name_;
-    std::string old_;
-    bool had_ = false;
-};
+using test::ScopedEnv;
 
 TEST(ModuleLoaderTest, SearchesTheEnvironmentThenBesideTheBinaryThenItsLibDir) {
     ScopedEnv env("VOXFX_MODULE_PATH", "/first/dir::/second/dir");

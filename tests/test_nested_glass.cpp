@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "demo/demo_scenes.hpp"
+#include "support/ground_scenes.hpp"
 #include "test_util.hpp"
 #include "voxfx/glass.hpp"
 #include "voxfx/render.hpp"
@@ -17,6 +18,8 @@
 
 namespace voxfx {
 namespace {
+
+using test::greyGroundScene;
 
 // A glass medium of index n, absorption sigma (grey) and tint.
 GlassMedium nestedMedium(double n, double sigma, float tint = 1) {
@@ -314,20 +317,6 @@ TEST(NestedGlassTest, VoxelMarchCrossesTouchingGlassesAtTheClosedFormInterface) 
     }
 }
 
-// A scene holding a grey ground (3 x 3, casting no shadow) and nothing else: material 0.
-Scene groundScene() {
-    Scene s;
-    Material ground;
-    ground.baseColor = {0.6f, 0.6f, 0.6f};
-    ground.specular = 0;
-    SceneMesh floor;
-    test::appendQuad(floor.mesh, {0, 0, 0}, {0, 0, 3}, {3, 0, 0});
-    floor.material = s.addMaterial(ground);
-    floor.castsShadow = false;
-    s.meshes.push_back(floor);
-    return s;
-}
-
 // The glass pixels of `s` from `cam` (96x72, no shadows): multi at 128³ against the exact tracer.
 ImageError multiAgainstExact(const Scene& s, const Camera& cam, const char* what) {
     RenderOptions o;
@@ -351,7 +340,7 @@ ImageError multiAgainstExact(const Scene& s, const Camera& cam, const char* what
 // A glass ball with a core of another glass (CHANG fig. 3's angel in a ball, as spheres) over a
 // ground, the camera looking at it.
 Scene nestedBallScene() {
-    Scene s = groundScene();
+    Scene s = greyGroundScene();
     Material ball;
     ball.transmission = 1;
     ball.ior = 1.5f;
@@ -390,7 +379,7 @@ TEST(NestedGlassTest, VoxelGlassRendersANestedBallCloseToTheExactTracer) {
 // the exact tracer over the glass pixels. Multi measured MAE 0.0020 / PSNR 37.6 dB; before it saw the
 // shared face, MAE 0.0256 / PSNR 23.8 dB.
 TEST(NestedGlassTest, VoxelGlassRendersTouchingGlassesCloseToTheExactTracer) {
-    Scene s = groundScene();
+    Scene s = greyGroundScene();
     Material lower;
     lower.transmission = 1;
     lower.ior = 1.5f;

@@ -17,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "demo/demo_scenes.hpp"
+#include "support/ground_scenes.hpp"
 #include "test_util.hpp"
 #include "voxfx/gbuffer.hpp"
 #include "voxfx/image_io.hpp"
@@ -29,32 +30,7 @@ namespace {
 using namespace voxfx::demo;
 
 using test::appendQuad;
-
-// A ground quad (albedo 0.5, no specular) lit straight from above with irradiance 2.
-Scene groundScene() {
-    Scene s;
-    Material ground;
-    ground.name = "ground";
-    ground.baseColor = {0.5f, 0.5f, 0.5f};
-    ground.specular = 0;
-    SceneMesh g;
-    g.name = "Ground";
-    appendQuad(g.mesh, {0, 0, 0}, {0, 0, 4}, {4, 0, 0}); // counter-clockwise from above
-    g.material = s.addMaterial(ground);
-    g.castsShadow = false;
-    s.meshes.push_back(g);
-    Light sun;
-    sun.name = "sun";
-    sun.direction = {0, -1, 0};
-    sun.intensity = 2;
-    s.lights.push_back(sun);
-    Camera c;
-    c.position = {0, 5, 5};
-    c.target = {0, 0, 0};
-    c.fovY = 0.7;
-    s.cameras.push_back(c);
-    return s;
-}
+using test::sunlitGroundScene;
 
 RenderOptions smallOptions(std::string_view kind = "none", int64_t w = 160, int64_t h = 120) {
     RenderOptions o;
@@ -148,7 +124,7 @@ TEST(RenderTest, GBufferMatchesBruteForceRayCasting) {
 TEST(RenderTest, LambertGroundMatchesHandDerivedRadiance) {
     // Normal up, light straight down: L = albedo / pi * E * 1 + ambient * albedo
     //   = 0.5 / pi * 2 + 0.1 * 0.5 = 0.36831; float rounding only (1e-5).
-    const Scene s = groundScene();
+    const Scene s = sunlitGroundScene();
     const RenderResult r = render(s, s.cameras[0], smallOptions());
     const float expected = float(0.5 / M_PI * 2 + 0.05);
     int64_t ground = 0;
@@ -166,7 +142,7 @@ TEST(RenderTest, LambertGroundMatchesHandDerivedRadiance) {
 // face has the same radiance (albedo / pi * E * cos + ambient; float rounding only). With normals
 // averaged over the corners the faces shade as if rounded; creaseAngle 180 still does that.
 TEST(RenderTest, ABoxWithSharedCornersHasFlatFacesAndTheCreaseAngleIsAnOption) {
-    Scene s = groundScene(); // its Lambert material, sun and camera; the ground made a box
+    Scene s = sunlitGroundScene(); // its Lambert material, sun and camera; the ground made a box
     s.meshes[0].mesh = test::makeBox({-1, 0.2, -1}, {1, 2.2, 1});
     s.lights[0].direction = normalize(Vec3d{-0.3, -1, -0.5});
     const Camera& c = s.cameras[0];
@@ -201,7 +177,7 @@ TEST(RenderTest, ABoxWithSharedCornersHasFlatFacesAndTheCreaseAngleIsAnOption) {
 TEST(RenderTest, ExposureScalesTheWholeLinearImageBackgroundIncluded) {
     // --exposure multiplies the linear image: ground and background pixels alike (an HDR file
     // written with exposure k is k times the exposure-1 one everywhere).
-    const Scene s = groundScene();
+    const Scene s = sunlitGroundScene();
     RenderOptions o = smallOptions();
     o.background = {0.2f, 0.3f, 0.4f};
     const RenderResult one = render(s, s.cameras[0], o);
@@ -219,7 +195,7 @@ TEST(RenderTest, ExposureScalesTheWholeLinearImageBackgroundIncluded) {
 TEST(RenderTest, ShadowsInTheImageAreAmbientOrTransmittedLight) {
     // An opaque box and a leaf (t = 0.5) over the ground: the ground under the box gets ambient only;
     // under the leaf ambient + 0.5 * direct, in every shadow kind that models it.
-    Scene s = groundScene();
+    Scene s = sunlitGroundScene();
     SceneMesh box, leaf;
     box.name = "box";
     box.mesh = test::makeBox({-2.5, 1, -0.5}, {-1.5, 2, 0.5});
@@ -259,7 +235,7 @@ TEST(RenderTest, BlendedMeshIsSeenThroughAndAMaskedOneIsNot) {
     // quad (both drawn by the G-buffer: an independent path). Masked (blend = false, foliage), the
     // pixels it covers must not depend on the ground behind it.
     auto withQuad = [](bool blend, float opacity, Vec3f groundColour) {
-        Scene s = groundScene();
+        Scene s = sunlitGroundScene();
         s.materials[0].baseColor = groundColour;
         Material glassy;
         glassy.name = "tinted";
@@ -278,7 +254,7 @@ TEST(RenderTest, BlendedMeshIsSeenThroughAndAMaskedOneIsNot) {
     // blended one (not opaque) does not, so the blend of the two images holds only without it.
     RenderOptions o = smallOptions("none", 96, 72);
     o.ambientOcclusion = Occlusion::Off;
-    const Scene bare = groundScene();
+    const Scene bare = sunlitGroundScene();
     const Image ground = render(bare, bare.cameras[0], o).image;
     const Scene opaqueQuad = withQuad(false, 1, {0.5f, 0.5f, 0.5f});
     const Image front = render(opaqueQuad, opaqueQuad.cameras[0], o).image;
@@ -572,7 +548,7 @@ TEST(RenderTest, CgalDemoSkipsMissingMeshesWithAWarningAndNeedsOne) {
 // ---- Bad input and the command line -----------------------------------------------------------------
 
 TEST(RenderTest, RejectsBadOptions) {
-    const Scene s = groundScene();
+    const Scene s = sunlitGroundScene();
     RenderOptions o = smallOptions();
     o.width = 0;
     EXPECT_THROW(render(s, s.cameras[0], o), Error);

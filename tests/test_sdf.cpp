@@ -16,7 +16,6 @@
 #include <cstring>
 #include <iostream>
 #include <limits>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -417,21 +416,6 @@ TEST(Sdf, FillsThatNeedTheWholeGridKeepTheDenseSolid) {
     }
 }
 
-struct SdfScopedEnv {
-    SdfScopedEnv(const char* name, const char* value) : name(name) {
-        if (const char* old = std::getenv(name)) saved = old;
-        setenv(name, value, 1);
-    }
-    ~SdfScopedEnv() {
-        if (saved)
-            setenv(name, saved->c_str(), 1);
-        else
-            unsetenv(name);
-    }
-    const char* name;
-    std::optional<std::string> saved;
-};
-
 TEST(Sdf, BricksLargerThanTheGridAreTheGrid) {
     // A brick edge far beyond the grid (8192 for a 24^3 grid) makes one brick of the grid's size:
     // the tiled voxelizer's bricks are not sized for it (8192^3 bits per brick would exceed the
@@ -439,7 +423,7 @@ TEST(Sdf, BricksLargerThanTheGridAreTheGrid) {
     const Mesh box = test::makeBox({0, 0, 0}, {1, 1, 1});
     const Frame frame = sdfFrame(box.view(), 20, 2);
     const SignedDistanceField reference = signedDistanceField(box.view(), frame);
-    const SdfScopedEnv budget("VOXFX_MEMORY_LIMIT", "256M");
+    const test::ScopedEnv budget("VOXFX_MEMORY_LIMIT", "256M");
     SdfOptions o;
     o.brickSize = 8192;
     expectSameField(signedDistanceField(box.view(), frame, o), reference, "bricks of 8192");
@@ -454,7 +438,7 @@ TEST(Sdf, LargeGridsNeedNoSolidOfTheWholeVolume) {
     const Mesh box = test::makeBox(Vec3d{1, 1, 1} * double(lo), Vec3d{1, 1, 1} * double(hi));
     const Frame frame = Frame::orthographic({{0, 0, 0}, Vec3d{1, 1, 1} * double(n)}, Axis::Z, n, n, n);
     const uint64_t denseBytes = BitGrid::requiredBytes(n, n, n);
-    const SdfScopedEnv budget("VOXFX_MEMORY_LIMIT", "64M");
+    const test::ScopedEnv budget("VOXFX_MEMORY_LIMIT", "64M");
     EXPECT_THROW(detail::signedDistanceField(box.view(), frame, {}, detail::SdfSign::Dense), Error);
     detail::SdfSignReport used;
     const SignedDistanceField f =

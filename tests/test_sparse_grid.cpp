@@ -11,7 +11,6 @@
 #include <fstream>
 #include <iterator>
 #include <map>
-#include <optional>
 #include <set>
 #include <tuple>
 
@@ -323,25 +322,6 @@ TEST(SparseGridTest, BudgetsAreEnforcedWithAMessageThatSaysWhat) {
 
 // ---- OpenVDB's tools in place of the dense operations (voxfx morph / csg on .vdb) -------------
 
-namespace sparse_ops_test {
-
-struct ScopedEnv {
-    ScopedEnv(const char* name, const char* value) : name(name) {
-        if (const char* old = std::getenv(name)) saved = old;
-        setenv(name, value, 1);
-    }
-    ~ScopedEnv() {
-        if (saved)
-            setenv(name, saved->c_str(), 1);
-        else
-            unsetenv(name);
-    }
-    const char* name;
-    std::optional<std::string> saved;
-};
-
-} // namespace sparse_ops_test
-
 TEST(SparseGridTest, SparseMorphologyEqualsTheDenseOneForEveryOpBorderAndRadius) {
     // Oracle: voxfx::morphology's separable word passes on the dense grid (independent of OpenVDB).
     // Random grids of sizes that are no multiple of 8, dense and sparse, and a box that reaches
@@ -425,7 +405,7 @@ TEST(SparseGridTest, CliMorphsAVdbThatDoesNotFitDensely) {
         dir.file("cube.off"), "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
                               "3 0 2 3\n3 0 3 1\n3 4 5 7\n3 4 7 6\n3 0 1 5\n3 0 5 4\n"
                               "3 2 6 7\n3 2 7 3\n3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n");
-    const sparse_ops_test::ScopedEnv budget("VOXFX_MEMORY_LIMIT", "4M");
+    const test::ScopedEnv budget("VOXFX_MEMORY_LIMIT", "4M");
     const std::string cube = dir.file("cube.vdb"), out = dir.file("eroded.vdb");
     ASSERT_EQ(test::runVoxfx(dir, "voxelize " + mesh + " -r 256 -o " + cube).exitCode, 0);
     test::CommandRun r = test::runVoxfx(dir, "morph " + cube + " --op erode --radius 2 -o " + out);

@@ -1,4 +1,6 @@
-// voxfx tests — the one shared helper header: temporary folders, file writing, fetched data.
+// voxfx tests — the general shared helper header: temporary folders, environment variables, file
+// writing, fetched data, meshes and oracles. What the tests of one family of techniques share lives
+// in tests/support/ (shadow_reference.hpp, volume_reference.hpp, glass_scenes.hpp, ground_scenes.hpp).
 #pragma once
 
 #include <atomic>
@@ -40,6 +42,29 @@ public:
 
 private:
     std::filesystem::path path_;
+};
+
+/// Sets an environment variable for one scope (the test process's own environment): the old value,
+/// or its absence, comes back on destruction.
+class ScopedEnv {
+public:
+    ScopedEnv(const char* name, const std::string& value) : name_(name) {
+        if (const char* old = std::getenv(name)) old_ = old, had_ = true;
+        ::setenv(name, value.c_str(), 1);
+    }
+    ~ScopedEnv() {
+        if (had_)
+            ::setenv(name_, old_.c_str(), 1);
+        else
+            ::unsetenv(name_);
+    }
+    ScopedEnv(const ScopedEnv&) = delete;
+    ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+private:
+    const char* name_;
+    std::string old_;
+    bool had_ = false;
 };
 
 /// The whole file at `path`, byte for byte ("" when it cannot be read).

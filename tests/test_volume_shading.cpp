@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "support/volume_reference.hpp"
 #include "voxfx/gbuffer.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/volume_scene.hpp"
@@ -20,17 +21,8 @@ namespace {
 constexpr double kVshdSun = 3;
 
 RenderOptions vshdOptions(VolumeShading shading, int64_t w, int64_t h) {
-    RenderOptions o;
-    o.width = w;
-    o.height = h;
     // The linear one-sample image over black without ambient or sky light: what the oracles describe.
-    o.ambient = {0, 0, 0};
-    o.skyLight = 0;
-    o.sky = SkyKind::Flat;
-    o.background = {0, 0, 0};
-    o.antiAliasing = AntiAliasing::Off;
-    o.toneMap = ToneMap::Clamp;
-    o.shadow = NoShadowOptions{};
+    RenderOptions o = test::linearBlackOptions(w, h);
     o.volumeShading = shading;
     return o;
 }
@@ -43,28 +35,7 @@ RenderOptions vshdOptions(VolumeShading shading, int64_t w, int64_t h) {
 // the rays tested keep well away from it.
 constexpr double kVshdSlabOpacity = 0.3, kVshdSlabLength = 0.5;
 
-Scene vshdSlab() {
-    Scene s;
-    Light sun;
-    sun.direction = normalize(Vec3d{0.5, -1, 0.3});
-    sun.intensity = float(kVshdSun);
-    s.lights.push_back(sun);
-    Camera c;
-    c.position = {0, 5, 2.5};
-    c.target = {0, 0.25, 0};
-    c.fovY = 0.3;
-    s.cameras.push_back(c);
-    const double h = 1.0 / 16;
-    auto v = std::make_shared<Volume>(Vec3i{32, 8, 32}, Vec3d{-1, 0, -1}, Vec3d{h, h, h});
-    std::fill(v->values().begin(), v->values().end(), 1.0f);
-    v->at(0, 0, 0) = 0;
-    const TransferFunction tf({{0, {1, 1, 1}}, {2, {1, 1, 1}}},
-                              {{0, kVshdSlabOpacity}, {2, kVshdSlabOpacity}});
-    auto vs = std::make_shared<VolumeScene>();
-    vs->addVolumeBox(v, tf, kVshdSlabLength, "slab");
-    s.volumeScene = vs;
-    return s;
-}
+Scene vshdSlab() { return test::homogeneousSlabScene(kVshdSlabOpacity, kVshdSlabLength, kVshdSun, true); }
 
 TEST(VolumeShadingTest, AHomogeneousSlabIsBeerLambertWithShadingOnOrOff) {
     const Scene s = vshdSlab();

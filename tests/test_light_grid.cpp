@@ -1,0 +1,274 @@
+// Tests of what the light-grid shadows share (voxfx/light_grid.hpp: transmittance, ED06 §3.1, and
+// absorption, CHANG §3) against exact light transport (tests/support/shadow_reference.hpp) and
+// hand-derived cases: stacked layers multiply (transmittance) and add optical depth per crossing
+// (absorption), spot and point lights (cube faces and their seams), the self-shadowing bias, and
+// the filtered (bilinear) lookups against the own-column one.
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "support/shadow_reference.hpp"
+#include "test_util.hpp"
+#include "voxfx/light_grid.hpp"
+#include "voxfx/light_view.hpp"
+#include "voxfx/render.hpp"
+#include "voxfx/shadow.hpp"
+
+namespace voxfx {
+namespace {
+
+using test::appendQuad;
+using test::ErrorStats;
+using test::exactCrossings;
+using test::exactReference;
+using test::exactTransmittance;
+using test::gridOptions;
+using test::leafMaterial;
+using test::leafScene;
+using test::oneLeafScene;
+using test::Reference;
+using test::setShadowOption;
+using test::shadowError;
+using test::sun;
+using test::visibilityOf;
+
+TEST(ShadowTest, StackedLayersMultiplyAndAbsorptionAddsPerCrossing) {
+    // Three horizontal layers 0.5 apart: transmittance t^3; absorption exp(-3 sigma).
+    Scene s;
+    SceneMesh leaves;
+    leaves.name = "layers";
+    for (const double y : {1.0, 1.5, 2.0}) appendQuad(leaves.mesh, {0, y, 0}, {0, 0, 1}, {1, 0, 0});
+    leaves.material = s.addMaterial(leafMaterial({0.3f, 0.3f, 0.3f}, 0.6f, 0.0f)); // grey: t = 0.4
+    s.meshes.push_back(leaves);
+    const LightShadow tr = buildLightShadow(s, sun({0, -1, 0}), gridOptions("transmittance", 32));
+    const LightShadow ab = buildLightShadow(s, sun({0, -1, 0}), gridOptions("absorption", 32));
+    const float sigma = -std::log(0.4f);
+    EXPECT_NEAR(absorptionPerCrossing(s.materials[0], 8).x, sigma, 1e-5f);
+    for (const double y : {0.0, 1.25, 1.75, 2.5}) {
+        const int layers = (y < 1.0) + (y < 1.5) + (y < 2.0);
+        EXPECT_NEAR(visibilityOf(tr, {0.2, y, -0.3}, {0, 0, 0}).x, std::pow(0.4f, float(layers)), 1e-5f) << y;
+        EXPECT_NEAR(visibilityOf(ab, {0.2, y, -0.3}, {0, 0, 0}).x, std::exp(-sigma * float(layers)), 1e-5f)
+            << y;
+    }
+}
+
+TEST(ShadowTest, SpotLightShadowsThroughALeaf) {
+    const Scene s = oneLeafScene({0, 2, 0}, {0, 0, 1}, {1, 0, 0},
+                                 leafMaterial({0.3f, 0.3f, 0.3f}, 0.5f, 0.0f)); // t = 0.5
+    Light spot;
+    spot.type = LightType::Spot;
+    spot.position = {0, 4, 0};
+    spot.direction = {0, -1, 0};
+    spot.outerConeAngle = 1.0;
+    for (const std::string_view kind : {"transmittance", "absorption"}) {
+        const LightShadow sh = buildLightShadow(s, spot, gridOptions(kind, 128));
+        // Ground points whose ray to the light crosses the leaf: |x| < 2 at y = 0 (similar triangles).
+        EXPECT_NEAR(visibilityOf(sh, {1.5, 0, 0.3}, {0, 0, 0}).x, 0.5f, 1e-5f) << kind;
+        EXPECT_NEAR(visibilityOf(sh, {-1.0, 0, -1.7}, {0, 0, 0}).x, 0.5f, 1e-5f) << kind;
+        EXPECT_EQ(visibilityOf(sh, {2.5, 0, 0}, {0, 0, 0}).x, 1.0f) << kind;
+        EXPECT_EQ(visibilityOf(sh, {0, 3, 0}, {0, 0, 0}).x, 1.0f) << kind;
+    }
+}
+
+TEST(ShadowTest, PointLightInsideALeafBoxDimsEveryDirectionOnce) {
+    // A box of six leaf faces around a point light: every point outside is behind exactly one face
+    // (cube-face views, each one perspective frame). Points near a box edge may fall on a column the
+    // neighbouring face's leaf covers; the exact reference decides, and >= 97 % must agree.
+    Scene s;
+    SceneMesh box;
+    box.name = "leafbox";
+    box.mesh = test::makeBox({-1, -1, -1}, {1, 1, 1});
+    box.material = s.addMaterial(leafMaterial({0.3f, 0.3f, 0.3f}, 0.5f, 0.0f));
+    s.meshes.push_back(box);
+    Light lamp;
+    lamp.type = LightType::Point;
+    lamp.position = {0.1, -0.05, 0.07};
+    for (const std::string_view kind : {"transmittance", "absorption"}) {
+        const LightShadow sh = buildLightShadow(s, lamp, gridOptions(kind, 128));
+        ASSERT_EQ(shadowName(shadowOptionsNamed(kind)), kind);
+        ASSERT_EQ(sh.index(), shadowOptionsNamed(kind).index());
+        std::mt19937_64 rng(5);
+        int agree = 0, total = 0;
+        for (int i = 0; i < 600; ++i) {
+            Vec3d d{std::normal_distribution<double>()(rng), std::normal_distribution<double>()(rng),
+                    std::normal_distribution<double>()(rng)};
+            const Vec3d p = lamp.position + normalize(d) * 3.0;
+            const float ref = exactTransmittance(s, lamp, p).x;
+            EXPECT_EQ(exactCrossings(s, lamp, p), 1);
+            agree += std::abs(visibilityOf(sh, p, {0, 0, 0}).x - ref) < 1e-4f;
+            ++total;
+        }
+        EXPECT_GE(agree, total * 97 / 100) << kind;
+    }
+}
+
+TEST(ShadowTest, PointLightLookupsOffsetAcrossACubeFaceSeamStayShadowed) {
+    // A leaf roof at y = 1 over a point light at the origin; receivers on a wall x = 3 facing the
+    // light, around the seam y = x between the +X and +Y cube faces. The normal offset (towards the
+    // light, -x) moves a lookup from the +X face's frustum into the +Y one for y just below 3: the
+    // lookup must then use the +Y face, not report "outside the view" (full light). Every ray from
+    // these points to the light crosses the roof exactly once (checked by the exact reference).
+    const Scene s = oneLeafScene({0, 1, 0}, {0, 0, 3}, {3, 0, 0},
+                                 leafMaterial({0.3f, 0.3f, 0.3f}, 0.5f, 0.0f)); // t = 0.5
+    Light lamp;
+    lamp.type = LightType::Point;
+    lamp.position = {0, 0, 0};
+    const Vec3d wallNormal{-1, 0, 0};
+    for (const std::string_view kind : {"transmittance", "absorption"}) {
+        const LightShadow sh = buildLightShadow(s, lamp, gridOptions(kind, 64));
+        int wrong = 0;
+        for (int i = 0; i < 200; ++i) {
+            const Vec3d p{3.0, 2.0 + 0.998 * double(i) / 200.0, 0.2 - 0.002 * i};
+            ASSERT_EQ(exactCrossings(s, lamp, p), 1);
+            const float ref = exactTransmittance(s, lamp, p).x;
+            wrong += !(std::abs(visibilityOf(sh, p, wallNormal).x - ref) < 1e-4f);
+        }
+        EXPECT_EQ(wrong, 0) << kind;
+    }
+}
+
+TEST(ShadowTest, PointsOnALeafAreNotShadowedByTheirOwnLeaf) {
+    // Self-shadowing bias: normal offset towards the light plus the skipped own cell. Leaves turned
+    // about 20, 50 and 70 degrees from facing the light.
+    for (const double tilt : {0.4, 1.5, 3.0}) {
+        const Vec3d c{0, 2, 0}, u = normalize(Vec3d{1, tilt, 0}), v = normalize(Vec3d{0, 0.3, 1});
+        const Scene s = oneLeafScene(c, u, v, leafMaterial({0.3f, 0.3f, 0.3f}, 0.5f, 0.0f));
+        Vec3d n = normalize(cross(u, v));
+        const Light light = sun({0.2, -1, 0.1});
+        if (dot(n, -light.direction) < 0) n = -n;
+        // Own-column and filtered lookups: the filtered one reads each neighbouring column where the
+        // leaf's own plane crosses it (receiver-plane depth).
+        for (const std::string_view kind : {"transmittance", "absorption"})
+            for (const bool conservative : {false, true})
+                for (const bool bilinear : {false, true}) {
+                    ShadowOptions o = gridOptions(kind, 128);
+                    if (conservative) {
+                        setShadowOption(o, "voxelMode", std::string("conservative"));
+                        setShadowOption(o, "coverage", std::string("conservative"));
+                    }
+                    setShadowOption(o, "bilinear", bilinear);
+                    const LightShadow sh = buildLightShadow(s, light, o);
+                    std::mt19937_64 rng(2);
+                    std::uniform_real_distribution<double> w(-0.9, 0.9);
+                    int lit = 0;
+                    for (int i = 0; i < 500; ++i) // 1 within float rounding of the filter's weights
+                        lit += visibilityOf(sh, c + u * w(rng) + v * w(rng), n).x >= 1.0f - 1e-6f;
+                    std::printf("tilt %.1f %s%s%s: %d of 500 lit\n", tilt, std::string(kind).c_str(),
+                                conservative ? " conservative" : "", bilinear ? " bilinear" : "", lit);
+                    EXPECT_GE(lit, 495)
+                        << "tilt " << tilt << " " << kind << (conservative ? " conservative" : " centre")
+                        << (bilinear ? " bilinear" : " own column");
+                }
+    }
+}
+
+// ---- Filtered lookups (the default) -------------------------------------------------------------
+
+/// Stair-stepping of a shadow edge: an opaque box turned 17 degrees about the vertical under a sun
+/// straight down, so its shadow edge on the ground runs across the light grid's columns. Along the
+/// edge, at `rows` positions, the ground is sampled across it (1/16 of a column apart) and the
+/// crossing of visibility 0.5 is found; the exact edge is the box's side. `wiggle` is the RMS of
+/// the crossing's distance from the edge about its mean (the staircase), `offset` that mean, both
+/// in columns.
+struct EdgeSteps {
+    double wiggle = 0, offset = 0;
+};
+
+EdgeSteps edgeSteps(std::string_view kind, int64_t n, bool bilinear) {
+    const double angle = 17.0 * 3.14159265358979 / 180.0, c = std::cos(angle), sn = std::sin(angle);
+    Scene s;
+    SceneMesh ground;
+    ground.name = "ground";
+    appendQuad(ground.mesh, {0, 0, 0}, {0, 0, 4}, {4, 0, 0});
+    ground.material = s.addMaterial(Material{});
+    ground.castsShadow = false;
+    s.meshes.push_back(ground);
+    SceneMesh box;
+    box.name = "box";
+    box.mesh = test::makeBox({-1, 1, -1}, {1, 2, 1});
+    for (Vec3f& p : box.mesh.positions) p = Vec3f(float(c * p.x - sn * p.z), p.y, float(sn * p.x + c * p.z));
+    // Nearly opaque tissue (0.05 per crossing): a partial occluder, so transmittance looks it up in
+    // its light grid (an opaque box would go to its standard shadow map).
+    box.material = s.addMaterial(leafMaterial({0.5f, 0.5f, 0.5f}, 0.95f, 0.0f));
+    s.meshes.push_back(box);
+    ShadowOptions o = gridOptions(kind, n);
+    setShadowOption(o, "bilinear", bilinear);
+    const LightShadow sh = buildLightShadow(s, sun({0, -1, 0}), o);
+    // The box's +x side after the turn: (1, z') maps to (c - sn z', sn + c z'); outward normal (c, sn).
+    const Vec3d u{c, 0, sn}, along{-sn, 0, c};
+    const Vec3d edge0{c, 0, sn};
+    // The column width of the light view the technique fits to its casters (the turned box).
+    Box3d bounds;
+    for (const Vec3f& p : s.meshes[1].mesh.positions) bounds.extend(Vec3d(p));
+    const double column = makeLightViews(sun({0, -1, 0}), bounds, n, n).at(0).columnWorldSize(edge0);
+    std::vector<double> d;
+    const int rows = 400;
+    for (int r = 0; r < rows; ++r) {
+        const double t = -0.8 + 1.6 * (r + 0.5) / rows;
+        const Vec3d base = edge0 + along * t;
+        double prev = -1, prevX = 0, hit = std::nan("");
+        for (int k = -64; k <= 64; ++k) {
+            const double x = double(k) / 16 * column;
+            const double v = visibilityOf(sh, base + u * x, {0, 1, 0}).x;
+            if (prev >= 0 && prev < 0.5 && v >= 0.5) {
+                hit = prevX + (0.5 - prev) / (v - prev) * (x - prevX);
+                break;
+            }
+            prev = v;
+            prevX = x;
+        }
+        if (std::isfinite(hit)) d.push_back(hit / column);
+    }
+    EdgeSteps e;
+    if (d.size() < size_t(rows) * 9 / 10) return {1e9, 1e9};
+    for (const double x : d) e.offset += x;
+    e.offset /= double(d.size());
+    for (const double x : d) e.wiggle += (x - e.offset) * (x - e.offset);
+    e.wiggle = std::sqrt(e.wiggle / double(d.size()));
+    return e;
+}
+
+// Issue 26 item 6: filtered (bilinear) light-grid lookups by default (BENCHMARKS.md, "Filtered
+// light-grid lookups"): filtering shortens the staircase of a shadow edge across the columns and
+// lowers the 95th percentile of the error against exact transport on foliage; the price is a
+// somewhat higher mean at 128 and 256 columns (a column's width of blur at every leaf's edge).
+// Tilted leaves do not shadow themselves (PointsOnALeafAreNotShadowedByTheirOwnLeaf, bilinear).
+// --no-bilinear gives ED06's own-column lookup.
+TEST(ShadowTest, FilteredLookupsShortenTheEdgeStaircaseAndBlurTheFoliage) {
+    EXPECT_TRUE(LightGridOptions{}.bilinear);
+    for (const std::string_view kind : {"transmittance", "absorption"}) {
+        for (const int64_t n : {64, 128}) {
+            const EdgeSteps nearest = edgeSteps(kind, n, false), filtered = edgeSteps(kind, n, true);
+            std::printf("%s %lld: edge staircase (RMS of the 0.5 crossing about the edge) nearest %.3f, "
+                        "filtered %.3f columns (mean offset %.3f, %.3f)\n",
+                        std::string(kind).c_str(), (long long)n, nearest.wiggle, filtered.wiggle,
+                        nearest.offset, filtered.offset);
+            EXPECT_GT(nearest.wiggle, 0.2) << kind << " " << n; // a step a column: about 1 / sqrt(12)
+            EXPECT_LT(filtered.wiggle, 0.85 * nearest.wiggle) << kind << " " << n;
+        }
+    }
+    const Scene s = leafScene(500, 2, 51);
+    const Light light = sun();
+    const Reference pts = exactReference(s, light, 1500, 6);
+    for (const std::string_view kind : {"transmittance", "absorption"})
+        for (const int64_t n : {64, 128, 256}) {
+            ShadowOptions nearest = gridOptions(kind, n), filtered = gridOptions(kind, n);
+            setShadowOption(nearest, "bilinear", false);
+            setShadowOption(filtered, "bilinear", true);
+            const ErrorStats en = shadowError(s, light, pts, nearest),
+                             ef = shadowError(s, light, pts, filtered);
+            std::printf("%s %lld: error against exact, mean nearest %.4f, filtered %.4f; p95 %.4f, %.4f\n",
+                        std::string(kind).c_str(), (long long)n, en.mean, ef.mean, en.p95, ef.p95);
+            EXPECT_LT(ef.p95, en.p95) << kind << " " << n;
+            EXPECT_LT(ef.mean, 1.3 * en.mean) << kind << " " << n;
+            if (n >= 128) { EXPECT_GT(ef.mean, en.mean) << kind << " " << n; } // the blur's price
+        }
+}
+
+} // namespace
+} // namespace voxfx

@@ -1,0 +1,168 @@
+// Tests of the standard shadow map (voxfx/shadow_map.hpp, technique "map") and of the maps built in
+// light views (voxfx/light_view.hpp): binary shadows under a box; the map's depths and the ED06
+// slicemap's cells against brute-force rays through each texel's centre (Moller–Trumbore, sharing
+// no code with the rasterizer); opaque leaves, which the transmittance technique puts in its own
+// standard map, shadowed exactly where those rays are blocked.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <variant>
+
+#include <gtest/gtest.h>
+
+#include "support/shadow_reference.hpp"
+#include "test_util.hpp"
+#include "voxfx/grid_query.hpp"
+#include "voxfx/light_view.hpp"
+#include "voxfx/render.hpp"
+#include "voxfx/shadow.hpp"
+#include "voxfx/shadow_map.hpp"
+#include "voxfx/transmittance_shadow.hpp"
+
+namespace voxfx {
+namespace {
+
+using test::gridOptions;
+using test::leafScene;
+using test::rayTriangle;
+using test::sun;
+using test::visibilityOf;
+
+TEST(ShadowTest, StandardShadowMapIsBinaryUnderABox) {
+    Scene s;
+    SceneMesh box;
+    box.name = "box";
+    box.mesh = test::makeBox({-0.5, 1, -0.5}, {0.5, 2, 0.5});
+    box.material = s.addMaterial(Material{});
+    s.meshes.push_back(box);
+    ShadowOptions o = gridOptions("map", 256);
+    const LightShadow sh = buildLightShadow(s, sun({0, -1, 0}), o);
+    EXPECT_EQ(visibilityOf(sh, {0, 0, 0}, {0, 1, 0}).x, 0.0f);
+    EXPECT_EQ(visibilityOf(sh, {0.4, 0, -0.4}, {0, 1, 0}).x, 0.0f);
+    EXPECT_EQ(visibilityOf(sh, {0.8, 0, 0}, {0, 1, 0}).x, 1.0f);
+    EXPECT_EQ(visibilityOf(sh, {0, 2.2, 0}, {0, 1, 0}).x, 1.0f); // above the box
+    EXPECT_EQ(visibilityOf(sh, {0, 2.0, 0}, {0, 1, 0}).x, 1.0f); // on its lit top face: no acne
+    EXPECT_EQ(visibilityOf(sh, {0, 0, 0}, {0, 1, 0}).y, 0.0f);
+}
+
+// The ray through the centre of texel (i, j) of a light view, from its near plane.
+void texelRay(const LightView& v, int64_t i, int64_t j, Vec3d& origin, Vec3d& dir) {
+    origin = v.frame.worldFromGrid({double(i) + 0.5, double(j) + 0.5, 0.0});
+    dir = normalize(v.frame.worldFromGrid({double(i) + 0.5, double(j) + 0.5, 1.0}) - origin);
+}
+
+/// Whether the ray through the centre of texel (i, j) of `view` hits a triangle of `mesh`
+/// (Moller–Trumbore on every triangle).
+bool texelRayHits(const LightView& view, int64_t i, int64_t j, const Mesh& mesh) {
+    Vec3d o, d;
+    texelRay(view, i, j, o, d);
+    for (size_t t = 0; t < mesh.triangleCount(); ++t)
+        if (rayTriangle(o, d, Vec3d(mesh.positions[mesh.indices[3 * t]]),
+                        Vec3d(mesh.positions[mesh.indices[3 * t + 1]]),
+                        Vec3d(mesh.positions[mesh.indices[3 * t + 2]])) >= 0)
+            return true;
+    return false;
+}
+
+TEST(ShadowTest, AllLeavesOpaqueGiveBinaryShadowsWhereRaysThroughTheTexelsAreBlocked) {
+    // Opaque leaves: the map and the transmittance technique (whose opaque casters go to its standard
+    // map, and which then builds no light grid) must give 0 where the rays through every texel
+    // centre around a ground point's texel hit a leaf and 1 where none does (every leaf lies above
+    // the ground, so a hit is a caster in front of the point). The oracle casts those rays against
+    // the leaves by brute force; points whose 5 x 5 texels disagree (a shadow's edge, where PCF
+    // blends) are left out.
+    const Scene s = leafScene(300, 2, 21, 1.0f);
+    for (const Material& m : s.materials) EXPECT_TRUE(m.isOpaque());
+    Mesh leaves = s.meshes[1].mesh; // both colour groups' quads
+    for (const Vec3f& v : s.meshes[2].mesh.positions) leaves.positions.push_back(v);
+    for (const uint32_t i : s.meshes[2].mesh.indices)
+        leaves.indices.push_back(i + uint32_t(s.meshes[1].mesh.positions.size()));
+    const Light light = sun();
+    const LightShadow tr = buildLightShadow(s, light, gridOptions("transmittance", 256));
+    const LightShadow map = buildLightShadow(s, light, gridOptions("map", 256));
+    EXPECT_TRUE(std::get<TransmittanceShadow>(tr).maps().empty());
+    const LightView& view = std::get<MapShadow>(map).views().at(0);
+    std::mt19937_64 rng(4);
+    std::uniform_real_distribution<double> u(-3, 3);
+    int tested = 0, dark = 0;
+    for (int i = 0; i < 1500; ++i) {
+        const Vec3d p{u(rng), 0, u(rng)};
+        const Vec3d g = view.gridFromWorld(p);
+        int hits = 0;
+        for (int64_t dy = -2; dy <= 2; ++dy)
+            for (int64_t dx = -2; dx <= 2; ++dx)
+                hits +=
+                    texelRayHits(view, int64_t(std::floor(g.x)) + dx, int64_t(std::floor(g.y)) + dy, leaves);
+        if (hits != 0 && hits != 25) continue;
+        ++tested;
+        dark += hits == 25;
+        const float expected = hits == 25 ? 0.0f : 1.0f;
+        for (const LightShadow* sh : {&tr, &map})
+            ASSERT_TRUE(visibilityOf(*sh, p, {0, 1, 0}) == (Vec3f{expected, expected, expected}))
+                << i << " at " << p.x << ", " << p.z << (sh == &tr ? " (transmittance)" : " (map)");
+    }
+    EXPECT_GT(tested, 1000);
+    EXPECT_GT(dark, 100);
+}
+
+TEST(ShadowTest, ShadowMapAndSlicemapHoldWhatTheRayThroughEachTexelCentreHits) {
+    // Centre-sampled coverage: a caster covers a texel exactly when the ray through the texel's
+    // centre hits it. The brute-force oracle casts that ray against every leaf triangle
+    // (Moller–Trumbore, no shared code): the standard map must hold the nearest hit's depth, and
+    // the ED06 slicemap must have a filled cell in exactly the columns the ray hits, at the hit's
+    // slice.
+    const Scene s = leafScene(400, 1, 31);
+    const Mesh& leaves = s.meshes[1].mesh;
+    const Light light = sun();
+    const Box3d bounds = computeBounds(leaves.view());
+    const LightView mapView = makeLightViews(light, bounds, 160, 1)[0];
+    const LightView gridView = makeLightViews(light, bounds, 160, 64)[0];
+    const ShadowMap map = ShadowMap::build(leaves.view(), mapView);
+    const MeshView groups[1] = {leaves.view()};
+    const Vec3f zero[1] = {{0, 0, 0}};
+    const TransmittanceShadowMap grid =
+        TransmittanceShadowMap::build(gridView, groups, zero, VoxelizeMode::Surface, Slicing::Uniform);
+    const BitGrid& bits = grid.channels()[0].grid.bits;
+    int64_t covered = 0;
+    for (int64_t j = 0; j < mapView.frame.height(); ++j)
+        for (int64_t i = 0; i < mapView.frame.width(); ++i) {
+            Vec3d o, d;
+            texelRay(mapView, i, j, o, d);
+            double nearest = std::numeric_limits<double>::infinity();
+            for (size_t t = 0; t < leaves.triangleCount(); ++t) {
+                const double h = rayTriangle(o, d, Vec3d(leaves.positions[leaves.indices[3 * t]]),
+                                             Vec3d(leaves.positions[leaves.indices[3 * t + 1]]),
+                                             Vec3d(leaves.positions[leaves.indices[3 * t + 2]]));
+                if (h >= 0) nearest = std::min(nearest, h);
+            }
+            const float depth = map.depthAt(i, j);
+            if (!std::isfinite(nearest)) {
+                ASSERT_TRUE(std::isinf(depth)) << i << ", " << j;
+                ASSERT_EQ(countColumnRange(bits.column(j * gridView.frame.width() + i), bits.depth(), 0,
+                                           bits.depth()),
+                          0)
+                    << i << ", " << j;
+                continue;
+            }
+            ++covered;
+            const Vec3d hit = o + d * nearest;
+            // The tolerance from the oracle's depth (one from the map's would be infinite where the
+            // map missed the caster).
+            const double expected = mapView.gridFromWorld(hit).z;
+            ASSERT_NEAR(depth, expected, 1e-4 * (1 + std::abs(expected))) << i << ", " << j;
+            // The slicemap: the slice of the nearest hit is filled (same view, same columns).
+            const int64_t slice = int64_t(std::floor(gridView.gridFromWorld(hit).z));
+            const uint64_t* col = bits.column(j * gridView.frame.width() + i);
+            bool near = false; // the hit's slice, or its neighbour for a hit within 1e-6 slices of a boundary
+            for (int64_t k = std::max<int64_t>(0, slice - 1);
+                 k <= std::min<int64_t>(bits.depth() - 1, slice + 1); ++k)
+                near = near || ((col[k >> 6] >> (k & 63)) & 1);
+            ASSERT_TRUE(near) << i << ", " << j << " slice " << slice;
+        }
+    EXPECT_GT(covered, 2000);
+}
+
+} // namespace
+} // namespace voxfx
