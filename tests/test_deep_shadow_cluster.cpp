@@ -43,6 +43,31 @@ VolumeScene dsmrTwoUnderAPointLight() {
     return s;
 }
 
+// The unclustered and the clustered maps of one light against the independent reference at
+// `count` receivers receiver(k) (those the reference can tell): their summed errors and how many
+// were compared; visit(reference, unclustered, clustered) sees each.
+struct ClusterErrors {
+    double single = 0, clustered = 0;
+    int64_t n = 0;
+};
+template <class Receiver, class Visit>
+ClusterErrors compareAtReceivers(const VolumeScene& s, const Light& l, const DeepShadow& single,
+                                 const DeepShadow& clustered, int count, Receiver receiver, Visit visit) {
+    ClusterErrors e;
+    for (int k = 0; k < count; ++k) {
+        const Vec3d p = receiver(k);
+        const double ref = dsmrReferenceTransmittance(s, l.position, p, 1.0);
+        if (ref < 0) continue;
+        const double a = single.visibility(p, {0, 0, 0}, 0, 0).x,
+                     b = clustered.visibility(p, {0, 0, 0}, 0, 0).x;
+        e.single += std::abs(a - ref);
+        e.clustered += std::abs(b - ref);
+        visit(ref, a, b);
+        ++e.n;
+    }
+    return e;
+}
+
 TEST(DeepShadowClusterTest, PointLightClustersAimFewerMapsAndAreCloserToTheReferenceAtEqualTexels) {
     VOXFX_REQUIRE_DATA("meshes/knot1.off");
     VOXFX_REQUIRE_DATA("meshes/elephant.off");
@@ -69,20 +94,14 @@ TEST(DeepShadowClusterTest, PointLightClustersAimFewerMapsAndAreCloserToTheRefer
     // Receivers on the ground around both shadows, against the independent reference.
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> u(-1, 1);
-    double errSingle = 0, errClustered = 0;
-    int64_t n = 0, differ = 0;
-    for (int k = 0; k < 2000; ++k) {
-        const double side = k % 2 ? 2.8 : -2.8;
-        const Vec3d p{side + 0.6 * u(rng), -0.5, 0.6 * u(rng)};
-        const double ref = dsmrReferenceTransmittance(s, l.position, p, 1.0);
-        if (ref < 0) continue;
-        const double a = single.visibility(p, {0, 0, 0}, 0, 0).x,
-                     b = clustered.visibility(p, {0, 0, 0}, 0, 0).x;
-        errSingle += std::abs(a - ref);
-        errClustered += std::abs(b - ref);
-        differ += std::abs(a - b) > 0.01;
-        ++n;
-    }
+    int64_t differ = 0;
+    const auto [errSingle, errClustered, n] = compareAtReceivers(
+        s, l, single, clustered, 2000,
+        [&](int k) {
+            const double side = k % 2 ? 2.8 : -2.8;
+            return Vec3d{side + 0.6 * u(rng), -0.5, 0.6 * u(rng)};
+        },
+        [&](double, double a, double b) { differ += std::abs(a - b) > 0.01; });
     ASSERT_GT(n, 1800);
     std::printf("point light, mean error single %.4f clustered %.4f, %lld of %lld differ\n",
                 errSingle / double(n), errClustered / double(n), (long long)differ, (long long)n);
@@ -112,20 +131,16 @@ TEST(DeepShadowClusterTest, APointLightClusterWiderThanAConeKeepsOnlyTheCubeFace
     EXPECT_LE(clustered.stats().clusteredViewTexels, clustered.stats().unclusteredViewTexels);
     std::mt19937 rng(9);
     std::uniform_real_distribution<double> u(-1, 1);
-    double errSingle = 0, errClustered = 0;
-    int64_t n = 0, wrong = 0, shadowed = 0;
-    for (int k = 0; k < 3000; ++k) {
-        const Vec3d p{3 * u(rng), 3 * u(rng), 3 * u(rng)};
-        const double ref = dsmrReferenceTransmittance(s, l.position, p, 1.0);
-        if (ref < 0) continue;
-        const double a = single.visibility(p, {0, 0, 0}, 0, 0).x,
-                     b = clustered.visibility(p, {0, 0, 0}, 0, 0).x;
-        errSingle += std::abs(a - ref);
-        errClustered += std::abs(b - ref);
-        wrong += std::abs(b - ref) > 0.5;
-        shadowed += ref < 0.5;
-        ++n;
-    }
+    int64_t wrong = 0, shadowed = 0;
+    const auto [errSingle, errClustered, n] = compareAtReceivers(
+        s, l, single, clustered, 3000,
+        [&](int) {
+            return Vec3d{3 * u(rng), 3 * u(rng), 3 * u(rng)};
+        },
+        [&](double ref, double, double b) {
+            wrong += std::abs(b - ref) > 0.5;
+            shadowed += ref < 0.5;
+        });
     ASSERT_GT(n, 2800);
     EXPECT_GT(shadowed, 200);
     std::printf("wide cluster, mean error single %.4f clustered %.4f, %lld wrong\n", errSingle / double(n),
