@@ -188,8 +188,8 @@ float pcfByDefinition(const ShadowMap& map, const Vec3d& p, int r, double bias) 
 }
 
 TEST(ShadowTest, ShadowMapLookupIsItsFilterByDefinitionOnGroundTrunksAndLeaves) {
-    // A tilted ground that casts (as a forest's floor does), boxes standing on it like trunks and
-    // leaves above: the lookup (which may answer "every tap lit" from a bound of the depths around
+    // A ground that casts (as a forest's floor does), lit at a slant, boxes standing on it like
+    // trunks and leaves above: the lookup (which may answer "every tap lit" from a bound of the depths around
     // a block of texels) must equal the filter counted tap by tap, for points on the ground, just
     // above it, on the boxes' sides and among the leaves, with every PCF radius and bias.
     const Scene s = leafScene(300, 1, 7, 1.0f);
