@@ -166,3 +166,65 @@ TEST(ShadowTest, ShadowMapAndSlicemapHoldWhatTheRayThroughEachTexelCentreHits) {
 
 } // namespace
 } // namespace voxfx
+
+namespace voxfx {
+namespace {
+
+// The percentage-closer filter by its definition, from the map's depths: the fraction of the
+// (2r+1)^2 texels around p's (clamped to the map) whose depth is not in front of p by more than
+// `bias` world units.
+float pcfByDefinition(const ShadowMap& map, const Vec3d& p, int r, double bias) {
+    const LightView& v = map.view();
+    const Vec3d g = v.gridFromWorld(p);
+    const int64_t W = v.frame.width(), H = v.frame.height();
+    const int64_t cx = std::clamp<int64_t>(int64_t(std::floor(g.x)), 0, W - 1),
+                  cy = std::clamp<int64_t>(int64_t(std::floor(g.y)), 0, H - 1);
+    int lit = 0;
+    for (int64_t y = cy - r; y <= cy + r; ++y)
+        for (int64_t x = cx - r; x <= cx + r; ++x)
+            lit += double(map.depthAt(std::clamp<int64_t>(x, 0, W - 1), std::clamp<int64_t>(y, 0, H - 1))) >=
+                   g.z - bias / v.worldPerDepthUnit();
+    return float(lit) / float((2 * r + 1) * (2 * r + 1));
+}
+
+TEST(ShadowTest, ShadowMapLookupIsItsFilterByDefinitionOnGroundTrunksAndLeaves) {
+    // A ground that casts (as a forest's floor does), lit at a slant, boxes standing on it like
+    // trunks and leaves above: the lookup (which may answer "every tap lit" from a bound of the depths around
+    // a block of texels) must equal the filter counted tap by tap, for points on the ground, just
+    // above it, on the boxes' sides and among the leaves, with every PCF radius and bias.
+    const Scene s = leafScene(300, 1, 7, 1.0f);
+    Mesh casters = s.meshes[0].mesh; // the ground
+    auto add = [&](const Mesh& m) {
+        const auto base = uint32_t(casters.positions.size());
+        casters.positions.insert(casters.positions.end(), m.positions.begin(), m.positions.end());
+        for (const uint32_t i : m.indices) casters.indices.push_back(base + i);
+    };
+    add(s.meshes[1].mesh);
+    for (const Vec3d& at : {Vec3d{-1, 0, -1}, Vec3d{1.2, 0, 0.3}, Vec3d{0, 0, 1.5}})
+        add(test::makeBox(at - Vec3d{0.1, 0, 0.1}, at + Vec3d{0.1, 2, 0.1}));
+    const Light light = sun({0.55, -1, 0.35});
+    const LightView view = makeLightViews(light, computeBounds(casters.view()), 300, 1)[0];
+    const ShadowMap map = ShadowMap::build(casters.view(), view);
+    const double texel = view.columnWorldSize({0, 0, 0});
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(-3.2, 3.2), h(0, 3);
+    int64_t lit = 0, dark = 0, partial = 0;
+    for (int i = 0; i < 20000; ++i) {
+        // Half on the ground (lifted by 0 to 2 texels, the lookup's own offsets), half anywhere.
+        const Vec3d p = i % 2 ? Vec3d{u(rng), h(rng), u(rng)} : Vec3d{u(rng), texel * (i % 5) * 0.5, u(rng)};
+        for (const int r : {0, 1, 2})
+            for (const double bias : {0.0, 1.0, 2.5}) {
+                const float got = map.visibility(p, r, bias * texel),
+                            want = pcfByDefinition(map, p, r, bias * texel);
+                ASSERT_EQ(got, want) << p.x << ", " << p.y << ", " << p.z << " r " << r << " bias " << bias;
+                (want == 1 ? lit : want == 0 ? dark : partial) += 1;
+            }
+    }
+    // Each kind of answer is well represented.
+    EXPECT_GT(lit, 20000);
+    EXPECT_GT(dark, 5000);
+    EXPECT_GT(partial, 2000);
+}
+
+} // namespace
+} // namespace voxfx

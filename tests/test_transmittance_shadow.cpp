@@ -4,9 +4,14 @@
 // grid counts a tilted leaf once and errs about as little as the surface grid, bad input, no
 // casters. What it shares with absorption (the light grid's lookups) is tested in
 // test_light_grid.cpp; the techniques against each other in test_shadow_cross_technique.cpp.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <random>
+#include <span>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -15,6 +20,7 @@
 #include "voxfx/light_view.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/shadow.hpp"
+#include "voxfx/transmittance_shadow.hpp"
 
 namespace voxfx {
 namespace {
@@ -90,6 +96,81 @@ TEST(ShadowTest, ConservativeTransmittanceIsAboutAsCloseToExactAsSurface) {
         EXPECT_LT(conservative.mean, 1.5 * surface.mean) << n;
         EXPECT_LT(conservative.mean, previous) << n;
         previous = conservative.mean;
+    }
+}
+
+// Channel k's factor to the power of its cells in front of `depth` in column `column` (conservative:
+// of its runs of consecutive cells that end there), over every channel: ED06's count, bit by bit.
+Vec3f columnByDefinition(const TransmittanceShadowMap& map, std::span<const Vec3f> factors, bool runs,
+                         int64_t column, double depth, int64_t skip) {
+    Vec3f out{1, 1, 1};
+    for (std::size_t k = 0; k < map.channels().size(); ++k) {
+        const VoxelGrid& g = map.channels()[k].grid;
+        const int64_t D = g.frame.depth();
+        const double z = g.frame.depthToSlice(column)(depth);
+        const int64_t end =
+            z >= 0 ? std::clamp<int64_t>((z >= double(D) ? D : int64_t(z)) - skip + 1, 0, D) : 0;
+        const uint64_t* bits = g.bits.column(column);
+        auto filled = [&](int64_t i) { return i < D && ((bits[i >> 6] >> (i & 63)) & 1u) != 0; };
+        int n = 0;
+        for (int64_t i = 0; i < end; ++i) n += filled(i) && (!runs || !filled(i + 1));
+        Vec3f power;
+        for (int c = 0; c < 3; ++c) power[c] = std::pow(factors[k][c], float(n));
+        out = out * power;
+    }
+    return out;
+}
+
+TEST(ShadowTest, TransmittanceIsEachChannelsFactorToThePowerOfItsCellsInFront) {
+    // Three colour channels of foliage, surface and conservative grids: at random points the lookup
+    // must be the product over the channels of each one's factor to the power of its cells in front
+    // of p's skipped cells, counted bit by bit; the bilinear lookup with no normal (each column at
+    // p's depth) the weighted sum of those products over the four columns around p.
+    const Scene s = leafScene(600, 3, 11);
+    std::vector<MeshView> groups;
+    std::vector<Vec3f> factors;
+    Box3d bounds;
+    for (std::size_t g = 1; g <= 3; ++g) {
+        groups.push_back(s.meshes[g].mesh.view());
+        factors.push_back(s.materials[s.meshes[g].material].shadowCrossingTransmittance());
+        bounds.extend(computeBounds(groups.back()));
+    }
+    const LightView view = makeLightViews(sun(), bounds, 64, 48)[0];
+    const int64_t W = view.frame.width(), H = view.frame.height();
+    for (const VoxelizeMode mode : {VoxelizeMode::Surface, VoxelizeMode::Conservative}) {
+        const TransmittanceShadowMap map =
+            TransmittanceShadowMap::build(view, groups, factors, mode, Slicing::Uniform);
+        const bool runs = mode == VoxelizeMode::Conservative;
+        std::mt19937_64 rng(3);
+        std::uniform_real_distribution<double> u(-2.5, 2.5), h(0, 3.5);
+        int shaded = 0;
+        for (int i = 0; i < 4000; ++i) {
+            const Vec3d p{u(rng), h(rng), u(rng)};
+            const int64_t skip = i % 3;
+            if (!view.covers(p)) continue;
+            const Vec3d g = view.gridFromWorld(p);
+            const int64_t x = std::clamp<int64_t>(int64_t(std::floor(g.x)), 0, W - 1),
+                          y = std::clamp<int64_t>(int64_t(std::floor(g.y)), 0, H - 1);
+            const Vec3f want = columnByDefinition(map, factors, runs, y * W + x, g.z, skip);
+            const Vec3f got = map.transmittance(p, skip);
+            Vec3f blend{0, 0, 0};
+            const int64_t x0 = int64_t(std::floor(g.x - 0.5)), y0 = int64_t(std::floor(g.y - 0.5));
+            const double wx = g.x - 0.5 - double(x0), wy = g.y - 0.5 - double(y0);
+            for (int dy = 0; dy < 2; ++dy)
+                for (int dx = 0; dx < 2; ++dx) {
+                    const int64_t c =
+                        std::clamp<int64_t>(y0 + dy, 0, H - 1) * W + std::clamp<int64_t>(x0 + dx, 0, W - 1);
+                    blend += columnByDefinition(map, factors, runs, c, g.z, skip) *
+                             float((dx ? wx : 1 - wx) * (dy ? wy : 1 - wy));
+                }
+            const Vec3f gotBlend = map.transmittanceBilinear(p, skip);
+            for (int c = 0; c < 3; ++c) {
+                ASSERT_NEAR(got[c], want[c], 1e-6f) << toString(mode) << " point " << i;
+                ASSERT_NEAR(gotBlend[c], blend[c], 1e-5f) << toString(mode) << " point " << i;
+            }
+            shaded += want.y < 1;
+        }
+        EXPECT_GT(shaded, 500) << toString(mode);
     }
 }
 

@@ -86,9 +86,17 @@ private:
     // Grid g's column: the prefix sum and chord (frame depth units) in front of p's skipped cells.
     float columnSum(const Grid& g, int64_t column, double depth, int64_t skipCells, double& chord) const;
     Vec3f columnDepth(int64_t column, double depth, int64_t skipCells, double lengthPerDepth) const;
+    // exp(-optical depth) of one column in front of `depth`: with entryLight_, one scan and a read.
+    Vec3f columnLight(int64_t column, double depth, int64_t skipCells, double lengthPerDepth) const;
     LightView view_;
     std::vector<Grid> grids_;
     int64_t writes_ = 0;
+    /// One bit per column: set where some grid holds a write (a lookup of an empty column needs
+    /// neither its depth nor its entries; a few kilobytes where the entries' offsets take hundreds).
+    std::vector<uint64_t> occupied_;
+    /// One grid without glass (every grey scene): exp(-optical depth) up to each entry, as the
+    /// lookup computes it, so that a lookup needs no exp.
+    std::vector<Vec3f> entryLight_;
 };
 
 /// RGB optical depth of one crossing of `m`: -ln(shadowCrossingTransmittance) per channel, or

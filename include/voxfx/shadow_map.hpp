@@ -44,6 +44,23 @@ public:
 private:
     LightView view_;
     std::vector<float> depth_;
+    // Two lower bounds of the depths of each kTile x kTile block of texels and of the kTileBorder
+    // texels around it: the least depth, and a plane, depth(x, y) >= a + b (x - x0) + c (y - y0)
+    // with (x0, y0) the block's first texel, checked texel by texel with the lookup's own
+    // arithmetic. A lookup whose taps all lie there and whose point is not behind either bound at
+    // the lowest tap is lit by every tap (open ground beside the casters, most of a forest floor,
+    // leaves above a trunk's block), answered without reading the taps; the answer is the same.
+    static constexpr int64_t kTile = 16, kTileBorder = 1;
+    struct DepthPlane {
+        float a, b, c;
+        float least;
+        double at(int64_t dx, int64_t dy) const {
+            return double(a) + double(b) * double(dx) + double(c) * double(dy);
+        }
+    };
+    std::vector<DepthPlane> lowerPlanes_; // row-major blocks
+    void buildLowerPlanes();
+    DepthPlane lowerPlane(int64_t x0, int64_t y0) const;
 };
 
 /// The maps of one light (one per light view: six cube faces for a point light), with the lookup.

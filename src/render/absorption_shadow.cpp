@@ -19,6 +19,19 @@
 
 namespace voxfx {
 
+namespace {
+
+Vec3f absorptionExp(const Vec3f& depth) {
+    // One exp for a grey depth (every opaque-only or grey scene).
+    if (depth.x == depth.y && depth.y == depth.z) {
+        const auto v = float(std::exp(-double(depth.x)));
+        return {v, v, v};
+    }
+    return beerLambert(depth, 1.0);
+}
+
+} // namespace
+
 AbsorptionShadowMap AbsorptionShadowMap::build(const LightView& view, const MeshView& casters,
                                                std::span<const float> triangleAbsorption, Coverage coverage,
                                                Slicing slicing, Progress* progress) {
@@ -86,6 +99,19 @@ AbsorptionShadowMap AbsorptionShadowMap::build(const LightView& view, std::span<
             }
         });
     }
+    const int64_t columns = view.frame.columnCount();
+    map.occupied_.assign(size_t((columns + 63) / 64), 0);
+    for (const Grid& g : map.grids_)
+        for (int64_t c = 0; c < columns; ++c)
+            if (g.offsets[size_t(c)] != g.offsets[size_t(c) + 1])
+                map.occupied_[size_t(c >> 6)] |= uint64_t(1) << (c & 63);
+    if (map.grids_.size() == 1 && map.grids_[0].chord.empty()) {
+        // columnDepth of one grid without glass is depthPerUnit * prefix, exactly.
+        const Grid& g = map.grids_[0];
+        map.entryLight_.resize(g.prefix.size());
+        for (std::size_t i = 0; i < g.prefix.size(); ++i)
+            map.entryLight_[i] = absorptionExp(g.depthPerUnit * g.prefix[i]);
+    }
     return map;
 }
 
@@ -123,24 +149,22 @@ Vec3f AbsorptionShadowMap::columnDepth(int64_t column, double depth, int64_t ski
     return out;
 }
 
+Vec3f AbsorptionShadowMap::columnLight(int64_t column, double depth, int64_t skipCells,
+                                       double lengthPerDepth) const {
+    if (entryLight_.empty()) return absorptionExp(columnDepth(column, depth, skipCells, lengthPerDepth));
+    const Grid& g = grids_[0];
+    const int64_t end = detail::slicesInFront(g.frame, column, depth, skipCells);
+    const int64_t b = g.offsets[size_t(column)], e = g.offsets[size_t(column) + 1];
+    int64_t i = b;
+    while (i < e && int64_t(g.slice[size_t(i)]) < end) ++i;
+    return i == b ? Vec3f{1, 1, 1} : entryLight_[size_t(i - 1)];
+}
+
 Vec3f AbsorptionShadowMap::opticalDepth(const Vec3d& world, int64_t skipCells) const {
     if (grids_.empty() || !view_.covers(world)) return {0, 0, 0};
     const detail::ColumnAt c = detail::nearestColumn(view_, world);
     return columnDepth(c.column, c.depth, skipCells, detail::worldLengthPerDepth(view_, world));
 }
-
-namespace {
-
-Vec3f absorptionExp(const Vec3f& depth) {
-    // One exp for a grey depth (every opaque-only or grey scene).
-    if (depth.x == depth.y && depth.y == depth.z) {
-        const auto v = float(std::exp(-double(depth.x)));
-        return {v, v, v};
-    }
-    return beerLambert(depth, 1.0);
-}
-
-} // namespace
 
 Vec3f AbsorptionShadowMap::transmittance(const Vec3d& world, int64_t skipCells) const {
     return absorptionExp(opticalDepth(world, skipCells));
@@ -149,10 +173,14 @@ Vec3f AbsorptionShadowMap::transmittance(const Vec3d& world, int64_t skipCells) 
 Vec3f AbsorptionShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells,
                                                  const Vec3d& normal) const {
     if (grids_.empty() || !view_.covers(world)) return {1, 1, 1};
-    const double lengthPerDepth = detail::worldLengthPerDepth(view_, world);
-    return detail::bilinearColumns<Vec3f, float>(view_, world, normal, [&](const detail::ColumnAt& c) {
-        return absorptionExp(columnDepth(c.column, c.depth, skipCells, lengthPerDepth));
-    });
+    // Only glass needs the length per depth unit (one grid without glass: none).
+    const double lengthPerDepth = entryLight_.empty() ? detail::worldLengthPerDepth(view_, world) : 0.0;
+    return detail::bilinearColumnsLazy<Vec3f, float>(
+        view_, world, normal, [&](int64_t column, const auto& depth) {
+            // A column no grid writes: exp(-0), without the receiver plane's depth.
+            if (((occupied_[size_t(column >> 6)] >> (column & 63)) & 1u) == 0) return Vec3f{1, 1, 1};
+            return columnLight(column, depth(), skipCells, lengthPerDepth);
+        });
 }
 
 std::span<const OptionField<AbsorptionShadowOptions>> AbsorptionShadowOptions::fields() {

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "voxfx/frame.hpp"
@@ -38,7 +39,7 @@ inline int64_t slicesInFront(const Frame& f, int64_t column, double depth, int64
 /// The column holding world point p. Precondition: view.covers(world); the index is clamped since
 /// covers() admits the closed border of the columns.
 inline ColumnAt nearestColumn(const LightView& view, const Vec3d& world) {
-    const Vec3d p = view.gridFromWorld(world);
+    const Vec3d p = view.frame.projection().gridFromWorld(world);
     const int64_t x = std::clamp<int64_t>(int64_t(std::floor(p.x)), 0, view.frame.width() - 1);
     const int64_t y = std::clamp<int64_t>(int64_t(std::floor(p.y)), 0, view.frame.height() - 1);
     return {y * view.frame.width() + x, p.z};
@@ -53,47 +54,85 @@ inline double worldLengthPerDepth(const LightView& view, const Vec3d& world) {
     return depth > 0 ? length(world - view.frame.eye()) / depth : 1.0;
 }
 
-/// Where the plane through world point q with normal n crosses column (x, y)'s centre line, as a
-/// depth of the view's frame (receiver-plane depth): the receiver's own surface continued into a
-/// neighbouring column. Within two column footprints of q's depth (a plane nearly along the
-/// light's rays would send the lookup far along the column); q's own depth for a zero normal.
-inline double receiverPlaneDepth(const LightView& view, const Vec3d& q, const Vec3d& qGrid, const Vec3d& n,
-                                 double x, double y) {
-    const Vec3d a = view.frame.worldFromGrid({x, y, qGrid.z});
-    const Vec3d along = view.frame.worldFromGrid({x, y, qGrid.z + 1}) - a; // one depth unit
-    const double slope = dot(n, along);
-    if (!(std::abs(slope) > 0)) return qGrid.z;
-    const double reach = 2 * length(view.frame.worldFromGrid({x + 1, y, qGrid.z}) - a) / length(along);
-    return qGrid.z + std::clamp(dot(n, q - a) / slope, -reach, reach);
-}
+/// Where the plane through a point q with normal n crosses the centre line of a column near
+/// q, as a depth of the view's frame (receiver-plane depth): the receiver's own surface continued
+/// into a neighbouring column. Within two column footprints of q's depth (a plane nearly along the
+/// light's rays would send the lookup far along the column). worldFromGrid is affine in (x, y) at
+/// a fixed depth, in orthographic and perspective frames alike, so the frame's steps at q, taken
+/// once, give the crossing of every column around q.
+class ReceiverPlane {
+public:
+    /// The plane through the point at grid coordinates qGrid with world normal n.
+    ReceiverPlane(const LightView& view, const Vec3d& qGrid, const Vec3d& n)
+        : n_(n), qGrid_(qGrid), perspective_(view.frame.isPerspective()) {
+        const Frame& f = view.frame;
+        const Vec3d a = f.worldFromGrid(qGrid), ax = f.worldFromGrid(qGrid + Vec3d{1, 0, 0}) - a,
+                    ay = f.worldFromGrid(qGrid + Vec3d{0, 1, 0}) - a;
+        along_ = f.worldFromGrid(qGrid + Vec3d{0, 0, 1}) - a; // one depth unit
+        if (perspective_) {
+            alongX_ = f.worldFromGrid(qGrid + Vec3d{1, 0, 1}) - (a + ax) - along_;
+            alongY_ = f.worldFromGrid(qGrid + Vec3d{0, 1, 1}) - (a + ay) - along_;
+        }
+        nx_ = dot(n, ax);
+        ny_ = dot(n, ay);
+        footprint_ = length(ax);
+    }
+    /// The depth where the plane crosses the centre line through grid point (x, y).
+    double depthAt(double x, double y) const {
+        const double u = x - qGrid_.x, v = y - qGrid_.y;
+        const Vec3d along = perspective_ ? along_ + alongX_ * u + alongY_ * v : along_;
+        const double slope = dot(n_, along);
+        if (!(std::abs(slope) > 0)) return qGrid_.z;
+        const double reach = 2 * footprint_ / length(along);
+        return qGrid_.z + std::clamp(-(nx_ * u + ny_ * v) / slope, -reach, reach);
+    }
 
-/// Bilinear interpolation of value(ColumnAt) over the four columns whose centres (x + 0.5)
+private:
+    Vec3d n_, qGrid_, along_, alongX_, alongY_;
+    double nx_ = 0, ny_ = 0, footprint_ = 0;
+    bool perspective_;
+};
+
+/// Bilinear interpolation of value(column, depth) over the four columns whose centres (x + 0.5)
 /// surround p; beyond the frame's border the border column stands in (what lies there is the
 /// neighbouring cube face of a point light, or no caster at all). Each column is read at
 /// the depth where the receiver's tangent plane (through p, normal n) crosses it, so a receiver
 /// tilted against the light is not shadowed by its own cells in the neighbouring columns (a
-/// percentage-closer filter's receiver-plane depth); with a zero n, at p's depth.
-/// Weights are computed in double and applied as S (float for colours, double for scalars).
-/// Precondition: view.covers(world).
+/// percentage-closer filter's receiver-plane depth); with a zero n, at p's depth. `depth` is a
+/// callable returning that depth, computed only when called: a map whose column is empty answers
+/// without it (most lookups in sparse foliage). Weights are computed in double and applied as S
+/// (float for colours, double for scalars). Precondition: view.covers(world).
 template <class T, class S, class Value>
-T bilinearColumns(const LightView& view, const Vec3d& world, const Vec3d& n, const Value& value) {
-    const Vec3d p = view.gridFromWorld(world);
+T bilinearColumnsLazy(const LightView& view, const Vec3d& world, const Vec3d& n, const Value& value) {
+    const Vec3d p = view.frame.projection().gridFromWorld(world); // inline: once per lookup
     const int64_t W = view.frame.width(), H = view.frame.height();
     const double fx = p.x - 0.5, fy = p.y - 0.5;
     const int64_t x0 = int64_t(std::floor(fx)), y0 = int64_t(std::floor(fy));
     const double wx = fx - double(x0), wy = fy - double(y0);
     const bool plane = n.x != 0 || n.y != 0 || n.z != 0;
+    std::optional<ReceiverPlane> receiver; // made by the first column that asks for its depth
     T out{};
     for (int dy = 0; dy < 2; ++dy)
         for (int dx = 0; dx < 2; ++dx) {
             const int64_t x = std::clamp<int64_t>(x0 + dx, 0, W - 1),
                           y = std::clamp<int64_t>(y0 + dy, 0, H - 1);
             const S w = S((dx ? wx : 1 - wx) * (dy ? wy : 1 - wy));
-            const double depth =
-                plane ? receiverPlaneDepth(view, world, p, n, double(x) + 0.5, double(y) + 0.5) : p.z;
-            out += value(ColumnAt{y * W + x, depth}) * w;
+            const auto depth = [&] {
+                if (!plane) return p.z;
+                if (!receiver) receiver.emplace(view, p, n);
+                return receiver->depthAt(double(x) + 0.5, double(y) + 0.5);
+            };
+            out += value(y * W + x, depth) * w;
         }
     return out;
+}
+
+/// bilinearColumnsLazy for a value(ColumnAt) that always reads the depth.
+template <class T, class S, class Value>
+T bilinearColumns(const LightView& view, const Vec3d& world, const Vec3d& n, const Value& value) {
+    return bilinearColumnsLazy<T, S>(view, world, n, [&](int64_t column, const auto& depth) {
+        return value(ColumnAt{column, depth()});
+    });
 }
 
 /// The view among `views` to look p up in, and the lookup point q = p + n * offset (offset in column

@@ -5,7 +5,10 @@
 // n = popcount(column bits in front of p) filled cells, and is attenuated by t^n per channel;
 // through glass also by Beer–Lambert over the chord between paired crossings (entering, leaving).
 // The lookup skips the cell holding p (its own surface; see light_grid.hpp's bias note). Opaque
-// casters go to a standard shadow map (shadow_map.hpp).
+// casters go to a standard shadow map (shadow_map.hpp). Where the channels share one frame and
+// none is glass, the counts are read from one sparse index of every channel's column (the slices
+// where a count steps, each with every channel's count): the same n, from one short run of entries
+// (in sparse foliage a small fraction of the bit columns' size), and none at all for an empty column.
 #include "voxfx/transmittance_shadow.hpp"
 
 #include <algorithm>
@@ -15,6 +18,7 @@
 #include "render/light_grid_lookup.hpp"
 #include "render/shadow_casters.hpp"
 #include "voxfx/grid_query.hpp"
+#include "voxfx/parallel.hpp"
 #include "voxfx/text.hpp"
 
 namespace voxfx {
@@ -49,10 +53,19 @@ TransmittanceShadowMap TransmittanceShadowMap::build(const LightView& view, std:
         for (std::size_t n = 0; n < powers.size(); ++n)
             for (int ch = 0; ch < 3; ++ch) powers[n][ch] = std::pow(t[ch], float(n));
     }
+    map.buildEventIndex();
     return map;
 }
 
 namespace {
+
+// Word w of a column's events: its filled cells, or (runs) the last cell of each run of filled
+// cells (cell i when i + 1 is empty; the padding bits beyond the depth are 0).
+uint64_t columnEventWord(const uint64_t* words, int64_t w, int64_t wordsPerColumn, bool runs) {
+    if (!runs) return words[w];
+    const uint64_t next = w + 1 < wordsPerColumn ? words[w + 1] & 1u : 0;
+    return words[w] & ~((words[w] >> 1) | (next << 63));
+}
 
 // Runs of filled cells (maximal sequences of consecutive ones) whose last cell lies in [0, end):
 // cell i ends a run when it is filled and i + 1 is not (the padding bits beyond the depth are 0).
@@ -100,6 +113,76 @@ void forEachCrossing(const BitGrid& bits, int64_t column, int64_t end, bool runs
 
 } // namespace
 
+void TransmittanceShadowMap::buildEventIndex() {
+    eventOffsets_.clear();
+    if (channels_.empty()) return;
+    const Frame& frame = channels_[0].grid.frame;
+    for (const Channel& c : channels_) {
+        const Vec3f& a = c.attenuation;
+        if (a.x > 0 || a.y > 0 || a.z > 0 || !c.grid.frame.sameGrid(frame)) return;
+    }
+    const int64_t columns = frame.columnCount(), P = channels_[0].grid.bits.wordsPerColumn();
+    const std::size_t C = channels_.size();
+    const bool runs = mode_ == VoxelizeMode::Conservative;
+    // The union of the channels' events in word w of a column, each channel's in `own`.
+    auto events = [&](int64_t column, int64_t w, uint64_t* own) {
+        uint64_t any = 0;
+        for (std::size_t k = 0; k < C; ++k)
+            any |= own[k] = columnEventWord(channels_[k].grid.bits.column(column), w, P, runs);
+        return any;
+    };
+    std::vector<uint64_t> perColumn(static_cast<std::size_t>(columns));
+    parallelFor(0, columns, 4096, [&](int64_t c0, int64_t c1) {
+        std::vector<uint64_t> own(C);
+        for (int64_t c = c0; c < c1; ++c)
+            for (int64_t w = 0; w < P; ++w)
+                perColumn[size_t(c)] += uint64_t(std::popcount(events(c, w, own.data())));
+    });
+    uint64_t total = 0;
+    for (const uint64_t n : perColumn) total += n;
+    // Only where the index is no larger than the bit columns (sparse foliage, not a dense solid).
+    const uint64_t indexBytes = 4 * uint64_t(columns + 1) + 2 * total * (1 + C);
+    if (total > UINT32_MAX || frame.depth() > 65535 || indexBytes > 8 * C * uint64_t(columns * P)) return;
+    eventOffsets_.resize(size_t(columns) + 1);
+    eventColumns_.assign(size_t((columns + 63) / 64), 0);
+    for (std::size_t c = 0; c < perColumn.size(); ++c) {
+        eventOffsets_[c + 1] = eventOffsets_[c] + uint32_t(perColumn[c]);
+        if (perColumn[c] != 0) eventColumns_[c >> 6] |= uint64_t(1) << (c & 63);
+    }
+    eventSlice_.assign(total, 0);
+    eventCounts_.assign(total * C, 0);
+    parallelFor(0, columns, 4096, [&](int64_t c0, int64_t c1) {
+        std::vector<uint64_t> own(C);
+        std::vector<uint16_t> count(C);
+        for (int64_t c = c0; c < c1; ++c) {
+            std::fill(count.begin(), count.end(), uint16_t(0));
+            std::size_t i = eventOffsets_[size_t(c)];
+            for (int64_t w = 0; w < P; ++w)
+                for (uint64_t any = events(c, w, own.data()); any; any &= any - 1, ++i) {
+                    const int bit = std::countr_zero(any);
+                    for (std::size_t k = 0; k < C; ++k)
+                        count[k] = uint16_t(count[k] + ((own[k] >> bit) & 1u));
+                    eventSlice_[i] = uint16_t(w * 64 + bit);
+                    std::copy(count.begin(), count.end(), eventCounts_.begin() + std::ptrdiff_t(i * C));
+                }
+        }
+    });
+}
+
+Vec3f TransmittanceShadowMap::indexedTransmittance(int64_t column, int64_t end) const {
+    const std::size_t b = eventOffsets_[size_t(column)], e = eventOffsets_[size_t(column) + 1];
+    std::size_t i = b;
+    while (i < e && int64_t(eventSlice_[i]) < end) ++i;
+    Vec3f out{1, 1, 1};
+    if (i == b) return out;
+    const std::size_t C = channels_.size();
+    const uint16_t* n = eventCounts_.data() + (i - 1) * C;
+    // As columnTransmittance: the channels in order, those with no cell in front left out.
+    for (std::size_t k = 0; k < C; ++k)
+        if (n[k] != 0) out = out * powers_[k][n[k]];
+    return out;
+}
+
 double TransmittanceShadowMap::columnChord(std::size_t k, int64_t column, double depth,
                                            int64_t skipCells) const {
     const VoxelGrid& g = channels_[k].grid;
@@ -145,6 +228,9 @@ int64_t TransmittanceShadowMap::columnCells(std::size_t k, int64_t column, doubl
 
 Vec3f TransmittanceShadowMap::columnTransmittance(int64_t column, double depth, int64_t skipCells,
                                                   double lengthPerDepth) const {
+    if (!eventOffsets_.empty())
+        return indexedTransmittance(column,
+                                    detail::slicesInFront(channels_[0].grid.frame, column, depth, skipCells));
     Vec3f out{1, 1, 1};
     for (std::size_t k = 0; k < channels_.size(); ++k) {
         const int64_t n = columnCells(k, column, depth, skipCells);
@@ -172,6 +258,14 @@ Vec3f TransmittanceShadowMap::transmittance(const Vec3d& world, int64_t skipCell
 Vec3f TransmittanceShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells,
                                                     const Vec3d& normal) const {
     if (channels_.empty() || !view_.covers(world)) return {1, 1, 1};
+    if (!eventOffsets_.empty())
+        return detail::bilinearColumnsLazy<Vec3f, float>(
+            view_, world, normal, [&](int64_t column, const auto& depth) {
+                // An empty column: no need for the receiver plane's depth.
+                if (((eventColumns_[size_t(column >> 6)] >> (column & 63)) & 1u) == 0) return Vec3f{1, 1, 1};
+                return indexedTransmittance(
+                    column, detail::slicesInFront(channels_[0].grid.frame, column, depth(), skipCells));
+            });
     const double lengthPerDepth = detail::worldLengthPerDepth(view_, world);
     return detail::bilinearColumns<Vec3f, float>(view_, world, normal, [&](const detail::ColumnAt& c) {
         return columnTransmittance(c.column, c.depth, skipCells, lengthPerDepth);
@@ -252,6 +346,8 @@ TransmittanceShadow TransmittanceShadow::build(const Scene& scene, const Light& 
 Vec3f TransmittanceShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     Vec3f v{1, 1, 1};
     v = v * opaque_.visibility(p, n);
+    // In the opaque casters' shadow the grids cannot change the (zero) product.
+    if (v.x == 0 && v.y == 0 && v.z == 0) return v;
     Vec3d q;
     const int i = detail::lookupView(views_, p, n, options_.grid.normalOffset, q);
     if (i < 0) return v;
