@@ -277,6 +277,10 @@ struct GlassReport {
     int64_t pixels = 0;   ///< output pixels showing glass
     double prepareMs = 0; ///< Embree build (exact) or the grids (voxel methods, frosted)
     double traceMs = 0;   ///< tracing the glass pixels
+    /// Voxel methods: the grid's voxels along the glass's longest side, and why (given, or auto from
+    /// the glass objects' size on screen: chooseGlassGrid); 0 and empty for the other methods.
+    int64_t grid = 0;
+    std::string gridReason;
 };
 
 struct RenderResult {
