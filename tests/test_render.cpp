@@ -686,15 +686,15 @@ TEST(RenderTest, DemoCommandRendersTheTreeWithEveryShadowKindOfAll) {
     }
 }
 
-// The value --help prints after "(default " on the line of `flag` (CLI11's "[VALUE]" for `bracket`).
-std::string helpDefault(const std::string& help, const std::string& flag, bool bracket = false) {
+// The value --help prints after "(default " on the line of `flag` (CLI11's "TYPE=VALUE" right after
+// the flag for `typed`).
+std::string helpDefault(const std::string& help, const std::string& flag, bool typed = false) {
     const std::size_t at = help.find(flag);
     if (at == std::string::npos) return "";
-    const std::string open = bracket ? "[" : "(default ";
-    const std::size_t from = help.find(open, at);
-    if (from == std::string::npos) return "";
-    const std::size_t begin = from + open.size();
-    return help.substr(begin, help.find_first_of(bracket ? "]" : ");", begin) - begin);
+    const std::size_t from = typed ? help.find('=', at) : help.find("(default ", at);
+    if (from == std::string::npos || from > help.find('\n', at)) return "";
+    const std::size_t begin = from + (typed ? 1 : std::string("(default ").size());
+    return help.substr(begin, help.find_first_of(typed ? " \n" : ");", begin) - begin);
 }
 
 TEST(RenderTest, BareDemoWritesWhatItsHelpSaysIntoAFolderOfTheCurrentDirectory) {
@@ -711,8 +711,9 @@ TEST(RenderTest, BareDemoWritesWhatItsHelpSaysIntoAFolderOfTheCurrentDirectory) 
     EXPECT_EQ(out.find("docs"), std::string::npos) << out;
     const std::filesystem::path cwd = dir.path() / "cwd";
     std::filesystem::create_directories(cwd);
-    const std::string cmd = "cd '" + cwd.string() + "' && " + std::string(VOXFX_CLI_PATH) +
-                            " demo --scenes tree --grid 8 --grid-depth 8 --aa off -q >/dev/null 2>&1";
+    const std::string cmd =
+        "cd '" + cwd.string() + "' && " + std::string(VOXFX_CLI_PATH) +
+        " demo --scenes tree --grid 8 --grid-depth 8 --aa off --ao off -q >/dev/null 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0);
     const Image img = readPng((cwd / out / ("tree-" + shadows + ".png")).string());
     EXPECT_EQ(std::to_string(img.width), width);

@@ -227,7 +227,7 @@ TEST(RenderImageTest, HdrFilesHoldSceneLinearRadianceAndPngTheFilmicCurveByDefau
         EXPECT_EQ(r.exitCode, 0) << r.err;
         return readImage(path).at(0, 0);
     };
-    for (const std::string ext : {".pfm", ".exr", ".PFM"}) {
+    for (const std::string ext : {".pfm", ".exr"}) {
         SCOPED_TRACE(ext);
         const Vec3f linear = corner("quad.obj", "a" + ext, ""),
                     doubled = corner("quad.obj", "b" + ext, "--exposure 2");

@@ -450,7 +450,8 @@ TEST(ShadowVolumeTest, ClampRunsLeavesOutTheEmptyDepthBetweenReceivers) {
     }
 }
 
-// The near end (#37 item 5): a ball high over the ground, seen only from its lit side, has no
+// The near end (#37 item 5): a ball high over the ground (the light far above it, so that the
+// empty depth between them is worth leaving out), seen only from its lit side, has no
 // receiver near it, so clampRuns starts its volume just over the ground, behind the caster, and
 // caps it there. Two cameras: one from the side, outside the volume (depth-pass: the piece's near
 // cap must be drawn, though it is not on the caster), one under the ball looking down, inside the
@@ -472,7 +473,7 @@ TEST(ShadowVolumeTest, NearEndClampingStartsTheVolumeAtItsReceiversAndKeepsTheSh
         const bool inside = &camera == &cameras[1];
         const SvFixture f = svFixture(s, camera, 96, 72);
         const ShadowCasterSet casters = ShadowCasterSet::build(f.scene);
-        for (const Light& light : {svPointLight({0.05, 9, 0.03}), svSun({0.02, -1, 0.01})}) {
+        for (const Light& light : {svPointLight({0.05, 20, 0.03}), svSun({0.02, -1, 0.01})}) {
             SCOPED_TRACE(light.name + (inside ? ", inside" : ", outside"));
             const std::vector<uint8_t> receivers =
                 shadowVolumeReceivers(f.gbuffer, f.geometry, f.scene.materials, light);
@@ -680,7 +681,7 @@ TEST(ShadowVolumeTest, BlendedKnotIsNoDarkerUnderVolumesThanUnderAShadowMap) {
     }
     std::cout << "[ shadow ] blended knot: " << knotPixels << " knot pixels, " << darker
               << " more than 30 levels darker under volumes than under map\n";
-    EXPECT_GT(knotPixels, 1500);
+    EXPECT_GT(knotPixels, 600);
     EXPECT_LE(darker, knotPixels / 50);
 }
 
