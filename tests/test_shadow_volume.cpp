@@ -400,6 +400,27 @@ TEST(ShadowVolumeTest, EachCullingAndClampingSwitchKeepsTheShadowAndSavesFragmen
               << " gaps\n";
 }
 
+// The unculled, unclamped volumes and the same with clampRuns alone, for one light: the shadowed
+// receivers of the first and the receivers where the two differ.
+struct SvRunsAgainstPlain {
+    ShadowVolumeMask plain, runs;
+    int64_t shadowed = 0, differ = 0;
+};
+SvRunsAgainstPlain svRunsAgainstPlain(const SvFixture& f, const ShadowCasterSet& casters, const Light& light,
+                                      const std::vector<uint8_t>& receivers) {
+    SvRunsAgainstPlain out;
+    ShadowVolumeOptions runs = svOptions(false, false);
+    runs.clampRuns = true;
+    out.plain =
+        computeShadowVolumes(casters, light, f.gbuffer, receivers, f.scene.bounds(), svOptions(false, false));
+    out.runs = computeShadowVolumes(casters, light, f.gbuffer, receivers, f.scene.bounds(), runs);
+    for (std::size_t i = 0; i < receivers.size(); ++i) {
+        out.shadowed += receivers[i] && out.plain.shadowed[i];
+        out.differ += receivers[i] && out.plain.shadowed[i] != out.runs.shadowed[i];
+    }
+    return out;
+}
+
 // Layers: a small ball high over a thin platform that takes half its shadow, the ground far below
 // taking the rest. The ball's volume holds receivers on the ball itself, on the platform and on the
 // ground: clampRuns leaves out the empty depth between them (two gaps, each longer than twice the
@@ -423,21 +444,13 @@ TEST(ShadowVolumeTest, ClampRunsLeavesOutTheEmptyDepthBetweenReceivers) {
         SCOPED_TRACE(light.name);
         const std::vector<uint8_t> receivers =
             shadowVolumeReceivers(f.gbuffer, f.geometry, f.scene.materials, light);
-        const ShadowVolumeOptions none = svOptions(false, false);
-        ShadowVolumeOptions runs = none, far = none;
-        runs.clampRuns = true;
+        ShadowVolumeOptions far = svOptions(false, false);
         far.clamp = true;
-        const ShadowVolumeMask plain =
-            computeShadowVolumes(casters, light, f.gbuffer, receivers, f.scene.bounds(), none);
-        const ShadowVolumeMask r =
-            computeShadowVolumes(casters, light, f.gbuffer, receivers, f.scene.bounds(), runs);
+        const SvRunsAgainstPlain both = svRunsAgainstPlain(f, casters, light, receivers);
+        const ShadowVolumeMask &plain = both.plain, &r = both.runs;
         const ShadowVolumeMask fa =
             computeShadowVolumes(casters, light, f.gbuffer, receivers, f.scene.bounds(), far);
-        int64_t shadowed = 0, differ = 0;
-        for (std::size_t i = 0; i < receivers.size(); ++i) {
-            shadowed += receivers[i] && plain.shadowed[i];
-            differ += receivers[i] && plain.shadowed[i] != r.shadowed[i];
-        }
+        const int64_t shadowed = both.shadowed, differ = both.differ;
         const SvComparison c = svCompare(f, receivers, plain.shadowed, svRayTraced(f, light));
         std::cout << "[ shadow ] " << light.name << ": " << shadowed << " shadowed receivers, fragments none "
                   << plain.stats.fragments << ", clampRuns " << r.stats.fragments << " (" << r.stats.gaps
@@ -478,18 +491,9 @@ TEST(ShadowVolumeTest, NearEndClampingStartsTheVolumeAtItsReceiversAndKeepsTheSh
             SCOPED_TRACE(light.name + (inside ? ", inside" : ", outside"));
             const std::vector<uint8_t> receivers =
                 shadowVolumeReceivers(f.gbuffer, f.geometry, f.scene.materials, light);
-            const ShadowVolumeOptions none = svOptions(false, false);
-            ShadowVolumeOptions runs = none;
-            runs.clampRuns = true;
-            const ShadowVolumeMask plain =
-                computeShadowVolumes(casters, light, f.gbuffer, receivers, f.scene.bounds(), none);
-            const ShadowVolumeMask r =
-                computeShadowVolumes(casters, light, f.gbuffer, receivers, f.scene.bounds(), runs);
-            int64_t shadowed = 0, differ = 0;
-            for (std::size_t i = 0; i < receivers.size(); ++i) {
-                shadowed += receivers[i] && plain.shadowed[i];
-                differ += receivers[i] && plain.shadowed[i] != r.shadowed[i];
-            }
+            const SvRunsAgainstPlain both = svRunsAgainstPlain(f, casters, light, receivers);
+            const ShadowVolumeMask &plain = both.plain, &r = both.runs;
+            const int64_t shadowed = both.shadowed, differ = both.differ;
             const SvComparison c = svCompare(f, receivers, r.shadowed, svRayTraced(f, light));
             std::cout << "[ shadow ] " << light.name << (inside ? " inside" : " outside") << ": " << shadowed
                       << " shadowed receivers, " << r.stats.nearClamped << " near ends, depth-pass "
