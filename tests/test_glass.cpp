@@ -4,6 +4,7 @@
 // values), the image error over the glass mask and the methods by name. Each method is tested on
 // its own in test_glass_optics.cpp, test_exact_glass.cpp, test_voxel_glass.cpp and
 // test_frosted_glass.cpp; glass shadows in test_exact_shadow.cpp and test_shadow_cross_technique.cpp.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -21,6 +22,7 @@
 #include "voxfx/glass.hpp"
 #include "voxfx/image_io.hpp"
 #include "voxfx/render.hpp"
+#include "voxfx/scene_io.hpp"
 
 namespace voxfx {
 namespace {
@@ -153,6 +155,90 @@ TEST(GlassTest, CommandLineRendersGlassAndComparesTheVoxelMethodsWithTheExactTra
                                              " --glass frosty");
     EXPECT_NE(bad.exitCode, 0);
     EXPECT_NE(bad.err.find("exact, multi, two-surface"), std::string::npos) << bad.err;
+}
+
+// The voxel glass grid without --glass-grid (#37 item 6): about one voxel per 1.5 pixels of the
+// glass object's extent on screen, rounded up to a multiple of 32 within 64..512. A cube of side 1
+// straight ahead at distance d: its near face (at d - 0.5) spans 1 / (d - 0.5) / tan(fovY / 2) * H / 2
+// pixels (pinhole projection, by hand).
+TEST(GlassTest, AutoGlassGridFollowsTheGlassObjectsSizeOnScreen) {
+    const double fovY = 0.8;
+    Box3d cube;
+    cube.extend(Vec3d{-0.5, -0.5, -0.5});
+    cube.extend(Vec3d{0.5, 0.5, 0.5});
+    auto frameAt = [&](double d, int64_t scale) {
+        Camera c;
+        c.position = {0, 0, d};
+        c.target = {0, 0, 0};
+        c.fovY = fovY;
+        return cameraFrame(c, 320 * scale, 240 * scale);
+    };
+    auto onScreen = [&](double d) { return 1 / (d - 0.5) / std::tan(fovY / 2) * 120; };
+    int64_t previous = 0;
+    for (const double d : {20.0, 3.0, 1.6, 1.2}) {
+        SCOPED_TRACE(d);
+        const std::vector<Box3d> objects{cube};
+        const GlassGridChoice g = chooseGlassGrid(0, objects, cube, frameAt(d, 1), 1.0);
+        const double e = std::min(onScreen(d), 320.0); // clipped to the image
+        EXPECT_NEAR(g.objectPixels, e, 0.01 * e);
+        const double wanted = e / 1.5 + 2;
+        EXPECT_GE(g.resolution, std::clamp(wanted, 64.0, 512.0) - 1e-9);
+        EXPECT_LE(g.resolution, std::max(wanted + 32, 64.0));
+        EXPECT_EQ(g.resolution % 32, 0);
+        EXPECT_GE(g.resolution, previous); // nearer: never coarser
+        previous = g.resolution;
+        EXPECT_NE(g.reason.find("auto"), std::string::npos) << g.reason;
+        // Supersampled frames count output pixels: the same grid.
+        EXPECT_EQ(chooseGlassGrid(0, objects, cube, frameAt(d, 2), 0.5).resolution, g.resolution);
+        // A given resolution is kept.
+        const GlassGridChoice given = chooseGlassGrid(40, objects, cube, frameAt(d, 1), 1.0);
+        EXPECT_EQ(given.resolution, 40);
+        EXPECT_EQ(given.reason, "given");
+    }
+    EXPECT_EQ(chooseGlassGrid(0, std::vector<Box3d>{cube}, cube, frameAt(20, 1), 1.0).resolution, 64);
+    EXPECT_GE(previous, 160);
+    // Glass spread wider than the object: the voxel size carries over to the longest side of all the
+    // glass (twice as long: about twice the voxels), within the 2^24-voxel budget.
+    Box3d wide = cube;
+    wide.extend(Vec3d{1.5, 0.5, 0.5});
+    const int64_t one = chooseGlassGrid(0, std::vector<Box3d>{cube}, cube, frameAt(3, 1), 1.0).resolution;
+    const GlassGridChoice two = chooseGlassGrid(0, std::vector<Box3d>{cube}, wide, frameAt(3, 1), 1.0);
+    EXPECT_GE(two.resolution, 2 * one - 64);
+    EXPECT_LE(two.resolution, 2 * one + 32);
+    Box3d huge = cube;
+    huge.extend(Vec3d{30, 30, 30});
+    const GlassGridChoice capped = chooseGlassGrid(0, std::vector<Box3d>{cube}, huge, frameAt(1.2, 1), 1.0);
+    EXPECT_LE(double(capped.resolution) * capped.resolution * capped.resolution, double(int64_t(1) << 24));
+    EXPECT_GE(capped.resolution, 64);
+}
+
+TEST(GlassTest, RenderSizesTheGlassGridFromTheScreenAndSaysWhich) {
+    // The gem (an octahedron of side sqrt 2) fills more pixels of a larger image: a finer grid; the
+    // command's summary names the grid and why, and a --glass-grid given is the grid used.
+    test::TempDir dir;
+    writeGemScene(dir);
+    const Scene s = loadScene(dir.file("scene.json"));
+    RenderOptions o;
+    o.shadow = NoShadowOptions{};
+    o.antiAliasing = AntiAliasing::Off;
+    o.glass = MultiGlassOptions{};
+    int64_t grid[2];
+    for (int k = 0; k < 2; ++k) {
+        o.width = k ? 400 : 64;
+        o.height = k ? 300 : 48;
+        grid[k] = render(s, s.cameras[0], o).glass.grid;
+    }
+    EXPECT_EQ(grid[0], 64);
+    EXPECT_GT(grid[1], 96);
+    const auto r = test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + dir.file("a.png") +
+                                           " --width 64 --height 48 --glass multi --shadows none");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("glass grid 64 (auto: the largest glass object spans"), std::string::npos) << r.out;
+    const auto given =
+        test::runVoxfx(dir, "render " + dir.file("scene.json") + " -o " + dir.file("b.png") +
+                                " --width 64 --height 48 --glass multi --glass-grid 40 --shadows none");
+    ASSERT_EQ(given.exitCode, 0) << given.err;
+    EXPECT_NE(given.out.find("glass grid 40 (given)"), std::string::npos) << given.out;
 }
 
 TEST(GlassTest, CommandLineGlassKnobsChangeTheImageAndBadValuesSayWhich) {

@@ -686,6 +686,44 @@ TEST(RenderTest, DemoCommandRendersTheTreeWithEveryShadowKindOfAll) {
     }
 }
 
+// The value --help prints after "(default " on the line of `flag` (CLI11's "TYPE=VALUE" right after
+// the flag for `typed`).
+std::string helpDefault(const std::string& help, const std::string& flag, bool typed = false) {
+    const std::size_t at = help.find(flag);
+    if (at == std::string::npos) return "";
+    const std::size_t from = typed ? help.find('=', at) : help.find("(default ", at);
+    if (from == std::string::npos || from > help.find('\n', at)) return "";
+    const std::size_t begin = from + (typed ? 1 : std::string("(default ").size());
+    return help.substr(begin, help.find_first_of(typed ? " \n" : ");", begin) - begin);
+}
+
+TEST(RenderTest, BareDemoWritesWhatItsHelpSaysIntoAFolderOfTheCurrentDirectory) {
+    // The defaults `demo --help` prints are the ones it renders with: a demo run without --width,
+    // --height, --shadows or -o, from an empty directory, writes <scene>-<shadows>.png of that size
+    // into the folder the help names there, and nothing under docs/ (it once wrote docs/images of
+    // whatever tree it ran in, and its help said map and 1280 x 720).
+    test::TempDir dir;
+    const std::string help = test::runVoxfx(dir, "demo --help").out;
+    const std::string shadows = helpDefault(help, "--shadows"), width = helpDefault(help, "--width"),
+                      height = helpDefault(help, "--height"), out = helpDefault(help, "--out-dir", true);
+    ASSERT_FALSE(shadows.empty() || width.empty() || height.empty() || out.empty()) << help;
+    EXPECT_EQ(std::filesystem::path(out).is_relative(), true) << out;
+    EXPECT_EQ(out.find("docs"), std::string::npos) << out;
+    const std::filesystem::path cwd = dir.path() / "cwd";
+    std::filesystem::create_directories(cwd);
+    const std::string cmd =
+        "cd '" + cwd.string() + "' && " + std::string(VOXFX_CLI_PATH) +
+        " demo --scenes tree --grid 8 --grid-depth 8 --aa off --ao off -q >/dev/null 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    const Image img = readPng((cwd / out / ("tree-" + shadows + ".png")).string());
+    EXPECT_EQ(std::to_string(img.width), width);
+    EXPECT_EQ(std::to_string(img.height), height);
+    EXPECT_FALSE(std::filesystem::exists(cwd / "docs"));
+    int64_t files = 0;
+    for ([[maybe_unused]] const auto& e : std::filesystem::recursive_directory_iterator(cwd)) ++files;
+    EXPECT_EQ(files, 2); // the folder and its one image
+}
+
 TEST(RenderTest, DemoSaysWhichFlagsAShadowKindDoesNotUse) {
     // Absorption has no voxel mode (its attribute grid counts each crossing once); the demo says
     // so instead of rendering as if --voxel-mode had been honoured. Transmittance uses it.

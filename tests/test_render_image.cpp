@@ -13,6 +13,7 @@
 
 #include "render/shading.hpp"
 #include "test_util.hpp"
+#include "voxfx/image_io.hpp"
 #include "voxfx/render.hpp"
 
 namespace voxfx {
@@ -198,6 +199,58 @@ TEST(RenderImageTest, DefaultOutputIsFilmicAndKeepsHighlightsApart) {
     RenderOptions linear = edgeOptions(32, AntiAliasing::Off);
     linear.ambient = {2, 2, 2};
     EXPECT_NEAR(render(e.scene, e.camera, linear).image.at(28, 16).x, 2.0f, 1e-5f); // clamp: as it is
+}
+
+// Narkowicz 2015's ACES fit with its 0.6 exposure, written from the paper (not the renderer's).
+double narkowiczAces(double x) {
+    const double v = 0.6 * x;
+    return std::min(1.0, v * (2.51 * v + 0.03) / (v * (2.43 * v + 0.59) + 0.14));
+}
+
+TEST(RenderImageTest, HdrFilesHoldSceneLinearRadianceAndPngTheFilmicCurveByDefault) {
+    // A flat sky of radiance (3, 2, 0.5) around a small quad, no lights: the corner pixel shows the
+    // sky. .pfm and .exr hold that radiance (times --exposure: a value above 1 survives), .png the
+    // filmic curve of it; a tone map given (flag or scene file) wins over the format's default.
+    test::TempDir dir;
+    test::writeFile(dir.file("quad.obj"),
+                    "v -0.1 -0.1 0\nv 0.1 -0.1 0\nv 0.1 0.1 0\nv -0.1 0.1 0\nf 1 2 3\nf 1 3 4\n");
+    test::writeFile(dir.file("filmic.json"),
+                    R"({"meshes": [{"file": "quad.obj"}], "render": {"toneMap": "filmic"}})");
+    const Vec3d sky{3, 2, 0.5};
+    auto corner = [&](const std::string& scene, const std::string& out, const std::string& flags) {
+        const std::string path = dir.file(out);
+        const test::CommandRun r = test::runVoxfx(
+            dir, "render " + dir.file(scene) + " -o " + path +
+                     " --width 16 --height 12 --aa off --shadows none --sky flat --background 3,2,0.5 "
+                     "--no-default-lights --sky-light 0 --ao off -q " +
+                     flags);
+        EXPECT_EQ(r.exitCode, 0) << r.err;
+        return readImage(path).at(0, 0);
+    };
+    for (const std::string ext : {".pfm", ".exr"}) {
+        SCOPED_TRACE(ext);
+        const Vec3f linear = corner("quad.obj", "a" + ext, ""),
+                    doubled = corner("quad.obj", "b" + ext, "--exposure 2");
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_FLOAT_EQ(linear[c], float(sky[c])); // 3, 2, 0.5: exact in half floats too
+            EXPECT_FLOAT_EQ(doubled[c], float(2 * sky[c]));
+        }
+        const Vec3f filmic = corner("quad.obj", "f" + ext, "--tone-map filmic");
+        const Vec3f fromScene = corner("filmic.json", "s" + ext, "");
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_NEAR(filmic[c], narkowiczAces(sky[c]), 1e-3);
+            EXPECT_NEAR(fromScene[c], narkowiczAces(sky[c]), 1e-3);
+        }
+    }
+    // PNG: the filmic curve by default (8-bit sRGB: within a level), clipped at 1 when linear is asked.
+    const Vec3f png = corner("quad.obj", "a.png", ""),
+                clipped = corner("quad.obj", "l.png", "--tone-map linear");
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(png[c], narkowiczAces(sky[c]), 0.01);
+        EXPECT_NEAR(clipped[c], std::min(1.0, sky[c]), 0.01);
+    }
+    EXPECT_LT(png.x, 0.95f);    // the curve's roll-off, not a clip
+    EXPECT_EQ(clipped.x, 1.0f); // 255
 }
 
 TEST(RenderImageTest, OneSkyLightsTheGroundAndFillsTheBackground) {

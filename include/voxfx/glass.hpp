@@ -88,6 +88,22 @@ static_assert(std::is_same_v<GlassOptions, GlassMethods::Options>,
 /// A built method.
 using BuiltGlass = GlassMethods::Built;
 
+/// The voxel glass grid render() builds, and why.
+struct GlassGridChoice {
+    int64_t resolution = 0;  ///< voxels along the glass's longest side
+    double objectPixels = 0; ///< auto: the largest glass object's extent on screen, output pixels
+    std::string reason;      ///< "given", or "auto: ..." (the time line prints it)
+};
+/// The grid of a voxel method: `requested` when it is not 0 (kGlassGridAuto); else about one voxel
+/// per 1.5 output pixels of the glass object that spans the most pixels on screen (the longest side
+/// of its bounding box's projection, clipped to the image), carried over to the longest side of
+/// the glass's bounds, rounded up to a multiple of 32 (a camera that moves a little keeps its grid),
+/// within kGlassGridAutoMin..kGlassGridAutoMax and at most 2^24 voxels over `glassBounds`.
+/// `objects`: each glass object's world bounds; `view`: the camera's frame, `pixelsPerColumn` the
+/// output pixels per column of it (1 / supersampling). No object in front of the camera: the minimum.
+GlassGridChoice chooseGlassGrid(int64_t requested, std::span<const Box3d> objects, const Box3d& glassBounds,
+                                const Frame& view, double pixelsPerColumn);
+
 /// Builds the method `options` holds.
 BuiltGlass buildGlass(const GlassInput& input, const GlassOptions& options);
 GlassPath traceGlass(const BuiltGlass& glass, const GlassHit& hit);

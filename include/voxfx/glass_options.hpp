@@ -45,8 +45,13 @@ struct GlassPathOptions : GlassSceneOptions {
     int maxEvents = 16; ///< refractions and reflections followed per ray
 };
 
-/// The glass grids' default resolution (voxel methods, frosted slicemaps).
+/// The glass grids' resolution where none is chosen from the screen (frosted slicemaps; a VoxelGlass
+/// built with gridResolution 0 outside render()).
 inline constexpr int64_t kGlassGridResolution = 128;
+/// The voxel methods' default gridResolution: auto, sized by render() from the glass objects' size
+/// on screen (chooseGlassGrid in voxfx/glass.hpp), within kGlassGridAutoMin..kGlassGridAutoMax.
+inline constexpr int64_t kGlassGridAuto = 0;
+inline constexpr int64_t kGlassGridAutoMin = 64, kGlassGridAutoMax = 512;
 
 struct NoGlassOptions {
     static constexpr std::string_view kName = "none";
@@ -67,7 +72,9 @@ struct ExactGlassOptions : GlassPathOptions {
 // multi and two-surface: the voxel march (voxfx/voxel_glass.hpp).
 /// What both voxel methods take.
 struct VoxelGlassOptions : GlassPathOptions {
-    int64_t gridResolution = kGlassGridResolution; ///< cubic voxels along the glass's longest side, 2..4096
+    /// Cubic voxels along the glass's longest side, 2..4096; 0 (the default): auto, from the glass
+    /// objects' size on screen (chooseGlassGrid).
+    int64_t gridResolution = kGlassGridAuto;
     /// Coverage::Conservative writes every voxel a triangle touches (no holes on steep triangles:
     /// CHANG's widened slabs taken to the limit), Center one voxel per column.
     Coverage coverage = Coverage::Conservative;

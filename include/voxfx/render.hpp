@@ -54,9 +54,11 @@
 // (RenderOptions::environment, else the procedural sky, or the flat `background` with sky = flat) is what the
 // background shows, what glass reflects and refracts, and the ambient light: albedo / pi times the
 // environment's irradiance around the normal (order-2 spherical harmonics, Ramamoorthi & Hanrahan 2001) times
-// skyLight, plus the constant `ambient`. Output: RenderOptions::toneMap filmic (default; the ACES fit of
-// Narkowicz 2015: display-referred, in [0, 1)) or clamp (the linear image as it is: writePng clamps at 1;
-// .pfm/.exr keep HDR). Deterministic for any thread count.
+// skyLight, plus the constant `ambient`. Output: RenderOptions::toneMap filmic (the ACES fit of
+// Narkowicz 2015: display-referred, in [0, 1)), linear (the image as it is: writePng clamps at 1;
+// .pfm/.exr keep HDR) or auto (the default: linear for HDR files, filmic for display formats,
+// toneMapForImage; render() itself, knowing no file, takes auto as filmic). Deterministic for any
+// thread count.
 //
 // Options by name. Every setting a front end reaches has a name (voxfx/options.hpp): the fields of
 // RenderOptions itself (renderOptionFields), of each shadow technique and of each glass method.
@@ -103,11 +105,21 @@ const char* toString(AntiAliasing a);
 /// Parses off | post | adaptive | full; throws voxfx::Error listing them otherwise.
 AntiAliasing parseAntiAliasing(const std::string& name);
 
-/// The output transform of render(): filmic (ACES fit, display-referred) or clamp (linear as is).
-enum class ToneMap : uint8_t { Filmic, Clamp };
-inline constexpr EnumName<ToneMap> kToneMapNames[] = {{"filmic", ToneMap::Filmic}, {"clamp", ToneMap::Clamp}};
+/// The output transform of render(): filmic (ACES fit, display-referred), linear (the scene-linear
+/// radiance as is, times the exposure; "clamp" is its old name: writePng clips at 1) or auto (the
+/// default: what toneMapForImage picks for the file written, filmic where render() is not told).
+enum class ToneMap : uint8_t { Filmic, Clamp, Auto };
+inline constexpr EnumName<ToneMap> kToneMapNames[] = {{"filmic", ToneMap::Filmic},
+                                                      {"linear", ToneMap::Clamp},
+                                                      {"auto", ToneMap::Auto},
+                                                      {"clamp", ToneMap::Clamp, true}};
 const char* toString(ToneMap t);
 ToneMap parseToneMap(const std::string& name);
+/// The output transform an image written to `path` gets: `requested` when it is filmic or linear;
+/// for auto, linear for the HDR formats (.exr, .pfm, .hdr: scene-linear radiance, as pbrt, Mitsuba
+/// and Blender write them) and filmic for display formats (.png, .ppm, ...) and an empty path.
+/// The one place the default depends on the format: front ends that write files call it.
+ToneMap toneMapForImage(ToneMap requested, std::string_view path);
 /// The filmic curve (Narkowicz 2015's fit of ACES, input scaled by 0.6): f(0) = 0, increasing,
 /// f(x) < 1 for every x below about 12, f(x) -> 1.033 (clamped to 1). Per channel.
 float filmicToneMap(float x);
@@ -153,9 +165,9 @@ struct RenderOptions {
     AntiAliasing antiAliasing = AntiAliasing::Full;
     /// Adaptive anti-aliasing: edge and glass pixels get s x s samples (2..8).
     int adaptiveSamples = 2;
-    ToneMap toneMap = ToneMap::Filmic; ///< the output transform
-    float exposure = 1;                ///< multiplies the linear result (background included)
-    GlassOptions glass; ///< the glass method and its options (default none: shaded as surfaces)
+    ToneMap toneMap = ToneMap::Auto; ///< the output transform (auto: toneMapForImage)
+    float exposure = 1;              ///< multiplies the linear result (background included)
+    GlassOptions glass;              ///< the glass method and its options (default none: shaded as surfaces)
     /// Radiance around the scene: shown as the background, seen through and in glass, and the ambient
     /// light. Null: the procedural sky (Environment::sky), or the flat `background` (sky = flat).
     std::shared_ptr<const Environment> environment;
@@ -265,6 +277,10 @@ struct GlassReport {
     int64_t pixels = 0;   ///< output pixels showing glass
     double prepareMs = 0; ///< Embree build (exact) or the grids (voxel methods, frosted)
     double traceMs = 0;   ///< tracing the glass pixels
+    /// Voxel methods: the grid's voxels along the glass's longest side, and why (given, or auto from
+    /// the glass objects' size on screen: chooseGlassGrid); 0 and empty for the other methods.
+    int64_t grid = 0;
+    std::string gridReason;
 };
 
 struct RenderResult {

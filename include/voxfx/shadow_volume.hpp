@@ -26,7 +26,9 @@
 // each front-facing and -1 for each back-facing fragment *in front of* it. The sum is the number
 // of volumes holding the pixel's surface point: shadowed iff it is not 0. Depth-pass is used for a
 // caster when a ball around the eye (covering what the near clip cuts off) is lit by it
-// (conservatively, by its bounding sphere); it then needs no near cap. Depth-fail everywhere else.
+// (conservatively, by its bounding sphere); it then needs no near cap, unless the caster is
+// see-through (blended: the G-buffer shows what lies behind it, and an eye ray through it enters
+// its volume through the near cap). Depth-fail everywhere else.
 //
 // Culling and clamping (ED06 §3.2), all conservative, so the shadow is the same pixel for pixel;
 // each switchable on its own (the options below) so each saving can be measured:
@@ -98,6 +100,9 @@ struct ShadowCaster {
     std::vector<uint32_t> twin;
     Vec3d sphereCentre; ///< bounding sphere (centre of the bounds, radius to the farthest vertex)
     double sphereRadius = 0;
+    /// Of a blended material (Material::blend): not in the G-buffer, so the camera sees receivers
+    /// through it, and a depth-pass count needs its near cap too.
+    bool seeThrough = false;
 };
 
 /// The closed casters of a scene with their edge adjacency, built once and used for every light.

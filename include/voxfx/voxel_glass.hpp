@@ -87,8 +87,9 @@ public:
     /// Voxelizes `mesh` (world space) into cubic voxels, options.gridResolution along the longest side
     /// of its bounds (one voxel of margin), with options.coverage. With `vertexNormals` (one unit
     /// normal per vertex, as the renderer shades with) the voxels hold those normals interpolated
-    /// over each triangle, else the face normals. Throws voxfx::Error for a resolution outside
-    /// 2..4096, mismatched sizes or no triangles.
+    /// over each triangle, else the face normals. Resolution 0 (auto; render() sizes it from the
+    /// screen first: chooseGlassGrid) is kGlassGridResolution here. Throws voxfx::Error for a
+    /// resolution outside 2..4096 (other than 0), mismatched sizes or no triangles.
     VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMedium, std::vector<GlassMedium> media,
                const VoxelGlassOptions& options, std::span<const Vec3f> vertexNormals = {});
     /// The path of a camera ray along unit `dir` that meets glass at `entry` (a surface point found by

@@ -13,19 +13,23 @@ namespace {
 
 using namespace voxfx::demo;
 
+// What the demo renders with unless a flag says otherwise, its --help prints these same values: an
+// image smaller than render's default, anti-aliased as render's; transmittance shadows.
+const RenderDefaults& demoDefaults() {
+    static const RenderDefaults d{"transmittance", {{"width", int64_t(640)}, {"height", int64_t(360)}}};
+    return d;
+}
+
+// Where the images go without -o: a folder of the current directory, never the source tree's
+// docs/images (README's images are rendered there with -o docs/images on purpose).
+constexpr const char* kDemoOutDir = "voxfx-demo";
+
 struct DemoArgs {
-    std::string scenes = "all", outDir = "docs/images", meshes = "data/meshes", writeScenes;
+    std::string scenes = "all", outDir = kDemoOutDir, meshes = "data/meshes", writeScenes;
     int threads = 0;
     bool quiet = false;
-    RenderFlags flags; ///< --shadows: a comma list or all (default transmittance)
+    RenderFlags flags{demoDefaults()}; ///< --shadows: a comma list or all
 };
-
-// The demo's image: smaller than render's default (the render flags override these); anti-aliased
-// as render's (adaptive samples on edges and glass, post-process elsewhere).
-void demoImage(RenderOptions& o) {
-    o.width = 640;
-    o.height = 360;
-}
 
 std::vector<std::string> allShadowNames() {
     std::vector<std::string> out;
@@ -58,7 +62,6 @@ void renderDemo(const DemoArgs& a, const Scene& scene, const std::string& name, 
                 RenderCache& cache) {
     // --glass as given, else the scene's default (the glass demo renders its glass as glass).
     RenderOptions o = renderOptionsFor(scene, kind, a.flags.glass);
-    demoImage(o);
     a.flags.apply(o, true); // a flag the kind does not use says so (absorption has no --voxel-mode)
     o.threads = a.threads;
     ProgressLine progress("rendering " + name + " (" + kind + ")", !a.quiet);
@@ -83,8 +86,7 @@ void renderDemo(const DemoArgs& a, const Scene& scene, const std::string& name, 
 
 int runDemo(const DemoArgs& a) {
     const std::vector<std::string> names = splitList(a.scenes, demoSceneNames());
-    const std::vector<std::string> kinds =
-        splitList(a.flags.shadows.empty() ? "transmittance" : a.flags.shadows, allShadowNames());
+    const std::vector<std::string> kinds = splitList(a.flags.shadowsOrDefault(), allShadowNames());
     for (const std::string& k : kinds) shadowOptionsNamed(k); // unknown names fail before any work
     std::filesystem::create_directories(a.outDir);
     if (!a.writeScenes.empty()) std::filesystem::create_directories(a.writeScenes);
@@ -112,8 +114,10 @@ const Command kDemo{
     "demo", "Render the demo scenes (procedural tree, bunny under leaves, CGAL meshes, glass)",
     [](CLI::App& app) {
         auto a = std::make_shared<DemoArgs>();
-        app.footer("\nThe render options apply where the shadow kind has them; the demo renders 640 x 360 "
-                   "(anti-aliased as render),\nunless --width, --height say otherwise. --shadows takes "
+        app.footer("\nThe render options apply where the shadow kind has them; the demo renders " +
+                   formatOption(*a->flags.defaultOf("width")) + " x " +
+                   formatOption(*a->flags.defaultOf("height")) +
+                   " (anti-aliased as render),\nunless --width, --height say otherwise. --shadows takes "
                    "all (" +
                    demoNameList(allShadowNames()) +
                    ") or a comma list;\na kind that refuses a scene (volumes: open casters) is reported and "
@@ -123,13 +127,14 @@ const Command kDemo{
                        "all = " + demoNameList(demoSceneNames()) + "; or a comma list of those and " +
                            demoNameList(largeDemoSceneNames()) +
                            " (128,000 leaf triangles: made only when named)")
-            ->default_val("all");
-        app.add_option("-o,--out-dir", a->outDir, "Folder for <scene>-<shadows>.png")
-            ->default_val("docs/images");
+            ->capture_default_str();
+        app.add_option("-o,--out-dir", a->outDir,
+                       "Folder for <scene>-<shadows>.png (made if missing; README's images: -o docs/images)")
+            ->capture_default_str();
         app.add_option("--meshes", a->meshes, "Folder holding bunny00.off, elephant.off, ...")
-            ->default_val("data/meshes");
+            ->capture_default_str();
         app.add_option("--write-scenes", a->writeScenes, "Also save each scene as <name>.glb here");
-        app.add_option("-j,--threads", a->threads, "Worker threads, 0 = all")->default_val(0);
+        app.add_option("-j,--threads", a->threads, "Worker threads, 0 = all")->capture_default_str();
         app.add_flag("-q,--quiet", a->quiet, "No summary or progress");
         a->flags.add(app);
         return std::function<int()>([a] { return runDemo(*a); });

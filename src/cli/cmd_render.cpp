@@ -54,6 +54,8 @@ void printSummary(const RenderArgs& a, const Scene& scene, const Camera& camera,
         std::cout << "glass " << r.glass.method << " (" << glass << "): " << withCommas(r.glass.pixels)
                   << " pixels, prepare " << fmtMs(r.glass.prepareMs) << ", trace " << fmtMs(r.glass.traceMs)
                   << "\n";
+        if (r.glass.grid > 0)
+            std::cout << "glass grid " << r.glass.grid << " (" << r.glass.gridReason << ")\n";
     }
 }
 
@@ -65,6 +67,7 @@ int runRender(const RenderArgs& a) {
 
     RenderOptions o = renderOptionsFor(scene, a.flags.shadows, a.flags.glass);
     a.flags.apply(o, !a.quiet);
+    o.toneMap = toneMapForImage(o.toneMap, a.output); // auto: linear for .exr/.pfm, filmic for .png
     const OptionValue* device = a.flags.find("device");
     if (device && std::get<std::string>(*device) == "cuda" && !cudaStatus().available && !a.quiet)
         std::cerr << "voxfx: --device cuda: " << cudaStatus().reason
@@ -89,14 +92,18 @@ Settings a JSON scene file gives under "render" (the options above, by their cam
 "gridResolution", "shadows", ...) are used unless a flag overrides them. An option of another
 shadow kind or glass method than the chosen ones does nothing (a line on stderr says so).
 Output by extension: .png (8-bit sRGB), .exr (OpenEXR, linear half-float RGB, HDR) or
-.pfm (linear 32-bit float, HDR).)";
+.pfm (linear 32-bit float, HDR). The tone map follows the format unless --tone-map (or the scene
+file's "toneMap") names one: .exr and .pfm hold the scene-linear radiance (times --exposure, no
+curve), as pbrt, Mitsuba and Blender write them; .png gets the filmic curve.)";
 
 const Command kRender{
     "render", "Render a scene (glTF, JSON wrapper, mesh) with shadows, glass and volumes", [](CLI::App& app) {
         auto a = std::make_shared<RenderArgs>();
         app.footer(RenderFlags::footer() + kRenderHelp);
         app.add_option("SCENE", a->input, "Scene: .gltf .glb .json, or a mesh file")->required();
-        app.add_option("-o,--output", a->output, "Image: .png (sRGB), .exr or .pfm (linear HDR)")->required();
+        app.add_option("-o,--output", a->output,
+                       "Image: .png (sRGB, filmic), .exr or .pfm (linear HDR radiance)")
+            ->required();
         app.add_option("--camera", a->camera, "Index of the scene camera (default 0)");
         app.add_option("--environment", a->environment, "Environment map: .exr .hdr .pfm .png, or 'sky'");
         app.add_option("-j,--threads", a->threads, "Worker threads, 0 = all (identical output)")

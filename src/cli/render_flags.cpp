@@ -78,14 +78,19 @@ const char* groupOf(const RenderOptionInfo& info) {
 } // namespace
 
 void RenderFlags::add(CLI::App& app) {
-    app.add_option("--shadows", shadows, "Shadow kind (default map; see below)")->group("Shadows");
+    const std::string shadowDefault =
+        defaults_.shadows.empty() ? std::string(shadowName(RenderOptions{}.shadow)) : defaults_.shadows;
+    app.add_option("--shadows", shadows, "Shadow kind (default " + shadowDefault + "; see below)")
+        ->group("Shadows");
     app.add_option("--glass", glass, "Glass method (default: exact if the scene has glass, else none)")
         ->group("Glass");
     for (const RenderOptionInfo& info : renderOptionCatalog()) {
         std::string names = "--" + kebabCase(info.name);
         if (!info.alias.empty()) names += ",--" + kebabCase(info.alias);
-        const std::string help =
-            info.help + " " + usersText(info) + (info.choices.empty() ? std::string() : ": " + info.choices);
+        const OptionValue* own = defaultOf(info.name);
+        const std::string help = info.help + " " +
+                                 (own ? "(default " + formatOption(*own) + ")" : usersText(info)) +
+                                 (info.choices.empty() ? std::string() : ": " + info.choices);
         const std::string name = info.name;
         if (info.type == OptionType::Flag) {
             // --no-NAME is an option of its own, out of the help (one name with "!" would print
@@ -127,7 +132,14 @@ std::string RenderFlags::footer() {
     return out;
 }
 
+const OptionValue* RenderFlags::defaultOf(const std::string& name) const {
+    for (const auto& [n, v] : defaults_.options)
+        if (n == name) return &v;
+    return nullptr;
+}
+
 void RenderFlags::apply(RenderOptions& options, bool warn) const {
+    for (const auto& [name, value] : defaults_.options) setRenderOption(options, name, value);
     for (const auto& [name, value] : given_) {
         const std::string flag = "--" + kebabCase(name);
         if (setRenderOption(options, flag, value) || !warn) continue;

@@ -3,6 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+
+#include "voxfx/file_name.hpp"
 
 namespace voxfx {
 
@@ -12,6 +15,11 @@ AntiAliasing parseAntiAliasing(const std::string& name) {
 }
 const char* toString(ToneMap t) { return enumName(t, kToneMapNames); }
 ToneMap parseToneMap(const std::string& name) { return parseEnum<ToneMap>(name, "tone map", kToneMapNames); }
+ToneMap toneMapForImage(ToneMap requested, std::string_view path) {
+    if (requested != ToneMap::Auto) return requested;
+    const std::string ext = fileExtension(std::filesystem::path(path));
+    return ext == ".exr" || ext == ".pfm" || ext == ".hdr" ? ToneMap::Clamp : ToneMap::Filmic;
+}
 const char* toString(SkyKind k) { return enumName(k, kSkyKindNames); }
 SkyKind parseSkyKind(const std::string& name) { return parseEnum<SkyKind>(name, "sky", kSkyKindNames); }
 

@@ -18,8 +18,9 @@ namespace voxfx {
 std::span<const OptionField<FrostedGlassOptions>> FrostedGlassOptions::fields() {
     using O = FrostedGlassOptions;
     static const std::vector<OptionField<O>> table = {
-        numberOption<O, &O::gridResolution>("glassGrid", "frosted glass: slicemap columns across and slices",
-                                            2, 4096),
+        numberOption<O, &O::gridResolution>(
+            "glassGrid", "frosted glass: slicemap columns across and slices, 2..4096 (0: the default 128)", 0,
+            4096),
         numberOption<O, &O::blur>(
             "frostedBlur", "frosted glass: blur cone (radians) through a thickness of the glass's diagonal",
             0, 3.2),
@@ -108,8 +109,9 @@ FrostedGlass::FrostedGlass(const MeshView& mesh, std::vector<uint32_t> triangleM
     if (triangleMedium.size() != mesh.triangleCount) fail("frosted glass: one medium per triangle expected");
     for (const uint32_t m : triangleMedium)
         if (m >= media_.size()) fail("frosted glass: medium index ", m, " out of range");
-    if (options.gridResolution < 2 || options.gridResolution > 4096)
-        fail("glass grid resolution must be between 2 and 4096, got ", options.gridResolution);
+    if ((options.gridResolution < 2 && options.gridResolution != kGlassGridAuto) ||
+        options.gridResolution > 4096)
+        fail("glass grid resolution must be between 2 and 4096 (or 0), got ", options.gridResolution);
     if (!(options.refraction >= 0) || !std::isfinite(options.refraction))
         fail("frosted glass: refraction scale must be finite and >= 0, got ", options.refraction);
     const Vec3d eye = camera.eye();
@@ -135,11 +137,13 @@ FrostedGlass::FrostedGlass(const MeshView& mesh, std::vector<uint32_t> triangleM
     farD += 1e-3 * diagonal_;
     nearD = std::max(nearD - 1e-3 * diagonal_, 1e-4 * farD);
     if (!(farD > nearD)) fail("frosted glass: the glass is behind the camera");
-    const int64_t W = options.gridResolution;
+    // 0 (what a scene file saved with a voxel method's auto grid holds): the default.
+    const int64_t W =
+        options.gridResolution == kGlassGridAuto ? kGlassGridResolution : options.gridResolution;
     const int64_t H = std::max<int64_t>(
         1, int64_t(std::lround(double(W) * double(camera.height()) / double(camera.width()))));
     frame_ = Frame::perspective(eye, eye + camera.forward(), camera.up(), 2 * std::atan(camera.tanHalfFovY()),
-                                W, H, nearD, farD, options.gridResolution);
+                                W, H, nearD, farD, W);
     // ED06 local slicing, one depth range per column for both slicemaps: the nearest and farthest
     // fragment of the whole glass (front and back faces) in that column.
     VoxelizeOptions vo;

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <type_traits>
+#include <vector>
 
 #include "render/antialias.hpp"
 #include "render/shading.hpp"
@@ -61,12 +63,46 @@ std::shared_ptr<const GlassSetup> setUpGlass(const FrameState& frame, const Glas
     return setup;
 }
 
+// The options the glass is built with: a voxel method's grid as given, or sized from the glass
+// objects' size on screen (chooseGlassGrid); the grid and why go to the result.
+GlassOptions glassWithGrid(FrameState& frame) {
+    GlassOptions method = frame.options.glass;
+    std::visit(
+        [&]<class O>(O& o) {
+            if constexpr (std::is_base_of_v<VoxelGlassOptions, O>) {
+                const SceneGeometry& g = frame.geometry;
+                std::vector<Box3d> objects;
+                Box3d all;
+                if (o.gridResolution == kGlassGridAuto)
+                    for (size_t t = 0; t < g.mesh.triangleCount(); ++t) {
+                        const uint32_t m = g.triangleMaterial[t];
+                        if (m >= frame.scene.materials.size() || !frame.scene.materials[m].isGlass())
+                            continue;
+                        if (g.triangleMesh[t] >= objects.size()) objects.resize(g.triangleMesh[t] + 1);
+                        for (int k = 0; k < 3; ++k) {
+                            const Vec3d p(g.mesh.positions[g.mesh.indices[3 * t + size_t(k)]]);
+                            objects[g.triangleMesh[t]].extend(p);
+                            all.extend(p);
+                        }
+                    }
+                const Frame& view = frame.gbuffer.frame;
+                const GlassGridChoice c = chooseGlassGrid(o.gridResolution, objects, all, view,
+                                                          double(frame.options.width) / double(view.width()));
+                o.gridResolution = c.resolution;
+                frame.result.glass.grid = c.resolution;
+                frame.result.glass.gridReason = c.reason;
+            }
+        },
+        method);
+    return method;
+}
+
 } // namespace
 
 void shadeGlass(FrameState& frame) {
     using Clock = std::chrono::steady_clock;
-    const GlassOptions& method = frame.options.glass;
-    if (std::holds_alternative<NoGlassOptions>(method)) return;
+    if (std::holds_alternative<NoGlassOptions>(frame.options.glass)) return;
+    const GlassOptions method = glassWithGrid(frame);
     const Scene& scene = frame.scene;
     const SceneGeometry& geometry = frame.geometry;
     const GBuffer& gbuffer = frame.gbuffer;

@@ -22,9 +22,10 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
             "adaptiveSamples", "adaptive anti-aliasing: s x s samples in edge and glass pixels", 2, 8),
         nameOption<O, parseToneMap, optionName<ToneMap>, &O::toneMap>(
             "toneMap",
-            "output transform: filmic (ACES curve, highlights roll off) or clamp (linear; PNG clips at "
-            "1, .exr/.pfm keep HDR)",
-            "filmic | clamp"),
+            "output transform: filmic (ACES curve, highlights roll off), linear (scene-linear radiance "
+            "times --exposure; PNG clips at 1; also 'clamp') or auto: linear for .exr/.pfm, filmic for "
+            ".png",
+            "auto | filmic | linear"),
         numberOption<O, &O::exposure>("exposure", "multiplies the linear image", 1e-6, 1e6),
         numberOption<O, &O::skyLight>(
             "skyLight", "ambient light from the environment's irradiance, times this (0: none)", 0, 1e6),

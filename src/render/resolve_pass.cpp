@@ -13,7 +13,7 @@ namespace voxfx::detail {
 
 namespace {
 
-// The output transform of one sample.
+// The output transform of one sample (t resolved: filmic or linear).
 Vec3f toneMapped(const Vec3f& c, ToneMap t) {
     if (t == ToneMap::Clamp) return c;
     return {filmicToneMap(c.x), filmicToneMap(c.y), filmicToneMap(c.z)};
@@ -63,6 +63,8 @@ void resolvePass(FrameState& f, Progress*) {
     std::vector<uint8_t>& refined = scratch.refined;
     refined.resize(size_t(w * h));
     const float norm = 1.0f / float(k * k);
+    // Auto: render() writes no file, so the display's filmic (toneMapForImage).
+    const ToneMap toneMap = toneMapForImage(o.toneMap, {});
     const int cells = o.supersample; // cells of a x a samples per pixel side
     parallelFor(0, h, 16, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
@@ -71,7 +73,7 @@ void resolvePass(FrameState& f, Progress*) {
                 uint8_t every = 0;
                 for (int cy = 0; cy < cells; ++cy)
                     for (int cx = 0; cx < cells; ++cx) {
-                        sum += cellSum(f, x * cells + cx, y * cells + cy, o.toneMap);
+                        sum += cellSum(f, x * cells + cx, y * cells + cy, toneMap);
                         if (!f.refined.empty())
                             every |= f.refined[size_t((y * cells + cy) * cw + x * cells + cx)] ==
                                      kEveryRefinedSample;

@@ -179,8 +179,10 @@ void svAppendVolume(const ShadowCaster& c, const SvCasterLight& s, const std::ve
             if (!cap[t]) continue;
             const uint32_t a = base + c.indices[3 * t], b = base + c.indices[3 * t + 1],
                            cc = base + c.indices[3 * t + 2];
-            // Near cap, reversed: V lies behind the unlit side (on the caster, depth-pass needs none).
-            if (!fromCaster || !s.depthPass) tri(a, cc, b);
+            // Near cap, reversed: V lies behind the unlit side. On an opaque caster depth-pass needs
+            // none (every eye ray through it ends on the caster); the camera sees receivers through a
+            // see-through one, and rays entering its volume there cross the cap.
+            if (!fromCaster || !s.depthPass || c.seeThrough) tri(a, cc, b);
             tri(a + n, b + n, cc + n); // far cap
             for (int k = 0; k < 3; ++k) {
                 const uint32_t e = uint32_t(3 * t + k);
@@ -205,6 +207,7 @@ ShadowCasterSet ShadowCasterSet::build(const Scene& scene) {
         if (!m.castsShadow || m.mesh.indices.empty()) continue;
         ShadowCaster c;
         c.name = m.name;
+        c.seeThrough = m.material < scene.materials.size() && scene.materials[m.material].blend;
         const int64_t open = svBuildCaster(m.mesh, c);
         if (open > 0)
             fail("shadow volumes need closed casters: mesh '", m.name, "' has ", open,

@@ -15,8 +15,11 @@ namespace {
 
 template <class O> std::vector<OptionField<O>> voxelGlassFields() {
     return {
-        numberOption<O, &O::gridResolution>("glassGrid", "glass voxels along the glass's longest side", 2,
-                                            4096),
+        numberOption<O, &O::gridResolution>(
+            "glassGrid",
+            "glass voxels along the glass's longest side, 2..4096; 0: auto, about one voxel per 1.5 "
+            "pixels of the largest glass object on screen (the summary line says which)",
+            0, 4096),
         nameOption<O, parseCoverage, optionName<Coverage>, &O::coverage>(
             "glassCoverage",
             "glass voxels: every voxel a triangle touches (CHANG's widened slabs at their limit: no "
@@ -78,11 +81,14 @@ VoxelGlass::VoxelGlass(const MeshView& mesh, std::vector<uint32_t> triangleMediu
     if (triangleMedium.size() != mesh.triangleCount) fail("voxel glass: one medium per triangle expected");
     for (const uint32_t m : triangleMedium)
         if (m >= media_.size()) fail("voxel glass: medium index ", m, " out of range");
-    if (options.gridResolution < 2 || options.gridResolution > 4096)
-        fail("glass grid resolution must be between 2 and 4096, got ", options.gridResolution);
+    if ((options.gridResolution < 2 && options.gridResolution != kGlassGridAuto) ||
+        options.gridResolution > 4096)
+        fail("glass grid resolution must be between 2 and 4096 (or 0: auto), got ", options.gridResolution);
     const Box3d box = computeBounds(mesh);
     if (box.empty()) fail("voxel glass: no triangles");
-    const int64_t n = options.gridResolution;
+    // Auto outside render() (no camera to size it from): the fixed default.
+    const int64_t n =
+        options.gridResolution == kGlassGridAuto ? kGlassGridResolution : options.gridResolution;
     const double longest = std::max({box.extent().x, box.extent().y, box.extent().z, 1e-12});
     // One voxel of margin on each side: n - 2 voxels span the longest side.
     voxel_ = longest / double(n - 2);
