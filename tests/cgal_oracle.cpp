@@ -89,6 +89,48 @@ SurfaceMesh surfaceMesh(const MeshView& mesh, int lineAxis, bool& valid) {
     return sm;
 }
 
+/// Step 1 of the solid oracles for one triangle (coordinates already permuted so that the
+/// lines run along the third): calls hit(column, p) for each column u + nu * v whose centre
+/// line (p, the centre in the (au, av) plane) pierces it, the point strictly inside the
+/// projected triangle; on an edge or vertex of it, or on the projection of a vertical
+/// triangle, the column is marked degenerate.
+template <class Hit>
+void piercedColumns(const Triangle3& tri, const CellGeometry& g, int au, int av,
+                    std::vector<uint8_t>& degenerate, Hit&& hit) {
+    const int64_t nu = g.dims[au], nv = g.dims[av];
+    const Point2 a(tri[0].x(), tri[0].y()), b(tri[1].x(), tri[1].y()), c(tri[2].x(), tri[2].y());
+    const CGAL::Orientation o = CGAL::orientation(a, b, c);
+    // Centre indices whose centre may lie in the projected bounding box, one spare each side
+    // (the floating-point index estimate is off by far less than a cell).
+    auto range = [&](int axis, double lo, double hi, int64_t n, int64_t& first, int64_t& last) {
+        first =
+            std::clamp<int64_t>(int64_t(std::floor((lo - g.lo[axis]) / g.cell[axis] - 0.5)) - 1, 0, n - 1);
+        last = std::clamp<int64_t>(int64_t(std::ceil((hi - g.lo[axis]) / g.cell[axis] - 0.5)) + 1, 0, n - 1);
+    };
+    int64_t u0, u1, v0, v1;
+    range(au, std::min({a.x(), b.x(), c.x()}), std::max({a.x(), b.x(), c.x()}), nu, u0, u1);
+    range(av, std::min({a.y(), b.y(), c.y()}), std::max({a.y(), b.y(), c.y()}), nv, v0, v1);
+    for (int64_t v = v0; v <= v1; ++v)
+        for (int64_t u = u0; u <= u1; ++u) {
+            const Point2 p(g.center(au, u), g.center(av, v));
+            const int64_t column = u + nu * v;
+            if (o == CGAL::COLLINEAR) {
+                // A triangle parallel to the line: degenerate when the line touches it.
+                if (K::Segment_2(a, b).has_on(p) || K::Segment_2(b, c).has_on(p) ||
+                    K::Segment_2(c, a).has_on(p))
+                    degenerate[std::size_t(column)] = 1;
+                continue;
+            }
+            const CGAL::Orientation s0 = CGAL::orientation(a, b, p), s1 = CGAL::orientation(b, c, p),
+                                    s2 = CGAL::orientation(c, a, p);
+            if (s0 == -o || s1 == -o || s2 == -o) continue; // outside
+            if (s0 == o && s1 == o && s2 == o)
+                hit(column, p);
+            else
+                degenerate[std::size_t(column)] = 1; // on an edge or a vertex
+        }
+}
+
 } // namespace oracle
 
 SolidOracle oracleSolid(const MeshView& mesh, const CellGeometry& g, int lineAxis) {
@@ -127,41 +169,9 @@ SolidOracle oracleSolid(const MeshView& mesh, const CellGeometry& g, int lineAxi
     // column is degenerate.
     std::vector<std::pair<int64_t, uint32_t>> hits; // (column u + nu * v, triangle)
     std::vector<uint8_t> degenerate(std::size_t(nu * nv), 0);
-    for (std::size_t t = 0; t < tris.size(); ++t) {
-        const Triangle3& tri = tris[t];
-        const Point2 a(tri[0].x(), tri[0].y()), b(tri[1].x(), tri[1].y()), c(tri[2].x(), tri[2].y());
-        const CGAL::Orientation o = CGAL::orientation(a, b, c);
-        // Centre indices whose centre may lie in the projected bounding box, one spare each side
-        // (the floating-point index estimate is off by far less than a cell).
-        auto range = [&](int axis, double lo, double hi, int64_t n, int64_t& first, int64_t& last) {
-            first = std::clamp<int64_t>(int64_t(std::floor((lo - g.lo[axis]) / g.cell[axis] - 0.5)) - 1, 0,
-                                        n - 1);
-            last =
-                std::clamp<int64_t>(int64_t(std::ceil((hi - g.lo[axis]) / g.cell[axis] - 0.5)) + 1, 0, n - 1);
-        };
-        int64_t u0, u1, v0, v1;
-        range(au, std::min({a.x(), b.x(), c.x()}), std::max({a.x(), b.x(), c.x()}), nu, u0, u1);
-        range(av, std::min({a.y(), b.y(), c.y()}), std::max({a.y(), b.y(), c.y()}), nv, v0, v1);
-        for (int64_t v = v0; v <= v1; ++v)
-            for (int64_t u = u0; u <= u1; ++u) {
-                const Point2 p(g.center(au, u), g.center(av, v));
-                const int64_t column = u + nu * v;
-                if (o == CGAL::COLLINEAR) {
-                    // A triangle parallel to the line: degenerate when the line touches it.
-                    if (K::Segment_2(a, b).has_on(p) || K::Segment_2(b, c).has_on(p) ||
-                        K::Segment_2(c, a).has_on(p))
-                        degenerate[std::size_t(column)] = 1;
-                    continue;
-                }
-                const CGAL::Orientation s0 = CGAL::orientation(a, b, p), s1 = CGAL::orientation(b, c, p),
-                                        s2 = CGAL::orientation(c, a, p);
-                if (s0 == -o || s1 == -o || s2 == -o) continue; // outside
-                if (s0 == o && s1 == o && s2 == o)
-                    hits.emplace_back(column, uint32_t(t));
-                else
-                    degenerate[std::size_t(column)] = 1; // on an edge or a vertex
-            }
-    }
+    for (std::size_t t = 0; t < tris.size(); ++t)
+        piercedColumns(tris[t], g, au, av, degenerate,
+                       [&](int64_t column, const Point2&) { hits.emplace_back(column, uint32_t(t)); });
     std::sort(hits.begin(), hits.end());
     r.crossings = int64_t(hits.size());
 
@@ -272,48 +282,23 @@ struct BitsPass {
         return lo < nw && above(lo) == 0 ? -1 : lo;
     }
     void triangle(const Triangle3& tri) {
-        const int64_t nu = g.dims.x, nv = g.dims.y, wpc = r.wordsPerColumn;
-        const Point2 a(tri[0].x(), tri[0].y()), b(tri[1].x(), tri[1].y()), c(tri[2].x(), tri[2].y());
-        const CGAL::Orientation o = CGAL::orientation(a, b, c);
-        auto range = [&](int axis, double lo, double hi, int64_t n, int64_t& first, int64_t& last) {
-            first = std::clamp<int64_t>(int64_t(std::floor((lo - g.lo[axis]) / g.cell[axis] - 0.5)) - 1, 0,
-                                        n - 1);
-            last =
-                std::clamp<int64_t>(int64_t(std::ceil((hi - g.lo[axis]) / g.cell[axis] - 0.5)) + 1, 0, n - 1);
-        };
-        int64_t u0, u1, v0, v1;
-        range(0, std::min({a.x(), b.x(), c.x()}), std::max({a.x(), b.x(), c.x()}), nu, u0, u1);
-        range(1, std::min({a.y(), b.y(), c.y()}), std::max({a.y(), b.y(), c.y()}), nv, v0, v1);
+        const CGAL::Orientation o = CGAL::orientation(
+            Point2(tri[0].x(), tri[0].y()), Point2(tri[1].x(), tri[1].y()), Point2(tri[2].x(), tri[2].y()));
         // The plane's depth at a column, in double: only a guess, checked exactly.
         const Vec3d p0(tri[0].x(), tri[0].y(), tri[0].z()), p1(tri[1].x(), tri[1].y(), tri[1].z()),
             p2(tri[2].x(), tri[2].y(), tri[2].z());
         const Vec3d n = cross(p1 - p0, p2 - p0);
-        for (int64_t v = v0; v <= v1; ++v)
-            for (int64_t u = u0; u <= u1; ++u) {
-                const Point2 p(g.center(0, u), g.center(1, v));
-                const int64_t column = u + nu * v;
-                if (o == CGAL::COLLINEAR) {
-                    if (K::Segment_2(a, b).has_on(p) || K::Segment_2(b, c).has_on(p) ||
-                        K::Segment_2(c, a).has_on(p))
-                        degenerate[std::size_t(column)] = 1;
-                    continue;
-                }
-                const CGAL::Orientation s0 = CGAL::orientation(a, b, p), s1 = CGAL::orientation(b, c, p),
-                                        s2 = CGAL::orientation(c, a, p);
-                if (s0 == -o || s1 == -o || s2 == -o) continue;
-                if (!(s0 == o && s1 == o && s2 == o)) {
-                    degenerate[std::size_t(column)] = 1;
-                    continue;
-                }
-                ++r.crossings;
-                if (degenerate[std::size_t(column)]) continue;
-                const double z = p0.z - (n.x * (p.x() - p0.x) + n.y * (p.y() - p0.y)) / n.z;
-                const int64_t k = firstAbove(tri, o, u, v, (z - g.lo.z) / g.cell.z - 0.5);
-                if (k < 0)
-                    degenerate[std::size_t(column)] = 1;
-                else if (k < g.dims.z)
-                    r.words[std::size_t(column * wpc + (k >> 6))] ^= uint64_t(1) << (k & 63);
-            }
+        piercedColumns(tri, g, 0, 1, degenerate, [&](int64_t column, const Point2& p) {
+            ++r.crossings;
+            if (degenerate[std::size_t(column)]) return;
+            const double z = p0.z - (n.x * (p.x() - p0.x) + n.y * (p.y() - p0.y)) / n.z;
+            const int64_t k =
+                firstAbove(tri, o, column % g.dims.x, column / g.dims.x, (z - g.lo.z) / g.cell.z - 0.5);
+            if (k < 0)
+                degenerate[std::size_t(column)] = 1;
+            else if (k < g.dims.z)
+                r.words[std::size_t(column * r.wordsPerColumn + (k >> 6))] ^= uint64_t(1) << (k & 63);
+        });
     }
 };
 
