@@ -89,6 +89,20 @@ SurfaceMesh surfaceMesh(const MeshView& mesh, int lineAxis, bool& valid) {
     return sm;
 }
 
+/// The first w in [0, n] with above(w) >= 0, for above() non-decreasing in w (a line of centres
+/// against one plane): binary search.
+template <class Above> int64_t firstNotBelow(Above&& above, int64_t n) {
+    int64_t lo = 0, hi = n; // the answer lies in [lo, hi]
+    while (lo < hi) {
+        const int64_t mid = (lo + hi) / 2;
+        if (above(mid) < 0)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
 /// Step 1 of the solid oracles for one triangle (coordinates already permuted so that the
 /// lines run along the third): calls hit(column, p) for each column u + nu * v whose centre
 /// line (p, the centre in the (au, av) plane) pierces it, the point strictly inside the
@@ -220,14 +234,7 @@ SolidOracle oracleSolid(const MeshView& mesh, const CellGeometry& g, int lineAxi
             auto above = [&](int64_t w) {
                 return int(CGAL::orientation(tri[0], tri[1], tri[2], centre(u, v, w))) * int(o);
             };
-            int64_t lo = 0, hi = nw; // first w with above(w) >= 0 lies in [lo, hi]
-            while (lo < hi) {
-                const int64_t mid = (lo + hi) / 2;
-                if (above(mid) < 0)
-                    lo = mid + 1;
-                else
-                    hi = mid;
-            }
+            const int64_t lo = firstNotBelow(above, nw);
             if (lo < nw && above(lo) == 0) {
                 onPlane = true; // a centre on the triangle: let Side_of_triangle_mesh say ON_BOUNDARY
                 break;
@@ -271,14 +278,7 @@ struct BitsPass {
         const int here = k < nw ? above(k) : 1, below = k > 0 ? above(k - 1) : -1;
         if (here == 0 || below == 0) return -1;
         if (here > 0 && below < 0) return k;
-        int64_t lo = 0, hi = nw; // first w with above(w) >= 0 lies in [lo, hi] (oracleSolid's search)
-        while (lo < hi) {
-            const int64_t mid = (lo + hi) / 2;
-            if (above(mid) < 0)
-                lo = mid + 1;
-            else
-                hi = mid;
-        }
+        const int64_t lo = firstNotBelow(above, nw); // oracleSolid's search
         return lo < nw && above(lo) == 0 ? -1 : lo;
     }
     void triangle(const Triangle3& tri) {
