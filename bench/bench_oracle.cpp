@@ -11,6 +11,9 @@
 //   voxfx_ms, oracle_ms, floor_ms   the voxelize step, oracleSolid on the same frame, the memset
 //   x_oracle                        oracle_ms / voxfx_ms (the goal of #39: >= 8)
 //   x_floor                         voxfx_ms / floor_ms (how far the step is from the floor)
+//   lean_ms, x_lean                 the lean exact oracle (oracleSolidBits: the same cells as
+//                                   oracleSolid, one thread, bits, the crossing's centre guessed
+//                                   and confirmed by two orientation_3) and lean_ms / voxfx_ms
 // Whole/<mesh>/<res>: the whole command to .binvox (load the .off, fit, voxelize, write), against
 // the oracle's whole command (CGAL's reader, oracleSolid, a plain run-length binvox writer).
 // Counters as above (x_oracle: the goal of #39 is >= 3 for armadillo 512).
@@ -28,6 +31,7 @@
 
 #include "bench_meshes.hpp"
 #include "cgal_oracle.hpp"
+#include "cgal_oracle_bits.hpp"
 #include "voxfx/voxfx.hpp"
 
 namespace {
@@ -90,7 +94,12 @@ void stepBench(benchmark::State& state, const std::string& name) {
         ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     }
     const double oracle = medianOf(3, [&] { benchmark::DoNotOptimize(oracleOn(m, in->frame).crossings); });
+    const test::CellGeometry geometry = test::CellGeometry::of(VoxelGrid{in->frame, {}});
+    const double lean =
+        medianOf(5, [&] { benchmark::DoNotOptimize(test::oracleSolidBits(m.view(), geometry).crossings); });
     report(state, ms, oracle, floorMs(in->frame));
+    state.counters["lean_ms"] = lean;
+    state.counters["x_lean"] = lean / median(ms);
     state.SetLabel(name + " " + std::to_string(m.triangleCount()) + " tris, " +
                    std::to_string(in->frame.width()) + "x" + std::to_string(in->frame.height()) + "x" +
                    std::to_string(in->frame.depth()));

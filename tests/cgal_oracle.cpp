@@ -15,6 +15,7 @@
 #include <CGAL/intersections.h>
 #include <gtest/gtest.h>
 
+#include "cgal_oracle_bits.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx::test {
@@ -88,6 +89,62 @@ SurfaceMesh surfaceMesh(const MeshView& mesh, int lineAxis, bool& valid) {
     return sm;
 }
 
+/// The first w in [0, n] with above(w) >= 0, for above() non-decreasing in w (a line of centres
+/// against one plane): binary search.
+template <class Above> int64_t firstNotBelow(Above&& above, int64_t n) {
+    int64_t lo = 0, hi = n; // the answer lies in [lo, hi]
+    while (lo < hi) {
+        const int64_t mid = (lo + hi) / 2;
+        if (above(mid) < 0)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/// Step 1 of the solid oracles for one triangle (coordinates already permuted so that the
+/// lines run along the third): calls hit(column, p) for each column u + nu * v whose centre
+/// line (p, the centre in the (au, av) plane) pierces it, the point strictly inside the
+/// projected triangle; on an edge or vertex of it, or on the projection of a vertical
+/// triangle, the column is marked degenerate.
+template <class Hit>
+void piercedColumns(const Triangle3& tri, const CellGeometry& g, int au, int av,
+                    std::vector<uint8_t>& degenerate, Hit&& hit) {
+    const int64_t nu = g.dims[au], nv = g.dims[av];
+    const Point2 a(tri[0].x(), tri[0].y()), b(tri[1].x(), tri[1].y()), c(tri[2].x(), tri[2].y());
+    const CGAL::Orientation o = CGAL::orientation(a, b, c);
+    // Centre indices whose centre may lie in the projected bounding box, one spare each side
+    // (the floating-point index estimate is off by far less than a cell).
+    auto range = [&](int axis, double lo, double hi, int64_t n, int64_t& first, int64_t& last) {
+        first =
+            std::clamp<int64_t>(int64_t(std::floor((lo - g.lo[axis]) / g.cell[axis] - 0.5)) - 1, 0, n - 1);
+        last = std::clamp<int64_t>(int64_t(std::ceil((hi - g.lo[axis]) / g.cell[axis] - 0.5)) + 1, 0, n - 1);
+    };
+    int64_t u0, u1, v0, v1;
+    range(au, std::min({a.x(), b.x(), c.x()}), std::max({a.x(), b.x(), c.x()}), nu, u0, u1);
+    range(av, std::min({a.y(), b.y(), c.y()}), std::max({a.y(), b.y(), c.y()}), nv, v0, v1);
+    for (int64_t v = v0; v <= v1; ++v)
+        for (int64_t u = u0; u <= u1; ++u) {
+            const Point2 p(g.center(au, u), g.center(av, v));
+            const int64_t column = u + nu * v;
+            if (o == CGAL::COLLINEAR) {
+                // A triangle parallel to the line: degenerate when the line touches it.
+                if (K::Segment_2(a, b).has_on(p) || K::Segment_2(b, c).has_on(p) ||
+                    K::Segment_2(c, a).has_on(p))
+                    degenerate[std::size_t(column)] = 1;
+                continue;
+            }
+            const CGAL::Orientation s0 = CGAL::orientation(a, b, p), s1 = CGAL::orientation(b, c, p),
+                                    s2 = CGAL::orientation(c, a, p);
+            if (s0 == -o || s1 == -o || s2 == -o) continue; // outside
+            if (s0 == o && s1 == o && s2 == o)
+                hit(column, p);
+            else
+                degenerate[std::size_t(column)] = 1; // on an edge or a vertex
+        }
+}
+
 } // namespace oracle
 
 SolidOracle oracleSolid(const MeshView& mesh, const CellGeometry& g, int lineAxis) {
@@ -126,41 +183,9 @@ SolidOracle oracleSolid(const MeshView& mesh, const CellGeometry& g, int lineAxi
     // column is degenerate.
     std::vector<std::pair<int64_t, uint32_t>> hits; // (column u + nu * v, triangle)
     std::vector<uint8_t> degenerate(std::size_t(nu * nv), 0);
-    for (std::size_t t = 0; t < tris.size(); ++t) {
-        const Triangle3& tri = tris[t];
-        const Point2 a(tri[0].x(), tri[0].y()), b(tri[1].x(), tri[1].y()), c(tri[2].x(), tri[2].y());
-        const CGAL::Orientation o = CGAL::orientation(a, b, c);
-        // Centre indices whose centre may lie in the projected bounding box, one spare each side
-        // (the floating-point index estimate is off by far less than a cell).
-        auto range = [&](int axis, double lo, double hi, int64_t n, int64_t& first, int64_t& last) {
-            first = std::clamp<int64_t>(int64_t(std::floor((lo - g.lo[axis]) / g.cell[axis] - 0.5)) - 1, 0,
-                                        n - 1);
-            last =
-                std::clamp<int64_t>(int64_t(std::ceil((hi - g.lo[axis]) / g.cell[axis] - 0.5)) + 1, 0, n - 1);
-        };
-        int64_t u0, u1, v0, v1;
-        range(au, std::min({a.x(), b.x(), c.x()}), std::max({a.x(), b.x(), c.x()}), nu, u0, u1);
-        range(av, std::min({a.y(), b.y(), c.y()}), std::max({a.y(), b.y(), c.y()}), nv, v0, v1);
-        for (int64_t v = v0; v <= v1; ++v)
-            for (int64_t u = u0; u <= u1; ++u) {
-                const Point2 p(g.center(au, u), g.center(av, v));
-                const int64_t column = u + nu * v;
-                if (o == CGAL::COLLINEAR) {
-                    // A triangle parallel to the line: degenerate when the line touches it.
-                    if (K::Segment_2(a, b).has_on(p) || K::Segment_2(b, c).has_on(p) ||
-                        K::Segment_2(c, a).has_on(p))
-                        degenerate[std::size_t(column)] = 1;
-                    continue;
-                }
-                const CGAL::Orientation s0 = CGAL::orientation(a, b, p), s1 = CGAL::orientation(b, c, p),
-                                        s2 = CGAL::orientation(c, a, p);
-                if (s0 == -o || s1 == -o || s2 == -o) continue; // outside
-                if (s0 == o && s1 == o && s2 == o)
-                    hits.emplace_back(column, uint32_t(t));
-                else
-                    degenerate[std::size_t(column)] = 1; // on an edge or a vertex
-            }
-    }
+    for (std::size_t t = 0; t < tris.size(); ++t)
+        piercedColumns(tris[t], g, au, av, degenerate,
+                       [&](int64_t column, const Point2&) { hits.emplace_back(column, uint32_t(t)); });
     std::sort(hits.begin(), hits.end());
     r.crossings = int64_t(hits.size());
 
@@ -209,14 +234,7 @@ SolidOracle oracleSolid(const MeshView& mesh, const CellGeometry& g, int lineAxi
             auto above = [&](int64_t w) {
                 return int(CGAL::orientation(tri[0], tri[1], tri[2], centre(u, v, w))) * int(o);
             };
-            int64_t lo = 0, hi = nw; // first w with above(w) >= 0 lies in [lo, hi]
-            while (lo < hi) {
-                const int64_t mid = (lo + hi) / 2;
-                if (above(mid) < 0)
-                    lo = mid + 1;
-                else
-                    hi = mid;
-            }
+            const int64_t lo = firstNotBelow(above, nw);
             if (lo < nw && above(lo) == 0) {
                 onPlane = true; // a centre on the triangle: let Side_of_triangle_mesh say ON_BOUNDARY
                 break;
@@ -231,6 +249,111 @@ SolidOracle oracleSolid(const MeshView& mesh, const CellGeometry& g, int lineAxi
         for (int64_t w = 0; w < nw; ++w) {
             parity ^= flip[std::size_t(w)];
             r.inside.cells[worldIndex(u, v, w)] = parity;
+        }
+    }
+    return r;
+}
+
+namespace oracle {
+
+// oracleSolidBits' per-triangle work: the columns whose centre line the triangle pierces get the
+// bit of the first centre above the crossing flipped; edge and vertex hits, vertical triangles
+// touching a line and centres on the plane mark the column degenerate.
+struct BitsPass {
+    const CellGeometry& g;
+    SolidOracleBits& r;
+    std::vector<uint8_t>& degenerate;
+
+    Point3 centre(int64_t u, int64_t v, int64_t w) const {
+        return Point3(g.center(0, u), g.center(1, v), g.center(2, w));
+    }
+    // The first centre of column (u, v) not below the triangle's plane (0..nw), or -1 when a
+    // centre lies on it. `o` is the projected triangle's orientation.
+    int64_t firstAbove(const Triangle3& tri, CGAL::Orientation o, int64_t u, int64_t v, double guess) const {
+        const int64_t nw = g.dims.z;
+        auto above = [&](int64_t w) {
+            return int(CGAL::orientation(tri[0], tri[1], tri[2], centre(u, v, w))) * int(o);
+        };
+        int64_t k = std::isfinite(guess) ? std::clamp<int64_t>(int64_t(std::ceil(guess)), 0, nw) : 0;
+        const int here = k < nw ? above(k) : 1, below = k > 0 ? above(k - 1) : -1;
+        if (here == 0 || below == 0) return -1;
+        if (here > 0 && below < 0) return k;
+        const int64_t lo = firstNotBelow(above, nw); // oracleSolid's search
+        return lo < nw && above(lo) == 0 ? -1 : lo;
+    }
+    void triangle(const Triangle3& tri) {
+        const CGAL::Orientation o = CGAL::orientation(
+            Point2(tri[0].x(), tri[0].y()), Point2(tri[1].x(), tri[1].y()), Point2(tri[2].x(), tri[2].y()));
+        // The plane's depth at a column, in double: only a guess, checked exactly.
+        const Vec3d p0(tri[0].x(), tri[0].y(), tri[0].z()), p1(tri[1].x(), tri[1].y(), tri[1].z()),
+            p2(tri[2].x(), tri[2].y(), tri[2].z());
+        const Vec3d n = cross(p1 - p0, p2 - p0);
+        piercedColumns(tri, g, 0, 1, degenerate, [&](int64_t column, const Point2& p) {
+            ++r.crossings;
+            if (degenerate[std::size_t(column)]) return;
+            const double z = p0.z - (n.x * (p.x() - p0.x) + n.y * (p.y() - p0.y)) / n.z;
+            const int64_t k =
+                firstAbove(tri, o, column % g.dims.x, column / g.dims.x, (z - g.lo.z) / g.cell.z - 0.5);
+            if (k < 0)
+                degenerate[std::size_t(column)] = 1;
+            else if (k < g.dims.z)
+                r.words[std::size_t(column * r.wordsPerColumn + (k >> 6))] ^= uint64_t(1) << (k & 63);
+        });
+    }
+};
+
+} // namespace oracle
+
+SolidOracleBits oracleSolidBits(const MeshView& mesh, const CellGeometry& g) {
+    using namespace oracle;
+    SolidOracleBits r;
+    r.dims = g.dims;
+    const int64_t nu = g.dims.x, nv = g.dims.y, nw = g.dims.z;
+    r.wordsPerColumn = (nw + 63) / 64;
+    const int64_t wpc = r.wordsPerColumn;
+    r.words.assign(std::size_t(nu * nv * wpc), 0);
+    std::vector<uint8_t> degenerate(std::size_t(nu * nv), 0);
+    BitsPass pass{g, r, degenerate};
+    for (const Triangle3& tri : triangles(mesh)) pass.triangle(tri);
+    // Parity: a prefix XOR down each column (carried across words).
+    for (int64_t column = 0; column < nu * nv; ++column) {
+        uint64_t parity = 0;
+        for (int64_t w = 0; w < wpc; ++w) {
+            uint64_t x = r.words[std::size_t(column * wpc + w)];
+            for (int s = 1; s < 64; s <<= 1) x ^= x << s;
+            x ^= parity;
+            r.words[std::size_t(column * wpc + w)] = x;
+            parity = uint64_t(0) - (x >> 63);
+        }
+        if (nw % 64) r.words[std::size_t(column * wpc + wpc - 1)] &= (uint64_t(1) << (nw % 64)) - 1;
+    }
+    // Degenerate columns: Side_of_triangle_mesh per centre (closed mesh) or left out (open).
+    std::optional<SurfaceMesh> sm;
+    std::optional<CGAL::Side_of_triangle_mesh<SurfaceMesh, K>> side;
+    bool closed = false;
+    for (int64_t column = 0; column < nu * nv; ++column) {
+        if (!degenerate[std::size_t(column)]) continue;
+        ++r.degenerateColumns;
+        if (!sm) {
+            bool manifold = false;
+            sm.emplace(surfaceMesh(mesh, 2, manifold));
+            closed = manifold && CGAL::is_closed(*sm);
+            if (closed) side.emplace(*sm);
+        }
+        if (r.leftOut.empty()) r.leftOut.assign(r.words.size(), 0);
+        uint64_t* in = &r.words[std::size_t(column * wpc)];
+        uint64_t* left = &r.leftOut[std::size_t(column * wpc)];
+        std::fill(in, in + wpc, uint64_t(0));
+        for (int64_t w = 0; w < nw; ++w) {
+            const uint64_t bit = uint64_t(1) << (w & 63);
+            if (!closed) {
+                left[w >> 6] |= bit;
+                continue;
+            }
+            const CGAL::Bounded_side bs =
+                (*side)(Point3(g.center(0, column % nu), g.center(1, column / nu), g.center(2, w)));
+            if (bs == CGAL::ON_BOUNDED_SIDE) in[w >> 6] |= bit;
+            if (bs == CGAL::ON_BOUNDARY) left[w >> 6] |= bit;
         }
     }
     return r;

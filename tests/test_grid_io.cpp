@@ -379,6 +379,46 @@ TEST(GridIoTest, VdbReadsBackWithPlainOpenVdbAtVoxelCentres) {
     }
 }
 
+TEST(GridIoTest, VdbTreeIsTheOneOpenVdbBuildsVoxelByVoxelAndPrunes) {
+    // A 150 x 140 x 300 grid: a full 128^3 block (a tile of the upper node), a full 8^3 block in
+    // a mixed lower node (a tile there), mixed leaves, and a full 128^3 block whose neighbour
+    // node is mixed. The reference is OpenVDB's own tree with every voxel set on, then pruned.
+    test::TempDir dir;
+    const int64_t nx = 150, ny = 140, nz = 300;
+    VoxelGrid g{Frame::orthographic({{0, 0, 0}, {1.5, 1.4, 3.0}}, Axis::Z, nx, ny, nz), BitGrid(nx, ny, nz)};
+    auto on = [&](int64_t x, int64_t y, int64_t z) {
+        if (x < 128 && y < 128 && z < 128) return true;                                     // full lower node
+        if (x < 128 && y < 128 && z >= 128 && z < 256) return (x * 7 + y * 3 + z) % 5 == 0; // mixed
+        if (x >= 136 && x < 144 && y >= 8 && y < 16 && z >= 256 && z < 264) return true;    // full leaf
+        return x >= 130 && (x + y + z) % 11 == 0;
+    };
+    for (int64_t x = 0; x < nx; ++x)
+        for (int64_t y = 0; y < ny; ++y)
+            for (int64_t z = 0; z < nz; ++z)
+                if (on(x, y, z)) g.bits.set(x, y, z);
+    openvdb::initialize();
+    openvdb::BoolGrid reference(false);
+    {
+        auto acc = reference.getAccessor();
+        for (int64_t x = 0; x < nx; ++x)
+            for (int64_t y = 0; y < ny; ++y)
+                for (int64_t z = 0; z < nz; ++z)
+                    if (on(x, y, z)) acc.setValueOn(openvdb::Coord(int(x), int(y), int(z)), true);
+    }
+    reference.tree().prune();
+    writeGrid(g, dir.file("tree.vdb"));
+    openvdb::io::File file(dir.file("tree.vdb"));
+    file.open(/*delayLoad=*/false);
+    auto written = openvdb::gridPtrCast<openvdb::BoolGrid>(file.readGrid("voxels"));
+    file.close();
+    ASSERT_TRUE(written);
+    EXPECT_EQ(written->tree().nodeCount(), reference.tree().nodeCount()); // nodes per level
+    EXPECT_EQ(written->tree().activeTileCount(), reference.tree().activeTileCount());
+    EXPECT_EQ(written->tree().activeVoxelCount(), reference.tree().activeVoxelCount());
+    EXPECT_EQ(written->tree().activeVoxelCount(), uint64_t(g.bits.count()));
+    EXPECT_TRUE(written->tree().hasSameTopology(reference.tree()));
+}
+
 TEST(GridIoTest, VdbReadsForeignFloatGridWithoutDimensions) {
     // A fog volume made with plain OpenVDB: voxels > 0 count, the active box sizes the grid.
     test::TempDir dir;

@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "cgal_oracle.hpp"
+#include "cgal_oracle_bits.hpp"
 #include "test_util.hpp"
 #include "voxelize/fill.hpp"
 #include "voxfx/mesh_io.hpp"
@@ -237,6 +238,35 @@ TEST(VoxelizeOracleTest, LatticeAlignedOctahedraMatchCgalDespiteDegenerateColumn
                                          conservativeOracleOf(mesh.view(), g)));
             if (axis == Axis::Z) reportOnSurface("octahedron", oracle);
         }
+    }
+}
+
+// The lean oracle of bench_oracle (oracleSolidBits) against oracleSolid, cell for cell: real meshes,
+// lattice-aligned octahedra (edge and vertex hits, centres on faces) and the open dragon.
+::testing::AssertionResult sameAsOracleSolid(const MeshView& mesh, const CellGeometry& g) {
+    const SolidOracle full = test::oracleSolid(mesh, g);
+    const test::SolidOracleBits bits = test::oracleSolidBits(mesh, g);
+    int64_t differ = 0;
+    for (int64_t k = 0; k < g.dims.z; ++k)
+        for (int64_t j = 0; j < g.dims.y; ++j)
+            for (int64_t i = 0; i < g.dims.x; ++i)
+                differ += bits.inside(i, j, k) != bool(full.inside.at(i, j, k)) ||
+                          bits.left(i, j, k) != bool(full.leftOut.at(i, j, k));
+    if (differ == 0) return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << differ << " cells differ";
+}
+
+TEST(VoxelizeOracleTest, LeanBitOracleEqualsOracleSolidCellForCell) {
+    for (const char* name : {"bunny00", "armadillo", "ChineseDragon-10kv"}) {
+        VOXFX_REQUIRE_DATA(meshFile(name));
+        SCOPED_TRACE(name);
+        const Mesh& mesh = loadCached(name);
+        EXPECT_TRUE(sameAsOracleSolid(mesh.view(), CellGeometry::of(VoxelGrid{fitted(mesh, 80), {}})));
+    }
+    for (const Vec3d& centre : {Vec3d{16.5, 15.5, 16.5}, Vec3d{16, 16, 16}, Vec3d{15.5, 16, 16.25}}) {
+        const Mesh mesh = test::makeOctahedron(centre, 9);
+        const Frame frame = Frame::orthographic({{0, 0, 0}, {32, 32, 32}}, Axis::Z, 32, 32, 32);
+        EXPECT_TRUE(sameAsOracleSolid(mesh.view(), CellGeometry::of(VoxelGrid{frame, {}})));
     }
 }
 

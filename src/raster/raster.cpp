@@ -105,15 +105,17 @@ public:
             int64_t f, l;
             coveredRows(r, coverage_, H, f, l);
             if (f > l) return;
+            r0 = std::min(r0, f);
+            r1 = std::max(r1, l);
+            if (tileColumns_ == 1) return; // one tile column (the whole-grid raster): rows suffice
             // Columns as coveredRows finds rows (clamped in floating point first).
             const double cf = center_ ? std::ceil(xlo - 0.5) : std::ceil(xlo - kConservativeSlack) - 1.0;
             const double cl = center_ ? std::floor(xhi - 0.5) : std::floor(xhi + kConservativeSlack);
-            r0 = std::min(r0, f);
-            r1 = std::max(r1, l);
             x0 = std::min(x0, int64_t(std::clamp(cf, 0.0, double(W - 1))));
             x1 = std::max(x1, int64_t(std::clamp(cl, 0.0, double(W - 1))));
         });
-        if (r1 < r0 || x1 < x0) return {0, -1, 0, -1};
+        if (r1 < r0 || (tileColumns_ > 1 && x1 < x0)) return {0, -1, 0, -1};
+        if (tileColumns_ == 1) x0 = x1 = 0;
         // A shift for the usual power-of-two tiles: this runs once per triangle and tiling.
         auto tile = [](int64_t v, int64_t size, int64_t count) {
             const int64_t index = (size & (size - 1)) == 0 ? v >> std::countr_zero(uint64_t(size)) : v / size;

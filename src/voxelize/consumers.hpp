@@ -98,18 +98,31 @@ VOXFX_HOSTDEV inline void setSliceRange(uint64_t* column, int64_t s0, int64_t s1
     orWord<Atomic>(column[w1], bitRange(0, int(s1 & 63) + 1));
 }
 
+/// Prefix XOR along n words of a column, word 0 first, starting from `carry` (all ones when the
+/// parity in front of the column is odd; 0 otherwise); returns the carry out. A word without a
+/// set bit takes the carry as it is (prefixXor(0) ^ carry == carry): most words of a solid
+/// grid hold no crossing, so only the words with one pay for the in-word prefix.
+VOXFX_HOSTDEV inline uint64_t prefixXorWords(uint64_t* col, int64_t n, uint64_t carry) {
+    for (int64_t w = 0; w < n; ++w) {
+        const uint64_t x = col[w];
+        if (x == 0) {
+            col[w] = carry;
+            continue;
+        }
+        const uint64_t v = prefixXor(x) ^ carry;
+        col[w] = v;
+        carry = uint64_t(0) - (v >> 63);
+    }
+    return carry;
+}
+
 /// Prefix-XOR every column of rows [y0, y1): bit s becomes the XOR of bits 0..s of the column.
 VOXFX_HOSTDEV inline void prefixXorRows(const BitGridView& grid, int64_t y0, int64_t y1) {
     const int64_t wpc = grid.wordsPerColumn;
     const uint64_t lastMask = grid.lastWordMask();
     for (int64_t c = y0 * grid.width, e = y1 * grid.width; c < e; ++c) {
         uint64_t* col = grid.column(c);
-        uint64_t carry = 0; // all ones when the parity so far is odd
-        for (int64_t w = 0; w < wpc; ++w) {
-            const uint64_t v = prefixXor(col[w]) ^ carry;
-            col[w] = v;
-            carry = uint64_t(0) - (v >> 63);
-        }
+        prefixXorWords(col, wpc, 0);
         col[wpc - 1] &= lastMask;
     }
 }

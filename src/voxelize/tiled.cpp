@@ -193,12 +193,7 @@ void parityBrick(Stack& st, int64_t b, int64_t s0, const BitGridView& out) {
             continue;
         }
         col[0] ^= uint64_t(st.carry[size_t(c)]); // bit 0: the parity in front of the brick
-        uint64_t carry = 0;
-        for (int64_t w = 0; w < wpc; ++w) {
-            const uint64_t v = prefixXor(col[w]) ^ carry;
-            col[w] = v;
-            carry = uint64_t(0) - (v >> 63);
-        }
+        prefixXorWords(col, wpc, 0);
         col[wpc - 1] &= mask;
         const int32_t p = int32_t((col[wpc - 1] >> last) & 1u);
         st.carry[size_t(c)] = p;

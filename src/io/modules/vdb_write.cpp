@@ -3,8 +3,11 @@
 //
 // The writer fills leaf nodes straight from the bit columns: with the grid sliced along z, the
 // 8 x 8 x 8 leaf at (x0, y0, z0) has value-mask word x & 7 = eight bytes, byte y & 7 being bits
-// z0 .. z0+7 of column (x, y) (offset = (x & 7) << 6 | (y & 7) << 3 | (z & 7)).
+// z0 .. z0+7 of column (x, y) (offset = (x & 7) << 6 | (y & 7) << 3 | (z & 7)), and the internal
+// nodes above them in parallel (fillLeaves).
 #include <algorithm>
+#include <array>
+#include <map>
 #include <memory>
 #include <type_traits>
 #include <vector>
@@ -13,62 +16,121 @@
 
 namespace voxfx::detail::vdbmodule {
 
-// Builds the leaves of a z-sliced grid, 8 x 8 leaf columns per task, and hands them to the tree
-// in a fixed order (deterministic tree, single-threaded insertion).
+namespace {
+
+// The 8 x 8 x 8 value masks of the leaf column (leafX, leafY) of a z-sliced grid: masks[bz * 8 + i]
+// is word i of leaf bz's value mask. Column (x, y) word w holds bits z = 64w .. 64w+63: byte k
+// goes to leaf bz = 8w + k.
+void leafColumnMasks(const VdbBits& g, int64_t leafX, int64_t leafY, int64_t lz,
+                     std::vector<uint64_t>& masks) {
+    std::fill(masks.begin(), masks.end(), 0);
+    for (int64_t ix = 0; ix < 8 && leafX * 8 + ix < g.nx; ++ix)
+        for (int64_t jy = 0; jy < 8 && leafY * 8 + jy < g.ny; ++jy) {
+            const uint64_t* col = g.words + ((leafY * 8 + jy) * g.nx + leafX * 8 + ix) * g.wordsPerColumn;
+            for (int64_t w = 0; w < g.wordsPerColumn; ++w) {
+                const uint64_t word = col[w];
+                if (!word) continue;
+                for (int64_t k = 0; k < 8 && w * 8 + k < lz; ++k)
+                    masks[size_t((w * 8 + k) * 8 + ix)] |= ((word >> (8 * k)) & 0xFF) << (8 * jy);
+            }
+        }
+}
+
+} // namespace
+
+// Builds the tree of a z-sliced grid bottom up, in parallel: each task makes the lower internal
+// nodes (128^3) of one column of them, with a leaf for each mixed 8^3 block and an active tile
+// for each full one (nothing for an empty one); a lower node whose blocks are all full becomes a
+// tile of its upper node instead. The upper nodes (4096^3) are then assembled and handed to the
+// root in a fixed order. This is the tree that adding the leaves and leaf tiles one by one and
+// pruning gave (leaves that are neither empty nor full are never constant; full blocks merge
+// upwards exactly as prune merges them), without the serial walk from the root per leaf and the
+// pass of prune over every node.
 template <class GridT> void fillLeaves(const VdbBits& g, ParallelFor parallelFor, GridT& grid) {
-    using LeafT = typename GridT::TreeType::LeafNodeType;
+    using TreeT = typename GridT::TreeType;
+    using UpperT = typename TreeT::RootNodeType::ChildNodeType;
+    using LowerT = typename UpperT::ChildNodeType;
+    using LeafT = typename TreeT::LeafNodeType;
     using ValueT = typename LeafT::ValueType;
-    const int64_t nx = g.nx, ny = g.ny, nz = g.nz, wpc = g.wordsPerColumn;
-    const int64_t lx = (nx + 7) / 8, ly = (ny + 7) / 8, lz = (nz + 7) / 8;
-    std::vector<std::vector<std::unique_ptr<LeafT>>> leaves(size_t(lx * ly));
-    std::vector<std::vector<openvdb::Coord>> fullLeaves(size_t(lx * ly));
+    constexpr int64_t kLeavesPerLower = LowerT::DIM / LeafT::DIM;
+    const int64_t lx = (g.nx + 7) / 8, ly = (g.ny + 7) / 8, lz = (g.nz + 7) / 8;
+    const int64_t bx = (lx + kLeavesPerLower - 1) / kLeavesPerLower,
+                  by = (ly + kLeavesPerLower - 1) / kLeavesPerLower,
+                  bz = (lz + kLeavesPerLower - 1) / kLeavesPerLower;
+    std::vector<std::vector<std::unique_ptr<LowerT>>> lowers(size_t(bx * by));
+    std::vector<std::vector<openvdb::Coord>> fullLowers(size_t(bx * by));
     auto body = [&](int64_t b, int64_t e) {
         std::vector<uint64_t> masks(size_t(lz * 8));
+        std::vector<std::unique_ptr<LowerT>> column(static_cast<size_t>(bz));
+        std::vector<openvdb::Index> full(static_cast<size_t>(bz));
         for (int64_t t = b; t < e; ++t) {
-            const int64_t bx = t % lx, by = t / lx;
-            std::fill(masks.begin(), masks.end(), 0);
-            // Column (x, y) word w holds bits z = 64w .. 64w+63: byte k goes to leaf bz = 8w + k.
-            for (int64_t ix = 0; ix < 8 && bx * 8 + ix < nx; ++ix)
-                for (int64_t jy = 0; jy < 8 && by * 8 + jy < ny; ++jy) {
-                    const uint64_t* col = g.words + ((by * 8 + jy) * nx + bx * 8 + ix) * wpc;
-                    for (int64_t w = 0; w < wpc; ++w) {
-                        const uint64_t word = col[w];
-                        if (!word) continue;
-                        for (int64_t k = 0; k < 8 && w * 8 + k < lz; ++k)
-                            masks[size_t((w * 8 + k) * 8 + ix)] |= ((word >> (8 * k)) & 0xFF) << (8 * jy);
+            const int64_t cx = t % bx, cy = t / bx;
+            std::fill(full.begin(), full.end(), 0);
+            for (int64_t iy = 0; iy < kLeavesPerLower && cy * kLeavesPerLower + iy < ly; ++iy)
+                for (int64_t ix = 0; ix < kLeavesPerLower && cx * kLeavesPerLower + ix < lx; ++ix) {
+                    const int64_t leafX = cx * kLeavesPerLower + ix, leafY = cy * kLeavesPerLower + iy;
+                    leafColumnMasks(g, leafX, leafY, lz, masks);
+                    for (int64_t z = 0; z < lz; ++z) {
+                        const uint64_t* m = &masks[size_t(z * 8)];
+                        if (!(m[0] | m[1] | m[2] | m[3] | m[4] | m[5] | m[6] | m[7])) continue;
+                        const openvdb::Coord origin(int(leafX * 8), int(leafY * 8), int(z * 8));
+                        std::unique_ptr<LowerT>& lower = column[size_t(z / kLeavesPerLower)];
+                        if (!lower) lower = std::make_unique<LowerT>(origin, ValueT(0), false);
+                        if (!~(m[0] & m[1] & m[2] & m[3] & m[4] & m[5] & m[6] & m[7])) {
+                            lower->addTile(LowerT::coordToOffset(origin), ValueT(1), true);
+                            ++full[size_t(z / kLeavesPerLower)];
+                            continue;
+                        }
+                        auto leaf = std::make_unique<LeafT>(origin, ValueT(0), false);
+                        typename LeafT::NodeMaskType mask;
+                        for (int i = 0; i < 8; ++i) mask.template getWord<uint64_t>(openvdb::Index(i)) = m[i];
+                        leaf->setValueMask(mask);
+                        if constexpr (std::is_same_v<ValueT, bool>) {
+                            std::copy(m, m + 8, leaf->buffer().data()); // value true exactly where active
+                        } else {
+                            auto* values = leaf->buffer().data();
+                            for (int i = 0; i < 512; ++i) values[i] = float((m[i >> 6] >> (i & 63)) & 1u);
+                        }
+                        lower->addChild(leaf.release());
                     }
                 }
-            for (int64_t bz = 0; bz < lz; ++bz) {
-                const uint64_t* m = &masks[size_t(bz * 8)];
-                if (!(m[0] | m[1] | m[2] | m[3] | m[4] | m[5] | m[6] | m[7])) continue;
-                const openvdb::Coord origin(int(bx * 8), int(by * 8), int(bz * 8));
-                // Full blocks become leaf-sized tiles: no 2 KiB float buffer to allocate and prune.
-                if (!~(m[0] & m[1] & m[2] & m[3] & m[4] & m[5] & m[6] & m[7])) {
-                    fullLeaves[size_t(t)].push_back(origin);
-                    continue;
-                }
-                typename LeafT::NodeMaskType mask;
-                for (int i = 0; i < 8; ++i) mask.template getWord<uint64_t>(openvdb::Index(i)) = m[i];
-                auto leaf = std::make_unique<LeafT>(origin, ValueT(0), false);
-                leaf->setValueMask(mask);
-                if constexpr (std::is_same_v<ValueT, bool>) {
-                    std::copy(m, m + 8, leaf->buffer().data()); // value true exactly where active
-                } else {
-                    auto* values = leaf->buffer().data();
-                    for (int i = 0; i < 512; ++i) values[i] = float((m[i >> 6] >> (i & 63)) & 1u);
-                }
-                leaves[size_t(t)].push_back(std::move(leaf));
+            for (int64_t z = 0; z < bz; ++z) {
+                std::unique_ptr<LowerT>& lower = column[size_t(z)];
+                if (!lower) continue;
+                if (full[size_t(z)] == LowerT::NUM_VALUES)
+                    fullLowers[size_t(t)].push_back(lower->origin());
+                else
+                    lowers[size_t(t)].push_back(std::move(lower));
+                lower.reset();
             }
         }
     };
-    forChunks(parallelFor, 0, lx * ly, 4, body);
-    auto& tree = grid.tree();
-    for (size_t t = 0; t < leaves.size(); ++t) {
-        for (auto& leaf : leaves[t]) tree.addLeaf(leaf.release());
-        for (const openvdb::Coord& origin : fullLeaves[t]) tree.addTile(1, origin, ValueT(1), true);
+    forChunks(parallelFor, 0, bx * by, 1, body);
+    // The upper nodes, in the order of their origins (a deterministic tree).
+    std::map<std::array<int, 3>, std::pair<std::unique_ptr<UpperT>, openvdb::Index>> uppers;
+    auto upperOf = [&](const openvdb::Coord& c) -> auto& {
+        const int mask = ~int(UpperT::DIM - 1);
+        const std::array<int, 3> key{c.x() & mask, c.y() & mask, c.z() & mask};
+        auto& slot = uppers[key];
+        if (!slot.first)
+            slot.first = std::make_unique<UpperT>(openvdb::Coord(key[0], key[1], key[2]), ValueT(0), false);
+        return slot;
+    };
+    for (size_t t = 0; t < lowers.size(); ++t) {
+        for (auto& lower : lowers[t]) upperOf(lower->origin()).first->addChild(lower.release());
+        for (const openvdb::Coord& origin : fullLowers[t]) {
+            auto& slot = upperOf(origin);
+            slot.first->addTile(UpperT::coordToOffset(origin), ValueT(1), true);
+            ++slot.second;
+        }
     }
-    // Blocks of full tiles merge into larger tiles: smaller files, same voxels.
-    tree.prune();
+    auto& root = grid.tree().root();
+    for (auto& [key, slot] : uppers) {
+        if (slot.second == UpperT::NUM_VALUES) // all full: a tile of the root, as prune makes it
+            root.addTile(slot.first->origin(), ValueT(1), true);
+        else
+            root.addChild(slot.first.release());
+    }
 }
 
 // What the sparse grids use besides this file's writers.
