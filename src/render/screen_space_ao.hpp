@@ -118,12 +118,13 @@ void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, st
 /// ((adaptive / 2, adaptive / 2) of the cell), into `visibility` (one per cell, row-major, y up).
 /// Reads the G-buffer itself rather than gathered buffers: a cell's position from its depth, its
 /// normals from its triangle's basis (`bases`, triangleBases of `geometry`) only where a step needs
-/// them (one shading normal per 2x2 block of one surface, and the cells the upsample cannot
-/// interpolate), so at half resolution it evaluates about a quarter of the surface points; the same
-/// method and, to float rounding, the same result as the overload above on gatherSurfaces' buffers
-/// (tests/test_screen_space_ao.cpp runs both). A triangle occludes where opaqueMaterial[its
-/// material] is nonzero (an index past it does not). Throws voxfx::Error as the overload above, and
-/// for a G-buffer that is not whole cells, bases of another count or `visibility` of another size.
+/// them (one shading normal per 2x2 block; face normals where the downsample tests for one surface
+/// and where the upsample cannot interpolate), so at half resolution it evaluates about a quarter
+/// of the shading normals; the same method, and within 0.0001 on average the same result, as the
+/// overload above on gatherSurfaces' buffers (tests/test_screen_space_ao.cpp runs both). A triangle occludes
+/// where opaqueMaterial[its material] is nonzero (an index past it does not). Throws voxfx::Error as the
+/// overload above, and for a G-buffer that is not whole cells, bases of another count or `visibility` of
+/// another size.
 void screenSpaceOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
                           std::span<const TriangleBasis> bases, std::span<const uint8_t> opaqueMaterial,
                           int adaptive, const ScreenSpaceOcclusionOptions& options,
