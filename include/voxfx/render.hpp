@@ -44,10 +44,12 @@
 //   resolve   box filter of the samples of each pixel, flipped to image rows (y down), then the
 //             output transform (RenderOptions::toneMap) and the post-process anti-aliasing.
 // Anti-aliasing (RenderOptions::antiAliasing, default full): the G-buffer holds s x s samples per
-// pixel (s = adaptiveSamples, times supersample); the shading pass shades every sample only in the
-// pixels on an edge (more than one mesh or material, background and geometry, a depth or normal
-// discontinuity), s samples (N-rooks) in pixels showing glass inside, and one sample, copied,
-// elsewhere; the glass pass traces the glass samples shaded. Pixels shaded once then get FXAA-style
+// pixel (s = adaptiveSamples, times supersample); the shading pass shades every pixel's central
+// sample, then the other samples only in the pixels on an edge (more than one mesh or material,
+// background and geometry, a depth or normal discontinuity), where a sample showing the triangle a
+// neighbouring pixel's central sample shows takes its shading; elsewhere the one sample is copied.
+// The glass pass traces the glass samples shaded, then s samples (N-rooks) in pixels showing glass
+// inside whose light differs from a neighbour's. Pixels shaded once then get FXAA-style
 // post-process anti-aliasing (Lottes 2009: an edge along the luma gradient, searched to its ends, blended by
 // the sub-pixel distance). Scenes the volume pass draws (volumes, Boolean shapes, blended meshes) keep one
 // sample per pixel (s = 1) and get the post-process only. Lighting: one environment

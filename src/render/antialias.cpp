@@ -41,22 +41,18 @@ void markRefinedCells(FrameState& f) {
     const SceneGeometry& geo = f.geometry;
     const int64_t W = f.width, cw = f.width / s, ch = f.height / s;
     f.refined.assign(size_t(cw * ch), 0);
-    const bool glassShown = !std::holds_alternative<NoGlassOptions>(f.options.glass);
-    std::vector<uint8_t> glass(f.scene.materials.size(), 0);
-    for (std::size_t m = 0; m < glass.size(); ++m) glass[m] = glassShown && f.scene.materials[m].isGlass();
     auto faceNormal = [&](uint32_t t) { return f.triangleBases[t].normal; };
     const float cos30 = float(std::cos(30 * M_PI / 180));
     parallelFor(0, ch, 8, [&](int64_t y0, int64_t y1) {
         for (int64_t cy = y0; cy < y1; ++cy)
             for (int64_t cx = 0; cx < cw; ++cx) {
                 const uint32_t first = g.triangle[size_t(cy * s * W + cx * s)];
-                bool refine = false, same = true, anyGlass = false;
+                bool refine = false, same = true;
                 float dmin = g.depth[size_t(cy * s * W + cx * s)], dmax = dmin;
                 for (int dy = 0; dy < s && !refine; ++dy)
                     for (int dx = 0; dx < s && !refine; ++dx) {
                         const size_t i = size_t((cy * s + dy) * W + cx * s + dx);
                         const uint32_t t = g.triangle[i];
-                        if (t != GBuffer::kNone && glass[geo.triangleMaterial[t]]) anyGlass = true;
                         if (t == first) continue;
                         same = false;
                         if (t == GBuffer::kNone || first == GBuffer::kNone ||
@@ -71,9 +67,58 @@ void markRefinedCells(FrameState& f) {
                         }
                     }
                 if (!refine && !same && dmax - dmin > 0.02f * dmin) refine = true;
-                f.refined[size_t(cy * cw + cx)] = refine ? kEveryRefinedSample : anyGlass ? kRookSamples : 0;
+                f.refined[size_t(cy * cw + cx)] = refine ? kEveryRefinedSample : 0;
             }
     });
+}
+
+namespace {
+
+float lumaOf(const Vec3f& c) {
+    const float r = std::clamp(c.x, 0.0f, 1.0f), g = std::clamp(c.y, 0.0f, 1.0f),
+                b = std::clamp(c.z, 0.0f, 1.0f);
+    return std::sqrt(0.299f * r + 0.587f * g + 0.114f * b); // perceptual (gamma 2) luma
+}
+
+// The perceptual luma of a shaded sample as the image shows it (after the output transform).
+float shownLuma(const Vec3f& c, ToneMap t) {
+    return lumaOf(t == ToneMap::Clamp ? c
+                                      : Vec3f{filmicToneMap(c.x), filmicToneMap(c.y), filmicToneMap(c.z)});
+}
+
+} // namespace
+
+std::size_t representativeSample(const FrameState& f, int64_t cx, int64_t cy) {
+    const int a = f.adaptive;
+    return std::size_t((cy * a + a / 2) * f.width + cx * a + a / 2);
+}
+
+std::size_t neighbourShowing(const FrameState& f, int64_t cx, int64_t cy, uint32_t triangle) {
+    const int a = f.adaptive;
+    const int64_t cw = f.width / a, ch = f.height / a;
+    // The four sides first, then the corners.
+    constexpr int kX[8] = {-1, 1, 0, 0, -1, 1, -1, 1}, kY[8] = {0, 0, -1, 1, -1, -1, 1, 1};
+    for (int k = 0; k < 8; ++k) {
+        const int64_t nx = cx + kX[k], ny = cy + kY[k];
+        if (nx < 0 || ny < 0 || nx >= cw || ny >= ch) continue;
+        const std::size_t r = representativeSample(f, nx, ny);
+        if (f.gbuffer.triangle[r] == triangle) return r;
+    }
+    return kNoSample;
+}
+
+bool contrastsWithNeighbours(const FrameState& f, int64_t cx, int64_t cy) {
+    const int a = f.adaptive;
+    const int64_t cw = f.width / a, ch = f.height / a;
+    const ToneMap tm = f.options.toneMap;
+    const float own = shownLuma(f.shaded[representativeSample(f, cx, cy)], tm);
+    const int64_t nx[4] = {cx - 1, cx + 1, cx, cx}, ny[4] = {cy, cy, cy - 1, cy + 1};
+    for (int k = 0; k < 4; ++k) {
+        if (nx[k] < 0 || ny[k] < 0 || nx[k] >= cw || ny[k] >= ch) continue;
+        if (std::abs(shownLuma(f.shaded[representativeSample(f, nx[k], ny[k])], tm) - own) > kRefineContrast)
+            return true;
+    }
+    return false;
 }
 
 int rookColumn(int s, int dy) {
@@ -94,16 +139,6 @@ bool shadedSample(const FrameState& f, int64_t x, int64_t y) {
         return dx == a / 2 && dy == a / 2;
     }
 }
-
-namespace {
-
-float lumaOf(const Vec3f& c) {
-    const float r = std::clamp(c.x, 0.0f, 1.0f), g = std::clamp(c.y, 0.0f, 1.0f),
-                b = std::clamp(c.z, 0.0f, 1.0f);
-    return std::sqrt(0.299f * r + 0.587f * g + 0.114f * b); // perceptual (gamma 2) luma
-}
-
-} // namespace
 
 Image postAntiAlias(const Image& in, const std::vector<uint8_t>& skip) {
     Image out = in;

@@ -3,7 +3,9 @@
 // filmic tone map (see render.hpp).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "render/frame_state.hpp"
@@ -15,11 +17,33 @@ namespace voxfx::detail {
 /// 0: the representative (adaptive / 2, adaptive / 2) only.
 inline constexpr uint8_t kEveryRefinedSample = 2, kRookSamples = 1;
 
+/// How far apart (perceptual luma of the shown image, 0..1) the light through neighbouring glass
+/// cells must be for them to get their N-rooks samples: the smallest step the post-process blends
+/// (FXAA's 1/32 of contrast), below which the eye sees no stair-steps.
+inline constexpr float kRefineContrast = 1.0f / 32;
+
 /// Fills frame.refined from the G-buffer: every sample of a cell (adaptive x adaptive samples)
 /// where its samples show different meshes or materials, background and geometry, faces whose
-/// normals differ by more than 30 degrees or depths more than 2 % apart; N-rooks samples where it
-/// shows glass (when a glass method is chosen) and no such edge.
+/// normals differ by more than 30 degrees or depths more than 2 % apart; 0 elsewhere (glass cells:
+/// see contrastsWithNeighbours).
 void markRefinedCells(FrameState& frame);
+
+/// The index of cell (cx, cy)'s representative sample (adaptive / 2, adaptive / 2).
+std::size_t representativeSample(const FrameState& frame, int64_t cx, int64_t cy);
+
+inline constexpr std::size_t kNoSample = ~std::size_t(0);
+
+/// The representative sample of a cell next to (cx, cy) (its four sides first, then its corners)
+/// that shows `triangle` (GBuffer::kNone: the background), or kNoSample. The shading pass shades an
+/// edge cell's sample of another triangle than its representative's only where no neighbour shows
+/// it: elsewhere the neighbour's shading, a cell away, stands for it (shading varies little over a
+/// cell; what anti-aliasing needs at an edge is which surface covers each sample).
+std::size_t neighbourShowing(const FrameState& frame, int64_t cx, int64_t cy, uint32_t triangle);
+
+/// Whether the shown luma of cell (cx, cy)'s representative differs from one of its four
+/// neighbours' by more than kRefineContrast (the glass pass: glass shaded once whose light through
+/// it varies gets N-rooks samples).
+bool contrastsWithNeighbours(const FrameState& frame, int64_t cx, int64_t cy);
 
 /// Whether the passes shade sample (x, y) (every sample when adaptive is 1).
 bool shadedSample(const FrameState& frame, int64_t x, int64_t y);

@@ -97,6 +97,38 @@ GlassOptions glassWithGrid(FrameState& frame) {
     return method;
 }
 
+// Adaptive anti-aliasing inside glass: a glass cell shaded once (no edge) whose light through it
+// differs from a neighbour's (contrastsWithNeighbours, on the traced representatives) gets its
+// N-rooks samples, each shaded as a surface and traced. The cells decide on representatives only,
+// which no cell changes, so the order does not matter.
+template <class ShowsGlass, class Trace>
+void addRookSamples(FrameState& f, const ShowsGlass& showsGlass, const Trace& trace) {
+    const int a = f.adaptive;
+    const int64_t W = f.width, cw = W / a, ch = f.height / a;
+    const Vec3d eye = f.gbuffer.frame.eye();
+    parallelFor(0, ch, 4, [&](int64_t y0, int64_t y1) {
+        for (int64_t cy = y0; cy < y1; ++cy)
+            for (int64_t cx = 0; cx < cw; ++cx) {
+                uint8_t& kind = f.refined[size_t(cy * cw + cx)];
+                const size_t rep = representativeSample(f, cx, cy);
+                if (kind != 0 || !showsGlass(rep) || !contrastsWithNeighbours(f, cx, cy)) continue;
+                kind = kRookSamples;
+                const float occlusion =
+                    f.screenOcclusion.empty() ? 1.0f : f.screenOcclusion[size_t(cy * cw + cx)];
+                for (int dy = 0; dy < a; ++dy) {
+                    const int64_t x = cx * a + rookColumn(a, dy), y = cy * a + dy;
+                    const size_t i = size_t(y * W + x);
+                    if (i == rep) continue;
+                    SurfacePoint s;
+                    f.shaded[i] = surfaceAt(f.gbuffer, f.geometry, x, y, s)
+                                      ? f.shader->shade(s, eye, occlusion)
+                                      : f.shaded[rep];
+                    if (showsGlass(i)) trace(x, y, i);
+                }
+            }
+    });
+}
+
 } // namespace
 
 void shadeGlass(FrameState& frame) {
@@ -168,28 +200,35 @@ void shadeGlass(FrameState& frame) {
 
     const int64_t W = gbuffer.frame.width(), H = gbuffer.frame.height();
     const Vec3d eye = gbuffer.frame.eye();
+    // The light through the glass at sample (x, y) (index i) mixed into its shading.
+    const auto trace = [&](int64_t x, int64_t y, size_t i) {
+        SurfacePoint s;
+        if (!surfaceAt(gbuffer, geometry, x, y, s)) return;
+        const Vec3d d = normalize(s.position - eye);
+        const GlassPath p = traceGlass(built, GlassHit{eye, d, s.position, s.normal, s.material});
+        if (!p.hit) return;
+        // Frosted light is the blurred environment (ED06's pre-filtered map), never the scene.
+        const Vec3f through =
+            incoming(s.position, p.reflectDir, 0) * p.reflectance +
+            (p.blurAngle > 0 ? env.lookup(p.exitDir, p.blurAngle) : incoming(p.exitPoint, p.exitDir, 0)) *
+                p.throughput;
+        const float tr = std::clamp(scene.materials[s.material].transmission, 0.0f, 1.0f);
+        shaded[i] = shaded[i] * (1 - tr) + through * (tr * options.exposure);
+        sampleMask[i] = 1;
+    };
+    const auto showsGlass = [&](size_t i) {
+        const uint32_t tri = gbuffer.triangle[i];
+        return tri != GBuffer::kNone && isGlass[geometry.triangleMaterial[tri]];
+    };
     parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
                 const size_t i = size_t(y * W + x);
-                const uint32_t tri = gbuffer.triangle[i];
-                if (tri == GBuffer::kNone || !isGlass[geometry.triangleMaterial[tri]]) continue;
-                if (!shadedSample(frame, x, y)) continue; // adaptive anti-aliasing fills it in
-                SurfacePoint s;
-                if (!surfaceAt(gbuffer, geometry, x, y, s)) continue;
-                const Vec3d d = normalize(s.position - eye);
-                const GlassPath p = traceGlass(built, GlassHit{eye, d, s.position, s.normal, s.material});
-                if (!p.hit) continue;
-                // Frosted light is the blurred environment (ED06's pre-filtered map), never the scene.
-                const Vec3f through = incoming(s.position, p.reflectDir, 0) * p.reflectance +
-                                      (p.blurAngle > 0 ? env.lookup(p.exitDir, p.blurAngle)
-                                                       : incoming(p.exitPoint, p.exitDir, 0)) *
-                                          p.throughput;
-                const float tr = std::clamp(scene.materials[s.material].transmission, 0.0f, 1.0f);
-                shaded[i] = shaded[i] * (1 - tr) + through * (tr * options.exposure);
-                sampleMask[i] = 1;
+                if (!showsGlass(i) || !shadedSample(frame, x, y)) continue; // AA fills the others in
+                trace(x, y, i);
             }
     });
+    if (frame.adaptive > 1) addRookSamples(frame, showsGlass, trace);
     frame.result.glass.traceMs += std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
 }
 

@@ -6,7 +6,6 @@
 #include "render/frame_passes.hpp"
 #include "render/render_cache.hpp"
 #include "render/screen_space_ao.hpp"
-#include "render/shading.hpp"
 #include "voxfx/ambient_occlusion.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/render.hpp"
@@ -15,38 +14,19 @@ namespace voxfx::detail {
 
 namespace {
 
-// Screen-space occlusion per cell of the G-buffer (adaptive x adaptive samples), from the sample the
-// shading pass shades for it: its surface point and whether it occludes (opaque), then GTAO over
-// the cells in the camera's frame at the cells' resolution, into f.screenOcclusion.
+// Screen-space occlusion per cell of the G-buffer (adaptive x adaptive samples), of the sample the
+// shading pass shades there, read from the G-buffer itself (screenSpaceOcclusion's G-buffer entry:
+// no gather of surface points), into f.screenOcclusion.
 void screenOcclusion(FrameState& f, double radius) {
     const int a = f.adaptive;
-    const int64_t cw = f.width / a, ch = f.height / a;
-    RenderCacheData::ScreenOcclusion& c = f.cache.screen;
-    c.position.resize(size_t(cw * ch));
-    c.normal.resize(size_t(cw * ch));
-    c.covered.resize(size_t(cw * ch));
-    c.occluder.resize(size_t(cw * ch));
-    std::vector<uint8_t> opaque(f.scene.materials.size());
+    std::vector<uint8_t>& opaque = f.cache.screen.opaque;
+    opaque.resize(f.scene.materials.size());
     for (std::size_t m = 0; m < opaque.size(); ++m) opaque[m] = f.scene.materials[m].isOpaque();
-    parallelFor(0, ch, 8, [&](int64_t y0, int64_t y1) {
-        for (int64_t cy = y0; cy < y1; ++cy)
-            for (int64_t cx = 0; cx < cw; ++cx) {
-                const auto i = size_t(cy * cw + cx);
-                SurfacePoint s;
-                const bool hit = surfaceFromBasis(f.gbuffer, f.geometry, f.triangleBases, cx * a + a / 2,
-                                                  cy * a + a / 2, s);
-                c.covered[i] = hit;
-                c.occluder[i] = hit && s.material < opaque.size() && opaque[s.material];
-                if (!hit) continue;
-                c.position[i] = Vec3f(s.position);
-                c.normal[i] = Vec3f(s.normal);
-            }
-    });
-    f.screenOcclusion.resize(size_t(cw * ch));
+    f.screenOcclusion.resize(size_t((f.width / a) * (f.height / a)));
     ScreenSpaceOcclusionOptions so;
     so.radius = radius;
-    screenSpaceOcclusion(cameraFrame(f.camera, cw, ch), cw, ch, c.position, c.normal, c.covered, so,
-                         c.occluder, f.screenOcclusion, c.scratch);
+    screenSpaceOcclusion(f.gbuffer, f.geometry, f.triangleBases, opaque, a, so, f.screenOcclusion,
+                         f.cache.screen.scratch);
 }
 
 } // namespace

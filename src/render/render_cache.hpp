@@ -137,9 +137,8 @@ struct RenderCacheData {
     std::vector<Vec3f> shaded;
     std::vector<float> screenOcclusion;
     std::vector<uint8_t> refined, glassSamples;
-    struct ScreenOcclusion { ///< the screen-space occlusion's inputs per cell, and its scratch
-        std::vector<Vec3f> position, normal;
-        std::vector<uint8_t> covered, occluder;
+    struct ScreenOcclusion { ///< the screen-space occlusion's opaque materials, and its scratch
+        std::vector<uint8_t> opaque;
         ScreenSpaceOcclusionScratch scratch;
     } screen;
     struct Resolve {

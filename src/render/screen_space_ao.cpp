@@ -19,6 +19,8 @@
 #include <array>
 #include <cmath>
 
+#include "render/render_cache.hpp"
+#include "render/shading.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/parallel.hpp"
 
@@ -43,7 +45,7 @@ constexpr int kBayer[4][4] = {{0, 8, 2, 10}, {12, 4, 14, 6}, {3, 11, 1, 9}, {15,
 // A working buffer, as the passes read it: per pixel (row-major) the position, the normal, whether
 // it is covered and whether it occludes. Packed: position and flags in 16 bytes (the horizon search
 // reads them together at scattered pixels: one cache line per sample instead of three), normals
-// apart. Spans: the caller's buffers as they are (the upsample's rare fallback at full resolution).
+// apart.
 constexpr uint32_t kCovered = 1, kOccluder = 2;
 using Sample = ScreenSpaceSample;
 struct Packed {
@@ -55,6 +57,13 @@ struct Packed {
     const Vec3f& position(int64_t i) const { return sample[i].position; }
     const Vec3f& normal(int64_t i) const { return normals[i]; }
 };
+
+// The full-resolution samples the working buffer is made from, and what the upsample and its rare
+// fallback (GTAO at one sample) read of them: by index as a buffer (as Packed), by (x, y) in the
+// down- and upsample. `testNormal` is the normal the downsample's one-surface test compares,
+// `upsampleNormal` the one the upsample's similarity weights take, and `meanNormal` the normal of a
+// block of one surface (from the sum of its test normals and its mean position). Two sources: the caller's
+// buffers (Spans), and the cells of a G-buffer (Cells).
 struct Spans {
     int64_t width = 0, height = 0;
     const Vec3f* positions = nullptr;
@@ -65,6 +74,89 @@ struct Spans {
     bool occludes(int64_t i) const { return coverage[i] && (!occluders || occluders[i]); }
     const Vec3f& position(int64_t i) const { return positions[i]; }
     const Vec3f& normal(int64_t i) const { return normals[i]; }
+    bool covered(int64_t x, int64_t y) const { return covered(y * width + x); }
+    bool occludes(int64_t x, int64_t y) const { return occludes(y * width + x); }
+    Vec3f position(int64_t x, int64_t y) const { return positions[y * width + x]; }
+    Vec3f normal(int64_t x, int64_t y) const { return normals[y * width + x]; }
+    Vec3f testNormal(int64_t x, int64_t y) const { return normals[y * width + x]; }
+    Vec3f upsampleNormal(int64_t x, int64_t y) const { return normals[y * width + x]; }
+    Vec3f meanNormal(const Vec3f& sum, int64_t, int64_t, const Vec3f&) const {
+        return length(sum) > 0 ? normalize(sum) : Vec3f{0, 0, 0};
+    }
+};
+
+// The renderer's samples: cell (x, y) of a G-buffer of `adaptive` x `adaptive` samples per cell is
+// its sample (x a + a / 2, y a + a / 2), the one the shading pass shades. Its position comes from
+// the depth (a multiply-add per coordinate: the eye ray's offsets per cell column and row are kept),
+// its normals from the triangle's basis only where asked: the face normal for the one-surface test,
+// the interpolated one (interpolatedNormal, as the shading pass's) for the working pixel and the
+// upsample's slow path. So the downsample evaluates one shading normal per block, not four.
+struct Cells {
+    int64_t width = 0, height = 0; ///< cells
+    const GBuffer* g = nullptr;
+    const SceneGeometry* geometry = nullptr;
+    const TriangleBasis* bases = nullptr;
+    std::span<const uint8_t> opaque; ///< per material: whether it occludes
+    int adaptive = 1;
+    Vec3f eye, right, up, forward;
+    std::vector<float> columnTan, rowTan; ///< the eye ray's offset along right, up per unit depth
+
+    Cells(const GBuffer& gbuffer, const SceneGeometry& geo, std::span<const TriangleBasis> b,
+          std::span<const uint8_t> opaqueMaterial, int a)
+        : width(gbuffer.frame.width() / a), height(gbuffer.frame.height() / a), g(&gbuffer), geometry(&geo),
+          bases(b.data()), opaque(opaqueMaterial), adaptive(a), eye(gbuffer.frame.eye()),
+          right(gbuffer.frame.right()), up(gbuffer.frame.up()), forward(gbuffer.frame.forward()) {
+        const Frame& f = gbuffer.frame;
+        columnTan.resize(size_t(width));
+        rowTan.resize(size_t(height));
+        for (int64_t x = 0; x < width; ++x)
+            columnTan[size_t(x)] =
+                float(dot(f.worldFromGrid({double(x * a + a / 2) + 0.5, 0.5, 1.0}) - f.eye(), f.right()));
+        for (int64_t y = 0; y < height; ++y)
+            rowTan[size_t(y)] =
+                float(dot(f.worldFromGrid({0.5, double(y * a + a / 2) + 0.5, 1.0}) - f.eye(), f.up()));
+    }
+    std::size_t sample(int64_t x, int64_t y) const {
+        return std::size_t((y * adaptive + adaptive / 2) * g->frame.width() + x * adaptive + adaptive / 2);
+    }
+    uint32_t triangle(int64_t x, int64_t y) const { return g->triangle[sample(x, y)]; }
+    bool covered(int64_t x, int64_t y) const { return triangle(x, y) != GBuffer::kNone; }
+    bool occludes(int64_t x, int64_t y) const {
+        const uint32_t t = triangle(x, y);
+        if (t == GBuffer::kNone) return false;
+        const uint32_t m = geometry->triangleMaterial[t];
+        return m < opaque.size() && opaque[m];
+    }
+    Vec3f position(int64_t x, int64_t y) const {
+        const float z = g->depth[sample(x, y)];
+        return eye + (right * columnTan[size_t(x)] + up * rowTan[size_t(y)] + forward) * z;
+    }
+    // The face normal, turned towards the eye.
+    Vec3f testNormal(int64_t x, int64_t y) const {
+        const Vec3f n = bases[triangle(x, y)].normal;
+        return dot(n, eye - position(x, y)) < 0 ? -n : n;
+    }
+    // The shading normal at `at` on the triangle of cell (x, y), turned as surfaceFromBasis turns it.
+    Vec3f normalAt(int64_t x, int64_t y, const Vec3f& at) const {
+        const uint32_t t = triangle(x, y);
+        const TriangleBasis& basis = bases[t];
+        const Vec3f n = interpolatedNormal(*geometry, basis, t, at - basis.a);
+        Vec3f ng = basis.normal;
+        if (dot(ng, eye - at) < 0) ng = -ng;
+        return dot(n, ng) < 0 ? -n : n;
+    }
+    Vec3f normal(int64_t x, int64_t y) const { return normalAt(x, y, position(x, y)); }
+    // The upsample's similarity weights take the face normal: the interpolated one moves them little
+    // and costs a visit to the triangle's vertices, for every cell off the upsample's fast path.
+    Vec3f upsampleNormal(int64_t x, int64_t y) const { return testNormal(x, y); }
+    Vec3f meanNormal(const Vec3f&, int64_t bestX, int64_t bestY, const Vec3f& meanPosition) const {
+        return normalAt(bestX, bestY, meanPosition);
+    }
+    // By index, as a buffer (the upsample's fallback).
+    bool covered(int64_t i) const { return covered(i % width, i / width); }
+    bool occludes(int64_t i) const { return occludes(i % width, i / width); }
+    Vec3f position(int64_t i) const { return position(i % width, i / width); }
+    Vec3f normal(int64_t i) const { return normal(i % width, i / width); }
 };
 
 // What every pixel of one working buffer shares.
@@ -347,14 +439,18 @@ void blur(const Packed& b, const std::vector<uint8_t>& links, std::span<const fl
     pass(across, out, W, kLinkUp);
 }
 
-// The caller's buffers (width x height samples) and what every step reads of them.
-struct Input {
-    int64_t W, H;
-    std::span<const Vec3f> position, normal;
-    std::span<const uint8_t> covered;
-    Spans full;        // the buffers as they are
-    Params fullParams; // at full resolution
-};
+void checkOptions(const ScreenSpaceOcclusionOptions& options) {
+    if (!(options.radius > 0 && std::isfinite(options.radius)))
+        fail("screen-space ambient occlusion: the radius must be positive and finite, got ", options.radius);
+    if (options.directions < 1 || options.directions > kMaxDirections)
+        fail("screen-space ambient occlusion: directions must be between 1 and ", kMaxDirections, ", got ",
+             options.directions);
+    if (options.steps < 1 || options.steps > kMaxSteps)
+        fail("screen-space ambient occlusion: steps must be between 1 and ", kMaxSteps, ", got ",
+             options.steps);
+    if (!(options.bias >= 0 && options.bias <= M_PI / 4))
+        fail("screen-space ambient occlusion: the bias must lie in [0, pi/4] radians, got ", options.bias);
+}
 
 void checkArguments(const Frame& camera, int64_t width, int64_t height, std::span<const Vec3f> position,
                     std::span<const Vec3f> normal, std::span<const uint8_t> covered,
@@ -370,33 +466,33 @@ void checkArguments(const Frame& camera, int64_t width, int64_t height, std::spa
         fail("screen-space ambient occlusion: ", count, " samples, but ", position.size(), " positions, ",
              normal.size(), " normals, ", covered.size(), " coverage flags, ", occluder.size(),
              " occluder flags and room for ", visibility.size(), " results");
-    if (!(options.radius > 0 && std::isfinite(options.radius)))
-        fail("screen-space ambient occlusion: the radius must be positive and finite, got ", options.radius);
-    if (options.directions < 1 || options.directions > kMaxDirections)
-        fail("screen-space ambient occlusion: directions must be between 1 and ", kMaxDirections, ", got ",
-             options.directions);
-    if (options.steps < 1 || options.steps > kMaxSteps)
-        fail("screen-space ambient occlusion: steps must be between 1 and ", kMaxSteps, ", got ",
-             options.steps);
-    if (!(options.bias >= 0 && options.bias <= M_PI / 4))
-        fail("screen-space ambient occlusion: the bias must lie in [0, pi/4] radians, got ", options.bias);
+    checkOptions(options);
 }
 
 // Without halfResolution: GTAO at every sample, linked and blurred.
-void fullResolution(const Input& in, std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch) {
-    const int64_t W = in.W, H = in.H;
+template <class Source>
+void fullResolution(const Source& full, const Params& fullParams, std::span<float> visibility,
+                    ScreenSpaceOcclusionScratch& scratch) {
+    const int64_t W = full.width, H = full.height;
     const auto count = std::size_t(W * H);
-    const std::span<const Vec3f> position = in.position, normal = in.normal;
-    const Spans& full = in.full;
-    const Params& fullParams = in.fullParams;
     std::vector<Sample>& samples = scratch.samples;
+    std::vector<Vec3f>& normals = scratch.normals;
     samples.resize(count);
+    normals.resize(count);
     parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
-        for (int64_t i = y0 * W; i < y1 * W; ++i)
-            samples[size_t(i)] = {position[size_t(i)],
-                                  (full.covered(i) ? kCovered : 0u) | (full.occludes(i) ? kOccluder : 0u)};
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < W; ++x) {
+                const auto i = std::size_t(y * W + x);
+                if (!full.covered(x, y)) {
+                    samples[i] = {};
+                    normals[i] = {};
+                    continue;
+                }
+                samples[i] = {full.position(x, y), kCovered | (full.occludes(x, y) ? kOccluder : 0u)};
+                normals[i] = full.normal(x, y);
+            }
     });
-    const Packed packed{W, H, samples.data(), normal.data()};
+    const Packed packed{W, H, samples.data(), normals.data()};
     scratch.raw.resize(count);
     parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
@@ -409,14 +505,27 @@ void fullResolution(const Input& in, std::span<float> visibility, ScreenSpaceOcc
     blur(packed, scratch.links, scratch.raw, scratch.across, visibility);
 }
 
+// A covered sample of a 2x2 block, as the downsample reads it.
+struct BlockSample {
+    int64_t x, y;
+    Vec3f position;
+};
+// Whether the four samples of a block show one triangle (the G-buffer's cells: then they are one
+// surface without testing their normals); the caller's buffers do not say.
+bool oneTriangle(const Spans&, const BlockSample*) { return false; }
+bool oneTriangle(const Cells& cells, const BlockSample* block) {
+    const uint32_t t = cells.triangle(block[0].x, block[0].y);
+    for (int k = 1; k < 4; ++k)
+        if (cells.triangle(block[k].x, block[k].y) != t) return false;
+    return true;
+}
+
 // Step 1, the working buffer at half resolution (in scratch: samples, normals, and links, where
 // kUniform marks a block of one smooth surface).
-Packed downsample(const Input& in, const Frame& camera, ScreenSpaceOcclusionScratch& scratch) {
-    const int64_t W = in.W, H = in.H;
-    const std::span<const Vec3f> position = in.position, normal = in.normal;
-    const std::span<const uint8_t> covered = in.covered;
-    const Spans& full = in.full;
-    const Params& fullParams = in.fullParams;
+template <class Source>
+Packed downsample(const Source& full, const Params& fullParams, const Frame& camera,
+                  ScreenSpaceOcclusionScratch& scratch) {
+    const int64_t W = full.width, H = full.height;
     // Step 1: per 2x2 block, the mean of its samples where they all show one smooth surface (then
     // the working pixel sits at the block's centre, where the upsample expects it), else the covered
     // sample nearest the eye (ties: the first in row order), so that a thin object in front keeps it.
@@ -432,19 +541,17 @@ Packed downsample(const Input& in, const Frame& camera, ScreenSpaceOcclusionScra
     parallelFor(0, h, 16, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < w; ++x) {
-                int64_t block[4], n = 0, best = -1;
+                BlockSample block[4];
+                int n = 0, best = -1, inside = 0;
                 float bestDepth = 0;
-                bool uniform = true;
                 for (int64_t j = 2 * y; j < std::min(H, 2 * y + 2); ++j)
                     for (int64_t i = 2 * x; i < std::min(W, 2 * x + 2); ++i) {
-                        const int64_t s = j * W + i;
-                        block[n++] = s;
-                        if (!covered[size_t(s)]) {
-                            uniform = false;
-                            continue;
-                        }
-                        const float d = dot(position[size_t(s)] - eye, forward);
-                        if (best < 0 || d < bestDepth) best = s, bestDepth = d;
+                        ++inside;
+                        if (!full.covered(i, j)) continue;
+                        block[n] = {i, j, full.position(i, j)};
+                        const float d = dot(block[n].position - eye, forward);
+                        if (best < 0 || d < bestDepth) best = n, bestDepth = d;
+                        ++n;
                     }
                 const auto l = std::size_t(y * w + x);
                 links[l] = 0;
@@ -453,26 +560,38 @@ Packed downsample(const Input& in, const Frame& camera, ScreenSpaceOcclusionScra
                     lowNormal[l] = {};
                     continue;
                 }
-                const Vec3f P = position[size_t(best)], N = normal[size_t(best)];
-                // One smooth surface: all occluders or none, within a sample's footprint of the
-                // nearest sample's tangent plane, normals within about 18 degrees of its normal.
-                const float footprint = bestDepth * fullParams.pixelSize;
+                const BlockSample& b = block[best];
+                const Vec3f P = b.position;
+                const bool occludes = full.occludes(b.x, b.y);
+                bool uniform = n == 4;
                 Vec3f sumPosition{0, 0, 0}, sumNormal{0, 0, 0};
-                for (int64_t k = 0; k < n && uniform; ++k) {
-                    const auto s = std::size_t(block[k]);
-                    uniform = full.occludes(int64_t(s)) == full.occludes(best) &&
-                              std::fabs(dot(position[s] - P, N)) <= footprint && dot(normal[s], N) >= 0.95f;
-                    sumPosition += position[s];
-                    sumNormal += normal[s];
+                if (uniform && oneTriangle(full, block)) { // one plane, one material
+                    for (const BlockSample& c : block) sumPosition += c.position;
+                } else {
+                    // One smooth surface: all occluders or none, within a sample's footprint of the
+                    // nearest sample's tangent plane, normals within about 18 degrees of its normal.
+                    const Vec3f N = full.testNormal(b.x, b.y);
+                    const float footprint = bestDepth * fullParams.pixelSize;
+                    for (int k = 0; k < n && uniform; ++k) {
+                        const BlockSample& c = block[k];
+                        const Vec3f m = k == best ? N : full.testNormal(c.x, c.y);
+                        uniform = full.occludes(c.x, c.y) == occludes &&
+                                  std::fabs(dot(c.position - P, N)) <= footprint && dot(m, N) >= 0.95f;
+                        sumPosition += c.position;
+                        sumNormal += m;
+                    }
                 }
-                lowSample[l].flags = kCovered | (full.occludes(best) ? kOccluder : 0u);
-                if (uniform && n == 4 && length(sumNormal) > 0) {
-                    lowSample[l].position = sumPosition * 0.25f;
-                    lowNormal[l] = normalize(sumNormal);
+                lowSample[l].flags = kCovered | (occludes ? kOccluder : 0u);
+                const Vec3f mean = sumPosition * 0.25f;
+                const Vec3f meanNormal =
+                    uniform && inside == 4 ? full.meanNormal(sumNormal, b.x, b.y, mean) : Vec3f{0, 0, 0};
+                if (length(meanNormal) > 0) {
+                    lowSample[l].position = mean;
+                    lowNormal[l] = meanNormal;
                     links[l] = kUniform;
                 } else {
                     lowSample[l].position = P;
-                    lowNormal[l] = N;
+                    lowNormal[l] = full.normal(b.x, b.y);
                 }
             }
     });
@@ -480,13 +599,10 @@ Packed downsample(const Input& in, const Frame& camera, ScreenSpaceOcclusionScra
 }
 
 // Step 4, back to full resolution: `smooth` (the blurred working pixels of `low`) into `out`.
-void upsample(const Input& in, const Packed& low, const std::vector<uint8_t>& links,
-              const std::vector<float>& smooth, std::span<float> out) {
-    const int64_t W = in.W, H = in.H, w = low.width, h = low.height;
-    const std::span<const Vec3f> position = in.position, normal = in.normal;
-    const std::span<const uint8_t> covered = in.covered;
-    const Spans& full = in.full;
-    const Params& fullParams = in.fullParams;
+template <class Source>
+void upsample(const Source& full, const Params& fullParams, const Packed& low,
+              const std::vector<uint8_t>& links, const std::vector<float>& smooth, std::span<float> out) {
+    const int64_t W = full.width, H = full.height, w = low.width, h = low.height;
     const Sample* lowSample = low.sample;
     const Vec3f* lowNormal = low.normals;
     // Step 4: working pixel (a, b) is centred on sample (2a + 1, 2b + 1), so sample (x, y) lies
@@ -499,7 +615,7 @@ void upsample(const Input& in, const Packed& low, const std::vector<uint8_t>& li
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
                 const int64_t i = y * W + x;
-                if (!covered[size_t(i)]) {
+                if (!full.covered(x, y)) {
                     out[size_t(i)] = 1;
                     continue;
                 }
@@ -515,7 +631,7 @@ void upsample(const Input& in, const Packed& low, const std::vector<uint8_t>& li
                         continue;
                     }
                 }
-                const Vec3f P = position[size_t(i)], N = normal[size_t(i)];
+                const Vec3f P = full.position(x, y), N = full.upsampleNormal(x, y);
                 const float tolerance = planeTolerance(fullParams, P);
                 float sum = 0, weights = 0;
                 for (int db = 0; db < 2; ++db)
@@ -546,30 +662,21 @@ void upsample(const Input& in, const Packed& low, const std::vector<uint8_t>& li
     });
 }
 
-} // namespace
-
-void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, std::span<const Vec3f> position,
-                          std::span<const Vec3f> normal, std::span<const uint8_t> covered,
-                          const ScreenSpaceOcclusionOptions& options, std::span<const uint8_t> occluder,
-                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch) {
-    checkArguments(camera, width, height, position, normal, covered, options, occluder, visibility);
-    const Input in{width,
-                   height,
-                   position,
-                   normal,
-                   covered,
-                   Spans{width, height, position.data(), normal.data(), covered.data(),
-                         occluder.empty() ? nullptr : occluder.data()},
-                   makeParams(camera, 1, options)};
+// GTAO over `full` (at camera's resolution times `scale` samples per side) into `visibility`.
+template <class Source>
+void occlusionOf(const Source& full, const Frame& camera, int scale,
+                 const ScreenSpaceOcclusionOptions& options, std::span<float> visibility,
+                 ScreenSpaceOcclusionScratch& scratch) {
+    const Params fullParams = makeParams(camera, scale, options);
     if (!options.halfResolution) {
-        fullResolution(in, visibility, scratch);
+        fullResolution(full, fullParams, visibility, scratch);
         return;
     }
-    const Packed low = downsample(in, camera, scratch);
+    const Packed low = downsample(full, fullParams, camera, scratch);
     const int64_t w = low.width, h = low.height;
     const auto lowCount = std::size_t(w * h);
     std::vector<uint8_t>& links = scratch.links;
-    const Params p = makeParams(camera, 2, options);
+    const Params p = makeParams(camera, 2 * scale, options);
     scratch.raw.resize(lowCount);
     parallelFor(0, h, 4, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
@@ -579,7 +686,39 @@ void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, st
     scratch.across.resize(lowCount);
     scratch.smooth.resize(lowCount);
     blur(low, links, scratch.raw, scratch.across, scratch.smooth);
-    upsample(in, low, links, scratch.smooth, visibility);
+    upsample(full, fullParams, low, links, scratch.smooth, visibility);
+}
+
+} // namespace
+
+void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, std::span<const Vec3f> position,
+                          std::span<const Vec3f> normal, std::span<const uint8_t> covered,
+                          const ScreenSpaceOcclusionOptions& options, std::span<const uint8_t> occluder,
+                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch) {
+    checkArguments(camera, width, height, position, normal, covered, options, occluder, visibility);
+    const Spans full{width,         height,         position.data(),
+                     normal.data(), covered.data(), occluder.empty() ? nullptr : occluder.data()};
+    occlusionOf(full, camera, 1, options, visibility, scratch);
+}
+
+void screenSpaceOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
+                          std::span<const TriangleBasis> bases, std::span<const uint8_t> opaqueMaterial,
+                          int adaptive, const ScreenSpaceOcclusionOptions& options,
+                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch) {
+    const Frame& camera = gbuffer.frame;
+    if (!camera.isPerspective()) fail("screen-space ambient occlusion: the camera frame must be perspective");
+    if (adaptive < 1 || camera.width() % adaptive || camera.height() % adaptive)
+        fail("screen-space ambient occlusion: the G-buffer's ", camera.width(), " x ", camera.height(),
+             " samples are not cells of ", adaptive, " x ", adaptive);
+    if (bases.size() != geometry.mesh.triangleCount())
+        fail("screen-space ambient occlusion: ", bases.size(), " triangle bases for ",
+             geometry.mesh.triangleCount(), " triangles");
+    const Cells full(gbuffer, geometry, bases, opaqueMaterial, adaptive);
+    if (full.width <= 0 || full.height <= 0 || visibility.size() != std::size_t(full.width * full.height))
+        fail("screen-space ambient occlusion: ", full.width * full.height, " cells but room for ",
+             visibility.size(), " results");
+    checkOptions(options);
+    occlusionOf(full, camera, adaptive, options, visibility, scratch);
 }
 
 std::vector<float> screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height,

@@ -47,6 +47,8 @@
 
 namespace voxfx::detail {
 
+struct TriangleBasis; // render/render_cache.hpp
+
 struct ScreenSpaceOcclusionOptions {
     /// Occluders farther than this from a point do not occlude it (world units, > 0): the radius the
     /// field method uses (RenderOptions::occlusionRadius, or fieldOcclusionSetup's default).
@@ -109,6 +111,23 @@ struct ScreenSpaceOcclusionScratch {
 void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, std::span<const Vec3f> position,
                           std::span<const Vec3f> normal, std::span<const uint8_t> covered,
                           const ScreenSpaceOcclusionOptions& options, std::span<const uint8_t> occluder,
+                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch);
+
+/// The renderer's entry: screenSpaceOcclusion over the cells of `gbuffer` (adaptive x adaptive
+/// samples each; 1: every sample), one sample per cell, the one the shading pass shades there
+/// ((adaptive / 2, adaptive / 2) of the cell), into `visibility` (one per cell, row-major, y up).
+/// Reads the G-buffer itself rather than gathered buffers: a cell's position from its depth, its
+/// normals from its triangle's basis (`bases`, triangleBases of `geometry`) only where a step needs
+/// them (one shading normal per 2x2 block; face normals where the downsample tests for one surface
+/// and where the upsample cannot interpolate), so at half resolution it evaluates about a quarter
+/// of the shading normals; the same method, and within 0.0001 on average the same result, as the
+/// overload above on gatherSurfaces' buffers (tests/test_screen_space_ao.cpp runs both). A triangle occludes
+/// where opaqueMaterial[its material] is nonzero (an index past it does not). Throws voxfx::Error as the
+/// overload above, and for a G-buffer that is not whole cells, bases of another count or `visibility` of
+/// another size.
+void screenSpaceOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
+                          std::span<const TriangleBasis> bases, std::span<const uint8_t> opaqueMaterial,
+                          int adaptive, const ScreenSpaceOcclusionOptions& options,
                           std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch);
 
 /// The G-buffer's surface points as the plain buffers screenSpaceOcclusion reads: per sample the

@@ -180,6 +180,23 @@ std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry) {
     return out;
 }
 
+Vec3f interpolatedNormal(const SceneGeometry& geometry, const TriangleBasis& basis, uint32_t t,
+                         const Vec3f& rel) {
+    // Barycentrics, clamped against rounding (a degenerate triangle: a third each).
+    float wb = 1.0f / 3, wc = 1.0f / 3;
+    const Vec3f& ng = basis.normal;
+    if (ng.x != 0 || ng.y != 0 || ng.z != 0) {
+        wb = std::max(0.0f, dot(rel, basis.toB));
+        wc = std::max(0.0f, dot(rel, basis.toC));
+    }
+    const float wa = std::max(0.0f, 1 - wb - wc);
+    const uint32_t* corner = &geometry.mesh.indices[3 * size_t(t)];
+    const Vec3f n = geometry.normals[corner[0]] * wa + geometry.normals[corner[1]] * wb +
+                    geometry.normals[corner[2]] * wc;
+    const float len = length(n);
+    return len > 0 ? n / len : ng;
+}
+
 bool surfaceFromBasis(const GBuffer& gbuffer, const SceneGeometry& geometry,
                       std::span<const TriangleBasis> bases, int64_t x, int64_t y, SurfacePoint& out) {
     const auto i = size_t(y * gbuffer.frame.width() + x);
@@ -188,20 +205,8 @@ bool surfaceFromBasis(const GBuffer& gbuffer, const SceneGeometry& geometry,
     const TriangleBasis& basis = bases[t];
     // The pixel ray meets the triangle's plane where the interpolated depth says.
     const Vec3d p = gbuffer.frame.worldFromGrid({double(x) + 0.5, double(y) + 0.5, double(gbuffer.depth[i])});
-    const Vec3f rel(p - Vec3d(basis.a));
-    // Barycentrics, clamped against rounding (a degenerate triangle: a third each).
-    float wb = 1.0f / 3, wc = 1.0f / 3;
     Vec3f ng = basis.normal;
-    if (ng.x != 0 || ng.y != 0 || ng.z != 0) {
-        wb = std::max(0.0f, dot(rel, basis.toB));
-        wc = std::max(0.0f, dot(rel, basis.toC));
-    }
-    const float wa = std::max(0.0f, 1 - wb - wc);
-    const uint32_t* corner = &geometry.mesh.indices[3 * size_t(t)];
-    Vec3f n = geometry.normals[corner[0]] * wa + geometry.normals[corner[1]] * wb +
-              geometry.normals[corner[2]] * wc;
-    const float len = length(n);
-    n = len > 0 ? n / len : ng;
+    Vec3f n = interpolatedNormal(geometry, basis, t, Vec3f(p - Vec3d(basis.a)));
     // Both sides are visible: turn the normals towards the viewer.
     if (dot(Vec3d(ng), gbuffer.frame.eye() - p) < 0) ng = -ng;
     if (dot(n, ng) < 0) n = -n;
@@ -222,8 +227,9 @@ Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material&
 
 namespace {
 
-// The samples of cell (cx, cy) the passes shade (antialias.hpp): every one of an edge cell, the
-// N-rooks samples of a glass cell, else the representative; as sample indices.
+// The samples of cell (cx, cy) the passes shade (antialias.hpp), as sample indices, its
+// representative first where it is one of them: every one of an edge cell, the N-rooks samples of a
+// glass cell, else the representative.
 int cellSamples(const FrameState& f, int64_t cx, int64_t cy, std::array<std::size_t, 64>& out) {
     const int a = f.adaptive;
     const int64_t W = f.width;
@@ -232,6 +238,7 @@ int cellSamples(const FrameState& f, int64_t cx, int64_t cy, std::array<std::siz
         return 1;
     }
     const uint8_t kind = f.refined[size_t(cy * (W / a) + cx)];
+    const std::size_t rep = representativeSample(f, cx, cy);
     int n = 0;
     for (int dy = 0; dy < a; ++dy)
         for (int dx = 0; dx < a; ++dx) {
@@ -240,11 +247,16 @@ int cellSamples(const FrameState& f, int64_t cx, int64_t cy, std::array<std::siz
                                                             : dx == a / 2 && dy == a / 2;
             if (shaded) out[size_t(n++)] = std::size_t((cy * a + dy) * W + cx * a + dx);
         }
+    for (int k = 1; k < n; ++k)
+        if (out[size_t(k)] == rep) std::swap(out[0], out[size_t(k)]);
     return n;
 }
 
 } // namespace
 
+// In two rounds where adaptive anti-aliasing is on: every cell's representative sample, then the
+// other samples of edge cells, each shaded only where neither an earlier sample of its cell nor a
+// neighbouring cell's representative shows its triangle (neighbourShowing).
 void shadeGBuffer(FrameState& frame, Progress* progress) {
     frame.shader = std::make_shared<const SurfaceShader>(frame);
     const SurfaceShader& shader = *frame.shader;
@@ -264,39 +276,55 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
     const std::vector<float>& screenOcclusion = frame.screenOcclusion;
     constexpr int64_t kRows = 4; // cell rows per step
     const int64_t blocks = (ch + kRows - 1) / kRows;
-    ProgressSteps steps(progress, blocks);
-    parallelFor(0, blocks, 1, [&](int64_t b0, int64_t b1) {
-        std::array<std::size_t, 64> samples;
-        for (int64_t b = b0; b < b1 && !steps.cancelled(); ++b) {
-            for (int64_t cy = b * kRows; cy < std::min(ch, (b + 1) * kRows); ++cy)
-                for (int64_t cx = 0; cx < cw; ++cx) {
-                    const int n = cellSamples(frame, cx, cy, samples);
-                    const float occlusion =
-                        screenOcclusion.empty() ? 1.0f : screenOcclusion[size_t(cy * cw + cx)];
-                    for (int k = 0; k < n; ++k) {
-                        const std::size_t i = samples[size_t(k)];
-                        const uint32_t tri = gbuffer.triangle[i];
-                        // Samples of a cell showing one triangle (or the background) share its
-                        // shading, as multisampling does: the first one's.
-                        int same = 0;
-                        while (same < k && gbuffer.triangle[samples[size_t(same)]] != tri) ++same;
-                        if (same < k) {
-                            out[i] = out[samples[size_t(same)]];
-                            continue;
+    const int rounds = a > 1 ? 2 : 1;
+    ProgressSteps steps(progress, rounds * blocks);
+    // Round 0: the first sample of each cell (its representative); round 1: the others.
+    const auto shadeRound = [&](int round) {
+        parallelFor(0, blocks, 1, [&](int64_t b0, int64_t b1) {
+            std::array<std::size_t, 64> samples;
+            for (int64_t b = b0; b < b1 && !steps.cancelled(); ++b) {
+                for (int64_t cy = b * kRows; cy < std::min(ch, (b + 1) * kRows); ++cy)
+                    for (int64_t cx = 0; cx < cw; ++cx) {
+                        const int n = round == 0 ? 1 : cellSamples(frame, cx, cy, samples);
+                        if (round == 0)
+                            samples[0] = a > 1 ? representativeSample(frame, cx, cy) : size_t(cy * W + cx);
+                        const float occlusion =
+                            screenOcclusion.empty() ? 1.0f : screenOcclusion[size_t(cy * cw + cx)];
+                        for (int k = round; k < n; ++k) {
+                            const std::size_t i = samples[size_t(k)];
+                            const uint32_t tri = gbuffer.triangle[i];
+                            // Samples of a cell showing one triangle (or the background) share its
+                            // shading, as multisampling does: the first one's.
+                            int same = 0;
+                            while (same < k && gbuffer.triangle[samples[size_t(same)]] != tri) ++same;
+                            if (same < k) {
+                                out[i] = out[samples[size_t(same)]];
+                                continue;
+                            }
+                            if (round == 1) {
+                                const std::size_t proxy = neighbourShowing(frame, cx, cy, tri);
+                                if (proxy != kNoSample) {
+                                    out[i] = out[proxy];
+                                    continue;
+                                }
+                            }
+                            const int64_t x = int64_t(i % size_t(W)), y = int64_t(i / size_t(W));
+                            SurfacePoint s;
+                            if (tri != GBuffer::kNone && surfaceFromBasis(gbuffer, geometry, bases, x, y, s))
+                                out[i] = shader.shade(s, eye, occlusion);
+                            else // the background shows the environment along the sample's ray
+                                out[i] =
+                                    env.lookup(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) -
+                                               eye) *
+                                    exposure;
                         }
-                        const int64_t x = int64_t(i % size_t(W)), y = int64_t(i / size_t(W));
-                        SurfacePoint s;
-                        if (tri != GBuffer::kNone && surfaceFromBasis(gbuffer, geometry, bases, x, y, s))
-                            out[i] = shader.shade(s, eye, occlusion);
-                        else // the background shows the environment along the sample's ray
-                            out[i] =
-                                env.lookup(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - eye) *
-                                exposure;
                     }
-                }
-            steps.step();
-        }
-    });
+                steps.step();
+            }
+        });
+    };
+    shadeRound(0);
+    if (a > 1 && !steps.cancelled()) shadeRound(1);
     if (steps.cancelled()) fail("cancelled");
 }
 

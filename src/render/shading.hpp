@@ -25,6 +25,12 @@ struct ShadeMaterial {
 /// Per triangle of the flattened scene, its TriangleBasis (render/render_cache.hpp).
 std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry);
 
+/// The unit shading normal of triangle t at the point basis.a + rel of its plane: its vertex normals
+/// weighted by the point's barycentrics (clamped at 0), the face normal where they cancel; not yet
+/// turned towards the viewer (surfaceFromBasis does that).
+Vec3f interpolatedNormal(const SceneGeometry& geometry, const TriangleBasis& basis, uint32_t t,
+                         const Vec3f& rel);
+
 /// The surface seen through G-buffer sample (x, y), as surfaceAt (voxfx/gbuffer.hpp) gives it, from
 /// the precomputed bases. False for the background.
 bool surfaceFromBasis(const GBuffer& gbuffer, const SceneGeometry& geometry,
