@@ -3,6 +3,7 @@
 // material's transmission.
 #include "render/glass_pass.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -10,11 +11,60 @@
 
 #include "render/antialias.hpp"
 #include "render/shading.hpp"
+#include "voxfx/contains.hpp"
 #include "voxfx/triangle_tracer.hpp"
 
 namespace voxfx::detail {
 
 namespace {
+
+// Removes the glass triangles that have their own medium on both sides: a part of one material
+// nested in or overlapping another of it, or the faces where two parts of it touch. Light crosses no
+// interface there (the exact tracer would apply the tint again, the voxel march would leave the
+// medium into air). Both sides of a triangle are points a hair off its centroid along its normal,
+// inside the medium where the generalized winding number of all its material's triangles is at
+// least 1/2 in magnitude.
+void dropSameMediumFaces(Mesh& glass, std::vector<uint32_t>& medium) {
+    const std::size_t n = medium.size();
+    const double eps = 1e-5 * std::max(1e-30, length(computeBounds(glass.view()).extent()));
+    std::vector<uint8_t> keep(n, 1);
+    std::vector<uint32_t> materials(medium);
+    std::sort(materials.begin(), materials.end());
+    materials.erase(std::unique(materials.begin(), materials.end()), materials.end());
+    const auto corner = [&](std::size_t t, int k) {
+        return Vec3d(glass.positions[glass.indices[3 * t + size_t(k)]]);
+    };
+    for (const uint32_t m : materials) {
+        Mesh own;
+        std::vector<std::size_t> triangles;
+        std::vector<Vec3d> sides;
+        for (std::size_t t = 0; t < n; ++t) {
+            if (medium[t] != m) continue;
+            const Vec3d a = corner(t, 0), b = corner(t, 1), c = corner(t, 2), nrm = cross(b - a, c - a);
+            if (!(length(nrm) > 0)) continue;
+            const Vec3d centre = (a + b + c) * (1.0 / 3), off = normalize(nrm) * eps;
+            triangles.push_back(t);
+            sides.push_back(centre + off);
+            sides.push_back(centre - off);
+        }
+        own.positions = glass.positions;
+        for (std::size_t t = 0; t < n; ++t)
+            if (medium[t] == m)
+                for (int k = 0; k < 3; ++k) own.indices.push_back(glass.indices[3 * t + size_t(k)]);
+        std::vector<double> w(sides.size());
+        windingNumbers(own.view(), sides, w);
+        for (std::size_t i = 0; i < triangles.size(); ++i)
+            if (std::abs(w[2 * i]) >= 0.5 && std::abs(w[2 * i + 1]) >= 0.5) keep[triangles[i]] = 0;
+    }
+    std::size_t out = 0;
+    for (std::size_t t = 0; t < n; ++t) {
+        if (!keep[t]) continue;
+        for (int k = 0; k < 3; ++k) glass.indices[3 * out + size_t(k)] = glass.indices[3 * t + size_t(k)];
+        medium[out++] = medium[t];
+    }
+    glass.indices.resize(3 * out);
+    medium.resize(out);
+}
 
 // The glass method's structures and the opaque scene's tracer (`any` false when no triangle is glass).
 std::shared_ptr<const GlassSetup> setUpGlass(const FrameState& frame, const GlassOptions& method) {
@@ -48,6 +98,7 @@ std::shared_ptr<const GlassSetup> setUpGlass(const FrameState& frame, const Glas
             setup->opaqueTriangle.push_back(uint32_t(t));
     }
     if (medium.empty()) return setup; // no glass: `any` stays false
+    dropSameMediumFaces(glass, medium);
     setup->any = true;
     setup->built =
         buildGlass(GlassInput{glass.view(), geometry.normals, medium, media, frame.gbuffer.frame}, method);
