@@ -670,6 +670,11 @@ TEST(TranslucencyShadowTest, EachCasterTakesItsMaterialsExtinctionAndOpaqueStays
     ExactShadowOptions eo;
     const LightShadow exact = buildLightShadow(s, s.lights[0], eo);
     const Vec3f sigma = attenuationCoefficient(jade);
+    const Vec3f centre[3] = {shadowVisibility(ls, {-1, 0, 0}, {0, 1, 0}),
+                             shadowVisibility(ls, {0, 0, 1.5}, {0, 1, 0}),
+                             shadowVisibility(ls, {1, 0, 0}, {0, 1, 0})};
+    std::printf("under the opaque box %.3f, jade over opaque %.3f, jade %.3f %.3f %.3f\n", centre[0].y,
+                centre[1].y, centre[2].x, centre[2].y, centre[2].z);
     for (double dz = -0.3; dz <= 0.3; dz += 0.15)
         for (double dx = -0.3; dx <= 0.3; dx += 0.15) {
             const Vec3d underTrunk{-1 + dx, 0, dz}, underJade{1 + dx, 0, dz}, underBoth{dx, 0, 1.5 + dz};
