@@ -170,7 +170,10 @@ std::span<const OptionField<TranslucencyShadowOptions>> TranslucencyShadowOption
         t.push_back(numberOption<O, &O::grid, &LightGridOptions::normalOffset>(
             "normalOffset", "lookup offset along the surface normal, in column footprints", 0, 1000));
         t.push_back(numberOption<O, &O::extinction>(
-            "extinction", "extinction coefficient of the solid casters, per world unit", 0, 1e9));
+            "extinction",
+            "extinction per world unit of see-through casters without attenuation of their own (opaque "
+            "ones stay opaque)",
+            0, 1e9));
         t.push_back(tripleOption<O, &O::tint>(
             "tint", "relative mean free path per channel (1,1,1 grey; 0.35,1,0.55 jade)", 1e-6, 1));
         t.push_back(nameOption<O, parseLightFill, optionName<Fill>, &O::fill>(
