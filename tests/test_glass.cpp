@@ -87,6 +87,51 @@ TEST(GlassTest, AbsorptionConstantScalesEveryMediumsAttenuation) {
     EXPECT_THROW(render(s, s.cameras[0], o), Error);
 }
 
+// #37: the constant scaled the camera's rays through the glass but not the shadow the same glass
+// casts. One constant for both: with shadows on (exact, and the crossing-counting absorption and
+// deep maps), k = 2 renders as the same glass with half the attenuation distance, shadow included,
+// pixel for pixel, for the exact tracer and the voxel march; and the ground in the ball's shadow
+// (seen past the ball, not through it) is darker than with k = 1.
+TEST(GlassTest, AbsorptionConstantScalesTheGlasssShadowAsItScalesCameraRays) {
+    RenderOptions o;
+    o.width = 64;
+    o.height = 48;
+    o.antiAliasing = AntiAliasing::Off;
+    o.toneMap = ToneMap::Clamp;
+    MultiGlassOptions multi;
+    multi.gridResolution = 48;
+    Scene s = glassTestScene();
+    Light sun;
+    sun.direction = normalize(Vec3d{-1, -1, 0}); // the ball's shadow falls at x < 0, beside it
+    s.lights.push_back(sun);
+    Scene half = s;
+    half.materials[1].attenuationDistance = 0.5f;
+    for (const char* shadows : {"exact", "absorption", "deep"})
+        for (const GlassOptions base : {GlassOptions(ExactGlassOptions{}), GlassOptions(multi)}) {
+            setRenderOption(o, "shadows", std::string(shadows));
+            GlassOptions doubledGlass = base;
+            std::visit(
+                [&](auto& m) {
+                    if constexpr (requires { m.absorptionConstant; }) m.absorptionConstant = 2;
+                },
+                doubledGlass);
+            o.glass = doubledGlass;
+            const RenderResult doubled = render(s, s.cameras[0], o);
+            o.glass = base;
+            const RenderResult byMaterial = render(half, half.cameras[0], o);
+            const RenderResult plain = render(s, s.cameras[0], o);
+            int64_t darkerGround = 0;
+            for (size_t i = 0; i < plain.image.pixels.size(); ++i) {
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_NEAR(doubled.image.pixels[i][c], byMaterial.image.pixels[i][c], 1e-5f)
+                        << shadows << " " << glassName(base) << " pixel " << i;
+                const bool glass = !plain.glassMask.empty() && plain.glassMask[i];
+                darkerGround += !glass && doubled.image.pixels[i].x < plain.image.pixels[i].x - 1e-3f;
+            }
+            EXPECT_GT(darkerGround, 20) << shadows << " " << glassName(base); // the shadow does change
+        }
+}
+
 TEST(GlassTest, ASceneWithoutLightsIsLitByTheDefaultSunAndSkyAmbient) {
     Scene s = glassTestScene();
     s.materials[1].transmission = 0; // opaque: plain shading

@@ -205,6 +205,59 @@ TEST(GlassTest, CrossingCountingShadowsPassWhatExactShadowsPassThroughGlass) {
         }
 }
 
+// #37: glass shadows gave every crossing Fresnel at normal incidence, (1 - F0), so the rim of a glass
+// ball's shadow was as light as its centre. A ball of clear glass (no tint, no attenuation) under a
+// sun straight down: the light reaching the ground at distance r from the centre crossed the sphere
+// at incidence cos = sqrt(1 - (r / R)^2) on the way in and out (a shadow ray is not bent), so it
+// passes (1 - F(cos))^2 (closed form; the exact tracer's Fresnel product). Absorption and deep
+// shadows take each crossing's Fresnel from its triangle's normal and the light's direction. Means
+// over rings of points.
+TEST(GlassTest, GlassShadowsDarkenTowardsTheRimByEachCrossingsFresnel) {
+    Scene s = test::greyGroundScene();
+    Material clear;
+    clear.baseColor = {1, 1, 1};
+    clear.transmission = 1;
+    clear.ior = 1.5f;
+    const double R = 0.6;
+    s.meshes.push_back({"ball", test::makeUvSphere({0, 1, 0}, R, 96, 192), {}, s.addMaterial(clear), true});
+    Light sun;
+    sun.direction = {0, -1, 0};
+    auto ringMean = [&](const LightShadow& ls, double r) {
+        double sum = 0;
+        for (int k = 0; k < 32; ++k) {
+            const double a = 2 * M_PI * (k + 0.5) / 32;
+            sum += shadowVisibility(ls, {r * std::cos(a), 0, r * std::sin(a)}, {0, 1, 0}).y;
+        }
+        return sum / 32;
+    };
+    // The Fresnel equations (unpolarized) from air into n = 1.5, written out here.
+    auto fresnelIn = [](double ci) {
+        const double n = 1.5, st = std::sqrt(1 - ci * ci) / n, ct = std::sqrt(1 - st * st);
+        const double rs = (ci - n * ct) / (ci + n * ct), rp = (ct - n * ci) / (ct + n * ci);
+        return 0.5 * (rs * rs + rp * rp);
+    };
+    const LightShadow exact = buildLightShadow(s, sun, ExactShadowOptions{});
+    for (const std::string_view kind : {"exact", "absorption", "deep"}) {
+        RenderOptions o;
+        setRenderOption(o, "shadows", std::string(kind));
+        if (kind != "exact") {
+            for (const char* name : {"gridResolution", "gridDepth", "dsmResolution"})
+                setRenderOption(o, name, int64_t(256));
+            setRenderOption(o, "epsilon", 0.0);
+        }
+        const LightShadow ls = kind == "exact" ? exact : buildLightShadow(s, sun, o.shadow);
+        for (const double f : {0.0, 0.5, 0.8, 0.9}) {
+            const double c = std::sqrt(1 - f * f), pass = 1 - fresnelIn(c);
+            const double got = ringMean(ls, f * R);
+            std::printf("%s at r = %.1f R: %.4f (closed form %.4f)\n", std::string(kind).c_str(), f, got,
+                        pass * pass);
+            EXPECT_NEAR(got, pass * pass, 0.02) << kind << " at r = " << f << " R";
+        }
+        // The rim darker than the centre by what the closed form says (0.785 against 0.922).
+        EXPECT_LT(ringMean(ls, 0.9 * R), ringMean(ls, 0) - 0.1) << kind;
+    }
+}
+
 // The glass shadow of a scene's casters on its ground (y = 0, normal up) under `sun`, sampled on a
 // grid of points over [-half, half]^2: the mean absolute error per channel of `kind` against the
 // exact tracer (the reference: Fresnel at each crossing, the tint, Beer–Lambert over the true chord),

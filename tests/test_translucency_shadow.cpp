@@ -19,7 +19,9 @@
 #include <gtest/gtest.h>
 
 #include "cgal_oracle.hpp"
+#include "support/ground_scenes.hpp"
 #include "test_util.hpp"
+#include "voxfx/exact_shadow.hpp"
 #include "voxfx/gbuffer.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/render.hpp"
@@ -30,12 +32,16 @@
 namespace voxfx {
 namespace {
 
+// `mesh` of a translucent solid without attenuation of its own: GI08's one matter, whose extinction
+// and tint the shadow's options give.
 Scene solidScene(const Mesh& mesh, const Light& light) {
     Scene s;
     SceneMesh m;
     m.name = "solid";
     m.mesh = mesh;
-    m.material = s.addMaterial(Material{});
+    Material matter;
+    matter.diffuseTransmission = 1;
+    m.material = s.addMaterial(matter);
     s.meshes.push_back(m);
     s.lights.push_back(light);
     return s;
@@ -636,6 +642,54 @@ TEST(TranslucencyShadowTest, OptionsByNameReachTheTechnique) {
     EXPECT_THROW(setRenderOption(o, "tint", Vec3d{0, 1, 1}), Error);
     EXPECT_THROW(setRenderOption(o, "extinction", -1.0), Error);
     EXPECT_THROW(setRenderOption(o, "fill", std::string("flood")), Error); // light views cannot flood
+}
+
+// #37: every caster was GI08's one matter (the option's extinction), so an opaque trunk became
+// translucent. Now each material has its own extinction: an opaque caster stays opaque (its shadow
+// as dark as the exact shadow's), a translucent solid with KHR_materials_volume attenuation passes
+// Beer-Lambert with its own sigma (closed form over the box's height), even when the opaque box
+// lies in the light's path behind or in front of it.
+TEST(TranslucencyShadowTest, EachCasterTakesItsMaterialsExtinctionAndOpaqueStaysOpaque) {
+    Scene s = test::sunlitGroundScene(); // the sun straight down onto the ground at y = 0
+    Material jade;
+    jade.diffuseTransmission = 0.7f;
+    jade.attenuationDistance = 0.5f;
+    jade.attenuationColor = {0.6f, 0.4f, 0.2f};
+    const double h = 0.5; // every box is h tall: the light crosses h of it
+    const uint32_t opaque = s.addMaterial(Material{}), translucent = s.addMaterial(jade);
+    s.meshes.push_back({"trunk", test::makeBox({-1.5, 0.5, -0.5}, {-0.5, 0.5 + h, 0.5}), {}, opaque, true});
+    s.meshes.push_back({"jade", test::makeBox({0.5, 0.5, -0.5}, {1.5, 0.5 + h, 0.5}), {}, translucent, true});
+    // Over z in [1, 2]: the jade box over the opaque one, both in one column of the light.
+    s.meshes.push_back({"jade2", test::makeBox({-0.5, 1.5, 1}, {0.5, 1.5 + h, 2}), {}, translucent, true});
+    s.meshes.push_back({"trunk2", test::makeBox({-0.5, 0.5, 1}, {0.5, 0.5 + h, 2}), {}, opaque, true});
+    TranslucencyShadowOptions o;
+    o.grid.resolution = 96;
+    o.grid.depth = 256;
+    o.extinction = 1; // the matter of translucent solids without attenuation of their own
+    const LightShadow ls = buildLightShadow(s, s.lights[0], o);
+    ExactShadowOptions eo;
+    const LightShadow exact = buildLightShadow(s, s.lights[0], eo);
+    const Vec3f sigma = attenuationCoefficient(jade);
+    const Vec3f centre[3] = {shadowVisibility(ls, {-1, 0, 0}, {0, 1, 0}),
+                             shadowVisibility(ls, {0, 0, 1.5}, {0, 1, 0}),
+                             shadowVisibility(ls, {1, 0, 0}, {0, 1, 0})};
+    std::printf("under the opaque box %.3f, jade over opaque %.3f, jade %.3f %.3f %.3f\n", centre[0].y,
+                centre[1].y, centre[2].x, centre[2].y, centre[2].z);
+    for (double dz = -0.3; dz <= 0.3; dz += 0.15)
+        for (double dx = -0.3; dx <= 0.3; dx += 0.15) {
+            const Vec3d underTrunk{-1 + dx, 0, dz}, underJade{1 + dx, 0, dz}, underBoth{dx, 0, 1.5 + dz};
+            for (const Vec3d& p : {underTrunk, underBoth}) {
+                EXPECT_EQ(shadowVisibility(exact, p, {0, 1, 0}), (Vec3f{0, 0, 0}));
+                EXPECT_EQ(shadowVisibility(ls, p, {0, 1, 0}), (Vec3f{0, 0, 0})) << p.x << ", " << p.z;
+            }
+            const Vec3f got = shadowVisibility(ls, underJade, {0, 1, 0});
+            for (int c = 0; c < 3; ++c) {
+                // The counted length is within a slice or two of h (the fitted view's depth over
+                // 256 slices): allow 4 % of h.
+                const double want = std::exp(-double(sigma[c]) * h);
+                EXPECT_NEAR(got[c], want, want * sigma[c] * 0.04 * h + 1e-4) << "channel " << c;
+            }
+        }
 }
 
 TEST(TranslucencyShadowTest, BadOptionsAndEmptyScenes) {

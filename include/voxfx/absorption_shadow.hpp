@@ -8,7 +8,9 @@
 // write, not per unit length: a crossing written once attenuates exactly by e^-sigma, matching the
 // per-crossing model of the exact reference. Grey materials (opaque ones, grey leaves) share one
 // voxelization whose writes carry their scalar depth; each coloured material (its RGB depth and
-// glass attenuation) has its own, so an opaque-only scene keeps one grid and a grey lookup. Glass
+// glass attenuation) has its own, so an opaque-only scene keeps one grid and a grey lookup. A glass
+// crossing's Fresnel loss, -ln(1 - F) at the angle between the light and the triangle's normal (as
+// exact shadows pass it), is written per triangle into the grey grid; its tint into its own. Glass
 // pairs its writes along a column (the first enters, the next leaves; a voxel written twice holds
 // both) and adds Beer–Lambert's sigma_glass x chord (Material::shadowAttenuationCoefficient), up to
 // p when p lies inside. Columns are reduced to prefix sums once, so a lookup scans the few written

@@ -22,10 +22,8 @@ inline Vec3d reflectDirection(const Vec3d& d, const Vec3d& n) { return d - n * (
 /// incoming ray (dot(d, n) < 0), with eta = n_incident / n_transmitted. False (out untouched) under
 /// total internal reflection.
 bool refractDirection(const Vec3d& d, const Vec3d& n, double eta, Vec3d& out);
-/// Exact unpolarized dielectric Fresnel reflectance for cos(incidence) cosI in [0, 1] from a medium of
-/// index etaI into etaT; 1 under total internal reflection.
-double fresnelDielectric(double cosI, double etaI, double etaT);
-// beerLambert(sigma, length): voxfx/scene.hpp (shared with the shadows).
+// fresnelDielectric(cosI, etaI, etaT) and beerLambert(sigma, length): voxfx/scene.hpp (shared with
+// the shadows).
 
 /// What one kind of glass does to light: index of refraction, Beer–Lambert coefficient per world unit
 /// and the tint applied once where light enters (KHR_materials_transmission: the base colour).

@@ -100,7 +100,9 @@ struct Material {
     /// and half the tint (its square root); the methods pair a crossing that enters with the next
     /// that leaves and multiply by beerLambert(shadowAttenuationCoefficient(), chord), so that a
     /// passage gives what ExactShadow gives at normal incidence (`thickness` is not used: the chord
-    /// is the glass's own).
+    /// is the glass's own). Absorption and deep shadows replace 1 - F0 by the crossing's own
+    /// 1 - fresnelDielectric(cos, 1, ior), cos between the light's ray and the crossed triangle's
+    /// normal, as ExactShadow does at every angle; transmittance shadows keep 1 - F0.
     Vec3f shadowCrossingTransmittance() const;
     /// Glass: attenuationCoefficient (Beer–Lambert over the chord between paired crossings); a sheet
     /// or an opaque material: zero (its crossings are all it does to light).
@@ -114,6 +116,10 @@ Vec3f attenuationCoefficient(const Material& m);
 /// method (ExactShadow over the traced chord, the light grids and deep shadow maps over the chord
 /// between paired crossings) and of the glass tracers.
 Vec3f beerLambert(const Vec3f& sigma, double length);
+/// Exact unpolarized dielectric Fresnel reflectance for cos(incidence) cosI in [0, 1] from a medium of
+/// index etaI into etaT; 1 under total internal reflection. The glass tracers' Fresnel, and that of
+/// every glass crossing of the shadows (voxfx/glass_optics.hpp).
+double fresnelDielectric(double cosI, double etaI, double etaT);
 
 /// One mesh in world space with one material.
 struct SceneMesh {

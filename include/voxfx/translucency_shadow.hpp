@@ -11,8 +11,12 @@
 //   visibility_c = exp(-extinction / tint_c * L)
 // extinction: the extinction coefficient sigma, per world unit; tint in (0, 1]: each channel's
 // relative mean free path (1, 1, 1: grey; a jade green (0.35, 1, 0.55): red and blue die out
-// first, thin parts glow green). Every caster is matter of the same sigma (GI08's model: one
-// translucent solid); materials do not enter.
+// first, thin parts glow green). Each caster is matter of its material's extinction
+// (translucencyExtinction): an opaque material stays opaque (infinite extinction: a filled cell in
+// front of p stops the light), a material with KHR_materials_volume attenuation has that
+// coefficient, and the other see-through ones (translucent solids without attenuation, glass,
+// sheets) are GI08's one matter, extinction / tint. The casters are voxelized in one solid grid per
+// extinction, and the visibility is the product of the groups' Beer-Lambert terms.
 //
 // Error: the cell centres inside a chord of length c along a column number floor or ceil of
 // c / h (h: the slice's world length along the column), so L differs from the exact chord by less
@@ -106,7 +110,12 @@ private:
     double lo_ = 0;
 };
 
-/// The shadow of one light: one solid grid per light view.
+/// The extinction per world unit, per channel, of a caster of material m under the translucency
+/// shadow (see the file comment): +inf for an opaque material, attenuationCoefficient(m) where it is
+/// not zero, else options.extinction / options.tint.
+Vec3d translucencyExtinction(const Material& m, const TranslucencyShadowOptions& options);
+
+/// The shadow of one light: per group of casters of one extinction, one solid grid per light view.
 class TranslucencyShadow {
 public:
     using Options = TranslucencyShadowOptions;
@@ -118,17 +127,18 @@ public:
                                     const TranslucencyShadowOptions& options, Progress* progress = nullptr);
     /// RGB fraction of the light reaching p; `n` the unit geometric normal turned towards the light.
     Vec3f visibility(const Vec3d& p, const Vec3d& n) const;
-    /// World length of matter the light crosses to reach p (its own column; the same normal offset
-    /// and skipped cells as visibility). 0 where no view covers p.
+    /// World length of matter (of every group) the light crosses to reach p (its own column; the
+    /// same normal offset and skipped cells as visibility). 0 where no view covers p.
     double pathLength(const Vec3d& p, const Vec3d& n) const;
     Stats stats() const;
+    /// Per group of casters, per light view (group-major).
     const std::vector<TranslucencyShadowMap>& maps() const { return maps_; }
 
 private:
     TranslucencyShadowOptions options_;
-    Vec3d sigma_;
+    std::vector<Vec3d> sigmas_; ///< per group of casters: its extinction (opaque: infinite)
     std::vector<LightView> views_;
-    std::vector<TranslucencyShadowMap> maps_;
+    std::vector<TranslucencyShadowMap> maps_; ///< per group, per view (group-major)
 };
 
 } // namespace voxfx

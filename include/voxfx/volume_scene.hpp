@@ -69,6 +69,10 @@ struct VolumeSceneObject {
     /// between a crossing that enters the object and the next that leaves it (volumeSceneOf:
     /// Material::shadowAttenuationCoefficient); zero for a sheet.
     Vec3f attenuation{0, 0, 0};
+    /// Glass, for shadows: its index of refraction (0: not glass). `transmittance` holds the Fresnel
+    /// of normal incidence, (1 - F0); deep shadow maps replace it by the crossing's own (1 - F) at
+    /// the angle between the light's ray and the crossed triangle's normal.
+    float ior = 0;
 
     /// What one crossing passes per channel: `transmittance`, or 1 - opacity in every channel.
     Vec3f shadowTransmittance() const {

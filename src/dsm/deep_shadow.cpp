@@ -45,6 +45,33 @@ struct DeepShadowView {
     /// The colour channel this map holds (0: red, or every channel of a grey scene).
     int channel = 0;
 
+    // Glass object o crossed at depth z of a texel's ray (direction `dir`): (1 - F) at the angle
+    // between the ray and the normal of its triangle there over the (1 - F0) its transmittance holds
+    // (the exact tracer's Fresnel per crossing); 1 for other objects.
+    double glassFresnelRatio(std::span<const ListFragment> frags, double z, std::size_t o,
+                             const Vec3d& dir) const {
+        const VolumeSceneObject& obj = scene->objects[o];
+        if (!(obj.ior > 1)) return 1.0;
+        const ShapeNode& node = scene->nodes[std::size_t(obj.shape)];
+        if (node.op != ShapeOp::Leaf) return 1.0;
+        auto it = std::lower_bound(frags.begin(), frags.end(), z,
+                                   [](const ListFragment& f, double d) { return f.depth < d; });
+        for (; it != frags.end() && it->depth == z; ++it) {
+            if (leaves->triangleLeaf[it->triangle] != uint32_t(node.leaf)) continue;
+            const Mesh& m = leaves->mesh;
+            const std::size_t t = it->triangle;
+            const Vec3d a(m.positions[m.indices[3 * t]]), b(m.positions[m.indices[3 * t + 1]]),
+                c(m.positions[m.indices[3 * t + 2]]);
+            const Vec3d n = cross(b - a, c - a);
+            const double nl = length(n) * length(dir);
+            if (!(nl > 0)) return 1.0;
+            const double cosine = std::min(1.0, std::abs(dot(n, dir)) / nl), ior = obj.ior;
+            const double f0 = ((ior - 1) / (ior + 1)) * ((ior - 1) / (ior + 1));
+            return (1 - fresnelDielectric(cosine, 1.0, ior)) / (1 - f0);
+        }
+        return 1.0;
+    }
+
     // Feeds texel (x, y) into the builder.
     void texel(int64_t x, int64_t y, VisibilityBuilder& b) const {
         const std::span<const ListFragment> frags = lists->column(x, y);
@@ -78,7 +105,8 @@ struct DeepShadowView {
                 if (glassSigma < 1e-12) glassSigma = 0;
                 b.surface(z, obj.kind == ObjectKind::Opaque
                                  ? 1.0
-                                 : 1.0 - double(obj.shadowTransmittance()[channel]));
+                                 : 1.0 - double(obj.shadowTransmittance()[channel]) *
+                                             glassFresnelRatio(frags, z, o, perDepth));
                 if (b.visibility() < term) {
                     if (b.visibility() > 0) b.ramp(z, 0.0);
                     return false;

@@ -15,6 +15,7 @@
 
 #include "render/light_grid_lookup.hpp"
 #include "render/shadow_casters.hpp"
+#include "voxfx/glass_optics.hpp"
 #include "voxfx/text.hpp"
 
 namespace voxfx {
@@ -202,11 +203,34 @@ std::span<const OptionField<AbsorptionShadowOptions>> AbsorptionShadowOptions::f
 
 Vec3f absorptionPerCrossing(const Material& m, float opaqueAbsorption) {
     if (m.isOpaque()) return {opaqueAbsorption, opaqueAbsorption, opaqueAbsorption};
-    const Vec3f t = m.shadowCrossingTransmittance();
+    // Glass: half the tint per crossing; its Fresnel depends on the crossing's angle
+    // (absorptionFresnelDepth, written per triangle).
+    Vec3f t = m.shadowCrossingTransmittance();
+    if (m.isGlass())
+        for (int c = 0; c < 3; ++c) t[c] = float(std::sqrt(double(m.crossingTransmittance()[c])));
     Vec3f out;
     for (int c = 0; c < 3; ++c) out[c] = std::min(opaqueAbsorption, -std::log(std::max(t[c], 1e-30f)));
     return out;
 }
+
+namespace {
+
+// The optical depth of the Fresnel loss where the light crosses triangle t of `mesh` (glass of index
+// ior): -ln(1 - F) at the angle between the light's direction and the triangle's normal, as the
+// exact tracer's crossing passes it (capped at `cap`).
+float absorptionFresnelDepth(const Mesh& mesh, std::size_t t, const Light& light, double ior, float cap) {
+    const Vec3d a(mesh.positions[mesh.indices[3 * t]]), b(mesh.positions[mesh.indices[3 * t + 1]]),
+        c(mesh.positions[mesh.indices[3 * t + 2]]);
+    const Vec3d n = cross(b - a, c - a);
+    const Vec3d toLight =
+        light.type == LightType::Directional ? -light.direction : light.position - (a + b + c) * (1.0 / 3);
+    const double nl = length(n) * length(toLight);
+    const double cosine = nl > 0 ? std::min(1.0, std::abs(dot(n, toLight)) / nl) : 1.0;
+    const double pass = 1 - fresnelDielectric(cosine, 1.0, std::max(1.0, ior));
+    return std::min(cap, float(-std::log(std::max(pass, 1e-30))));
+}
+
+} // namespace
 
 AbsorptionShadowStats& AbsorptionShadowStats::operator+=(const AbsorptionShadowStats& o) {
     grids += o.grids;
@@ -250,14 +274,25 @@ AbsorptionShadow AbsorptionShadow::build(const Scene& scene, const Light& light,
     std::vector<Mesh> meshes(oneGroup ? 0 : keys.size());
     std::vector<std::vector<float>> scalars(keys.size());
     const Mesh& all = casters.all;
-    for (std::size_t t = 0; t < casters.allMaterialIndex.size(); ++t) {
-        const uint32_t m = casters.allMaterialIndex[t], g = materialGroup[m];
-        scalars[g].push_back(materialScalar[m]);
-        if (oneGroup) continue;
-        Mesh& mesh = meshes[g];
+    // Glass adds its crossing's Fresnel depth to the grey group: in its scalar when its material is
+    // grey, else as a second write of the triangle there (its own group pairs the crossings).
+    const auto copyTriangle = [&](Mesh& mesh, std::size_t t) {
         for (int k = 0; k < 3; ++k) {
             mesh.indices.push_back(uint32_t(mesh.positions.size()));
             mesh.positions.push_back(all.positions[all.indices[3 * t + size_t(k)]]);
+        }
+    };
+    for (std::size_t t = 0; t < casters.allMaterialIndex.size(); ++t) {
+        const uint32_t m = casters.allMaterialIndex[t], g = materialGroup[m];
+        const Material& mat = scene.materials[m];
+        const float fresnel =
+            mat.isGlass() ? absorptionFresnelDepth(all, t, light, mat.ior, options.opaqueAbsorption) : 0.0f;
+        scalars[g].push_back(g == 0 ? std::min(options.opaqueAbsorption, materialScalar[m] + fresnel)
+                                    : materialScalar[m]);
+        if (!oneGroup) copyTriangle(meshes[g], t);
+        if (g != 0 && fresnel > 0) {
+            scalars[0].push_back(fresnel);
+            copyTriangle(meshes[0], t);
         }
     }
     std::vector<AbsorptionShadowMap::Group> groups;

@@ -20,16 +20,6 @@ bool refractDirection(const Vec3d& d, const Vec3d& n, double eta, Vec3d& out) {
     return true;
 }
 
-double fresnelDielectric(double cosI, double etaI, double etaT) {
-    cosI = std::clamp(cosI, 0.0, 1.0);
-    const double sinT = etaI / etaT * std::sqrt(std::max(0.0, 1 - cosI * cosI));
-    if (sinT >= 1) return 1;
-    const double cosT = std::sqrt(std::max(0.0, 1 - sinT * sinT));
-    const double rs = (etaI * cosI - etaT * cosT) / (etaI * cosI + etaT * cosT);
-    const double rp = (etaT * cosI - etaI * cosT) / (etaT * cosI + etaI * cosT);
-    return 0.5 * (rs * rs + rp * rp);
-}
-
 GlassMedium glassMedium(const Material& m) {
     GlassMedium g;
     g.ior = std::max(1.0f, m.ior);

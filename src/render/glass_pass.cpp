@@ -3,20 +3,77 @@
 // material's transmission.
 #include "render/glass_pass.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <memory>
 #include <type_traits>
 #include <vector>
 
 #include "render/antialias.hpp"
 #include "render/shading.hpp"
+#include "voxfx/contains.hpp"
 #include "voxfx/triangle_tracer.hpp"
 
 namespace voxfx::detail {
 
 namespace {
+
+// Removes the glass triangles that have their own medium on both sides: a scene mesh of one glass
+// nested in, overlapping or touching face to face another mesh of that glass. Light crosses no
+// interface there (the exact tracer would apply the tint again, the voxel march would leave the
+// medium into air). A triangle's outer side is a point a hair off its centroid along its normal
+// (counter-clockwise); it is inside the glass where the generalized winding number of the other
+// meshes of its material is at least 1/2 in magnitude. A material of one mesh costs nothing (faces
+// inside one mesh are left as they are).
+void dropSameMediumFaces(Mesh& glass, std::vector<uint32_t>& medium, std::vector<uint32_t>& meshOf) {
+    const std::size_t n = medium.size();
+    const double eps = 1e-5 * std::max(1e-30, length(computeBounds(glass.view()).extent()));
+    std::vector<uint8_t> keep(n, 1);
+    std::map<uint32_t, std::vector<uint32_t>> meshesOf; // per material, its meshes
+    for (std::size_t t = 0; t < n; ++t) {
+        std::vector<uint32_t>& m = meshesOf[medium[t]];
+        if (std::find(m.begin(), m.end(), meshOf[t]) == m.end()) m.push_back(meshOf[t]);
+    }
+    const auto corner = [&](std::size_t t, int k) {
+        return Vec3d(glass.positions[glass.indices[3 * t + size_t(k)]]);
+    };
+    for (const auto& [material, meshes] : meshesOf) {
+        if (meshes.size() < 2) continue;
+        for (const uint32_t mesh : meshes) {
+            Mesh others;
+            others.positions = glass.positions;
+            std::vector<std::size_t> triangles;
+            std::vector<Vec3d> outer;
+            for (std::size_t t = 0; t < n; ++t) {
+                if (medium[t] != material) continue;
+                if (meshOf[t] != mesh) {
+                    for (int k = 0; k < 3; ++k) others.indices.push_back(glass.indices[3 * t + size_t(k)]);
+                    continue;
+                }
+                const Vec3d a = corner(t, 0), b = corner(t, 1), c = corner(t, 2), nrm = cross(b - a, c - a);
+                if (!(length(nrm) > 0)) continue;
+                triangles.push_back(t);
+                outer.push_back((a + b + c) * (1.0 / 3) + normalize(nrm) * eps);
+            }
+            std::vector<double> w(outer.size());
+            windingNumbers(others.view(), outer, w);
+            for (std::size_t i = 0; i < triangles.size(); ++i)
+                if (std::abs(w[i]) >= 0.5) keep[triangles[i]] = 0;
+        }
+    }
+    std::size_t out = 0;
+    for (std::size_t t = 0; t < n; ++t) {
+        if (!keep[t]) continue;
+        for (int k = 0; k < 3; ++k) glass.indices[3 * out + size_t(k)] = glass.indices[3 * t + size_t(k)];
+        medium[out] = medium[t];
+        meshOf[out++] = meshOf[t];
+    }
+    glass.indices.resize(3 * out);
+    medium.resize(out);
+}
 
 // The glass method's structures and the opaque scene's tracer (`any` false when no triangle is glass).
 std::shared_ptr<const GlassSetup> setUpGlass(const FrameState& frame, const GlassOptions& method) {
@@ -39,17 +96,20 @@ std::shared_ptr<const GlassSetup> setUpGlass(const FrameState& frame, const Glas
     glass.positions = geometry.mesh.positions;
     Mesh opaque;
     opaque.positions = geometry.mesh.positions;
-    std::vector<uint32_t> medium;
+    std::vector<uint32_t> medium, meshOf;
     for (size_t t = 0; t < geometry.mesh.triangleCount(); ++t) {
         const bool g = isGlass[geometry.triangleMaterial[t]];
         for (int k = 0; k < 3; ++k)
             (g ? glass : opaque).indices.push_back(geometry.mesh.indices[3 * t + size_t(k)]);
-        if (g)
+        if (g) {
             medium.push_back(geometry.triangleMaterial[t]);
-        else
+            meshOf.push_back(geometry.triangleMesh[t]);
+        } else {
             setup->opaqueTriangle.push_back(uint32_t(t));
+        }
     }
     if (medium.empty()) return setup; // no glass: `any` stays false
+    dropSameMediumFaces(glass, medium, meshOf);
     setup->any = true;
     setup->built =
         buildGlass(GlassInput{glass.view(), geometry.normals, medium, media, frame.gbuffer.frame}, method);

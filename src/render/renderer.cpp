@@ -2,6 +2,8 @@
 // timed and given its share of the progress (see render.hpp for the passes).
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <limits>
 #include <optional>
 
 #include "core/progress_range.hpp"
@@ -54,6 +56,19 @@ void gbufferPass(FrameState& f, Progress* progress) {
     detail::markRefinedCells(f);
 }
 
+// `scene` with every glass material's attenuation coefficient times k (its attenuation distance
+// over k; none for k = 0): what the glass methods make of the materials under absorption constant k.
+Scene withAbsorptionConstant(const Scene& scene, double k) {
+    if (!(k >= 0) || !std::isfinite(k))
+        fail("glass: the absorption constant must be finite and >= 0, got ", k);
+    Scene out = scene;
+    for (Material& m : out.materials)
+        if (m.isGlass())
+            m.attenuationDistance =
+                k > 0 ? float(double(m.attenuationDistance) / k) : std::numeric_limits<float>::infinity();
+    return out;
+}
+
 // One shadow per light, each built by the chosen technique with its share of the progress (or
 // reused from the cache when built from the same meshes, materials, light and options), then given
 // the G-buffer where the technique counts over it; their counters summed.
@@ -65,6 +80,12 @@ void shadowPass(FrameState& f, Progress* progress) {
     const ShadowOptions& options = f.options.shadow;
     // What a technique may fit to the view (deep shadows' clusters: the camera).
     const BuildContext context{f.camera, f.width, f.height};
+    // CHANG's absorption constant scales the glass's attenuation for the shadows as for the camera's
+    // rays (the glass pass): the shadows are built from the scene with it applied to the materials.
+    const double absorption = glassAbsorptionConstant(f.options.glass);
+    const std::optional<Scene> absorbing =
+        absorption != 1.0 ? std::optional<Scene>(withAbsorptionConstant(f.scene, absorption)) : std::nullopt;
+    const Scene& casters = absorbing ? *absorbing : f.scene;
     // Room for two techniques' shadows of every light.
     f.cache.shadows.setCapacity(std::max<std::size_t>(8, 2 * n));
     bool allCached = n > 0;
@@ -73,13 +94,14 @@ void shadowPass(FrameState& f, Progress* progress) {
         h.value(f.meshesKey), h.value(f.materialsKey);
         detail::hashLight(h, f.lights[i]);
         h.options(options);
+        h.value(absorption);
         if (detail::viewDependent(options)) detail::hashCamera(h, f.camera);
         std::shared_ptr<LightShadow> shadow = f.cache.shadows.find(h.get());
         if (!shadow) {
             allCached = false;
             detail::ProgressRange sp(progress, double(i) / double(n), double(i + 1) / double(n));
             shadow = std::make_shared<LightShadow>(
-                buildLightShadow(f.scene, f.lights[i], options, context, sp.get()));
+                buildLightShadow(casters, f.lights[i], options, context, sp.get()));
             f.cache.shadows.insert(h.get(), shadow);
         }
         prepareLightShadow(*shadow, f.gbuffer, f.geometry);

@@ -8,8 +8,10 @@
 #include "voxfx/translucency_shadow.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <string>
 
 #include "render/light_grid_lookup.hpp"
@@ -168,7 +170,10 @@ std::span<const OptionField<TranslucencyShadowOptions>> TranslucencyShadowOption
         t.push_back(numberOption<O, &O::grid, &LightGridOptions::normalOffset>(
             "normalOffset", "lookup offset along the surface normal, in column footprints", 0, 1000));
         t.push_back(numberOption<O, &O::extinction>(
-            "extinction", "extinction coefficient of the solid casters, per world unit", 0, 1e9));
+            "extinction",
+            "extinction per world unit of see-through casters without attenuation of their own (opaque "
+            "ones stay opaque)",
+            0, 1e9));
         t.push_back(tripleOption<O, &O::tint>(
             "tint", "relative mean free path per channel (1,1,1 grey; 0.35,1,0.55 jade)", 1e-6, 1));
         t.push_back(nameOption<O, parseLightFill, optionName<Fill>, &O::fill>(
@@ -190,6 +195,15 @@ std::string TranslucencyShadowStats::summary() const {
            countText(filledCells) + " filled cells";
 }
 
+Vec3d translucencyExtinction(const Material& m, const TranslucencyShadowOptions& options) {
+    const double inf = std::numeric_limits<double>::infinity();
+    if (m.isOpaque() && !m.isTranslucent()) return {inf, inf, inf};
+    const Vec3f own = attenuationCoefficient(m);
+    if (own.x > 0 || own.y > 0 || own.z > 0) return Vec3d(own);
+    const Vec3f& t = options.tint;
+    return {options.extinction / t.x, options.extinction / t.y, options.extinction / t.z};
+}
+
 TranslucencyShadow TranslucencyShadow::build(const Scene& scene, const Light& light,
                                              const TranslucencyShadowOptions& options, Progress* progress) {
     detail::checkLightGrid(options.grid, "translucency");
@@ -201,14 +215,28 @@ TranslucencyShadow TranslucencyShadow::build(const Scene& scene, const Light& li
             fail("translucency shadows: tint components must lie in (0, 1], got ", t.x, ", ", t.y, ", ", t.z);
     TranslucencyShadow out;
     out.options_ = options;
-    out.sigma_ = {options.extinction / t.x, options.extinction / t.y, options.extinction / t.z};
     const detail::CasterSets casters = detail::collectCasters(scene);
     if (casters.all.indices.empty()) return out;
+    // The casters by their matter's extinction (opaque: infinite), one solid grid per group and view.
+    std::map<std::array<double, 3>, std::size_t> groupOf;
+    std::vector<Mesh> groups;
+    const Mesh& all = casters.all;
+    for (std::size_t tr = 0; tr < casters.allMaterialIndex.size(); ++tr) {
+        const Vec3d sigma = translucencyExtinction(scene.materials[casters.allMaterialIndex[tr]], options);
+        const auto [it, added] =
+            groupOf.emplace(std::array<double, 3>{sigma.x, sigma.y, sigma.z}, groups.size());
+        if (added) {
+            groups.emplace_back().positions = all.positions;
+            out.sigmas_.push_back(sigma);
+        }
+        for (int k = 0; k < 3; ++k) groups[it->second].indices.push_back(all.indices[3 * tr + size_t(k)]);
+    }
     out.views_ =
-        makeLightViews(light, computeBounds(casters.all.view()), options.grid.resolution, options.grid.depth);
-    for (const LightView& v : out.views_)
-        out.maps_.push_back(TranslucencyShadowMap::build(v, casters.all.view(), options.fill,
-                                                         options.grid.slicing, progress));
+        makeLightViews(light, computeBounds(all.view()), options.grid.resolution, options.grid.depth);
+    for (const Mesh& g : groups)
+        for (const LightView& v : out.views_)
+            out.maps_.push_back(
+                TranslucencyShadowMap::build(v, g.view(), options.fill, options.grid.slicing, progress));
     return out;
 }
 
@@ -216,16 +244,23 @@ Vec3f TranslucencyShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     Vec3d q;
     const int i = detail::lookupView(views_, p, n, options_.grid.normalOffset, q);
     if (i < 0) return {1, 1, 1};
-    const TranslucencyShadowMap& m = maps_[size_t(i)];
     const int64_t skip = options_.grid.skipCells;
-    return options_.grid.bilinear ? m.transmittanceBilinear(q, skip, sigma_, n)
-                                  : m.transmittance(q, skip, sigma_);
+    Vec3f v{1, 1, 1};
+    for (std::size_t g = 0; g < sigmas_.size(); ++g) {
+        const TranslucencyShadowMap& m = maps_[g * views_.size() + size_t(i)];
+        v = v * (options_.grid.bilinear ? m.transmittanceBilinear(q, skip, sigmas_[g], n)
+                                        : m.transmittance(q, skip, sigmas_[g]));
+    }
+    return v;
 }
 
 double TranslucencyShadow::pathLength(const Vec3d& p, const Vec3d& n) const {
     Vec3d q;
     const int i = detail::lookupView(views_, p, n, options_.grid.normalOffset, q);
-    return i < 0 ? 0.0 : maps_[size_t(i)].pathLength(q, options_.grid.skipCells);
+    double total = 0;
+    for (std::size_t g = 0; i >= 0 && g < sigmas_.size(); ++g)
+        total += maps_[g * views_.size() + size_t(i)].pathLength(q, options_.grid.skipCells);
+    return total;
 }
 
 TranslucencyShadow::Stats TranslucencyShadow::stats() const {

@@ -38,6 +38,16 @@ Vec3f beerLambert(const Vec3f& sigma, double length) {
     return out;
 }
 
+double fresnelDielectric(double cosI, double etaI, double etaT) {
+    cosI = std::clamp(cosI, 0.0, 1.0);
+    const double sinT = etaI / etaT * std::sqrt(std::max(0.0, 1 - cosI * cosI));
+    if (sinT >= 1) return 1;
+    const double cosT = std::sqrt(std::max(0.0, 1 - sinT * sinT));
+    const double rs = (etaI * cosI - etaT * cosT) / (etaI * cosI + etaT * cosT);
+    const double rp = (etaT * cosI - etaI * cosT) / (etaT * cosI + etaI * cosT);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
 Vec3f Material::shadowCrossingTransmittance() const {
     const Vec3f tint = crossingTransmittance();
     if (!isGlass()) return tint;

@@ -156,6 +156,7 @@ VolumeScene volumeSceneOf(const Scene& scene, SceneMeshes meshes) {
             o.opacity = std::clamp(1.0f - (0.2126f * t.x + 0.7152f * t.y + 0.0722f * t.z), 0.0f, 1.0f);
             o.transmittance = t;
             o.attenuation = mat.shadowAttenuationCoefficient();
+            if (mat.isGlass()) o.ior = std::max(1.0f, mat.ior);
         }
         v.addObject(std::move(o));
     }
