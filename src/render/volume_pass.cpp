@@ -6,15 +6,9 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
-#include <memory>
 #include <optional>
-#include <span>
-#include <variant>
 
 #include "render/shading.hpp"
-#include "voxfx/deep_shadow.hpp"
-#include "voxfx/exact_shadow.hpp"
-#include "voxfx/triangle_tracer.hpp"
 #include "voxfx/volume_scene.hpp"
 
 namespace voxfx {
@@ -174,13 +168,7 @@ struct VolumeComposite {
     std::vector<EmptySpace> emptySpace;
     std::vector<PreintegratedTransfer> preintegrated; ///< per Volume object
     double step;                                      ///< world length between volume samples
-    /// Per object: a Volume object whose shape is its volume's box (addVolumeBox), which the box
-    /// clips exactly.
-    std::vector<uint8_t> boxShape;
-    /// Under deep shadows, with a Volume object of another shape: the leaves, to find where the step
-    /// towards the light leaves the shape (ownTransmittance).
-    std::unique_ptr<TriangleTracer> leafTracer;
-    static constexpr double kPieceDepth = 0.5; ///< optical depth of the pieces of a dense interval
+    static constexpr double kPieceDepth = 0.5;        ///< optical depth of the pieces of a dense interval
     /// Phong shading of volume samples (RenderOptions::volumeShading) with lights to shade by.
     bool shaded;
     /// Per Volume object, phong: the gradient magnitude (value per world unit) from which a sample
@@ -194,37 +182,8 @@ struct VolumeComposite {
           emptySpace(f.options.skipEmptySpace ? emptySpaceOf(scene)
                                               : std::vector<EmptySpace>(scene.objects.size())),
           preintegrated(preintegrate(scene)), step(sampleStep(scene) * f.options.volumeStep),
-          boxShape(boxShapes(scene)),
           shaded(f.options.volumeShading == VolumeShading::Phong && !f.lights.empty()),
-          fullGradient(shaded ? fullGradients(scene) : std::vector<double>()) {
-        const bool deep = std::any_of(f.shadows.begin(), f.shadows.end(),
-                                      [](const auto& s) { return std::holds_alternative<DeepShadow>(*s); });
-        bool otherShape = false;
-        for (std::size_t o = 0; o < scene.objects.size(); ++o)
-            otherShape |= scene.objects[o].kind == ObjectKind::Volume && !boxShape[o];
-        if (deep && otherShape && surfaces.flat.mesh.triangleCount() > 0)
-            leafTracer = std::make_unique<TriangleTracer>(surfaces.flat.mesh.view());
-    }
-
-    static std::vector<uint8_t> boxShapes(const VolumeScene& vs) {
-        std::vector<uint8_t> out(vs.objects.size(), 0);
-        for (std::size_t o = 0; o < vs.objects.size(); ++o) {
-            const VolumeSceneObject& obj = vs.objects[o];
-            if (obj.kind != ObjectKind::Volume) continue;
-            const ShapeNode& n = vs.nodes[std::size_t(obj.shape)];
-            if (n.op != ShapeOp::Leaf) continue;
-            const Mesh& leaf = vs.leaves[std::size_t(n.leaf)];
-            const Volume& v = *vs.volumes[std::size_t(obj.volume)];
-            const Box3d a = computeBounds(leaf.view()), b = v.box();
-            const double tol = 1e-6 * length(b.extent());
-            bool same = leaf.triangleCount() == 12;
-            for (int k = 0; k < 3; ++k)
-                same = same && std::abs(a.lo[k] - b.lo[k]) <= tol && std::abs(a.hi[k] - b.hi[k]) <= tol &&
-                       std::abs(v.axis(k)[k] - 1) <= 1e-12;
-            out[o] = same;
-        }
-        return out;
-    }
+          fullGradient(shaded ? fullGradients(scene) : std::vector<double>()) {}
 
     static std::vector<double> fullGradients(const VolumeScene& vs) {
         std::vector<double> out(vs.objects.size(), std::numeric_limits<double>::infinity());
@@ -294,20 +253,14 @@ struct VolumeComposite {
         return r.transmittance >= 1e-3;
     }
 
-    // Light arriving at volume sample p inside the volume objects `inside`: returns the ambient
-    // light (the constant and the sky's mean radiance, its order-0 harmonic) and sets `lights` to
-    // every light's irradiance times its shadow. The shadow is looked up at q, one sample step
-    // towards the light (with that direction as q's normal, so the technique adds its own offset): a
-    // shadow map samples the volume in steps of its own, and a dense layer the sample lies at the
-    // front of (bone under skin) must not shadow its own surface by the step over which the map's
-    // visibility falls. Deep shadow maps are read at q itself (no offset or bias: q lies in a
-    // medium, not on a surface) and the medium between p and q, which that lookup leaves out, is put
-    // back (ownTransmittance: exact for a homogeneous medium; without it a uniform slab was brighter
-    // by exp(sigma * the offset)); exact shadows, which march the volume finely, are traced from p.
-    // `unshaded` is the ambient plus every light's irradiance / pi: the light a sample takes without
-    // a normal.
-    Vec3f lightAt(const Vec3d& p, std::span<const uint8_t> inside, std::vector<LightSample>& lights,
-                  Vec3f& unshaded) const {
+    // Light arriving at volume sample p: returns the ambient light (the constant and the sky's mean
+    // radiance, its order-0 harmonic) and sets `lights` to every light's irradiance times its
+    // shadow, looked up at p moved one sample step towards the light (and given that direction as
+    // the lookup's normal, so the technique adds its own offset): a shadow map samples the volume in
+    // steps of its own, and a dense layer the sample lies at the front of (bone under skin) must not
+    // shadow its own surface by the step over which the map's visibility falls. `unshaded` is the
+    // ambient plus every light's irradiance / pi: the light a sample takes without a normal.
+    Vec3f lightAt(const Vec3d& p, std::vector<LightSample>& lights, Vec3f& unshaded) const {
         const std::span<const Light> sceneLights = frame.lights;
         const Vec3f ambient = frame.options.ambient + frame.environment->sphericalHarmonics()[0] *
                                                           float(0.282095 * frame.options.skyLight);
@@ -317,56 +270,14 @@ struct VolumeComposite {
             Vec3d toLight;
             const Vec3f e = lightIrradiance(sceneLights[l], p, toLight);
             if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
-            const Vec3f vis =
-                l < frame.shadows.size() ? shadowAt(*frame.shadows[l], p, toLight, inside) : Vec3f{1, 1, 1};
+            const Vec3f vis = l < frame.shadows.size()
+                                  ? shadowVisibility(*frame.shadows[l], p + toLight * step, toLight)
+                                  : Vec3f{1, 1, 1};
             const Vec3f ev = e * vis;
             unshaded += ev * float(1.0 / M_PI);
             lights.push_back({ev, toLight});
         }
         return ambient;
-    }
-
-    // The shadow of volume sample p (see lightAt).
-    Vec3f shadowAt(const LightShadow& shadow, const Vec3d& p, const Vec3d& toLight,
-                   std::span<const uint8_t> inside) const {
-        const Vec3d q = p + toLight * step;
-        if (std::holds_alternative<ExactShadow>(shadow)) return shadowVisibility(shadow, p, toLight);
-        const DeepShadow* deep = std::get_if<DeepShadow>(&shadow);
-        if (!deep) return shadowVisibility(shadow, q, toLight);
-        return deep->visibility(q, {0, 0, 0}, 0, 0) * float(ownTransmittance(p, q, inside));
-    }
-
-    // The transmittance of the volume objects `inside` (those holding p) along the segment from p
-    // to q: per object, the part of the segment inside its volume's box and, where its shape is not
-    // that box, up to the first surface of the volume scene's leaves, with the pre-integrated
-    // extinction of the values at its ends (exact for a homogeneous medium).
-    double ownTransmittance(const Vec3d& p, const Vec3d& q, std::span<const uint8_t> inside) const {
-        double depth = 0;
-        for (std::size_t o = 0; o < inside.size(); ++o) {
-            const VolumeSceneObject& obj = vs.objects[o];
-            if (!inside[o] || obj.kind != ObjectKind::Volume) continue;
-            const Volume& volume = *vs.volumes[std::size_t(obj.volume)];
-            const VolumeView v = volume.view();
-            // The segment's parameter range inside the box: 0 <= voxel coordinate <= n on each axis.
-            const int64_t n[3] = {v.nx, v.ny, v.nz};
-            double t1 = 1;
-            for (int a = 0; a < 3 && t1 > 0; ++a) {
-                const double wp = v.voxelCoordinate(p, a), dw = v.voxelCoordinate(q, a) - wp;
-                if (dw > 0) t1 = std::min(t1, (double(n[a]) - wp) / dw);
-                if (dw < 0) t1 = std::min(t1, -wp / dw);
-            }
-            if (!(t1 > 0)) continue;
-            if (!boxShape[o] && leafTracer) {
-                const double len = length(q - p);
-                const TriangleTracer::Hit h = leafTracer->intersect(p, (q - p) * (1 / len), 0, t1 * len);
-                if (h.hit) t1 = h.t / len;
-            }
-            const Vec3d c = p + (q - p) * t1;
-            if (emptySpace[o].emptyBetween(p, c)) continue;
-            depth += preintegrated[o].extinction(double(volume.sample(p)), double(volume.sample(c))) *
-                     length(c - p);
-        }
-        return std::exp(-depth);
     }
 
     // Phong (DSM §3.2) at sample p of volume object o: the diffuse light (times the sample's colour)
@@ -463,7 +374,7 @@ struct VolumeComposite {
             for (int64_t k = 0; k < pieces && r.transmittance >= 1e-3; ++k) {
                 const Vec3d p = p0 + (p1 - p0) * ((double(k) * pl + lightDepth) / dl);
                 Vec3f unshaded;
-                const Vec3f ambient = lightAt(p, inside, *r.lights, unshaded);
+                const Vec3f ambient = lightAt(p, *r.lights, unshaded);
                 for (std::size_t o = 0; o < inside.size(); ++o) {
                     const ObjectInterval& w = (*r.objects)[o];
                     if (!(w.sigma > 0)) continue;

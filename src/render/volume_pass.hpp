@@ -23,9 +23,7 @@ namespace voxfx::detail {
 /// at its ends (PreintegratedTransfer; opacity 1 - exp(-σ dl)), its colour = pre-integrated transfer
 /// colour × (ambient + Σ lights irradiance × shadow visibility / π), the light taken at the
 /// interval's opacity-weighted depth (its middle when thin, 1/σ behind its start when dense) and the
-/// shadow looked up one step towards the light (with that direction as the lookup's normal; deep
-/// shadow maps without offset or bias), times the transmittance of the volumes over that step under
-/// deep and exact shadows (the medium the lookup leaves out: a uniform slab is Beer–Lambert). The walk
+/// shadow looked up one step towards the light, with that direction as the lookup's normal. The walk
 /// stops when the accumulated opacity reaches 0.999, and the result is blended over frame.shaded
 /// (row-major, y up). The meshes of blended materials (Material::blend), which the G-buffer leaves
 /// out, are walked here too, as translucent objects shaded with their own material. Records the
