@@ -227,6 +227,7 @@ BoxOnFloor boxOnFloor() {
     o.shadow = shadowOptionsNamed("none");
     o.defaultLights = false;
     o.toneMap = ToneMap::Clamp;
+    o.exposure = 1; // fixed: the oracle describes radiance
     o.antiAliasing = AntiAliasing::Off;
     o.sky = SkyKind::Flat;
     o.background = {1, 1, 1};

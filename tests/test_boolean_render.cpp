@@ -216,6 +216,7 @@ TEST(BooleanRenderTest, RenderedPixelsAreTheSurfacesAlphaCompositedInDepthOrder)
     o.background = {0.1f, 0.2f, 0.3f};
     o.antiAliasing = AntiAliasing::Off;
     o.toneMap = ToneMap::Clamp;
+    o.exposure = 1; // fixed: the oracle describes radiance
     const RenderResult r = render(scene, brenCamera(), o);
     const auto expected = brenOracle(s, cameraFrame(brenCamera(), 64, 48));
     int64_t checked = 0, blended = 0;

@@ -49,6 +49,7 @@ RenderOptions smallOptions(std::string_view kind = "none", int64_t w = 160, int6
     o.background = {0, 0, 0};
     o.antiAliasing = AntiAliasing::Off;
     o.toneMap = ToneMap::Clamp;
+    o.exposure = 1; // a fixed exposure: these tests compare radiances
     return o;
 }
 

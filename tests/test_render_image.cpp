@@ -95,6 +95,7 @@ RenderOptions edgeOptions(int64_t size, AntiAliasing aa) {
     o.sky = SkyKind::Flat;
     o.background = {0, 0, 0};
     o.toneMap = ToneMap::Clamp;
+    o.exposure = 1; // a fixed exposure: these tests compare radiances
     o.antiAliasing = aa;
     return o;
 }
@@ -341,6 +342,7 @@ TEST(RenderImageTest, OneSkyLightsTheGroundAndFillsTheBackground) {
     o.shadow = shadowOptionsNamed("none");
     o.defaultLights = false;
     o.toneMap = ToneMap::Clamp;
+    o.exposure = 1; // a fixed exposure: these tests compare radiances
     o.sky = SkyKind::Flat;
     const Vec3f L{0.8f, 0.6f, 0.4f};
     o.background = L;
@@ -373,6 +375,7 @@ TEST(RenderImageTest, SceneWithLightsShowsTheSameSkyAsOneWithout) {
     o.height = 33;
     o.shadow = shadowOptionsNamed("none");
     o.toneMap = ToneMap::Clamp;
+    o.exposure = 1; // a fixed exposure: these tests compare radiances
     o.antiAliasing = AntiAliasing::Off;
     const Vec3f without = render(s, c, o).image.at(16, 16);
     s.lights.push_back(sun);

@@ -374,6 +374,7 @@ TranslucentSetup translucentSetup() {
     o.width = 96, o.height = 72;
     o.antiAliasing = AntiAliasing::Off;
     o.toneMap = ToneMap::Clamp;
+    o.exposure = 1; // fixed: the closed forms describe radiance
     o.sky = SkyKind::Flat;
     o.background = {0.8f, 0.9f, 1.0f};
     o.skyLight = 0;
@@ -554,6 +555,7 @@ TEST(TranslucencyShadowTest, BackLitTranslucentSolidPassesTheLightThroughTheMatt
     o.width = o.height = 33;
     o.antiAliasing = AntiAliasing::Off;
     o.toneMap = ToneMap::Clamp;
+    o.exposure = 1; // fixed: the closed forms describe radiance
     o.sky = SkyKind::Flat;
     o.background = {0, 0, 0};
     o.skyLight = 0;

@@ -29,15 +29,48 @@ void directionToEquirect(const Vec3d& d, double& u, double& v);
 /// The unit direction of (u, v); the inverse of directionToEquirect for v in (0, 1).
 Vec3d equirectToDirection(double u, double v);
 
+/// The unit of the procedural sky's radiance: radiance 1 (linear sRGB whose luminance is 1) is this
+/// many cd/m^2, so that the sun at the default elevation gives about irradiance 3 (the old default
+/// sun's) and a white plane under sun and sky about radiance 1.
+inline constexpr double kSkyLuminanceUnit = 30000;
+/// The solar illuminance outside the atmosphere, lux (Darula et al. 2005's 128 klx).
+inline constexpr double kSolarIlluminance = 128000;
+inline constexpr double kDefaultSunElevation = 54.5; ///< degrees above the horizon
+inline constexpr double kDefaultSunAzimuth = 142;    ///< degrees from -z (north) towards +x (east)
+inline constexpr double kDefaultTurbidity = 2;       ///< Preetham's T: 2 very clear .. 10 hazy
+
+/// The unit direction towards a sun `elevationDegrees` above the horizon (+y up) and
+/// `azimuthDegrees` from -z (the default camera's view) turning towards +x.
+Vec3d sunDirectionFromAngles(double elevationDegrees, double azimuthDegrees);
+
 struct SkyOptions {
-    Vec3d sunDirection{0.35, 0.8, 0.45}; ///< towards the sun (normalized); also the default sun light's
-    Vec3f zenith{0.25f, 0.45f, 0.95f};   ///< radiance straight up
-    Vec3f horizon{0.85f, 0.9f, 1.0f};    ///< radiance at the horizon
-    Vec3f ground{0.32f, 0.30f, 0.27f};   ///< radiance below the horizon
-    Vec3f sun{40.0f, 38.0f, 34.0f};      ///< radiance of the sun's disc
-    double sunAngularRadius = 0.02;      ///< radians (the real sun: 0.0047; wider reads better in images)
-    int width = 512, height = 256;       ///< resolution of the baked map
+    /// Towards the sun (normalized); the sky's light and the default sun both come from it. Its
+    /// elevation is clamped to at least 1 degree (the model is fitted for a sun above the horizon).
+    Vec3d sunDirection = sunDirectionFromAngles(kDefaultSunElevation, kDefaultSunAzimuth);
+    double turbidity = kDefaultTurbidity; ///< 1.7 .. 10 (clamped)
+    /// The ground below the horizon: a Lambertian plane of this albedo under the sun and the sky.
+    Vec3f groundAlbedo{0.3f, 0.3f, 0.3f};
+    double sunAngularRadius = 0.02; ///< radians of the disc drawn (the real sun: 0.0047; wider reads better)
+    int width = 512, height = 256;  ///< resolution of the baked map
 };
+
+/// What the procedural sky is made of, in the sky's units (kSkyLuminanceUnit).
+struct Daylight {
+    /// Irradiance of the sun's direct light on a face towards it, linear sRGB: the extraterrestrial
+    /// sun (a 5778 K black body of kSolarIlluminance) through Preetham's Rayleigh and aerosol
+    /// transmittance along the Kasten air mass.
+    Vec3f sunIrradiance;
+    Vec3f zenith; ///< the sky's radiance straight up
+    Vec3f ground; ///< the radiance below the horizon: groundAlbedo / pi * (sun + sky) irradiance
+    double skyHorizontalIrradiance = 0; ///< luminance-weighted, sky's units: the diffuse part
+    double sunHorizontalIrradiance = 0; ///< the direct part on a horizontal face
+};
+
+/// Preetham, Shirley & Smits 1999, "A Practical Analytic Model for Daylight": the sky's radiance
+/// (linear sRGB, sky units) along unit direction d above the horizon, for the sun towards unit
+/// `sun` and turbidity T: the Perez distribution of Y, x and y relative to the zenith's, the
+/// zenith's luminance and chromaticity from the paper's fits, xyY -> XYZ -> linear sRGB.
+Vec3f preethamSkyRadiance(const Vec3d& d, const Vec3d& sun, double turbidity);
 
 class Environment {
 public:
@@ -45,9 +78,11 @@ public:
     Environment();
     /// Takes `image` as level 0 and builds the pyramid. Throws voxfx::Error for an empty image.
     explicit Environment(Image image);
-    /// A procedural sky baked into a map: zenith-to-horizon gradient, a ground colour below the
-    /// horizon (with a short blend), the sun as a disc with a glow.
-    static Environment sky(const SkyOptions& options = {});
+    /// The procedural daylight sky baked into a map: Preetham's sky above the horizon
+    /// (preethamSkyRadiance), a Lambertian ground of SkyOptions::groundAlbedo lit by that sun and
+    /// sky below it, the sun as a disc. The sun's light is sunIrradiance() along sunDirection()
+    /// (the disc is seen, in glass, but left out of the ambient harmonics, which it would count twice).
+    static Environment sky(const SkyOptions& options = {}, Daylight* daylight = nullptr);
 
     int levels() const { return int(levels_.size()); }
     const Image& level(int k) const { return levels_[size_t(k)]; }
@@ -71,16 +106,26 @@ public:
     const std::array<Vec3f, 9>& sphericalHarmonics() const { return sh_; }
     /// Mean of level 0's texels (the last level).
     Vec3f average() const { return levels_.back().pixels[0]; }
-    /// The sun: a procedural sky's (its direction towards the sun); for a map the direction of its
-    /// brightest region (the brightest texel of the first level at most 64 texels wide) when it is
-    /// at least 4 times the map's mean luminance, else zero (a map without a sun).
+    /// The sun: a procedural sky's (its direction towards the sun); for a map, its sun region when
+    /// it has one: the texels connected to the brightest one that are at least max(4 x the map's
+    /// mean, 1/20 of the brightest) luminance, within 0.2 sr (at the first level at most 1024
+    /// texels wide). The region is taken out of the ambient light (its texels replaced by the mean
+    /// of the texels around it before the projection on harmonics) and becomes the sun: direction
+    /// the luminance-weighted centroid of what was removed, irradiance (sunIrradiance) the removed
+    /// radiance times the texels' solid angles. Zero for a map without a sun.
     const Vec3d& sunDirection() const { return sunDirection_; }
+    /// The sun's irradiance on a face towards it (linear RGB); zero without a sun. The irradiance on
+    /// a face of normal n is irradiance(n) + sunIrradiance() * max(0, n . sunDirection()).
+    const Vec3f& sunIrradiance() const { return sunIrradiance_; }
 
 private:
-    void projectOnHarmonics();
-    void findSun();
+    void buildLevels(Image image);
+    void projectOnHarmonics(const Image& im);
+    /// The sun region of `im` (see sunDirection()), taken out of `im`.
+    void extractSun(Image& im);
     std::vector<Image> levels_;
     Vec3d sunDirection_;
+    Vec3f sunIrradiance_;
     std::array<Vec3f, 9> sh_{};
 };
 

@@ -164,12 +164,21 @@ struct RenderOptions {
     double skyLight = 1;
     SkyKind sky = SkyKind::Procedural;     ///< the environment when none is given
     Vec3f background{0.60f, 0.72f, 0.90f}; ///< the flat environment's radiance (sky = flat)
+    /// The procedural sky (Environment::sky, SkyOptions): the sun's place (degrees above the horizon,
+    /// and from -z towards +x), the turbidity and the ground's albedo below the horizon. The default
+    /// sun of a scene without lights is the sky's.
+    double sunElevation = kDefaultSunElevation;
+    double sunAzimuth = kDefaultSunAzimuth;
+    double turbidity = kDefaultTurbidity;
+    Vec3f groundAlbedo = SkyOptions{}.groundAlbedo;
     AntiAliasing antiAliasing = AntiAliasing::Full;
     /// Adaptive anti-aliasing: edge and glass pixels get s x s samples (2..8).
     int adaptiveSamples = 2;
     ToneMap toneMap = ToneMap::Auto; ///< the output transform (auto: toneMapForImage)
-    float exposure = 1;              ///< multiplies the linear result (background included)
-    GlassOptions glass;              ///< the glass method and its options (default none: shaded as surfaces)
+    /// Multiplies the linear result (background included); 0: automatic, key / the frame's
+    /// log-average luminance (Reinhard et al. 2002, key 0.18: RenderResult::exposure).
+    float exposure = 1;
+    GlassOptions glass; ///< the glass method and its options (default none: shaded as surfaces)
     /// Radiance around the scene: shown as the background, seen through and in glass, and the ambient
     /// light. Null: the procedural sky (Environment::sky), or the flat `background` (sky = flat).
     std::shared_ptr<const Environment> environment;
@@ -211,11 +220,16 @@ struct RenderOptions {
     int64_t translucencySlices = 256;
 
     /// The named fields of RenderOptions itself: width, height, supersample, antiAliasing,
-    /// adaptiveSamples, toneMap, exposure, ambient, skyLight, sky, background, volumeStep,
+    /// adaptiveSamples, toneMap, exposure, ambient, skyLight, sky, background, sunElevation,
+    /// sunAzimuth, turbidity, groundAlbedo, volumeStep,
     /// emptySpaceSkipping, volumeShading, defaultLights, creaseAngle, ambientOcclusion,
     /// occlusionRadius, occlusionResolution, translucencySlices.
     static std::span<const OptionField<RenderOptions>> fields();
 };
+
+/// The procedural sky RenderOptions describe (sunElevation, sunAzimuth, turbidity, groundAlbedo;
+/// SkyOptions' defaults otherwise): the one render() uses without an environment map.
+SkyOptions skyOptions(const RenderOptions& options);
 
 /// Sets the option `name` (lowerCamelCase, or its kebab- or snake-case spelling) wherever the
 /// render uses it. "shadows" and "glass" (names) choose a technique with its default options; any
@@ -298,6 +312,8 @@ struct RenderResult {
     std::vector<uint8_t> glassMask;
     GlassReport glass;
     int64_t volumeSamples = 0; ///< volume samples the ray-casting pass took
+    /// The exposure the image was made with: RenderOptions::exposure, or the automatic one.
+    float exposure = 1;
 };
 
 namespace detail {

@@ -54,7 +54,7 @@ def test_an_unshadowed_ground_has_the_closed_form_radiance(tmp_path):
     scene = voxfx.load_scene(write_scene(tmp_path, cube=False))
     assert scene.triangle_count == 2 and scene.light_count == 1
     img = voxfx.render(scene, shadows="none", width=64, height=48, ambient=(0.1, 0.1, 0.1), background=(0, 0, 1),
-                       sky="flat", sky_light=0, anti_aliasing="off", tone_map="clamp")
+                       sky="flat", sky_light=0, anti_aliasing="off", tone_map="clamp", exposure=1)
     assert img.shape == (48, 64, 3) and img.dtype == np.float32
     # The sun on the ground (normal up): ambient * albedo + albedo / pi * E * cos(angle to the normal).
     cosine = 1 / np.sqrt(0.3**2 + 1 + 0.2**2)

@@ -86,8 +86,11 @@ int runRender(const RenderArgs& a) {
 }
 
 const char* kRenderHelp = R"(
-A scene without lights is lit by a default sun and the sky (or --environment). The background,
-what glass reflects and the ambient light all come from that one environment (--sky, --sky-light).
+A scene without lights is lit by the sky's sun (Preetham's daylight: --sun-elevation, --sun-azimuth,
+--turbidity) or by an environment map's own sun (its brightest region, taken out of its ambient
+light). The background, what glass reflects and the ambient light all come from that one
+environment (--sky, --sky-light; below the horizon a ground of --ground-albedo). The exposure is
+automatic (the frame's log-average luminance to 0.18) unless --exposure gives one.
 Settings a JSON scene file gives under "render" (the options above, by their camelCase names:
 "gridResolution", "shadows", ...) are used unless a flag overrides them. An option of another
 shadow kind or glass method than the chosen ones does nothing (a line on stderr says so).

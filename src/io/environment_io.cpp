@@ -11,10 +11,11 @@ Environment loadEnvironment(const std::string& path) {
     return Environment(readImage(path));
 }
 
-std::shared_ptr<const Environment> loadSceneEnvironment(const Scene& scene, const RenderOptions&,
+std::shared_ptr<const Environment> loadSceneEnvironment(const Scene& scene, const RenderOptions& options,
                                                         const std::string& requested) {
     const std::string path = !requested.empty() ? requested : scene.settings.environmentMap;
     if (path.empty()) return nullptr; // render's own: the procedural sky, or the flat background
+    if (path == "sky") return std::make_shared<const Environment>(Environment::sky(skyOptions(options)));
     return std::make_shared<const Environment>(loadEnvironment(path));
 }
 

@@ -1,8 +1,11 @@
-// voxfx — equirectangular environment maps with a box-filtered pyramid, and the procedural sky.
+// voxfx — equirectangular environment maps with a box-filtered pyramid, their ambient harmonics
+// and their sun (the procedural sky: daylight.cpp).
 #include "voxfx/environment.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "voxfx/error.hpp"
 
@@ -47,11 +50,20 @@ Environment::Environment() : levels_{Image(1, 1)} {}
 
 Environment::Environment(Image image) {
     if (image.width <= 0 || image.height <= 0) fail("an environment map needs at least one texel");
+    levels_.clear();
+    buildLevels(std::move(image));
+    // The ambient light: the first level at most 1024 texels wide, less its sun.
+    std::size_t k = 0;
+    while (k + 1 < levels_.size() && levels_[k].width > 1024) ++k;
+    Image ambient = levels_[k];
+    extractSun(ambient);
+    projectOnHarmonics(ambient);
+}
+
+void Environment::buildLevels(Image image) {
     levels_.push_back(std::move(image));
     while (levels_.back().width > 1 || levels_.back().height > 1)
         levels_.push_back(downsampleEnvironmentLevel(levels_.back()));
-    projectOnHarmonics();
-    findSun();
 }
 
 namespace {
@@ -74,10 +86,7 @@ double luminance(const Vec3f& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 *
 
 } // namespace
 
-void Environment::projectOnHarmonics() {
-    std::size_t k = 0;
-    while (k + 1 < levels_.size() && levels_[k].width > 1024) ++k;
-    const Image& im = levels_[k];
+void Environment::projectOnHarmonics(const Image& im) {
     // Quadrature cells: the texels, or a 64 x 32 grid over a smaller map (each cell takes the texel
     // holding its centre), so that a tiny map's one texel is not read as one direction.
     const int64_t W = std::max<int64_t>(im.width, 64), H = std::max<int64_t>(im.height, 32);
@@ -99,23 +108,67 @@ void Environment::projectOnHarmonics() {
     for (int b = 0; b < 9; ++b) sh_[size_t(b)] = Vec3f(sum[size_t(b)]);
 }
 
-void Environment::findSun() {
+void Environment::extractSun(Image& im) {
     sunDirection_ = {0, 0, 0};
-    std::size_t k = 0;
-    while (k + 1 < levels_.size() && levels_[k].width > 64) ++k;
-    const Image& im = levels_[k];
-    double best = -1, mean = 0;
+    sunIrradiance_ = {0, 0, 0};
+    const int64_t W = im.width, H = im.height;
+    if (W < 8 || H < 4) return;
+    std::vector<double> omega(static_cast<size_t>(H)), lum(static_cast<size_t>(W * H));
+    double mean = 0, best = -1;
     int64_t bi = 0, bj = 0;
-    for (int64_t j = 0; j < im.height; ++j)
-        for (int64_t i = 0; i < im.width; ++i) {
+    for (int64_t j = 0; j < H; ++j) {
+        omega[size_t(j)] =
+            2 * M_PI / double(W) *
+            (std::cos(double(j) * M_PI / double(H)) - std::cos(double(j + 1) * M_PI / double(H)));
+        for (int64_t i = 0; i < W; ++i) {
             const double l = luminance(im.at(i, j));
-            mean += l;
+            lum[size_t(j * W + i)] = l;
+            mean += l * omega[size_t(j)];
             if (l > best) best = l, bi = i, bj = j;
         }
-    mean /= double(im.width * im.height);
-    if (best > 4 * mean && best > 0)
-        sunDirection_ = equirectToDirection((double(bi) + 0.5) / double(im.width),
-                                            (double(bj) + 0.5) / double(im.height));
+    }
+    mean /= 4 * M_PI;
+    if (!(best > 4 * mean && best > 0)) return;
+    // The region: texels 8-connected to the brightest (u wraps) at least the threshold bright.
+    const double threshold = std::max(4 * mean, best / 20);
+    std::vector<uint8_t> state(size_t(W * H), 0); // 1: in the region, 2: around it
+    std::vector<std::pair<int64_t, int64_t>> stack{{bi, bj}}, region, ring;
+    state[size_t(bj * W + bi)] = 1;
+    double regionOmega = 0;
+    while (!stack.empty()) {
+        const auto [i, j] = stack.back();
+        stack.pop_back();
+        region.emplace_back(i, j);
+        regionOmega += omega[size_t(j)];
+        if (regionOmega > 0.2) return; // a bright part of the sky, not a sun
+        for (int64_t dj = -1; dj <= 1; ++dj)
+            for (int64_t di = -1; di <= 1; ++di) {
+                const int64_t y = j + dj, x = ((i + di) % W + W) % W;
+                if (y < 0 || y >= H || state[size_t(y * W + x)] != 0) continue;
+                const bool in = lum[size_t(y * W + x)] >= threshold;
+                state[size_t(y * W + x)] = in ? 1 : 2;
+                (in ? stack : ring).emplace_back(x, y);
+            }
+    }
+    Vec3d around{0, 0, 0};
+    double aroundOmega = 0;
+    for (const auto& [i, j] : ring) {
+        around += Vec3d(im.at(i, j)) * omega[size_t(j)];
+        aroundOmega += omega[size_t(j)];
+    }
+    const Vec3f fill = aroundOmega > 0 ? Vec3f(around / aroundOmega) : Vec3f{0, 0, 0};
+    Vec3d energy{0, 0, 0}, centroid{0, 0, 0};
+    for (const auto& [i, j] : region) {
+        const Vec3f excess = im.at(i, j) - fill;
+        energy += Vec3d(excess) * omega[size_t(j)];
+        centroid += equirectToDirection((double(i) + 0.5) / double(W), (double(j) + 0.5) / double(H)) *
+                    (luminance(excess) * omega[size_t(j)]);
+        im.at(i, j) = fill;
+    }
+    if (!(length(centroid) > 0)) return;
+    sunDirection_ = normalize(centroid);
+    sunIrradiance_ =
+        Vec3f{float(std::max(0.0, energy.x)), float(std::max(0.0, energy.y)), float(std::max(0.0, energy.z))};
 }
 
 Vec3f Environment::irradiance(const Vec3d& n) const {
@@ -126,38 +179,6 @@ Vec3f Environment::irradiance(const Vec3d& n) const {
     Vec3d e{0, 0, 0};
     for (int b = 0; b < 9; ++b) e += Vec3d(sh_[size_t(b)]) * (a[b] * y[size_t(b)]);
     return Vec3f{float(std::max(0.0, e.x)), float(std::max(0.0, e.y)), float(std::max(0.0, e.z))};
-}
-
-Environment Environment::sky(const SkyOptions& o) {
-    if (o.width < 2 || o.height < 2) fail("the sky map needs at least 2 x 2 texels");
-    const Vec3d sun = normalize(o.sunDirection);
-    Image img(o.width, o.height);
-    const double cosSun = std::cos(o.sunAngularRadius);
-    for (int64_t j = 0; j < img.height; ++j)
-        for (int64_t i = 0; i < img.width; ++i) {
-            const Vec3d d = equirectToDirection((double(i) + 0.5) / double(img.width),
-                                                (double(j) + 0.5) / double(img.height));
-            const double up = d.y;
-            Vec3f c;
-            if (up >= 0) {
-                const float t = float(std::pow(1.0 - up, 3.0)); // horizon band
-                c = o.zenith * (1 - t) + o.horizon * t;
-            } else {
-                const float t = float(std::min(1.0, -up * 8.0)); // short blend into the ground
-                c = o.horizon * (1 - t) + o.ground * t;
-            }
-            const double cs = dot(d, sun);
-            if (up > -0.02) {
-                if (cs >= cosSun)
-                    c = o.sun;
-                else // glow: a narrow lobe around the disc
-                    c += o.sun * float(0.02 * std::pow(std::max(0.0, cs), 64.0));
-            }
-            img.at(i, j) = c;
-        }
-    Environment env(std::move(img));
-    env.sunDirection_ = sun;
-    return env;
 }
 
 Vec3f Environment::sampleLevel(const Vec3d& d, int k) const {

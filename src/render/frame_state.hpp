@@ -54,6 +54,8 @@ struct FrameState {
     RenderResult& result;
     /// Set by a pass that reused what an earlier frame built (PassTime::cached).
     bool cachedPass = false;
+    /// RenderOptions::exposure is 0 (automatic): `options` holds exposure 1, the resolve pass scales.
+    bool autoExposure = false;
 };
 
 } // namespace voxfx::detail

@@ -26,17 +26,32 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
             "times --exposure; PNG clips at 1; also 'clamp') or auto: linear for .exr/.pfm, filmic for "
             ".png",
             "auto | filmic | linear"),
-        numberOption<O, &O::exposure>("exposure", "multiplies the linear image", 1e-6, 1e6),
+        numberOption<O, &O::exposure>(
+            "exposure",
+            "multiplies the linear image; 0: automatic (key 0.18 over the frame's log-average luminance)", 0,
+            1e6),
         numberOption<O, &O::skyLight>(
             "skyLight", "ambient light from the environment's irradiance, times this (0: none)", 0, 1e6),
         tripleOption<O, &O::ambient>("ambient", "constant ambient radiance added to the sky's, linear RGB", 0,
                                      1e6),
         nameOption<O, parseSkyKind, optionName<SkyKind>, &O::sky>(
             "sky",
-            "the environment without --environment: procedural (gradient, ground, sun) or flat "
-            "(--background everywhere); background, glass and ambient all use it",
+            "the environment without --environment: procedural (Preetham's daylight sky with its sun, a "
+            "ground of --ground-albedo below the horizon) or flat (--background everywhere); background, "
+            "glass and ambient all use it",
             "procedural | flat"),
         tripleOption<O, &O::background>("background", "the flat sky's radiance, linear RGB", 0, 1e6),
+        numberOption<O, &O::sunElevation>(
+            "sunElevation", "procedural sky: the sun's degrees above the horizon (the default sun's too)", 1,
+            90),
+        numberOption<O, &O::sunAzimuth>("sunAzimuth",
+                                        "procedural sky: the sun's degrees from -z (the default view) "
+                                        "towards +x",
+                                        -360, 360),
+        numberOption<O, &O::turbidity>(
+            "turbidity", "procedural sky: Preetham's turbidity, 2 (very clear) to 10 (hazy)", 1.7, 10),
+        tripleOption<O, &O::groundAlbedo>(
+            "groundAlbedo", "procedural sky: the albedo of the ground below the horizon, linear RGB", 0, 1),
         numberOption<O, &O::volumeStep>(
             "volumeStep", "volume ray casting: sample step in smallest voxel spacings", 1e-3, 1000),
         flagOption<O, &O::skipEmptySpace>(

@@ -1,9 +1,11 @@
 // voxfx — the renderer's driver: one frame is an ordered list of passes over one frame state, each
 // timed and given its share of the progress (see render.hpp for the passes).
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <optional>
 
 #include "core/progress_range.hpp"
@@ -139,6 +141,21 @@ constexpr RenderPass kPasses[] = {{"flatten", 0.0, flattenPass},
                                   {"ray casting", 1.0, volumePass},
                                   {"resolve", 1.0, detail::resolvePass}};
 
+// The procedural sky of these options, baked once and kept (the last few) for the next frames.
+std::shared_ptr<const Environment> cachedSky(const SkyOptions& o) {
+    static std::mutex mutex;
+    static std::vector<std::pair<std::array<double, 8>, std::shared_ptr<const Environment>>> kept;
+    const std::array<double, 8> key{o.sunDirection.x, o.sunDirection.y, o.sunDirection.z, o.turbidity,
+                                    o.groundAlbedo.x, o.groundAlbedo.y, o.groundAlbedo.z, o.sunAngularRadius};
+    std::lock_guard lock(mutex);
+    for (const auto& [k, env] : kept)
+        if (k == key) return env;
+    auto env = std::make_shared<const Environment>(Environment::sky(o));
+    if (kept.size() >= 4) kept.erase(kept.begin());
+    kept.emplace_back(key, env);
+    return env;
+}
+
 void checkRender(const Scene& scene, const RenderOptions& options) {
     if (options.width <= 0 || options.height <= 0 || options.width > 65536 || options.height > 65536)
         fail("image size must be between 1 and 65536 pixels per side, got ", options.width, " x ",
@@ -154,6 +171,14 @@ void checkRender(const Scene& scene, const RenderOptions& options) {
 
 } // namespace
 
+SkyOptions skyOptions(const RenderOptions& o) {
+    SkyOptions s;
+    s.sunDirection = sunDirectionFromAngles(o.sunElevation, o.sunAzimuth);
+    s.turbidity = o.turbidity;
+    s.groundAlbedo = o.groundAlbedo;
+    return s;
+}
+
 RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
     RenderCache cache; // this frame's alone
     return render(scene, camera, options, cache);
@@ -164,23 +189,27 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     checkRender(scene, options);
     const auto t0 = Clock::now();
     // The one environment: given, else the procedural sky or the flat background. A scene without
-    // lights gets the default sun: the sky's, or a map's brightest region.
-    static const Environment defaultSky = Environment::sky();
+    // lights gets the default sun: the environment's (the sky's, or a map's sun region), else (the
+    // flat background) a white sun of irradiance 3 along SkyOptions' direction.
+    std::shared_ptr<const Environment> keep;
     std::optional<Environment> flat;
     const Environment* env = options.environment.get();
-    if (!env)
-        env = options.sky == SkyKind::Flat ? &flat.emplace(Image(1, 1, options.background)) : &defaultSky;
+    if (!env && options.sky == SkyKind::Flat) env = &flat.emplace(Image(1, 1, options.background));
+    if (!env) env = (keep = cachedSky(skyOptions(options))).get();
     std::span<const Light> lights = scene.lights;
     Light sun;
     if (scene.lights.empty() && options.defaultLights) {
         sun.name = "default sun";
-        const Vec3d towards =
-            length(env->sunDirection()) > 0 ? env->sunDirection() : SkyOptions{}.sunDirection;
-        sun.direction = -normalize(towards);
-        sun.color = {1.0f, 0.96f, 0.9f};
-        sun.intensity = 3;
-        lights = {&sun, 1};
+        const bool own = length(env->sunDirection()) > 0;
+        sun.direction = -normalize(own ? env->sunDirection() : SkyOptions{}.sunDirection);
+        sun.color = own ? env->sunIrradiance() : Vec3f{1.0f, 0.96f, 0.9f};
+        sun.intensity = own ? 1 : 3;
+        if (own || options.environment == nullptr) lights = {&sun, 1};
     }
+    // Automatic exposure: the passes render at exposure 1 and the resolve pass scales.
+    const bool autoExposure = !(options.exposure > 0);
+    std::optional<RenderOptions> unitExposure;
+    if (autoExposure) unitExposure.emplace(options).exposure = 1;
     // Adaptive anti-aliasing, except where the volume pass draws (it casts a ray per sample).
     const bool volumes = (scene.volumeScene && !scene.volumeScene->objects.empty()) ||
                          std::any_of(scene.meshes.begin(), scene.meshes.end(), [&](const SceneMesh& m) {
@@ -195,7 +224,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     FrameState frame{scene,
                      lights,
                      camera,
-                     options,
+                     autoExposure ? *unitExposure : options,
                      env,
                      options.width * k,
                      options.height * k,
@@ -214,6 +243,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
                      c.shaded,
                      c.glassSamples,
                      result};
+    frame.autoExposure = autoExposure;
     frame.refined.clear();
     frame.glassSamples.clear();
     frame.screenOcclusion.clear();

@@ -1,6 +1,7 @@
 // voxfx — the renderer's resolve pass (render/frame_passes.hpp): from the shaded samples to the
 // image.
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "render/antialias.hpp"
@@ -19,25 +20,48 @@ Vec3f toneMapped(const Vec3f& c, ToneMap t) {
     return {filmicToneMap(c.x), filmicToneMap(c.y), filmicToneMap(c.z)};
 }
 
-// The tone-mapped sum of the samples of cell (cx, cy) that the passes shaded: all a x a of a refined
-// cell; the mean of its N-rooks samples (glass inside), or its one representative sample, a x a
-// times, elsewhere (adaptive anti-aliasing left the others unshaded).
-Vec3f cellSum(const FrameState& f, int64_t cx, int64_t cy, ToneMap t) {
+// The tone-mapped sum of the samples of cell (cx, cy) that the passes shaded, each times `scale`:
+// all a x a of a refined cell; the mean of its N-rooks samples (glass inside), or its one
+// representative sample, a x a times, elsewhere (adaptive anti-aliasing left the others unshaded).
+// Without a tone map (`t` null): the linear sum.
+Vec3f cellSum(const FrameState& f, int64_t cx, int64_t cy, const ToneMap* t, float scale) {
     const int a = f.adaptive;
     const int64_t W = f.width, sx = cx * a, sy = cy * a;
     const uint8_t kind = f.refined.empty() ? kEveryRefinedSample : f.refined[size_t(cy * (W / a) + cx)];
+    auto out = [&](const Vec3f& c) { return t ? toneMapped(c * scale, *t) : c * scale; };
     Vec3f sum;
     if (kind == kEveryRefinedSample) {
         for (int dy = 0; dy < a; ++dy)
-            for (int dx = 0; dx < a; ++dx) sum += toneMapped(f.shaded[size_t((sy + dy) * W + sx + dx)], t);
+            for (int dx = 0; dx < a; ++dx) sum += out(f.shaded[size_t((sy + dy) * W + sx + dx)]);
         return sum;
     }
     if (kind == kRookSamples) {
         Vec3f mean;
         for (int dy = 0; dy < a; ++dy) mean += f.shaded[size_t((sy + dy) * W + sx + rookColumn(a, dy))];
-        return toneMapped(mean * (1.0f / float(a)), t) * float(a * a);
+        return out(mean * (1.0f / float(a))) * float(a * a);
     }
-    return toneMapped(f.shaded[size_t((sy + a / 2) * W + sx + a / 2)], t) * float(a * a);
+    return out(f.shaded[size_t((sy + a / 2) * W + sx + a / 2)]) * float(a * a);
+}
+
+// Automatic exposure (Reinhard et al. 2002, eq. 1): key / the log-average luminance of the frame's
+// cells, exp(mean of log(1e-4 + L)). Rows are summed in order (deterministic for any thread count).
+float autoExposureScale(const FrameState& f) {
+    constexpr double kKey = 0.18, kDelta = 1e-4;
+    const int a = std::max(f.adaptive, 1);
+    const int64_t cw = f.width / a, ch = f.height / a;
+    std::vector<double> rows(size_t(ch), 0.0);
+    parallelFor(0, ch, 16, [&](int64_t y0, int64_t y1) {
+        for (int64_t cy = y0; cy < y1; ++cy)
+            for (int64_t cx = 0; cx < cw; ++cx) {
+                const Vec3f c = cellSum(f, cx, cy, nullptr, 1.0f / float(a * a));
+                rows[size_t(cy)] +=
+                    std::log(kDelta + std::max(0.0, 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z));
+            }
+    });
+    double sum = 0;
+    for (const double r : rows) sum += r;
+    const double logAverage = std::exp(sum / double(std::max<int64_t>(1, cw * ch)));
+    return float(std::clamp(kKey / logAverage, 1e-6, 1e6));
 }
 
 } // namespace
@@ -66,6 +90,8 @@ void resolvePass(FrameState& f, Progress*) {
     // Auto: render() writes no file, so the display's filmic (toneMapForImage).
     const ToneMap toneMap = toneMapForImage(o.toneMap, {});
     const int cells = o.supersample; // cells of a x a samples per pixel side
+    const float scale = f.autoExposure ? autoExposureScale(f) : 1.0f;
+    r.exposure = f.autoExposure ? scale : o.exposure;
     parallelFor(0, h, 16, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < w; ++x) {
@@ -73,7 +99,7 @@ void resolvePass(FrameState& f, Progress*) {
                 uint8_t every = 0;
                 for (int cy = 0; cy < cells; ++cy)
                     for (int cx = 0; cx < cells; ++cx) {
-                        sum += cellSum(f, x * cells + cx, y * cells + cy, toneMap);
+                        sum += cellSum(f, x * cells + cx, y * cells + cy, &toneMap, scale);
                         if (!f.refined.empty())
                             every |= f.refined[size_t((y * cells + cy) * cw + x * cells + cx)] ==
                                      kEveryRefinedSample;

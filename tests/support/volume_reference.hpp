@@ -225,6 +225,7 @@ inline RenderOptions linearBlackOptions(int64_t width, int64_t height) {
     o.background = {0, 0, 0};
     o.antiAliasing = AntiAliasing::Off;
     o.toneMap = ToneMap::Clamp;
+    o.exposure = 1; // fixed: the closed forms describe radiance
     o.shadow = NoShadowOptions{};
     return o;
 }

@@ -241,6 +241,18 @@ Light directionalLight(const char* name, const Vec3d& direction, Vec3f colour, f
     return l;
 }
 
+/// Render settings that put the procedural sky's sun where the scene's sun light comes from (when
+/// it has one: `towardsSun`, else the sky's default) and give the sky's ground below the horizon the
+/// albedo of the scene's ground, so the ground runs on to the horizon in its own colour.
+void matchSky(Scene& scene, Vec3f groundAlbedo, std::optional<Vec3d> towardsSun = std::nullopt) {
+    if (towardsSun) {
+        const Vec3d t = normalize(*towardsSun);
+        scene.settings.render.emplace_back("sunElevation", std::asin(t.y) * 180 / M_PI);
+        scene.settings.render.emplace_back("sunAzimuth", std::atan2(t.x, -t.z) * 180 / M_PI);
+    }
+    scene.settings.render.emplace_back("groundAlbedo", Vec3d(groundAlbedo));
+}
+
 /// The demo scenes' camera ("View", near 0.05, far 100); adds it, validates and returns the scene.
 Scene withView(Scene scene, const Vec3d& position, const Vec3d& target, double fovYDegrees) {
     Camera cam;
@@ -276,6 +288,7 @@ Scene makeTreeScene(const TreeOptions& o) {
     addNonEmpty(scene, leaves);
 
     scene.lights.push_back(directionalLight("Sun", {0.55, -1.0, 0.35}, {1.0f, 0.95f, 0.85f}, 3.2f));
+    matchSky(scene, {0.30f, 0.36f, 0.16f}, Vec3d{-0.55, 1.0, -0.35});
     return withView(std::move(scene), {-2.2, 1.9, 6.2}, {0.8, 1.55, 0.2}, 50);
 }
 
@@ -318,6 +331,7 @@ Scene makeForestScene(const ForestOptions& o) {
 
     // The tree scene's sun; the camera looks down the lattice's diagonal from outside a corner.
     scene.lights.push_back(directionalLight("Sun", {0.55, -1.0, 0.35}, {1.0f, 0.95f, 0.85f}, 3.2f));
+    matchSky(scene, {0.30f, 0.36f, 0.16f}, Vec3d{-0.55, 1.0, -0.35});
     const double half = 0.5 * o.spacing * std::max(columns, rows);
     return withView(std::move(scene), {-0.55 * half, 0.75 * half + 2, 1.9 * half + 3}, {0, 1.2, -0.1 * half},
                     50);
@@ -366,6 +380,7 @@ Scene makeBunnyScene(const std::string& meshesDir, int leaves, uint64_t seed) {
     spot.innerConeAngle = 25 * M_PI / 180;
     spot.outerConeAngle = 38 * M_PI / 180;
     scene.lights.push_back(spot);
+    matchSky(scene, {0.45f, 0.42f, 0.36f});
 
     return withView(std::move(scene), {-1.0, 1.3, 6.4}, {0.2, 1.15, 0}, 46);
 }
@@ -411,6 +426,7 @@ Scene makeCgalScene(const std::string& meshesDir, int leaves, uint64_t seed) {
     addLeaves(scene, clusters, leaves, 3, 0.16, 0.7f, 0.6f, rng, 0.4);
 
     scene.lights.push_back(directionalLight("Sun", {-0.35, -1.0, -0.3}, {1.0f, 0.95f, 0.86f}, 2.6f));
+    matchSky(scene, {0.42f, 0.40f, 0.34f}, Vec3d{0.35, 1.0, 0.3});
     Light lamp;
     lamp.name = "Lamp";
     lamp.type = LightType::Point;

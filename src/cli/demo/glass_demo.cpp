@@ -205,6 +205,8 @@ Scene makeGlassScene(const std::string& meshesDir) {
     block.target = {1.65, 0.6, -0.1};
     block.fovY = 36 * M_PI / 180;
     scene.cameras.push_back(block);
+    // Beyond the 8 x 8 tiles the sky's ground runs on to the horizon in the tiles' mean colour.
+    scene.settings.render.emplace_back("groundAlbedo", Vec3d{0.46, 0.455, 0.44});
     scene.validate();
     return scene;
 }
