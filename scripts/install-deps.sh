@@ -10,7 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libcgal-dev libgmp-dev libmpfr-dev libeigen3-dev
   libembree-dev clang-format time ccache zlib1g-dev libblosc-dev
   clang libclang-rt-14-dev
-  python3-dev pybind11-dev python3-numpy python3-pytest python3-distributed python3-openvdb
+  python3-dev pybind11-dev python3-numpy python3-pytest python3-distributed python3-zarr python3-openvdb
   python3-pip python3-setuptools python3-wheel python3-venv python3-mypy
   libsdl2-dev xvfb xdotool x11-apps
   python3-torch

@@ -3,6 +3,7 @@
 // CGAL in test_voxelize_oracle.cpp and test_voxelize_border.cpp), for every mode and tileable fill,
 // brick sizes that cut the meshes through vertices, edges and faces, every slicing axis; the
 // tiled solid against CGAL directly; what needs the whole grid is refused by name.
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <mutex>
@@ -288,6 +289,50 @@ TEST(TiledTest, InteriorBricksOfALargeGridAreUniformAndTheirCountGrowsWithTheSur
         // Mixed bricks grow like the surface: about 4x per doubling, never like the volume (8x).
         if (previous) { EXPECT_LE(mixed, 5 * previous) << n; }
         previous = mixed;
+    }
+}
+
+// What voxfx.dask's tasks do: each voxelizes a rectangle of stacks on its own (a fresh call, no
+// state from the others); the pieces together are the dense grid, and each brick comes exactly once.
+TEST(TiledTest, PiecesOfStacksVoxelizedOnTheirOwnAssembleIntoTheDenseGrid) {
+    VOXFX_REQUIRE_DATA("meshes/elephant.off");
+    const Mesh elephant = loadData("elephant.off");
+    FitOptions fit;
+    fit.resolution = 77;
+    const Frame frame = fitFrame(computeBounds(elephant.view()), fit);
+    for (const Fill fill : {Fill::Parity, Fill::Winding, Fill::Gwn}) {
+        VoxelizeOptions o;
+        o.fill = fill;
+        const VoxelGrid dense = voxelize(elephant.view(), frame, o);
+        const int64_t B = 16, sx = (frame.width() + B - 1) / B, sy = (frame.height() + B - 1) / B;
+        BitGrid bits(frame.width(), frame.height(), frame.depth());
+        const BitGridView out = bits.view();
+        std::vector<int> seen(size_t(sx * sy * ((frame.depth() + B - 1) / B)), 0);
+        std::mutex m;
+        // Rectangles of 2 x 3 stacks (the last ones clipped by the grid), one call each.
+        for (int64_t y0 = 0; y0 < sy; y0 += 3)
+            for (int64_t x0 = 0; x0 < sx; x0 += 2) {
+                TileOptions t;
+                t.brickSize = B;
+                t.stackX0 = x0;
+                t.stackX1 = x0 + 2;
+                t.stackY0 = y0;
+                t.stackY1 = y0 + 3;
+                voxelizeTiles(elephant.view(), frame, o, t, [&](const GridTile& tile) {
+                    std::lock_guard<std::mutex> lock(m);
+                    EXPECT_TRUE(tile.x0 / B >= x0 && tile.x0 / B < x0 + 2 && tile.y0 / B >= y0 &&
+                                tile.y0 / B < y0 + 3);
+                    ++seen[size_t(((tile.s0 / B) * sy + tile.y0 / B) * sx + tile.x0 / B)];
+                    for (int64_t y = 0; y < tile.height; ++y)
+                        for (int64_t x = 0; x < tile.width; ++x)
+                            for (int64_t s = 0; s < tile.depth; ++s)
+                                if (tile.uniform ? tile.value : tile.bits.get(x, y, s))
+                                    out.set(tile.x0 + x, tile.y0 + y, tile.s0 + s);
+                });
+            }
+        EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](int n) { return n == 1; }));
+        EXPECT_TRUE(bits == dense.bits)
+            << toString(fill) << ": pieces " << bits.count() << " cells, dense " << dense.bits.count();
     }
 }
 

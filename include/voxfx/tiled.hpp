@@ -64,6 +64,12 @@ struct TileOptions {
     /// and fragments of every worker thread) before the first brick is visited: what a caller that
     /// keeps results (a sparse tree) has left of its budget. Not owned.
     uint64_t* workingBytes = nullptr;
+    /// Only the stacks (bx, by) with stackX0 <= bx < stackX1 and stackY0 <= by < stackY1 are
+    /// voxelized and visited: one piece of the grid (a task of voxfx.dask.voxelize_grid). A stack's
+    /// bricks depend on the stack alone (its parity starts empty in front of its first brick), so
+    /// the pieces of a grid, run anywhere in any order, are the bricks of the whole run. Clipped to
+    /// the grid's stacks; the default (-1 ends) is every stack.
+    int64_t stackX0 = 0, stackY0 = 0, stackX1 = -1, stackY1 = -1;
 };
 
 /// One brick as `visit` sees it. Cell (x, y, s) of the brick is cell (x0 + x, y0 + y, s0 + s) of

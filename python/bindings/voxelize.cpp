@@ -1,5 +1,9 @@
-// Voxelization: voxelize (as `voxfx voxelize` does) and cuda_status.
+// Voxelization: voxelize (as `voxfx voxelize` does) and cuda_status; the two pieces of a grid
+// voxelized across a cluster (voxfx.dask.voxelize_grid): _grid_frame and _voxelize_stacks.
+#include <cstring>
+
 #include "common.hpp"
+#include "voxfx/tiled.hpp"
 
 namespace voxfx::python {
 namespace {
@@ -77,6 +81,92 @@ void warnIfStretched(const Frame& frame, const std::optional<std::vector<int64_t
     if (PyErr_WarnEx(PyExc_UserWarning, text.c_str(), 2) != 0) throw py::error_already_set();
 }
 
+// A frame as plain values, (lo, hi, axis, width, height, depth): what a task needs to rebuild it
+// exactly (Frame::orthographic, as SparseGrid's pickle does).
+py::tuple frameState(const Frame& f) {
+    return py::make_tuple(vec3(f.box().lo), vec3(f.box().hi), toString(f.axis()), f.width(), f.height(),
+                          f.depth());
+}
+
+Frame frameFromState(const py::tuple& t) {
+    if (t.size() != 6) throw ArgumentError("a frame is (lo, hi, axis, width, height, depth)");
+    const auto lo = t[0].cast<std::vector<double>>(), hi = t[1].cast<std::vector<double>>();
+    Box3d box;
+    box.lo = {lo.at(0), lo.at(1), lo.at(2)};
+    box.hi = {hi.at(0), hi.at(1), hi.at(2)};
+    return asArgument([&] {
+        return Frame::orthographic(box, parseAxis(t[2].cast<std::string>()), t[3].cast<int64_t>(),
+                                   t[4].cast<int64_t>(), t[5].cast<int64_t>());
+    });
+}
+
+// One brick as a task returns it: the packed bits copied out of the visitor's call.
+struct KeptBrick {
+    GridTile tile;
+    std::vector<uint64_t> words;
+};
+
+// The bricks of the stacks [sx0, sx1) x [sy0, sy1), in the grid's [x, y, z] order: a list of
+// (x0, y0, z0, value) with value a bool (a uniform brick) or a bool array (w, h, d).
+py::list voxelizeStacks(const PyMesh& mesh, const py::tuple& state, const std::vector<int64_t>& stacks,
+                        int64_t brick, const std::string& mode, const std::string& fill, int threads) {
+    if (stacks.size() != 4) throw ArgumentError("stacks must be (x0, y0, x1, y1)");
+    const Frame frame = frameFromState(state);
+    if (frame.axis() != Axis::Z) throw ArgumentError("the bricks of a grid are written along axis z only");
+    VoxelizeOptions vo;
+    asArgument([&] {
+        vo.mode = parseVoxelizeMode(mode);
+        vo.fill = parseFill(fill);
+    });
+    vo.threads = threads;
+    TileOptions to;
+    to.brickSize = brick;
+    to.stackX0 = stacks[0];
+    to.stackY0 = stacks[1];
+    to.stackX1 = stacks[2];
+    to.stackY1 = stacks[3];
+    std::vector<KeptBrick> kept;
+    std::mutex keptMutex;
+    interruptible([&](Cancel& cancel) {
+        vo.progress = &cancel;
+        voxelizeTiles(mesh.mesh.view(), frame, vo, to, [&](const GridTile& tile) {
+            KeptBrick k{tile, {}};
+            if (!tile.uniform) {
+                const BitGridView& b = tile.bits;
+                k.words.assign(b.words, b.words + b.columnCount() * b.wordsPerColumn);
+            }
+            k.tile.bits = {};
+            const std::lock_guard lock(keptMutex);
+            kept.push_back(std::move(k));
+        });
+    });
+    // The same order whatever the threads did: by stack, then slice.
+    std::sort(kept.begin(), kept.end(), [](const KeptBrick& a, const KeptBrick& b) {
+        return std::tie(a.tile.y0, a.tile.x0, a.tile.s0) < std::tie(b.tile.y0, b.tile.x0, b.tile.s0);
+    });
+    py::list out;
+    for (const KeptBrick& k : kept) {
+        const GridTile& t = k.tile;
+        py::object value;
+        if (t.uniform) {
+            value = py::bool_(t.value);
+        } else {
+            py::array_t<bool> a({py::ssize_t(t.width), py::ssize_t(t.height), py::ssize_t(t.depth)});
+            bool* o = a.mutable_data();
+            const int64_t wpc = (t.depth + 63) / 64;
+            for (int64_t x = 0; x < t.width; ++x)
+                for (int64_t y = 0; y < t.height; ++y) {
+                    const uint64_t* col = k.words.data() + (y * t.width + x) * wpc;
+                    bool* dst = o + (x * t.height + y) * t.depth;
+                    for (int64_t s = 0; s < t.depth; ++s) dst[s] = (col[s >> 6] >> (s & 63)) & 1u;
+                }
+            value = std::move(a);
+        }
+        out.append(py::make_tuple(t.x0, t.y0, t.s0, value));
+    }
+    return out;
+}
+
 } // namespace
 
 void bindVoxelize(py::module_& m) {
@@ -147,6 +237,51 @@ void bindVoxelize(py::module_& m) {
         "voxfx.SparseGrid voxelized tile by tile, no dense grid at any point (the same voxels; its "
         "coordinates() are the (N, 3) int32 cells; VOXFX_MEMORY_LIMIT caps it; like= takes no sparse "
         "grid). Ctrl-C stops it.");
+
+    m.def(
+        "_grid_frame",
+        [](const py::object& meshObj, std::optional<Int> resolution, std::optional<double> voxelSize,
+           std::optional<std::vector<int64_t>> dims, const py::object& bounds, Int margin, bool cube) {
+            const auto mesh = meshArgument(meshObj, py::none());
+            FitOptions fit = fitOptions(resolution, voxelSize, dims, bounds, margin, "z", cube);
+            fit.checkDenseMemory = false; // the grid is never whole in one process
+            const Frame frame = voxelizeFrame(*mesh, fit, py::none(), 0);
+            py::dict d;
+            d["frame"] = frameState(frame);
+            d["dims"] = py::make_tuple(frame.width(), frame.height(), frame.depth());
+            // Index-to-world of the voxel centres, the mesh's recentring added back.
+            const Frame world = mesh->shifted() ? frame.translated(mesh->origin) : frame;
+            py::list rows;
+            const Vec3d cell = world.cellSize(), lo = world.box().lo;
+            for (int r = 0; r < 4; ++r) {
+                py::list row;
+                for (int c = 0; c < 4; ++c)
+                    row.append(r == 3   ? (c == 3 ? 1.0 : 0.0)
+                               : c == r ? cell[r]
+                               : c == 3 ? lo[r] + 0.5 * cell[r]
+                                        : 0.0);
+                rows.append(row);
+            }
+            d["affine"] = rows;
+            return d;
+        },
+        py::arg("mesh"), py::kw_only(), py::arg("resolution") = py::none(),
+        py::arg("voxel_size") = py::none(), py::arg("dims") = py::none(), py::arg("bounds") = py::none(),
+        py::arg("margin") = 0, py::arg("cube") = false,
+        "voxfx.dask's planning step: the frame voxelize() fits with these arguments (axis z) as plain "
+        "values for _voxelize_stacks, its dims and the index-to-world affine of the voxel centres.");
+    m.def(
+        "_voxelize_stacks",
+        [](const py::object& meshObj, const py::tuple& frame, const std::vector<int64_t>& stacks, Int brick,
+           const std::string& mode, const std::string& fill, int threads) {
+            const auto mesh = meshArgument(meshObj, py::none());
+            return voxelizeStacks(*mesh, frame, stacks, brick, mode, fill, threads);
+        },
+        py::arg("mesh"), py::arg("frame"), py::arg("stacks"), py::kw_only(), py::arg("brick") = 128,
+        py::arg("mode") = "solid", py::arg("fill") = "auto", py::arg("threads") = 0,
+        "One task of voxfx.dask.voxelize_grid: the bricks of the stacks (x0, y0, x1, y1) (in bricks "
+        "along x and y) of the grid `frame` (from _grid_frame), voxelized on their own: a list of "
+        "(x0, y0, z0, value), value a bool for a uniform brick or a bool array indexed [x, y, z].");
 
     m.def(
         "cuda_status",

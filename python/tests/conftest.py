@@ -13,6 +13,10 @@ import time
 import pytest
 
 
+def pytest_configure(config):
+    config.addinivalue_line("markers", "slow: a long case, run by the ctest test python.pytest.slow (label slow)")
+
+
 def _data_dir():
     for var in ("VOXFX_DATA_DIR", "VOXFX_DATA_DIR_DEFAULT"):
         if os.environ.get(var):

@@ -1,7 +1,15 @@
 // voxfx voxelize MESH -o GRID — mesh to voxel grid in any mode, with the summary line; a volume
 // with --threshold T becomes a bit grid on its own lattice (voxelize_volume.cpp).
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <iomanip>
 #include <iostream>
+#include <sstream>
+#include <vector>
+
+#include <unistd.h>
 
 #include "cli_common.hpp"
 #include "grid_input.hpp"
@@ -21,7 +29,71 @@ struct VoxelizeArgs {
     bool quiet = false;
     bool volume = false; ///< --threshold given: the input is a volume
     double threshold = 0;
+    std::string scheduler; ///< -o GRID.zarr: the Dask scheduler's address (none: a local cluster)
+    int64_t brick = 128;   ///< -o GRID.zarr: the chunk edge
 };
+
+// -o GRID.zarr: one grid across a Dask cluster, brick by brick into a Zarr store. The work is
+// Python's (voxfx.dask.voxelize_grid: Dask, Zarr), so this command hands its arguments to
+// voxfx.dask._main in Python and becomes that process. The interpreter: VOXFX_PYTHON, else
+// Debian's /usr/bin/python3 (the one with Dask and Zarr), else python3 on PATH; voxfx's package:
+// the build tree's python/ beside this program, or the installed package this program is in.
+[[noreturn]] void runVoxelizeZarr(const VoxelizeArgs& a) {
+    if (a.volume) fail("-o ", a.output, ": volumes (--threshold) are not voxelized into a Zarr store");
+    if (a.choice.axis != "z" || a.choice.slicing != "uniform" || a.device != "cpu" || a.fit.padding ||
+        a.dense || a.choice.vdbFloat)
+        fail("-o ", a.output,
+             ": a Zarr grid is sliced along z, uniformly, on the CPU (no --axis, --slicing, ",
+             "--device, --padding, --dense or --vdb-float)");
+    const auto exact = [](double v) { // every digit: the same frame in Python
+        std::ostringstream o;
+        o << std::setprecision(17) << v;
+        return o.str();
+    };
+    // -c, not -m voxfx.dask: a local cluster's worker processes start by re-running the main
+    // module (multiprocessing's spawn), which must not be this run's.
+    std::vector<std::string> args = {"python3", "-c",
+                                     "import sys, voxfx.dask; sys.exit(voxfx.dask._main(sys.argv[1:]))"};
+    args.insert(args.end(), {"voxelize", a.input, "-o", a.output, "-m", a.choice.mode, "--fill",
+                             a.choice.fill, "--brick", std::to_string(a.brick)});
+    if (a.fit.voxelSize > 0) {
+        args.insert(args.end(), {"--voxel-size", exact(a.fit.voxelSize)});
+    } else if (a.fit.dims.size() == 3) {
+        args.push_back("--dims");
+        for (int64_t d : a.fit.dims) args.push_back(std::to_string(d));
+    } else {
+        args.insert(args.end(), {"-r", std::to_string(toFitOptions(a.fit, voxelizeFitChoices()).resolution)});
+    }
+    if (a.fit.bounds.size() == 6) {
+        args.push_back("--bounds");
+        for (double b : a.fit.bounds) args.push_back(exact(b));
+    }
+    if (a.fit.margin > 0) args.insert(args.end(), {"--margin", std::to_string(a.fit.margin)});
+    if (a.fit.cube) args.push_back("--cube");
+    if (!a.scheduler.empty()) args.insert(args.end(), {"--scheduler", a.scheduler});
+    if (a.quiet) args.push_back("-q");
+    // Where voxfx's Python package is, ahead of whatever PYTHONPATH holds.
+    std::error_code ec;
+    const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec),
+                                dir = exe.parent_path();
+    std::string path;
+    for (const std::filesystem::path& p : {dir / "python", dir.parent_path()})
+        if (std::filesystem::exists(p / "voxfx" / "dask.py", ec)) path += p.string() + ":";
+    const char* old = std::getenv("PYTHONPATH");
+    path += old ? old : "";
+    if (!path.empty()) setenv("PYTHONPATH", path.c_str(), 1);
+    const char* chosen = std::getenv("VOXFX_PYTHON");
+    const std::string python = chosen && *chosen                                 ? chosen
+                               : std::filesystem::exists("/usr/bin/python3", ec) ? "/usr/bin/python3"
+                                                                                 : "python3";
+    std::vector<char*> argv;
+    for (std::string& s : args) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    std::cout.flush();
+    execvp(python.c_str(), argv.data());
+    fail("-o ", a.output, ": cannot run ", python, " for the Zarr output (", std::strerror(errno),
+         "); it needs Python 3 with voxfx, Dask and Zarr (apt install python3-distributed python3-zarr)");
+}
 
 // --memory: the budget of every size check of the run, as VOXFX_MEMORY_LIMIT (which it sets, so
 // the library's checks and the tiles' budget all see it).
@@ -101,6 +173,8 @@ int runVoxelize(const VoxelizeArgs& a) {
         return runVoxelizeVolume(
             {a.input, a.output, a.threshold, a.choice.axis, a.choice.vdbFloat, a.threads, a.quiet});
     }
+    if (a.output.ends_with(".zarr") || a.output.ends_with(".zarr/")) runVoxelizeZarr(a);
+    if (!a.scheduler.empty()) fail("--scheduler needs -o GRID.zarr (one grid across a Dask cluster)");
     const auto t0 = Clock::now();
     // Everything that can be checked before the work starts is checked here, so a bad output
     // name does not cost a voxelization.
@@ -246,7 +320,14 @@ Volumes (--threshold T): the input is a scalar volume (.inr .inr.gz .nrrd .nhdr 
   and mesh). The fitting options, --mode, --fill, --slicing and --device do not apply.
 
 Formats (by extension): .binvox .vdb (BoolGrid "voxels", or float with --vdb-float)
-  .nrrd (uint8) .ply/.obj (mesh of the filled voxels' exposed faces). Written atomically.)";
+  .nrrd (uint8) .ply/.obj (mesh of the filled voxels' exposed faces). Written atomically.
+
+One grid across a Dask cluster (-o GRID.zarr): bricks of --brick cells (default 128) voxelized
+  as Dask tasks (voxfx.dask.voxelize_grid) on the cluster of --scheduler ADDRESS (none: a local
+  cluster of this machine's cores) into a Zarr store: bool array "voxels" indexed [x, y, z], one
+  blosc-compressed chunk per brick, empty bricks not written, the affine in its attributes;
+  dask.array.from_zarr(GRID.zarr, component="voxels") reads it lazily. A rerun skips the bricks
+  already done. Needs python3-distributed and python3-zarr; fills parity, winding and gwn.)";
 
 const Command kVoxelize{
     "voxelize", "Voxelize a mesh into a grid file (.binvox .vdb .nrrd .ply .obj .npy .npz)",
@@ -256,7 +337,8 @@ const Command kVoxelize{
         app.add_option("MESH", a->input,
                        "Mesh file (off, obj, ply, stl, gltf, glb, ...), or a volume with --threshold")
             ->required();
-        app.add_option("-o,--output", a->output, "Output grid: .binvox .vdb .nrrd .ply .obj .npy .npz")
+        app.add_option("-o,--output", a->output,
+                       "Output grid: .binvox .vdb .nrrd .ply .obj .npy .npz, or .zarr (see below)")
             ->required();
         addFitOptions(app, a->fit, voxelizeFitChoices());
         addVoxelizeChoiceOptions(app, a->choice);
@@ -268,6 +350,11 @@ const Command kVoxelize{
         app.add_option("--memory", a->memory, "Memory budget: bytes, or K, M, G, T (see below)");
         app.add_flag("--dense", a->dense, "Build the whole grid first for .vdb too (the path before tiles)");
         app.add_flag("-q,--quiet", a->quiet, "No summary or progress");
+        app.add_option("--scheduler", a->scheduler,
+                       "-o GRID.zarr: the Dask scheduler's address (tcp://host:8786); none: a local cluster");
+        app.add_option("--brick", a->brick, "-o GRID.zarr: the chunk edge in cells (a multiple of 8)")
+            ->default_val(128)
+            ->check(CLI::PositiveNumber);
         CLI::Option* threshold =
             app.add_option("--threshold", a->threshold,
                            "The input is a volume: fill the cells whose sample is >= this value (see below)");

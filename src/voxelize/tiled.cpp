@@ -448,7 +448,13 @@ void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
         std::atomic<bool> stop{false}; // an error: the first one is rethrown
         std::mutex errorMutex;
         std::exception_ptr error;
-        const int64_t stacks = stacksX * stacksY;
+        // The stacks asked for (TileOptions' range, clipped to the grid's), numbered k = 0.. in
+        // row-major order within the range.
+        const int64_t ax0 = std::clamp<int64_t>(tiles.stackX0, 0, stacksX),
+                      ay0 = std::clamp<int64_t>(tiles.stackY0, 0, stacksY);
+        const int64_t ax1 = tiles.stackX1 < 0 ? stacksX : std::clamp<int64_t>(tiles.stackX1, ax0, stacksX),
+                      ay1 = tiles.stackY1 < 0 ? stacksY : std::clamp<int64_t>(tiles.stackY1, ay0, stacksY);
+        const int64_t rangeX = ax1 - ax0, stacks = rangeX * (ay1 - ay0);
         ProgressSteps steps(options.progress, stacks);
         parallelFor(0, stacks, 1, [&](int64_t sb, int64_t se) {
             Stack st;
@@ -459,9 +465,10 @@ void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
             st.edges = &edges;
             st.fullFrame = &frame;
             st.mesh = &mesh;
-            for (int64_t k = sb; k < se && !stop.load(std::memory_order_relaxed) && !steps.cancelled(); ++k) {
+            for (int64_t i = sb; i < se && !stop.load(std::memory_order_relaxed) && !steps.cancelled(); ++i) {
                 try {
-                    const int64_t x0 = (k % stacksX) * B, y0 = (k / stacksX) * B;
+                    const int64_t bx = ax0 + i % rangeX, by = ay0 + i / rangeX, k = by * stacksX + bx;
+                    const int64_t x0 = bx * B, y0 = by * B;
                     st.own = {x0, y0, std::min(B, W - x0), std::min(B, H - y0)};
                     const int64_t gx0 = std::max<int64_t>(0, x0 - halo),
                                   gy0 = std::max<int64_t>(0, y0 - halo);
