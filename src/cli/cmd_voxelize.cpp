@@ -86,6 +86,7 @@ struct VoxelizeArgs {
     const std::string python = chosen && *chosen                                 ? chosen
                                : std::filesystem::exists("/usr/bin/python3", ec) ? "/usr/bin/python3"
                                                                                  : "python3";
+    args[0] = python; // sys.executable, which a local cluster's worker processes are started with
     std::vector<char*> argv;
     for (std::string& s : args) argv.push_back(s.data());
     argv.push_back(nullptr);
