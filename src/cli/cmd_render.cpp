@@ -89,8 +89,8 @@ const char* kRenderHelp = R"(
 A scene without lights is lit by the sky's sun (Preetham's daylight: --sun-elevation, --sun-azimuth,
 --turbidity) or by an environment map's own sun (its brightest region, taken out of its ambient
 light). The background, what glass reflects and the ambient light all come from that one
-environment (--sky, --sky-light; below the horizon a ground of --ground-albedo). The exposure is
-automatic (the frame's log-average luminance to 0.18) unless --exposure gives one.
+environment (--sky, --sky-light; below the horizon a ground of --ground-albedo). --exposure 0
+makes the exposure automatic (the frame's log-average luminance to 0.18); the default is 1.
 Settings a JSON scene file gives under "render" (the options above, by their camelCase names:
 "gridResolution", "shadows", ...) are used unless a flag overrides them. An option of another
 shadow kind or glass method than the chosen ones does nothing (a line on stderr says so).
