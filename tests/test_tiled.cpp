@@ -26,6 +26,15 @@ struct Assembled {
     int64_t bricks = 0, uniform = 0;
 };
 
+// Sets the brick's cells in `out`, the grid of the whole frame.
+void paintTile(const GridTile& tile, const BitGridView& out) {
+    for (int64_t y = 0; y < tile.height; ++y)
+        for (int64_t x = 0; x < tile.width; ++x)
+            for (int64_t s = 0; s < tile.depth; ++s)
+                if (tile.uniform ? tile.value : tile.bits.get(x, y, s))
+                    out.set(tile.x0 + x, tile.y0 + y, tile.s0 + s);
+}
+
 // Every brick written into one grid of the frame's size (bricks of different stacks own different
 // columns; one stack's bricks come in slice order on one thread, so plain writes are safe).
 Assembled assemble(const MeshView& mesh, const Frame& frame, const VoxelizeOptions& o, int64_t brick) {
@@ -41,11 +50,7 @@ Assembled assemble(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
         EXPECT_EQ(tile.bits.words == nullptr, tile.uniform);
         EXPECT_TRUE(tile.width > 0 && tile.height > 0 && tile.depth > 0 && tile.width <= brick &&
                     tile.height <= brick && tile.depth <= brick);
-        for (int64_t y = 0; y < tile.height; ++y)
-            for (int64_t x = 0; x < tile.width; ++x)
-                for (int64_t s = 0; s < tile.depth; ++s)
-                    if (tile.uniform ? tile.value : tile.bits.get(x, y, s))
-                        out.set(tile.x0 + x, tile.y0 + y, tile.s0 + s);
+        paintTile(tile, out);
         if (!tile.uniform) { // padding bits stay zero, as in every slicemap
             for (int64_t c = 0; c < tile.bits.columnCount(); ++c)
                 EXPECT_EQ(tile.bits.column(c)[tile.bits.wordsPerColumn - 1] & ~tile.bits.lastWordMask(), 0u);
@@ -323,11 +328,7 @@ TEST(TiledTest, PiecesOfStacksVoxelizedOnTheirOwnAssembleIntoTheDenseGrid) {
                     EXPECT_TRUE(tile.x0 / B >= x0 && tile.x0 / B < x0 + 2 && tile.y0 / B >= y0 &&
                                 tile.y0 / B < y0 + 3);
                     ++seen[size_t(((tile.s0 / B) * sy + tile.y0 / B) * sx + tile.x0 / B)];
-                    for (int64_t y = 0; y < tile.height; ++y)
-                        for (int64_t x = 0; x < tile.width; ++x)
-                            for (int64_t s = 0; s < tile.depth; ++s)
-                                if (tile.uniform ? tile.value : tile.bits.get(x, y, s))
-                                    out.set(tile.x0 + x, tile.y0 + y, tile.s0 + s);
+                    paintTile(tile, out);
                 });
             }
         EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](int n) { return n == 1; }));
