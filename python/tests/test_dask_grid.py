@@ -143,7 +143,9 @@ def test_a_run_killed_half_way_gives_the_same_store_after_a_rerun(tmp_path, data
     before = int(zarr.open_group(store, mode="r")["done"][:].sum())
     summary = voxfx.dask.voxelize_grid(path, 384, client, store, **args)
     assert summary["tasks"] == tasks
-    assert summary["skipped"] == before and before >= tasks // 4
+    # Tasks the killed driver had started may still finish and mark themselves after `before` was
+    # read: the rerun skips at least what was marked then.
+    assert summary["skipped"] >= before >= tasks // 4
     reference = voxfx.voxelize(voxfx.load_mesh(path), resolution=384, sparse=True).to_grid()
     _expect_store_equals(store, reference)
     # A third run has nothing left to do.
