@@ -1,7 +1,8 @@
 // The smallest program that renders: load a scene (a glTF or JSON scene, or any mesh loadMesh
 // reads), take the options its file states, render it from its first camera (or the default one)
-// with transmittance shadows, and write a PNG. It includes render.hpp and the two file headers:
-// not the techniques (BENCHMARKS.md, "Public headers", times what compiling this costs).
+// with transmittance shadows, and write a PNG (render() tone-maps filmic, as for a display
+// format). It includes render.hpp and the two file headers, not the techniques: BENCHMARKS.md
+// ("Public headers") times what compiling it costs.
 //
 //   build/render_minimal data/meshes/bunny00.off bunny.png
 #include <cstdio>
@@ -24,7 +25,6 @@ int main(int argc, char** argv) {
         options.width = 640;
         options.height = 480;
         voxfx::setRenderOption(options, "gridResolution", voxfx::OptionValue(int64_t(128)));
-        options.toneMap = voxfx::toneMapForImage(options.toneMap, argv[2]);
 
         const voxfx::Camera camera =
             voxfx::sceneCamera(scene, 0, double(options.width) / double(options.height));
