@@ -1,5 +1,5 @@
 #!/bin/bash
-# What compiling a program that renders costs, per version of include/ (BENCHMARKS.md, "Public
+# What compiling a program that renders costs, per version of include/ (BENCHMARKS.md, "#36 public
 # headers"). Usage:
 #   bench/header_cost.sh ROUNDS NAME=INCLUDE_DIR [NAME=INCLUDE_DIR ...]
 # e.g. the committed headers against an older commit's:

@@ -2,7 +2,7 @@
 // reads), take the options its file states, render it from its first camera (or the default one)
 // with transmittance shadows, and write a PNG (render() tone-maps filmic, as for a display
 // format). It includes render.hpp and the two file headers, not the techniques: BENCHMARKS.md
-// ("Public headers") times what compiling it costs.
+// ("#36 public headers") times what compiling it costs.
 //
 //   build/render_minimal data/meshes/bunny00.off bunny.png
 #include <cstdio>
