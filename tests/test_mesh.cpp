@@ -253,6 +253,34 @@ TEST(MeshTest, TopologyMatchesBruteForceOnRandomMeshes) {
     }
 }
 
+TEST(MeshTest, TopologyOfFansAroundOneVertexMatchesBruteForce) {
+    // Every edge's uses are summed at its larger endpoint, one vertex's edges at a time: a hub
+    // with thousands of edges (a cone's apex), closed or with some spokes used three times, and
+    // after it a small mesh (the calls reuse their scratch memory), against the brute force.
+    for (const int spokes : {3, 17, 2000}) {
+        for (const bool fins : {false, true}) {
+            Mesh m;
+            m.positions.push_back({0, 0, 1});  // the apex
+            m.positions.push_back({0, 0, -1}); // the bottom's centre
+            for (int k = 0; k < spokes; ++k) {
+                const double a = 2 * 3.141592653589793 * k / spokes;
+                m.positions.push_back({float(std::cos(a)), float(std::sin(a)), 0});
+            }
+            for (int k = 0; k < spokes; ++k) {
+                const auto p = uint32_t(2 + k), q = uint32_t(2 + (k + 1) % spokes);
+                m.indices.insert(m.indices.end(), {0, p, q, 1, q, p});
+                if (fins && k % 7 == 0) m.indices.insert(m.indices.end(), {0, p, 1});
+            }
+            const MeshTopology want = bruteForceTopology(m);
+            SCOPED_TRACE(std::to_string(spokes) + (fins ? " spokes with fins" : " spokes"));
+            expectTopology(analyzeTopology(m.view()), want.edges, want.boundaryEdges, want.nonManifoldEdges,
+                           want.misorientedEdges);
+            EXPECT_EQ(want.closed(), !fins);
+            expectTopology(analyzeTopology(unitCube().view()), 18, 0, 0, 0);
+        }
+    }
+}
+
 TEST(MeshTest, TopologySkipsTrianglesWithOutOfRangeIndices) {
     Mesh m = unitCube();
     m.indices.insert(m.indices.end(), {0, 1, 99});

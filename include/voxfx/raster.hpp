@@ -207,6 +207,10 @@ TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsP
                       int64_t colsPerTile = 0, int64_t grow = 0,
                       const std::function<void(int64_t entries)>& counted = {});
 
+/// Gives the set-up's and the bins' memory back for the next call's (no page faults there);
+/// they are left empty. `bins` may be null.
+void recycle(RasterSetup& setup, TileBins* bins);
+
 } // namespace detail
 
 /// Rasterizes `mesh` over `frame`'s columns and hands fragments or spans to `consumer`, tile by

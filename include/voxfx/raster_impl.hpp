@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <mutex>
 
@@ -177,15 +178,23 @@ VOXFX_HOSTDEV void rasterizeCenter(const RasterTriangle& t, const FrameView& fra
         // CanonicalEdge::side, so shared edges still agree bit for bit.
         const double rowTerm[3] = {edges[0].dx * (sy - edges[0].ay), edges[1].dx * (sy - edges[1].ay),
                                    edges[2].dx * (sy - edges[2].ay)};
+        // The depth's row part, t.w[0] + gy (sy - y0), once per row: the sum below is evaluated
+        // left to right, so the fragment's depth is the same double as summed in one expression.
+        double rowW = 0;
+        bool haveRowW = false;
         auto emit = [&](int64_t x) {
             const double sx = double(x) + 0.5;
-            if (!havePlane) {
-                const double uw = t.w[1] - t.w[0], vw = t.w[2] - t.w[0];
-                gx = (uw * vy - vw * uy) / det;
-                gy = (ux * vw - vx * uw) / det;
-                havePlane = true;
+            if (!haveRowW) {
+                if (!havePlane) {
+                    const double uw = t.w[1] - t.w[0], vw = t.w[2] - t.w[0];
+                    gx = (uw * vy - vw * uy) / det;
+                    gy = (ux * vw - vx * uw) / det;
+                    havePlane = true;
+                }
+                rowW = t.w[0] + gy * (sy - t.y[0]);
+                haveRowW = true;
             }
-            const double w = t.w[0] + gy * (sy - t.y[0]) + gx * (sx - t.x[0]);
+            const double w = rowW + gx * (sx - t.x[0]);
             sink.fragment(x, y, perspective ? 1.0 / w : w, t.index, t.front);
         };
         int64_t x = xb;
@@ -201,8 +210,15 @@ VOXFX_HOSTDEV void rasterizeCenter(const RasterTriangle& t, const FrameView& fra
                 const V4d e = (rowTerm[k] - edges[k].dy * (sx - edges[k].ax)) * inward[k];
                 inside &= (e > 0) | ((e == 0) & (tieInside[k] ? V4l{-1, -1, -1, -1} : V4l{0, 0, 0, 0}));
             }
+#ifdef __AVX__
+            // The covered lanes as bits (the sign bit of each all-ones lane), lowest first.
+            for (unsigned bits = unsigned(__builtin_ia32_movmskpd256(V4d(inside))); bits != 0;
+                 bits &= bits - 1)
+                emit(x + std::countr_zero(bits));
+#else
             for (int lane = 0; lane < 4; ++lane)
                 if (inside[lane]) emit(x + lane);
+#endif
         }
 #endif
         for (; x <= xe; ++x) {
@@ -426,7 +442,7 @@ void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& op
     auto tileAt = [&](int64_t index) {
         return Tile{index, index * rowsPerTile, std::min(H, (index + 1) * rowsPerTile)};
     };
-    const detail::RasterSetup setup = detail::prepareVertices(frame, mesh, options.fullLine);
+    detail::RasterSetup setup = detail::prepareVertices(frame, mesh, options.fullLine);
     const FrameView& view = setup.frame;
 
     if constexpr (DirectConsumer<Consumer>) {
@@ -456,11 +472,12 @@ void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& op
                 }
             });
             if (steps.cancelled()) fail("cancelled");
+            detail::recycle(setup, nullptr);
             return;
         }
     }
 
-    const detail::TileBins bins = detail::binTriangles(setup, options.coverage, rowsPerTile);
+    detail::TileBins bins = detail::binTriangles(setup, options.coverage, rowsPerTile);
     ProgressSteps steps(options.progress, bins.tileCount);
     parallelFor(0, bins.tileCount, 1, [&](int64_t tb, int64_t te) {
         for (int64_t tile = tb; tile < te && !steps.cancelled(); ++tile) {
@@ -475,6 +492,7 @@ void rasterize(const Frame& frame, const MeshView& mesh, const RasterOptions& op
         }
     });
     if (steps.cancelled()) fail("cancelled");
+    detail::recycle(setup, &bins);
 }
 
 template <Coverage C, TileConsumer Consumer>

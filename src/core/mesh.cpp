@@ -13,6 +13,7 @@
 #include <cstring>
 #include <vector>
 
+#include "core/scratch.hpp"
 #include "voxfx/error.hpp"
 
 namespace voxfx {
@@ -81,7 +82,8 @@ constexpr std::size_t kMaxMergedVertices = 0xFFFFFFFFu;
 // Maps each of the first n vertices to the first vertex with a bit-identical position (after
 // turning -0 into +0, the same point), in O(n) with an open-addressing hash table.
 std::vector<uint32_t> mergeIdenticalPositions(const MeshView& mesh, std::size_t n) {
-    std::vector<uint32_t> remap(n);
+    std::vector<uint32_t> remap = detail::Scratch<uint32_t>::take(n);
+    remap.resize(n);
     auto key = [&](std::size_t v) {
         const float* p = vertexPtr(mesh, v);
         std::array<uint32_t, 3> k;
@@ -91,7 +93,8 @@ std::vector<uint32_t> mergeIdenticalPositions(const MeshView& mesh, std::size_t 
     const std::size_t capacity = std::bit_ceil(2 * n);
     const std::size_t mask = capacity - 1;
     constexpr uint32_t kEmpty = ~uint32_t(0);
-    std::vector<uint32_t> table(capacity, kEmpty);
+    std::vector<uint32_t> table = detail::Scratch<uint32_t>::take(capacity);
+    table.assign(capacity, kEmpty);
     for (std::size_t v = 0; v < n; ++v) {
         const auto k = key(v);
         // Multiplicative hash of the 96 bits (odd 64-bit constants of xxHash), high bits folded in.
@@ -113,18 +116,32 @@ std::vector<uint32_t> mergeIdenticalPositions(const MeshView& mesh, std::size_t 
             slot = (slot + 1) & mask;
         }
     }
+    detail::Scratch<uint32_t>::give(std::move(table));
     return remap;
 }
 
-// Classifies the edges whose smaller endpoint is one vertex: [begin, end) holds, per directed use
-// of such an edge, (larger endpoint << 1 | backward), in any order; sorting groups each edge's uses.
-template <class Entry> void classifyEdgesOfVertex(Entry* begin, Entry* end, MeshTopology& topo) {
-    if (end - begin > 1) std::sort(begin, end);
-    for (Entry* i = begin; i != end;) {
-        Entry* j = i;
-        std::size_t backward = 0;
-        while (j != end && (*j >> 1) == (*i >> 1)) backward += *j++ & 1;
-        const std::size_t uses = std::size_t(j - i);
+// Classifies the edges whose smaller endpoint is vertex v: [begin, end) holds, per directed use
+// of such an edge, (larger endpoint << 1 | backward), in any order. Without sorting: the uses of
+// an edge are summed at its larger endpoint w (sums[w] = uses << 32 | backward uses), which
+// mark[w] stamps with v + 1 while the sum is v's (0: free); a second pass classifies each edge
+// at its first use and frees the stamp. Both arrays hold n entries.
+template <class Entry>
+void classifyEdgesOfVertex(std::size_t v, const Entry* begin, const Entry* end, uint32_t* mark,
+                           uint64_t* sums, MeshTopology& topo) {
+    const auto stamp = uint32_t(v + 1);
+    for (const Entry* i = begin; i != end; ++i) {
+        const std::size_t w = std::size_t(*i >> 1);
+        if (mark[w] != stamp) {
+            mark[w] = stamp;
+            sums[w] = 0;
+        }
+        sums[w] += (uint64_t(1) << 32) | uint64_t(*i & 1);
+    }
+    for (const Entry* i = begin; i != end; ++i) {
+        const std::size_t w = std::size_t(*i >> 1);
+        if (mark[w] != stamp) continue;
+        mark[w] = 0;
+        const uint64_t uses = sums[w] >> 32, backward = sums[w] & 0xFFFFFFFFu;
         ++topo.edges;
         if (uses == 1)
             ++topo.boundaryEdges;
@@ -132,11 +149,10 @@ template <class Entry> void classifyEdgesOfVertex(Entry* begin, Entry* end, Mesh
             ++topo.nonManifoldEdges;
         else if (backward != 1)
             ++topo.misorientedEdges;
-        i = j;
     }
 }
 
-// Edge classification in O(V + T) plus small per-vertex sorts: directed edges are bucketed by
+// Edge classification in O(V + T): directed edges are bucketed by
 // their smaller endpoint with a counting sort (count, prefix sum, fill), as meshoptimizer builds
 // its adjacency. Entry is uint32_t while vertex ids fit 31 bits, uint64_t beyond.
 template <class Entry>
@@ -147,9 +163,9 @@ void classifyEdges(const MeshView& mesh, const std::vector<uint32_t>& remap, Mes
     auto forEachEdge = [&](auto&& f) {
         for (std::size_t t = 0; t < mesh.triangleCount; ++t) {
             const uint32_t* tri = mesh.indices + 3 * t;
-            if (tri[0] >= n || tri[1] >= n || tri[2] >= n) continue;
+            if (std::max({tri[0], tri[1], tri[2]}) >= n) continue;
             const uint32_t v[3] = {remap[tri[0]], remap[tri[1]], remap[tri[2]]};
-            if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
+            if ((v[0] == v[1]) | (v[1] == v[2]) | (v[0] == v[2])) continue;
             for (int c = 0; c < 3; ++c) {
                 const uint32_t p = v[c], q = v[(c + 1) % 3];
                 f(std::min(p, q), std::max(p, q), p > q);
@@ -157,15 +173,26 @@ void classifyEdges(const MeshView& mesh, const std::vector<uint32_t>& remap, Mes
         }
     };
     // After the fill, start[v] is where vertex v's bucket ends and start[v - 1] where it begins.
-    std::vector<std::size_t> start(n + 1, 0);
+    std::vector<uint64_t> start = detail::Scratch<uint64_t>::take(n + 1);
+    start.assign(n + 1, 0);
     forEachEdge([&](uint32_t lo, uint32_t, bool) { ++start[lo + 1]; });
     for (std::size_t v = 0; v < n; ++v) start[v + 1] += start[v];
-    std::vector<Entry> entries(start[n]);
+    std::vector<Entry> entries = detail::Scratch<Entry>::take(start[n]);
+    entries.resize(start[n]);
     forEachEdge([&](uint32_t lo, uint32_t hi, bool backward) {
         entries[start[lo]++] = Entry(hi) << 1 | Entry(backward);
     });
+    std::vector<uint32_t> mark = detail::Scratch<uint32_t>::take(n);
+    mark.assign(n, 0);
+    std::vector<uint64_t> sums = detail::Scratch<uint64_t>::take(n);
+    sums.resize(n);
     for (std::size_t v = 0; v < n; ++v)
-        classifyEdgesOfVertex(entries.data() + (v == 0 ? 0 : start[v - 1]), entries.data() + start[v], topo);
+        classifyEdgesOfVertex(v, entries.data() + (v == 0 ? 0 : start[v - 1]), entries.data() + start[v],
+                              mark.data(), sums.data(), topo);
+    detail::Scratch<uint64_t>::give(std::move(start));
+    detail::Scratch<Entry>::give(std::move(entries));
+    detail::Scratch<uint32_t>::give(std::move(mark));
+    detail::Scratch<uint64_t>::give(std::move(sums));
 }
 
 } // namespace
@@ -243,11 +270,12 @@ MeshTopology analyzeTopology(const MeshView& mesh) {
     // Indices are 32-bit, so at most 2^32 - 1 vertices can be told apart (one value marks empty).
     const std::size_t n = std::min<std::size_t>(mesh.vertexCount, kMaxMergedVertices);
     if (mesh.triangleCount == 0 || n == 0) return topo;
-    const std::vector<uint32_t> remap = mergeIdenticalPositions(mesh, n);
+    std::vector<uint32_t> remap = mergeIdenticalPositions(mesh, n);
     if (n <= (std::size_t(1) << 31))
         classifyEdges<uint32_t>(mesh, remap, topo);
     else
         classifyEdges<uint64_t>(mesh, remap, topo);
+    detail::Scratch<uint32_t>::give(std::move(remap));
     return topo;
 }
 

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include "core/scratch.hpp"
+
 namespace voxfx {
 
 const char* toString(Coverage c) { return enumName(c, kCoverageNames); }
@@ -60,11 +62,12 @@ RasterSetup prepareVertices(const Frame& frame, const MeshView& mesh, bool fullL
     RasterSetup s;
     s.frame = frame.view();
     s.mesh = &mesh;
+    s.vertices = Scratch<Vec3d>::take(mesh.vertexCount); // memory of an earlier call: no page faults
     s.vertices.resize(mesh.vertexCount);
     s.clipDepth = clipDepthOf(frame, mesh, fullLine);
     Vec3d* out = s.vertices.data();
     const Projection pr = frame.projection();
-    parallelFor(0, int64_t(mesh.vertexCount), 65536, [&](int64_t b, int64_t e) {
+    parallelFor(0, int64_t(mesh.vertexCount), 8192, [&](int64_t b, int64_t e) {
         for (int64_t i = b; i < e; ++i) out[i] = projectVertex(pr, mesh.vertex(size_t(i)));
     });
     return s;
@@ -149,8 +152,10 @@ TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsP
 
     // Pass 1: each triangle's tile range (set up once, kept for pass 2) and counts per
     // (chunk, tile).
-    std::vector<TileSpan> spans(static_cast<size_t>(T));
-    std::vector<int64_t> counts(size_t(chunks) * tiles, 0);
+    std::vector<TileSpan> spans = Scratch<TileSpan>::take(size_t(T));
+    spans.resize(static_cast<size_t>(T));
+    std::vector<int64_t> counts = Scratch<int64_t>::take(size_t(chunks) * tiles);
+    counts.assign(size_t(chunks) * tiles, 0);
     parallelFor(0, chunks, 1, [&](int64_t cb, int64_t ce) {
         for (int64_t c = cb; c < ce; ++c) {
             int64_t* row = counts.data() + size_t(c) * tiles;
@@ -163,8 +168,10 @@ TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsP
         }
     });
     // Exclusive prefix sums: tile-major, then chunk order, so each tile lists triangles in order.
+    bins.offsets = Scratch<int64_t>::take(tiles + 1);
     bins.offsets.assign(tiles + 1, 0);
-    std::vector<int64_t> cursor(size_t(chunks) * tiles, 0);
+    std::vector<int64_t> cursor = Scratch<int64_t>::take(size_t(chunks) * tiles);
+    cursor.assign(size_t(chunks) * tiles, 0);
     int64_t total = 0;
     for (size_t k = 0; k < tiles; ++k) {
         bins.offsets[k] = total;
@@ -175,6 +182,7 @@ TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsP
     }
     bins.offsets[tiles] = total;
     if (counted) counted(total);
+    bins.entries = Scratch<uint32_t>::take(size_t(total));
     bins.entries.resize(size_t(total));
     // Pass 2: fill.
     parallelFor(0, chunks, 1, [&](int64_t cb, int64_t ce) {
@@ -188,7 +196,17 @@ TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsP
             }
         }
     });
+    Scratch<TileSpan>::give(std::move(spans));
+    Scratch<int64_t>::give(std::move(counts));
+    Scratch<int64_t>::give(std::move(cursor));
     return bins;
+}
+
+void recycle(RasterSetup& setup, TileBins* bins) {
+    Scratch<Vec3d>::give(std::move(setup.vertices));
+    if (!bins) return;
+    Scratch<int64_t>::give(std::move(bins->offsets));
+    Scratch<uint32_t>::give(std::move(bins->entries));
 }
 
 } // namespace voxfx::detail
