@@ -121,6 +121,28 @@ bool contrastsWithNeighbours(const FrameState& f, int64_t cx, int64_t cy) {
     return false;
 }
 
+int cellSamples(const FrameState& f, int64_t cx, int64_t cy, std::array<std::size_t, 64>& out) {
+    const int a = f.adaptive;
+    const int64_t W = f.width;
+    if (a <= 1) {
+        out[0] = std::size_t(cy * W + cx);
+        return 1;
+    }
+    const uint8_t kind = f.refined[size_t(cy * (W / a) + cx)];
+    const std::size_t rep = representativeSample(f, cx, cy);
+    int n = 0;
+    for (int dy = 0; dy < a; ++dy)
+        for (int dx = 0; dx < a; ++dx) {
+            const bool shaded = kind == kEveryRefinedSample ? true
+                                : kind == kRookSamples      ? dx == rookColumn(a, dy)
+                                                            : dx == a / 2 && dy == a / 2;
+            if (shaded) out[size_t(n++)] = std::size_t((cy * a + dy) * W + cx * a + dx);
+        }
+    for (int k = 1; k < n; ++k)
+        if (out[size_t(k)] == rep) std::swap(out[0], out[size_t(k)]);
+    return n;
+}
+
 int rookColumn(int s, int dy) {
     const int c = 2 * dy;
     return (s % 2 ? c : c + (c >= s)) % s;

@@ -3,6 +3,7 @@
 // filmic tone map (see render.hpp).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -47,6 +48,12 @@ bool contrastsWithNeighbours(const FrameState& frame, int64_t cx, int64_t cy);
 
 /// Whether the passes shade sample (x, y) (every sample when adaptive is 1).
 bool shadedSample(const FrameState& frame, int64_t x, int64_t y);
+
+/// The samples of cell (cx, cy) the passes shade, as sample indices into `out`, its representative
+/// first where it is one of them, the others in row order except that the one the representative
+/// displaced takes its place: every one of an edge cell, the N-rooks samples of a glass cell, else
+/// the representative. Returns their count.
+int cellSamples(const FrameState& frame, int64_t cx, int64_t cy, std::array<std::size_t, 64>& out);
 
 /// The column of the N-rooks sample in row dy of an s x s cell (a permutation of 0..s-1).
 int rookColumn(int s, int dy);
