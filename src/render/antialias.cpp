@@ -107,18 +107,18 @@ std::size_t neighbourShowing(const FrameState& f, int64_t cx, int64_t cy, uint32
     return kNoSample;
 }
 
-bool contrastsWithNeighbours(const FrameState& f, int64_t cx, int64_t cy) {
+bool curvesAcrossNeighbours(const FrameState& f, int64_t cx, int64_t cy) {
     const int a = f.adaptive;
     const int64_t cw = f.width / a, ch = f.height / a;
     const ToneMap tm = f.options.toneMap;
     const float own = shownLuma(f.shaded[representativeSample(f, cx, cy)], tm);
-    const int64_t nx[4] = {cx - 1, cx + 1, cx, cx}, ny[4] = {cy, cy, cy - 1, cy + 1};
-    for (int k = 0; k < 4; ++k) {
-        if (nx[k] < 0 || ny[k] < 0 || nx[k] >= cw || ny[k] >= ch) continue;
-        if (std::abs(shownLuma(f.shaded[representativeSample(f, nx[k], ny[k])], tm) - own) > kRefineContrast)
-            return true;
-    }
-    return false;
+    // A neighbour past the image's side counts as the cell itself (a one-sided difference).
+    const auto at = [&](int64_t x, int64_t y) {
+        return x < 0 || y < 0 || x >= cw || y >= ch ? own
+                                                    : shownLuma(f.shaded[representativeSample(f, x, y)], tm);
+    };
+    return std::abs(at(cx - 1, cy) + at(cx + 1, cy) - 2 * own) > kRefineContrast ||
+           std::abs(at(cx, cy - 1) + at(cx, cy + 1) - 2 * own) > kRefineContrast;
 }
 
 int cellSamples(const FrameState& f, int64_t cx, int64_t cy, std::array<std::size_t, 64>& out) {

@@ -202,7 +202,7 @@ void traceCells(FrameState& f, const ShowsGlass& showsGlass, const Trace& trace)
 }
 
 // Adaptive anti-aliasing inside glass: a glass cell shaded once (no edge) whose light through it
-// differs from a neighbour's (contrastsWithNeighbours, on the traced representatives) gets its
+// bends or steps between its neighbours' (curvesAcrossNeighbours, on the traced representatives) gets its
 // N-rooks samples, each shaded as a surface and traced. The cells decide on representatives only,
 // which no cell changes, so the order does not matter.
 template <class ShowsGlass, class Trace>
@@ -215,7 +215,7 @@ void addRookSamples(FrameState& f, const ShowsGlass& showsGlass, const Trace& tr
             for (int64_t cx = 0; cx < cw; ++cx) {
                 uint8_t& kind = f.refined[size_t(cy * cw + cx)];
                 const size_t rep = representativeSample(f, cx, cy);
-                if (kind != 0 || !showsGlass(rep) || !contrastsWithNeighbours(f, cx, cy)) continue;
+                if (kind != 0 || !showsGlass(rep) || !curvesAcrossNeighbours(f, cx, cy)) continue;
                 kind = kRookSamples;
                 const float occlusion =
                     f.screenOcclusion.empty() ? 1.0f : f.screenOcclusion[size_t(cy * cw + cx)];

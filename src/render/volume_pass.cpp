@@ -479,8 +479,9 @@ struct SampleCaster {
 // Whether adaptive anti-aliasing shades every sample of cell (cx, cy), shaded once so far, for what
 // the volume pass draws there: its samples' rays cross different faces of the volume scene (the
 // edge of a volume's box, of a Boolean's shape, of a blended mesh; a crease), or the rays cross
-// something and the cell's composited light differs from a neighbour's by more than the
-// post-process would leave (contrastsWithNeighbours: an edge inside a volume, the bone under skin).
+// something and the cell's composited light bends or steps between its neighbours' by more than
+// the post-process would leave (curvesAcrossNeighbours: an edge inside a volume, the bone under
+// skin).
 bool volumeEdge(const FrameState& f, const SampleCaster& c, const ColumnCrossings& crossings, int64_t cx,
                 int64_t cy) {
     const int a = f.adaptive;
@@ -499,7 +500,7 @@ bool volumeEdge(const FrameState& f, const SampleCaster& c, const ColumnCrossing
             if ((!col.empty() || !own.empty()) && !crossings.same(own, c.zMax(rep), col, c.zMax(i), near))
                 return true;
         }
-    return crossed && contrastsWithNeighbours(f, cx, cy);
+    return crossed && curvesAcrossNeighbours(f, cx, cy);
 }
 
 } // namespace
