@@ -436,6 +436,9 @@ BENCHMARK_CAPTURE(BM_FrameCost, bunny, std::string("bunny"))->Unit(benchmark::kM
 BENCHMARK_CAPTURE(BM_FrameCost, cgal, std::string("cgal"))->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_FrameCost, glass, std::string("glass"))->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_FrameCost, forest, std::string("forest"))->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_FrameCost, dsm_demo, std::string("dsm-demo"))
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // The linear (tone map clamp) frames of a scene with exact shadows and with none, made once.
 struct LinearReferences {

@@ -51,8 +51,9 @@
 // The glass pass traces the glass samples shaded, then s samples (N-rooks) in pixels showing glass
 // inside whose light differs from a neighbour's. Pixels shaded once then get FXAA-style
 // post-process anti-aliasing (Lottes 2009: an edge along the luma gradient, searched to its ends, blended by
-// the sub-pixel distance). Scenes the volume pass draws (volumes, Boolean shapes, blended meshes) keep one
-// sample per pixel (s = 1) and get the post-process only. Lighting: one environment
+// the sub-pixel distance). The volume pass (volumes, Boolean shapes, blended meshes) composites over
+// the samples shaded, then shades every sample of the pixels where its rays cross different faces or
+// its light differs from a neighbour's. Lighting: one environment
 // (RenderOptions::environment, else the procedural sky, or the flat `background` with sky = flat) is what the
 // background shows, what glass reflects and refracts, and the ambient light: albedo / pi times the
 // environment's irradiance around the normal (order-2 spherical harmonics, Ramamoorthi & Hanrahan 2001) times

@@ -107,18 +107,40 @@ std::size_t neighbourShowing(const FrameState& f, int64_t cx, int64_t cy, uint32
     return kNoSample;
 }
 
-bool contrastsWithNeighbours(const FrameState& f, int64_t cx, int64_t cy) {
+bool curvesAcrossNeighbours(const FrameState& f, int64_t cx, int64_t cy) {
     const int a = f.adaptive;
     const int64_t cw = f.width / a, ch = f.height / a;
     const ToneMap tm = f.options.toneMap;
     const float own = shownLuma(f.shaded[representativeSample(f, cx, cy)], tm);
-    const int64_t nx[4] = {cx - 1, cx + 1, cx, cx}, ny[4] = {cy, cy, cy - 1, cy + 1};
-    for (int k = 0; k < 4; ++k) {
-        if (nx[k] < 0 || ny[k] < 0 || nx[k] >= cw || ny[k] >= ch) continue;
-        if (std::abs(shownLuma(f.shaded[representativeSample(f, nx[k], ny[k])], tm) - own) > kRefineContrast)
-            return true;
+    // A neighbour past the image's side counts as the cell itself (a one-sided difference).
+    const auto at = [&](int64_t x, int64_t y) {
+        return x < 0 || y < 0 || x >= cw || y >= ch ? own
+                                                    : shownLuma(f.shaded[representativeSample(f, x, y)], tm);
+    };
+    return std::abs(at(cx - 1, cy) + at(cx + 1, cy) - 2 * own) > kRefineContrast ||
+           std::abs(at(cx, cy - 1) + at(cx, cy + 1) - 2 * own) > kRefineContrast;
+}
+
+int cellSamples(const FrameState& f, int64_t cx, int64_t cy, std::array<std::size_t, 64>& out) {
+    const int a = f.adaptive;
+    const int64_t W = f.width;
+    if (a <= 1) {
+        out[0] = std::size_t(cy * W + cx);
+        return 1;
     }
-    return false;
+    const uint8_t kind = f.refined[size_t(cy * (W / a) + cx)];
+    const std::size_t rep = representativeSample(f, cx, cy);
+    int n = 0;
+    for (int dy = 0; dy < a; ++dy)
+        for (int dx = 0; dx < a; ++dx) {
+            const bool shaded = kind == kEveryRefinedSample ? true
+                                : kind == kRookSamples      ? dx == rookColumn(a, dy)
+                                                            : dx == a / 2 && dy == a / 2;
+            if (shaded) out[size_t(n++)] = std::size_t((cy * a + dy) * W + cx * a + dx);
+        }
+    for (int k = 1; k < n; ++k)
+        if (out[size_t(k)] == rep) std::swap(out[0], out[size_t(k)]);
+    return n;
 }
 
 int rookColumn(int s, int dy) {

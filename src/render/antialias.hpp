@@ -3,6 +3,7 @@
 // filmic tone map (see render.hpp).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -17,15 +18,15 @@ namespace voxfx::detail {
 /// 0: the representative (adaptive / 2, adaptive / 2) only.
 inline constexpr uint8_t kEveryRefinedSample = 2, kRookSamples = 1;
 
-/// How far apart (perceptual luma of the shown image, 0..1) the light through neighbouring glass
-/// cells must be for them to get their N-rooks samples: the smallest step the post-process blends
-/// (FXAA's 1/32 of contrast), below which the eye sees no stair-steps.
+/// How far (perceptual luma of the shown image, 0..1) the light through a glass or volume cell must
+/// depart from its neighbours' for it to get more samples (curvesAcrossNeighbours): the smallest step the
+/// post-process blends (FXAA's 1/32 of contrast), below which the eye sees no stair-steps.
 inline constexpr float kRefineContrast = 1.0f / 32;
 
 /// Fills frame.refined from the G-buffer: every sample of a cell (adaptive x adaptive samples)
 /// where its samples show different meshes or materials, background and geometry, faces whose
 /// normals differ by more than 30 degrees or depths more than 2 % apart; 0 elsewhere (glass cells:
-/// see contrastsWithNeighbours).
+/// see curvesAcrossNeighbours).
 void markRefinedCells(FrameState& frame);
 
 /// The index of cell (cx, cy)'s representative sample (adaptive / 2, adaptive / 2).
@@ -40,13 +41,22 @@ inline constexpr std::size_t kNoSample = ~std::size_t(0);
 /// cell; what anti-aliasing needs at an edge is which surface covers each sample).
 std::size_t neighbourShowing(const FrameState& frame, int64_t cx, int64_t cy, uint32_t triangle);
 
-/// Whether the shown luma of cell (cx, cy)'s representative differs from one of its four
-/// neighbours' by more than kRefineContrast (the glass pass: glass shaded once whose light through
-/// it varies gets N-rooks samples).
-bool contrastsWithNeighbours(const FrameState& frame, int64_t cx, int64_t cy);
+/// Whether the shown luma of cell (cx, cy)'s representative departs from the straight line through
+/// its two neighbours' along x or along y by more than kRefineContrast (the second difference
+/// |l(-1) + l(+1) - 2 l(0)|; a neighbour past the image's side counts as the cell): light that
+/// varies linearly across a cell averages to its centre's value, so only a bend or a step (an edge
+/// inside glass or a volume) needs more samples. The glass pass (glass shaded once, N-rooks samples)
+/// and the volume pass (every sample) refine by it.
+bool curvesAcrossNeighbours(const FrameState& frame, int64_t cx, int64_t cy);
 
 /// Whether the passes shade sample (x, y) (every sample when adaptive is 1).
 bool shadedSample(const FrameState& frame, int64_t x, int64_t y);
+
+/// The samples of cell (cx, cy) the passes shade, as sample indices into `out`, its representative
+/// first where it is one of them, the others in row order except that the one the representative
+/// displaced takes its place: every one of an edge cell, the N-rooks samples of a glass cell, else
+/// the representative. Returns their count.
+int cellSamples(const FrameState& frame, int64_t cx, int64_t cy, std::array<std::size_t, 64>& out);
 
 /// The column of the N-rooks sample in row dy of an s x s cell (a permutation of 0..s-1).
 int rookColumn(int s, int dy);

@@ -4,6 +4,7 @@
 #include "render/glass_pass.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -157,8 +158,51 @@ GlassOptions glassWithGrid(FrameState& frame) {
     return method;
 }
 
+// Adaptive anti-aliasing at glass edges: every cell's representative traced, then the other samples
+// of edge cells, each as the shading pass shaded it: a sample whose shading was an earlier sample's
+// of its cell, or a neighbouring cell's representative's (the same triangle: shadeGBuffer), takes
+// that sample's light through the glass too, the rest are traced. What an edge cell needs is which
+// surface covers each sample; the light through one triangle varies little over a cell. The second
+// round reads representatives and its own cell only, so the order of the cells does not matter.
+template <class ShowsGlass, class Trace>
+void traceCells(FrameState& f, const ShowsGlass& showsGlass, const Trace& trace) {
+    const int a = f.adaptive;
+    const int64_t W = f.width, cw = W / a, ch = f.height / a;
+    const std::vector<uint32_t>& triangle = f.gbuffer.triangle;
+    const auto traceAt = [&](size_t i) { trace(int64_t(i % size_t(W)), int64_t(i / size_t(W)), i); };
+    parallelFor(0, ch, 4, [&](int64_t y0, int64_t y1) {
+        for (int64_t cy = y0; cy < y1; ++cy)
+            for (int64_t cx = 0; cx < cw; ++cx) {
+                const size_t rep = representativeSample(f, cx, cy);
+                if (showsGlass(rep)) traceAt(rep);
+            }
+    });
+    parallelFor(0, ch, 4, [&](int64_t y0, int64_t y1) {
+        std::array<std::size_t, 64> samples;
+        for (int64_t cy = y0; cy < y1; ++cy)
+            for (int64_t cx = 0; cx < cw; ++cx) {
+                if (f.refined[size_t(cy * cw + cx)] != kEveryRefinedSample) continue;
+                const int n = cellSamples(f, cx, cy, samples);
+                for (int k = 1; k < n; ++k) {
+                    const size_t i = samples[size_t(k)];
+                    if (!showsGlass(i)) continue;
+                    int same = 0;
+                    while (same < k && triangle[samples[size_t(same)]] != triangle[i]) ++same;
+                    const size_t from =
+                        same < k ? samples[size_t(same)] : neighbourShowing(f, cx, cy, triangle[i]);
+                    if (from == kNoSample) {
+                        traceAt(i);
+                    } else {
+                        f.shaded[i] = f.shaded[from];
+                        f.glassSamples[i] = f.glassSamples[from];
+                    }
+                }
+            }
+    });
+}
+
 // Adaptive anti-aliasing inside glass: a glass cell shaded once (no edge) whose light through it
-// differs from a neighbour's (contrastsWithNeighbours, on the traced representatives) gets its
+// bends or steps between its neighbours' (curvesAcrossNeighbours, on the traced representatives) gets its
 // N-rooks samples, each shaded as a surface and traced. The cells decide on representatives only,
 // which no cell changes, so the order does not matter.
 template <class ShowsGlass, class Trace>
@@ -171,7 +215,7 @@ void addRookSamples(FrameState& f, const ShowsGlass& showsGlass, const Trace& tr
             for (int64_t cx = 0; cx < cw; ++cx) {
                 uint8_t& kind = f.refined[size_t(cy * cw + cx)];
                 const size_t rep = representativeSample(f, cx, cy);
-                if (kind != 0 || !showsGlass(rep) || !contrastsWithNeighbours(f, cx, cy)) continue;
+                if (kind != 0 || !showsGlass(rep) || !curvesAcrossNeighbours(f, cx, cy)) continue;
                 kind = kRookSamples;
                 const float occlusion =
                     f.screenOcclusion.empty() ? 1.0f : f.screenOcclusion[size_t(cy * cw + cx)];
@@ -280,15 +324,16 @@ void shadeGlass(FrameState& frame) {
         const uint32_t tri = gbuffer.triangle[i];
         return tri != GBuffer::kNone && isGlass[geometry.triangleMaterial[tri]];
     };
-    parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = 0; x < W; ++x) {
-                const size_t i = size_t(y * W + x);
-                if (!showsGlass(i) || !shadedSample(frame, x, y)) continue; // AA fills the others in
-                trace(x, y, i);
-            }
-    });
-    if (frame.adaptive > 1) addRookSamples(frame, showsGlass, trace);
+    if (frame.adaptive > 1) {
+        traceCells(frame, showsGlass, trace);
+        addRookSamples(frame, showsGlass, trace);
+    } else {
+        parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
+            for (int64_t y = y0; y < y1; ++y)
+                for (int64_t x = 0; x < W; ++x)
+                    if (showsGlass(size_t(y * W + x))) trace(x, y, size_t(y * W + x));
+        });
+    }
     frame.result.glass.traceMs += std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
 }
 

@@ -137,7 +137,8 @@ struct RenderCacheData {
     std::vector<Vec3f> shaded;
     std::vector<float> screenOcclusion;
     std::vector<uint8_t> refined, glassSamples;
-    struct ScreenOcclusion { ///< the screen-space occlusion's opaque materials, and its scratch
+    std::vector<Vec3f> volumeBehind; ///< the volume pass: per cell, the light behind its volumes
+    struct ScreenOcclusion {         ///< the screen-space occlusion's opaque materials, and its scratch
         std::vector<uint8_t> opaque;
         ScreenSpaceOcclusionScratch scratch;
     } screen;

@@ -210,14 +210,9 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     const bool autoExposure = !(options.exposure > 0);
     std::optional<RenderOptions> unitExposure;
     if (autoExposure) unitExposure.emplace(options).exposure = 1;
-    // Adaptive anti-aliasing, except where the volume pass draws (it casts a ray per sample).
-    const bool volumes = (scene.volumeScene && !scene.volumeScene->objects.empty()) ||
-                         std::any_of(scene.meshes.begin(), scene.meshes.end(), [&](const SceneMesh& m) {
-                             return m.material < scene.materials.size() && scene.materials[m.material].blend;
-                         });
     const bool adaptiveOn =
         options.antiAliasing == AntiAliasing::Adaptive || options.antiAliasing == AntiAliasing::Full;
-    const int adaptive = adaptiveOn && !volumes ? options.adaptiveSamples : 1;
+    const int adaptive = adaptiveOn ? options.adaptiveSamples : 1;
     RenderResult result;
     const int k = options.supersample * adaptive;
     detail::RenderCacheData& c = cache.data();

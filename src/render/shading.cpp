@@ -225,35 +225,6 @@ Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material&
     return frame.shader->shade(s, m, eye);
 }
 
-namespace {
-
-// The samples of cell (cx, cy) the passes shade (antialias.hpp), as sample indices, its
-// representative first where it is one of them: every one of an edge cell, the N-rooks samples of a
-// glass cell, else the representative.
-int cellSamples(const FrameState& f, int64_t cx, int64_t cy, std::array<std::size_t, 64>& out) {
-    const int a = f.adaptive;
-    const int64_t W = f.width;
-    if (a <= 1) {
-        out[0] = std::size_t(cy * W + cx);
-        return 1;
-    }
-    const uint8_t kind = f.refined[size_t(cy * (W / a) + cx)];
-    const std::size_t rep = representativeSample(f, cx, cy);
-    int n = 0;
-    for (int dy = 0; dy < a; ++dy)
-        for (int dx = 0; dx < a; ++dx) {
-            const bool shaded = kind == kEveryRefinedSample ? true
-                                : kind == kRookSamples      ? dx == rookColumn(a, dy)
-                                                            : dx == a / 2 && dy == a / 2;
-            if (shaded) out[size_t(n++)] = std::size_t((cy * a + dy) * W + cx * a + dx);
-        }
-    for (int k = 1; k < n; ++k)
-        if (out[size_t(k)] == rep) std::swap(out[0], out[size_t(k)]);
-    return n;
-}
-
-} // namespace
-
 // In two rounds where adaptive anti-aliasing is on: every cell's representative sample, then the
 // other samples of edge cells, each shaded only where neither an earlier sample of its cell nor a
 // neighbouring cell's representative shows its triangle (neighbourShowing).

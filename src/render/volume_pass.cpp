@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 
+#include "render/antialias.hpp"
 #include "render/shading.hpp"
 #include "voxfx/volume_scene.hpp"
 
@@ -397,8 +398,119 @@ struct VolumeComposite {
     }
 };
 
+// The faces a column's fragments nearer than z cross, in order: leaves and face normals, compared
+// between the samples of a cell (a volume's, a Boolean's or a blended mesh's edge).
+struct ColumnCrossings {
+    const std::vector<uint32_t>& leaf;
+    const std::vector<Vec3f>& faceNormal; ///< unit, per flattened triangle (zero when degenerate)
+
+    // Whether columns a (up to depth za) and b (up to zb) cross the same leaves in the same order,
+    // with faces within 30 degrees where they cross different triangles.
+    bool same(std::span<const ListFragment> a, double za, std::span<const ListFragment> b, double zb,
+              double nearDepth) const {
+        const float cos30 = 0.866f;
+        auto first = [&](std::span<const ListFragment> c) {
+            std::size_t i = 0;
+            while (i < c.size() && c[i].depth < nearDepth) ++i;
+            return i;
+        };
+        std::size_t i = first(a), j = first(b);
+        for (; i < a.size() && a[i].depth < za && j < b.size() && b[j].depth < zb; ++i, ++j) {
+            const uint32_t ta = a[i].triangle, tb = b[j].triangle;
+            if (ta == tb) continue;
+            if (leaf[ta] != leaf[tb] || std::abs(dot(faceNormal[ta], faceNormal[tb])) < cos30) return false;
+        }
+        return !(i < a.size() && a[i].depth < za) && !(j < b.size() && b[j].depth < zb);
+    }
+};
+
+// The camera's rays through the volume scene: one sample's walk composited over what the passes
+// before shaded there.
+struct SampleCaster {
+    const FrameState& frame;
+    const VolumeComposite& pass;
+    const FragmentLists& lists;
+    const VolumeScene& scene;
+
+    struct Walker { // per thread
+        SegmentWalker walker;
+        std::vector<ObjectInterval> objects;
+        std::vector<LightSample> lights;
+        int64_t samples = 0;
+    };
+    Walker walker() const {
+        Walker w{SegmentWalker(scene, pass.surfaces.flat.triangleLeaf),
+                 std::vector<ObjectInterval>(scene.objects.size()),
+                 {},
+                 0};
+        w.lights.reserve(frame.lights.size());
+        return w;
+    }
+    // The G-buffer's depth at sample i: the walk stops at the surface it shows.
+    double zMax(std::size_t i) const {
+        const GBuffer& g = frame.gbuffer;
+        return g.triangle[i] != GBuffer::kNone ? double(g.depth[i]) : std::numeric_limits<double>::infinity();
+    }
+    // Sample (x, y) composited over `behind` into `out`.
+    void cast(Walker& w, int64_t x, int64_t y, const Vec3f& behind, Vec3f& out) const {
+        const auto col = lists.column(x, y);
+        if (col.empty()) {
+            out = behind;
+            return;
+        }
+        const Frame& f = frame.gbuffer.frame;
+        const std::size_t i = std::size_t(y * f.width() + x);
+        PixelRay r{x, y, col, f.eye(), {}, 0, 0, sampleJitter(x, y, 1)};
+        r.objects = &w.objects;
+        r.lights = &w.lights;
+        r.perDepth = f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - r.eye;
+        r.lengthPerDepth = length(r.perDepth);
+        r.zMax = zMax(i);
+        w.walker.walk(
+            col, [&](double z, std::size_t o, bool entering) { return pass.surface(r, z, o, entering); },
+            [&](double z0, double z1, std::span<const uint8_t> inside) {
+                return pass.segment(r, z0, z1, inside);
+            });
+        w.samples += r.samples;
+        out = r.transmittance < 1.0 ? r.color + behind * float(r.transmittance) : behind;
+    }
+};
+
+// Whether adaptive anti-aliasing shades every sample of cell (cx, cy), shaded once so far, for what
+// the volume pass draws there: its samples' rays cross different faces of the volume scene (the
+// edge of a volume's box, of a Boolean's shape, of a blended mesh; a crease), or the rays cross
+// something and the cell's composited light bends or steps between its neighbours' by more than
+// the post-process would leave (curvesAcrossNeighbours: an edge inside a volume, the bone under
+// skin).
+bool volumeEdge(const FrameState& f, const SampleCaster& c, const ColumnCrossings& crossings, int64_t cx,
+                int64_t cy) {
+    const int a = f.adaptive;
+    const std::size_t rep = representativeSample(f, cx, cy);
+    const int64_t W = f.width, rx = int64_t(rep % std::size_t(W)), ry = int64_t(rep / std::size_t(W));
+    const auto own = c.lists.column(rx, ry);
+    const double near = f.gbuffer.frame.nearDepth();
+    bool crossed = !own.empty();
+    for (int dy = 0; dy < a; ++dy)
+        for (int dx = 0; dx < a; ++dx) {
+            const int64_t x = cx * a + dx, y = cy * a + dy;
+            const std::size_t i = std::size_t(y * W + x);
+            if (i == rep) continue;
+            const auto col = c.lists.column(x, y);
+            crossed |= !col.empty();
+            if ((!col.empty() || !own.empty()) && !crossings.same(own, c.zMax(rep), col, c.zMax(i), near))
+                return true;
+        }
+    return crossed && curvesAcrossNeighbours(f, cx, cy);
+}
+
 } // namespace
 
+// Every sample the passes shaded (antialias.hpp's shadedSample) cast and composited; then, with
+// adaptive anti-aliasing, the cells shaded once where the volume scene draws an edge (volumeEdge)
+// get every sample: each over the light the passes before gave the cell (one mesh and material
+// shows in all its samples, or the G-buffer would have refined it), as the shading pass shares a
+// cell's shading among its samples. The second round reads only representatives, which it does not
+// change: the order of the cells does not matter.
 void compositeVolumes(FrameState& frame) {
     const Scene& scene = frame.scene;
     // What the camera draws here: the volume scene's objects, and the meshes of blended materials
@@ -411,41 +523,56 @@ void compositeVolumes(FrameState& frame) {
     const VolumeScene* chosen = merged ? &*merged : scene.volumeScene.get();
     if (!chosen || chosen->objects.empty()) return;
     const VolumeComposite pass(frame, *chosen);
-    const GBuffer& gbuffer = frame.gbuffer;
-    const Frame& f = gbuffer.frame;
+    const Frame& f = frame.gbuffer.frame;
     const FragmentLists lists = FragmentLists::build(f, pass.surfaces.flat.mesh.view());
-    const int64_t W = f.width(), H = f.height();
+    const SampleCaster caster{frame, pass, lists, *chosen};
+    const int a = frame.adaptive;
+    const int64_t W = frame.width, cw = W / a, ch = frame.height / a;
+    // The light behind each cell shaded once, before its representative is composited (round 2).
+    std::vector<Vec3f>& behind = frame.cache.volumeBehind;
+    if (a > 1) behind.resize(std::size_t(cw * ch));
     std::atomic<int64_t> samples{0};
-    parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
-        SegmentWalker walker(*chosen, pass.surfaces.flat.triangleLeaf);
-        std::vector<ObjectInterval> objects(chosen->objects.size());
-        std::vector<LightSample> lights;
-        lights.reserve(frame.lights.size());
-        int64_t local = 0;
-        for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = 0; x < W; ++x) {
-                const auto col = lists.column(x, y);
-                if (col.empty()) continue;
-                const std::size_t pixel = std::size_t(y * W + x);
-                PixelRay r{x, y, col, f.eye(), {}, 0, 0, sampleJitter(x, y, 1)};
-                r.objects = &objects;
-                r.lights = &lights;
-                r.perDepth = f.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - r.eye;
-                r.lengthPerDepth = length(r.perDepth);
-                r.zMax = gbuffer.triangle[pixel] != GBuffer::kNone ? double(gbuffer.depth[pixel])
-                                                                   : std::numeric_limits<double>::infinity();
-                walker.walk(
-                    col,
-                    [&](double z, std::size_t o, bool entering) { return pass.surface(r, z, o, entering); },
-                    [&](double z0, double z1, std::span<const uint8_t> inside) {
-                        return pass.segment(r, z0, z1, inside);
-                    });
-                local += r.samples;
-                if (r.transmittance < 1.0)
-                    frame.shaded[pixel] = r.color + frame.shaded[pixel] * float(r.transmittance);
+    parallelFor(0, ch, 2, [&](int64_t y0, int64_t y1) {
+        SampleCaster::Walker w = caster.walker();
+        for (int64_t cy = y0; cy < y1; ++cy)
+            for (int64_t cx = 0; cx < cw; ++cx) {
+                if (a > 1 && frame.refined[std::size_t(cy * cw + cx)] == 0)
+                    behind[std::size_t(cy * cw + cx)] = frame.shaded[representativeSample(frame, cx, cy)];
+                for (int64_t y = cy * a; y < (cy + 1) * a; ++y)
+                    for (int64_t x = cx * a; x < (cx + 1) * a; ++x) {
+                        if (!shadedSample(frame, x, y)) continue;
+                        Vec3f& out = frame.shaded[std::size_t(y * W + x)];
+                        caster.cast(w, x, y, out, out);
+                    }
             }
-        samples += local;
+        samples += w.samples;
     });
+    if (a > 1) {
+        std::vector<Vec3f> faceNormals(pass.surfaces.flat.mesh.triangleCount());
+        for (std::size_t t = 0; t < faceNormals.size(); ++t) {
+            const Vec3d p = volumePassCorner(pass.surfaces.flat.mesh, uint32_t(t), 0);
+            const Vec3d n = cross(volumePassCorner(pass.surfaces.flat.mesh, uint32_t(t), 1) - p,
+                                  volumePassCorner(pass.surfaces.flat.mesh, uint32_t(t), 2) - p);
+            faceNormals[t] = length(n) > 0 ? Vec3f(normalize(n)) : Vec3f{0, 0, 0};
+        }
+        const ColumnCrossings crossings{pass.surfaces.flat.triangleLeaf, faceNormals};
+        parallelFor(0, ch, 2, [&](int64_t y0, int64_t y1) {
+            SampleCaster::Walker w = caster.walker();
+            for (int64_t cy = y0; cy < y1; ++cy)
+                for (int64_t cx = 0; cx < cw; ++cx) {
+                    uint8_t& kind = frame.refined[std::size_t(cy * cw + cx)];
+                    if (kind != 0 || !volumeEdge(frame, caster, crossings, cx, cy)) continue;
+                    kind = kEveryRefinedSample;
+                    const std::size_t rep = representativeSample(frame, cx, cy);
+                    for (int64_t y = cy * a; y < (cy + 1) * a; ++y)
+                        for (int64_t x = cx * a; x < (cx + 1) * a; ++x)
+                            if (std::size_t(y * W + x) != rep)
+                                caster.cast(w, x, y, behind[std::size_t(cy * cw + cx)],
+                                            frame.shaded[std::size_t(y * W + x)]);
+                }
+            samples += w.samples;
+        });
+    }
     frame.result.volumeSamples = samples.load();
 }
 

@@ -26,7 +26,10 @@ namespace voxfx::detail {
 /// shadow looked up one step towards the light, with that direction as the lookup's normal. The walk
 /// stops when the accumulated opacity reaches 0.999, and the result is blended over frame.shaded
 /// (row-major, y up). The meshes of blended materials (Material::blend), which the G-buffer leaves
-/// out, are walked here too, as translucent objects shaded with their own material. Records the
+/// out, are walked here too, as translucent objects shaded with their own material. With adaptive
+/// anti-aliasing (frame.adaptive > 1) the samples the passes before shaded are cast, then the cells
+/// shaded once whose samples' rays cross different faces of the volume scene, or whose composited
+/// light differs from a neighbour's, are shaded at every sample (frame.refined). Records the
 /// number of volume samples taken in frame.result. Nothing happens when the scene has neither volume
 /// scene objects nor blended meshes.
 void compositeVolumes(FrameState& frame);
