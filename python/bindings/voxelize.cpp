@@ -149,6 +149,33 @@ void unpackColumns(const uint64_t* words, int64_t wpc, int64_t width, int64_t he
         }
 }
 
+// A brick as numcodecs' PackBits encodes a zarr chunk of B^3 bools (order C, [x, y, z], cells past
+// the brick's w x h x d False): one byte of padding bits (0: B^3 is a multiple of 8), then 8 cells
+// per byte, the first in the high bit. `out` holds 1 + B^3 / 8 bytes.
+void packChunk(const uint64_t* words, int64_t wpc, int64_t width, int64_t height, int64_t depth, int64_t B,
+               uint8_t* out) {
+    static const std::array<uint8_t, 256> reversed = [] {
+        std::array<uint8_t, 256> t{};
+        for (int v = 0; v < 256; ++v)
+            for (int b = 0; b < 8; ++b)
+                if (v >> b & 1) t[size_t(v)] |= uint8_t(0x80u >> b);
+        return t;
+    }();
+    std::memset(out, 0, size_t(1 + B * B * B / 8));
+    const int64_t bytes = (depth + 7) / 8;
+    const unsigned lastMask = depth % 8 ? (1u << (depth % 8)) - 1 : 0xffu;
+    for (int64_t x = 0; x < width; ++x)
+        for (int64_t y = 0; y < height; ++y) {
+            const uint64_t* col = words + (y * width + x) * wpc;
+            uint8_t* dst = out + 1 + (x * B + y) * (B / 8);
+            for (int64_t g = 0; g < bytes; ++g) {
+                unsigned v = unsigned(col[g >> 3] >> (8 * (g & 7))) & 0xffu;
+                if (g == bytes - 1) v &= lastMask;
+                dst[g] = reversed[v];
+            }
+        }
+}
+
 // One brick as a task returns it: the packed bits copied out of the visitor's call.
 struct KeptBrick {
     GridTile tile;
@@ -160,7 +187,7 @@ struct KeptBrick {
 // (x0, y0, z0, value) with value a bool (a uniform brick) or a bool array (w, h, d).
 py::list voxelizeStacks(const PyMesh& mesh, const py::tuple& state, const std::vector<int64_t>& stacks,
                         int64_t brick, const std::string& mode, const std::string& fill, int threads,
-                        const py::object& visit) {
+                        const py::object& visit, bool packbits) {
     const Frame frame = frameFromState(state);
     if (frame.axis() != Axis::Z) throw ArgumentError("the bricks of a grid are written along axis z only");
     VoxelizeOptions vo = stackOptions(mode, fill, threads);
@@ -169,6 +196,7 @@ py::list voxelizeStacks(const PyMesh& mesh, const py::tuple& state, const std::v
         // Each brick handed to `visit` as it is made (memory: one stack's, not the task's), one
         // call at a time (the lock, then the GIL), mixed bricks unpacked into one buffer.
         py::array_t<bool> buffer(py::ssize_t(std::max<int64_t>(brick, 8) * brick * brick));
+        py::array_t<uint8_t> packed(py::ssize_t(1 + brick * brick * brick / 8));
         std::mutex one;
         interruptible([&](Cancel& cancel) {
             vo.progress = &cancel;
@@ -178,6 +206,10 @@ py::list voxelizeStacks(const PyMesh& mesh, const py::tuple& state, const std::v
                 py::object value;
                 if (t.uniform) {
                     value = py::bool_(t.value);
+                } else if (packbits) {
+                    packChunk(t.bits.words, t.bits.wordsPerColumn, t.width, t.height, t.depth, brick,
+                              packed.mutable_data());
+                    value = packed;
                 } else {
                     unpackColumns(t.bits.words, t.bits.wordsPerColumn, t.width, t.height, t.depth,
                                   buffer.mutable_data());
@@ -383,19 +415,21 @@ void bindVoxelize(py::module_& m) {
     m.def(
         "_voxelize_stacks",
         [](const py::object& meshObj, const py::tuple& frame, const std::vector<int64_t>& stacks, Int brick,
-           const std::string& mode, const std::string& fill, int threads, const py::object& visit) {
+           const std::string& mode, const std::string& fill, int threads, const py::object& visit,
+           bool packbits) {
             const auto mesh = meshArgument(meshObj, py::none());
-            return voxelizeStacks(*mesh, frame, stacks, brick, mode, fill, threads, visit);
+            return voxelizeStacks(*mesh, frame, stacks, brick, mode, fill, threads, visit, packbits);
         },
         py::arg("mesh"), py::arg("frame"), py::arg("stacks"), py::kw_only(), py::arg("brick") = 128,
         py::arg("mode") = "solid", py::arg("fill") = "auto", py::arg("threads") = 0,
-        py::arg("visit") = py::none(),
+        py::arg("visit") = py::none(), py::arg("packbits") = false,
         "One task of voxfx.dask.voxelize_grid: the bricks of the stacks (x0, y0, x1, y1) (in bricks "
         "along x and y) of the grid `frame` (from _grid_frame), voxelized on their own: a list of "
         "(x0, y0, z0, value), value a bool for a uniform brick or a bool array indexed [x, y, z]. "
         "visit: called as visit(x0, y0, z0, value) for each brick as it is made instead (one call at a "
         "time, in no set order; an empty list returned); its arrays share one buffer, valid during the "
-        "call only.");
+        "call only. packbits=True (with visit): a mixed brick comes as the uint8 array numcodecs.PackBits "
+        "makes of its whole zarr chunk (brick^3 bools, False past the grid).");
 
     m.def(
         "_resolve_fill",
