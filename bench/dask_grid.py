@@ -11,11 +11,15 @@ resident set of a worker, the driver's peak, the store's bytes and files.
 Run it as a file (a LocalCluster's workers re-import the main module)."""
 import argparse
 import os
-import resource
 import shutil
 import sys
 import tempfile
 import time
+
+
+def peak_mib():
+    with open("/proc/self/status", encoding="ascii") as f:
+        return next(int(l.split()[1]) for l in f if l.startswith("VmHWM:")) / 1024
 
 
 def folder_bytes(path):
@@ -48,7 +52,7 @@ def main():
         t = time.monotonic()
         g = voxfx.voxelize(mesh, resolution=a.resolution, sparse=True, threads=1)
         s = time.monotonic() - t
-        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        peak = peak_mib()
         print(f"single-process tiles (1 thread),{a.resolution},0,{s:.1f},,{peak:.0f},{g.memory_bytes / 2**20:.0f},,")
         del g
     for n in a.workers:
@@ -65,7 +69,7 @@ def main():
             cluster.close()
         size, files = folder_bytes(out)
         shutil.rmtree(out, ignore_errors=True)
-        driver = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        driver = peak_mib()
         print(f"{'regions' if a.regions else 'zarr'},{a.resolution},{n},{s['seconds']:.1f},"
               f"{s['worker_peak_bytes'] / 2**20:.0f},{driver:.0f},{size / 2**20:.0f},{files},{s['tasks']}", flush=True)
 

@@ -210,10 +210,17 @@ def _mark(folder, tx, ty):
 
 
 def _peak_rss():
-    """The peak resident set of this (worker) process in bytes."""
-    import resource
-
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    """The peak resident set of this (worker) process in bytes: VmHWM, whose memory map is the
+    process's own (getrusage's ru_maxrss survives fork and exec: a spawned worker would report the
+    driver's peak); 0 where /proc has none."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 0
 
 
 def _tasks_of(dims, brick, stacks_per_task):
