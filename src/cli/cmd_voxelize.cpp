@@ -328,7 +328,7 @@ Formats (by extension): .binvox .vdb (BoolGrid "voxels", or float with --vdb-flo
 One grid across a Dask cluster (-o GRID.zarr): bricks of --brick cells (default 128) voxelized
   as Dask tasks (voxfx.dask.voxelize_grid) on the cluster of --scheduler ADDRESS (none: a local
   cluster of this machine's cores) into a Zarr store: bool array "voxels" indexed [x, y, z], one
-  blosc-compressed chunk per brick, empty bricks not written, the affine in its attributes;
+  chunk per brick (bits packed, zstd), empty bricks not written, the affine in its attributes;
   dask.array.from_zarr(GRID.zarr, component="voxels") reads it lazily. A rerun skips the bricks
   already done. Needs python3-distributed and python3-zarr; fills parity, winding and gwn.
   -o GRID.vdb with --scheduler: the same tasks write one .vdb per region into GRID.regions/
