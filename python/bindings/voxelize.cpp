@@ -1,5 +1,8 @@
 // Voxelization: voxelize (as `voxfx voxelize` does) and cuda_status; the two pieces of a grid
 // voxelized across a cluster (voxfx.dask.voxelize_grid): _grid_frame and _voxelize_stacks.
+#include <algorithm>
+#include <bit>
+#include <cmath>
 #include <cstring>
 
 #include "common.hpp"
@@ -100,37 +103,131 @@ Frame frameFromState(const py::tuple& t) {
     });
 }
 
-// One brick as a task returns it: the packed bits copied out of the visitor's call.
-struct KeptBrick {
-    GridTile tile;
-    std::vector<uint64_t> words;
-};
-
-// The bricks of the stacks [sx0, sx1) x [sy0, sy1), in the grid's [x, y, z] order: a list of
-// (x0, y0, z0, value) with value a bool (a uniform brick) or a bool array (w, h, d).
-py::list voxelizeStacks(const PyMesh& mesh, const py::tuple& state, const std::vector<int64_t>& stacks,
-                        int64_t brick, const std::string& mode, const std::string& fill, int threads) {
-    if (stacks.size() != 4) throw ArgumentError("stacks must be (x0, y0, x1, y1)");
-    const Frame frame = frameFromState(state);
-    if (frame.axis() != Axis::Z) throw ArgumentError("the bricks of a grid are written along axis z only");
+VoxelizeOptions stackOptions(const std::string& mode, const std::string& fill, int threads) {
     VoxelizeOptions vo;
     asArgument([&] {
         vo.mode = parseVoxelizeMode(mode);
         vo.fill = parseFill(fill);
     });
     vo.threads = threads;
+    return vo;
+}
+
+// The tiles of the stacks (x0, y0, x1, y1) of bricks of `brick` cells.
+TileOptions stackRange(int64_t brick, const std::vector<int64_t>& stacks) {
+    if (stacks.size() != 4) throw ArgumentError("stacks must be (x0, y0, x1, y1)");
     TileOptions to;
     to.brickSize = brick;
     to.stackX0 = stacks[0];
     to.stackY0 = stacks[1];
     to.stackX1 = stacks[2];
     to.stackY1 = stacks[3];
+    return to;
+}
+
+// The columns of a brick's packed bits (column (x, y) at words (y * width + x) * wpc, slice s at bit
+// s of them) as bools indexed [x, y, z]: eight bits at a time through a table of their eight bytes.
+void unpackColumns(const uint64_t* words, int64_t wpc, int64_t width, int64_t height, int64_t depth,
+                   bool* out) {
+    static const std::array<uint64_t, 256> bytes = [] {
+        std::array<uint64_t, 256> t{};
+        for (int v = 0; v < 256; ++v)
+            for (int b = 0; b < 8; ++b) t[size_t(v)] |= uint64_t((v >> b) & 1) << (8 * b); // little-endian
+        return t;
+    }();
+    static_assert(sizeof(bool) == 1 && std::endian::native == std::endian::little);
+    const int64_t whole = depth / 8;
+    for (int64_t x = 0; x < width; ++x)
+        for (int64_t y = 0; y < height; ++y) {
+            const uint64_t* col = words + (y * width + x) * wpc;
+            unsigned char* dst = reinterpret_cast<unsigned char*>(out + (x * height + y) * depth);
+            for (int64_t g = 0; g < whole; ++g) {
+                const uint64_t e = bytes[(col[g >> 3] >> (8 * (g & 7))) & 0xffu];
+                std::memcpy(dst + 8 * g, &e, 8);
+            }
+            for (int64_t s = 8 * whole; s < depth; ++s) dst[s] = (col[s >> 6] >> (s & 63)) & 1u;
+        }
+}
+
+// A brick as numcodecs' PackBits encodes a zarr chunk of B^3 bools (order C, [x, y, z], cells past
+// the brick's w x h x d False): one byte of padding bits (0: B^3 is a multiple of 8), then 8 cells
+// per byte, the first in the high bit. `out` holds 1 + B^3 / 8 bytes.
+void packChunk(const uint64_t* words, int64_t wpc, int64_t width, int64_t height, int64_t depth, int64_t B,
+               uint8_t* out) {
+    static const std::array<uint8_t, 256> reversed = [] {
+        std::array<uint8_t, 256> t{};
+        for (int v = 0; v < 256; ++v)
+            for (int b = 0; b < 8; ++b)
+                if (v >> b & 1) t[size_t(v)] |= uint8_t(0x80u >> b);
+        return t;
+    }();
+    std::memset(out, 0, size_t(1 + B * B * B / 8));
+    const int64_t bytes = (depth + 7) / 8;
+    const unsigned lastMask = depth % 8 ? (1u << (depth % 8)) - 1 : 0xffu;
+    for (int64_t x = 0; x < width; ++x)
+        for (int64_t y = 0; y < height; ++y) {
+            const uint64_t* col = words + (y * width + x) * wpc;
+            uint8_t* dst = out + 1 + (x * B + y) * (B / 8);
+            for (int64_t g = 0; g < bytes; ++g) {
+                unsigned v = unsigned(col[g >> 3] >> (8 * (g & 7))) & 0xffu;
+                if (g == bytes - 1) v &= lastMask;
+                dst[g] = reversed[v];
+            }
+        }
+}
+
+// One brick as a task returns it: the packed bits copied out of the visitor's call.
+struct KeptBrick {
+    GridTile tile;
+    std::vector<uint64_t> words;
+    int64_t wordsPerColumn = 0;
+};
+
+// The bricks of the stacks [sx0, sx1) x [sy0, sy1), in the grid's [x, y, z] order: a list of
+// (x0, y0, z0, value) with value a bool (a uniform brick) or a bool array (w, h, d).
+py::list voxelizeStacks(const PyMesh& mesh, const py::tuple& state, const std::vector<int64_t>& stacks,
+                        int64_t brick, const std::string& mode, const std::string& fill, int threads,
+                        const py::object& visit, bool packbits) {
+    const Frame frame = frameFromState(state);
+    if (frame.axis() != Axis::Z) throw ArgumentError("the bricks of a grid are written along axis z only");
+    VoxelizeOptions vo = stackOptions(mode, fill, threads);
+    TileOptions to = stackRange(brick, stacks);
+    if (!visit.is_none()) {
+        // Each brick handed to `visit` as it is made (memory: one stack's, not the task's), one
+        // call at a time (the lock, then the GIL), mixed bricks unpacked into one buffer.
+        py::array_t<bool> buffer(py::ssize_t(std::max<int64_t>(brick, 8) * brick * brick));
+        py::array_t<uint8_t> packed(py::ssize_t(1 + brick * brick * brick / 8));
+        std::mutex one;
+        interruptible([&](Cancel& cancel) {
+            vo.progress = &cancel;
+            voxelizeTiles(mesh.mesh.view(), frame, vo, to, [&](const GridTile& t) {
+                const std::lock_guard lock(one);
+                const py::gil_scoped_acquire gil;
+                py::object value;
+                if (t.uniform) {
+                    value = py::bool_(t.value);
+                } else if (packbits) {
+                    packChunk(t.bits.words, t.bits.wordsPerColumn, t.width, t.height, t.depth, brick,
+                              packed.mutable_data());
+                    value = packed;
+                } else {
+                    unpackColumns(t.bits.words, t.bits.wordsPerColumn, t.width, t.height, t.depth,
+                                  buffer.mutable_data());
+                    value =
+                        py::array_t<bool>({py::ssize_t(t.width), py::ssize_t(t.height), py::ssize_t(t.depth)},
+                                          buffer.data(), buffer);
+                }
+                visit(t.x0, t.y0, t.s0, value);
+            });
+        });
+        return py::list();
+    }
     std::vector<KeptBrick> kept;
     std::mutex keptMutex;
     interruptible([&](Cancel& cancel) {
         vo.progress = &cancel;
         voxelizeTiles(mesh.mesh.view(), frame, vo, to, [&](const GridTile& tile) {
-            KeptBrick k{tile, {}};
+            KeptBrick k{tile, {}, tile.bits.wordsPerColumn};
             if (!tile.uniform) {
                 const BitGridView& b = tile.bits;
                 k.words.assign(b.words, b.words + b.columnCount() * b.wordsPerColumn);
@@ -147,22 +244,67 @@ py::list voxelizeStacks(const PyMesh& mesh, const py::tuple& state, const std::v
     py::list out;
     for (const KeptBrick& k : kept) {
         const GridTile& t = k.tile;
-        py::object value;
-        if (t.uniform) {
-            value = py::bool_(t.value);
-        } else {
+        py::object value = py::bool_(t.value);
+        if (!t.uniform) {
             py::array_t<bool> a({py::ssize_t(t.width), py::ssize_t(t.height), py::ssize_t(t.depth)});
-            bool* o = a.mutable_data();
-            const int64_t wpc = (t.depth + 63) / 64;
-            for (int64_t x = 0; x < t.width; ++x)
-                for (int64_t y = 0; y < t.height; ++y) {
-                    const uint64_t* col = k.words.data() + (y * t.width + x) * wpc;
-                    bool* dst = o + (x * t.height + y) * t.depth;
-                    for (int64_t s = 0; s < t.depth; ++s) dst[s] = (col[s >> 6] >> (s & 63)) & 1u;
-                }
+            unpackColumns(k.words.data(), k.wordsPerColumn, t.width, t.height, t.depth, a.mutable_data());
             value = std::move(a);
         }
         out.append(py::make_tuple(t.x0, t.y0, t.s0, value));
+    }
+    return out;
+}
+
+// voxfx.dask's triangles per task: task (tx, ty) of a k x k rectangle of stacks of `brick` columns
+// gets the triangles whose footprint on the grid's x-y plane, widened by one cell on every side,
+// meets its columns (a column-local fill, parity or winding, sees in its columns exactly the
+// crossings of those), as a mesh of its own: the vertices it uses, compacted, and the same origin.
+// Row-major list (ty * tasksX + tx); None for a task no triangle reaches.
+py::list taskMeshes(const PyMesh& mesh, const Frame& frame, int64_t brick, int64_t k) {
+    if (brick <= 0 || k <= 0) throw ArgumentError("brick and stacks per task must be positive");
+    const int64_t span = brick * k; // columns per task along x and y
+    const int64_t tasksX = (frame.width() + span - 1) / span, tasksY = (frame.height() + span - 1) / span;
+    const Vec3d lo = frame.box().lo, cell = frame.cellSize();
+    const MeshView view = mesh.mesh.view();
+    std::vector<std::vector<uint32_t>> lists(size_t(tasksX * tasksY));
+    auto taskOf = [&](double g, int64_t n) {
+        return std::clamp<int64_t>(int64_t(std::floor(g / double(span))), 0, n - 1);
+    };
+    for (std::size_t t = 0; t < view.triangleCount; ++t) {
+        Vec3d a = view.vertex(view.index(t, 0)), b = view.vertex(view.index(t, 1)),
+              c = view.vertex(view.index(t, 2));
+        const double x0 = (std::min({a.x, b.x, c.x}) - lo.x) / cell.x - 1,
+                     x1 = (std::max({a.x, b.x, c.x}) - lo.x) / cell.x + 1;
+        const double y0 = (std::min({a.y, b.y, c.y}) - lo.y) / cell.y - 1,
+                     y1 = (std::max({a.y, b.y, c.y}) - lo.y) / cell.y + 1;
+        if (x1 < 0 || y1 < 0 || x0 > double(frame.width()) || y0 > double(frame.height())) continue;
+        for (int64_t ty = taskOf(y0, tasksY), ty1 = taskOf(y1, tasksY); ty <= ty1; ++ty)
+            for (int64_t tx = taskOf(x0, tasksX), tx1 = taskOf(x1, tasksX); tx <= tx1; ++tx)
+                lists[size_t(ty * tasksX + tx)].push_back(uint32_t(t));
+    }
+    // Compaction: remap[v] is v's index in the current task's mesh, valid when stamp[v] is the task.
+    std::vector<uint32_t> remap(view.vertexCount), stamp(view.vertexCount, UINT32_MAX);
+    py::list out;
+    for (std::size_t task = 0; task < lists.size(); ++task) {
+        if (lists[task].empty()) {
+            out.append(py::none());
+            continue;
+        }
+        auto part = std::make_shared<PyMesh>();
+        part->origin = mesh.origin;
+        part->source = mesh.source;
+        part->mesh.indices.reserve(3 * lists[task].size());
+        for (const uint32_t t : lists[task])
+            for (int c = 0; c < 3; ++c) {
+                const uint32_t v = view.index(t, c);
+                if (stamp[v] != uint32_t(task)) {
+                    stamp[v] = uint32_t(task);
+                    remap[v] = uint32_t(part->mesh.positions.size());
+                    part->mesh.positions.push_back(mesh.mesh.positions[v]);
+                }
+                part->mesh.indices.push_back(remap[v]);
+            }
+        out.append(py::cast(part));
     }
     return out;
 }
@@ -273,15 +415,68 @@ void bindVoxelize(py::module_& m) {
     m.def(
         "_voxelize_stacks",
         [](const py::object& meshObj, const py::tuple& frame, const std::vector<int64_t>& stacks, Int brick,
-           const std::string& mode, const std::string& fill, int threads) {
+           const std::string& mode, const std::string& fill, int threads, const py::object& visit,
+           bool packbits) {
             const auto mesh = meshArgument(meshObj, py::none());
-            return voxelizeStacks(*mesh, frame, stacks, brick, mode, fill, threads);
+            return voxelizeStacks(*mesh, frame, stacks, brick, mode, fill, threads, visit, packbits);
         },
         py::arg("mesh"), py::arg("frame"), py::arg("stacks"), py::kw_only(), py::arg("brick") = 128,
         py::arg("mode") = "solid", py::arg("fill") = "auto", py::arg("threads") = 0,
+        py::arg("visit") = py::none(), py::arg("packbits") = false,
         "One task of voxfx.dask.voxelize_grid: the bricks of the stacks (x0, y0, x1, y1) (in bricks "
         "along x and y) of the grid `frame` (from _grid_frame), voxelized on their own: a list of "
-        "(x0, y0, z0, value), value a bool for a uniform brick or a bool array indexed [x, y, z].");
+        "(x0, y0, z0, value), value a bool for a uniform brick or a bool array indexed [x, y, z]. "
+        "visit: called as visit(x0, y0, z0, value) for each brick as it is made instead (one call at a "
+        "time, in no set order; an empty list returned); its arrays share one buffer, valid during the "
+        "call only. packbits=True (with visit): a mixed brick comes as the uint8 array numcodecs.PackBits "
+        "makes of its whole zarr chunk (brick^3 bools, False past the grid).");
+
+    m.def(
+        "_resolve_fill",
+        [](const py::object& meshObj, const py::tuple& frame, const std::string& mode,
+           const std::string& fill) {
+            const auto mesh = meshArgument(meshObj, py::none());
+            const VoxelizeOptions vo = stackOptions(mode, fill, 1);
+            const Frame f = frameFromState(frame);
+            return std::string(toString(asArgument([&] { return resolveFill(mesh->mesh.view(), f, vo); })));
+        },
+        py::arg("mesh"), py::arg("frame"), py::kw_only(), py::arg("mode") = "solid", py::arg("fill") = "auto",
+        "voxfx.dask's planning step: the fill voxelize() runs for `fill` on this mesh (auto: parity for a "
+        "closed mesh, else flood), decided once on the whole mesh before its triangles are split.");
+    m.def(
+        "_task_meshes",
+        [](const py::object& meshObj, const py::tuple& frame, Int brick, Int k) {
+            const auto mesh = meshArgument(meshObj, py::none());
+            return taskMeshes(*mesh, frameFromState(frame), brick, k);
+        },
+        py::arg("mesh"), py::arg("frame"), py::kw_only(), py::arg("brick"), py::arg("stacks_per_task"),
+        "voxfx.dask's split: for each task of k x k stacks (row-major), the triangles over its columns "
+        "(and a cell around them) as a voxfx.Mesh of their own, or None. For column-local fills (parity, "
+        "winding) a task's bricks from its part equal those from the whole mesh.");
+    m.def(
+        "_voxelize_region",
+        [](const py::object& meshObj, const py::tuple& state, const std::vector<int64_t>& stacks,
+           const std::string& path, Int brick, const std::string& mode, const std::string& fill,
+           int threads) {
+            const auto mesh = meshArgument(meshObj, py::none());
+            const Frame frame = frameFromState(state);
+            VoxelizeOptions vo = stackOptions(mode, fill, threads);
+            TileOptions to = stackRange(brick, stacks);
+            int64_t count = 0;
+            interruptible([&](Cancel& cancel) {
+                vo.progress = &cancel;
+                SparseGrid grid = voxelizeSparse(mesh->mesh.view(), frame, vo, to);
+                if (mesh->shifted()) grid.translate(mesh->origin);
+                count = grid.count();
+                writeGrid(grid, path);
+            });
+            return count;
+        },
+        py::arg("mesh"), py::arg("frame"), py::arg("stacks"), py::arg("path"), py::kw_only(),
+        py::arg("brick") = 128, py::arg("mode") = "solid", py::arg("fill") = "auto", py::arg("threads") = 0,
+        "One task of voxfx.dask.voxelize_regions: the stacks (x0, y0, x1, y1) of the grid `frame` as a "
+        "sparse grid written to the .vdb `path` (atomically; the whole grid's frame and dims, so that "
+        "`voxfx merge` unites the regions); returns its filled cells.");
 
     m.def(
         "cuda_status",

@@ -173,15 +173,15 @@ def test_what_the_tiles_cannot_do_is_refused_before_any_task(tmp_path, data_path
 
 
 class _LocalClient:
-    """A client that runs each task in this process (client.map/gather/scatter), for the checks
+    """A client that runs each task in this process (client.submit/gather/scatter), for the checks
     that need no cluster."""
     dashboard_link = None
 
     def scatter(self, value, broadcast=False):
         return value
 
-    def map(self, fn, items, pure=False, **kwargs):
-        return [fn(item, **kwargs) for item in items]
+    def submit(self, fn, *args, pure=False, **kwargs):
+        return fn(*args, **kwargs)
 
     def gather(self, futures):
         return futures
@@ -200,3 +200,101 @@ def test_the_command_hands_a_zarr_output_to_the_cluster(tmp_path, data_path, cli
     r = subprocess.run([cli, "voxelize", path, "-r", "64", "--axis", "x", "-o", str(bad)], capture_output=True,
                        text=True, env=_env(), timeout=60)
     assert r.returncode != 0 and "sliced along z" in r.stderr and not bad.exists()
+
+
+def _columns_crossed(vertices, faces, frame_lo, cell, x_range, y_range):
+    """Brute force: the triangles whose x-y projection holds a column centre of the rectangle
+    x_range x y_range (cells), by barycentric signs on every centre of each triangle's box."""
+    out = set()
+    for t, f in enumerate(faces):
+        p = (vertices[f, :2] - frame_lo[:2]) / cell[:2] - 0.5  # column centres at integers
+        lo, hi = np.floor(p.min(axis=0)).astype(int), np.ceil(p.max(axis=0)).astype(int)
+        xs = np.arange(max(lo[0], x_range[0]), min(hi[0], x_range[1] - 1) + 1)
+        ys = np.arange(max(lo[1], y_range[0]), min(hi[1], y_range[1] - 1) + 1)
+        if not len(xs) or not len(ys):
+            continue
+        gx, gy = np.meshgrid(xs, ys)
+        a, b, c = p
+        def side(u, v):
+            return (v[0] - u[0]) * (gy - u[1]) - (v[1] - u[1]) * (gx - u[0])
+        s = np.stack([side(a, b), side(b, c), side(c, a)])
+        if ((s >= 0).all(axis=0) | (s <= 0).all(axis=0)).any():
+            out.add(t)
+    return out
+
+
+def test_each_task_gets_the_triangles_over_its_columns_and_not_the_whole_mesh(data_path):
+    mesh = voxfx.load_mesh(data_path("meshes/bunny00.off"))
+    plan = voxfx._voxfx._grid_frame(mesh, resolution=128)
+    frame, dims, brick, k = plan["frame"], plan["dims"], 16, 2
+    parts = voxfx._voxfx._task_meshes(mesh, frame, brick=brick, stacks_per_task=k)
+    tasks = voxfx.dask._tasks_of(dims, brick, k)
+    assert len(parts) == len(tasks)
+    v, f = mesh.vertices - np.asarray(mesh.origin), mesh.faces
+    lo = np.asarray(frame[0])
+    cell = (np.asarray(frame[1]) - lo) / np.asarray(dims)
+    # Triangles are told apart by their corners (a part renumbers its vertices).
+    def keys(vertices, faces):
+        return {tuple(sorted(map(tuple, np.round(vertices[t], 6)))) for t in faces}
+    sizes = []
+    for (tx, ty, x0, y0, x1, y1), part in zip(tasks, parts):
+        crossed = _columns_crossed(v, f, lo, cell, (x0 * brick, x1 * brick), (y0 * brick, y1 * brick))
+        if part is None:
+            assert not crossed, (tx, ty)
+            continue
+        pv = part.vertices - np.asarray(mesh.origin)
+        assert keys(v, f[sorted(crossed)]) <= keys(pv, part.faces), (tx, ty)
+        sizes.append(len(part.faces))
+    # Each part is a small piece of the mesh; together about the mesh once (a border triangle twice).
+    assert max(sizes) < 0.25 * len(f) and sum(sizes) < 1.3 * len(f)
+
+
+def _expect_vdb_equals(path, reference):
+    ours = voxfx.read_sparse_grid(str(path)).to_grid()
+    assert ours.dims == reference.dims and np.allclose(ours.affine, reference.affine)
+    assert np.array_equal(ours.to_numpy(), reference.to_numpy())
+
+
+def test_regions_merged_equal_the_single_process_grid_and_a_rerun_skips_them(tmp_path, data_path, client, cli):
+    mesh = voxfx.load_mesh(data_path("meshes/bunny00.off"))
+    reference = voxfx.voxelize(mesh, resolution=256, sparse=True).to_grid()
+    folder = tmp_path / "bunny.regions"
+    s = voxfx.dask.voxelize_regions(mesh, 256, client, str(folder), brick=32, stacks_per_task=2, progress=False)
+    assert s["dims"] == reference.dims and s["skipped"] == 0 and 1 < s["regions"] < s["tasks"]
+    files = sorted(p for p in os.listdir(folder) if p.endswith(".vdb"))
+    assert len(files) == s["regions"] and s["filled"] == reference.count()
+    # The merge command and the Python merge give the single-process grid.
+    r = subprocess.run([cli, "merge", str(folder), "-o", str(tmp_path / "cli.vdb")], capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert f"{len(files)} regions" in r.stdout
+    _expect_vdb_equals(tmp_path / "cli.vdb", reference)
+    voxfx.dask.merge_regions(str(folder), str(tmp_path / "py.vdb"))
+    _expect_vdb_equals(tmp_path / "py.vdb", reference)
+    # A rerun skips every region done; one mark removed: that region alone runs again.
+    os.remove(folder / "done" / "1-1")
+    again = voxfx.dask.voxelize_regions(mesh, 256, client, str(folder), brick=32, stacks_per_task=2, progress=False)
+    assert again["skipped"] == s["tasks"] - 1
+    voxfx.dask.merge_regions(str(folder), str(tmp_path / "again.vdb"))
+    _expect_vdb_equals(tmp_path / "again.vdb", reference)
+    # Another grid's regions are refused by the merge, and nothing is written.
+    other = tmp_path / "other.regions"
+    voxfx.dask.voxelize_regions(mesh, 128, client, str(other), brick=32, progress=False)
+    mixed = sorted(str(other / p) for p in os.listdir(other) if p.endswith(".vdb"))[:1] + [str(folder / files[0])]
+    r = subprocess.run([cli, "merge", *mixed, "-o", str(tmp_path / "mixed.vdb")], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode != 0 and "another grid" in r.stderr and not (tmp_path / "mixed.vdb").exists()
+
+
+def test_the_command_writes_vdb_regions_on_the_cluster_and_merges_them(tmp_path, data_path, cli, cluster):
+    scheduler_file, _ = cluster
+    import json
+
+    address = json.load(open(scheduler_file))["address"]
+    path = data_path("meshes/bunny00.off")
+    out = tmp_path / "bunny.vdb"
+    r = subprocess.run([cli, "voxelize", path, "-r", "96", "--brick", "16", "-o", str(out), "--scheduler", address,
+                        "-q"], capture_output=True, text=True, env=_env(), timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "bunny.regions" / "voxfx-regions.json").exists()
+    _expect_vdb_equals(out, voxfx.voxelize(voxfx.load_mesh(path), resolution=96, sparse=True).to_grid())

@@ -12,7 +12,7 @@ The grid is cut as the tiled voxelizer cuts it (voxfx/tiled.hpp): bricks of B^3 
 *stacks* of bricks over the same B x B columns. A task voxelizes a rectangle of stacks on its own
 (each column's parity or winding number is carried down its stack inside the task, so no task waits
 for another and the result does not depend on which worker ran what) and writes each brick as one
-chunk of the Zarr array "voxels" (bool, blosc zstd with bit shuffle; bricks that are all empty are
+chunk of the Zarr array "voxels" (bool, packed 8 to a byte (numcodecs.PackBits), then zstd; bricks that are all empty are
 not written). The array's attributes hold the index-to-world affine of the voxel centres
 ("affine", 4 x 4), "voxel_size", "origin" (the world position of cell (0, 0, 0)'s centre) and the
 options. A task marks its rectangle done in the array "done" after its last brick: a rerun with
@@ -140,12 +140,18 @@ def run_manifest(manifest, outdir, client=None, chunk=16, format=".binvox", skip
 
 # ---- one grid across a cluster ------------------------------------------------------------------
 
-_GRID_FORMAT = 1  # the store's layout version, in its attributes
+_GRID_FORMAT = 2  # the store's layout version, in its attributes
+
+
+_FULL_CHUNKS = {}  # (chunk shape, compressor): a full chunk's encoded bytes, once per worker process
 
 
 def _grid_task(rect, mesh, frame, store, brick, mode, fill, threads):
     """One task: the stacks of `rect` = (tx, ty, x0, y0, x1, y1), voxelized and written brick by
-    brick into the store, then marked done. Returns (tx, ty, chunks written, seconds)."""
+    brick into the store, then marked done. `mesh` holds the triangles over the rectangle's columns
+    (or the whole mesh); None: none reach it, nothing to write. Returns (tx, ty, chunks written,
+    seconds, peak resident bytes of the worker process)."""
+    import numpy as np
     import zarr
 
     from voxfx._voxfx import _voxelize_stacks
@@ -155,23 +161,70 @@ def _grid_task(rect, mesh, frame, store, brick, mode, fill, threads):
     voxels, done = root["voxels"], root["done"]
     tx, ty = rect[0], rect[1]
     written = 0
-    for x0, y0, z0, value in _voxelize_stacks(mesh, frame, rect[2:], brick=brick, mode=mode, fill=fill,
-                                             threads=threads):
-        if value is False or (value is not True and not value.any()):
-            continue  # the fill value: an empty brick is never written (zarr's own switch is not kept)
+    full = None  # a full brick's chunk, encoded once: inside a solid most bricks are full
+
+    def write(x0, y0, z0, value):
+        nonlocal written, full
+        if value is False:
+            return  # the fill value: an empty brick is never written (zarr's own switch is not kept)
         if value is True:
-            w, h, d = (min(brick, n - o) for n, o in zip(voxels.shape, (x0, y0, z0)))
-            voxels[x0:x0 + w, y0:y0 + h, z0:z0 + d] = True
-        else:
-            w, h, d = value.shape
-            voxels[x0:x0 + w, y0:y0 + h, z0:z0 + d] = value
+            if full is None:
+                key = (voxels.chunks, repr(voxels.compressor))
+                full = _FULL_CHUNKS.get(key) or _FULL_CHUNKS.setdefault(
+                    key, voxels._encode_chunk(np.ones(voxels.chunks, dtype=bool)))
+            voxels.chunk_store[voxels._chunk_key((x0 // brick, y0 // brick, z0 // brick))] = full
+        else:  # the chunk's PackBits bytes, compressed as zarr's own encoding would (filters, then compressor)
+            if value[1:].any():
+                voxels.chunk_store[voxels._chunk_key((x0 // brick, y0 // brick, z0 // brick))] = \
+                    voxels.compressor.encode(value)
+            else:
+                return
         written += 1
+
+    if mesh is not None:
+        _voxelize_stacks(mesh, frame, rect[2:], brick=brick, mode=mode, fill=fill, threads=threads, visit=write,
+                         packbits=True)
     done[tx, ty] = 1
-    return tx, ty, written, time.monotonic() - start
+    return tx, ty, written, time.monotonic() - start, _peak_rss()
+
+
+def _region_task(rect, mesh, frame, folder, brick, mode, fill, threads):
+    """One task of voxelize_regions: the stacks of `rect` written as FOLDER/region-TX-TY.vdb (none
+    when no triangle reaches them), then marked done (FOLDER/done/TX-TY). Returns (tx, ty, filled
+    cells, seconds, peak resident bytes)."""
+    from voxfx._voxfx import _voxelize_region
+
+    start = time.monotonic()
+    tx, ty = rect[0], rect[1]
+    filled = 0
+    if mesh is not None:
+        filled = _voxelize_region(mesh, frame, rect[2:], os.path.join(folder, f"region-{tx:04d}-{ty:04d}.vdb"),
+                                  brick=brick, mode=mode, fill=fill, threads=threads)
+    _mark(folder, tx, ty)
+    return tx, ty, filled, time.monotonic() - start, _peak_rss()
+
+
+def _mark(folder, tx, ty):
+    with open(os.path.join(folder, "done", f"{tx}-{ty}"), "w"):
+        pass
+
+
+def _peak_rss():
+    """The peak resident set of this (worker) process in bytes: VmHWM, whose memory map is the
+    process's own (getrusage's ru_maxrss survives fork and exec: a spawned worker would report the
+    driver's peak); 0 where /proc has none."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 0
 
 
 def _tasks_of(dims, brick, stacks_per_task):
-    """The rectangles of k x k stacks: (tx, ty, x0, y0, x1, y1) in stacks."""
+    """The rectangles of k x k stacks: (tx, ty, x0, y0, x1, y1) in stacks, row-major (ty, then tx)."""
     sx, sy = (math.ceil(n / brick) for n in dims[:2])
     k = stacks_per_task
     return [(tx, ty, tx * k, ty * k, min(sx, tx * k + k), min(sy, ty * k + k))
@@ -198,13 +251,44 @@ def _open_store(store, dims, brick, attrs, tasks_shape, overwrite):
         raise ValueError(f"{path or store}: a store of another grid or other options "
                          f"({root.attrs.get('voxfx')}); overwrite=True replaces it")
     root = zarr.open_group(store, mode="w")
-    compressor = numcodecs.Blosc(cname="zstd", clevel=3, shuffle=numcodecs.Blosc.BITSHUFFLE)
+    # Bools packed 8 to a byte (numcodecs.PackBits, which any zarr reader with numcodecs decodes), then
+    # zstd level 1 (whole, not in blosc's blocks: 3x faster and 3x smaller on packed bits); the tasks
+    # write the packed bytes straight from voxfx's bit columns.
+    compressor = numcodecs.Zstd(level=1)
     root.create_dataset("voxels", shape=tuple(dims), chunks=(brick,) * 3, dtype=bool, fill_value=False,
-                        compressor=compressor, write_empty_chunks=False)
+                        compressor=compressor, filters=[numcodecs.PackBits()], write_empty_chunks=False)
     root.create_dataset("done", shape=tasks_shape, chunks=(1, 1), dtype="u1", fill_value=0,
                         write_empty_chunks=False)
     root.attrs.update(attrs)
     return root, False
+
+
+_REGIONS_FILE = "voxfx-regions.json"
+
+
+def _open_regions(folder, attrs, overwrite):
+    """The regions folder: made, or reopened for the same grid and options (returns the (tx, ty) of
+    the tasks done before). Another grid's folder is emptied only with overwrite; a non-empty folder
+    that is not a regions folder is never touched."""
+    import shutil
+
+    folder = os.fspath(folder)
+    info = os.path.join(folder, _REGIONS_FILE)
+    if os.path.isfile(info):
+        with open(info, encoding="utf-8") as f:
+            old = json.load(f)
+        if old.get("voxfx") == attrs["voxfx"] and not overwrite:
+            names = os.listdir(os.path.join(folder, "done")) if os.path.isdir(os.path.join(folder, "done")) else []
+            return {tuple(int(v) for v in n.split("-")) for n in names if n.count("-") == 1}
+        if not overwrite:
+            raise ValueError(f"{folder}: regions of another grid or other options ({old.get('voxfx')}); "
+                             "overwrite=True replaces them")
+        shutil.rmtree(folder)
+    elif os.path.isdir(folder) and os.listdir(folder):
+        raise ValueError(f"{folder}: a folder that is not a voxfx regions folder; give an empty or new path")
+    os.makedirs(os.path.join(folder, "done"), exist_ok=True)
+    _write_report(attrs, info)
+    return set()
 
 
 def _get_client(client):
@@ -220,31 +304,18 @@ def _get_client(client):
         return distributed.Client(cluster), cluster
 
 
-def voxelize_grid(mesh, resolution=None, client=None, store=None, *, voxel_size=None, dims=None, bounds=None,
-                  margin=0, cube=False, mode="solid", fill="auto", brick=128, stacks_per_task=None, threads=1,
-                  overwrite=False, progress=True):
-    """Voxelizes `mesh` into the Zarr store `store` on the Dask cluster of `client`, brick by brick.
+def _plan(mesh, resolution, voxel_size, dims, bounds, margin, cube, mode, fill, brick, stacks_per_task):
+    """What both kinds of store need before any task: the mesh, frame, dims, k, tasks, the store's
+    attributes, the fill the tasks run and, per task, its triangles (None: none reach it).
 
-    mesh: a voxfx.Mesh (or anything voxfx.Mesh takes) or a mesh file's path (read here, sent once
-    to every worker). The grid: resolution, voxel_size, dims, bounds, margin, cube as
-    voxfx.voxelize takes them (axis z). mode: surface | conservative | solid | solid-conservative |
-    interior; fill auto | parity | winding | gwn (auto: parity for a closed mesh; an open one needs
-    fill="gwn": flood and vote need the whole grid). brick: the chunk edge B (a multiple of 8; 16
-    for gwn). stacks_per_task: each task takes k x k stacks of bricks (default: about 1,000 tasks at
-    most). threads: voxfx's threads per task (1: Dask's workers are the parallelism).
-    client: a distributed.Client; None uses the current client or, when there is none, a
-    LocalCluster on this machine for the call. store: a folder path (or any Zarr store). A rerun
-    with the same arguments skips the bricks already done; other arguments on an existing store
-    are refused unless overwrite=True. progress: Dask's progress bar (distributed.progress) while
-    the tasks run. Returns a summary: store, dims, affine, tasks, skipped, chunks_written, seconds.
-    """
+    Column-local fills (parity and winding, and the surface modes) see in a column only the
+    triangles over it, so each task gets those alone; gwn's winding numbers need every triangle,
+    so its tasks share the whole mesh. Fill auto is decided here, once, on the whole mesh (a part is
+    open)."""
     import voxfx
 
-    if store is None:
-        raise TypeError("voxelize_grid needs a store (a folder for the Zarr array)")
     if isinstance(brick, bool) or not isinstance(brick, int) or brick <= 0 or brick % 8:
         raise ValueError(f"brick must be a positive multiple of 8, got {brick!r}")
-    start = time.monotonic()
     if isinstance(mesh, (str, os.PathLike)):
         mesh = voxfx.load_mesh(mesh)
     elif not isinstance(mesh, voxfx.Mesh):
@@ -256,10 +327,15 @@ def voxelize_grid(mesh, resolution=None, client=None, store=None, *, voxel_size=
     # here, before any task: an empty rectangle of stacks checks all of it.
     voxfx._voxfx._voxelize_stacks(mesh, frame, (0, 0, 0, 0), brick=brick, mode=mode, fill=fill, threads=1)
     stacks = [math.ceil(n / brick) for n in shape[:2]]
-    k = stacks_per_task or max(1, math.ceil(math.sqrt(stacks[0] * stacks[1] / 1024)))
+    k = stacks_per_task or max(1, math.ceil(math.sqrt(stacks[0] * stacks[1] / 256)))
     if isinstance(k, bool) or not isinstance(k, int) or k < 1:
         raise ValueError(f"stacks_per_task must be a positive integer, got {stacks_per_task!r}")
+    run_fill = voxfx._voxfx._resolve_fill(mesh, frame, mode=mode, fill=fill)
     tasks = _tasks_of(shape, brick, k)
+    if run_fill == "gwn":
+        parts = [mesh] * len(tasks)
+    else:
+        parts = voxfx._voxfx._task_meshes(mesh, frame, brick=brick, stacks_per_task=k)
     affine = plan["affine"]
     attrs = {
         "voxfx": {"format": _GRID_FORMAT, "frame": [list(frame[0]), list(frame[1]), frame[2], *frame[3:]],
@@ -270,40 +346,129 @@ def voxelize_grid(mesh, resolution=None, client=None, store=None, *, voxel_size=
         "axes": ["x", "y", "z"],
     }
     tasks_shape = (math.ceil(stacks[0] / k), math.ceil(stacks[1] / k))
-    root, reopened = _open_store(store, shape, brick, attrs, tasks_shape, overwrite)
-    if reopened:
-        done = root["done"][:]
-        todo = [t for t in tasks if not done[t[0], t[1]]]
-    else:
-        todo = tasks
+    return dict(mesh=mesh, frame=frame, shape=shape, k=k, tasks=tasks, parts=parts, attrs=attrs, fill=run_fill,
+                tasks_shape=tasks_shape)
+
+
+def _run(client, fn, todo, parts, progress, **kwargs):
+    """Runs fn(rect, mesh, **kwargs) for the tasks `todo` (indices into parts) on the cluster;
+    returns their results. Parts are sent once: the whole mesh broadcast to every worker, or each
+    task's own triangles scattered."""
     client, cluster = _get_client(client)
     try:
-        results = []
-        if todo:
-            if progress and getattr(client, "dashboard_link", None):
-                print(f"voxfx.dask: {len(todo)} tasks ({len(tasks) - len(todo)} done before); dashboard "
-                      f"{client.dashboard_link}", file=sys.stderr)
-            mesh_future = client.scatter(mesh, broadcast=True)
-            futures = client.map(_grid_task, todo, mesh=mesh_future, frame=frame, store=store, brick=brick,
-                                 mode=mode, fill=fill, threads=threads, pure=False)
-            if progress:
-                import distributed
+        if not todo:
+            return []
+        if progress and getattr(client, "dashboard_link", None):
+            print(f"voxfx.dask: {len(todo)} tasks; dashboard {client.dashboard_link}", file=sys.stderr)
+        meshes = [parts[i] for i, _ in todo]
+        if all(m is meshes[0] for m in meshes):  # gwn: one mesh for every task
+            sent = [client.scatter(meshes[0], broadcast=True)] * len(todo)
+        else:
+            own = [i for i, m in enumerate(meshes) if m is not None]
+            sent = [None] * len(todo)
+            for i, f in zip(own, client.scatter([meshes[i] for i in own])):
+                sent[i] = f
+        futures = [client.submit(fn, rect, m, pure=False, **kwargs) for (_, rect), m in zip(todo, sent)]
+        if progress:
+            import distributed
 
-                distributed.progress(futures)
-            results = client.gather(futures)
+            distributed.progress(futures)
+        return client.gather(futures)
     finally:
         if cluster is not None:
             client.close()
             cluster.close()
+
+
+def voxelize_grid(mesh, resolution=None, client=None, store=None, *, voxel_size=None, dims=None, bounds=None,
+                  margin=0, cube=False, mode="solid", fill="auto", brick=128, stacks_per_task=None, threads=1,
+                  overwrite=False, progress=True):
+    """Voxelizes `mesh` into the Zarr store `store` on the Dask cluster of `client`, brick by brick.
+
+    mesh: a voxfx.Mesh (or anything voxfx.Mesh takes) or a mesh file's path (read here). Each task
+    gets the triangles over its columns only (gwn, whose winding numbers need them all: the whole
+    mesh, sent once to every worker). The grid: resolution, voxel_size, dims, bounds, margin, cube as
+    voxfx.voxelize takes them (axis z). mode: surface | conservative | solid | solid-conservative |
+    interior; fill auto | parity | winding | gwn (auto: parity for a closed mesh; an open one needs
+    fill="gwn": flood and vote need the whole grid). brick: the chunk edge B (a multiple of 8; 16
+    for gwn). stacks_per_task: each task takes k x k stacks of bricks (default: about 256 tasks at
+    most). threads: voxfx's threads per task (1: Dask's workers are the parallelism).
+    client: a distributed.Client; None uses the current client or, when there is none, a
+    LocalCluster on this machine for the call. store: a folder path (or any Zarr store). A rerun
+    with the same arguments skips the bricks already done; other arguments on an existing store
+    are refused unless overwrite=True. progress: Dask's progress bar (distributed.progress) while
+    the tasks run. Returns a summary: store, dims, affine, tasks, skipped, chunks_written, seconds,
+    worker_peak_bytes (the largest peak resident set of a worker that ran a task).
+    """
+    if store is None:
+        raise TypeError("voxelize_grid needs a store (a folder for the Zarr array)")
+    start = time.monotonic()
+    p = _plan(mesh, resolution, voxel_size, dims, bounds, margin, cube, mode, fill, brick, stacks_per_task)
+    root, reopened = _open_store(store, p["shape"], brick, p["attrs"], p["tasks_shape"], overwrite)
+    done = root["done"][:] if reopened else None
+    todo = [(i, t) for i, t in enumerate(p["tasks"]) if done is None or not done[t[0], t[1]]]
+    results = _run(client, _grid_task, todo, p["parts"], progress, frame=p["frame"], store=store, brick=brick,
+                   mode=mode, fill=p["fill"], threads=threads)
     return {
         "store": os.fspath(store) if isinstance(store, (str, os.PathLike)) else store,
-        "dims": shape,
-        "affine": affine,
-        "tasks": len(tasks),
-        "skipped": len(tasks) - len(todo),
+        "dims": p["shape"],
+        "affine": p["attrs"]["affine"],
+        "tasks": len(p["tasks"]),
+        "skipped": len(p["tasks"]) - len(todo),
         "chunks_written": sum(r[2] for r in results),
         "seconds": time.monotonic() - start,
+        "worker_peak_bytes": max((r[4] for r in results), default=0),
     }
+
+
+def voxelize_regions(mesh, resolution=None, client=None, folder=None, *, voxel_size=None, dims=None, bounds=None,
+                     margin=0, cube=False, mode="solid", fill="auto", brick=128, stacks_per_task=None, threads=1,
+                     overwrite=False, progress=True):
+    """Voxelizes `mesh` on the Dask cluster of `client` into OpenVDB files, one per task's region:
+    FOLDER/region-TX-TY.vdb, each a BoolGrid "voxels" of the cells of its k x k stacks of bricks in
+    the whole grid's frame (transform and "voxfx_dims" the whole grid's), so that
+    `voxfx merge FOLDER -o GRID.vdb` (or OpenVDB's own tools) unites them. A region no triangle
+    reaches has no file. The arguments are voxelize_grid's; a rerun with the same arguments skips the
+    regions marked done (FOLDER/done/TX-TY, written after the region's file is renamed into place).
+    Returns a summary: folder, dims, affine, tasks, skipped, regions (files written), filled (their
+    cells), seconds, worker_peak_bytes.
+    """
+    if folder is None:
+        raise TypeError("voxelize_regions needs a folder for the region files")
+    start = time.monotonic()
+    p = _plan(mesh, resolution, voxel_size, dims, bounds, margin, cube, mode, fill, brick, stacks_per_task)
+    folder = os.path.abspath(os.fspath(folder))
+    done = _open_regions(folder, p["attrs"], overwrite)
+    todo = [(i, t) for i, t in enumerate(p["tasks"]) if (t[0], t[1]) not in done]
+    results = _run(client, _region_task, todo, p["parts"], progress, frame=p["frame"], folder=folder, brick=brick,
+                   mode=mode, fill=p["fill"], threads=threads)
+    return {
+        "folder": folder,
+        "dims": p["shape"],
+        "affine": p["attrs"]["affine"],
+        "tasks": len(p["tasks"]),
+        "skipped": len(p["tasks"]) - len(todo),
+        "regions": sum(p["parts"][i] is not None for i, _ in todo),
+        "filled": sum(r[2] for r in results),
+        "seconds": time.monotonic() - start,
+        "worker_peak_bytes": max((r[4] for r in results), default=0),
+    }
+
+
+def merge_regions(folder, output):
+    """Unites the region files of `folder` (voxelize_regions) into one grid file (.vdb, .binvox,
+    .nrrd): `voxfx merge` in this process. Returns the merged voxfx.SparseGrid."""
+    import voxfx
+
+    files = sorted(os.path.join(folder, n) for n in os.listdir(folder)
+                   if n.endswith(".vdb") and not n.startswith("."))
+    if not files:
+        raise ValueError(f"{folder}: no .vdb region in it")
+    grid = voxfx.read_sparse_grid(files[0])
+    for f in files[1:]:
+        grid.unite(voxfx.read_sparse_grid(f))
+    grid.save(output)
+    return grid
 
 
 def open_grid(store):
@@ -315,8 +480,9 @@ def open_grid(store):
 
 
 def _main(argv):
-    """`voxfx voxelize MESH -o GRID.zarr [--scheduler ADDRESS] ...`: the command hands .zarr outputs
-    to this (argv without the program's name)."""
+    """`voxfx voxelize MESH -o GRID.zarr [--scheduler ADDRESS] ...` and `voxfx voxelize MESH -o
+    GRID.vdb --scheduler ADDRESS`: the command hands these outputs to this (argv without the
+    program's name). GRID.vdb: regions into GRID.regions/, then merged into GRID.vdb."""
     import argparse
 
     import voxfx
@@ -325,7 +491,8 @@ def _main(argv):
                                 "Dask cluster into a Zarr store (voxfx.dask.voxelize_grid)")
     p.add_argument("command", choices=["voxelize"])
     p.add_argument("mesh")
-    p.add_argument("-o", "--output", required=True, help="the Zarr store (a folder, GRID.zarr)")
+    p.add_argument("-o", "--output", required=True,
+                   help="the Zarr store (a folder, GRID.zarr), or GRID.vdb (regions in GRID.regions/, merged)")
     p.add_argument("-r", "--resolution", type=int)
     p.add_argument("--voxel-size", type=float)
     p.add_argument("--dims", type=int, nargs=3)
@@ -345,10 +512,16 @@ def _main(argv):
 
         client = distributed.Client(a.scheduler)
     bounds = None if a.bounds is None else (a.bounds[:3], a.bounds[3:])
+    grid = dict(voxel_size=a.voxel_size, dims=a.dims, bounds=bounds, margin=a.margin, cube=a.cube, mode=a.mode,
+                fill=a.fill, brick=a.brick, overwrite=a.overwrite, progress=not a.quiet)
+    vdb = a.output.lower().endswith(".vdb")
     try:
-        s = voxelize_grid(a.mesh, a.resolution, client, a.output, voxel_size=a.voxel_size, dims=a.dims,
-                          bounds=bounds, margin=a.margin, cube=a.cube, mode=a.mode, fill=a.fill, brick=a.brick,
-                          overwrite=a.overwrite, progress=not a.quiet)
+        if vdb:
+            regions = a.output[:-4] + ".regions"
+            s = voxelize_regions(a.mesh, a.resolution, client, regions, **grid)
+            merge_regions(regions, a.output)
+        else:
+            s = voxelize_grid(a.mesh, a.resolution, client, a.output, **grid)
     except (voxfx.Error, ValueError, TypeError, OSError) as e:
         print(f"voxfx: error: {e}", file=sys.stderr)
         return 2
@@ -357,7 +530,8 @@ def _main(argv):
             client.close()
     if not a.quiet:
         d = s["dims"]
+        what = f"{s['regions']} regions written" if vdb else f"{s['chunks_written']} chunks written"
         print(f"{a.mesh} -> {d[0]} x {d[1]} x {d[2]} grid in {s['tasks']} tasks ({s['skipped']} done before), "
-              f"{s['chunks_written']} chunks written, {s['seconds']:.1f} s -> {a.output} (zarr)")
+              f"{what}, {s['seconds']:.1f} s -> {a.output} ({'vdb, regions in ' + regions if vdb else 'zarr'})")
     return 0
 

@@ -33,17 +33,17 @@ struct VoxelizeArgs {
     int64_t brick = 128;   ///< -o GRID.zarr: the chunk edge
 };
 
-// -o GRID.zarr: one grid across a Dask cluster, brick by brick into a Zarr store. The work is
-// Python's (voxfx.dask.voxelize_grid: Dask, Zarr), so this command hands its arguments to
-// voxfx.dask._main in Python and becomes that process. The interpreter: VOXFX_PYTHON, else
-// Debian's /usr/bin/python3 (the one with Dask and Zarr), else python3 on PATH; voxfx's package:
-// the build tree's python/ beside this program, or the installed package this program is in.
+// -o GRID.zarr (or -o GRID.vdb --scheduler): one grid across a Dask cluster, brick by brick into
+// a Zarr store (or .vdb regions, then merged). The work is Python's (voxfx.dask: Dask, Zarr), so this command
+// hands its arguments to voxfx.dask._main in Python and becomes that process. The interpreter: VOXFX_PYTHON,
+// else Debian's /usr/bin/python3 (the one with Dask and Zarr), else python3 on PATH; voxfx's package: the
+// build tree's python/ beside this program, or the installed package this program is in.
 [[noreturn]] void runVoxelizeZarr(const VoxelizeArgs& a) {
-    if (a.volume) fail("-o ", a.output, ": volumes (--threshold) are not voxelized into a Zarr store");
+    if (a.volume) fail("-o ", a.output, ": volumes (--threshold) are not voxelized on a Dask cluster");
     if (a.choice.axis != "z" || a.choice.slicing != "uniform" || a.device != "cpu" || a.fit.padding ||
         a.dense || a.choice.vdbFloat)
         fail("-o ", a.output,
-             ": a Zarr grid is sliced along z, uniformly, on the CPU (no --axis, --slicing, ",
+             ": a grid of a Dask cluster is sliced along z, uniformly, on the CPU (no --axis, --slicing, ",
              "--device, --padding, --dense or --vdb-float)");
     const auto exact = [](double v) { // every digit: the same frame in Python
         std::ostringstream o;
@@ -175,7 +175,9 @@ int runVoxelize(const VoxelizeArgs& a) {
             {a.input, a.output, a.threshold, a.choice.axis, a.choice.vdbFloat, a.threads, a.quiet});
     }
     if (a.output.ends_with(".zarr") || a.output.ends_with(".zarr/")) runVoxelizeZarr(a);
-    if (!a.scheduler.empty()) fail("--scheduler needs -o GRID.zarr (one grid across a Dask cluster)");
+    if (!a.scheduler.empty() && gridFormatFromPath(a.output) == GridFormat::Vdb) runVoxelizeZarr(a);
+    if (!a.scheduler.empty())
+        fail("--scheduler needs -o GRID.zarr or -o GRID.vdb (one grid across a Dask cluster)");
     const auto t0 = Clock::now();
     // Everything that can be checked before the work starts is checked here, so a bad output
     // name does not cost a voxelization.
@@ -326,9 +328,12 @@ Formats (by extension): .binvox .vdb (BoolGrid "voxels", or float with --vdb-flo
 One grid across a Dask cluster (-o GRID.zarr): bricks of --brick cells (default 128) voxelized
   as Dask tasks (voxfx.dask.voxelize_grid) on the cluster of --scheduler ADDRESS (none: a local
   cluster of this machine's cores) into a Zarr store: bool array "voxels" indexed [x, y, z], one
-  blosc-compressed chunk per brick, empty bricks not written, the affine in its attributes;
+  chunk per brick (bits packed, zstd), empty bricks not written, the affine in its attributes;
   dask.array.from_zarr(GRID.zarr, component="voxels") reads it lazily. A rerun skips the bricks
-  already done. Needs python3-distributed and python3-zarr; fills parity, winding and gwn.)";
+  already done. Needs python3-distributed and python3-zarr; fills parity, winding and gwn.
+  -o GRID.vdb with --scheduler: the same tasks write one .vdb per region into GRID.regions/
+  (voxfx.dask.voxelize_regions; a rerun skips the regions done), then this command unites
+  them into GRID.vdb as `voxfx merge GRID.regions -o GRID.vdb` does.)";
 
 const Command kVoxelize{
     "voxelize", "Voxelize a mesh into a grid file (.binvox .vdb .nrrd .ply .obj .npy .npz)",
@@ -352,7 +357,8 @@ const Command kVoxelize{
         app.add_flag("--dense", a->dense, "Build the whole grid first for .vdb too (the path before tiles)");
         app.add_flag("-q,--quiet", a->quiet, "No summary or progress");
         app.add_option("--scheduler", a->scheduler,
-                       "-o GRID.zarr: the Dask scheduler's address (tcp://host:8786); none: a local cluster");
+                       "-o GRID.zarr: the Dask scheduler's address (tcp://host:8786); none: a local "
+                       "cluster. With -o GRID.vdb: regions on that cluster, then merged");
         app.add_option("--brick", a->brick, "-o GRID.zarr: the chunk edge in cells (a multiple of 8)")
             ->default_val(128)
             ->check(CLI::PositiveNumber);
