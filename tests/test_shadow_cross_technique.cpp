@@ -205,19 +205,32 @@ TEST(GlassTest, CrossingCountingShadowsPassWhatExactShadowsPassThroughGlass) {
         }
 }
 
-// #37: glass shadows gave every crossing Fresnel at normal incidence, (1 - F0), so the rim of a glass
-// ball's shadow was as light as its centre. A ball of clear glass (no tint, no attenuation) under a
-// sun straight down: the light reaching the ground at distance r from the centre crossed the sphere
-// at incidence cos = sqrt(1 - (r / R)^2) on the way in and out (a shadow ray is not bent), so it
-// passes (1 - F(cos))^2 (closed form; the exact tracer's Fresnel product). Absorption and deep
-// shadows take each crossing's Fresnel from its triangle's normal and the light's direction. Means
-// over rings of points.
-TEST(GlassTest, GlassShadowsDarkenTowardsTheRimByEachCrossingsFresnel) {
-    Scene s = test::greyGroundScene();
+// The Fresnel equations (unpolarized) from air into n = 1.5 at incidence cosine ci, written out here.
+double fresnelIntoGlass15(double ci) {
+    const double n = 1.5, st = std::sqrt(1 - ci * ci) / n, ct = std::sqrt(1 - st * st);
+    const double rs = (ci - n * ct) / (ci + n * ct), rp = (ct - n * ci) / (ct + n * ci);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+// Clear glass of index 1.5 (no tint, no attenuation).
+Material clearGlass15() {
     Material clear;
     clear.baseColor = {1, 1, 1};
     clear.transmission = 1;
     clear.ior = 1.5f;
+    return clear;
+}
+
+// #37: glass shadows gave every crossing Fresnel at normal incidence, (1 - F0), so the rim of a glass
+// ball's shadow was as light as its centre. A ball of clear glass (no tint, no attenuation) under a
+// sun straight down: the light reaching the ground at distance r from the centre crossed the sphere
+// at incidence cos = sqrt(1 - (r / R)^2) on the way in and out (a shadow ray is not bent), so it
+// passes (1 - F(cos))^2 (closed form; the exact tracer's Fresnel product). Absorption, transmittance
+// and deep shadows take each crossing's Fresnel from its triangle's normal and the light's
+// direction. Means over rings of points.
+TEST(GlassTest, GlassShadowsDarkenTowardsTheRimByEachCrossingsFresnel) {
+    Scene s = test::greyGroundScene();
+    const Material clear = clearGlass15();
     const double R = 0.6;
     s.meshes.push_back({"ball", test::makeUvSphere({0, 1, 0}, R, 96, 192), {}, s.addMaterial(clear), true});
     Light sun;
@@ -230,14 +243,8 @@ TEST(GlassTest, GlassShadowsDarkenTowardsTheRimByEachCrossingsFresnel) {
         }
         return sum / 32;
     };
-    // The Fresnel equations (unpolarized) from air into n = 1.5, written out here.
-    auto fresnelIn = [](double ci) {
-        const double n = 1.5, st = std::sqrt(1 - ci * ci) / n, ct = std::sqrt(1 - st * st);
-        const double rs = (ci - n * ct) / (ci + n * ct), rp = (ct - n * ci) / (ct + n * ci);
-        return 0.5 * (rs * rs + rp * rp);
-    };
     const LightShadow exact = buildLightShadow(s, sun, ExactShadowOptions{});
-    for (const std::string_view kind : {"exact", "absorption", "deep"}) {
+    for (const std::string_view kind : {"exact", "absorption", "transmittance", "deep"}) {
         RenderOptions o;
         setRenderOption(o, "shadows", std::string(kind));
         if (kind != "exact") {
@@ -247,7 +254,7 @@ TEST(GlassTest, GlassShadowsDarkenTowardsTheRimByEachCrossingsFresnel) {
         }
         const LightShadow ls = kind == "exact" ? exact : buildLightShadow(s, sun, o.shadow);
         for (const double f : {0.0, 0.5, 0.8, 0.9}) {
-            const double c = std::sqrt(1 - f * f), pass = 1 - fresnelIn(c);
+            const double c = std::sqrt(1 - f * f), pass = 1 - fresnelIntoGlass15(c);
             const double got = ringMean(ls, f * R);
             std::printf("%s at r = %.1f R: %.4f (closed form %.4f)\n", std::string(kind).c_str(), f, got,
                         pass * pass);
@@ -255,6 +262,44 @@ TEST(GlassTest, GlassShadowsDarkenTowardsTheRimByEachCrossingsFresnel) {
         }
         // The rim darker than the centre by what the closed form says (0.785 against 0.922).
         EXPECT_LT(ringMean(ls, 0.9 * R), ringMean(ls, 0) - 0.1) << kind;
+    }
+}
+
+// #37: the same for a flat pane: a slab of clear glass (1.2 x 0.1 x 1.2, n 1.5) turned 70 degrees
+// about z over the ground, under a sun straight down. The light reaching the ground under the middle
+// of the pane crossed its two large faces at cos 70 degrees, so it passes (1 - F(cos 70))^2 = 0.687
+// (closed form; normal incidence would pass 0.922), and every shadow method must agree with the
+// exact tracer there; means over a grid of ground points.
+TEST(GlassTest, AGlassPaneTiltedToTheLightPassesTheFresnelOfItsAngle) {
+    Scene s = test::greyGroundScene();
+    const Material clear = clearGlass15();
+    Mesh pane = test::makeBox({-0.6, -0.05, -0.6}, {0.6, 0.05, 0.6});
+    const double a = 70 * M_PI / 180, c = std::cos(a), sn = std::sin(a);
+    for (Vec3f& v : pane.positions) // about z, then up to y = 1
+        v = Vec3f{float(c * v.x - sn * v.y), float(sn * v.x + c * v.y + 1), v.z};
+    s.meshes.push_back({"pane", pane, {}, s.addMaterial(clear), true});
+    Light sun;
+    sun.direction = {0, -1, 0};
+    const double pass = 1 - fresnelIntoGlass15(c), closed = pass * pass;
+    auto mean = [&](const LightShadow& ls) {
+        double sum = 0;
+        for (int i = 0; i < 8; ++i)
+            for (int k = 0; k < 8; ++k) // |x| < 0.1: under both large faces (they span |x| < 0.158)
+                sum += shadowVisibility(ls, {-0.1 + 0.2 * (i + 0.5) / 8, 0, -0.4 + 0.8 * (k + 0.5) / 8},
+                                        {0, 1, 0})
+                           .y;
+        return sum / 64;
+    };
+    const double exact = mean(buildLightShadow(s, sun, ExactShadowOptions{}));
+    EXPECT_NEAR(exact, closed, 0.005);
+    for (const std::string_view kind : {"absorption", "transmittance", "deep"}) {
+        RenderOptions o;
+        setRenderOption(o, "shadows", std::string(kind));
+        setRenderOption(o, "epsilon", 0.0);
+        const double got = mean(buildLightShadow(s, sun, o.shadow));
+        std::printf("%s: %.4f (exact %.4f, closed form %.4f)\n", std::string(kind).c_str(), got, exact,
+                    closed);
+        EXPECT_NEAR(got, exact, 0.02) << kind;
     }
 }
 

@@ -100,11 +100,12 @@ Scene dsmrUniformScene(bool ball, double opacityLength) {
     return s;
 }
 
-RenderOptions dsmrUniformOptions(bool deep) {
+RenderOptions dsmrUniformOptions(bool deep, double epsilon = DeepShadowOptions{}.epsilon) {
     RenderOptions o = linearBlackOptions(96, 72); // what the closed form describes
     if (deep) {
         DeepShadowOptions d;
         d.resolution = 96;
+        d.epsilon = epsilon;
         o.shadow = d;
     }
     return o;
@@ -148,20 +149,22 @@ TEST(VolumeSamplingTest, AHomogeneousSlabMatchesBeerLambertsClosedForm) {
     double worst = 0;
     for (const DsmrSlabPixel& p : px) worst = std::max(worst, std::abs(p.value - p.unshadowed));
     EXPECT_LT(worst, 1e-4); // the pre-integrated intervals compose to Beer-Lambert exactly
-    const RenderResult deep = render(s, s.cameras[0], dsmrUniformOptions(true));
+    // Under deep shadows (epsilon 0.01) the light in the slab is Beer-Lambert from the top face
+    // too: within about epsilon of the closed form. (The lookup a step towards the light, which keeps
+    // a dense layer from shadowing its own front, made it 8.9 % brighter until the medium over that
+    // step was put back.)
+    const double epsilon = 0.01;
+    const RenderResult deep = render(s, s.cameras[0], dsmrUniformOptions(true, epsilon));
     double meanErr = 0, worstDeep = 0;
     for (const DsmrSlabPixel& p : dsmrSlabPixels(s, deep.image, len)) {
         meanErr += std::abs(p.value - p.deep) / p.deep;
         worstDeep = std::max(worstDeep, std::abs(p.value - p.deep) / p.deep);
     }
     meanErr /= double(px.size());
-    std::printf("slab: unshadowed worst %.3g, deep mean relative error %.4f, worst %.4f\n", worst, meanErr,
-                worstDeep);
-    // Under deep shadows the volume's light is looked up a step and a texel towards the light (so
-    // a dense layer does not shadow its own front: see the ring test below), which brightens a
-    // homogeneous medium by about exp(sigma * that offset): 8.9 % here (3.4 % before the bias).
-    EXPECT_LT(meanErr, 0.10);
-    EXPECT_LT(worstDeep, 0.10);
+    std::printf("slab: unshadowed worst %.3g, deep (epsilon %.2f) mean relative error %.4f, worst %.4f\n",
+                worst, epsilon, meanErr, worstDeep);
+    EXPECT_LT(meanErr, 1.2 * epsilon);
+    EXPECT_LT(worstDeep, 2.5 * epsilon);
 }
 
 // Rings are a pattern from pixel to pixel: the residual of each pixel against the mean of its
@@ -217,8 +220,11 @@ TEST(VolumeSamplingTest, AUniformSlabAndBallShowNoRingsUnderDeepShadows) {
             }
         const double contrast = dsmrRingContrast(r.image, keep);
         std::printf("%s: ring contrast %.5f\n", ball ? "ball" : "slab", contrast);
-        // Equal unjittered steps gave 0.020 (slab) and 0.055 (ball); now 0.0003 and 0.011.
-        EXPECT_LT(contrast, ball ? 0.025 : 0.005) << (ball ? "ball" : "slab");
+        // Equal unjittered steps gave 0.020 (slab) and 0.055 (ball); jittered, 0.0003 and 0.011;
+        // with the medium over the lookup's step put back (#37), 0.0015 and 0.013. Putting it back at
+        // the mean extinction of the step's two ends (d9cb3bd, reverted: it speckled the DSM demo's
+        // skull) gave the ball 0.022.
+        EXPECT_LT(contrast, ball ? 0.017 : 0.005) << (ball ? "ball" : "slab");
     }
 }
 

@@ -65,8 +65,9 @@ public:
     Vec3f transmittance(const Vec3d& world, int64_t skipCells) const;
     /// Bilinear interpolation of exp(-optical depth) of the four columns around p, each read at the
     /// depth where the receiver's tangent plane (normal `normal`) crosses it; at p's depth for a
-    /// zero normal; beyond the grid's border, its border column.
-    Vec3f transmittanceBilinear(const Vec3d& world, int64_t skipCells, const Vec3d& normal = {}) const;
+    /// zero normal; beyond the grid's border, its border column; sharpened (LightGridOptions::sharpness).
+    Vec3f transmittanceBilinear(const Vec3d& world, int64_t skipCells, const Vec3d& normal = {},
+                                double sharpness = 1) const;
     const LightView& view() const { return view_; }
     /// The first group's frame (with local slicing when requested: each group fits its own).
     const Frame& frame() const { return grids_.empty() ? view_.frame : grids_[0].frame; }

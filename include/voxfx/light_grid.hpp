@@ -27,6 +27,12 @@ struct LightGridOptions {
     /// a shadow map); false: p's own column only (ED06's lookup: a sharper, stair-stepped edge, and a
     /// slightly smaller mean error against exact transport at 128 columns and more).
     bool bilinear = true;
+    /// Bilinear lookups: the blend of the four columns is stretched between the lowest and highest
+    /// of them, per channel, by this slope about their middle (1, the default: plain bilinear, a
+    /// column wide ramp at every edge; larger: the ramp narrows about bilinear's own contours, but a
+    /// smooth gradient turns into terraces and a point can brighten where a leaf is added to a
+    /// neighbouring column: BENCHMARKS.md, #37).
+    double sharpness = 1.0;
 };
 
 } // namespace voxfx

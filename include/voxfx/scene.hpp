@@ -100,9 +100,9 @@ struct Material {
     /// and half the tint (its square root); the methods pair a crossing that enters with the next
     /// that leaves and multiply by beerLambert(shadowAttenuationCoefficient(), chord), so that a
     /// passage gives what ExactShadow gives at normal incidence (`thickness` is not used: the chord
-    /// is the glass's own). Absorption and deep shadows replace 1 - F0 by the crossing's own
-    /// 1 - fresnelDielectric(cos, 1, ior), cos between the light's ray and the crossed triangle's
-    /// normal, as ExactShadow does at every angle; transmittance shadows keep 1 - F0.
+    /// is the glass's own). Absorption, transmittance and deep shadows replace 1 - F0 by the
+    /// crossing's own 1 - fresnelDielectric(cos, 1, ior), cos between the light's ray and the crossed
+    /// triangle's normal, as ExactShadow does at every angle.
     Vec3f shadowCrossingTransmittance() const;
     /// Glass: attenuationCoefficient (Beer–Lambert over the chord between paired crossings); a sheet
     /// or an opaque material: zero (its crossings are all it does to light).

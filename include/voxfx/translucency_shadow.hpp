@@ -62,7 +62,7 @@ public:
     /// depth where the receiver's tangent plane (normal `normal`) crosses it; at p's depth for a
     /// zero normal; beyond the grid's border, its border column.
     Vec3f transmittanceBilinear(const Vec3d& world, int64_t skipCells, const Vec3d& sigma,
-                                const Vec3d& normal = {}) const;
+                                const Vec3d& normal = {}, double sharpness = 1) const;
     const LightView& view() const { return view_; }
     const VoxelGrid& grid() const { return grid_; }
 

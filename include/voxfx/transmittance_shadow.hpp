@@ -12,7 +12,9 @@
 // shadowAttenuationCoefficient) pair their crossings along the column, the first entering and the
 // next leaving, and multiply by beerLambert(sigma_k, chord): the world length between the paired
 // cells (cell centres; conservative grids: run centres), up to p when p lies inside (the column
-// holds an even number of crossings and an odd number lies in front of p).
+// holds an even number of crossings and an odd number lies in front of p). A glass crossing at an
+// angle passes the Fresnel of that angle: the depth beyond normal incidence's is quantized
+// (1/256) and each of its binary digits is a grey channel of the glass triangles that have it.
 //
 // Thread-safety: a built shadow is read-only (lookups from any number of threads); build voxelizes
 // with worker threads.
@@ -66,8 +68,9 @@ public:
     Vec3f transmittance(const Vec3d& world, int64_t skipCells) const;
     /// Bilinear interpolation of the transmittance of the four columns around p, each read at the
     /// depth where the receiver's tangent plane (normal `normal`) crosses it; at p's depth for a
-    /// zero normal; beyond the grid's border, its border column.
-    Vec3f transmittanceBilinear(const Vec3d& world, int64_t skipCells, const Vec3d& normal = {}) const;
+    /// zero normal; beyond the grid's border, its border column; sharpened (LightGridOptions::sharpness).
+    Vec3f transmittanceBilinear(const Vec3d& world, int64_t skipCells, const Vec3d& normal = {},
+                                double sharpness = 1) const;
     const LightView& view() const { return view_; }
     const std::vector<Channel>& channels() const { return channels_; }
 

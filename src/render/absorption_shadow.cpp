@@ -171,17 +171,19 @@ Vec3f AbsorptionShadowMap::transmittance(const Vec3d& world, int64_t skipCells) 
     return absorptionExp(opticalDepth(world, skipCells));
 }
 
-Vec3f AbsorptionShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells,
-                                                 const Vec3d& normal) const {
+Vec3f AbsorptionShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells, const Vec3d& normal,
+                                                 double sharpness) const {
     if (grids_.empty() || !view_.covers(world)) return {1, 1, 1};
     // Only glass needs the length per depth unit (one grid without glass: none).
     const double lengthPerDepth = entryLight_.empty() ? detail::worldLengthPerDepth(view_, world) : 0.0;
     return detail::bilinearColumnsLazy<Vec3f, float>(
-        view_, world, normal, [&](int64_t column, const auto& depth) {
+        view_, world, normal,
+        [&](int64_t column, const auto& depth) {
             // A column no grid writes: exp(-0), without the receiver plane's depth.
             if (((occupied_[size_t(column >> 6)] >> (column & 63)) & 1u) == 0) return Vec3f{1, 1, 1};
             return columnLight(column, depth(), skipCells, lengthPerDepth);
-        });
+        },
+        sharpness);
 }
 
 std::span<const OptionField<AbsorptionShadowOptions>> AbsorptionShadowOptions::fields() {
@@ -204,7 +206,7 @@ std::span<const OptionField<AbsorptionShadowOptions>> AbsorptionShadowOptions::f
 Vec3f absorptionPerCrossing(const Material& m, float opaqueAbsorption) {
     if (m.isOpaque()) return {opaqueAbsorption, opaqueAbsorption, opaqueAbsorption};
     // Glass: half the tint per crossing; its Fresnel depends on the crossing's angle
-    // (absorptionFresnelDepth, written per triangle).
+    // (detail::glassCrossingFresnelDepth, written per triangle).
     Vec3f t = m.shadowCrossingTransmittance();
     if (m.isGlass())
         for (int c = 0; c < 3; ++c) t[c] = float(std::sqrt(double(m.crossingTransmittance()[c])));
@@ -212,25 +214,6 @@ Vec3f absorptionPerCrossing(const Material& m, float opaqueAbsorption) {
     for (int c = 0; c < 3; ++c) out[c] = std::min(opaqueAbsorption, -std::log(std::max(t[c], 1e-30f)));
     return out;
 }
-
-namespace {
-
-// The optical depth of the Fresnel loss where the light crosses triangle t of `mesh` (glass of index
-// ior): -ln(1 - F) at the angle between the light's direction and the triangle's normal, as the
-// exact tracer's crossing passes it (capped at `cap`).
-float absorptionFresnelDepth(const Mesh& mesh, std::size_t t, const Light& light, double ior, float cap) {
-    const Vec3d a(mesh.positions[mesh.indices[3 * t]]), b(mesh.positions[mesh.indices[3 * t + 1]]),
-        c(mesh.positions[mesh.indices[3 * t + 2]]);
-    const Vec3d n = cross(b - a, c - a);
-    const Vec3d toLight =
-        light.type == LightType::Directional ? -light.direction : light.position - (a + b + c) * (1.0 / 3);
-    const double nl = length(n) * length(toLight);
-    const double cosine = nl > 0 ? std::min(1.0, std::abs(dot(n, toLight)) / nl) : 1.0;
-    const double pass = 1 - fresnelDielectric(cosine, 1.0, std::max(1.0, ior));
-    return std::min(cap, float(-std::log(std::max(pass, 1e-30))));
-}
-
-} // namespace
 
 AbsorptionShadowStats& AbsorptionShadowStats::operator+=(const AbsorptionShadowStats& o) {
     grids += o.grids;
@@ -285,8 +268,9 @@ AbsorptionShadow AbsorptionShadow::build(const Scene& scene, const Light& light,
     for (std::size_t t = 0; t < casters.allMaterialIndex.size(); ++t) {
         const uint32_t m = casters.allMaterialIndex[t], g = materialGroup[m];
         const Material& mat = scene.materials[m];
-        const float fresnel =
-            mat.isGlass() ? absorptionFresnelDepth(all, t, light, mat.ior, options.opaqueAbsorption) : 0.0f;
+        const float fresnel = mat.isGlass() ? detail::glassCrossingFresnelDepth(all, t, light, mat.ior,
+                                                                                options.opaqueAbsorption)
+                                            : 0.0f;
         scalars[g].push_back(g == 0 ? std::min(options.opaqueAbsorption, materialScalar[m] + fresnel)
                                     : materialScalar[m]);
         if (!oneGroup) copyTriangle(meshes[g], t);
@@ -315,7 +299,8 @@ Vec3f AbsorptionShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     if (i < 0) return {1, 1, 1};
     const AbsorptionShadowMap& m = maps_[size_t(i)];
     const int64_t skip = options_.grid.skipCells;
-    return options_.grid.bilinear ? m.transmittanceBilinear(q, skip, n) : m.transmittance(q, skip);
+    return options_.grid.bilinear ? m.transmittanceBilinear(q, skip, n, options_.grid.sharpness)
+                                  : m.transmittance(q, skip);
 }
 
 AbsorptionShadow::Stats AbsorptionShadow::stats() const {

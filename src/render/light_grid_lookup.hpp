@@ -93,6 +93,27 @@ private:
     bool perspective_;
 };
 
+/// A blend v of values between lo and hi (one channel) stretched about their middle by slope k:
+/// lo + (hi - lo) clamp(1/2 + k ((v - lo) / (hi - lo) - 1/2), 0, 1); v itself for k = 1 or equal
+/// values.
+inline double sharpenBlend(double v, double lo, double hi, double k) {
+    if (k == 1 || !(hi - lo > 1e-7)) return v;
+    return lo + (hi - lo) * std::clamp(0.5 + k * ((v - lo) / (hi - lo) - 0.5), 0.0, 1.0);
+}
+inline Vec3f sharpenBlend(const Vec3f& v, const Vec3f& lo, const Vec3f& hi, double k) {
+    Vec3f out;
+    for (int c = 0; c < 3; ++c) out[c] = float(sharpenBlend(double(v[c]), double(lo[c]), double(hi[c]), k));
+    return out;
+}
+inline double blendMin(double a, double b) { return std::min(a, b); }
+inline double blendMax(double a, double b) { return std::max(a, b); }
+inline Vec3f blendMin(const Vec3f& a, const Vec3f& b) {
+    return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
+}
+inline Vec3f blendMax(const Vec3f& a, const Vec3f& b) {
+    return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
+}
+
 /// Bilinear interpolation of value(column, depth) over the four columns whose centres (x + 0.5)
 /// surround p; beyond the frame's border the border column stands in (what lies there is the
 /// neighbouring cube face of a point light, or no caster at all). Each column is read at
@@ -101,9 +122,12 @@ private:
 /// percentage-closer filter's receiver-plane depth); with a zero n, at p's depth. `depth` is a
 /// callable returning that depth, computed only when called: a map whose column is empty answers
 /// without it (most lookups in sparse foliage). Weights are computed in double and applied as S
-/// (float for colours, double for scalars). Precondition: view.covers(world).
+/// (float for colours, double for scalars). The blend is sharpened by `sharpness` between the four
+/// values' lowest and highest (sharpenBlend; LightGridOptions::sharpness). Precondition:
+/// view.covers(world).
 template <class T, class S, class Value>
-T bilinearColumnsLazy(const LightView& view, const Vec3d& world, const Vec3d& n, const Value& value) {
+T bilinearColumnsLazy(const LightView& view, const Vec3d& world, const Vec3d& n, const Value& value,
+                      double sharpness = 1) {
     const Vec3d p = view.frame.projection().gridFromWorld(world); // inline: once per lookup
     const int64_t W = view.frame.width(), H = view.frame.height();
     const double fx = p.x - 0.5, fy = p.y - 0.5;
@@ -111,7 +135,7 @@ T bilinearColumnsLazy(const LightView& view, const Vec3d& world, const Vec3d& n,
     const double wx = fx - double(x0), wy = fy - double(y0);
     const bool plane = n.x != 0 || n.y != 0 || n.z != 0;
     std::optional<ReceiverPlane> receiver; // made by the first column that asks for its depth
-    T out{};
+    T out{}, lo{}, hi{};
     for (int dy = 0; dy < 2; ++dy)
         for (int dx = 0; dx < 2; ++dx) {
             const int64_t x = std::clamp<int64_t>(x0 + dx, 0, W - 1),
@@ -122,17 +146,24 @@ T bilinearColumnsLazy(const LightView& view, const Vec3d& world, const Vec3d& n,
                 if (!receiver) receiver.emplace(view, p, n);
                 return receiver->depthAt(double(x) + 0.5, double(y) + 0.5);
             };
-            out += value(y * W + x, depth) * w;
+            const T v = value(y * W + x, depth);
+            out += v * w;
+            lo = dx || dy ? blendMin(lo, v) : v;
+            hi = dx || dy ? blendMax(hi, v) : v;
         }
-    return out;
+    return sharpness == 1 ? out : sharpenBlend(out, lo, hi, sharpness);
 }
 
 /// bilinearColumnsLazy for a value(ColumnAt) that always reads the depth.
 template <class T, class S, class Value>
-T bilinearColumns(const LightView& view, const Vec3d& world, const Vec3d& n, const Value& value) {
-    return bilinearColumnsLazy<T, S>(view, world, n, [&](int64_t column, const auto& depth) {
-        return value(ColumnAt{column, depth()});
-    });
+T bilinearColumns(const LightView& view, const Vec3d& world, const Vec3d& n, const Value& value,
+                  double sharpness = 1) {
+    return bilinearColumnsLazy<T, S>(
+        view, world, n,
+        [&](int64_t column, const auto& depth) {
+            return value(ColumnAt{column, depth()});
+        },
+        sharpness);
 }
 
 /// The view among `views` to look p up in, and the lookup point q = p + n * offset (offset in column
@@ -172,6 +203,11 @@ template <class O> void appendLightGridFields(std::vector<OptionField<O>>& out) 
     out.push_back(flagOption<O, &O::grid, &LightGridOptions::bilinear>(
         "bilinear", "interpolate light-grid lookups between the four columns around a point, each at the "
                     "receiver's plane (off: the point's own column, ED06's stair-stepped edges)"));
+    out.push_back(numberOption<O, &O::grid, &LightGridOptions::sharpness>(
+        "sharpness",
+        "bilinear light-grid lookups: slope of the blend between the four columns' lowest and "
+        "highest value (1: plain bilinear; larger: narrower edges)",
+        1, 1e6));
 }
 
 } // namespace voxfx::detail

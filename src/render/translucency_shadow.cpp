@@ -83,11 +83,14 @@ Vec3f TranslucencyShadowMap::transmittance(const Vec3d& world, int64_t skipCells
 }
 
 Vec3f TranslucencyShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells, const Vec3d& sigma,
-                                                   const Vec3d& normal) const {
+                                                   const Vec3d& normal, double sharpness) const {
     if (grid_.bits.empty() || !view_.covers(world)) return {1, 1, 1};
-    return detail::bilinearColumns<Vec3f, float>(view_, world, normal, [&](const detail::ColumnAt& c) {
-        return beerLambert(sigma, columnPath(c.column, c.depth, skipCells));
-    });
+    return detail::bilinearColumns<Vec3f, float>(
+        view_, world, normal,
+        [&](const detail::ColumnAt& c) {
+            return beerLambert(sigma, columnPath(c.column, c.depth, skipCells));
+        },
+        sharpness);
 }
 
 ViewMatter ViewMatter::build(const Frame& camera, const MeshView& solids, Fill fill, int64_t slices) {
@@ -248,8 +251,9 @@ Vec3f TranslucencyShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     Vec3f v{1, 1, 1};
     for (std::size_t g = 0; g < sigmas_.size(); ++g) {
         const TranslucencyShadowMap& m = maps_[g * views_.size() + size_t(i)];
-        v = v * (options_.grid.bilinear ? m.transmittanceBilinear(q, skip, sigmas_[g], n)
-                                        : m.transmittance(q, skip, sigmas_[g]));
+        v = v * (options_.grid.bilinear
+                     ? m.transmittanceBilinear(q, skip, sigmas_[g], n, options_.grid.sharpness)
+                     : m.transmittance(q, skip, sigmas_[g]));
     }
     return v;
 }

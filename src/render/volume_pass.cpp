@@ -6,10 +6,15 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <optional>
+#include <span>
+#include <variant>
 
 #include "render/antialias.hpp"
 #include "render/shading.hpp"
+#include "voxfx/deep_shadow.hpp"
+#include "voxfx/triangle_tracer.hpp"
 #include "voxfx/volume_scene.hpp"
 
 namespace voxfx {
@@ -169,7 +174,13 @@ struct VolumeComposite {
     std::vector<EmptySpace> emptySpace;
     std::vector<PreintegratedTransfer> preintegrated; ///< per Volume object
     double step;                                      ///< world length between volume samples
-    static constexpr double kPieceDepth = 0.5;        ///< optical depth of the pieces of a dense interval
+    /// Per object: a Volume object whose shape is its volume's box (addVolumeBox), which the box
+    /// clips exactly.
+    std::vector<uint8_t> boxShape;
+    /// Under deep shadows, with a Volume object of another shape: the leaves, to find where the step
+    /// towards the light leaves the shape (ownTransmittance).
+    std::unique_ptr<TriangleTracer> leafTracer;
+    static constexpr double kPieceDepth = 0.5; ///< optical depth of the pieces of a dense interval
     /// Phong shading of volume samples (RenderOptions::volumeShading) with lights to shade by.
     bool shaded;
     /// Per Volume object, phong: the gradient magnitude (value per world unit) from which a sample
@@ -183,8 +194,37 @@ struct VolumeComposite {
           emptySpace(f.options.skipEmptySpace ? emptySpaceOf(scene)
                                               : std::vector<EmptySpace>(scene.objects.size())),
           preintegrated(preintegrate(scene)), step(sampleStep(scene) * f.options.volumeStep),
+          boxShape(boxShapes(scene)),
           shaded(f.options.volumeShading == VolumeShading::Phong && !f.lights.empty()),
-          fullGradient(shaded ? fullGradients(scene) : std::vector<double>()) {}
+          fullGradient(shaded ? fullGradients(scene) : std::vector<double>()) {
+        const bool deep = std::any_of(f.shadows.begin(), f.shadows.end(),
+                                      [](const auto& s) { return std::holds_alternative<DeepShadow>(*s); });
+        bool otherShape = false;
+        for (std::size_t o = 0; o < scene.objects.size(); ++o)
+            otherShape |= scene.objects[o].kind == ObjectKind::Volume && !boxShape[o];
+        if (deep && otherShape && surfaces.flat.mesh.triangleCount() > 0)
+            leafTracer = std::make_unique<TriangleTracer>(surfaces.flat.mesh.view());
+    }
+
+    static std::vector<uint8_t> boxShapes(const VolumeScene& vs) {
+        std::vector<uint8_t> out(vs.objects.size(), 0);
+        for (std::size_t o = 0; o < vs.objects.size(); ++o) {
+            const VolumeSceneObject& obj = vs.objects[o];
+            if (obj.kind != ObjectKind::Volume) continue;
+            const ShapeNode& n = vs.nodes[std::size_t(obj.shape)];
+            if (n.op != ShapeOp::Leaf) continue;
+            const Mesh& leaf = vs.leaves[std::size_t(n.leaf)];
+            const Volume& v = *vs.volumes[std::size_t(obj.volume)];
+            const Box3d a = computeBounds(leaf.view()), b = v.box();
+            const double tol = 1e-6 * length(b.extent());
+            bool same = leaf.triangleCount() == 12;
+            for (int k = 0; k < 3; ++k)
+                same = same && std::abs(a.lo[k] - b.lo[k]) <= tol && std::abs(a.hi[k] - b.hi[k]) <= tol &&
+                       std::abs(v.axis(k)[k] - 1) <= 1e-12;
+            out[o] = same;
+        }
+        return out;
+    }
 
     static std::vector<double> fullGradients(const VolumeScene& vs) {
         std::vector<double> out(vs.objects.size(), std::numeric_limits<double>::infinity());
@@ -254,14 +294,18 @@ struct VolumeComposite {
         return r.transmittance >= 1e-3;
     }
 
-    // Light arriving at volume sample p: returns the ambient light (the constant and the sky's mean
-    // radiance, its order-0 harmonic) and sets `lights` to every light's irradiance times its
-    // shadow, looked up at p moved one sample step towards the light (and given that direction as
-    // the lookup's normal, so the technique adds its own offset): a shadow map samples the volume in
-    // steps of its own, and a dense layer the sample lies at the front of (bone under skin) must not
-    // shadow its own surface by the step over which the map's visibility falls. `unshaded` is the
-    // ambient plus every light's irradiance / pi: the light a sample takes without a normal.
-    Vec3f lightAt(const Vec3d& p, std::vector<LightSample>& lights, Vec3f& unshaded) const {
+    // Light arriving at volume sample p inside the volume objects `inside`: returns the ambient
+    // light (the constant and the sky's mean radiance, its order-0 harmonic) and sets `lights` to
+    // every light's irradiance times its shadow (shadowAt), looked up at p moved one sample step
+    // towards the light (and given that direction as the lookup's normal, so the technique adds its
+    // own offset): a shadow map samples the volume in steps of its own, and a dense layer the sample
+    // lies at the front of (bone under skin) must not shadow its own surface by the step over which
+    // the map's visibility falls. Under deep shadows the medium over that step and the offsets, which
+    // the lookup leaves out, is put back (ownTransmittance; without it a uniform slab was brighter by
+    // exp(sigma * the offset), 8 %). `unshaded` is the ambient plus every light's irradiance / pi:
+    // the light a sample takes without a normal.
+    Vec3f lightAt(const Vec3d& p, std::span<const uint8_t> inside, std::vector<LightSample>& lights,
+                  Vec3f& unshaded) const {
         const std::span<const Light> sceneLights = frame.lights;
         const Vec3f ambient = frame.options.ambient + frame.environment->sphericalHarmonics()[0] *
                                                           float(0.282095 * frame.options.skyLight);
@@ -271,14 +315,68 @@ struct VolumeComposite {
             Vec3d toLight;
             const Vec3f e = lightIrradiance(sceneLights[l], p, toLight);
             if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
-            const Vec3f vis = l < frame.shadows.size()
-                                  ? shadowVisibility(*frame.shadows[l], p + toLight * step, toLight)
-                                  : Vec3f{1, 1, 1};
+            const Vec3f vis =
+                l < frame.shadows.size() ? shadowAt(*frame.shadows[l], p, toLight, inside) : Vec3f{1, 1, 1};
             const Vec3f ev = e * vis;
             unshaded += ev * float(1.0 / M_PI);
             lights.push_back({ev, toLight});
         }
         return ambient;
+    }
+
+    // The shadow of volume sample p (see lightAt): looked up at q, a step towards the light; under
+    // deep shadows times ownTransmittance from p to where the map is read (q moved towards the
+    // light by the normal offset and the depth bias, a texel footprint each by default).
+    Vec3f shadowAt(const LightShadow& shadow, const Vec3d& p, const Vec3d& toLight,
+                   std::span<const uint8_t> inside) const {
+        const Vec3d q = p + toLight * step;
+        const DeepShadow* deep = std::get_if<DeepShadow>(&shadow);
+        if (!deep) return shadowVisibility(shadow, q, toLight);
+        const DeepShadowOptions* o = std::get_if<DeepShadowOptions>(&frame.options.shadow);
+        const double offsets = o ? o->normalOffset + o->depthBias : 2.0;
+        const int view = viewIndexFor(deep->views(), q);
+        const double texel = view < 0 ? 0.0 : deep->views()[std::size_t(view)].columnWorldSize(q);
+        return deep->visibility(q, toLight) *
+               float(ownTransmittance(p, q + toLight * (offsets * texel), inside));
+    }
+
+    // The transmittance of the volume objects `inside` (those holding p) along the segment from p
+    // to q that the shadow lookup leaves out: per object, the part of the segment inside its
+    // volume's box and, where its shape is not that box, up to the first surface of the volume
+    // scene's leaves, with the smaller of the extinctions at its two ends. A homogeneous medium
+    // passes its Beer–Lambert (a uniform slab is the closed form within the map's epsilon); a
+    // dense layer the sample lies at the front of passes what lies in front of it, so the layer
+    // does not shadow its own surface (the lookup's step is there for that; the pre-integrated
+    // mean of the two ends, between bone and skin, lit each sample by where its jittered start
+    // fell: speckle on the DSM demo's skull).
+    double ownTransmittance(const Vec3d& p, const Vec3d& q, std::span<const uint8_t> inside) const {
+        double depth = 0;
+        for (std::size_t o = 0; o < inside.size(); ++o) {
+            const VolumeSceneObject& obj = vs.objects[o];
+            if (!inside[o] || obj.kind != ObjectKind::Volume) continue;
+            const Volume& volume = *vs.volumes[std::size_t(obj.volume)];
+            const VolumeView v = volume.view();
+            // The segment's parameter range inside the box: 0 <= voxel coordinate <= n on each axis.
+            const int64_t n[3] = {v.nx, v.ny, v.nz};
+            double t1 = 1;
+            for (int a = 0; a < 3 && t1 > 0; ++a) {
+                const double wp = v.voxelCoordinate(p, a), dw = v.voxelCoordinate(q, a) - wp;
+                if (dw > 0) t1 = std::min(t1, (double(n[a]) - wp) / dw);
+                if (dw < 0) t1 = std::min(t1, -wp / dw);
+            }
+            if (!(t1 > 0)) continue;
+            if (!boxShape[o] && leafTracer) {
+                const double len = length(q - p);
+                const TriangleTracer::Hit h = leafTracer->intersect(p, (q - p) * (1 / len), 0, t1 * len);
+                if (h.hit) t1 = h.t / len;
+            }
+            const Vec3d c = p + (q - p) * t1;
+            if (emptySpace[o].emptyBetween(p, c)) continue;
+            const double a = volume.sample(p), b = volume.sample(c);
+            const PreintegratedTransfer& pre = preintegrated[o];
+            depth += std::min(pre.extinction(a, a), pre.extinction(b, b)) * length(c - p);
+        }
+        return std::exp(-depth);
     }
 
     // Phong (DSM §3.2) at sample p of volume object o: the diffuse light (times the sample's colour)
@@ -375,7 +473,7 @@ struct VolumeComposite {
             for (int64_t k = 0; k < pieces && r.transmittance >= 1e-3; ++k) {
                 const Vec3d p = p0 + (p1 - p0) * ((double(k) * pl + lightDepth) / dl);
                 Vec3f unshaded;
-                const Vec3f ambient = lightAt(p, *r.lights, unshaded);
+                const Vec3f ambient = lightAt(p, inside, *r.lights, unshaded);
                 for (std::size_t o = 0; o < inside.size(); ++o) {
                     const ObjectInterval& w = (*r.objects)[o];
                     if (!(w.sigma > 0)) continue;

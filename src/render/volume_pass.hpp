@@ -23,7 +23,10 @@ namespace voxfx::detail {
 /// at its ends (PreintegratedTransfer; opacity 1 - exp(-σ dl)), its colour = pre-integrated transfer
 /// colour × (ambient + Σ lights irradiance × shadow visibility / π), the light taken at the
 /// interval's opacity-weighted depth (its middle when thin, 1/σ behind its start when dense) and the
-/// shadow looked up one step towards the light, with that direction as the lookup's normal. The walk
+/// shadow looked up one step towards the light (with that direction as the lookup's normal), under
+/// deep shadows times the transmittance of the volumes over that step and the map's offsets (the
+/// medium the lookup leaves out, at the smaller extinction of its two ends: a uniform slab is
+/// Beer–Lambert, a dense layer does not shadow its own front). The walk
 /// stops when the accumulated opacity reaches 0.999, and the result is blended over frame.shaded
 /// (row-major, y up). The meshes of blended materials (Material::blend), which the G-buffer leaves
 /// out, are walked here too, as translucent objects shaded with their own material. With adaptive
