@@ -23,11 +23,11 @@ void drain() {
 
 TEST(ScratchTest, TakeHandsBackTheMemoryOfAVectorGivenBackEmpty) {
     drain();
-    std::vector<Probe> v = Scratch<Probe>::take(1000);
+    PageVector<Probe> v = Scratch<Probe>::take(1000);
     v.resize(1000, Probe{7, 7});
     const Probe* memory = v.data();
     Scratch<Probe>::give(std::move(v));
-    std::vector<Probe> again = Scratch<Probe>::take(500);
+    PageVector<Probe> again = Scratch<Probe>::take(500);
     EXPECT_TRUE(again.empty());
     EXPECT_EQ(again.data(), memory);
     EXPECT_GE(again.capacity(), 1000u);
@@ -36,19 +36,19 @@ TEST(ScratchTest, TakeHandsBackTheMemoryOfAVectorGivenBackEmpty) {
 
 TEST(ScratchTest, TakePicksTheSmallestThatFitsElseTheLargest) {
     drain();
-    std::vector<Probe> small = Scratch<Probe>::take(0), large = Scratch<Probe>::take(0);
+    PageVector<Probe> small = Scratch<Probe>::take(0), large = Scratch<Probe>::take(0);
     small.reserve(100);
     large.reserve(10000);
     const Probe *smallMemory = small.data(), *largeMemory = large.data();
     Scratch<Probe>::give(std::move(large));
     Scratch<Probe>::give(std::move(small));
-    std::vector<Probe> a = Scratch<Probe>::take(50);      // both fit: the smaller
-    std::vector<Probe> b = Scratch<Probe>::take(1000000); // none left that fits: the one left
+    PageVector<Probe> a = Scratch<Probe>::take(50);      // both fit: the smaller
+    PageVector<Probe> b = Scratch<Probe>::take(1000000); // none left that fits: the one left
     EXPECT_EQ(a.data(), smallMemory);
     EXPECT_EQ(b.data(), largeMemory);
     Scratch<Probe>::give(std::move(a));
     Scratch<Probe>::give(std::move(b));
-    std::vector<Probe> c = Scratch<Probe>::take(1000000); // neither fits: the larger, to grow
+    PageVector<Probe> c = Scratch<Probe>::take(1000000); // neither fits: the larger, to grow
     EXPECT_EQ(c.data(), largeMemory);
     Scratch<Probe>::give(std::move(c));
 }
@@ -60,7 +60,7 @@ TEST(ScratchTest, ConcurrentCallsNeverShareAVector) {
     for (int t = 0; t < kThreads; ++t)
         threads.emplace_back([t, &bad] {
             for (int r = 0; r < kRounds; ++r) {
-                std::vector<Probe> v = Scratch<Probe>::take(64);
+                PageVector<Probe> v = Scratch<Probe>::take(64);
                 v.assign(64, Probe{t, r});
                 for (const Probe& p : v) bad[size_t(t)] += p.a != t || p.b != r;
                 Scratch<Probe>::give(std::move(v));

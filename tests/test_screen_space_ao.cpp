@@ -14,6 +14,7 @@
 
 #include "demo/demo_scenes.hpp"
 #include "render/screen_space_ao.hpp"
+#include "render/shading.hpp"
 #include "test_util.hpp"
 #include "voxfx/ambient_occlusion.hpp"
 #include "voxfx/gbuffer.hpp"

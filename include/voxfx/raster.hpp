@@ -62,6 +62,7 @@
 #include "voxfx/enum_names.hpp"
 #include "voxfx/frame.hpp"
 #include "voxfx/mesh.hpp"
+#include "voxfx/page_memory.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/types.hpp"
 
@@ -140,7 +141,7 @@ struct RasterTriangle {
 struct RasterSetup {
     FrameView frame;
     const MeshView* mesh;
-    std::vector<Vec3d> vertices; // orthographic: grid coordinates; perspective: camera (right, up, forward)
+    PageVector<Vec3d> vertices; // orthographic: grid coordinates; perspective: camera (right, up, forward)
     double clipDepth = 0;
     template <class Emit> void triangle(std::size_t t, Emit&& emit) const;
 };
@@ -198,8 +199,8 @@ struct TileBins {
     int64_t rowsPerTile = 1, colsPerTile = 1;
     int64_t tileColumns = 1;
     int64_t tileCount = 0;
-    std::vector<int64_t> offsets;  // tileCount + 1
-    std::vector<uint32_t> entries; // triangle indices
+    PageVector<int64_t> offsets;  // tileCount + 1
+    PageVector<uint32_t> entries; // triangle indices
 };
 /// `counted`, when given, receives the number of entries after they are counted and before they
 /// are allocated (it may throw, for a memory check).

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include <sys/mman.h>
 #include <unistd.h>
 
+#include "voxfx/page_memory.hpp"
 #include "voxfx/parallel.hpp"
 
 namespace voxfx {
@@ -123,7 +123,7 @@ uint64_t BitGrid::requiredBytes(int64_t w, int64_t h, int64_t d) {
 
 void BitGrid::Free::operator()(uint64_t* p) const {
     if (mappedBytes)
-        munmap(p, mappedBytes);
+        detail::unmapPages(p, mappedBytes);
     else
         std::free(p);
 }
@@ -134,18 +134,17 @@ BitGrid::BitGrid(int64_t w, int64_t h, int64_t d) {
     std::ostringstream what;
     what << "a " << w << " x " << h << " x " << d << " grid";
     checkMemory(bytes, what.str().c_str());
-    // Fresh anonymous mappings are zero, so large grids skip the clearing pass, and huge pages
-    // cut the page faults of first touch by 512x (they dominate on virtual machines).
-    constexpr uint64_t kMapThreshold = uint64_t(1) << 21;
+    // Fresh mappings are zero, so large grids skip the clearing pass, and huge pages cut the page
+    // faults of first touch by 512x (they dominate on virtual machines): page_memory.hpp.
     uint64_t* p = nullptr;
     Free deleter{0};
-    if (bytes >= kMapThreshold) {
-        const uint64_t mapped = (bytes + kMapThreshold - 1) / kMapThreshold * kMapThreshold;
-        void* m = mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-        if (m == MAP_FAILED) fail(what.str(), " needs ", gib(bytes), ", and mapping that much memory failed");
-        madvise(m, mapped, MADV_HUGEPAGE);
-        p = static_cast<uint64_t*>(m);
-        deleter.mappedBytes = mapped;
+    if (bytes >= (uint64_t(1) << 21)) {
+        try {
+            p = static_cast<uint64_t*>(detail::mapPages(bytes));
+        } catch (const std::bad_alloc&) {
+            fail(what.str(), " needs ", gib(bytes), ", and mapping that much memory failed");
+        }
+        deleter.mappedBytes = bytes;
     } else {
         p = static_cast<uint64_t*>(std::aligned_alloc(64, (bytes + 63) / 64 * 64));
         if (!p) fail(what.str(), " needs ", gib(bytes), ", and the allocation failed");

@@ -81,8 +81,8 @@ constexpr std::size_t kMaxMergedVertices = 0xFFFFFFFFu;
 
 // Maps each of the first n vertices to the first vertex with a bit-identical position (after
 // turning -0 into +0, the same point), in O(n) with an open-addressing hash table.
-std::vector<uint32_t> mergeIdenticalPositions(const MeshView& mesh, std::size_t n) {
-    std::vector<uint32_t> remap = detail::Scratch<uint32_t>::take(n);
+detail::PageVector<uint32_t> mergeIdenticalPositions(const MeshView& mesh, std::size_t n) {
+    detail::PageVector<uint32_t> remap = detail::Scratch<uint32_t>::take(n);
     remap.resize(n);
     auto key = [&](std::size_t v) {
         const float* p = vertexPtr(mesh, v);
@@ -93,7 +93,7 @@ std::vector<uint32_t> mergeIdenticalPositions(const MeshView& mesh, std::size_t 
     const std::size_t capacity = std::bit_ceil(2 * n);
     const std::size_t mask = capacity - 1;
     constexpr uint32_t kEmpty = ~uint32_t(0);
-    std::vector<uint32_t> table = detail::Scratch<uint32_t>::take(capacity);
+    detail::PageVector<uint32_t> table = detail::Scratch<uint32_t>::take(capacity);
     table.assign(capacity, kEmpty);
     for (std::size_t v = 0; v < n; ++v) {
         const auto k = key(v);
@@ -156,7 +156,7 @@ void classifyEdgesOfVertex(std::size_t v, const Entry* begin, const Entry* end, 
 // their smaller endpoint with a counting sort (count, prefix sum, fill), as meshoptimizer builds
 // its adjacency. Entry is uint32_t while vertex ids fit 31 bits, uint64_t beyond.
 template <class Entry>
-void classifyEdges(const MeshView& mesh, const std::vector<uint32_t>& remap, MeshTopology& topo) {
+void classifyEdges(const MeshView& mesh, const detail::PageVector<uint32_t>& remap, MeshTopology& topo) {
     const std::size_t n = remap.size();
     // Calls f(smaller, larger, backward) for the three edges of every usable triangle: in range,
     // and with three distinct positions (a triangle with two corners at one point has no edge).
@@ -173,18 +173,18 @@ void classifyEdges(const MeshView& mesh, const std::vector<uint32_t>& remap, Mes
         }
     };
     // After the fill, start[v] is where vertex v's bucket ends and start[v - 1] where it begins.
-    std::vector<uint64_t> start = detail::Scratch<uint64_t>::take(n + 1);
+    detail::PageVector<uint64_t> start = detail::Scratch<uint64_t>::take(n + 1);
     start.assign(n + 1, 0);
     forEachEdge([&](uint32_t lo, uint32_t, bool) { ++start[lo + 1]; });
     for (std::size_t v = 0; v < n; ++v) start[v + 1] += start[v];
-    std::vector<Entry> entries = detail::Scratch<Entry>::take(start[n]);
+    detail::PageVector<Entry> entries = detail::Scratch<Entry>::take(start[n]);
     entries.resize(start[n]);
     forEachEdge([&](uint32_t lo, uint32_t hi, bool backward) {
         entries[start[lo]++] = Entry(hi) << 1 | Entry(backward);
     });
-    std::vector<uint32_t> mark = detail::Scratch<uint32_t>::take(n);
+    detail::PageVector<uint32_t> mark = detail::Scratch<uint32_t>::take(n);
     mark.assign(n, 0);
-    std::vector<uint64_t> sums = detail::Scratch<uint64_t>::take(n);
+    detail::PageVector<uint64_t> sums = detail::Scratch<uint64_t>::take(n);
     sums.resize(n);
     for (std::size_t v = 0; v < n; ++v)
         classifyEdgesOfVertex(v, entries.data() + (v == 0 ? 0 : start[v - 1]), entries.data() + start[v],
@@ -270,7 +270,7 @@ MeshTopology analyzeTopology(const MeshView& mesh) {
     // Indices are 32-bit, so at most 2^32 - 1 vertices can be told apart (one value marks empty).
     const std::size_t n = std::min<std::size_t>(mesh.vertexCount, kMaxMergedVertices);
     if (mesh.triangleCount == 0 || n == 0) return topo;
-    std::vector<uint32_t> remap = mergeIdenticalPositions(mesh, n);
+    detail::PageVector<uint32_t> remap = mergeIdenticalPositions(mesh, n);
     if (n <= (std::size_t(1) << 31))
         classifyEdges<uint32_t>(mesh, remap, topo);
     else

@@ -3,7 +3,8 @@
 // The voxelize step's temporaries (projected vertices, tile bins, the closed-mesh test's tables:
 // a few MiB at 512^3) are large enough that the allocator maps them fresh on every call, and a
 // fresh page costs a fault on first touch (on virtual machines the faults were 10-20 % of a
-// call in the profile of #39). Scratch<T>::take() hands out a vector that an earlier call gave
+// call in the profile of #39). The vectors are PageVectors (huge pages from the first call on:
+// page_memory.hpp). Scratch<T>::take() hands out a vector that an earlier call gave
 // back (empty, its capacity kept), give() keeps a vector's memory for the next call. The pool
 // is process-wide and locked, so concurrent calls each get their own vectors; it keeps a few
 // vectors of at most kMaxBytes each, so a huge mesh does not pin its memory.
@@ -15,6 +16,8 @@
 #include <utility>
 #include <vector>
 
+#include "voxfx/page_memory.hpp"
+
 namespace voxfx::detail {
 
 template <class T> class Scratch {
@@ -24,8 +27,8 @@ public:
 
     /// An empty vector, with the memory of one given back earlier when there is one: the
     /// smallest that holds `size` elements, else the largest (which then grows).
-    static std::vector<T> take(std::size_t size) {
-        std::vector<T> v;
+    static PageVector<T> take(std::size_t size) {
+        PageVector<T> v;
         std::lock_guard<std::mutex> lock(state().mutex);
         auto& kept = state().kept;
         std::size_t best = kept.size();
@@ -47,9 +50,9 @@ public:
         return v;
     }
     /// Keeps v's memory for a later take() (drops it when too large or enough are kept).
-    static void give(std::vector<T>&& v) {
+    static void give(PageVector<T>&& v) {
         if (v.capacity() == 0 || v.capacity() * sizeof(T) > kMaxBytes) return;
-        std::vector<T> mine = std::move(v);
+        PageVector<T> mine = std::move(v);
         std::lock_guard<std::mutex> lock(state().mutex);
         if (state().kept.size() < kMaxKept) state().kept.push_back(std::move(mine));
     }
@@ -57,7 +60,7 @@ public:
 private:
     struct State {
         std::mutex mutex;
-        std::vector<std::vector<T>> kept;
+        std::vector<PageVector<T>> kept;
     };
     static State& state() {
         static State s;

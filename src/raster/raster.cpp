@@ -152,9 +152,9 @@ TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsP
 
     // Pass 1: each triangle's tile range (set up once, kept for pass 2) and counts per
     // (chunk, tile).
-    std::vector<TileSpan> spans = Scratch<TileSpan>::take(size_t(T));
+    PageVector<TileSpan> spans = Scratch<TileSpan>::take(size_t(T));
     spans.resize(static_cast<size_t>(T));
-    std::vector<int64_t> counts = Scratch<int64_t>::take(size_t(chunks) * tiles);
+    PageVector<int64_t> counts = Scratch<int64_t>::take(size_t(chunks) * tiles);
     counts.assign(size_t(chunks) * tiles, 0);
     parallelFor(0, chunks, 1, [&](int64_t cb, int64_t ce) {
         for (int64_t c = cb; c < ce; ++c) {
@@ -170,7 +170,7 @@ TileBins binTriangles(const RasterSetup& setup, Coverage coverage, int64_t rowsP
     // Exclusive prefix sums: tile-major, then chunk order, so each tile lists triangles in order.
     bins.offsets = Scratch<int64_t>::take(tiles + 1);
     bins.offsets.assign(tiles + 1, 0);
-    std::vector<int64_t> cursor = Scratch<int64_t>::take(size_t(chunks) * tiles);
+    PageVector<int64_t> cursor = Scratch<int64_t>::take(size_t(chunks) * tiles);
     cursor.assign(size_t(chunks) * tiles, 0);
     int64_t total = 0;
     for (size_t k = 0; k < tiles; ++k) {
