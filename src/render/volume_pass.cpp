@@ -407,7 +407,10 @@ struct VolumeComposite {
             if (emptySpace[o].emptyBetween(p, c)) continue;
             const double a = volume.sample(p), b = volume.sample(c);
             const PreintegratedTransfer& pre = preintegrated[o];
-            depth += std::min(pre.extinction(a, a), pre.extinction(b, b)) * length(c - p);
+            // The extinction at a value: extinction(v, v) without the two cumulative integrals it
+            // would take and not use (equal ends take the point's extinction).
+            auto at = [&](double value) { return pre.extinction(value, 0.0, value, 0.0); };
+            depth += std::min(at(a), at(b)) * length(c - p);
         }
         return std::exp(-depth);
     }
