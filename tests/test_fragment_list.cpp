@@ -68,5 +68,37 @@ TEST(FragmentListTest, ListsDoNotDependOnTheThreadCount) {
         }
 }
 
+// A renderer keeps its lists between frames and rebuilds them in place (FragmentLists::rebuild):
+// lists rebuilt over memory left by a larger frame of another mesh, and by a smaller one, must be
+// the lists a fresh build gives, with no fragment of the earlier frame left over.
+TEST(FragmentListTest, ListsRebuiltInPlaceAreThoseOfAFreshBuild) {
+    const Mesh torus = test::makeTorus({0, 0, 0}, 0.6, 0.25, 24, 12);
+    const Mesh ball = test::makeUvSphere({0.1, 0, 0}, 0.7, 12, 24);
+    const Frame small = Frame::perspective({0.3, 0.2, 3}, {0, 0, 0}, {0, 1, 0}, 0.8, 37, 29, 0.5, 6, 1);
+    const Frame large = Frame::perspective({-0.4, 0.5, 2.5}, {0, 0, 0}, {0, 1, 0}, 0.9, 61, 47, 0.5, 6, 1);
+    auto expectSame = [](const FragmentLists& a, const FragmentLists& b) {
+        ASSERT_EQ(a.width(), b.width());
+        ASSERT_EQ(a.height(), b.height());
+        ASSERT_EQ(a.fragmentCount(), b.fragmentCount());
+        ASSERT_GT(a.fragmentCount(), 0);
+        for (int64_t y = 0; y < a.height(); ++y)
+            for (int64_t x = 0; x < a.width(); ++x) {
+                const auto u = a.column(x, y), v = b.column(x, y);
+                ASSERT_EQ(u.size(), v.size()) << x << ", " << y;
+                for (std::size_t i = 0; i < u.size(); ++i) {
+                    EXPECT_EQ(u[i].depth, v[i].depth);
+                    EXPECT_EQ(u[i].triangle, v[i].triangle);
+                    EXPECT_EQ(u[i].front, v[i].front);
+                    if (i + 1 < u.size()) { EXPECT_LE(u[i].depth, u[i + 1].depth); }
+                }
+            }
+    };
+    FragmentLists reused = FragmentLists::build(large, ball.view());
+    reused.rebuild(small, torus.view());
+    expectSame(reused, FragmentLists::build(small, torus.view()));
+    reused.rebuild(large, ball.view());
+    expectSame(reused, FragmentLists::build(large, ball.view()));
+}
+
 } // namespace
 } // namespace voxfx

@@ -35,6 +35,9 @@ public:
     /// fragments per column, sorted by depth (ties: lower triangle first). Throws voxfx::Error when
     /// `progress` cancels.
     static FragmentLists build(const Frame& frame, const MeshView& mesh, Progress* progress = nullptr);
+    /// The same into this object, reusing its memory: lists rebuilt every frame of the same size
+    /// allocate (and page-fault) nothing new.
+    void rebuild(const Frame& frame, const MeshView& mesh, Progress* progress = nullptr);
 
     int64_t width() const { return width_; }
     int64_t height() const { return height_; }
@@ -48,6 +51,11 @@ public:
     int64_t maxPerColumn() const;
 
 private:
+    struct RowEntry {
+        int64_t x;
+        ListFragment f;
+    };
+    std::vector<std::vector<RowEntry>> rows_; ///< scratch of rebuild: each row's fragments, unsorted
     int64_t width_ = 0, height_ = 0;
     std::vector<int64_t> offsets_; ///< columnCount + 1
     std::vector<ListFragment> fragments_;

@@ -276,7 +276,8 @@ struct PassTime {
     std::string_view name;
     double ms = 0;
     /// The pass reused what an earlier frame built (RenderCache) instead of building it: the
-    /// flattened scene, the lights' shadows, the occlusion field or the glass structures.
+    /// flattened scene, the lights' shadows, the occlusion field, the glass structures or the volume
+    /// pass's setup.
     bool cached = false;
 };
 
@@ -323,13 +324,15 @@ struct RenderCacheData;
 
 /// What the frames of a static scene share, kept between render() calls: the flattened scene, each
 /// light's shadow (light grids, shadow maps, deep shadow maps, BVHs), the ambient-occlusion field,
-/// the glass method's structures, and the frame buffers (so a frame of the same size allocates
-/// nothing large). Pass one cache to every frame of a scene: an orbiting camera, a viewer, the
-/// renders of several shadow kinds. Each part is keyed by what it was built from (the meshes,
-/// materials and lights by content, the options, the camera where a technique is fitted to it:
-/// frosted glass, clustered deep shadows), so a change to the scene or the options rebuilds just
-/// what it touches and a stale part is never used; RenderTimings marks the passes that reused
-/// one (PassTime::cached). Not thread-safe: one render at a time per cache. Movable, not copyable.
+/// the glass method's structures, the volume pass's setup (its volume scene, surfaces, empty space,
+/// pre-integrated transfer functions), and the frame buffers and fragment lists (so a frame of the
+/// same size allocates nothing large). Pass one cache to every frame of a scene: an orbiting
+/// camera, a viewer, the renders of several shadow kinds. Each part is keyed by what it was built
+/// from (the meshes, materials and lights by content, the options, the camera where a technique is
+/// fitted to it: frosted glass, clustered deep shadows), so a change to the scene or the options
+/// rebuilds just what it touches and a stale part is never used; RenderTimings marks the passes
+/// that reused one (PassTime::cached). Not thread-safe: one render at a time per cache. Movable,
+/// not copyable.
 class RenderCache {
 public:
     RenderCache();

@@ -10,16 +10,11 @@ namespace voxfx {
 
 namespace {
 
-struct FragmentListEntry {
-    int64_t x;
-    ListFragment f;
-};
-
 // Each tile owns its rows: sinks append to the row vectors of their tile without locks.
-struct FragmentListConsumer {
-    std::vector<std::vector<FragmentListEntry>>* rows;
+template <class Entry> struct FragmentListConsumer {
+    std::vector<std::vector<Entry>>* rows;
     struct Sink {
-        std::vector<std::vector<FragmentListEntry>>* rows;
+        std::vector<std::vector<Entry>>* rows;
         void fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool front) {
             (*rows)[std::size_t(y)].push_back({x, {depth, triangle, front}});
         }
@@ -32,39 +27,59 @@ struct FragmentListConsumer {
 
 FragmentLists FragmentLists::build(const Frame& frame, const MeshView& mesh, Progress* progress) {
     FragmentLists out;
-    out.width_ = frame.width();
-    out.height_ = frame.height();
-    std::vector<std::vector<FragmentListEntry>> rows(std::size_t(out.height_));
-    FragmentListConsumer consumer{&rows};
+    out.rebuild(frame, mesh, progress);
+    out.rows_ = {};
+    return out;
+}
+
+void FragmentLists::rebuild(const Frame& frame, const MeshView& mesh, Progress* progress) {
+    width_ = frame.width();
+    height_ = frame.height();
+    std::vector<std::vector<RowEntry>>& rows = rows_;
+    rows.resize(std::size_t(height_));
+    for (auto& row : rows) row.clear();
+    FragmentListConsumer<RowEntry> consumer{&rows};
     RasterOptions ro;
     ro.progress = progress;
     rasterize<Coverage::Center>(frame, mesh, ro, consumer);
 
-    // Sort every row by (column, depth, triangle): a total order, whatever the tiling.
-    parallelFor(0, out.height_, 8, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y)
-            std::sort(rows[std::size_t(y)].begin(), rows[std::size_t(y)].end(),
-                      [](const FragmentListEntry& a, const FragmentListEntry& b) {
-                          if (a.x != b.x) return a.x < b.x;
-                          if (a.f.depth != b.f.depth) return a.f.depth < b.f.depth;
-                          return a.f.triangle < b.f.triangle;
-                      });
-    });
-    out.offsets_.assign(std::size_t(out.width_ * out.height_ + 1), 0);
-    for (int64_t y = 0; y < out.height_; ++y)
-        for (const FragmentListEntry& e : rows[std::size_t(y)])
-            ++out.offsets_[std::size_t(y * out.width_ + e.x + 1)];
-    for (std::size_t c = 1; c < out.offsets_.size(); ++c) out.offsets_[c] += out.offsets_[c - 1];
-    out.fragments_.resize(std::size_t(out.offsets_.back()));
-    parallelFor(0, out.height_, 8, [&](int64_t y0, int64_t y1) {
+    // Pack the rows in order, then each row's fragments by column (a counting sort, in place of
+    // sorting the row) and each column by (depth, triangle): a total order, whatever the tiling.
+    const std::size_t W = std::size_t(width_);
+    if (W == 0 || height_ == 0) {
+        offsets_.assign(1, 0);
+        fragments_.clear();
+        return;
+    }
+    offsets_.resize(W * std::size_t(height_) + 1);
+    int64_t total = 0;
+    for (int64_t y = 0; y < height_; ++y) {
+        offsets_[std::size_t(y) * W] = total;
+        total += int64_t(rows[std::size_t(y)].size());
+    }
+    offsets_.back() = total;
+    fragments_.resize(std::size_t(total));
+    parallelFor(0, height_, 8, [&](int64_t y0, int64_t y1) {
+        std::vector<int64_t> cursor(W);
         for (int64_t y = y0; y < y1; ++y) {
             const auto& row = rows[std::size_t(y)];
-            if (row.empty()) continue;
-            ListFragment* dst = out.fragments_.data() + out.offsets_[std::size_t(y * out.width_)];
-            for (const FragmentListEntry& e : row) *dst++ = e.f;
+            // off[0]: the row's start; off[W]: the next row's (the end), neither written here.
+            int64_t* off = offsets_.data() + std::size_t(y) * W;
+            std::fill(off + 1, off + W, int64_t(0));
+            for (const RowEntry& e : row)
+                if (e.x + 1 < int64_t(W)) ++off[e.x + 1];
+            for (std::size_t c = 1; c < W; ++c) off[c] += off[c - 1];
+            std::copy(off, off + W, cursor.begin());
+            for (const RowEntry& e : row) fragments_[std::size_t(cursor[std::size_t(e.x)]++)] = e.f;
+            for (std::size_t c = 0; c < W; ++c) {
+                ListFragment* b = fragments_.data() + off[c];
+                ListFragment* e = fragments_.data() + off[c + 1]; // off[W]: the next row's start
+                std::sort(b, e, [](const ListFragment& u, const ListFragment& v) {
+                    return u.depth != v.depth ? u.depth < v.depth : u.triangle < v.triangle;
+                });
+            }
         }
     });
-    return out;
 }
 
 int64_t FragmentLists::maxPerColumn() const {

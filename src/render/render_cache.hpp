@@ -19,6 +19,7 @@
 
 #include "render/screen_space_ao.hpp"
 #include "voxfx/ambient_occlusion.hpp"
+#include "voxfx/fragment_list.hpp"
 #include "voxfx/gbuffer.hpp"
 #include "voxfx/glass.hpp"
 #include "voxfx/render.hpp"
@@ -122,6 +123,8 @@ struct TriangleBasis {
 
 /// The glass pass's structures (render/glass_pass.cpp): built once per glass key.
 struct GlassSetup;
+/// The volume pass's structures (render/volume_pass.cpp): built once per volume key.
+struct VolumeSetup;
 
 struct RenderCacheData {
     std::optional<uint64_t> geometryKey;
@@ -132,12 +135,14 @@ struct RenderCacheData {
     KeyedCache<const FieldOcclusionSetup> occlusionSetup{2};
     KeyedCache<const AmbientOcclusion> occlusion{2};
     KeyedCache<const GlassSetup> glass{3};
+    KeyedCache<const VolumeSetup> volume{2};
     // Frame buffers: overwritten every frame, kept for their memory.
     GBuffer gbuffer;
     std::vector<Vec3f> shaded;
     std::vector<float> screenOcclusion;
     std::vector<uint8_t> refined, glassSamples;
     std::vector<Vec3f> volumeBehind; ///< the volume pass: per cell, the light behind its volumes
+    FragmentLists volumeLists;       ///< the volume pass: its fragment lists, rebuilt every frame
     struct ScreenOcclusion {         ///< the screen-space occlusion's opaque materials, and its scratch
         std::vector<uint8_t> opaque;
         ScreenSpaceOcclusionScratch scratch;

@@ -164,10 +164,14 @@ struct PixelRay {
     std::vector<LightSample>* lights = nullptr;     ///< per light of the scene, at the current sample
 };
 
-// What the pass composites: the volume scene's objects (and blended meshes), how each surface is
-// shaded, the bricks each volume skips and the sample step.
-struct VolumeComposite {
-    const FrameState& frame;
+} // namespace
+
+// What the volume pass builds from the scene alone, kept in the RenderCache across frames (the
+// volume scene's objects and blended meshes, how each surface is shaded, the bricks each volume
+// skips, the pre-integrated transfer functions, the sample step): a frame of a static scene
+// rebuilds none of it.
+struct VolumeSetup {
+    std::shared_ptr<const VolumeScene> owner; ///< the scene's volume scene, or one with the blended meshes
     const VolumeScene& vs;
     std::vector<Material> materials; ///< per object: how its surface is shaded
     ObjectSurfaces surfaces;
@@ -180,30 +184,32 @@ struct VolumeComposite {
     /// Under deep shadows, with a Volume object of another shape: the leaves, to find where the step
     /// towards the light leaves the shape (ownTransmittance).
     std::unique_ptr<TriangleTracer> leafTracer;
-    static constexpr double kPieceDepth = 0.5; ///< optical depth of the pieces of a dense interval
-    /// Phong shading of volume samples (RenderOptions::volumeShading) with lights to shade by.
-    bool shaded;
     /// Per Volume object, phong: the gradient magnitude (value per world unit) from which a sample
     /// is fully shaded; +inf for a constant volume (never shaded).
     std::vector<double> fullGradient;
     /// Phong: a change of this fraction of the volume's value range per voxel shades fully.
     static constexpr double kFullShadingChange = 0.05;
+    std::vector<Vec3f> faceNormals; ///< unit, per flattened triangle (zero when degenerate)
 
-    VolumeComposite(const FrameState& f, const VolumeScene& scene)
-        : frame(f), vs(scene), materials(objectMaterials(f.scene, scene)), surfaces(scene),
-          emptySpace(f.options.skipEmptySpace ? emptySpaceOf(scene)
-                                              : std::vector<EmptySpace>(scene.objects.size())),
-          preintegrated(preintegrate(scene)), step(sampleStep(scene) * f.options.volumeStep),
-          boxShape(boxShapes(scene)),
-          shaded(f.options.volumeShading == VolumeShading::Phong && !f.lights.empty()),
-          fullGradient(shaded ? fullGradients(scene) : std::vector<double>()) {
-        const bool deep = std::any_of(f.shadows.begin(), f.shadows.end(),
-                                      [](const auto& s) { return std::holds_alternative<DeepShadow>(*s); });
+    VolumeSetup(const Scene& scene, std::shared_ptr<const VolumeScene> chosen, const RenderOptions& options,
+                bool deep)
+        : owner(std::move(chosen)), vs(*owner), materials(objectMaterials(scene, vs)), surfaces(vs),
+          emptySpace(options.skipEmptySpace ? emptySpaceOf(vs) : std::vector<EmptySpace>(vs.objects.size())),
+          preintegrated(preintegrate(vs)), step(sampleStep(vs) * options.volumeStep), boxShape(boxShapes(vs)),
+          fullGradient(fullGradients(vs)) {
         bool otherShape = false;
-        for (std::size_t o = 0; o < scene.objects.size(); ++o)
-            otherShape |= scene.objects[o].kind == ObjectKind::Volume && !boxShape[o];
+        for (std::size_t o = 0; o < vs.objects.size(); ++o)
+            otherShape |= vs.objects[o].kind == ObjectKind::Volume && !boxShape[o];
         if (deep && otherShape && surfaces.flat.mesh.triangleCount() > 0)
             leafTracer = std::make_unique<TriangleTracer>(surfaces.flat.mesh.view());
+        const Mesh& m = surfaces.flat.mesh;
+        faceNormals.resize(m.triangleCount());
+        for (std::size_t t = 0; t < faceNormals.size(); ++t) {
+            const Vec3d p = volumePassCorner(m, uint32_t(t), 0);
+            const Vec3d n =
+                cross(volumePassCorner(m, uint32_t(t), 1) - p, volumePassCorner(m, uint32_t(t), 2) - p);
+            faceNormals[t] = length(n) > 0 ? Vec3f(normalize(n)) : Vec3f{0, 0, 0};
+        }
     }
 
     static std::vector<uint8_t> boxShapes(const VolumeScene& vs) {
@@ -276,6 +282,33 @@ struct VolumeComposite {
             }
         return spacing;
     }
+};
+
+namespace {
+
+// What the pass composites in this frame: the cached setup, shaded under the frame's lights.
+struct VolumeComposite {
+    const FrameState& frame;
+    const VolumeSetup& setup;
+    const VolumeScene& vs;
+    const std::vector<Material>& materials;
+    const ObjectSurfaces& surfaces;
+    const std::vector<EmptySpace>& emptySpace;
+    const std::vector<PreintegratedTransfer>& preintegrated;
+    double step;
+    const std::vector<uint8_t>& boxShape;
+    const TriangleTracer* leafTracer;
+    static constexpr double kPieceDepth = 0.5; ///< optical depth of the pieces of a dense interval
+    /// Phong shading of volume samples (RenderOptions::volumeShading) with lights to shade by.
+    bool shaded;
+    const std::vector<double>& fullGradient;
+
+    VolumeComposite(const FrameState& f, const VolumeSetup& s)
+        : frame(f), setup(s), vs(s.vs), materials(s.materials), surfaces(s.surfaces),
+          emptySpace(s.emptySpace), preintegrated(s.preintegrated), step(s.step), boxShape(s.boxShape),
+          leafTracer(s.leafTracer.get()),
+          shaded(f.options.volumeShading == VolumeShading::Phong && !f.lights.empty()),
+          fullGradient(s.fullGradient) {}
 
     // A surface of object o at depth z: shaded and composited; false stops the walk.
     bool surface(PixelRay& r, double z, std::size_t o, bool entering) const {
@@ -374,7 +407,10 @@ struct VolumeComposite {
             if (emptySpace[o].emptyBetween(p, c)) continue;
             const double a = volume.sample(p), b = volume.sample(c);
             const PreintegratedTransfer& pre = preintegrated[o];
-            depth += std::min(pre.extinction(a, a), pre.extinction(b, b)) * length(c - p);
+            // The extinction at a value: extinction(v, v) without the two cumulative integrals it
+            // would take and not use (equal ends take the point's extinction).
+            auto at = [&](double value) { return pre.extinction(value, 0.0, value, 0.0); };
+            depth += std::min(at(a), at(b)) * length(c - p);
         }
         return std::exp(-depth);
     }
@@ -601,6 +637,36 @@ bool volumeEdge(const FrameState& f, const SampleCaster& c, const ColumnCrossing
     return crossed && curvesAcrossNeighbours(f, cx, cy);
 }
 
+// The volume pass's setup for this frame's scene and options: from the cache while the meshes,
+// materials, volume scene and the options it reads stay the same; null when the camera sees no
+// volume scene object and no blended mesh.
+std::shared_ptr<const VolumeSetup> volumeSetup(FrameState& frame) {
+    const Scene& scene = frame.scene;
+    const RenderOptions& options = frame.options;
+    // What the camera draws here: the volume scene's objects, and the meshes of blended materials
+    // (left out of the G-buffer) as translucent objects.
+    const bool anyBlended = std::any_of(scene.meshes.begin(), scene.meshes.end(), [&](const SceneMesh& m) {
+        return m.material < scene.materials.size() && scene.materials[m.material].blend;
+    });
+    if (!anyBlended && !(scene.volumeScene && !scene.volumeScene->objects.empty())) return nullptr;
+    const bool deep = std::any_of(frame.shadows.begin(), frame.shadows.end(),
+                                  [](const auto& s) { return std::holds_alternative<DeepShadow>(*s); });
+    Hasher key;
+    key.value(frame.meshesKey), key.value(frame.materialsKey), key.value(options.skipEmptySpace);
+    key.value(options.volumeStep), key.value(deep);
+    std::shared_ptr<const VolumeSetup> setup = frame.cache.volume.find(key.get());
+    if (setup) {
+        frame.cachedPass = true;
+    } else {
+        std::shared_ptr<const VolumeScene> chosen =
+            anyBlended ? std::make_shared<const VolumeScene>(volumeSceneOf(scene, SceneMeshes::Blended))
+                       : scene.volumeScene;
+        setup = std::make_shared<const VolumeSetup>(scene, std::move(chosen), options, deep);
+        frame.cache.volume.insert(key.get(), setup);
+    }
+    return setup->vs.objects.empty() ? nullptr : setup;
+}
+
 } // namespace
 
 // Every sample the passes shaded (antialias.hpp's shadedSample) cast and composited; then, with
@@ -610,19 +676,13 @@ bool volumeEdge(const FrameState& f, const SampleCaster& c, const ColumnCrossing
 // cell's shading among its samples. The second round reads only representatives, which it does not
 // change: the order of the cells does not matter.
 void compositeVolumes(FrameState& frame) {
-    const Scene& scene = frame.scene;
-    // What the camera draws here: the volume scene's objects, and the meshes of blended materials
-    // (left out of the G-buffer) as translucent objects.
-    const bool anyBlended = std::any_of(scene.meshes.begin(), scene.meshes.end(), [&](const SceneMesh& m) {
-        return m.material < scene.materials.size() && scene.materials[m.material].blend;
-    });
-    std::optional<VolumeScene> merged;
-    if (anyBlended) merged.emplace(volumeSceneOf(scene, SceneMeshes::Blended));
-    const VolumeScene* chosen = merged ? &*merged : scene.volumeScene.get();
-    if (!chosen || chosen->objects.empty()) return;
-    const VolumeComposite pass(frame, *chosen);
+    std::shared_ptr<const VolumeSetup> setup = volumeSetup(frame);
+    if (!setup) return;
+    const VolumeComposite pass(frame, *setup);
+    const VolumeScene* chosen = &setup->vs;
     const Frame& f = frame.gbuffer.frame;
-    const FragmentLists lists = FragmentLists::build(f, pass.surfaces.flat.mesh.view());
+    FragmentLists& lists = frame.cache.volumeLists;
+    lists.rebuild(f, pass.surfaces.flat.mesh.view());
     const SampleCaster caster{frame, pass, lists, *chosen};
     const int a = frame.adaptive;
     const int64_t W = frame.width, cw = W / a, ch = frame.height / a;
@@ -646,14 +706,7 @@ void compositeVolumes(FrameState& frame) {
         samples += w.samples;
     });
     if (a > 1) {
-        std::vector<Vec3f> faceNormals(pass.surfaces.flat.mesh.triangleCount());
-        for (std::size_t t = 0; t < faceNormals.size(); ++t) {
-            const Vec3d p = volumePassCorner(pass.surfaces.flat.mesh, uint32_t(t), 0);
-            const Vec3d n = cross(volumePassCorner(pass.surfaces.flat.mesh, uint32_t(t), 1) - p,
-                                  volumePassCorner(pass.surfaces.flat.mesh, uint32_t(t), 2) - p);
-            faceNormals[t] = length(n) > 0 ? Vec3f(normalize(n)) : Vec3f{0, 0, 0};
-        }
-        const ColumnCrossings crossings{pass.surfaces.flat.triangleLeaf, faceNormals};
+        const ColumnCrossings crossings{pass.surfaces.flat.triangleLeaf, setup->faceNormals};
         parallelFor(0, ch, 2, [&](int64_t y0, int64_t y1) {
             SampleCaster::Walker w = caster.walker();
             for (int64_t cy = y0; cy < y1; ++cy)
