@@ -293,10 +293,11 @@ template <class Buffer> struct HorizonWalk {
 };
 
 // GTAO at working pixel (x, y): the visibility in [0, 1], 1 for background.
-template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int64_t x, int64_t y) {
-    const int64_t here = y * b.width + x;
-    if (!b.covered(here)) return 1;
-    const Vec3f P = b.position(here), N = b.normal(here);
+// GTAO at point P with unit normal N over buffer `b`, the point at (cx, cy) in b's pixels (`here`:
+// its own pixel, which the walk skips; -1: none), slices and offsets of pattern index k.
+template <class Buffer>
+float occlusionOf(const Buffer& b, const Params& p, const Vec3f& P, const Vec3f& N, float cx, float cy,
+                  int64_t here, int k) {
     const Vec3f toEye = p.eye - P;
     const float eyeDistance = length(toEye);
     const float depth = dot(P - p.eye, p.forward);
@@ -305,12 +306,10 @@ template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int6
     // The radius in working pixels at this depth; under a pixel nothing but p itself is in reach.
     const float radiusPixels = p.radius * p.pixelsPerTan / depth;
     if (!(radiusPixels >= 1)) return 1;
-    const int k = kBayer[y & 3][x & 3];
     const auto& dirX = p.dirX[size_t(k)];
     const auto& dirY = p.dirY[size_t(k)];
     const std::array<float, kMaxSteps>& fraction = p.stepFraction[size_t(k)];
-    const HorizonWalk<Buffer> walk{
-        b, p, fraction, here, float(x) + 0.5f, float(y) + 0.5f, kReach * radiusPixels, P, N, V};
+    const HorizonWalk<Buffer> walk{b, p, fraction, here, cx, cy, kReach * radiusPixels, P, N, V};
     float sum = 0, sumOpen = 0;
     for (int s = 0; s < p.directions; ++s) {
         const float dx = dirX[size_t(s)], dy = dirY[size_t(s)];
@@ -360,6 +359,14 @@ template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int6
     }
     if (!(sumOpen > 0)) return 1;
     return std::clamp(sum / sumOpen, 0.0f, 1.0f);
+}
+
+// GTAO at working pixel (x, y): the visibility in [0, 1], 1 for background.
+template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int64_t x, int64_t y) {
+    const int64_t here = y * b.width + x;
+    if (!b.covered(here)) return 1;
+    return occlusionOf(b, p, b.position(here), b.normal(here), float(x) + 0.5f, float(y) + 0.5f, here,
+                       kBayer[y & 3][x & 3]);
 }
 
 // How much neighbour (q, m) belongs to the surface of p with unit normal n, in [0, tolerance]
@@ -605,11 +612,13 @@ Packed downsample(const Source& full, const Params& fullParams, const Frame& cam
 // (x even) or 1/4 and 3/4 (x odd), and likewise in y. Where its own block is uniform and the four
 // are linked, it takes their bilinear mean (bilinear: no need of its surface); elsewhere the four
 // weighted by their similarity to its own surface too; where none is similar, the most similar of the
-// 4x4 around it; where none is at all (a sliver no block kept), GTAO at the sample itself (weighted).
+// 4x4 around it; where none is at all (a sliver no block kept), GTAO at the sample itself over the
+// working buffer (weighted).
 struct Upsample {
     Packed low;
     const uint8_t* links = nullptr;
     const float* smooth = nullptr;
+    Params lowParams; ///< the working buffer's
 
     bool bilinear(int64_t x, int64_t y, float& out) const {
         const int64_t w = low.width, h = low.height;
@@ -655,7 +664,13 @@ struct Upsample {
                 const float s = similarity(P, N, tolerance, low.sample[l].position, low.normals[l]);
                 if (s > best) best = s, out = smooth[l];
             }
-        return best == 0 ? occlusionAt(full, fullParams, x, y) : out;
+        // The sliver's own GTAO, walking the working buffer (as every working pixel's does) from its
+        // point at its place on it: the full-resolution buffer is not there to walk in the G-buffer's
+        // case (reading it costs a triangle and a material per step), and the working buffer holds
+        // the occluders around at the resolution the others see them.
+        if (best > 0) return out;
+        return occlusionOf(low, lowParams, P, full.normal(x, y), 0.5f * (float(x) + 0.5f),
+                           0.5f * (float(y) + 0.5f), -1, kBayer[y & 3][x & 3]);
     }
 };
 
@@ -693,7 +708,7 @@ Upsample workingOcclusion(const Source& full, const Params& fullParams, const Fr
     scratch.across.resize(lowCount);
     scratch.smooth.resize(lowCount);
     blur(low, links, scratch.raw, scratch.across, scratch.smooth);
-    return Upsample{low, links.data(), scratch.smooth.data()};
+    return Upsample{low, links.data(), scratch.smooth.data(), p};
 }
 
 // GTAO over `full` (at camera's resolution times `scale` samples per side) into `visibility`.
