@@ -59,6 +59,7 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <limits>
@@ -429,6 +430,11 @@ void BM_FrameCost(benchmark::State& state, const std::string& name) {
     state.counters["ao_share"] = (full.total - noAo.total) / full.total;
     state.counters["ao_share_cpu"] = (full.cpu - noAo.cpu) / full.cpu;
     state.counters["occlusion_share"] = full.pass("occlusion") / full.total;
+    // Where anti-aliasing costs: the passes it makes dearer (ms per frame, with AA and without).
+    for (const char* pass : {"G-buffer", "shading", "resolve"}) {
+        state.counters[counterName(pass)] = full.pass(pass) / n;
+        state.counters[counterName(pass, "aa_off_")] = noAa.pass(pass) / n;
+    }
     state.SetLabel(name + ": default, --aa off, --ao off; 1280x720, cached, orbiting");
 }
 BENCHMARK_CAPTURE(BM_FrameCost, tree, std::string("tree"))->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -439,6 +445,32 @@ BENCHMARK_CAPTURE(BM_FrameCost, forest, std::string("forest"))->Unit(benchmark::
 BENCHMARK_CAPTURE(BM_FrameCost, dsm_demo, std::string("dsm-demo"))
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// For counting rather than timing (the machine is shared: `perf stat -e cycles:u,instructions:u`
+// counts the process's own work whatever the load): one warm-up frame, then VOXFX_BENCH_FRAMES
+// (default 8) cached frames of one variant (default, --aa off, --ao off), the camera orbiting as in
+// BM_FrameCost; run it with 0 frames too and take the difference for the frames' own cost.
+void BM_FrameVariant(benchmark::State& state, const std::string& name, int variant) {
+    const BenchScene& b = benchScene(name);
+    RenderOptions o = frameOptions(b.scene);
+    if (variant == 1) o.antiAliasing = AntiAliasing::Off;
+    if (variant == 2) o.ambientOcclusion = Occlusion::Off;
+    const char* env = std::getenv("VOXFX_BENCH_FRAMES");
+    const int frames = env ? std::atoi(env) : 8;
+    const FrameFn frame = cachedFrames(b, o);
+    benchmark::DoNotOptimize(frame().image.pixels.data());
+    for (auto _ : state)
+        for (int i = 0; i < frames; ++i) benchmark::DoNotOptimize(frame().image.pixels.data());
+    state.SetLabel(name + (variant == 0 ? ": default" : variant == 1 ? ": --aa off" : ": --ao off"));
+}
+#define VOXFX_FRAME_VARIANTS(id, scene)                                                                      \
+    BENCHMARK_CAPTURE(BM_FrameVariant, id##_default, std::string(scene), 0)->Iterations(1);                  \
+    BENCHMARK_CAPTURE(BM_FrameVariant, id##_aa_off, std::string(scene), 1)->Iterations(1);                   \
+    BENCHMARK_CAPTURE(BM_FrameVariant, id##_ao_off, std::string(scene), 2)->Iterations(1)
+VOXFX_FRAME_VARIANTS(tree, "tree");
+VOXFX_FRAME_VARIANTS(bunny, "bunny");
+VOXFX_FRAME_VARIANTS(cgal, "cgal");
+VOXFX_FRAME_VARIANTS(forest, "forest");
 
 // The linear (tone map clamp) frames of a scene with exact shadows and with none, made once.
 struct LinearReferences {

@@ -10,7 +10,8 @@ namespace voxfx::detail {
 /// nothing where it is off or there is no ambient light; its setup (opaque triangles, region,
 /// radius) and, for the field method, the field (voxfx/ambient_occlusion.hpp), both kept in the
 /// cache (f.occlusion); for the screen method, GTAO (render/screen_space_ao.hpp) over the
-/// G-buffer's cells, one sample each (the one the shading pass shades), into f.screenOcclusion.
+/// G-buffer's cells, one sample each (the one the shading pass shades), up to the upsample, which the
+/// shading pass does (f.cellOcclusion, filling f.screenOcclusion).
 void occlusionPass(FrameState& f, Progress* progress);
 
 /// render/resolve_pass.cpp: box filter of the k x k (times adaptive) samples of each pixel, each

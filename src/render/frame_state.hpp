@@ -16,6 +16,7 @@
 namespace voxfx::detail {
 
 class SurfaceShader;
+class CellOcclusion; // render/screen_space_ao.hpp
 
 struct FrameState {
     const Scene& scene; ///< as given: its meshes, materials and volumes
@@ -56,6 +57,9 @@ struct FrameState {
     bool cachedPass = false;
     /// RenderOptions::exposure is 0 (automatic): `options` holds exposure 1, the resolve pass scales.
     bool autoExposure = false;
+    /// Screen-space occlusion before its upsample to the cells, which the shading pass does where it
+    /// has each cell's surface point (filling screenOcclusion); null otherwise.
+    std::shared_ptr<const CellOcclusion> cellOcclusion = nullptr;
 };
 
 } // namespace voxfx::detail

@@ -15,8 +15,9 @@ namespace voxfx::detail {
 namespace {
 
 // Screen-space occlusion per cell of the G-buffer (adaptive x adaptive samples), of the sample the
-// shading pass shades there, read from the G-buffer itself (screenSpaceOcclusion's G-buffer entry:
-// no gather of surface points), into f.screenOcclusion.
+// shading pass shades there, read from the G-buffer itself (no gather of surface points): all but the
+// upsample to the cells, which the shading pass does where it has each cell's surface point
+// (f.cellOcclusion; it fills f.screenOcclusion).
 void screenOcclusion(FrameState& f, double radius) {
     const int a = f.adaptive;
     std::vector<uint8_t>& opaque = f.cache.screen.opaque;
@@ -25,15 +26,16 @@ void screenOcclusion(FrameState& f, double radius) {
     f.screenOcclusion.resize(size_t((f.width / a) * (f.height / a)));
     ScreenSpaceOcclusionOptions so;
     so.radius = radius;
-    screenSpaceOcclusion(f.gbuffer, f.geometry, f.triangleBases, opaque, a, so, f.screenOcclusion,
-                         f.cache.screen.scratch);
+    f.cellOcclusion = std::make_shared<const CellOcclusion>(f.gbuffer, f.geometry, f.triangleBases, opaque, a,
+                                                            so, f.cache.screen.scratch);
 }
 
 } // namespace
 
 // The ambient light's occlusion (RenderOptions::ambientOcclusion): its setup (opaque triangles,
 // region, radius) and, for the field method, the field, both kept in the cache; for the screen
-// method, GTAO over the G-buffer's cells (one sample each: the one the shading pass shades).
+// method, GTAO over the G-buffer's cells (one sample each: the one the shading pass shades), the
+// upsample left to the shading pass.
 void occlusionPass(FrameState& f, Progress* progress) {
     const RenderOptions& o = f.options;
     const bool ambientLight = o.skyLight > 0 || o.ambient.x > 0 || o.ambient.y > 0 || o.ambient.z > 0;

@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 
 #include "render/render_cache.hpp"
 #include "render/shading.hpp"
@@ -292,10 +293,11 @@ template <class Buffer> struct HorizonWalk {
 };
 
 // GTAO at working pixel (x, y): the visibility in [0, 1], 1 for background.
-template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int64_t x, int64_t y) {
-    const int64_t here = y * b.width + x;
-    if (!b.covered(here)) return 1;
-    const Vec3f P = b.position(here), N = b.normal(here);
+// GTAO at point P with unit normal N over buffer `b`, the point at (cx, cy) in b's pixels (`here`:
+// its own pixel, which the walk skips; -1: none), slices and offsets of pattern index k.
+template <class Buffer>
+float occlusionOf(const Buffer& b, const Params& p, const Vec3f& P, const Vec3f& N, float cx, float cy,
+                  int64_t here, int k) {
     const Vec3f toEye = p.eye - P;
     const float eyeDistance = length(toEye);
     const float depth = dot(P - p.eye, p.forward);
@@ -304,12 +306,10 @@ template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int6
     // The radius in working pixels at this depth; under a pixel nothing but p itself is in reach.
     const float radiusPixels = p.radius * p.pixelsPerTan / depth;
     if (!(radiusPixels >= 1)) return 1;
-    const int k = kBayer[y & 3][x & 3];
     const auto& dirX = p.dirX[size_t(k)];
     const auto& dirY = p.dirY[size_t(k)];
     const std::array<float, kMaxSteps>& fraction = p.stepFraction[size_t(k)];
-    const HorizonWalk<Buffer> walk{
-        b, p, fraction, here, float(x) + 0.5f, float(y) + 0.5f, kReach * radiusPixels, P, N, V};
+    const HorizonWalk<Buffer> walk{b, p, fraction, here, cx, cy, kReach * radiusPixels, P, N, V};
     float sum = 0, sumOpen = 0;
     for (int s = 0; s < p.directions; ++s) {
         const float dx = dirX[size_t(s)], dy = dirY[size_t(s)];
@@ -359,6 +359,14 @@ template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int6
     }
     if (!(sumOpen > 0)) return 1;
     return std::clamp(sum / sumOpen, 0.0f, 1.0f);
+}
+
+// GTAO at working pixel (x, y): the visibility in [0, 1], 1 for background.
+template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int64_t x, int64_t y) {
+    const int64_t here = y * b.width + x;
+    if (!b.covered(here)) return 1;
+    return occlusionOf(b, p, b.position(here), b.normal(here), float(x) + 0.5f, float(y) + 0.5f, here,
+                       kBayer[y & 3][x & 3]);
 }
 
 // How much neighbour (q, m) belongs to the surface of p with unit normal n, in [0, tolerance]
@@ -598,80 +606,94 @@ Packed downsample(const Source& full, const Params& fullParams, const Frame& cam
     return Packed{w, h, lowSample.data(), lowNormal.data()};
 }
 
-// Step 4, back to full resolution: `smooth` (the blurred working pixels of `low`) into `out`.
+// Step 4, back to full resolution, one sample at a time: the blurred working pixels (`smooth`) of
+// `low`, with the links the blur followed. Working pixel (a, b) is centred on sample (2a + 1, 2b + 1),
+// so sample (x, y) lies between working pixels a0 = floor((x - 1) / 2) and a0 + 1 at 3/4 and 1/4
+// (x even) or 1/4 and 3/4 (x odd), and likewise in y. Where its own block is uniform and the four
+// are linked, it takes their bilinear mean (bilinear: no need of its surface); elsewhere the four
+// weighted by their similarity to its own surface too; where none is similar, the most similar of the
+// 4x4 around it; where none is at all (a sliver no block kept), GTAO at the sample itself over the
+// working buffer (weighted).
+struct Upsample {
+    Packed low;
+    const uint8_t* links = nullptr;
+    const float* smooth = nullptr;
+    Params lowParams; ///< the working buffer's
+
+    bool bilinear(int64_t x, int64_t y, float& out) const {
+        const int64_t w = low.width, h = low.height;
+        const int64_t a0 = (x - 1) >> 1, b0 = (y - 1) >> 1; // arithmetic shift: floor
+        if (!(a0 >= 0 && b0 >= 0 && a0 + 1 < w && b0 + 1 < h)) return false;
+        const auto l = std::size_t(b0 * w + a0), up = l + std::size_t(w);
+        if (!((links[std::size_t((y >> 1) * w + (x >> 1))] & kUniform) &&
+              (links[l] & (kLinkRight | kLinkUp)) == (kLinkRight | kLinkUp) && (links[l + 1] & kLinkUp) &&
+              (links[up] & kLinkRight)))
+            return false;
+        const float fx = (x & 1) ? 0.25f : 0.75f, fy = (y & 1) ? 0.25f : 0.75f;
+        out = (1 - fy) * ((1 - fx) * smooth[l] + fx * smooth[l + 1]) +
+              fy * ((1 - fx) * smooth[up] + fx * smooth[up + 1]);
+        return true;
+    }
+
+    // Sample (x, y) at P with unit normal N (the source's upsampleNormal) off the bilinear path.
+    template <class Source>
+    float weighted(const Source& full, const Params& fullParams, int64_t x, int64_t y, const Vec3f& P,
+                   const Vec3f& N) const {
+        const int64_t w = low.width, h = low.height;
+        const int64_t a0 = (x - 1) >> 1, b0 = (y - 1) >> 1;
+        const float fx = (x & 1) ? 0.25f : 0.75f, fy = (y & 1) ? 0.25f : 0.75f;
+        const float tolerance = planeTolerance(fullParams, P);
+        float sum = 0, weights = 0;
+        for (int db = 0; db < 2; ++db)
+            for (int da = 0; da < 2; ++da) {
+                const int64_t a = a0 + da, bb = b0 + db;
+                if (a < 0 || bb < 0 || a >= w || bb >= h) continue;
+                const auto l = std::size_t(bb * w + a);
+                if (!low.covered(int64_t(l))) continue;
+                const float wgt = (da ? fx : 1 - fx) * (db ? fy : 1 - fy) *
+                                  similarity(P, N, tolerance, low.sample[l].position, low.normals[l]);
+                sum += wgt * smooth[l];
+                weights += wgt;
+            }
+        if (weights > 1e-3f * tolerance) return sum / weights;
+        float best = 0, out = 1;
+        for (int64_t bb = std::max<int64_t>(0, b0 - 1); bb <= std::min(h - 1, b0 + 2); ++bb)
+            for (int64_t a = std::max<int64_t>(0, a0 - 1); a <= std::min(w - 1, a0 + 2); ++a) {
+                const auto l = std::size_t(bb * w + a);
+                if (!low.covered(int64_t(l))) continue;
+                const float s = similarity(P, N, tolerance, low.sample[l].position, low.normals[l]);
+                if (s > best) best = s, out = smooth[l];
+            }
+        // The sliver's own GTAO, walking the working buffer (as every working pixel's does) from its
+        // point at its place on it: the full-resolution buffer is not there to walk in the G-buffer's
+        // case (reading it costs a triangle and a material per step), and the working buffer holds
+        // the occluders around at the resolution the others see them.
+        if (best > 0) return out;
+        return occlusionOf(low, lowParams, P, full.normal(x, y), 0.5f * (float(x) + 0.5f),
+                           0.5f * (float(y) + 0.5f), -1, kBayer[y & 3][x & 3]);
+    }
+};
+
+// Step 4 over every sample of `full` into `out`.
 template <class Source>
-void upsample(const Source& full, const Params& fullParams, const Packed& low,
-              const std::vector<uint8_t>& links, const std::vector<float>& smooth, std::span<float> out) {
-    const int64_t W = full.width, H = full.height, w = low.width, h = low.height;
-    const Sample* lowSample = low.sample;
-    const Vec3f* lowNormal = low.normals;
-    // Step 4: working pixel (a, b) is centred on sample (2a + 1, 2b + 1), so sample (x, y) lies
-    // between working pixels a0 = floor((x - 1) / 2) and a0 + 1 at 3/4 and 1/4 (x even) or 1/4 and
-    // 3/4 (x odd), and likewise in y. Where its own block is uniform and the four are linked, it
-    // takes their bilinear mean; elsewhere the four weighted by their similarity to its own surface
-    // too; where none is similar, the most similar of the 4x4 around it; where none is at all (a
-    // sliver no block kept), GTAO at the sample itself.
-    parallelFor(0, H, 8, [&](int64_t y0, int64_t y1) {
+void upsample(const Source& full, const Params& fullParams, const Upsample& up, std::span<float> out) {
+    parallelFor(0, full.height, 8, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = 0; x < W; ++x) {
-                const int64_t i = y * W + x;
-                if (!full.covered(x, y)) {
-                    out[size_t(i)] = 1;
-                    continue;
-                }
-                const int64_t a0 = (x - 1) >> 1, b0 = (y - 1) >> 1; // arithmetic shift: floor
-                const float fx = (x & 1) ? 0.25f : 0.75f, fy = (y & 1) ? 0.25f : 0.75f;
-                if (a0 >= 0 && b0 >= 0 && a0 + 1 < w && b0 + 1 < h) {
-                    const auto l = std::size_t(b0 * w + a0), up = l + std::size_t(w);
-                    if ((links[std::size_t((y >> 1) * w + (x >> 1))] & kUniform) &&
-                        (links[l] & (kLinkRight | kLinkUp)) == (kLinkRight | kLinkUp) &&
-                        (links[l + 1] & kLinkUp) && (links[up] & kLinkRight)) {
-                        out[size_t(i)] = (1 - fy) * ((1 - fx) * smooth[l] + fx * smooth[l + 1]) +
-                                         fy * ((1 - fx) * smooth[up] + fx * smooth[up + 1]);
-                        continue;
-                    }
-                }
-                const Vec3f P = full.position(x, y), N = full.upsampleNormal(x, y);
-                const float tolerance = planeTolerance(fullParams, P);
-                float sum = 0, weights = 0;
-                for (int db = 0; db < 2; ++db)
-                    for (int da = 0; da < 2; ++da) {
-                        const int64_t a = a0 + da, bb = b0 + db;
-                        if (a < 0 || bb < 0 || a >= w || bb >= h) continue;
-                        const auto l = std::size_t(bb * w + a);
-                        if (!low.covered(int64_t(l))) continue;
-                        const float wgt = (da ? fx : 1 - fx) * (db ? fy : 1 - fy) *
-                                          similarity(P, N, tolerance, lowSample[l].position, lowNormal[l]);
-                        sum += wgt * smooth[l];
-                        weights += wgt;
-                    }
-                if (weights > 1e-3f * tolerance) {
-                    out[size_t(i)] = sum / weights;
-                    continue;
-                }
-                float best = 0;
-                for (int64_t bb = std::max<int64_t>(0, b0 - 1); bb <= std::min(h - 1, b0 + 2); ++bb)
-                    for (int64_t a = std::max<int64_t>(0, a0 - 1); a <= std::min(w - 1, a0 + 2); ++a) {
-                        const auto l = std::size_t(bb * w + a);
-                        if (!low.covered(int64_t(l))) continue;
-                        const float s = similarity(P, N, tolerance, lowSample[l].position, lowNormal[l]);
-                        if (s > best) best = s, out[size_t(i)] = smooth[l];
-                    }
-                if (best == 0) out[size_t(i)] = occlusionAt(full, fullParams, x, y);
+            for (int64_t x = 0; x < full.width; ++x) {
+                float& v = out[size_t(y * full.width + x)];
+                if (!full.covered(x, y))
+                    v = 1;
+                else if (!up.bilinear(x, y, v))
+                    v = up.weighted(full, fullParams, x, y, full.position(x, y), full.upsampleNormal(x, y));
             }
     });
 }
 
-// GTAO over `full` (at camera's resolution times `scale` samples per side) into `visibility`.
+// Steps 1-3 at half resolution over `full` (at camera's resolution times `scale` samples per side):
+// what the upsample reads, in `scratch`.
 template <class Source>
-void occlusionOf(const Source& full, const Frame& camera, int scale,
-                 const ScreenSpaceOcclusionOptions& options, std::span<float> visibility,
-                 ScreenSpaceOcclusionScratch& scratch) {
-    const Params fullParams = makeParams(camera, scale, options);
-    if (!options.halfResolution) {
-        fullResolution(full, fullParams, visibility, scratch);
-        return;
-    }
+Upsample workingOcclusion(const Source& full, const Params& fullParams, const Frame& camera, int scale,
+                          const ScreenSpaceOcclusionOptions& options, ScreenSpaceOcclusionScratch& scratch) {
     const Packed low = downsample(full, fullParams, camera, scratch);
     const int64_t w = low.width, h = low.height;
     const auto lowCount = std::size_t(w * h);
@@ -686,7 +708,21 @@ void occlusionOf(const Source& full, const Frame& camera, int scale,
     scratch.across.resize(lowCount);
     scratch.smooth.resize(lowCount);
     blur(low, links, scratch.raw, scratch.across, scratch.smooth);
-    upsample(full, fullParams, low, links, scratch.smooth, visibility);
+    return Upsample{low, links.data(), scratch.smooth.data(), p};
+}
+
+// GTAO over `full` (at camera's resolution times `scale` samples per side) into `visibility`.
+template <class Source>
+void occlusionOf(const Source& full, const Frame& camera, int scale,
+                 const ScreenSpaceOcclusionOptions& options, std::span<float> visibility,
+                 ScreenSpaceOcclusionScratch& scratch) {
+    const Params fullParams = makeParams(camera, scale, options);
+    if (!options.halfResolution) {
+        fullResolution(full, fullParams, visibility, scratch);
+        return;
+    }
+    upsample(full, fullParams, workingOcclusion(full, fullParams, camera, scale, options, scratch),
+             visibility);
 }
 
 } // namespace
@@ -701,10 +737,10 @@ void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, st
     occlusionOf(full, camera, 1, options, visibility, scratch);
 }
 
-void screenSpaceOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
-                          std::span<const TriangleBasis> bases, std::span<const uint8_t> opaqueMaterial,
-                          int adaptive, const ScreenSpaceOcclusionOptions& options,
-                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch) {
+namespace {
+
+void checkCells(const GBuffer& gbuffer, const SceneGeometry& geometry, std::span<const TriangleBasis> bases,
+                int adaptive) {
     const Frame& camera = gbuffer.frame;
     if (!camera.isPerspective()) fail("screen-space ambient occlusion: the camera frame must be perspective");
     if (adaptive < 1 || camera.width() % adaptive || camera.height() % adaptive)
@@ -713,12 +749,81 @@ void screenSpaceOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
     if (bases.size() != geometry.mesh.triangleCount())
         fail("screen-space ambient occlusion: ", bases.size(), " triangle bases for ",
              geometry.mesh.triangleCount(), " triangles");
+    if (camera.width() / adaptive <= 0 || camera.height() / adaptive <= 0)
+        fail("screen-space ambient occlusion: the G-buffer has no cells");
+}
+
+} // namespace
+
+void screenSpaceOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
+                          std::span<const TriangleBasis> bases, std::span<const uint8_t> opaqueMaterial,
+                          int adaptive, const ScreenSpaceOcclusionOptions& options,
+                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch) {
+    checkCells(gbuffer, geometry, bases, adaptive);
     const Cells full(gbuffer, geometry, bases, opaqueMaterial, adaptive);
-    if (full.width <= 0 || full.height <= 0 || visibility.size() != std::size_t(full.width * full.height))
+    if (visibility.size() != std::size_t(full.width * full.height))
         fail("screen-space ambient occlusion: ", full.width * full.height, " cells but room for ",
              visibility.size(), " results");
     checkOptions(options);
-    occlusionOf(full, camera, adaptive, options, visibility, scratch);
+    occlusionOf(full, gbuffer.frame, adaptive, options, visibility, scratch);
+}
+
+struct CellOcclusion::Impl {
+    int64_t width = 0, height = 0;
+    virtual ~Impl() = default;
+    virtual float at(int64_t cx, int64_t cy, const Vec3f& position, const Vec3f& faceNormal) const = 0;
+};
+
+namespace {
+
+// CellOcclusion's state (the source's types live in this file's anonymous namespace).
+struct CellOcclusionState final : CellOcclusion::Impl {
+    Cells full;
+    Params fullParams;
+    Upsample up;
+    std::vector<float> cells; ///< without halfResolution: every cell's visibility
+    CellOcclusionState(const GBuffer& gbuffer, const SceneGeometry& geometry,
+                       std::span<const TriangleBasis> bases, std::span<const uint8_t> opaqueMaterial,
+                       int adaptive, const ScreenSpaceOcclusionOptions& options,
+                       ScreenSpaceOcclusionScratch& scratch)
+        : full(gbuffer, geometry, bases, opaqueMaterial, adaptive),
+          fullParams(makeParams(gbuffer.frame, adaptive, options)) {
+        width = full.width;
+        height = full.height;
+        if (options.halfResolution) {
+            up = workingOcclusion(full, fullParams, gbuffer.frame, adaptive, options, scratch);
+            return;
+        }
+        cells.resize(std::size_t(full.width * full.height));
+        fullResolution(full, fullParams, cells, scratch);
+    }
+    float at(int64_t cx, int64_t cy, const Vec3f& position, const Vec3f& faceNormal) const override {
+        if (!cells.empty()) return cells[std::size_t(cy * full.width + cx)];
+        float v = 1;
+        if (!up.bilinear(cx, cy, v)) v = up.weighted(full, fullParams, cx, cy, position, faceNormal);
+        return v;
+    }
+};
+
+} // namespace
+
+CellOcclusion::CellOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
+                             std::span<const TriangleBasis> bases, std::span<const uint8_t> opaqueMaterial,
+                             int adaptive, const ScreenSpaceOcclusionOptions& options,
+                             ScreenSpaceOcclusionScratch& scratch) {
+    checkCells(gbuffer, geometry, bases, adaptive);
+    checkOptions(options);
+    impl_ = std::make_unique<CellOcclusionState>(gbuffer, geometry, bases, opaqueMaterial, adaptive, options,
+                                                 scratch);
+}
+
+CellOcclusion::~CellOcclusion() = default;
+
+int64_t CellOcclusion::width() const { return impl_->width; }
+int64_t CellOcclusion::height() const { return impl_->height; }
+
+float CellOcclusion::at(int64_t cx, int64_t cy, const Vec3f& position, const Vec3f& faceNormal) const {
+    return impl_->at(cx, cy, position, faceNormal);
 }
 
 std::vector<float> screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height,

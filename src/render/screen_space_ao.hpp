@@ -37,6 +37,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -129,6 +130,34 @@ void screenSpaceOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
                           std::span<const TriangleBasis> bases, std::span<const uint8_t> opaqueMaterial,
                           int adaptive, const ScreenSpaceOcclusionOptions& options,
                           std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch);
+
+/// The renderer's entry in two halves, so that the last step, the bilateral upsample to the cells,
+/// runs where the shading pass has each cell's surface point already (position and face normal: no
+/// second reconstruction from the G-buffer, no second visit to the triangle): the constructor runs
+/// the rest of screenSpaceOcclusion's G-buffer entry (downsample, horizon search, blur; without
+/// halfResolution, every cell), `at` gives one covered cell's visibility. The same method and
+/// arithmetic as that entry, which upsamples through `at`'s code with the position from the depth
+/// and the face normal of its cell. The object reads its arguments and `scratch` until it is
+/// destroyed; `at` is thread-safe. Throws voxfx::Error as the G-buffer entry does.
+class CellOcclusion {
+public:
+    CellOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry, std::span<const TriangleBasis> bases,
+                  std::span<const uint8_t> opaqueMaterial, int adaptive,
+                  const ScreenSpaceOcclusionOptions& options, ScreenSpaceOcclusionScratch& scratch);
+    ~CellOcclusion();
+    CellOcclusion(const CellOcclusion&) = delete;
+    CellOcclusion& operator=(const CellOcclusion&) = delete;
+    int64_t width() const;  ///< cells
+    int64_t height() const; ///< cells
+    /// The visibility of covered cell (cx, cy) whose sample (the shading pass's) lies at `position`
+    /// with face normal `faceNormal` turned towards the eye (surfaceFromBasis' geometricNormal).
+    float at(int64_t cx, int64_t cy, const Vec3f& position, const Vec3f& faceNormal) const;
+
+    struct Impl; ///< its state (screen_space_ao.cpp)
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
 
 /// The G-buffer's surface points as the plain buffers screenSpaceOcclusion reads: per sample the
 /// position and normal of surfaceAt, covered, and occluder = the triangle's material is opaque

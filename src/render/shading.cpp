@@ -13,6 +13,7 @@
 #include <mutex>
 
 #include "render/antialias.hpp"
+#include "render/screen_space_ao.hpp"
 
 namespace voxfx::detail {
 
@@ -225,26 +226,64 @@ Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material&
     return frame.shader->shade(s, m, eye);
 }
 
+namespace {
+
+// Sample i of the G-buffer: its surface point shaded with the ambient light's `occlusion`, or the
+// environment along its ray where it shows the background.
+// `known`: its surface point, where the caller has it.
+Vec3f shadeSample(const FrameState& frame, std::size_t i, float occlusion,
+                  const SurfacePoint* known = nullptr) {
+    const GBuffer& gbuffer = frame.gbuffer;
+    const Frame& cam = gbuffer.frame;
+    if (known) return frame.shader->shade(*known, cam.eye(), occlusion);
+    const int64_t x = int64_t(i % size_t(frame.width)), y = int64_t(i / size_t(frame.width));
+    SurfacePoint s;
+    if (gbuffer.triangle[i] != GBuffer::kNone &&
+        surfaceFromBasis(gbuffer, frame.geometry, frame.triangleBases, x, y, s))
+        return frame.shader->shade(s, cam.eye(), occlusion);
+    return frame.environment->lookup(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - cam.eye()) *
+           frame.options.exposure;
+}
+
+// Round 0 at cell (cx, cy): its representative sample `i`, with the screen-space occlusion's upsample
+// to the cell where the occlusion pass left it (`cells`), whose value the cell keeps for round 1 and
+// the passes after.
+void shadeRepresentative(FrameState& frame, const CellOcclusion* cells, int64_t cx, int64_t cy,
+                         std::size_t i) {
+    const auto cell = size_t(cy * (frame.width / frame.adaptive) + cx);
+    SurfacePoint s;
+    const bool covered =
+        frame.gbuffer.triangle[i] != GBuffer::kNone &&
+        surfaceFromBasis(frame.gbuffer, frame.geometry, frame.triangleBases, int64_t(i % size_t(frame.width)),
+                         int64_t(i / size_t(frame.width)), s);
+    float occlusion = 1;
+    if (cells) {
+        if (covered) occlusion = cells->at(cx, cy, Vec3f(s.position), Vec3f(s.geometricNormal));
+        frame.screenOcclusion[cell] = occlusion;
+    } else if (!frame.screenOcclusion.empty()) {
+        occlusion = frame.screenOcclusion[cell];
+    }
+    frame.shaded[i] = shadeSample(frame, i, occlusion, covered ? &s : nullptr);
+}
+
+} // namespace
+
 // In two rounds where adaptive anti-aliasing is on: every cell's representative sample, then the
 // other samples of edge cells, each shaded only where neither an earlier sample of its cell nor a
 // neighbouring cell's representative shows its triangle (neighbourShowing).
 void shadeGBuffer(FrameState& frame, Progress* progress) {
     frame.shader = std::make_shared<const SurfaceShader>(frame);
-    const SurfaceShader& shader = *frame.shader;
     const GBuffer& gbuffer = frame.gbuffer;
-    const SceneGeometry& geometry = frame.geometry;
-    const std::vector<TriangleBasis>& bases = frame.triangleBases;
-    const Environment& env = *frame.environment;
-    const Frame& cam = gbuffer.frame;
-    const Vec3d eye = cam.eye();
     const int a = frame.adaptive;
     const int64_t W = frame.width, H = frame.height, cw = W / a, ch = H / a;
-    const float exposure = frame.options.exposure;
     // Every sample the passes read is written below (the others, left out by adaptive
     // anti-aliasing, are never read): no need to clear.
     std::vector<Vec3f>& out = frame.shaded;
     out.resize(size_t(W * H));
+    // Screen-space occlusion: the occlusion pass left its upsample to round 0 here, which has each
+    // cell's surface point; round 1 and the passes after read the cells' values.
     const std::vector<float>& screenOcclusion = frame.screenOcclusion;
+    const CellOcclusion* cellOcclusion = frame.cellOcclusion.get();
     constexpr int64_t kRows = 4; // cell rows per step
     const int64_t blocks = (ch + kRows - 1) / kRows;
     const int rounds = a > 1 ? 2 : 1;
@@ -256,12 +295,16 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
             for (int64_t b = b0; b < b1 && !steps.cancelled(); ++b) {
                 for (int64_t cy = b * kRows; cy < std::min(ch, (b + 1) * kRows); ++cy)
                     for (int64_t cx = 0; cx < cw; ++cx) {
-                        const int n = round == 0 ? 1 : cellSamples(frame, cx, cy, samples);
-                        if (round == 0)
-                            samples[0] = a > 1 ? representativeSample(frame, cx, cy) : size_t(cy * W + cx);
+                        if (round == 0) {
+                            const std::size_t rep =
+                                a > 1 ? representativeSample(frame, cx, cy) : size_t(cy * W + cx);
+                            shadeRepresentative(frame, cellOcclusion, cx, cy, rep);
+                            continue;
+                        }
+                        const int n = cellSamples(frame, cx, cy, samples);
                         const float occlusion =
                             screenOcclusion.empty() ? 1.0f : screenOcclusion[size_t(cy * cw + cx)];
-                        for (int k = round; k < n; ++k) {
+                        for (int k = 1; k < n; ++k) {
                             const std::size_t i = samples[size_t(k)];
                             const uint32_t tri = gbuffer.triangle[i];
                             // Samples of a cell showing one triangle (or the background) share its
@@ -272,22 +315,8 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                                 out[i] = out[samples[size_t(same)]];
                                 continue;
                             }
-                            if (round == 1) {
-                                const std::size_t proxy = neighbourShowing(frame, cx, cy, tri);
-                                if (proxy != kNoSample) {
-                                    out[i] = out[proxy];
-                                    continue;
-                                }
-                            }
-                            const int64_t x = int64_t(i % size_t(W)), y = int64_t(i / size_t(W));
-                            SurfacePoint s;
-                            if (tri != GBuffer::kNone && surfaceFromBasis(gbuffer, geometry, bases, x, y, s))
-                                out[i] = shader.shade(s, eye, occlusion);
-                            else // the background shows the environment along the sample's ray
-                                out[i] =
-                                    env.lookup(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) -
-                                               eye) *
-                                    exposure;
+                            const std::size_t proxy = neighbourShowing(frame, cx, cy, tri);
+                            out[i] = proxy != kNoSample ? out[proxy] : shadeSample(frame, i, occlusion);
                         }
                     }
                 steps.step();
