@@ -4,6 +4,8 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <map>
+#include <mutex>
 
 #include "common.hpp"
 #include "voxfx/tiled.hpp"
@@ -174,6 +176,63 @@ void packChunk(const uint64_t* words, int64_t wpc, int64_t width, int64_t height
                 dst[g] = reversed[v];
             }
         }
+}
+
+// The written bricks of one stack, or of a run of its slices, gathered for one call of the
+// visitor: the z0 of its full bricks, and of its mixed ones with their PackBits chunks end to end.
+struct StackBatch {
+    std::vector<int64_t> full, mixed;
+    std::vector<uint8_t> packed; ///< mixed.size() chunks of 1 + B^3 / 8 bytes
+};
+
+// The batches handed to visit(x0, y0, full, mixed, packed): one call per stack (or per
+// `batchBytes` of packed chunks within a stack, so memory stays bounded at any brick size), the
+// GIL taken once for it. Empty bricks and mixed bricks with no cell set are left out (a zarr
+// chunk of the fill value is never written); packed is a fresh uint8 array (mixed count, 1 + B^3/8).
+void visitStackBatches(const PyMesh& mesh, const Frame& frame, VoxelizeOptions vo, const TileOptions& to,
+                       int64_t brick, const py::object& visit, int64_t batchBytes) {
+    const auto chunkBytes = size_t(1 + brick * brick * brick / 8);
+    std::map<std::pair<int64_t, int64_t>, StackBatch> open; // by stack (x0, y0); nodes are stable
+    std::mutex openMutex, one;
+    auto flush = [&](int64_t x0, int64_t y0, StackBatch& b) {
+        if (b.full.empty() && b.mixed.empty()) return;
+        const std::lock_guard lock(one);
+        const py::gil_scoped_acquire gil;
+        auto* bytes = new std::vector<uint8_t>(std::move(b.packed));
+        py::capsule owner(bytes, [](void* v) { delete static_cast<std::vector<uint8_t>*>(v); });
+        py::array_t<uint8_t> packed({py::ssize_t(b.mixed.size()), py::ssize_t(chunkBytes)}, bytes->data(),
+                                    owner);
+        visit(x0, y0, py::cast(b.full), py::cast(b.mixed), packed);
+        b = StackBatch{};
+    };
+    interruptible([&](Cancel& cancel) {
+        vo.progress = &cancel;
+        voxelizeTiles(mesh.mesh.view(), frame, vo, to, [&](const GridTile& t) {
+            StackBatch* b = nullptr;
+            {
+                const std::lock_guard lock(openMutex);
+                b = &open[{t.x0, t.y0}];
+            }
+            if (t.uniform && t.value) {
+                b->full.push_back(t.s0);
+            } else if (!t.uniform) {
+                const size_t at = b->packed.size();
+                b->packed.resize(at + chunkBytes);
+                uint8_t* chunk = b->packed.data() + at;
+                packChunk(t.bits.words, t.bits.wordsPerColumn, t.width, t.height, t.depth, brick, chunk);
+                if (std::any_of(chunk + 1, chunk + chunkBytes, [](uint8_t v) { return v != 0; }))
+                    b->mixed.push_back(t.s0);
+                else
+                    b->packed.resize(at);
+            }
+            const bool last = t.s0 + t.depth >= frame.depth();
+            if (last || int64_t(b->packed.size()) >= batchBytes) flush(t.x0, t.y0, *b);
+            if (last) {
+                const std::lock_guard lock(openMutex);
+                open.erase({t.x0, t.y0});
+            }
+        });
+    });
 }
 
 // One brick as a task returns it: the packed bits copied out of the visitor's call.
@@ -416,20 +475,35 @@ void bindVoxelize(py::module_& m) {
         "_voxelize_stacks",
         [](const py::object& meshObj, const py::tuple& frame, const std::vector<int64_t>& stacks, Int brick,
            const std::string& mode, const std::string& fill, int threads, const py::object& visit,
-           bool packbits) {
+           bool packbits, const py::object& visitStack, Int batchBytes) {
             const auto mesh = meshArgument(meshObj, py::none());
+            if (!visitStack.is_none()) {
+                if (!visit.is_none()) throw ArgumentError("give visit or visit_stack, not both");
+                if (batchBytes <= 0) throw ArgumentError("batch_bytes must be positive");
+                const Frame f = frameFromState(frame);
+                if (f.axis() != Axis::Z)
+                    throw ArgumentError("the bricks of a grid are written along axis z only");
+                visitStackBatches(*mesh, f, stackOptions(mode, fill, threads), stackRange(brick, stacks),
+                                  brick, visitStack, batchBytes);
+                return py::list();
+            }
             return voxelizeStacks(*mesh, frame, stacks, brick, mode, fill, threads, visit, packbits);
         },
         py::arg("mesh"), py::arg("frame"), py::arg("stacks"), py::kw_only(), py::arg("brick") = 128,
         py::arg("mode") = "solid", py::arg("fill") = "auto", py::arg("threads") = 0,
-        py::arg("visit") = py::none(), py::arg("packbits") = false,
+        py::arg("visit") = py::none(), py::arg("packbits") = false, py::arg("visit_stack") = py::none(),
+        py::arg("batch_bytes") = Int(int64_t(64) << 20),
         "One task of voxfx.dask.voxelize_grid: the bricks of the stacks (x0, y0, x1, y1) (in bricks "
         "along x and y) of the grid `frame` (from _grid_frame), voxelized on their own: a list of "
         "(x0, y0, z0, value), value a bool for a uniform brick or a bool array indexed [x, y, z]. "
         "visit: called as visit(x0, y0, z0, value) for each brick as it is made instead (one call at a "
         "time, in no set order; an empty list returned); its arrays share one buffer, valid during the "
         "call only. packbits=True (with visit): a mixed brick comes as the uint8 array numcodecs.PackBits "
-        "makes of its whole zarr chunk (brick^3 bools, False past the grid).");
+        "makes of its whole zarr chunk (brick^3 bools, False past the grid). visit_stack: called as "
+        "visit_stack(x0, y0, full, mixed, packed) once per stack instead (or per batch_bytes of packed "
+        "chunks in it), the GIL taken once for it: full and mixed the z0 of its full bricks and of its "
+        "mixed bricks with a cell set, packed a uint8 array of the mixed ones' PackBits chunks, one row "
+        "each; empty bricks are left out.");
 
     m.def(
         "_resolve_fill",

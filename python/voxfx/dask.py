@@ -147,8 +147,8 @@ _FULL_CHUNKS = {}  # (chunk shape, compressor): a full chunk's encoded bytes, on
 
 
 def _grid_task(rect, mesh, frame, store, brick, mode, fill, threads):
-    """One task: the stacks of `rect` = (tx, ty, x0, y0, x1, y1), voxelized and written brick by
-    brick into the store, then marked done. `mesh` holds the triangles over the rectangle's columns
+    """One task: the stacks of `rect` = (tx, ty, x0, y0, x1, y1), voxelized and written stack by
+    stack into the store, then marked done. `mesh` holds the triangles over the rectangle's columns
     (or the whole mesh); None: none reach it, nothing to write. Returns (tx, ty, chunks written,
     seconds, peak resident bytes of the worker process)."""
     import numpy as np
@@ -162,28 +162,27 @@ def _grid_task(rect, mesh, frame, store, brick, mode, fill, threads):
     tx, ty = rect[0], rect[1]
     written = 0
     full = None  # a full brick's chunk, encoded once: inside a solid most bricks are full
+    chunks, compressor = voxels.chunk_store, voxels.compressor
 
-    def write(x0, y0, z0, value):
+    def write(x0, y0, full_z0, mixed_z0, packed):
+        # One call per stack (the GIL taken once for it, not once per brick): its full bricks and
+        # its mixed ones as the PackBits bytes of their chunks, compressed as zarr's own encoding
+        # would (filters, then compressor); empty bricks, the fill value, never come.
         nonlocal written, full
-        if value is False:
-            return  # the fill value: an empty brick is never written (zarr's own switch is not kept)
-        if value is True:
-            if full is None:
-                key = (voxels.chunks, repr(voxels.compressor))
-                full = _FULL_CHUNKS.get(key) or _FULL_CHUNKS.setdefault(
-                    key, voxels._encode_chunk(np.ones(voxels.chunks, dtype=bool)))
-            voxels.chunk_store[voxels._chunk_key((x0 // brick, y0 // brick, z0 // brick))] = full
-        else:  # the chunk's PackBits bytes, compressed as zarr's own encoding would (filters, then compressor)
-            if value[1:].any():
-                voxels.chunk_store[voxels._chunk_key((x0 // brick, y0 // brick, z0 // brick))] = \
-                    voxels.compressor.encode(value)
-            else:
-                return
-        written += 1
+        bx, by = x0 // brick, y0 // brick
+        if full_z0 and full is None:
+            key = (voxels.chunks, repr(compressor))
+            full = _FULL_CHUNKS.get(key) or _FULL_CHUNKS.setdefault(
+                key, voxels._encode_chunk(np.ones(voxels.chunks, dtype=bool)))
+        for z0 in full_z0:
+            chunks[voxels._chunk_key((bx, by, z0 // brick))] = full
+        for z0, value in zip(mixed_z0, packed):
+            chunks[voxels._chunk_key((bx, by, z0 // brick))] = compressor.encode(value)
+        written += len(full_z0) + len(mixed_z0)
 
     if mesh is not None:
-        _voxelize_stacks(mesh, frame, rect[2:], brick=brick, mode=mode, fill=fill, threads=threads, visit=write,
-                         packbits=True)
+        _voxelize_stacks(mesh, frame, rect[2:], brick=brick, mode=mode, fill=fill, threads=threads,
+                         visit_stack=write)
     done[tx, ty] = 1
     return tx, ty, written, time.monotonic() - start, _peak_rss()
 
