@@ -164,16 +164,19 @@ def _grid_task(rect, mesh, frame, store, brick, mode, fill, threads):
     full = None  # a full brick's chunk, encoded once: inside a solid most bricks are full
     chunks, compressor = voxels.chunk_store, voxels.compressor
 
+    def full_chunk():
+        key = (voxels.chunks, repr(compressor))
+        return _FULL_CHUNKS.get(key) or _FULL_CHUNKS.setdefault(
+            key, bytes(voxels._encode_chunk(np.ones(voxels.chunks, dtype=bool))))
+
     def write(x0, y0, full_z0, mixed_z0, packed):
-        # One call per stack (the GIL taken once for it, not once per brick): its full bricks and
-        # its mixed ones as the PackBits bytes of their chunks, compressed as zarr's own encoding
-        # would (filters, then compressor); empty bricks, the fill value, never come.
+        # One call per stack (the GIL taken once for it, not once per brick): its full bricks (unless
+        # written by voxfx) and its mixed ones as the PackBits bytes of their chunks, compressed as
+        # zarr's own encoding would (filters, then compressor); empty bricks, the fill value, never come.
         nonlocal written, full
         bx, by = x0 // brick, y0 // brick
         if full_z0 and full is None:
-            key = (voxels.chunks, repr(compressor))
-            full = _FULL_CHUNKS.get(key) or _FULL_CHUNKS.setdefault(
-                key, voxels._encode_chunk(np.ones(voxels.chunks, dtype=bool)))
+            full = full_chunk()
         for z0 in full_z0:
             chunks[voxels._chunk_key((bx, by, z0 // brick))] = full
         for z0, value in zip(mixed_z0, packed):
@@ -181,10 +184,27 @@ def _grid_task(rect, mesh, frame, store, brick, mode, fill, threads):
         written += len(full_z0) + len(mixed_z0)
 
     if mesh is not None:
-        _voxelize_stacks(mesh, frame, rect[2:], brick=brick, mode=mode, fill=fill, threads=threads,
-                         visit_stack=write)
+        files = {}
+        folder = _chunk_folder(voxels)
+        if folder is not None:  # a folder of chunk files: voxfx writes the full ones, without the GIL
+            files = dict(full_chunk=full_chunk(), chunk_folder=folder, separator=voxels._dimension_separator)
+        written += _voxelize_stacks(mesh, frame, rect[2:], brick=brick, mode=mode, fill=fill, threads=threads,
+                                    visit_stack=write, **files)
     done[tx, ty] = 1
     return tx, ty, written, time.monotonic() - start, _peak_rss()
+
+
+def _chunk_folder(array):
+    """The folder of `array`'s chunk files when its store is a plain zarr.DirectoryStore whose chunk
+    keys are file names in it (separator "."), else None (another store: zarr writes them all)."""
+    import zarr
+
+    store = array.chunk_store
+    if type(store) is not zarr.storage.DirectoryStore or getattr(store, "normalize_keys", False):
+        return None
+    if array._dimension_separator != ".":
+        return None
+    return os.path.join(store.path, array.path)
 
 
 def _region_task(rect, mesh, frame, folder, brick, mode, fill, threads):
