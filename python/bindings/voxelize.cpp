@@ -189,7 +189,7 @@ void packChunk(const uint64_t* words, int64_t wpc, int64_t width, int64_t height
 // visitor: the z0 of its full bricks, and of its mixed ones with their PackBits chunks end to end.
 struct StackBatch {
     std::vector<int64_t> full, mixed;
-    std::vector<uint8_t> packed; ///< mixed.size() chunks of 1 + B^3 / 8 bytes
+    std::vector<uint8_t> packed; ///< its first mixed.size() chunks of 1 + B^3 / 8 bytes; kept, not shrunk
 };
 
 // Full bricks written to a zarr DirectoryStore's array folder here, without the GIL: each chunk
@@ -230,23 +230,26 @@ void writeFullChunkFile(FullChunkFiles& files, int64_t bx, int64_t by, int64_t b
 // The batches handed to visit(x0, y0, full, mixed, packed): one call per stack (or per
 // `batchBytes` of packed chunks within a stack, so memory stays bounded at any brick size), the
 // GIL taken once for it. Empty bricks and mixed bricks with no cell set are left out (a zarr
-// chunk of the fill value is never written); packed is a fresh uint8 array (mixed count, 1 + B^3/8).
-// With `files`, full bricks are written there instead and not handed to visit.
+// chunk of the fill value is never written); packed is a uint8 array (mixed count, 1 + B^3/8) over a
+// buffer reused from stack to stack (valid during the call only: fresh pages for every stack cost
+// more in page faults than the packing). With `files`, full bricks are written there instead and
+// not handed to visit.
 void visitStackBatches(const PyMesh& mesh, const Frame& frame, VoxelizeOptions vo, const TileOptions& to,
                        int64_t brick, const py::object& visit, int64_t batchBytes, FullChunkFiles* files) {
     const auto chunkBytes = size_t(1 + brick * brick * brick / 8);
     std::map<std::pair<int64_t, int64_t>, StackBatch> open; // by stack (x0, y0); nodes are stable
+    std::vector<StackBatch> spare;                          // the buffers of finished stacks
     std::mutex openMutex, one;
     auto flush = [&](int64_t x0, int64_t y0, StackBatch& b) {
         if (b.full.empty() && b.mixed.empty()) return;
         const std::lock_guard lock(one);
         const py::gil_scoped_acquire gil;
-        auto* bytes = new std::vector<uint8_t>(std::move(b.packed));
-        py::capsule owner(bytes, [](void* v) { delete static_cast<std::vector<uint8_t>*>(v); });
-        py::array_t<uint8_t> packed({py::ssize_t(b.mixed.size()), py::ssize_t(chunkBytes)}, bytes->data(),
-                                    owner);
+        const py::capsule borrowed(b.packed.data(), [](void*) {});
+        py::array_t<uint8_t> packed({py::ssize_t(b.mixed.size()), py::ssize_t(chunkBytes)}, b.packed.data(),
+                                    borrowed);
         visit(x0, y0, py::cast(b.full), py::cast(b.mixed), packed);
-        b = StackBatch{};
+        b.full.clear();
+        b.mixed.clear();
     };
     interruptible([&](Cancel& cancel) {
         vo.progress = &cancel;
@@ -254,27 +257,32 @@ void visitStackBatches(const PyMesh& mesh, const Frame& frame, VoxelizeOptions v
             StackBatch* b = nullptr;
             {
                 const std::lock_guard lock(openMutex);
-                b = &open[{t.x0, t.y0}];
+                auto [it, made] = open.try_emplace({t.x0, t.y0});
+                if (made && !spare.empty()) {
+                    it->second = std::move(spare.back());
+                    spare.pop_back();
+                }
+                b = &it->second;
             }
             if (t.uniform && t.value && files) {
                 writeFullChunkFile(*files, t.x0 / brick, t.y0 / brick, t.s0 / brick);
             } else if (t.uniform && t.value) {
                 b->full.push_back(t.s0);
             } else if (!t.uniform) {
-                const size_t at = b->packed.size();
-                b->packed.resize(at + chunkBytes);
+                const size_t at = b->mixed.size() * chunkBytes;
+                if (b->packed.size() < at + chunkBytes) b->packed.resize(std::max(2 * at, at + chunkBytes));
                 uint8_t* chunk = b->packed.data() + at;
                 packChunk(t.bits.words, t.bits.wordsPerColumn, t.width, t.height, t.depth, brick, chunk);
                 if (std::any_of(chunk + 1, chunk + chunkBytes, [](uint8_t v) { return v != 0; }))
                     b->mixed.push_back(t.s0);
-                else
-                    b->packed.resize(at);
             }
             const bool last = t.s0 + t.depth >= frame.depth();
-            if (last || int64_t(b->packed.size()) >= batchBytes) flush(t.x0, t.y0, *b);
+            if (last || int64_t(b->mixed.size() * chunkBytes) >= batchBytes) flush(t.x0, t.y0, *b);
             if (last) {
                 const std::lock_guard lock(openMutex);
-                open.erase({t.x0, t.y0});
+                auto it = open.find({t.x0, t.y0});
+                spare.push_back(std::move(it->second));
+                open.erase(it);
             }
         });
     });
@@ -558,7 +566,8 @@ void bindVoxelize(py::module_& m) {
         "visit_stack(x0, y0, full, mixed, packed) once per stack instead (or per batch_bytes of packed "
         "chunks in it), the GIL taken once for it: full and mixed the z0 of its full bricks and of its "
         "mixed bricks with a cell set, packed a uint8 array of the mixed ones' PackBits chunks, one row "
-        "each; empty bricks are left out. full_chunk (bytes) and chunk_folder (with visit_stack): full "
+        "each (over one buffer, valid during the call only); empty bricks are left out. full_chunk (bytes) "
+        "and chunk_folder (with visit_stack): full "
         "bricks are written here, without the GIL, as the files CHUNK_FOLDER/bx<separator>by<separator>bz "
         "of those bytes (a zarr DirectoryStore's chunks) and not handed to visit_stack; returns how many.");
 

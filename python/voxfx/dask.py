@@ -13,7 +13,8 @@ The grid is cut as the tiled voxelizer cuts it (voxfx/tiled.hpp): bricks of B^3 
 (each column's parity or winding number is carried down its stack inside the task, so no task waits
 for another and the result does not depend on which worker ran what) and writes each brick as one
 chunk of the Zarr array "voxels" (bool, packed 8 to a byte (numcodecs.PackBits), then zstd; bricks that are all empty are
-not written). The array's attributes hold the index-to-world affine of the voxel centres
+not written; a task hands Python its bricks once per stack, not once per brick, and in a plain folder
+store voxfx writes the full bricks' chunk files itself, without the GIL). The array's attributes hold the index-to-world affine of the voxel centres
 ("affine", 4 x 4), "voxel_size", "origin" (the world position of cell (0, 0, 0)'s centre) and the
 options. A task marks its rectangle done in the array "done" after its last brick: a rerun with
 the same arguments skips what is marked, so a run that crashed half-way loses nothing finished
