@@ -1,9 +1,18 @@
 // Voxelization: voxelize (as `voxfx voxelize` does) and cuda_status; the two pieces of a grid
 // voxelized across a cluster (voxfx.dask.voxelize_grid): _grid_frame and _voxelize_stacks.
 #include <algorithm>
+#include <atomic>
 #include <bit>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <map>
+#include <mutex>
+#include <random>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 #include "common.hpp"
 #include "voxfx/tiled.hpp"
@@ -174,6 +183,109 @@ void packChunk(const uint64_t* words, int64_t wpc, int64_t width, int64_t height
                 dst[g] = reversed[v];
             }
         }
+}
+
+// The written bricks of one stack, or of a run of its slices, gathered for one call of the
+// visitor: the z0 of its full bricks, and of its mixed ones with their PackBits chunks end to end.
+struct StackBatch {
+    std::vector<int64_t> full, mixed;
+    std::vector<uint8_t> packed; ///< its first mixed.size() chunks of 1 + B^3 / 8 bytes; kept, not shrunk
+};
+
+// Full bricks written to a zarr DirectoryStore's array folder here, without the GIL: each chunk
+// FOLDER/bx<sep>by<sep>bz holds `bytes` (the store's encoding of a full chunk), written as zarr
+// writes one (a temporary file in the folder, then renamed over the chunk: never half-written).
+struct FullChunkFiles {
+    std::string folder, separator, bytes;
+    std::string tag =
+        std::to_string(std::random_device{}()) + "-" + std::to_string(::getpid()) + "-"; ///< unique
+    std::atomic<int64_t> written{0};
+    std::atomic<int64_t> serial{0};
+};
+
+void writeFullChunkFile(FullChunkFiles& files, int64_t bx, int64_t by, int64_t bz) {
+    const std::string& sep = files.separator;
+    const std::string path =
+        files.folder + "/" + std::to_string(bx) + sep + std::to_string(by) + sep + std::to_string(bz);
+    const std::string tmp = path + "." + files.tag + std::to_string(files.serial++) + ".partial";
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    bool ok = fd >= 0;
+    for (size_t done = 0; ok && done < files.bytes.size();) {
+        const ssize_t n = ::write(fd, files.bytes.data() + done, files.bytes.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        ok = n > 0;
+        done += ok ? size_t(n) : 0;
+    }
+    const int error = ok ? 0 : errno;
+    if (fd >= 0 && ::close(fd) != 0 && ok) ok = false;
+    if (ok && std::rename(tmp.c_str(), path.c_str()) == 0) {
+        ++files.written;
+        return;
+    }
+    const std::string why = std::strerror(error ? error : errno);
+    std::remove(tmp.c_str());
+    throw Error(path + ": cannot write the chunk: " + why);
+}
+
+// The batches handed to visit(x0, y0, full, mixed, packed): one call per stack (or per
+// `batchBytes` of packed chunks within a stack, so memory stays bounded at any brick size), the
+// GIL taken once for it. Empty bricks and mixed bricks with no cell set are left out (a zarr
+// chunk of the fill value is never written); packed is a uint8 array (mixed count, 1 + B^3/8) over a
+// buffer reused from stack to stack (valid during the call only: fresh pages for every stack cost
+// more in page faults than the packing). With `files`, full bricks are written there instead and
+// not handed to visit.
+void visitStackBatches(const PyMesh& mesh, const Frame& frame, VoxelizeOptions vo, const TileOptions& to,
+                       int64_t brick, const py::object& visit, int64_t batchBytes, FullChunkFiles* files) {
+    const auto chunkBytes = size_t(1 + brick * brick * brick / 8);
+    std::map<std::pair<int64_t, int64_t>, StackBatch> open; // by stack (x0, y0); nodes are stable
+    std::vector<StackBatch> spare;                          // the buffers of finished stacks
+    std::mutex openMutex, one;
+    auto flush = [&](int64_t x0, int64_t y0, StackBatch& b) {
+        if (b.full.empty() && b.mixed.empty()) return;
+        const std::lock_guard lock(one);
+        const py::gil_scoped_acquire gil;
+        const py::capsule borrowed(b.packed.data(), [](void*) {});
+        py::array_t<uint8_t> packed({py::ssize_t(b.mixed.size()), py::ssize_t(chunkBytes)}, b.packed.data(),
+                                    borrowed);
+        visit(x0, y0, py::cast(b.full), py::cast(b.mixed), packed);
+        b.full.clear();
+        b.mixed.clear();
+    };
+    interruptible([&](Cancel& cancel) {
+        vo.progress = &cancel;
+        voxelizeTiles(mesh.mesh.view(), frame, vo, to, [&](const GridTile& t) {
+            StackBatch* b = nullptr;
+            {
+                const std::lock_guard lock(openMutex);
+                auto [it, made] = open.try_emplace({t.x0, t.y0});
+                if (made && !spare.empty()) {
+                    it->second = std::move(spare.back());
+                    spare.pop_back();
+                }
+                b = &it->second;
+            }
+            if (t.uniform && t.value && files) {
+                writeFullChunkFile(*files, t.x0 / brick, t.y0 / brick, t.s0 / brick);
+            } else if (t.uniform && t.value) {
+                b->full.push_back(t.s0);
+            } else if (!t.uniform) {
+                const size_t at = b->mixed.size() * chunkBytes;
+                if (b->packed.size() < at + chunkBytes) b->packed.resize(std::max(2 * at, at + chunkBytes));
+                uint8_t* chunk = b->packed.data() + at;
+                packChunk(t.bits.words, t.bits.wordsPerColumn, t.width, t.height, t.depth, brick, chunk);
+                if (std::any_of(chunk + 1, chunk + chunkBytes, [](uint8_t v) { return v != 0; }))
+                    b->mixed.push_back(t.s0);
+            }
+            const bool last = t.s0 + t.depth >= frame.depth();
+            if (last || int64_t(b->mixed.size() * chunkBytes) >= batchBytes) flush(t.x0, t.y0, *b);
+            if (last) {
+                const std::lock_guard lock(openMutex);
+                auto it = open.find({t.x0, t.y0});
+                spare.push_back(std::move(it->second));
+                open.erase(it);
+            }
+        });
+    });
 }
 
 // One brick as a task returns it: the packed bits copied out of the visitor's call.
@@ -416,20 +528,48 @@ void bindVoxelize(py::module_& m) {
         "_voxelize_stacks",
         [](const py::object& meshObj, const py::tuple& frame, const std::vector<int64_t>& stacks, Int brick,
            const std::string& mode, const std::string& fill, int threads, const py::object& visit,
-           bool packbits) {
+           bool packbits, const py::object& visitStack, Int batchBytes, const py::object& fullChunk,
+           const py::object& chunkFolder, const std::string& separator) {
             const auto mesh = meshArgument(meshObj, py::none());
-            return voxelizeStacks(*mesh, frame, stacks, brick, mode, fill, threads, visit, packbits);
+            if (!visitStack.is_none()) {
+                if (!visit.is_none()) throw ArgumentError("give visit or visit_stack, not both");
+                if (batchBytes <= 0) throw ArgumentError("batch_bytes must be positive");
+                const Frame f = frameFromState(frame);
+                if (f.axis() != Axis::Z)
+                    throw ArgumentError("the bricks of a grid are written along axis z only");
+                std::unique_ptr<FullChunkFiles> files;
+                if (!fullChunk.is_none()) {
+                    files = std::make_unique<FullChunkFiles>();
+                    files->bytes = py::cast<std::string>(py::bytes(fullChunk));
+                    files->folder = py::cast<std::string>(py::str(chunkFolder));
+                    files->separator = separator;
+                }
+                visitStackBatches(*mesh, f, stackOptions(mode, fill, threads), stackRange(brick, stacks),
+                                  brick, visitStack, batchBytes, files.get());
+                return py::object(py::int_(files ? files->written.load() : 0));
+            }
+            return py::object(
+                voxelizeStacks(*mesh, frame, stacks, brick, mode, fill, threads, visit, packbits));
         },
         py::arg("mesh"), py::arg("frame"), py::arg("stacks"), py::kw_only(), py::arg("brick") = 128,
         py::arg("mode") = "solid", py::arg("fill") = "auto", py::arg("threads") = 0,
-        py::arg("visit") = py::none(), py::arg("packbits") = false,
+        py::arg("visit") = py::none(), py::arg("packbits") = false, py::arg("visit_stack") = py::none(),
+        py::arg("batch_bytes") = Int(int64_t(64) << 20), py::arg("full_chunk") = py::none(),
+        py::arg("chunk_folder") = py::none(), py::arg("separator") = ".",
         "One task of voxfx.dask.voxelize_grid: the bricks of the stacks (x0, y0, x1, y1) (in bricks "
         "along x and y) of the grid `frame` (from _grid_frame), voxelized on their own: a list of "
         "(x0, y0, z0, value), value a bool for a uniform brick or a bool array indexed [x, y, z]. "
         "visit: called as visit(x0, y0, z0, value) for each brick as it is made instead (one call at a "
         "time, in no set order; an empty list returned); its arrays share one buffer, valid during the "
         "call only. packbits=True (with visit): a mixed brick comes as the uint8 array numcodecs.PackBits "
-        "makes of its whole zarr chunk (brick^3 bools, False past the grid).");
+        "makes of its whole zarr chunk (brick^3 bools, False past the grid). visit_stack: called as "
+        "visit_stack(x0, y0, full, mixed, packed) once per stack instead (or per batch_bytes of packed "
+        "chunks in it), the GIL taken once for it: full and mixed the z0 of its full bricks and of its "
+        "mixed bricks with a cell set, packed a uint8 array of the mixed ones' PackBits chunks, one row "
+        "each (over one buffer, valid during the call only); empty bricks are left out. full_chunk (bytes) "
+        "and chunk_folder (with visit_stack): full "
+        "bricks are written here, without the GIL, as the files CHUNK_FOLDER/bx<separator>by<separator>bz "
+        "of those bytes (a zarr DirectoryStore's chunks) and not handed to visit_stack; returns how many.");
 
     m.def(
         "_resolve_fill",

@@ -108,6 +108,17 @@ def test_the_store_equals_the_single_process_tiles(tmp_path, data_path, client, 
     # Empty bricks are not written: fewer chunk files than bricks.
     chunks = [f for f in os.listdir(os.path.join(store, "voxels")) if not f.startswith(".")]
     assert 0 < len(chunks) < math.prod(math.ceil(n / brick) for n in reference.dims)
+    assert not [f for f in chunks if f.endswith(".partial")]  # every chunk file renamed into place
+
+
+def test_a_store_that_is_not_a_folder_of_chunk_files_gets_the_same_bits(tmp_path, data_path, client):
+    """Full bricks go straight to the files of a plain DirectoryStore; any other store (here nested
+    chunk folders, keys x/y/z) gets every chunk through zarr, with the same bits."""
+    mesh = voxfx.load_mesh(data_path("meshes/bunny00.off"))
+    store = zarr.storage.NestedDirectoryStore(str(tmp_path / "nested.zarr"))
+    voxfx.dask.voxelize_grid(mesh, 128, client, store, brick=16, progress=False)
+    assert os.path.isdir(tmp_path / "nested.zarr" / "voxels" / "3")  # nested: not the files voxfx writes
+    _expect_store_equals(store, voxfx.voxelize(mesh, resolution=128, fill="parity", sparse=True).to_grid())
 
 
 def test_a_run_killed_half_way_gives_the_same_store_after_a_rerun(tmp_path, data_path, cluster, client):
@@ -247,6 +258,45 @@ def test_each_task_gets_the_triangles_over_its_columns_and_not_the_whole_mesh(da
         sizes.append(len(part.faces))
     # Each part is a small piece of the mesh; together about the mesh once (a border triangle twice).
     assert max(sizes) < 0.25 * len(f) and sum(sizes) < 1.3 * len(f)
+
+
+@pytest.mark.parametrize("batch_bytes,threads", [(64 << 20, 1), (3 * (1 + 16 ** 3 // 8), 2)])
+def test_a_stack_comes_in_one_call_with_its_bricks_packed_as_zarr_packs_them(data_path, batch_bytes, threads):
+    """_voxelize_stacks(visit_stack=...): each written brick once, full ones by position and mixed
+    ones as the numcodecs.PackBits bytes of their chunk, against the dense voxelize() grid; one call
+    per stack unless the packed bytes pass batch_bytes (then a stack comes in several)."""
+    import numcodecs
+
+    mesh = voxfx.load_mesh(data_path("meshes/bunny00.off"))
+    plan = voxfx._voxfx._grid_frame(mesh, resolution=96)
+    frame, dims, b = plan["frame"], plan["dims"], 16
+    dense = np.pad(voxfx.voxelize(mesh, resolution=96, fill="parity").to_numpy(),
+                   [(0, -n % b) for n in dims])  # the grid's cells, False past its end as in a chunk
+    calls, seen = [], {}
+
+    def visit(x0, y0, full, mixed, packed):
+        calls.append((x0, y0))
+        assert packed.dtype == np.uint8 and packed.shape == (len(mixed), 1 + b ** 3 // 8)
+        for z0 in full:  # a full brick's cells in the grid; past its end a chunk holds none
+            seen[(x0, y0, z0)] = np.zeros((b, b, b), dtype=bool)
+            seen[(x0, y0, z0)][:dims[0] - x0, :dims[1] - y0, :dims[2] - z0] = True
+        for z0, chunk in zip(mixed, packed):
+            seen[(x0, y0, z0)] = numcodecs.PackBits().decode(chunk).reshape(b, b, b)
+            assert seen[(x0, y0, z0)].any()
+
+    stacks = [math.ceil(n / b) for n in dims[:2]]
+    voxfx._voxfx._voxelize_stacks(mesh, frame, [0, 0, *stacks], brick=b, fill="parity", threads=threads,
+                                  visit_stack=visit, batch_bytes=batch_bytes)
+    expected = {(x, y, z) for x in range(0, dims[0], b) for y in range(0, dims[1], b) for z in range(0, dims[2], b)
+                if dense[x:x + b, y:y + b, z:z + b].any()}
+    assert set(seen) == expected
+    for (x, y, z), bits in seen.items():
+        assert np.array_equal(bits, dense[x:x + b, y:y + b, z:z + b]), (x, y, z)
+    written = {(x, y) for x, y, _ in expected}
+    if batch_bytes > 1 << 20:
+        assert sorted(calls) == sorted(written)  # one call per stack with a written brick
+    else:
+        assert set(calls) == written and len(calls) > len(written)
 
 
 def _expect_vdb_equals(path, reference):

@@ -13,7 +13,8 @@ The grid is cut as the tiled voxelizer cuts it (voxfx/tiled.hpp): bricks of B^3 
 (each column's parity or winding number is carried down its stack inside the task, so no task waits
 for another and the result does not depend on which worker ran what) and writes each brick as one
 chunk of the Zarr array "voxels" (bool, packed 8 to a byte (numcodecs.PackBits), then zstd; bricks that are all empty are
-not written). The array's attributes hold the index-to-world affine of the voxel centres
+not written; a task hands Python its bricks once per stack, not once per brick, and in a plain folder
+store voxfx writes the full bricks' chunk files itself, without the GIL). The array's attributes hold the index-to-world affine of the voxel centres
 ("affine", 4 x 4), "voxel_size", "origin" (the world position of cell (0, 0, 0)'s centre) and the
 options. A task marks its rectangle done in the array "done" after its last brick: a rerun with
 the same arguments skips what is marked, so a run that crashed half-way loses nothing finished
@@ -147,8 +148,8 @@ _FULL_CHUNKS = {}  # (chunk shape, compressor): a full chunk's encoded bytes, on
 
 
 def _grid_task(rect, mesh, frame, store, brick, mode, fill, threads):
-    """One task: the stacks of `rect` = (tx, ty, x0, y0, x1, y1), voxelized and written brick by
-    brick into the store, then marked done. `mesh` holds the triangles over the rectangle's columns
+    """One task: the stacks of `rect` = (tx, ty, x0, y0, x1, y1), voxelized and written stack by
+    stack into the store, then marked done. `mesh` holds the triangles over the rectangle's columns
     (or the whole mesh); None: none reach it, nothing to write. Returns (tx, ty, chunks written,
     seconds, peak resident bytes of the worker process)."""
     import numpy as np
@@ -162,30 +163,49 @@ def _grid_task(rect, mesh, frame, store, brick, mode, fill, threads):
     tx, ty = rect[0], rect[1]
     written = 0
     full = None  # a full brick's chunk, encoded once: inside a solid most bricks are full
+    chunks, compressor = voxels.chunk_store, voxels.compressor
 
-    def write(x0, y0, z0, value):
+    def full_chunk():
+        key = (voxels.chunks, repr(compressor))
+        return _FULL_CHUNKS.get(key) or _FULL_CHUNKS.setdefault(
+            key, bytes(voxels._encode_chunk(np.ones(voxels.chunks, dtype=bool))))
+
+    def write(x0, y0, full_z0, mixed_z0, packed):
+        # One call per stack (the GIL taken once for it, not once per brick): its full bricks (unless
+        # written by voxfx) and its mixed ones as the PackBits bytes of their chunks, compressed as
+        # zarr's own encoding would (filters, then compressor); empty bricks, the fill value, never come.
         nonlocal written, full
-        if value is False:
-            return  # the fill value: an empty brick is never written (zarr's own switch is not kept)
-        if value is True:
-            if full is None:
-                key = (voxels.chunks, repr(voxels.compressor))
-                full = _FULL_CHUNKS.get(key) or _FULL_CHUNKS.setdefault(
-                    key, voxels._encode_chunk(np.ones(voxels.chunks, dtype=bool)))
-            voxels.chunk_store[voxels._chunk_key((x0 // brick, y0 // brick, z0 // brick))] = full
-        else:  # the chunk's PackBits bytes, compressed as zarr's own encoding would (filters, then compressor)
-            if value[1:].any():
-                voxels.chunk_store[voxels._chunk_key((x0 // brick, y0 // brick, z0 // brick))] = \
-                    voxels.compressor.encode(value)
-            else:
-                return
-        written += 1
+        bx, by = x0 // brick, y0 // brick
+        if full_z0 and full is None:
+            full = full_chunk()
+        for z0 in full_z0:
+            chunks[voxels._chunk_key((bx, by, z0 // brick))] = full
+        for z0, value in zip(mixed_z0, packed):
+            chunks[voxels._chunk_key((bx, by, z0 // brick))] = compressor.encode(value)
+        written += len(full_z0) + len(mixed_z0)
 
     if mesh is not None:
-        _voxelize_stacks(mesh, frame, rect[2:], brick=brick, mode=mode, fill=fill, threads=threads, visit=write,
-                         packbits=True)
+        files = {}
+        folder = _chunk_folder(voxels)
+        if folder is not None:  # a folder of chunk files: voxfx writes the full ones, without the GIL
+            files = dict(full_chunk=full_chunk(), chunk_folder=folder, separator=voxels._dimension_separator)
+        written += _voxelize_stacks(mesh, frame, rect[2:], brick=brick, mode=mode, fill=fill, threads=threads,
+                                    visit_stack=write, **files)
     done[tx, ty] = 1
     return tx, ty, written, time.monotonic() - start, _peak_rss()
+
+
+def _chunk_folder(array):
+    """The folder of `array`'s chunk files when its store is a plain zarr.DirectoryStore whose chunk
+    keys are file names in it (separator "."), else None (another store: zarr writes them all)."""
+    import zarr
+
+    store = array.chunk_store
+    if type(store) is not zarr.storage.DirectoryStore or getattr(store, "normalize_keys", False):
+        return None
+    if array._dimension_separator != ".":
+        return None
+    return os.path.join(store.path, array.path)
 
 
 def _region_task(rect, mesh, frame, folder, brick, mode, fill, threads):
