@@ -14,6 +14,7 @@
 #include <cstring>
 #include <exception>
 #include <iomanip>
+#include <memory>
 #include <mutex>
 #include <sstream>
 #include <vector>
@@ -149,6 +150,50 @@ struct Stack {
     const MeshView* mesh = nullptr;
     GwnCurtains curtains;
     std::vector<int32_t> totals;
+    std::vector<Mark> sorted; // a brick's marks by column (winding, gwn)
+    std::vector<int64_t> first;
+
+    /// The bytes its vectors hold (what keeping it for the next task costs).
+    size_t keptBytes() const {
+        const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+        return bytes(spans) + bytes(centres) + bytes(spanBuckets.start) + bytes(spanBuckets.marks) +
+               bytes(spanBuckets.cursor) + bytes(centreBuckets.start) + bytes(centreBuckets.marks) +
+               bytes(centreBuckets.cursor) + bytes(carry) + bytes(touched) + bytes(bitsWords) +
+               bytes(surfaceWords) + bytes(haloWords) + bytes(totals) + bytes(sorted) + bytes(first);
+    }
+};
+
+// Stacks' scratch kept between the chunks of a call and between calls: a Dask task is one call
+// over a few stacks, and every fresh vector of a stack (its marks, buckets, bricks: a few MiB)
+// costs a page fault per 4 KiB on first touch, or on every use where the allocator gives memory
+// back eagerly (Dask workers set MALLOC_TRIM_THRESHOLD_=65536: a task ran 1.5-2x slower there).
+// Kept: as many stacks as ran at once, each up to kMaxKeptBytes.
+class StackPool {
+public:
+    static constexpr size_t kMaxKeptBytes = size_t(256) << 20;
+    static std::unique_ptr<Stack> take() {
+        std::lock_guard<std::mutex> lock(mutex());
+        auto& kept = stacks();
+        if (kept.empty()) return std::make_unique<Stack>();
+        std::unique_ptr<Stack> st = std::move(kept.back());
+        kept.pop_back();
+        return st;
+    }
+    static void give(std::unique_ptr<Stack> st) {
+        if (st->keptBytes() > kMaxKeptBytes) return;
+        std::lock_guard<std::mutex> lock(mutex());
+        if (stacks().size() < size_t(2 * hardwareThreads())) stacks().push_back(std::move(st));
+    }
+
+private:
+    static std::mutex& mutex() {
+        static std::mutex m;
+        return m;
+    }
+    static std::vector<std::unique_ptr<Stack>>& stacks() {
+        static std::vector<std::unique_ptr<Stack>> s;
+        return s;
+    }
 };
 
 BitGridView viewOf(std::vector<uint64_t>& words, int64_t w, int64_t h, int64_t d) {
@@ -204,8 +249,8 @@ void parityBrick(Stack& st, int64_t b, int64_t s0, const BitGridView& out) {
 // Winding: per column, the crossings in slice order; cells where the running sum (from the
 // carried winding number) is nonzero are set, as WindingConsumer does for the whole column.
 void windingBrick(Stack& st, int64_t b, int64_t s0, const BitGridView& out) {
-    const Mark* first = st.centreBuckets.begin(b);
-    std::vector<Mark> sorted(first, st.centreBuckets.end(b));
+    std::vector<Mark>& sorted = st.sorted;
+    sorted.assign(st.centreBuckets.begin(b), st.centreBuckets.end(b));
     std::sort(sorted.begin(), sorted.end(), [](const Mark& a, const Mark& z) {
         return a.column != z.column ? a.column < z.column : a.s0 < z.s0;
     });
@@ -266,8 +311,8 @@ void gwnBrick(Stack& st, int64_t b, const GridTile& tile, const BitGridView& out
             if (x >= sx0 && x < sx1 && y >= sy0 && y < sy1 && a <= z)
                 setSliceRange(halo.column(x - sx0, y - sy0), a - sz0, z - sz0);
         }
-    std::vector<Mark> sorted;
-    std::vector<int64_t> first;
+    std::vector<Mark>& sorted = st.sorted;
+    std::vector<int64_t>& first = st.first;
     sortByColumn(st.centreBuckets, b, out.columnCount(), sorted, first);
     GwnRegion region;
     region.x0 = tile.x0;
@@ -457,7 +502,8 @@ void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
         const int64_t rangeX = ax1 - ax0, stacks = rangeX * (ay1 - ay0);
         ProgressSteps steps(options.progress, stacks);
         parallelFor(0, stacks, 1, [&](int64_t sb, int64_t se) {
-            Stack st;
+            std::unique_ptr<Stack> kept = StackPool::take();
+            Stack& st = *kept;
             st.frame = &view;
             st.plan = &plan;
             st.B = B;
@@ -495,6 +541,7 @@ void voxelizeTiles(const MeshView& mesh, const Frame& frame, const VoxelizeOptio
                 }
                 if (!stop) steps.step();
             }
+            StackPool::give(std::move(kept));
         });
         if (error) std::rethrow_exception(error);
         if (steps.cancelled()) fail("cancelled");
