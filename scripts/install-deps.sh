@@ -8,7 +8,7 @@ packages=(
   libtbb-dev libassimp-dev libopenvdb-dev libboost-iostreams-dev
   libcli11-dev nlohmann-json3-dev libpng-dev libopenexr-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcgal-dev libgmp-dev libmpfr-dev libeigen3-dev
-  libembree-dev clang-format time ccache zlib1g-dev libblosc-dev
+  libembree-dev clang-format time ccache zlib1g-dev libblosc-dev libzstd-dev
   clang libclang-rt-14-dev
   python3-dev pybind11-dev python3-numpy python3-pytest python3-distributed python3-zarr python3-openvdb
   python3-pip python3-setuptools python3-wheel python3-venv python3-mypy

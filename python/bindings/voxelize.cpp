@@ -8,11 +8,14 @@
 #include <cstdio>
 #include <cstring>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <random>
+#include <utility>
 
 #include <fcntl.h>
 #include <unistd.h>
+#include <zstd.h>
 
 #include "common.hpp"
 #include "voxfx/tiled.hpp"
@@ -192,26 +195,54 @@ struct StackBatch {
     std::vector<uint8_t> packed; ///< its first mixed.size() chunks of 1 + B^3 / 8 bytes; kept, not shrunk
 };
 
-// Full bricks written to a zarr DirectoryStore's array folder here, without the GIL: each chunk
-// FOLDER/bx<sep>by<sep>bz holds `bytes` (the store's encoding of a full chunk), written as zarr
-// writes one (a temporary file in the folder, then renamed over the chunk: never half-written).
-struct FullChunkFiles {
+// The batches' buffers kept from one task's call to the next (a worker runs many): fresh ones
+// cost a page fault per 4 KiB, and on every call where the allocator trims eagerly, as Dask's
+// workers make it (MALLOC_TRIM_THRESHOLD_=65536).
+std::mutex& stackBatchesMutex() {
+    static std::mutex m;
+    return m;
+}
+std::vector<StackBatch>& keptStackBatches() {
+    static std::vector<StackBatch> kept;
+    return kept;
+}
+std::vector<StackBatch> takeStackBatches() {
+    const std::lock_guard lock(stackBatchesMutex());
+    return std::exchange(keptStackBatches(), {});
+}
+void giveStackBatches(std::vector<StackBatch>&& batches) {
+    constexpr size_t kMaxKeptBytes = size_t(256) << 20;
+    const std::lock_guard lock(stackBatchesMutex());
+    size_t bytes = 0;
+    for (const StackBatch& b : keptStackBatches()) bytes += b.packed.capacity();
+    for (StackBatch& b : batches)
+        if ((bytes += b.packed.capacity()) <= kMaxKeptBytes) keptStackBatches().push_back(std::move(b));
+}
+
+// Bricks written to a zarr DirectoryStore's array folder here, without the GIL: each chunk
+// FOLDER/bx<sep>by<sep>bz holds the store's encoding of the brick, written as zarr writes one (a
+// temporary file in the folder, then renamed over the chunk: never half-written). Full bricks get
+// `bytes` (the store's encoding of a full chunk, made once by zarr); with zstdLevel > 0 (a store of
+// PackBits then numcodecs.Zstd(level)), mixed bricks too: their PackBits bytes compressed as
+// numcodecs does (ZSTD_compress at the level: one zstd frame), by a context kept per thread.
+struct ChunkFiles {
     std::string folder, separator, bytes;
+    int zstdLevel = 0;
     std::string tag =
         std::to_string(std::random_device{}()) + "-" + std::to_string(::getpid()) + "-"; ///< unique
     std::atomic<int64_t> written{0};
     std::atomic<int64_t> serial{0};
 };
 
-void writeFullChunkFile(FullChunkFiles& files, int64_t bx, int64_t by, int64_t bz) {
+void writeChunkFile(ChunkFiles& files, int64_t bx, int64_t by, int64_t bz, const char* data, size_t size) {
     const std::string& sep = files.separator;
     const std::string path =
         files.folder + "/" + std::to_string(bx) + sep + std::to_string(by) + sep + std::to_string(bz);
     const std::string tmp = path + "." + files.tag + std::to_string(files.serial++) + ".partial";
     const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
     bool ok = fd >= 0;
-    for (size_t done = 0; ok && done < files.bytes.size();) {
-        const ssize_t n = ::write(fd, files.bytes.data() + done, files.bytes.size() - done);
+    for (size_t done = 0; ok && done < size;) {
+        const ssize_t n = ::write(fd, data + done, size - done);
         if (n < 0 && errno == EINTR) continue;
         ok = n > 0;
         done += ok ? size_t(n) : 0;
@@ -227,6 +258,31 @@ void writeFullChunkFile(FullChunkFiles& files, int64_t bx, int64_t by, int64_t b
     throw Error(path + ": cannot write the chunk: " + why);
 }
 
+// A mixed brick's chunk file: packed (PackBits) and compressed in this thread's buffers, which
+// are kept from brick to brick and task to task (fresh ones cost page faults, and a fresh zstd
+// context per chunk, as numcodecs makes one, zeroes its tables every time). False when the
+// brick has no cell set (a chunk of the fill value is never written).
+bool writeMixedChunkFile(ChunkFiles& files, const GridTile& t, int64_t brick) {
+    struct Buffers {
+        std::vector<uint8_t> packed;
+        std::vector<char> compressed;
+        std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> context{ZSTD_createCCtx(), ZSTD_freeCCtx};
+    };
+    thread_local Buffers local;
+    const auto chunkBytes = size_t(1 + brick * brick * brick / 8);
+    local.packed.resize(chunkBytes);
+    packChunk(t.bits.words, t.bits.wordsPerColumn, t.width, t.height, t.depth, brick, local.packed.data());
+    if (std::none_of(local.packed.begin() + 1, local.packed.end(), [](uint8_t v) { return v != 0; }))
+        return false;
+    local.compressed.resize(ZSTD_compressBound(chunkBytes));
+    if (!local.context) throw Error("cannot make a zstd compression context");
+    const size_t n = ZSTD_compressCCtx(local.context.get(), local.compressed.data(), local.compressed.size(),
+                                       local.packed.data(), chunkBytes, files.zstdLevel);
+    if (ZSTD_isError(n)) throw Error(std::string("zstd: ") + ZSTD_getErrorName(n));
+    writeChunkFile(files, t.x0 / brick, t.y0 / brick, t.s0 / brick, local.compressed.data(), n);
+    return true;
+}
+
 // The batches handed to visit(x0, y0, full, mixed, packed): one call per stack (or per
 // `batchBytes` of packed chunks within a stack, so memory stays bounded at any brick size), the
 // GIL taken once for it. Empty bricks and mixed bricks with no cell set are left out (a zarr
@@ -235,10 +291,10 @@ void writeFullChunkFile(FullChunkFiles& files, int64_t bx, int64_t by, int64_t b
 // more in page faults than the packing). With `files`, full bricks are written there instead and
 // not handed to visit.
 void visitStackBatches(const PyMesh& mesh, const Frame& frame, VoxelizeOptions vo, const TileOptions& to,
-                       int64_t brick, const py::object& visit, int64_t batchBytes, FullChunkFiles* files) {
+                       int64_t brick, const py::object& visit, int64_t batchBytes, ChunkFiles* files) {
     const auto chunkBytes = size_t(1 + brick * brick * brick / 8);
     std::map<std::pair<int64_t, int64_t>, StackBatch> open; // by stack (x0, y0); nodes are stable
-    std::vector<StackBatch> spare;                          // the buffers of finished stacks
+    std::vector<StackBatch> spare = takeStackBatches();     // the buffers of finished stacks
     std::mutex openMutex, one;
     auto flush = [&](int64_t x0, int64_t y0, StackBatch& b) {
         if (b.full.empty() && b.mixed.empty()) return;
@@ -265,7 +321,10 @@ void visitStackBatches(const PyMesh& mesh, const Frame& frame, VoxelizeOptions v
                 b = &it->second;
             }
             if (t.uniform && t.value && files) {
-                writeFullChunkFile(*files, t.x0 / brick, t.y0 / brick, t.s0 / brick);
+                writeChunkFile(*files, t.x0 / brick, t.y0 / brick, t.s0 / brick, files->bytes.data(),
+                               files->bytes.size());
+            } else if (!t.uniform && files && files->zstdLevel > 0) {
+                writeMixedChunkFile(*files, t, brick);
             } else if (t.uniform && t.value) {
                 b->full.push_back(t.s0);
             } else if (!t.uniform) {
@@ -286,6 +345,7 @@ void visitStackBatches(const PyMesh& mesh, const Frame& frame, VoxelizeOptions v
             }
         });
     });
+    giveStackBatches(std::move(spare));
 }
 
 // One brick as a task returns it: the packed bits copied out of the visitor's call.
@@ -529,7 +589,7 @@ void bindVoxelize(py::module_& m) {
         [](const py::object& meshObj, const py::tuple& frame, const std::vector<int64_t>& stacks, Int brick,
            const std::string& mode, const std::string& fill, int threads, const py::object& visit,
            bool packbits, const py::object& visitStack, Int batchBytes, const py::object& fullChunk,
-           const py::object& chunkFolder, const std::string& separator) {
+           const py::object& chunkFolder, const std::string& separator, int zstdLevel) {
             const auto mesh = meshArgument(meshObj, py::none());
             if (!visitStack.is_none()) {
                 if (!visit.is_none()) throw ArgumentError("give visit or visit_stack, not both");
@@ -537,12 +597,13 @@ void bindVoxelize(py::module_& m) {
                 const Frame f = frameFromState(frame);
                 if (f.axis() != Axis::Z)
                     throw ArgumentError("the bricks of a grid are written along axis z only");
-                std::unique_ptr<FullChunkFiles> files;
+                std::unique_ptr<ChunkFiles> files;
                 if (!fullChunk.is_none()) {
-                    files = std::make_unique<FullChunkFiles>();
+                    files = std::make_unique<ChunkFiles>();
                     files->bytes = py::cast<std::string>(py::bytes(fullChunk));
                     files->folder = py::cast<std::string>(py::str(chunkFolder));
                     files->separator = separator;
+                    files->zstdLevel = zstdLevel;
                 }
                 visitStackBatches(*mesh, f, stackOptions(mode, fill, threads), stackRange(brick, stacks),
                                   brick, visitStack, batchBytes, files.get());
@@ -555,7 +616,7 @@ void bindVoxelize(py::module_& m) {
         py::arg("mode") = "solid", py::arg("fill") = "auto", py::arg("threads") = 0,
         py::arg("visit") = py::none(), py::arg("packbits") = false, py::arg("visit_stack") = py::none(),
         py::arg("batch_bytes") = Int(int64_t(64) << 20), py::arg("full_chunk") = py::none(),
-        py::arg("chunk_folder") = py::none(), py::arg("separator") = ".",
+        py::arg("chunk_folder") = py::none(), py::arg("separator") = ".", py::arg("zstd_level") = 0,
         "One task of voxfx.dask.voxelize_grid: the bricks of the stacks (x0, y0, x1, y1) (in bricks "
         "along x and y) of the grid `frame` (from _grid_frame), voxelized on their own: a list of "
         "(x0, y0, z0, value), value a bool for a uniform brick or a bool array indexed [x, y, z]. "
@@ -569,7 +630,9 @@ void bindVoxelize(py::module_& m) {
         "each (over one buffer, valid during the call only); empty bricks are left out. full_chunk (bytes) "
         "and chunk_folder (with visit_stack): full "
         "bricks are written here, without the GIL, as the files CHUNK_FOLDER/bx<separator>by<separator>bz "
-        "of those bytes (a zarr DirectoryStore's chunks) and not handed to visit_stack; returns how many.");
+        "of those bytes (a zarr DirectoryStore's chunks) and not handed to visit_stack; with zstd_level > 0 "
+        "(a store of PackBits then numcodecs.Zstd(level=zstd_level)) mixed bricks too, compressed as "
+        "numcodecs does; returns how many files were written.");
 
     m.def(
         "_resolve_fill",

@@ -299,6 +299,41 @@ def test_a_stack_comes_in_one_call_with_its_bricks_packed_as_zarr_packs_them(dat
         assert set(calls) == written and len(calls) > len(written)
 
 
+def test_the_chunk_files_voxfx_writes_are_the_bytes_zarr_writes_and_hold_the_dense_grid(tmp_path, data_path):
+    """A task on a folder store (PackBits then numcodecs.Zstd, as voxelize_grid makes it) writes its
+    full and mixed chunk files itself, without the GIL: each file holds the bytes zarr's own encoder
+    makes of the brick (numcodecs.Zstd: one zstd frame, compressed afresh here), and the bricks
+    equal the dense voxelize() grid."""
+    mesh = voxfx.load_mesh(data_path("meshes/bunny00.off"))
+    b, res = 16, 96
+    p = voxfx.dask._plan(mesh, res, None, None, None, 0, False, "solid", "parity", b, None)
+    store = str(tmp_path / "grid.zarr")
+    root, _ = voxfx.dask._open_store(store, p["shape"], b, p["attrs"], p["tasks_shape"], True)
+    voxels = root["voxels"]
+    assert voxfx.dask._zstd_level(voxels) == 1
+    for i, part in enumerate(p["parts"]):
+        if part is not None:
+            voxfx.dask._grid_task(p["tasks"][i], part, frame=p["frame"], store=store, brick=b, mode="solid",
+                                  fill=p["fill"], threads=2)
+    folder = os.path.join(store, "voxels")
+    names = [n for n in os.listdir(folder) if not n.startswith(".")]
+    assert not [n for n in names if n.endswith(".partial")]
+    dims = p["shape"]
+    dense = np.pad(voxfx.voxelize(mesh, resolution=res, fill="parity").to_numpy(), [(0, -n % b) for n in dims])
+    mixed = 0
+    for name in names:
+        x, y, z = (int(v) * b for v in name.split("."))
+        brick = dense[x:x + b, y:y + b, z:z + b]
+        assert brick.any(), name  # no chunk of the fill value
+        with open(os.path.join(folder, name), "rb") as f:
+            assert f.read() == bytes(voxels._encode_chunk(brick)), name
+        mixed += not brick[:dims[0] - x, :dims[1] - y, :dims[2] - z].all()
+    expected = {(x, y, z) for x in range(0, dims[0], b) for y in range(0, dims[1], b)
+                for z in range(0, dims[2], b) if dense[x:x + b, y:y + b, z:z + b].any()}
+    assert len(names) == len(expected) and mixed > 100
+    assert np.array_equal(voxels[...], dense[:dims[0], :dims[1], :dims[2]])
+
+
 def _expect_vdb_equals(path, reference):
     ours = voxfx.read_sparse_grid(str(path)).to_grid()
     assert ours.dims == reference.dims and np.allclose(ours.affine, reference.affine)

@@ -187,12 +187,25 @@ def _grid_task(rect, mesh, frame, store, brick, mode, fill, threads):
     if mesh is not None:
         files = {}
         folder = _chunk_folder(voxels)
-        if folder is not None:  # a folder of chunk files: voxfx writes the full ones, without the GIL
-            files = dict(full_chunk=full_chunk(), chunk_folder=folder, separator=voxels._dimension_separator)
+        if folder is not None:  # a folder of chunk files: voxfx writes them, without the GIL
+            files = dict(full_chunk=full_chunk(), chunk_folder=folder, separator=voxels._dimension_separator,
+                         zstd_level=_zstd_level(voxels))
         written += _voxelize_stacks(mesh, frame, rect[2:], brick=brick, mode=mode, fill=fill, threads=threads,
                                     visit_stack=write, **files)
     done[tx, ty] = 1
     return tx, ty, written, time.monotonic() - start, _peak_rss()
+
+
+def _zstd_level(array):
+    """The level voxfx compresses mixed chunks at itself when `array` is encoded as voxelize_grid makes
+    it (PackBits, then numcodecs.Zstd, whose chunks are one zstd frame of the packed bytes), else 0
+    (zarr encodes them)."""
+    import numcodecs
+
+    filters, compressor = array.filters or [], array.compressor
+    if [type(f) for f in filters] != [numcodecs.PackBits] or type(compressor) is not numcodecs.Zstd:
+        return 0
+    return compressor.level if compressor.level > 0 else 0
 
 
 def _chunk_folder(array):
