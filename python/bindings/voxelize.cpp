@@ -367,8 +367,9 @@ py::list voxelizeStacks(const PyMesh& mesh, const py::tuple& state, const std::v
     if (!visit.is_none()) {
         // Each brick handed to `visit` as it is made (memory: one stack's, not the task's), one
         // call at a time (the lock, then the GIL), mixed bricks unpacked into one buffer.
-        py::array_t<bool> buffer(py::ssize_t(std::max<int64_t>(brick, 8) * brick * brick));
-        py::array_t<uint8_t> packed(py::ssize_t(1 + brick * brick * brick / 8));
+        // Only the buffer of the form asked for (a brick^3 bool array is 2 MiB at brick 128).
+        py::array_t<bool> buffer(py::ssize_t(packbits ? 0 : std::max<int64_t>(brick, 8) * brick * brick));
+        py::array_t<uint8_t> packed(py::ssize_t(packbits ? 1 + brick * brick * brick / 8 : 0));
         std::mutex one;
         interruptible([&](Cancel& cancel) {
             vo.progress = &cancel;
