@@ -495,6 +495,41 @@ TEST(ScreenSpaceOcclusionTest, OutputIsTheSameForEveryThreadCount) {
     }
 }
 
+TEST(ScreenSpaceOcclusionTest, TheVectorHorizonSearchGivesTheScalarOutputBitForBit) {
+    // The horizon search walks the four sides of two slices in SIMD lanes (vectorWalk, the default)
+    // with the scalar walk's arithmetic, operation for operation: the output must be the same bits,
+    // on every path of the walk (samples beyond the image, on the pixel itself, not occluding,
+    // within the radius, the crossing of the sphere after one within it; the slivers' GTAO at the
+    // upsample). Odd slice counts leave the last pair half used; 1 to 3 slices and 1 to 7 steps.
+    const Scene tree = demo::makeTreeScene();
+    const View v = viewOf(tree, tree.cameras[0], 320, 180);
+    const Corner c;
+    const View corner = viewOf(c.scene, c.camera, 160, 120);
+    const struct { int directions, steps; } counts[] = {{2, 5}, {1, 7}, {3, 3}, {2, 1}};
+    for (const View* view : {&v, &corner})
+        for (const auto& n : counts)
+            for (const bool half : {true, false})
+                for (const Entry entry : kEntries) {
+                    ScreenSpaceOcclusionOptions o;
+                    o.radius = view == &v ? 0.8 : 1.0;
+                    o.halfResolution = half;
+                    o.directions = n.directions;
+                    o.steps = n.steps;
+                    const std::vector<float> vector = occlusion(*view, o, entry);
+                    o.vectorWalk = false;
+                    const std::vector<float> scalar = occlusion(*view, o, entry);
+                    ASSERT_EQ(vector.size(), scalar.size());
+                    int64_t occluded = 0, differ = 0;
+                    for (std::size_t i = 0; i < vector.size(); ++i) {
+                        occluded += scalar[i] < 0.98f;
+                        differ += std::memcmp(&vector[i], &scalar[i], sizeof(float)) != 0;
+                    }
+                    EXPECT_GT(occluded, 300) << "the test needs occluded samples";
+                    EXPECT_EQ(differ, 0) << n.directions << " x " << n.steps << " " << nameOf(entry)
+                                         << (half ? " half" : " full");
+                }
+}
+
 TEST(ScreenSpaceOcclusionTest, AKeptScratchGivesTheSameOutputAsFreshBuffers) {
     // Nothing of a previous call may leak into the next through the kept buffers: a scratch used
     // first on another scene, size and resolution mode gives the fresh result (the tree's frame has

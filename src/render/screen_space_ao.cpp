@@ -25,6 +25,13 @@
 #include "voxfx/error.hpp"
 #include "voxfx/parallel.hpp"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#define VOXFX_SSAO_SSE2 1
+#else
+#define VOXFX_SSAO_SSE2 0
+#endif
+
 namespace voxfx::detail {
 
 namespace {
@@ -38,6 +45,8 @@ constexpr int kMaxDirections = 16, kMaxSteps = 32;
 // power 2, 0.007 with these).
 constexpr float kReach = 1.2f;
 constexpr double kSpacingPower = 1.5;
+// A walk sample's offset from its pixel's central ray counts 1/8192ths of a pixel (up to 4 pixels).
+constexpr float kOffsetUnits = 8192;
 
 // The 4x4 Bayer matrix: neighbouring pixels get distant pattern indices, so any 2x2 or 4x1 group
 // spreads over the slice angles.
@@ -53,6 +62,7 @@ struct Packed {
     int64_t width = 0, height = 0;
     const Sample* sample = nullptr;
     const Vec3f* normals = nullptr;
+    const ScreenSpaceWalkSample* walk = nullptr; ///< the horizon search's copy (walkSamples)
     bool covered(int64_t i) const { return sample[i].flags & kCovered; }
     bool occludes(int64_t i) const { return sample[i].flags == (kCovered | kOccluder); }
     const Vec3f& position(int64_t i) const { return sample[i].position; }
@@ -167,6 +177,11 @@ struct Params {
     float pixelSize = 0;    ///< 1 / pixelsPerTan: a working pixel's footprint per unit of depth
     float radius = 0, radius2 = 0, sinBias2 = 0; ///< sinBias2: sin^2 of the bias angle
     int directions = 0, steps = 0;
+    bool scalarWalk =
+        false; ///< the horizon search one side at a time (ScreenSpaceOcclusionOptions::vectorWalk)
+    // The central ray of working pixel (x, y) is right tx + up ty + forward (per unit of depth), with
+    // tx = txBase + x txStep, ty = tyBase + y tyStep; a walk sample's offsets count txStep / 8192.
+    float txBase = 0, tyBase = 0, txStep = 0, tyStep = 0, txQuant = 0, tyQuant = 0;
     // Per pattern index: the slices' screen directions and the steps' distances as fractions of the
     // radius in pixels.
     std::array<std::array<float, kMaxDirections>, 16> dirX{}, dirY{};
@@ -186,6 +201,15 @@ Params makeParams(const Frame& camera, int scale, const ScreenSpaceOcclusionOpti
     p.sinBias2 = float(std::sin(o.bias) * std::sin(o.bias));
     p.directions = o.directions;
     p.steps = o.steps;
+    p.scalarWalk = !o.vectorWalk || !VOXFX_SSAO_SSE2;
+    const auto tangent = [&](double gx, double gy) {
+        const Vec3d w = camera.worldFromGrid({gx, gy, 1.0}) - camera.eye();
+        return std::array<double, 2>{dot(w, camera.right()), dot(w, camera.up())};
+    };
+    const auto t0 = tangent(0.5 * scale, 0.5 * scale), t1 = tangent(1.5 * scale, 1.5 * scale);
+    p.txBase = float(t0[0]), p.tyBase = float(t0[1]);
+    p.txStep = float(t1[0] - t0[0]), p.tyStep = float(t1[1] - t0[1]);
+    p.txQuant = p.txStep / kOffsetUnits, p.tyQuant = p.tyStep / kOffsetUnits;
     for (int k = 0; k < 16; ++k) {
         // Slice angles: 16 rotations by sixteenths of the spacing pi / directions; step offsets: a
         // second permutation of the pattern (5k + 3 mod 16), so angle and offset do not go together.
@@ -223,7 +247,8 @@ inline float fastAcos(float x) {
 
 // One side of a slice of GTAO at a working pixel: samples along the screen direction (sx, sy) up
 // to `reach` working pixels, spaced by `fraction`, raise the horizon from the pixel's point P (unit
-// normal N, unit direction to the eye V).
+// normal N, unit direction to the eye V). In view space (right, up, forward from the eye), where the
+// walk samples (Packed::walk) give their points.
 template <class Buffer> struct HorizonWalk {
     const Buffer& b;
     const Params& p;
@@ -232,6 +257,13 @@ template <class Buffer> struct HorizonWalk {
     float cx, cy; // its centre
     float reach;  // working pixels
     Vec3f P, N, V;
+
+    // Working pixel (x, y)'s point in view space from its walk sample w (which occludes).
+    Vec3f viewPoint(const ScreenSpaceWalkSample& w, int64_t x, int64_t y) const {
+        const float tx = (p.txBase + float(x) * p.txStep) + float(w.offsetX) * p.txQuant;
+        const float ty = (p.tyBase + float(y) * p.tyStep) + float(w.offsetY) * p.tyQuant;
+        return {tx * w.depth, ty * w.depth, w.depth};
+    }
 
     // A point d (from P) raises the horizon (the cosine of its angle from V) unless it lies at most
     // `bias` above the tangent plane (the surface itself). Compared through squares with their signs
@@ -257,13 +289,14 @@ template <class Buffer> struct HorizonWalk {
             const float fx = cx + sx * t, fy = cy + sy * t;
             // No data beyond the image (on it, truncation is the floor).
             if (!(fx >= 0 && fy >= 0 && fx < width && fy < height)) break;
-            const int64_t q = int64_t(fy) * b.width + int64_t(fx);
+            const int64_t x = int64_t(fx), y = int64_t(fy), q = y * b.width + x;
             if (q == here) continue;
-            if (!b.occludes(q)) {
+            const ScreenSpaceWalkSample& sample = b.walk[q];
+            if (!(sample.depth > 0)) { // not an occluder
                 previousInside = false;
                 continue;
             }
-            const Vec3f d = b.position(q) - P;
+            const Vec3f d = viewPoint(sample, x, y) - P;
             const float d2 = dot(d, d);
             if (d2 < p.radius2) {
                 if (d2 > 0) raiseBy(d, d2, horizon, raised);
@@ -292,9 +325,223 @@ template <class Buffer> struct HorizonWalk {
     }
 };
 
-// GTAO at working pixel (x, y): the visibility in [0, 1], 1 for background.
+#if VOXFX_SSAO_SSE2
+// The four sides of two slices at once, one per lane of an SSE register (the same arithmetic as
+// `raise`, operation for operation, so the horizons are bit for bit the scalar walk's): the
+// samples' branches (occluder or not, inside the radius or not, raised or not) become masks, which
+// the scalar walk mispredicts about once a side. sx, sy: each lane's screen direction; horizon:
+// in, each lane's start, out, its horizon; the lanes it raised as bits of the result.
+template <class Buffer> struct HorizonWalk4 {
+    const HorizonWalk<Buffer>& w;
+
+    static __m128 select(__m128 mask, __m128 a, __m128 b) {
+        return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
+    }
+    // dot(a, b) in the scalar order: (x x' + y y') + z z'.
+    static __m128 dot3(__m128 ax, __m128 ay, __m128 az, __m128 bx, __m128 by, __m128 bz) {
+        return _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, bx), _mm_mul_ps(ay, by)), _mm_mul_ps(az, bz));
+    }
+    static __m128 absolute(__m128 v) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), v); }
+
+    struct Lanes {
+        __m128 horizon, raised;
+    };
+    // raiseBy on the lanes of `mask`.
+    void raiseBy(__m128 mask, __m128 dx, __m128 dy, __m128 dz, __m128 d2, Lanes& l) const {
+        const Vec3f &N = w.N, &V = w.V;
+        const __m128 dn = dot3(dx, dy, dz, _mm_set1_ps(N.x), _mm_set1_ps(N.y), _mm_set1_ps(N.z));
+        mask = _mm_and_ps(
+            mask, _mm_and_ps(_mm_cmpgt_ps(dn, _mm_setzero_ps()),
+                             _mm_cmpgt_ps(_mm_mul_ps(dn, dn), _mm_mul_ps(_mm_set1_ps(w.p.sinBias2), d2))));
+        if (!_mm_movemask_ps(mask)) return;
+        const __m128 dv = dot3(dx, dy, dz, _mm_set1_ps(V.x), _mm_set1_ps(V.y), _mm_set1_ps(V.z));
+        const __m128 h = l.horizon;
+        const __m128 higher = _mm_and_ps(
+            mask, _mm_cmpgt_ps(_mm_mul_ps(dv, absolute(dv)), _mm_mul_ps(_mm_mul_ps(h, absolute(h)), d2)));
+        l.horizon = select(higher, _mm_div_ps(dv, _mm_sqrt_ps(d2)), h);
+        l.raised = _mm_or_ps(l.raised, higher);
+    }
+
+    // The walk samples of the lanes' pixels (ix, iy) (dead lanes: `fallback`'s): their depths, and
+    // their offsets as floats; `self`: the lanes on the walk's own pixel, as bits.
+    __m128 load(__m128i ixv, __m128i iyv, int aliveBits, int64_t fallback, int& self, __m128& offsetX,
+                __m128& offsetY) const {
+        alignas(16) int32_t ix[4], iy[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(ix), ixv);
+        _mm_store_si128(reinterpret_cast<__m128i*>(iy), iyv);
+        __m128i s[4];
+        for (int k = 0; k < 4; ++k) {
+            const int64_t q = (aliveBits >> k) & 1 ? int64_t(iy[k]) * w.b.width + ix[k] : fallback;
+            self |= int(q == w.here) << k;
+            s[k] = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&w.b.walk[q]));
+        }
+        // Each 8 bytes: the depth, then offsetX in the low and offsetY in the high half of a word.
+        const __m128 lo = _mm_castsi128_ps(_mm_unpacklo_epi64(s[0], s[1]));
+        const __m128 hi = _mm_castsi128_ps(_mm_unpacklo_epi64(s[2], s[3]));
+        const __m128i offsets = _mm_castps_si128(_mm_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1)));
+        offsetX = _mm_cvtepi32_ps(_mm_srai_epi32(_mm_slli_epi32(offsets, 16), 16));
+        offsetY = _mm_cvtepi32_ps(_mm_srai_epi32(offsets, 16));
+        return _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0));
+    }
+
+    int raise(const float* sx, const float* sy, float* horizon) const {
+        const __m128 sxv = _mm_loadu_ps(sx), syv = _mm_loadu_ps(sy);
+        const __m128 width = _mm_set1_ps(float(w.b.width)), height = _mm_set1_ps(float(w.b.height));
+        const __m128 px = _mm_set1_ps(w.P.x), py = _mm_set1_ps(w.P.y), pz = _mm_set1_ps(w.P.z);
+        const __m128 radius2 = _mm_set1_ps(w.p.radius2), zero = _mm_setzero_ps();
+        Lanes l{_mm_loadu_ps(horizon), zero};
+        __m128 alive = _mm_castsi128_ps(_mm_set1_epi32(-1)), previousInside = zero;
+        __m128 prevX = zero, prevY = zero, prevZ = zero;
+        const int64_t fallback = w.here >= 0 ? w.here : 0; // any sample: dead lanes load it, masked
+        for (int i = 0; i < w.p.steps; ++i) {
+            const __m128 t = _mm_set1_ps(w.reach * w.fraction[size_t(i)]);
+            const __m128 fx = _mm_add_ps(_mm_set1_ps(w.cx), _mm_mul_ps(sxv, t));
+            const __m128 fy = _mm_add_ps(_mm_set1_ps(w.cy), _mm_mul_ps(syv, t));
+            alive =
+                _mm_and_ps(alive, _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(fx, zero), _mm_cmpge_ps(fy, zero)),
+                                             _mm_and_ps(_mm_cmplt_ps(fx, width), _mm_cmplt_ps(fy, height))));
+            const int aliveBits = _mm_movemask_ps(alive);
+            if (!aliveBits) break;
+            const __m128i ixv = _mm_cvttps_epi32(fx), iyv = _mm_cvttps_epi32(fy);
+            int self = 0;
+            __m128 offsetX, offsetY;
+            const __m128 depth = load(ixv, iyv, aliveBits, fallback, self, offsetX, offsetY);
+            const __m128 active =
+                _mm_and_ps(alive, _mm_castsi128_ps(_mm_set_epi32(self & 8 ? 0 : -1, self & 4 ? 0 : -1,
+                                                                 self & 2 ? 0 : -1, self & 1 ? 0 : -1)));
+            const __m128 act = _mm_and_ps(active, _mm_cmpgt_ps(depth, zero)); // occluders
+            // The samples' points in view space (viewPoint), less P.
+            const __m128 tx =
+                _mm_add_ps(_mm_add_ps(_mm_set1_ps(w.p.txBase),
+                                      _mm_mul_ps(_mm_cvtepi32_ps(ixv), _mm_set1_ps(w.p.txStep))),
+                           _mm_mul_ps(offsetX, _mm_set1_ps(w.p.txQuant)));
+            const __m128 ty =
+                _mm_add_ps(_mm_add_ps(_mm_set1_ps(w.p.tyBase),
+                                      _mm_mul_ps(_mm_cvtepi32_ps(iyv), _mm_set1_ps(w.p.tyStep))),
+                           _mm_mul_ps(offsetY, _mm_set1_ps(w.p.tyQuant)));
+            const __m128 dx = _mm_sub_ps(_mm_mul_ps(tx, depth), px),
+                         dy = _mm_sub_ps(_mm_mul_ps(ty, depth), py), dz = _mm_sub_ps(depth, pz);
+            const __m128 d2 = dot3(dx, dy, dz, dx, dy, dz);
+            const __m128 inside = _mm_and_ps(act, _mm_cmplt_ps(d2, radius2));
+            raiseBy(_mm_and_ps(inside, _mm_cmpgt_ps(d2, zero)), dx, dy, dz, d2, l);
+            const __m128 crossing = _mm_andnot_ps(inside, _mm_and_ps(act, previousInside));
+            if (_mm_movemask_ps(crossing)) raiseAtCrossing(crossing, dx, dy, dz, prevX, prevY, prevZ, l);
+            prevX = select(inside, dx, prevX), prevY = select(inside, dy, prevY),
+            prevZ = select(inside, dz, prevZ);
+            // An active sample clears previousInside unless it is inside (an occluder within the radius).
+            previousInside = _mm_or_ps(_mm_andnot_ps(active, previousInside), inside);
+        }
+        _mm_storeu_ps(horizon, l.horizon);
+        return _mm_movemask_ps(l.raised);
+    }
+
+    // The scalar walk's crossing of the sphere between the previous sample (inside) and d (beyond).
+    void raiseAtCrossing(__m128 mask, __m128 dx, __m128 dy, __m128 dz, __m128 prevX, __m128 prevY,
+                         __m128 prevZ, Lanes& l) const {
+        const __m128 radius2 = _mm_set1_ps(w.p.radius2), zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+        const __m128 ex = _mm_sub_ps(dx, prevX), ey = _mm_sub_ps(dy, prevY), ez = _mm_sub_ps(dz, prevZ);
+        const __m128 a = dot3(ex, ey, ez, ex, ey, ez);
+        mask = _mm_and_ps(mask, _mm_cmplt_ps(a, radius2));
+        if (!_mm_movemask_ps(mask)) return;
+        const __m128 bh = dot3(prevX, prevY, prevZ, ex, ey, ez);
+        const __m128 c = _mm_sub_ps(dot3(prevX, prevY, prevZ, prevX, prevY, prevZ), radius2);
+        // std::max(0, v) is v > 0 ? v : 0 (NaN: 0), as _mm_max_ps(v, 0).
+        const __m128 root = _mm_sqrt_ps(_mm_max_ps(_mm_sub_ps(_mm_mul_ps(bh, bh), _mm_mul_ps(a, c)), zero));
+        __m128 u = _mm_div_ps(_mm_add_ps(_mm_xor_ps(bh, _mm_set1_ps(-0.0f)), root), a);
+        // std::clamp(u, 0, 1): u < 0 ? 0 : (1 < u ? 1 : u).
+        u = select(_mm_cmplt_ps(u, zero), zero, select(_mm_cmplt_ps(one, u), one, u));
+        const __m128 cx = _mm_add_ps(prevX, _mm_mul_ps(ex, u)), cy = _mm_add_ps(prevY, _mm_mul_ps(ey, u)),
+                     cz = _mm_add_ps(prevZ, _mm_mul_ps(ez, u));
+        raiseBy(mask, cx, cy, cz, dot3(cx, cy, cz, cx, cy, cz), l);
+    }
+};
+#endif
+
+// The four sides of a pair of slices (lanes: screen directions sx, sy; horizons in and out; whether
+// each was raised), four at once or one at a time (`scalar`): the same result bit for bit.
+template <class Buffer>
+void walkSides(const HorizonWalk<Buffer>& walk, bool scalar, const float* sx, const float* sy, float* horizon,
+               bool* raised) {
+#if VOXFX_SSAO_SSE2
+    if (!scalar) {
+        const int bits = HorizonWalk4<Buffer>{walk}.raise(sx, sy, horizon);
+        for (int j = 0; j < 4; ++j) raised[j] = (bits >> j) & 1;
+        return;
+    }
+#else
+    (void)scalar;
+#endif
+    for (int j = 0; j < 4; ++j) raised[j] = walk.raise(sx[j], sy[j], horizon[j]);
+}
+
+// One slice of GTAO at a point (unit normal N, unit direction to the eye V): the plane through the eye
+// ray and the screen direction (dx, dy), spanned by V and `axis` (the screen direction in world, made
+// orthogonal to V). Angles are measured from V, positive towards axis (the side of +(dx, dy) on
+// screen). `valid` false: the slice is degenerate (it adds nothing).
+struct Slice {
+    bool valid = false;
+    float weight = 0, cosG = 0, sinG = 0, gamma = 0;
+};
+
+// What the slices of one point share: N.V, and the camera's right and up against V and N.
+struct SliceBasis {
+    float nv, rv, uv, nr, nu;
+};
+SliceBasis sliceBasis(const Params& p, const Vec3f& N, const Vec3f& V) {
+    return {dot(N, V), dot(p.right, V), dot(p.up, V), dot(N, p.right), dot(N, p.up)};
+}
+
+// In the orthonormal basis V, axis, V x axis of the slice, N's projection onto the slice plane is
+// (N.V) V + (N.axis) axis, so its length (the slice's weight) and angle gamma need only N.V and
+// N.axis: with screen = right dx + up dy (a unit vector) and s = screen.V, axis = (screen - s V) / L,
+// L^2 = 1 - s^2, and N.axis = (N.screen - s N.V) / L. No cross product, no projected vector.
+Slice sliceOf(const SliceBasis& sb, float dx, float dy) {
+    Slice s;
+    const float sv = dx * sb.rv + dy * sb.uv;
+    const float axis2 = 1 - sv * sv;
+    if (!(axis2 > 1e-12f)) return s;
+    const float na = dx * sb.nr + dy * sb.nu - sb.nv * sv; // N.axis times L
+    const float weight2 = sb.nv * sb.nv + na * na / axis2;
+    s.weight = std::sqrt(weight2);
+    if (!(s.weight > 1e-6f)) return s;
+    s.cosG = sb.nv / s.weight, s.sinG = na / std::sqrt(axis2 * weight2);
+    if (!(s.cosG > 0)) { // a normal turned away in this slice: taken as grazing
+        s.cosG = 0;
+        s.sinG = s.sinG >= 0 ? 1.0f : -1.0f;
+    }
+    s.gamma = s.sinG >= 0 ? fastAcos(s.cosG) : -fastAcos(s.cosG);
+    s.valid = true;
+    return s;
+}
+
+// The slice's visible part between its horizons (cosines of their angles from V; `raised` false: the
+// tangent plane, gamma -+ pi/2), and with both at the tangent plane (open), through the same
+// arithmetic so that a slice nothing occludes gives visible == open exactly.
+void addSlice(const Slice& s, const float* horizon, const bool* raised, float& sum, float& sumOpen) {
+    const float cosG = s.cosG, sinG = s.sinG;
+    const float hMinus = s.gamma - 0.5f * kPi, hPlus = s.gamma + 0.5f * kPi;
+    const float openMinus = arc(hMinus, sinG, -cosG, cosG, sinG);
+    const float openPlus = arc(hPlus, -sinG, cosG, cosG, sinG);
+    float a = 0;
+    if (raised[0]) {
+        const float c = horizon[0];
+        a += arc(-fastAcos(c), c, -std::sqrt(std::max(0.0f, 1 - c * c)), cosG, sinG);
+    } else {
+        a += openMinus;
+    }
+    if (raised[1]) {
+        const float c = horizon[1];
+        a += arc(fastAcos(c), c, std::sqrt(std::max(0.0f, 1 - c * c)), cosG, sinG);
+    } else {
+        a += openPlus;
+    }
+    sum += s.weight * a;
+    sumOpen += s.weight * (openMinus + openPlus);
+}
+
 // GTAO at point P with unit normal N over buffer `b`, the point at (cx, cy) in b's pixels (`here`:
-// its own pixel, which the walk skips; -1: none), slices and offsets of pattern index k.
+// its own pixel, which the walk skips; -1: none), slices and offsets of pattern index k. The slices
+// go in pairs, their four sides walked at once (HorizonWalk4) unless p.scalarWalk.
 template <class Buffer>
 float occlusionOf(const Buffer& b, const Params& p, const Vec3f& P, const Vec3f& N, float cx, float cy,
                   int64_t here, int k) {
@@ -309,53 +556,35 @@ float occlusionOf(const Buffer& b, const Params& p, const Vec3f& P, const Vec3f&
     const auto& dirX = p.dirX[size_t(k)];
     const auto& dirY = p.dirY[size_t(k)];
     const std::array<float, kMaxSteps>& fraction = p.stepFraction[size_t(k)];
-    const HorizonWalk<Buffer> walk{b, p, fraction, here, cx, cy, kReach * radiusPixels, P, N, V};
+    const SliceBasis basis = sliceBasis(p, N, V);
+    const Vec3f rel = P - p.eye;
+    const HorizonWalk<Buffer> walk{b,
+                                   p,
+                                   fraction,
+                                   here,
+                                   cx,
+                                   cy,
+                                   kReach * radiusPixels,
+                                   {dot(rel, p.right), dot(rel, p.up), depth},
+                                   {basis.nr, basis.nu, dot(N, p.forward)},
+                                   {basis.rv, basis.uv, dot(V, p.forward)}};
     float sum = 0, sumOpen = 0;
-    for (int s = 0; s < p.directions; ++s) {
-        const float dx = dirX[size_t(s)], dy = dirY[size_t(s)];
-        // The slice: the plane through the eye ray and the screen direction (dx, dy), spanned by V
-        // and `axis` (the screen direction in world, made orthogonal to V). Angles are measured
-        // from V, positive towards axis (the side of +(dx, dy) on screen).
-        const Vec3f screen = p.right * dx + p.up * dy;
-        Vec3f axis = screen - V * dot(screen, V);
-        const float axisLength = length(axis);
-        if (!(axisLength > 1e-6f)) continue;
-        axis = axis / axisLength;
-        const Vec3f sliceNormal = cross(axis, V);
-        const Vec3f projected = N - sliceNormal * dot(N, sliceNormal);
-        const float weight = length(projected);
-        if (!(weight > 1e-6f)) continue;
-        float cosG = dot(projected, V) / weight, sinG = dot(projected, axis) / weight;
-        if (!(cosG > 0)) { // a normal turned away in this slice: taken as grazing
-            cosG = 0;
-            sinG = sinG >= 0 ? 1.0f : -1.0f;
+    for (int s0 = 0; s0 < p.directions; s0 += 2) {
+        // Lanes: slice s0's -axis and +axis sides, then slice s0 + 1's (if any; else s0's again).
+        const int s1 = std::min(s0 + 1, p.directions - 1);
+        const Slice slice[2] = {sliceOf(basis, dirX[size_t(s0)], dirY[size_t(s0)]),
+                                sliceOf(basis, dirX[size_t(s1)], dirY[size_t(s1)])};
+        if (!slice[0].valid && !(s1 > s0 && slice[1].valid)) continue;
+        float sx[4], sy[4], horizon[4];
+        bool raised[4] = {false, false, false, false};
+        for (int j = 0; j < 2; ++j) {
+            const float dx = dirX[size_t(j ? s1 : s0)], dy = dirY[size_t(j ? s1 : s0)];
+            sx[2 * j] = -dx, sy[2 * j] = -dy, sx[2 * j + 1] = dx, sy[2 * j + 1] = dy;
+            horizon[2 * j] = slice[j].sinG, horizon[2 * j + 1] = -slice[j].sinG;
         }
-        const float gamma = sinG >= 0 ? fastAcos(cosG) : -fastAcos(cosG);
-        // Horizons as cosines of their angle from V, starting at the tangent plane (gamma -+ pi/2).
-        float horizon[2] = {sinG, -sinG}; // [0]: the -axis side, [1]: the +axis side
-        bool raised[2] = {false, false};
-        for (int side = 0; side < 2; ++side)
-            raised[side] = walk.raise(side ? dx : -dx, side ? dy : -dy, horizon[side]);
-        // The open slice (horizons at the tangent plane) and this one, through the same arithmetic so
-        // that a slice nothing occludes gives a == open exactly.
-        const float hMinus = gamma - 0.5f * kPi, hPlus = gamma + 0.5f * kPi;
-        const float openMinus = arc(hMinus, sinG, -cosG, cosG, sinG);
-        const float openPlus = arc(hPlus, -sinG, cosG, cosG, sinG);
-        float a = 0;
-        if (raised[0]) {
-            const float c = horizon[0];
-            a += arc(-fastAcos(c), c, -std::sqrt(std::max(0.0f, 1 - c * c)), cosG, sinG);
-        } else {
-            a += openMinus;
-        }
-        if (raised[1]) {
-            const float c = horizon[1];
-            a += arc(fastAcos(c), c, std::sqrt(std::max(0.0f, 1 - c * c)), cosG, sinG);
-        } else {
-            a += openPlus;
-        }
-        sum += weight * a;
-        sumOpen += weight * (openMinus + openPlus);
+        walkSides(walk, p.scalarWalk, sx, sy, horizon, raised);
+        if (slice[0].valid) addSlice(slice[0], horizon, raised, sum, sumOpen);
+        if (s1 > s0 && slice[1].valid) addSlice(slice[1], horizon + 2, raised + 2, sum, sumOpen);
     }
     if (!(sumOpen > 0)) return 1;
     return std::clamp(sum / sumOpen, 0.0f, 1.0f);
@@ -414,6 +643,36 @@ void linkNeighbours(const Packed& b, const Params& p, std::vector<uint8_t>& link
                 links[size_t(i)] = l;
             }
     });
+}
+
+// A walk sample's offset from its pixel's central ray (tangent units) in units of `quant`, clamped
+// to int16 (a point more than 4 pixels off its pixel's ray, which no buffer of this file holds).
+int16_t offsetUnits(float offset, float quant) {
+    const float u = std::round(offset / quant);
+    return int16_t(u > 32767 ? 32767.0f : u >= -32767 ? u : -32767.0f);
+}
+
+// The horizon search's copy of working buffer b (Packed::walk): per pixel that occludes, its depth and
+// offsets in view space.
+void walkSamples(Packed& b, const Params& p, std::vector<ScreenSpaceWalkSample>& out) {
+    out.resize(std::size_t(b.width * b.height));
+    parallelFor(0, b.height, 16, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < b.width; ++x) {
+                const int64_t i = y * b.width + x;
+                ScreenSpaceWalkSample w;
+                const Vec3f rel = b.position(i) - p.eye;
+                const float z = dot(rel, p.forward);
+                if (b.occludes(i) && z > 0) {
+                    w.depth = z;
+                    w.offsetX =
+                        offsetUnits(dot(rel, p.right) / z - (p.txBase + float(x) * p.txStep), p.txQuant);
+                    w.offsetY = offsetUnits(dot(rel, p.up) / z - (p.tyBase + float(y) * p.tyStep), p.tyQuant);
+                }
+                out[std::size_t(i)] = w;
+            }
+    });
+    b.walk = out.data();
 }
 
 // Step 3: the separable blur, weights 1 2 2 2 1 over the pixels linked to the centre through a chain
@@ -500,7 +759,8 @@ void fullResolution(const Source& full, const Params& fullParams, std::span<floa
                 normals[i] = full.normal(x, y);
             }
     });
-    const Packed packed{W, H, samples.data(), normals.data()};
+    Packed packed{W, H, samples.data(), normals.data()};
+    walkSamples(packed, fullParams, scratch.walk);
     scratch.raw.resize(count);
     parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
@@ -694,11 +954,12 @@ void upsample(const Source& full, const Params& fullParams, const Upsample& up, 
 template <class Source>
 Upsample workingOcclusion(const Source& full, const Params& fullParams, const Frame& camera, int scale,
                           const ScreenSpaceOcclusionOptions& options, ScreenSpaceOcclusionScratch& scratch) {
-    const Packed low = downsample(full, fullParams, camera, scratch);
+    Packed low = downsample(full, fullParams, camera, scratch);
     const int64_t w = low.width, h = low.height;
     const auto lowCount = std::size_t(w * h);
     std::vector<uint8_t>& links = scratch.links;
     const Params p = makeParams(camera, 2 * scale, options);
+    walkSamples(low, p, scratch.walk);
     scratch.raw.resize(lowCount);
     parallelFor(0, h, 4, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)

@@ -70,6 +70,10 @@ struct ScreenSpaceOcclusionOptions {
     /// coarsely tessellated curved surface must not occlude itself where its flat facets rise above
     /// the plane of the interpolated normal. Surfaces meeting at a larger angle occlude fully.
     double bias = 0.1;
+    /// Walk the four sides of two slices at once in SIMD lanes (x86-64's SSE2; elsewhere always one at
+    /// a time). False: one side at a time, the scalar reference the tests compare it with; both give
+    /// the same output bit for bit.
+    bool vectorWalk = true;
 };
 
 /// Visibility (1 = unoccluded, cosine-weighted, as AmbientOcclusion::visibility) per sample of a
@@ -96,13 +100,21 @@ struct alignas(16) ScreenSpaceSample {
     Vec3f position;
     uint32_t flags = 0;
 };
-/// The buffers screenSpaceOcclusion works in (about 14 bytes per sample at half resolution, 40 at
+/// A sample as the horizon search reads it, in 8 bytes: its depth along the camera's forward axis
+/// (0: it does not occlude) and its offset from its pixel's central ray in 1/8192ths of a pixel, so
+/// that the rows within the search's reach stay in a core's cache (internal).
+struct alignas(8) ScreenSpaceWalkSample {
+    float depth = 0;
+    int16_t offsetX = 0, offsetY = 0;
+};
+/// The buffers screenSpaceOcclusion works in (about 16 bytes per sample at half resolution, 48 at
 /// full). A caller that computes occlusion frame after frame keeps one, so that the memory is
 /// reused: fresh buffers cost a page fault per 4 KiB touched (on this project's virtual machines
 /// about a third of the call; bench/bench_ssao.cpp measures both). Nothing carries over between
 /// calls but the allocations; not for concurrent calls.
 struct ScreenSpaceOcclusionScratch {
     std::vector<ScreenSpaceSample> samples;
+    std::vector<ScreenSpaceWalkSample> walk;
     std::vector<Vec3f> normals;
     std::vector<uint8_t> links;
     std::vector<float> raw, across, smooth;
