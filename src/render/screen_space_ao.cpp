@@ -26,7 +26,7 @@
 #include "voxfx/parallel.hpp"
 
 #if defined(__SSE2__)
-#include <emmintrin.h>
+#include <immintrin.h>
 #define VOXFX_SSAO_SSE2 1
 #else
 #define VOXFX_SSAO_SSE2 0
@@ -362,19 +362,38 @@ template <class Buffer> struct HorizonWalk4 {
         l.raised = _mm_or_ps(l.raised, higher);
     }
 
-    // The walk samples of the lanes' pixels (ix, iy) (dead lanes: `fallback`'s): their depths, and
-    // their offsets as floats; `self`: the lanes on the walk's own pixel, as bits.
-    __m128 load(__m128i ixv, __m128i iyv, int aliveBits, int64_t fallback, int& self, __m128& offsetX,
+    // The walk samples of the lanes' pixels (ix, iy) (dead lanes, not in `alive`: `fallback`'s): their
+    // depths, and their offsets as floats; `self`: the lanes on the walk's own pixel. Indices in SIMD
+    // where they fit 32 bits and SSE4.1 multiplies them, else one lane at a time.
+    __m128 load(__m128i ixv, __m128i iyv, __m128 alive, int64_t fallback, __m128& self, __m128& offsetX,
                 __m128& offsetY) const {
-        alignas(16) int32_t ix[4], iy[4];
-        _mm_store_si128(reinterpret_cast<__m128i*>(ix), ixv);
-        _mm_store_si128(reinterpret_cast<__m128i*>(iy), iyv);
-        __m128i s[4];
-        for (int k = 0; k < 4; ++k) {
-            const int64_t q = (aliveBits >> k) & 1 ? int64_t(iy[k]) * w.b.width + ix[k] : fallback;
-            self |= int(q == w.here) << k;
-            s[k] = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&w.b.walk[q]));
+        alignas(16) int32_t q32[4];
+        alignas(16) int64_t q[4];
+#if defined(__SSE4_1__)
+        if (w.b.width * w.b.height <= INT32_MAX) {
+            const __m128i index =
+                _mm_add_epi32(_mm_mullo_epi32(iyv, _mm_set1_epi32(int32_t(w.b.width))), ixv);
+            const __m128i live = _mm_castps_si128(alive);
+            const __m128i chosen = _mm_or_si128(_mm_and_si128(live, index),
+                                                _mm_andnot_si128(live, _mm_set1_epi32(int32_t(fallback))));
+            self = _mm_castsi128_ps(_mm_cmpeq_epi32(chosen, _mm_set1_epi32(int32_t(w.here))));
+            _mm_store_si128(reinterpret_cast<__m128i*>(q32), chosen);
+            for (int k = 0; k < 4; ++k) q[k] = q32[k];
+        } else
+#endif
+        {
+            alignas(16) int32_t ix[4], iy[4];
+            _mm_store_si128(reinterpret_cast<__m128i*>(ix), ixv);
+            _mm_store_si128(reinterpret_cast<__m128i*>(iy), iyv);
+            const int aliveBits = _mm_movemask_ps(alive);
+            for (int k = 0; k < 4; ++k) {
+                q[k] = (aliveBits >> k) & 1 ? int64_t(iy[k]) * w.b.width + ix[k] : fallback;
+                q32[k] = q[k] == w.here ? -1 : 0;
+            }
+            self = _mm_castsi128_ps(_mm_load_si128(reinterpret_cast<const __m128i*>(q32)));
         }
+        __m128i s[4];
+        for (int k = 0; k < 4; ++k) s[k] = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&w.b.walk[q[k]]));
         // Each 8 bytes: the depth, then offsetX in the low and offsetY in the high half of a word.
         const __m128 lo = _mm_castsi128_ps(_mm_unpacklo_epi64(s[0], s[1]));
         const __m128 hi = _mm_castsi128_ps(_mm_unpacklo_epi64(s[2], s[3]));
@@ -400,15 +419,11 @@ template <class Buffer> struct HorizonWalk4 {
             alive =
                 _mm_and_ps(alive, _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(fx, zero), _mm_cmpge_ps(fy, zero)),
                                              _mm_and_ps(_mm_cmplt_ps(fx, width), _mm_cmplt_ps(fy, height))));
-            const int aliveBits = _mm_movemask_ps(alive);
-            if (!aliveBits) break;
+            if (!_mm_movemask_ps(alive)) break;
             const __m128i ixv = _mm_cvttps_epi32(fx), iyv = _mm_cvttps_epi32(fy);
-            int self = 0;
-            __m128 offsetX, offsetY;
-            const __m128 depth = load(ixv, iyv, aliveBits, fallback, self, offsetX, offsetY);
-            const __m128 active =
-                _mm_and_ps(alive, _mm_castsi128_ps(_mm_set_epi32(self & 8 ? 0 : -1, self & 4 ? 0 : -1,
-                                                                 self & 2 ? 0 : -1, self & 1 ? 0 : -1)));
+            __m128 self, offsetX, offsetY;
+            const __m128 depth = load(ixv, iyv, alive, fallback, self, offsetX, offsetY);
+            const __m128 active = _mm_andnot_ps(self, alive);
             const __m128 act = _mm_and_ps(active, _mm_cmpgt_ps(depth, zero)); // occluders
             // The samples' points in view space (viewPoint), less P.
             const __m128 tx =
