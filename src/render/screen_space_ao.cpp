@@ -19,6 +19,7 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <optional>
 
 #include "render/render_cache.hpp"
 #include "render/shading.hpp"
@@ -472,6 +473,151 @@ template <class Buffer> struct HorizonWalk4 {
 };
 #endif
 
+#if defined(__AVX2__)
+// Two points' HorizonWalk4 in one AVX register: lanes 0-3 are point a's four sides, 4-7 point b's,
+// with HorizonWalk4's arithmetic lane for lane (so the scalar walk's bits). Half the instructions per
+// step and point: the search's steps are most of its cost once its branches are masks.
+template <class Buffer> struct HorizonWalk8 {
+    const HorizonWalk<Buffer>& a;
+    const HorizonWalk<Buffer>& b;
+
+    static __m256 pair(float lo, float hi) {
+        return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_set1_ps(lo)), _mm_set1_ps(hi), 1);
+    }
+    static __m256i pairInt(int32_t lo, int32_t hi) {
+        return _mm256_inserti128_si256(_mm256_castsi128_si256(_mm_set1_epi32(lo)), _mm_set1_epi32(hi), 1);
+    }
+    static __m256 select(__m256 mask, __m256 x, __m256 y) {
+        return _mm256_or_ps(_mm256_and_ps(mask, x), _mm256_andnot_ps(mask, y));
+    }
+    static __m256 dot3(__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
+        return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)),
+                             _mm256_mul_ps(az, bz));
+    }
+    static __m256 absolute(__m256 v) { return _mm256_andnot_ps(_mm256_set1_ps(-0.0f), v); }
+
+    struct Lanes {
+        __m256 horizon, raised;
+        __m256 nx, ny, nz, vx, vy, vz; // the points' N and V
+    };
+    void raiseBy(__m256 mask, __m256 dx, __m256 dy, __m256 dz, __m256 d2, Lanes& l) const {
+        const __m256 dn = dot3(dx, dy, dz, l.nx, l.ny, l.nz);
+        mask = _mm256_and_ps(
+            mask, _mm256_and_ps(_mm256_cmp_ps(dn, _mm256_setzero_ps(), _CMP_GT_OQ),
+                                _mm256_cmp_ps(_mm256_mul_ps(dn, dn),
+                                              _mm256_mul_ps(_mm256_set1_ps(a.p.sinBias2), d2), _CMP_GT_OQ)));
+        if (!_mm256_movemask_ps(mask)) return;
+        const __m256 dv = dot3(dx, dy, dz, l.vx, l.vy, l.vz);
+        const __m256 h = l.horizon;
+        const __m256 higher =
+            _mm256_and_ps(mask, _mm256_cmp_ps(_mm256_mul_ps(dv, absolute(dv)),
+                                              _mm256_mul_ps(_mm256_mul_ps(h, absolute(h)), d2), _CMP_GT_OQ));
+        l.horizon = select(higher, _mm256_div_ps(dv, _mm256_sqrt_ps(d2)), h);
+        l.raised = _mm256_or_ps(l.raised, higher);
+    }
+    void raiseAtCrossing(__m256 mask, __m256 dx, __m256 dy, __m256 dz, __m256 prevX, __m256 prevY,
+                         __m256 prevZ, Lanes& l) const {
+        const __m256 radius2 = _mm256_set1_ps(a.p.radius2), zero = _mm256_setzero_ps(),
+                     one = _mm256_set1_ps(1.0f);
+        const __m256 ex = _mm256_sub_ps(dx, prevX), ey = _mm256_sub_ps(dy, prevY),
+                     ez = _mm256_sub_ps(dz, prevZ);
+        const __m256 e2 = dot3(ex, ey, ez, ex, ey, ez);
+        mask = _mm256_and_ps(mask, _mm256_cmp_ps(e2, radius2, _CMP_LT_OQ));
+        if (!_mm256_movemask_ps(mask)) return;
+        const __m256 bh = dot3(prevX, prevY, prevZ, ex, ey, ez);
+        const __m256 c = _mm256_sub_ps(dot3(prevX, prevY, prevZ, prevX, prevY, prevZ), radius2);
+        const __m256 root =
+            _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(_mm256_mul_ps(bh, bh), _mm256_mul_ps(e2, c)), zero));
+        __m256 u = _mm256_div_ps(_mm256_add_ps(_mm256_xor_ps(bh, _mm256_set1_ps(-0.0f)), root), e2);
+        u = select(_mm256_cmp_ps(u, zero, _CMP_LT_OQ), zero,
+                   select(_mm256_cmp_ps(one, u, _CMP_LT_OQ), one, u));
+        const __m256 cx = _mm256_add_ps(prevX, _mm256_mul_ps(ex, u)),
+                     cy = _mm256_add_ps(prevY, _mm256_mul_ps(ey, u)),
+                     cz = _mm256_add_ps(prevZ, _mm256_mul_ps(ez, u));
+        raiseBy(mask, cx, cy, cz, dot3(cx, cy, cz, cx, cy, cz), l);
+    }
+    // The lanes' walk samples (HorizonWalk4::load, indices in 32 bits: the caller checks they fit).
+    __m256 load(__m256i ix, __m256i iy, __m256 alive, __m256& self, __m256& offsetX, __m256& offsetY) const {
+        const __m256i index =
+            _mm256_add_epi32(_mm256_mullo_epi32(iy, _mm256_set1_epi32(int32_t(a.b.width))), ix);
+        const __m256i live = _mm256_castps_si256(alive);
+        const __m256i chosen =
+            _mm256_or_si256(_mm256_and_si256(live, index),
+                            _mm256_andnot_si256(live, pairInt(int32_t(a.here >= 0 ? a.here : 0),
+                                                              int32_t(b.here >= 0 ? b.here : 0))));
+        self = _mm256_castsi256_ps(_mm256_cmpeq_epi32(chosen, pairInt(int32_t(a.here), int32_t(b.here))));
+        alignas(32) int32_t q[8];
+        _mm256_store_si256(reinterpret_cast<__m256i*>(q), chosen);
+        const ScreenSpaceWalkSample* walk = a.b.walk;
+        __m128i s[8];
+        for (int k = 0; k < 8; ++k) s[k] = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&walk[q[k]]));
+        __m128 depth[2], offsets[2];
+        for (int h = 0; h < 2; ++h) {
+            const __m128 lo = _mm_castsi128_ps(_mm_unpacklo_epi64(s[4 * h], s[4 * h + 1]));
+            const __m128 hi = _mm_castsi128_ps(_mm_unpacklo_epi64(s[4 * h + 2], s[4 * h + 3]));
+            depth[h] = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0));
+            offsets[h] = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1));
+        }
+        const __m256i o =
+            _mm256_castps_si256(_mm256_insertf128_ps(_mm256_castps128_ps256(offsets[0]), offsets[1], 1));
+        offsetX = _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(o, 16), 16));
+        offsetY = _mm256_cvtepi32_ps(_mm256_srai_epi32(o, 16));
+        return _mm256_insertf128_ps(_mm256_castps128_ps256(depth[0]), depth[1], 1);
+    }
+
+    // sx, sy, horizon: 8 lanes each (a's four sides, then b's); the lanes raised as bits.
+    int raise(const float* sx, const float* sy, float* horizon) const {
+        const Params& p = a.p;
+        const __m256 sxv = _mm256_loadu_ps(sx), syv = _mm256_loadu_ps(sy);
+        const __m256 width = _mm256_set1_ps(float(a.b.width)), height = _mm256_set1_ps(float(a.b.height));
+        const __m256 px = pair(a.P.x, b.P.x), py = pair(a.P.y, b.P.y), pz = pair(a.P.z, b.P.z);
+        const __m256 cx = pair(a.cx, b.cx), cy = pair(a.cy, b.cy);
+        const __m256 radius2 = _mm256_set1_ps(p.radius2), zero = _mm256_setzero_ps();
+        Lanes l{_mm256_loadu_ps(horizon), zero,
+                pair(a.N.x, b.N.x),       pair(a.N.y, b.N.y),
+                pair(a.N.z, b.N.z),       pair(a.V.x, b.V.x),
+                pair(a.V.y, b.V.y),       pair(a.V.z, b.V.z)};
+        __m256 alive = _mm256_castsi256_ps(_mm256_set1_epi32(-1)), previousInside = zero;
+        __m256 prevX = zero, prevY = zero, prevZ = zero;
+        for (int i = 0; i < p.steps; ++i) {
+            const __m256 t = pair(a.reach * a.fraction[size_t(i)], b.reach * b.fraction[size_t(i)]);
+            const __m256 fx = _mm256_add_ps(cx, _mm256_mul_ps(sxv, t));
+            const __m256 fy = _mm256_add_ps(cy, _mm256_mul_ps(syv, t));
+            alive = _mm256_and_ps(alive, _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(fx, zero, _CMP_GE_OQ),
+                                                                     _mm256_cmp_ps(fy, zero, _CMP_GE_OQ)),
+                                                       _mm256_and_ps(_mm256_cmp_ps(fx, width, _CMP_LT_OQ),
+                                                                     _mm256_cmp_ps(fy, height, _CMP_LT_OQ))));
+            if (!_mm256_movemask_ps(alive)) break;
+            const __m256i ix = _mm256_cvttps_epi32(fx), iy = _mm256_cvttps_epi32(fy);
+            __m256 self, offsetX, offsetY;
+            const __m256 depth = load(ix, iy, alive, self, offsetX, offsetY);
+            const __m256 active = _mm256_andnot_ps(self, alive);
+            const __m256 act = _mm256_and_ps(active, _mm256_cmp_ps(depth, zero, _CMP_GT_OQ));
+            const __m256 tx =
+                _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(p.txBase),
+                                            _mm256_mul_ps(_mm256_cvtepi32_ps(ix), _mm256_set1_ps(p.txStep))),
+                              _mm256_mul_ps(offsetX, _mm256_set1_ps(p.txQuant)));
+            const __m256 ty =
+                _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(p.tyBase),
+                                            _mm256_mul_ps(_mm256_cvtepi32_ps(iy), _mm256_set1_ps(p.tyStep))),
+                              _mm256_mul_ps(offsetY, _mm256_set1_ps(p.tyQuant)));
+            const __m256 dx = _mm256_sub_ps(_mm256_mul_ps(tx, depth), px),
+                         dy = _mm256_sub_ps(_mm256_mul_ps(ty, depth), py), dz = _mm256_sub_ps(depth, pz);
+            const __m256 d2 = dot3(dx, dy, dz, dx, dy, dz);
+            const __m256 inside = _mm256_and_ps(act, _mm256_cmp_ps(d2, radius2, _CMP_LT_OQ));
+            raiseBy(_mm256_and_ps(inside, _mm256_cmp_ps(d2, zero, _CMP_GT_OQ)), dx, dy, dz, d2, l);
+            const __m256 crossing = _mm256_andnot_ps(inside, _mm256_and_ps(act, previousInside));
+            if (_mm256_movemask_ps(crossing)) raiseAtCrossing(crossing, dx, dy, dz, prevX, prevY, prevZ, l);
+            prevX = select(inside, dx, prevX), prevY = select(inside, dy, prevY),
+            prevZ = select(inside, dz, prevZ);
+            previousInside = _mm256_or_ps(_mm256_andnot_ps(active, previousInside), inside);
+        }
+        _mm256_storeu_ps(horizon, l.horizon);
+        return _mm256_movemask_ps(l.raised);
+    }
+};
+#endif
+
 // The four sides of a pair of slices (lanes: screen directions sx, sy; horizons in and out; whether
 // each was raised), four at once or one at a time (`scalar`): the same result bit for bit.
 template <class Buffer>
@@ -555,54 +701,81 @@ void addSlice(const Slice& s, const float* horizon, const bool* raised, float& s
 }
 
 // GTAO at point P with unit normal N over buffer `b`, the point at (cx, cy) in b's pixels (`here`:
-// its own pixel, which the walk skips; -1: none), slices and offsets of pattern index k. The slices
-// go in pairs, their four sides walked at once (HorizonWalk4) unless p.scalarWalk.
-template <class Buffer>
-float occlusionOf(const Buffer& b, const Params& p, const Vec3f& P, const Vec3f& N, float cx, float cy,
-                  int64_t here, int k) {
-    const Vec3f toEye = p.eye - P;
-    const float eyeDistance = length(toEye);
-    const float depth = dot(P - p.eye, p.forward);
-    if (!(eyeDistance > 0) || !(depth > 0)) return 1;
-    const Vec3f V = toEye / eyeDistance;
-    // The radius in working pixels at this depth; under a pixel nothing but p itself is in reach.
-    const float radiusPixels = p.radius * p.pixelsPerTan / depth;
-    if (!(radiusPixels >= 1)) return 1;
-    const auto& dirX = p.dirX[size_t(k)];
-    const auto& dirY = p.dirY[size_t(k)];
-    const std::array<float, kMaxSteps>& fraction = p.stepFraction[size_t(k)];
-    const SliceBasis basis = sliceBasis(p, N, V);
-    const Vec3f rel = P - p.eye;
-    const HorizonWalk<Buffer> walk{b,
-                                   p,
-                                   fraction,
-                                   here,
-                                   cx,
-                                   cy,
-                                   kReach * radiusPixels,
-                                   {dot(rel, p.right), dot(rel, p.up), depth},
-                                   {basis.nr, basis.nu, dot(N, p.forward)},
-                                   {basis.rv, basis.uv, dot(V, p.forward)}};
+// its own pixel, which the walk skips; -1: none), slices and offsets of pattern index k, in steps
+// (so that two points can walk in one SIMD register, HorizonWalk8): per pair of slices s0, s0 + 1,
+// `prepare` sets the four sides' lanes (slice s0's -axis and +axis sides, then slice s0 + 1's, or
+// s0's again where there is none), a walk raises their horizons, `add` integrates the slices.
+template <class Buffer> struct GtaoPoint {
+    const Params& p;
+    const std::array<float, kMaxDirections>& dirX;
+    const std::array<float, kMaxDirections>& dirY;
+    std::optional<HorizonWalk<Buffer>> walk; ///< empty: nothing occludes the point (1)
+    SliceBasis basis{};
     float sum = 0, sumOpen = 0;
-    for (int s0 = 0; s0 < p.directions; s0 += 2) {
-        // Lanes: slice s0's -axis and +axis sides, then slice s0 + 1's (if any; else s0's again).
-        const int s1 = std::min(s0 + 1, p.directions - 1);
-        const Slice slice[2] = {sliceOf(basis, dirX[size_t(s0)], dirY[size_t(s0)]),
-                                sliceOf(basis, dirX[size_t(s1)], dirY[size_t(s1)])};
-        if (!slice[0].valid && !(s1 > s0 && slice[1].valid)) continue;
-        float sx[4], sy[4], horizon[4];
-        bool raised[4] = {false, false, false, false};
+    Slice slice[2];
+    int s0 = 0, s1 = 0;
+    float sx[4] = {}, sy[4] = {}, horizon[4] = {};
+    bool raised[4] = {};
+
+    GtaoPoint(const Buffer& b, const Params& params, const Vec3f& P, const Vec3f& N, float cx, float cy,
+              int64_t here, int k)
+        : p(params), dirX(params.dirX[size_t(k)]), dirY(params.dirY[size_t(k)]) {
+        const Vec3f toEye = p.eye - P;
+        const float eyeDistance = length(toEye);
+        const float depth = dot(P - p.eye, p.forward);
+        if (!(eyeDistance > 0) || !(depth > 0)) return;
+        const Vec3f V = toEye / eyeDistance;
+        // The radius in working pixels at this depth; under a pixel nothing but p itself is in reach.
+        const float radiusPixels = p.radius * p.pixelsPerTan / depth;
+        if (!(radiusPixels >= 1)) return;
+        basis = sliceBasis(p, N, V);
+        const Vec3f rel = P - p.eye;
+        walk.emplace(HorizonWalk<Buffer>{b,
+                                         p,
+                                         p.stepFraction[size_t(k)],
+                                         here,
+                                         cx,
+                                         cy,
+                                         kReach * radiusPixels,
+                                         {dot(rel, p.right), dot(rel, p.up), depth},
+                                         {basis.nr, basis.nu, dot(N, p.forward)},
+                                         {basis.rv, basis.uv, dot(V, p.forward)}});
+    }
+    // False: both slices are degenerate (nothing to walk or add).
+    bool prepare(int first) {
+        s0 = first, s1 = std::min(first + 1, p.directions - 1);
+        slice[0] = sliceOf(basis, dirX[size_t(s0)], dirY[size_t(s0)]);
+        slice[1] = sliceOf(basis, dirX[size_t(s1)], dirY[size_t(s1)]);
+        if (!slice[0].valid && !(s1 > s0 && slice[1].valid)) return false;
         for (int j = 0; j < 2; ++j) {
             const float dx = dirX[size_t(j ? s1 : s0)], dy = dirY[size_t(j ? s1 : s0)];
             sx[2 * j] = -dx, sy[2 * j] = -dy, sx[2 * j + 1] = dx, sy[2 * j + 1] = dy;
             horizon[2 * j] = slice[j].sinG, horizon[2 * j + 1] = -slice[j].sinG;
+            raised[2 * j] = raised[2 * j + 1] = false;
         }
-        walkSides(walk, p.scalarWalk, sx, sy, horizon, raised);
+        return true;
+    }
+    void add() {
         if (slice[0].valid) addSlice(slice[0], horizon, raised, sum, sumOpen);
         if (s1 > s0 && slice[1].valid) addSlice(slice[1], horizon + 2, raised + 2, sum, sumOpen);
     }
-    if (!(sumOpen > 0)) return 1;
-    return std::clamp(sum / sumOpen, 0.0f, 1.0f);
+    float result() const { return sumOpen > 0 ? std::clamp(sum / sumOpen, 0.0f, 1.0f) : 1.0f; }
+    // The whole of it, one point.
+    float run() {
+        if (!walk) return 1;
+        for (int first = 0; first < p.directions; first += 2)
+            if (prepare(first)) {
+                walkSides(*walk, p.scalarWalk, sx, sy, horizon, raised);
+                add();
+            }
+        return result();
+    }
+};
+
+template <class Buffer>
+float occlusionOf(const Buffer& b, const Params& p, const Vec3f& P, const Vec3f& N, float cx, float cy,
+                  int64_t here, int k) {
+    return GtaoPoint<Buffer>(b, p, P, N, cx, cy, here, k).run();
 }
 
 // GTAO at working pixel (x, y): the visibility in [0, 1], 1 for background.
@@ -611,6 +784,57 @@ template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int6
     if (!b.covered(here)) return 1;
     return occlusionOf(b, p, b.position(here), b.normal(here), float(x) + 0.5f, float(y) + 0.5f, here,
                        kBayer[y & 3][x & 3]);
+}
+
+// GTAO at working pixels (x, y) and (x + 1, y) into out[0] and out[1], as occlusionAt gives them: where
+// both have slices to walk, in one AVX register (HorizonWalk8), else one at a time.
+template <class Buffer>
+void occlusionPairAt(const Buffer& b, const Params& p, int64_t x, int64_t y, float* out) {
+#if defined(__AVX2__)
+    const int64_t i = y * b.width + x;
+    if (!p.scalarWalk && b.covered(i) && b.covered(i + 1) && b.width * b.height <= INT32_MAX) {
+        const float cy = float(y) + 0.5f;
+        GtaoPoint<Buffer> g0(b, p, b.position(i), b.normal(i), float(x) + 0.5f, cy, i, kBayer[y & 3][x & 3]);
+        GtaoPoint<Buffer> g1(b, p, b.position(i + 1), b.normal(i + 1), float(x + 1) + 0.5f, cy, i + 1,
+                             kBayer[y & 3][(x + 1) & 3]);
+        if (!g0.walk || !g1.walk) {
+            out[0] = g0.run(), out[1] = g1.run();
+            return;
+        }
+        for (int first = 0; first < p.directions; first += 2) {
+            const bool walk0 = g0.prepare(first), walk1 = g1.prepare(first);
+            if (walk0 && walk1) {
+                float sx[8], sy[8], horizon[8];
+                for (int j = 0; j < 4; ++j) {
+                    sx[j] = g0.sx[j], sy[j] = g0.sy[j], horizon[j] = g0.horizon[j];
+                    sx[4 + j] = g1.sx[j], sy[4 + j] = g1.sy[j], horizon[4 + j] = g1.horizon[j];
+                }
+                const int bits = HorizonWalk8<Buffer>{*g0.walk, *g1.walk}.raise(sx, sy, horizon);
+                for (int j = 0; j < 4; ++j) {
+                    g0.horizon[j] = horizon[j], g0.raised[j] = (bits >> j) & 1;
+                    g1.horizon[j] = horizon[4 + j], g1.raised[j] = (bits >> (4 + j)) & 1;
+                }
+            } else if (walk0) {
+                walkSides(*g0.walk, false, g0.sx, g0.sy, g0.horizon, g0.raised);
+            } else if (walk1) {
+                walkSides(*g1.walk, false, g1.sx, g1.sy, g1.horizon, g1.raised);
+            }
+            if (walk0) g0.add();
+            if (walk1) g1.add();
+        }
+        out[0] = g0.result(), out[1] = g1.result();
+        return;
+    }
+#endif
+    out[0] = occlusionAt(b, p, x, y);
+    out[1] = occlusionAt(b, p, x + 1, y);
+}
+
+// GTAO along row y of working buffer b into out (b.width values), two pixels at a time.
+template <class Buffer> void occlusionRow(const Buffer& b, const Params& p, int64_t y, float* out) {
+    int64_t x = 0;
+    for (; x + 1 < b.width; x += 2) occlusionPairAt(b, p, x, y, out + x);
+    if (x < b.width) out[x] = occlusionAt(b, p, x, y);
 }
 
 // How much neighbour (q, m) belongs to the surface of p with unit normal n, in [0, tolerance]
@@ -778,9 +1002,7 @@ void fullResolution(const Source& full, const Params& fullParams, std::span<floa
     walkSamples(packed, fullParams, scratch.walk);
     scratch.raw.resize(count);
     parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = 0; x < W; ++x)
-                scratch.raw[size_t(y * W + x)] = occlusionAt(packed, fullParams, x, y);
+        for (int64_t y = y0; y < y1; ++y) occlusionRow(packed, fullParams, y, &scratch.raw[size_t(y * W)]);
     });
     scratch.links.assign(count, 0);
     linkNeighbours(packed, fullParams, scratch.links);
@@ -977,8 +1199,7 @@ Upsample workingOcclusion(const Source& full, const Params& fullParams, const Fr
     walkSamples(low, p, scratch.walk);
     scratch.raw.resize(lowCount);
     parallelFor(0, h, 4, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = 0; x < w; ++x) scratch.raw[size_t(y * w + x)] = occlusionAt(low, p, x, y);
+        for (int64_t y = y0; y < y1; ++y) occlusionRow(low, p, y, &scratch.raw[size_t(y * w)]);
     });
     linkNeighbours(low, p, links);
     scratch.across.resize(lowCount);
