@@ -786,55 +786,67 @@ template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int6
                        kBayer[y & 3][x & 3]);
 }
 
-// GTAO at working pixels (x, y) and (x + 1, y) into out[0] and out[1], as occlusionAt gives them: where
-// both have slices to walk, in one AVX register (HorizonWalk8), else one at a time.
-template <class Buffer>
-void occlusionPairAt(const Buffer& b, const Params& p, int64_t x, int64_t y, float* out) {
+// Two points' GTAO (each prepared as GtaoPoint, with slices to walk): where both have a pair of
+// slices to walk, in one AVX register (HorizonWalk8), else one at a time; each result as run() gives it.
+template <class Buffer> void runPair(GtaoPoint<Buffer>& g0, GtaoPoint<Buffer>& g1) {
 #if defined(__AVX2__)
-    const int64_t i = y * b.width + x;
-    if (!p.scalarWalk && b.covered(i) && b.covered(i + 1) && b.width * b.height <= INT32_MAX) {
-        const float cy = float(y) + 0.5f;
-        GtaoPoint<Buffer> g0(b, p, b.position(i), b.normal(i), float(x) + 0.5f, cy, i, kBayer[y & 3][x & 3]);
-        GtaoPoint<Buffer> g1(b, p, b.position(i + 1), b.normal(i + 1), float(x + 1) + 0.5f, cy, i + 1,
-                             kBayer[y & 3][(x + 1) & 3]);
-        if (!g0.walk || !g1.walk) {
-            out[0] = g0.run(), out[1] = g1.run();
-            return;
-        }
-        for (int first = 0; first < p.directions; first += 2) {
-            const bool walk0 = g0.prepare(first), walk1 = g1.prepare(first);
-            if (walk0 && walk1) {
-                float sx[8], sy[8], horizon[8];
-                for (int j = 0; j < 4; ++j) {
-                    sx[j] = g0.sx[j], sy[j] = g0.sy[j], horizon[j] = g0.horizon[j];
-                    sx[4 + j] = g1.sx[j], sy[4 + j] = g1.sy[j], horizon[4 + j] = g1.horizon[j];
-                }
-                const int bits = HorizonWalk8<Buffer>{*g0.walk, *g1.walk}.raise(sx, sy, horizon);
-                for (int j = 0; j < 4; ++j) {
-                    g0.horizon[j] = horizon[j], g0.raised[j] = (bits >> j) & 1;
-                    g1.horizon[j] = horizon[4 + j], g1.raised[j] = (bits >> (4 + j)) & 1;
-                }
-            } else if (walk0) {
-                walkSides(*g0.walk, false, g0.sx, g0.sy, g0.horizon, g0.raised);
-            } else if (walk1) {
-                walkSides(*g1.walk, false, g1.sx, g1.sy, g1.horizon, g1.raised);
+    for (int first = 0; first < g0.p.directions; first += 2) {
+        const bool walk0 = g0.prepare(first), walk1 = g1.prepare(first);
+        if (walk0 && walk1) {
+            float sx[8], sy[8], horizon[8];
+            for (int j = 0; j < 4; ++j) {
+                sx[j] = g0.sx[j], sy[j] = g0.sy[j], horizon[j] = g0.horizon[j];
+                sx[4 + j] = g1.sx[j], sy[4 + j] = g1.sy[j], horizon[4 + j] = g1.horizon[j];
             }
-            if (walk0) g0.add();
-            if (walk1) g1.add();
+            const int bits = HorizonWalk8<Buffer>{*g0.walk, *g1.walk}.raise(sx, sy, horizon);
+            for (int j = 0; j < 4; ++j) {
+                g0.horizon[j] = horizon[j], g0.raised[j] = (bits >> j) & 1;
+                g1.horizon[j] = horizon[4 + j], g1.raised[j] = (bits >> (4 + j)) & 1;
+            }
+        } else if (walk0) {
+            walkSides(*g0.walk, false, g0.sx, g0.sy, g0.horizon, g0.raised);
+        } else if (walk1) {
+            walkSides(*g1.walk, false, g1.sx, g1.sy, g1.horizon, g1.raised);
         }
-        out[0] = g0.result(), out[1] = g1.result();
-        return;
+        if (walk0) g0.add();
+        if (walk1) g1.add();
     }
+#else
+    g0.run(), g1.run();
 #endif
-    out[0] = occlusionAt(b, p, x, y);
-    out[1] = occlusionAt(b, p, x + 1, y);
 }
 
-// GTAO along row y of working buffer b into out (b.width values), two pixels at a time.
+// GTAO along row y of working buffer b into out (b.width values), as occlusionAt gives it: the pixels
+// with something to walk two at a time (runPair), in row order, so that a row broken by background
+// (the forest's leaves against the sky) still fills both halves of the register.
 template <class Buffer> void occlusionRow(const Buffer& b, const Params& p, int64_t y, float* out) {
-    int64_t x = 0;
-    for (; x + 1 < b.width; x += 2) occlusionPairAt(b, p, x, y, out + x);
-    if (x < b.width) out[x] = occlusionAt(b, p, x, y);
+#if defined(__AVX2__)
+    const bool paired = !p.scalarWalk && b.width * b.height <= INT32_MAX;
+#else
+    const bool paired = false;
+#endif
+    std::optional<GtaoPoint<Buffer>> pending;
+    int64_t pendingX = 0;
+    for (int64_t x = 0; x < b.width; ++x) {
+        const int64_t i = y * b.width + x;
+        if (!b.covered(i) || !paired) {
+            out[x] = occlusionAt(b, p, x, y);
+            continue;
+        }
+        GtaoPoint<Buffer> g(b, p, b.position(i), b.normal(i), float(x) + 0.5f, float(y) + 0.5f, i,
+                            kBayer[y & 3][x & 3]);
+        if (!g.walk) {
+            out[x] = 1; // as run() gives it
+        } else if (!pending) {
+            pending.emplace(g);
+            pendingX = x;
+        } else {
+            runPair(*pending, g);
+            out[pendingX] = pending->result(), out[x] = g.result();
+            pending.reset();
+        }
+    }
+    if (pending) out[pendingX] = pending->run();
 }
 
 // How much neighbour (q, m) belongs to the surface of p with unit normal n, in [0, tolerance]
