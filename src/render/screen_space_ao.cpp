@@ -7,7 +7,9 @@
 //      keeps its samples; the surface behind it finds its own in the neighbouring blocks at the
 //      upsample);
 //   2. per working pixel, `directions` slices, each with two horizons found by `steps` samples per
-//      side, integrated in closed form;
+//      side, integrated in closed form; the sides walked in AVX2 lanes (two pixels' four sides at
+//      once) on an 8-byte view-space copy of the working buffer, bit for bit the scalar walk
+//      (ScreenSpaceOcclusionOptions::vectorWalk);
 //   3. links between neighbouring working pixels on one smooth surface, and a separable blur over
 //      5 x 5 linked pixels, weights 1 2 2 2 1 (every phase of the 4x4 pattern gets the same weight,
 //      so the pattern cancels on a smooth surface);
@@ -26,11 +28,11 @@
 #include "voxfx/error.hpp"
 #include "voxfx/parallel.hpp"
 
-#if defined(__SSE2__)
+#if defined(__AVX2__)
 #include <immintrin.h>
-#define VOXFX_SSAO_SSE2 1
+#define VOXFX_SSAO_AVX2 1
 #else
-#define VOXFX_SSAO_SSE2 0
+#define VOXFX_SSAO_AVX2 0
 #endif
 
 namespace voxfx::detail {
@@ -202,7 +204,7 @@ Params makeParams(const Frame& camera, int scale, const ScreenSpaceOcclusionOpti
     p.sinBias2 = float(std::sin(o.bias) * std::sin(o.bias));
     p.directions = o.directions;
     p.steps = o.steps;
-    p.scalarWalk = !o.vectorWalk || !VOXFX_SSAO_SSE2;
+    p.scalarWalk = !o.vectorWalk || !VOXFX_SSAO_AVX2;
     const auto tangent = [&](double gx, double gy) {
         const Vec3d w = camera.worldFromGrid({gx, gy, 1.0}) - camera.eye();
         return std::array<double, 2>{dot(w, camera.right()), dot(w, camera.up())};
@@ -326,157 +328,13 @@ template <class Buffer> struct HorizonWalk {
     }
 };
 
-#if VOXFX_SSAO_SSE2
-// The four sides of two slices at once, one per lane of an SSE register (the same arithmetic as
-// `raise`, operation for operation, so the horizons are bit for bit the scalar walk's): the
-// samples' branches (occluder or not, inside the radius or not, raised or not) become masks, which
-// the scalar walk mispredicts about once a side. sx, sy: each lane's screen direction; horizon:
-// in, each lane's start, out, its horizon; the lanes it raised as bits of the result.
-template <class Buffer> struct HorizonWalk4 {
-    const HorizonWalk<Buffer>& w;
-
-    static __m128 select(__m128 mask, __m128 a, __m128 b) {
-        return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
-    }
-    // dot(a, b) in the scalar order: (x x' + y y') + z z'.
-    static __m128 dot3(__m128 ax, __m128 ay, __m128 az, __m128 bx, __m128 by, __m128 bz) {
-        return _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, bx), _mm_mul_ps(ay, by)), _mm_mul_ps(az, bz));
-    }
-    static __m128 absolute(__m128 v) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), v); }
-
-    struct Lanes {
-        __m128 horizon, raised;
-    };
-    // raiseBy on the lanes of `mask`.
-    void raiseBy(__m128 mask, __m128 dx, __m128 dy, __m128 dz, __m128 d2, Lanes& l) const {
-        const Vec3f &N = w.N, &V = w.V;
-        const __m128 dn = dot3(dx, dy, dz, _mm_set1_ps(N.x), _mm_set1_ps(N.y), _mm_set1_ps(N.z));
-        mask = _mm_and_ps(
-            mask, _mm_and_ps(_mm_cmpgt_ps(dn, _mm_setzero_ps()),
-                             _mm_cmpgt_ps(_mm_mul_ps(dn, dn), _mm_mul_ps(_mm_set1_ps(w.p.sinBias2), d2))));
-        if (!_mm_movemask_ps(mask)) return;
-        const __m128 dv = dot3(dx, dy, dz, _mm_set1_ps(V.x), _mm_set1_ps(V.y), _mm_set1_ps(V.z));
-        const __m128 h = l.horizon;
-        const __m128 higher = _mm_and_ps(
-            mask, _mm_cmpgt_ps(_mm_mul_ps(dv, absolute(dv)), _mm_mul_ps(_mm_mul_ps(h, absolute(h)), d2)));
-        l.horizon = select(higher, _mm_div_ps(dv, _mm_sqrt_ps(d2)), h);
-        l.raised = _mm_or_ps(l.raised, higher);
-    }
-
-    // The walk samples of the lanes' pixels (ix, iy) (dead lanes, not in `alive`: `fallback`'s): their
-    // depths, and their offsets as floats; `self`: the lanes on the walk's own pixel. Indices in SIMD
-    // where they fit 32 bits and SSE4.1 multiplies them, else one lane at a time.
-    __m128 load(__m128i ixv, __m128i iyv, __m128 alive, int64_t fallback, __m128& self, __m128& offsetX,
-                __m128& offsetY) const {
-        alignas(16) int32_t q32[4];
-        alignas(16) int64_t q[4];
-#if defined(__SSE4_1__)
-        if (w.b.width * w.b.height <= INT32_MAX) {
-            const __m128i index =
-                _mm_add_epi32(_mm_mullo_epi32(iyv, _mm_set1_epi32(int32_t(w.b.width))), ixv);
-            const __m128i live = _mm_castps_si128(alive);
-            const __m128i chosen = _mm_or_si128(_mm_and_si128(live, index),
-                                                _mm_andnot_si128(live, _mm_set1_epi32(int32_t(fallback))));
-            self = _mm_castsi128_ps(_mm_cmpeq_epi32(chosen, _mm_set1_epi32(int32_t(w.here))));
-            _mm_store_si128(reinterpret_cast<__m128i*>(q32), chosen);
-            for (int k = 0; k < 4; ++k) q[k] = q32[k];
-        } else
-#endif
-        {
-            alignas(16) int32_t ix[4], iy[4];
-            _mm_store_si128(reinterpret_cast<__m128i*>(ix), ixv);
-            _mm_store_si128(reinterpret_cast<__m128i*>(iy), iyv);
-            const int aliveBits = _mm_movemask_ps(alive);
-            for (int k = 0; k < 4; ++k) {
-                q[k] = (aliveBits >> k) & 1 ? int64_t(iy[k]) * w.b.width + ix[k] : fallback;
-                q32[k] = q[k] == w.here ? -1 : 0;
-            }
-            self = _mm_castsi128_ps(_mm_load_si128(reinterpret_cast<const __m128i*>(q32)));
-        }
-        __m128i s[4];
-        for (int k = 0; k < 4; ++k) s[k] = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&w.b.walk[q[k]]));
-        // Each 8 bytes: the depth, then offsetX in the low and offsetY in the high half of a word.
-        const __m128 lo = _mm_castsi128_ps(_mm_unpacklo_epi64(s[0], s[1]));
-        const __m128 hi = _mm_castsi128_ps(_mm_unpacklo_epi64(s[2], s[3]));
-        const __m128i offsets = _mm_castps_si128(_mm_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1)));
-        offsetX = _mm_cvtepi32_ps(_mm_srai_epi32(_mm_slli_epi32(offsets, 16), 16));
-        offsetY = _mm_cvtepi32_ps(_mm_srai_epi32(offsets, 16));
-        return _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0));
-    }
-
-    int raise(const float* sx, const float* sy, float* horizon) const {
-        const __m128 sxv = _mm_loadu_ps(sx), syv = _mm_loadu_ps(sy);
-        const __m128 width = _mm_set1_ps(float(w.b.width)), height = _mm_set1_ps(float(w.b.height));
-        const __m128 px = _mm_set1_ps(w.P.x), py = _mm_set1_ps(w.P.y), pz = _mm_set1_ps(w.P.z);
-        const __m128 radius2 = _mm_set1_ps(w.p.radius2), zero = _mm_setzero_ps();
-        Lanes l{_mm_loadu_ps(horizon), zero};
-        __m128 alive = _mm_castsi128_ps(_mm_set1_epi32(-1)), previousInside = zero;
-        __m128 prevX = zero, prevY = zero, prevZ = zero;
-        const int64_t fallback = w.here >= 0 ? w.here : 0; // any sample: dead lanes load it, masked
-        for (int i = 0; i < w.p.steps; ++i) {
-            const __m128 t = _mm_set1_ps(w.reach * w.fraction[size_t(i)]);
-            const __m128 fx = _mm_add_ps(_mm_set1_ps(w.cx), _mm_mul_ps(sxv, t));
-            const __m128 fy = _mm_add_ps(_mm_set1_ps(w.cy), _mm_mul_ps(syv, t));
-            alive =
-                _mm_and_ps(alive, _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(fx, zero), _mm_cmpge_ps(fy, zero)),
-                                             _mm_and_ps(_mm_cmplt_ps(fx, width), _mm_cmplt_ps(fy, height))));
-            if (!_mm_movemask_ps(alive)) break;
-            const __m128i ixv = _mm_cvttps_epi32(fx), iyv = _mm_cvttps_epi32(fy);
-            __m128 self, offsetX, offsetY;
-            const __m128 depth = load(ixv, iyv, alive, fallback, self, offsetX, offsetY);
-            const __m128 active = _mm_andnot_ps(self, alive);
-            const __m128 act = _mm_and_ps(active, _mm_cmpgt_ps(depth, zero)); // occluders
-            // The samples' points in view space (viewPoint), less P.
-            const __m128 tx =
-                _mm_add_ps(_mm_add_ps(_mm_set1_ps(w.p.txBase),
-                                      _mm_mul_ps(_mm_cvtepi32_ps(ixv), _mm_set1_ps(w.p.txStep))),
-                           _mm_mul_ps(offsetX, _mm_set1_ps(w.p.txQuant)));
-            const __m128 ty =
-                _mm_add_ps(_mm_add_ps(_mm_set1_ps(w.p.tyBase),
-                                      _mm_mul_ps(_mm_cvtepi32_ps(iyv), _mm_set1_ps(w.p.tyStep))),
-                           _mm_mul_ps(offsetY, _mm_set1_ps(w.p.tyQuant)));
-            const __m128 dx = _mm_sub_ps(_mm_mul_ps(tx, depth), px),
-                         dy = _mm_sub_ps(_mm_mul_ps(ty, depth), py), dz = _mm_sub_ps(depth, pz);
-            const __m128 d2 = dot3(dx, dy, dz, dx, dy, dz);
-            const __m128 inside = _mm_and_ps(act, _mm_cmplt_ps(d2, radius2));
-            raiseBy(_mm_and_ps(inside, _mm_cmpgt_ps(d2, zero)), dx, dy, dz, d2, l);
-            const __m128 crossing = _mm_andnot_ps(inside, _mm_and_ps(act, previousInside));
-            if (_mm_movemask_ps(crossing)) raiseAtCrossing(crossing, dx, dy, dz, prevX, prevY, prevZ, l);
-            prevX = select(inside, dx, prevX), prevY = select(inside, dy, prevY),
-            prevZ = select(inside, dz, prevZ);
-            // An active sample clears previousInside unless it is inside (an occluder within the radius).
-            previousInside = _mm_or_ps(_mm_andnot_ps(active, previousInside), inside);
-        }
-        _mm_storeu_ps(horizon, l.horizon);
-        return _mm_movemask_ps(l.raised);
-    }
-
-    // The scalar walk's crossing of the sphere between the previous sample (inside) and d (beyond).
-    void raiseAtCrossing(__m128 mask, __m128 dx, __m128 dy, __m128 dz, __m128 prevX, __m128 prevY,
-                         __m128 prevZ, Lanes& l) const {
-        const __m128 radius2 = _mm_set1_ps(w.p.radius2), zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
-        const __m128 ex = _mm_sub_ps(dx, prevX), ey = _mm_sub_ps(dy, prevY), ez = _mm_sub_ps(dz, prevZ);
-        const __m128 a = dot3(ex, ey, ez, ex, ey, ez);
-        mask = _mm_and_ps(mask, _mm_cmplt_ps(a, radius2));
-        if (!_mm_movemask_ps(mask)) return;
-        const __m128 bh = dot3(prevX, prevY, prevZ, ex, ey, ez);
-        const __m128 c = _mm_sub_ps(dot3(prevX, prevY, prevZ, prevX, prevY, prevZ), radius2);
-        // std::max(0, v) is v > 0 ? v : 0 (NaN: 0), as _mm_max_ps(v, 0).
-        const __m128 root = _mm_sqrt_ps(_mm_max_ps(_mm_sub_ps(_mm_mul_ps(bh, bh), _mm_mul_ps(a, c)), zero));
-        __m128 u = _mm_div_ps(_mm_add_ps(_mm_xor_ps(bh, _mm_set1_ps(-0.0f)), root), a);
-        // std::clamp(u, 0, 1): u < 0 ? 0 : (1 < u ? 1 : u).
-        u = select(_mm_cmplt_ps(u, zero), zero, select(_mm_cmplt_ps(one, u), one, u));
-        const __m128 cx = _mm_add_ps(prevX, _mm_mul_ps(ex, u)), cy = _mm_add_ps(prevY, _mm_mul_ps(ey, u)),
-                     cz = _mm_add_ps(prevZ, _mm_mul_ps(ez, u));
-        raiseBy(mask, cx, cy, cz, dot3(cx, cy, cz, cx, cy, cz), l);
-    }
-};
-#endif
-
-#if defined(__AVX2__)
-// Two points' HorizonWalk4 in one AVX register: lanes 0-3 are point a's four sides, 4-7 point b's,
-// with HorizonWalk4's arithmetic lane for lane (so the scalar walk's bits). Half the instructions per
-// step and point: the search's steps are most of its cost once its branches are masks.
+#if VOXFX_SSAO_AVX2
+// The four sides of two slices of two points at once, one per lane of an AVX register (lanes 0-3
+// point a's, 4-7 point b's; a lone point fills both halves), with `raise`'s arithmetic operation
+// for operation, so the horizons are bit for bit the scalar walk's: the samples' branches
+// (occluder or not, inside the radius or not, raised or not) become masks, which the scalar walk
+// mispredicts about once a side, and the steps cost half the instructions per point of four lanes.
+// Sample indices in 32 bits: the callers check that the buffer's fit.
 template <class Buffer> struct HorizonWalk8 {
     const HorizonWalk<Buffer>& a;
     const HorizonWalk<Buffer>& b;
@@ -536,7 +394,8 @@ template <class Buffer> struct HorizonWalk8 {
                      cz = _mm256_add_ps(prevZ, _mm256_mul_ps(ez, u));
         raiseBy(mask, cx, cy, cz, dot3(cx, cy, cz, cx, cy, cz), l);
     }
-    // The lanes' walk samples (HorizonWalk4::load, indices in 32 bits: the caller checks they fit).
+    // The walk samples of the lanes' pixels (ix, iy) (dead lanes, not in `alive`: their point's own or
+    // the first): their depths, and their offsets as floats; `self`: the lanes on their point's pixel.
     __m256 load(__m256i ix, __m256i iy, __m256 alive, __m256& self, __m256& offsetX, __m256& offsetY) const {
         const __m256i index =
             _mm256_add_epi32(_mm256_mullo_epi32(iy, _mm256_set1_epi32(int32_t(a.b.width))), ix);
@@ -619,14 +478,17 @@ template <class Buffer> struct HorizonWalk8 {
 #endif
 
 // The four sides of a pair of slices (lanes: screen directions sx, sy; horizons in and out; whether
-// each was raised), four at once or one at a time (`scalar`): the same result bit for bit.
+// each was raised), at once (HorizonWalk8, the point in both halves) or one at a time (`scalar`): the
+// same result bit for bit.
 template <class Buffer>
 void walkSides(const HorizonWalk<Buffer>& walk, bool scalar, const float* sx, const float* sy, float* horizon,
                bool* raised) {
-#if VOXFX_SSAO_SSE2
-    if (!scalar) {
-        const int bits = HorizonWalk4<Buffer>{walk}.raise(sx, sy, horizon);
-        for (int j = 0; j < 4; ++j) raised[j] = (bits >> j) & 1;
+#if VOXFX_SSAO_AVX2
+    if (!scalar && walk.b.width * walk.b.height <= INT32_MAX) {
+        float sx8[8], sy8[8], horizon8[8];
+        for (int j = 0; j < 8; ++j) sx8[j] = sx[j & 3], sy8[j] = sy[j & 3], horizon8[j] = horizon[j & 3];
+        const int bits = HorizonWalk8<Buffer>{walk, walk}.raise(sx8, sy8, horizon8);
+        for (int j = 0; j < 4; ++j) horizon[j] = horizon8[j], raised[j] = (bits >> j) & 1;
         return;
     }
 #else
@@ -789,7 +651,7 @@ template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int6
 // Two points' GTAO (each prepared as GtaoPoint, with slices to walk): where both have a pair of
 // slices to walk, in one AVX register (HorizonWalk8), else one at a time; each result as run() gives it.
 template <class Buffer> void runPair(GtaoPoint<Buffer>& g0, GtaoPoint<Buffer>& g1) {
-#if defined(__AVX2__)
+#if VOXFX_SSAO_AVX2
     for (int first = 0; first < g0.p.directions; first += 2) {
         const bool walk0 = g0.prepare(first), walk1 = g1.prepare(first);
         if (walk0 && walk1) {
@@ -820,7 +682,7 @@ template <class Buffer> void runPair(GtaoPoint<Buffer>& g0, GtaoPoint<Buffer>& g
 // with something to walk two at a time (runPair), in row order, so that a row broken by background
 // (the forest's leaves against the sky) still fills both halves of the register.
 template <class Buffer> void occlusionRow(const Buffer& b, const Params& p, int64_t y, float* out) {
-#if defined(__AVX2__)
+#if VOXFX_SSAO_AVX2
     const bool paired = !p.scalarWalk && b.width * b.height <= INT32_MAX;
 #else
     const bool paired = false;

@@ -70,9 +70,9 @@ struct ScreenSpaceOcclusionOptions {
     /// coarsely tessellated curved surface must not occlude itself where its flat facets rise above
     /// the plane of the interpolated normal. Surfaces meeting at a larger angle occlude fully.
     double bias = 0.1;
-    /// Walk the four sides of two slices at once in SIMD lanes (x86-64's SSE2; elsewhere always one at
-    /// a time). False: one side at a time, the scalar reference the tests compare it with; both give
-    /// the same output bit for bit.
+    /// Walk the four sides of two slices of two pixels at once in SIMD lanes (builds with AVX2, as
+    /// x86-64-v3; elsewhere always one side at a time). False: one side at a time, the scalar
+    /// reference the tests compare it with; both give the same output bit for bit.
     bool vectorWalk = true;
 };
 
@@ -84,10 +84,12 @@ struct ScreenSpaceOcclusionOptions {
 /// materials; see gatherSurfaces); the others only receive. `camera` is the G-buffer's perspective
 /// Frame (width x height columns). Deterministic: no random numbers (a fixed 4x4 pattern), the same
 /// output for every thread count. Cost at the defaults, 1280 x 720 (the tree demo, one core of the
-/// project's 2.1 GHz machine, bench/bench_ssao.cpp): 66 ms of CPU with fresh buffers, 43 ms with a
-/// kept ScreenSpaceOcclusionScratch (the field method: 73 ms to build, 323 ms of lookups);
-/// full resolution about 3x. Rows run in parallel. Throws voxfx::Error for a camera that is not
-/// perspective or not width x height, spans of other sizes, or options out of range.
+/// project's 2.1 GHz machine, bench/bench_ssao.cpp, with the scalar horizon search of before
+/// vectorWalk): 66 ms of CPU with fresh buffers, 43 ms with a kept ScreenSpaceOcclusionScratch (the
+/// field method: 73 ms to build, 323 ms of lookups); full resolution about 3x. The SIMD search took
+/// about a quarter off the occlusion's share of a renderer's frame (BENCHMARKS.md, #34). Rows run in
+/// parallel. Throws voxfx::Error for a camera that is not perspective or not width x height, spans of other
+/// sizes, or options out of range.
 std::vector<float> screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height,
                                         std::span<const Vec3f> position, std::span<const Vec3f> normal,
                                         std::span<const uint8_t> covered,
