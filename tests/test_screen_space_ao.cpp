@@ -472,6 +472,20 @@ TEST(ScreenSpaceOcclusionTest, TheRenderersUpsampleInTheShadingPassMatchesTheGBu
     EXPECT_LT(max, 1e-3);
 }
 
+// Two outputs of the method compared bit for bit: the values that differ, and those of `a` below 0.98
+// (the comparison needs occluded samples).
+struct BitCompare {
+    int64_t occluded = 0, differ = 0;
+};
+BitCompare compareBits(const std::vector<float>& a, const std::vector<float>& b) {
+    BitCompare c;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        c.occluded += a[i] < 0.98f;
+        c.differ += std::memcmp(&a[i], &b[i], sizeof(float)) != 0;
+    }
+    return c;
+}
+
 TEST(ScreenSpaceOcclusionTest, OutputIsTheSameForEveryThreadCount) {
     const Scene scene = demo::makeTreeScene();
     const View v = viewOf(scene, scene.cameras[0], 320, 180);
@@ -484,13 +498,9 @@ TEST(ScreenSpaceOcclusionTest, OutputIsTheSameForEveryThreadCount) {
             withThreads(1, [&] { one = occlusion(v, o, entry); });
             withThreads(2, [&] { two = occlusion(v, o, entry); });
             ASSERT_EQ(one.size(), two.size());
-            int64_t occluded = 0, differ = 0;
-            for (std::size_t i = 0; i < one.size(); ++i) {
-                occluded += one[i] < 0.98f;
-                differ += std::memcmp(&one[i], &two[i], sizeof(float)) != 0;
-            }
-            EXPECT_GT(occluded, 500) << "the test needs occluded samples";
-            EXPECT_EQ(differ, 0) << nameOf(entry) << (half ? " half" : " full");
+            const BitCompare c = compareBits(one, two);
+            EXPECT_GT(c.occluded, 500) << "the test needs occluded samples";
+            EXPECT_EQ(c.differ, 0) << nameOf(entry) << (half ? " half" : " full");
         }
     }
 }
@@ -519,14 +529,10 @@ TEST(ScreenSpaceOcclusionTest, TheVectorHorizonSearchGivesTheScalarOutputBitForB
                     o.vectorWalk = false;
                     const std::vector<float> scalar = occlusion(*view, o, entry);
                     ASSERT_EQ(vector.size(), scalar.size());
-                    int64_t occluded = 0, differ = 0;
-                    for (std::size_t i = 0; i < vector.size(); ++i) {
-                        occluded += scalar[i] < 0.98f;
-                        differ += std::memcmp(&vector[i], &scalar[i], sizeof(float)) != 0;
-                    }
-                    EXPECT_GT(occluded, 300) << "the test needs occluded samples";
-                    EXPECT_EQ(differ, 0) << n.directions << " x " << n.steps << " " << nameOf(entry)
-                                         << (half ? " half" : " full");
+                    const BitCompare bits = compareBits(scalar, vector);
+                    EXPECT_GT(bits.occluded, 300) << "the test needs occluded samples";
+                    EXPECT_EQ(bits.differ, 0) << n.directions << " x " << n.steps << " " << nameOf(entry)
+                                              << (half ? " half" : " full");
                 }
 }
 
