@@ -7,7 +7,8 @@
 //   ./build/bench_ssao --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 //
 // ScreenSpace*/D/S: D directions, S steps (the defaults 2/5, and cheaper and dearer settings);
-// *Reused: the buffers kept from call to call (ScreenSpaceOcclusionScratch). Times are process CPU
+// *Reused: the buffers kept from call to call (ScreenSpaceOcclusionScratch); */D/S/V: V 1 the horizon
+// search in SIMD lanes (the default), 0 one side at a time. Times are process CPU
 // time (all threads) next to wall time. Counters: samples/s (items processed), covered (samples
 // showing geometry).
 #include <string>
@@ -86,7 +87,8 @@ void screenSpace(benchmark::State& state, bool half) {
 }
 
 // The same with the buffers kept from call to call (ScreenSpaceOcclusionScratch and the output), as a
-// renderer that keeps them across frames would: no page faults, no zero fill.
+// renderer that keeps them across frames would: no page faults, no zero fill. Third argument: the
+// horizon search in SIMD lanes (1, the default) or one side at a time (0, the scalar reference).
 void screenSpaceReused(benchmark::State& state, bool half) {
     const Tree& t = tree();
     detail::ScreenSpaceOcclusionOptions o;
@@ -94,6 +96,7 @@ void screenSpaceReused(benchmark::State& state, bool half) {
     o.halfResolution = half;
     o.directions = int(state.range(0));
     o.steps = int(state.range(1));
+    o.vectorWalk = state.range(2) != 0;
     detail::ScreenSpaceOcclusionScratch scratch;
     std::vector<float> v(std::size_t(kWidth * kHeight));
     for (auto _ : state) {
@@ -153,12 +156,13 @@ BENCHMARK(BM_ScreenSpaceHalf)
     ->MeasureProcessCPUTime()
     ->UseRealTime();
 BENCHMARK(BM_ScreenSpaceHalfReused)
-    ->Args({2, 5})
+    ->Args({2, 5, 1})
+    ->Args({2, 5, 0})
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()
     ->UseRealTime();
 BENCHMARK(BM_ScreenSpaceFullReused)
-    ->Args({2, 5})
+    ->Args({2, 5, 1})
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()
     ->UseRealTime();

@@ -472,6 +472,20 @@ TEST(ScreenSpaceOcclusionTest, TheRenderersUpsampleInTheShadingPassMatchesTheGBu
     EXPECT_LT(max, 1e-3);
 }
 
+// Two outputs of the method compared bit for bit: the values that differ, and those of `a` below 0.98
+// (the comparison needs occluded samples).
+struct BitCompare {
+    int64_t occluded = 0, differ = 0;
+};
+BitCompare compareBits(const std::vector<float>& a, const std::vector<float>& b) {
+    BitCompare c;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        c.occluded += a[i] < 0.98f;
+        c.differ += std::memcmp(&a[i], &b[i], sizeof(float)) != 0;
+    }
+    return c;
+}
+
 TEST(ScreenSpaceOcclusionTest, OutputIsTheSameForEveryThreadCount) {
     const Scene scene = demo::makeTreeScene();
     const View v = viewOf(scene, scene.cameras[0], 320, 180);
@@ -484,15 +498,42 @@ TEST(ScreenSpaceOcclusionTest, OutputIsTheSameForEveryThreadCount) {
             withThreads(1, [&] { one = occlusion(v, o, entry); });
             withThreads(2, [&] { two = occlusion(v, o, entry); });
             ASSERT_EQ(one.size(), two.size());
-            int64_t occluded = 0, differ = 0;
-            for (std::size_t i = 0; i < one.size(); ++i) {
-                occluded += one[i] < 0.98f;
-                differ += std::memcmp(&one[i], &two[i], sizeof(float)) != 0;
-            }
-            EXPECT_GT(occluded, 500) << "the test needs occluded samples";
-            EXPECT_EQ(differ, 0) << nameOf(entry) << (half ? " half" : " full");
+            const BitCompare c = compareBits(one, two);
+            EXPECT_GT(c.occluded, 500) << "the test needs occluded samples";
+            EXPECT_EQ(c.differ, 0) << nameOf(entry) << (half ? " half" : " full");
         }
     }
+}
+
+TEST(ScreenSpaceOcclusionTest, TheVectorHorizonSearchGivesTheScalarOutputBitForBit) {
+    // The horizon search walks the four sides of two slices in SIMD lanes (vectorWalk, the default)
+    // with the scalar walk's arithmetic, operation for operation: the output must be the same bits,
+    // on every path of the walk (samples beyond the image, on the pixel itself, not occluding,
+    // within the radius, the crossing of the sphere after one within it; the slivers' GTAO at the
+    // upsample). Odd slice counts leave the last pair half used; 1 to 3 slices and 1 to 7 steps.
+    const Scene tree = demo::makeTreeScene();
+    const View v = viewOf(tree, tree.cameras[0], 320, 180);
+    const Corner c;
+    const View corner = viewOf(c.scene, c.camera, 160, 120);
+    const struct { int directions, steps; } counts[] = {{2, 5}, {1, 7}, {3, 3}, {2, 1}};
+    for (const View* view : {&v, &corner})
+        for (const auto& n : counts)
+            for (const bool half : {true, false})
+                for (const Entry entry : kEntries) {
+                    ScreenSpaceOcclusionOptions o;
+                    o.radius = view == &v ? 0.8 : 1.0;
+                    o.halfResolution = half;
+                    o.directions = n.directions;
+                    o.steps = n.steps;
+                    const std::vector<float> vector = occlusion(*view, o, entry);
+                    o.vectorWalk = false;
+                    const std::vector<float> scalar = occlusion(*view, o, entry);
+                    ASSERT_EQ(vector.size(), scalar.size());
+                    const BitCompare bits = compareBits(scalar, vector);
+                    EXPECT_GT(bits.occluded, 300) << "the test needs occluded samples";
+                    EXPECT_EQ(bits.differ, 0) << n.directions << " x " << n.steps << " " << nameOf(entry)
+                                              << (half ? " half" : " full");
+                }
 }
 
 TEST(ScreenSpaceOcclusionTest, AKeptScratchGivesTheSameOutputAsFreshBuffers) {

@@ -7,7 +7,9 @@
 //      keeps its samples; the surface behind it finds its own in the neighbouring blocks at the
 //      upsample);
 //   2. per working pixel, `directions` slices, each with two horizons found by `steps` samples per
-//      side, integrated in closed form;
+//      side, integrated in closed form; the sides walked in AVX2 lanes (two pixels' four sides at
+//      once) on an 8-byte view-space copy of the working buffer, bit for bit the scalar walk
+//      (ScreenSpaceOcclusionOptions::vectorWalk);
 //   3. links between neighbouring working pixels on one smooth surface, and a separable blur over
 //      5 x 5 linked pixels, weights 1 2 2 2 1 (every phase of the 4x4 pattern gets the same weight,
 //      so the pattern cancels on a smooth surface);
@@ -19,11 +21,19 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <optional>
 
 #include "render/render_cache.hpp"
 #include "render/shading.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/parallel.hpp"
+
+#if defined(__AVX2__)
+#include <immintrin.h>
+#define VOXFX_SSAO_AVX2 1
+#else
+#define VOXFX_SSAO_AVX2 0
+#endif
 
 namespace voxfx::detail {
 
@@ -38,6 +48,8 @@ constexpr int kMaxDirections = 16, kMaxSteps = 32;
 // power 2, 0.007 with these).
 constexpr float kReach = 1.2f;
 constexpr double kSpacingPower = 1.5;
+// A walk sample's offset from its pixel's central ray counts 1/8192ths of a pixel (up to 4 pixels).
+constexpr float kOffsetUnits = 8192;
 
 // The 4x4 Bayer matrix: neighbouring pixels get distant pattern indices, so any 2x2 or 4x1 group
 // spreads over the slice angles.
@@ -53,6 +65,7 @@ struct Packed {
     int64_t width = 0, height = 0;
     const Sample* sample = nullptr;
     const Vec3f* normals = nullptr;
+    const ScreenSpaceWalkSample* walk = nullptr; ///< the horizon search's copy (walkSamples)
     bool covered(int64_t i) const { return sample[i].flags & kCovered; }
     bool occludes(int64_t i) const { return sample[i].flags == (kCovered | kOccluder); }
     const Vec3f& position(int64_t i) const { return sample[i].position; }
@@ -167,6 +180,11 @@ struct Params {
     float pixelSize = 0;    ///< 1 / pixelsPerTan: a working pixel's footprint per unit of depth
     float radius = 0, radius2 = 0, sinBias2 = 0; ///< sinBias2: sin^2 of the bias angle
     int directions = 0, steps = 0;
+    bool scalarWalk =
+        false; ///< the horizon search one side at a time (ScreenSpaceOcclusionOptions::vectorWalk)
+    // The central ray of working pixel (x, y) is right tx + up ty + forward (per unit of depth), with
+    // tx = txBase + x txStep, ty = tyBase + y tyStep; a walk sample's offsets count txStep / 8192.
+    float txBase = 0, tyBase = 0, txStep = 0, tyStep = 0, txQuant = 0, tyQuant = 0;
     // Per pattern index: the slices' screen directions and the steps' distances as fractions of the
     // radius in pixels.
     std::array<std::array<float, kMaxDirections>, 16> dirX{}, dirY{};
@@ -186,6 +204,15 @@ Params makeParams(const Frame& camera, int scale, const ScreenSpaceOcclusionOpti
     p.sinBias2 = float(std::sin(o.bias) * std::sin(o.bias));
     p.directions = o.directions;
     p.steps = o.steps;
+    p.scalarWalk = !o.vectorWalk || !VOXFX_SSAO_AVX2;
+    const auto tangent = [&](double gx, double gy) {
+        const Vec3d w = camera.worldFromGrid({gx, gy, 1.0}) - camera.eye();
+        return std::array<double, 2>{dot(w, camera.right()), dot(w, camera.up())};
+    };
+    const auto t0 = tangent(0.5 * scale, 0.5 * scale), t1 = tangent(1.5 * scale, 1.5 * scale);
+    p.txBase = float(t0[0]), p.tyBase = float(t0[1]);
+    p.txStep = float(t1[0] - t0[0]), p.tyStep = float(t1[1] - t0[1]);
+    p.txQuant = p.txStep / kOffsetUnits, p.tyQuant = p.tyStep / kOffsetUnits;
     for (int k = 0; k < 16; ++k) {
         // Slice angles: 16 rotations by sixteenths of the spacing pi / directions; step offsets: a
         // second permutation of the pattern (5k + 3 mod 16), so angle and offset do not go together.
@@ -223,7 +250,8 @@ inline float fastAcos(float x) {
 
 // One side of a slice of GTAO at a working pixel: samples along the screen direction (sx, sy) up
 // to `reach` working pixels, spaced by `fraction`, raise the horizon from the pixel's point P (unit
-// normal N, unit direction to the eye V).
+// normal N, unit direction to the eye V). In view space (right, up, forward from the eye), where the
+// walk samples (Packed::walk) give their points.
 template <class Buffer> struct HorizonWalk {
     const Buffer& b;
     const Params& p;
@@ -232,6 +260,13 @@ template <class Buffer> struct HorizonWalk {
     float cx, cy; // its centre
     float reach;  // working pixels
     Vec3f P, N, V;
+
+    // Working pixel (x, y)'s point in view space from its walk sample w (which occludes).
+    Vec3f viewPoint(const ScreenSpaceWalkSample& w, int64_t x, int64_t y) const {
+        const float tx = (p.txBase + float(x) * p.txStep) + float(w.offsetX) * p.txQuant;
+        const float ty = (p.tyBase + float(y) * p.tyStep) + float(w.offsetY) * p.tyQuant;
+        return {tx * w.depth, ty * w.depth, w.depth};
+    }
 
     // A point d (from P) raises the horizon (the cosine of its angle from V) unless it lies at most
     // `bias` above the tangent plane (the surface itself). Compared through squares with their signs
@@ -257,13 +292,14 @@ template <class Buffer> struct HorizonWalk {
             const float fx = cx + sx * t, fy = cy + sy * t;
             // No data beyond the image (on it, truncation is the floor).
             if (!(fx >= 0 && fy >= 0 && fx < width && fy < height)) break;
-            const int64_t q = int64_t(fy) * b.width + int64_t(fx);
+            const int64_t x = int64_t(fx), y = int64_t(fy), q = y * b.width + x;
             if (q == here) continue;
-            if (!b.occludes(q)) {
+            const ScreenSpaceWalkSample& sample = b.walk[q];
+            if (!(sample.depth > 0)) { // not an occluder
                 previousInside = false;
                 continue;
             }
-            const Vec3f d = b.position(q) - P;
+            const Vec3f d = viewPoint(sample, x, y) - P;
             const float d2 = dot(d, d);
             if (d2 < p.radius2) {
                 if (d2 > 0) raiseBy(d, d2, horizon, raised);
@@ -292,73 +328,316 @@ template <class Buffer> struct HorizonWalk {
     }
 };
 
-// GTAO at working pixel (x, y): the visibility in [0, 1], 1 for background.
+#if VOXFX_SSAO_AVX2
+// The four sides of two slices of two points at once, one per lane of an AVX register (lanes 0-3
+// point a's, 4-7 point b's; a lone point fills both halves), with `raise`'s arithmetic operation
+// for operation, so the horizons are bit for bit the scalar walk's: the samples' branches
+// (occluder or not, inside the radius or not, raised or not) become masks, which the scalar walk
+// mispredicts about once a side, and the steps cost half the instructions per point of four lanes.
+// Sample indices in 32 bits: the callers check that the buffer's fit.
+template <class Buffer> struct HorizonWalk8 {
+    const HorizonWalk<Buffer>& a;
+    const HorizonWalk<Buffer>& b;
+
+    static __m256 pair(float lo, float hi) {
+        return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_set1_ps(lo)), _mm_set1_ps(hi), 1);
+    }
+    static __m256i pairInt(int32_t lo, int32_t hi) {
+        return _mm256_inserti128_si256(_mm256_castsi128_si256(_mm_set1_epi32(lo)), _mm_set1_epi32(hi), 1);
+    }
+    static __m256 select(__m256 mask, __m256 x, __m256 y) {
+        return _mm256_or_ps(_mm256_and_ps(mask, x), _mm256_andnot_ps(mask, y));
+    }
+    static __m256 dot3(__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
+        return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)),
+                             _mm256_mul_ps(az, bz));
+    }
+    static __m256 absolute(__m256 v) { return _mm256_andnot_ps(_mm256_set1_ps(-0.0f), v); }
+
+    struct Lanes {
+        __m256 horizon, raised;
+        __m256 nx, ny, nz, vx, vy, vz; // the points' N and V
+    };
+    void raiseBy(__m256 mask, __m256 dx, __m256 dy, __m256 dz, __m256 d2, Lanes& l) const {
+        const __m256 dn = dot3(dx, dy, dz, l.nx, l.ny, l.nz);
+        mask = _mm256_and_ps(
+            mask, _mm256_and_ps(_mm256_cmp_ps(dn, _mm256_setzero_ps(), _CMP_GT_OQ),
+                                _mm256_cmp_ps(_mm256_mul_ps(dn, dn),
+                                              _mm256_mul_ps(_mm256_set1_ps(a.p.sinBias2), d2), _CMP_GT_OQ)));
+        if (!_mm256_movemask_ps(mask)) return;
+        const __m256 dv = dot3(dx, dy, dz, l.vx, l.vy, l.vz);
+        const __m256 h = l.horizon;
+        const __m256 higher =
+            _mm256_and_ps(mask, _mm256_cmp_ps(_mm256_mul_ps(dv, absolute(dv)),
+                                              _mm256_mul_ps(_mm256_mul_ps(h, absolute(h)), d2), _CMP_GT_OQ));
+        l.horizon = select(higher, _mm256_div_ps(dv, _mm256_sqrt_ps(d2)), h);
+        l.raised = _mm256_or_ps(l.raised, higher);
+    }
+    void raiseAtCrossing(__m256 mask, __m256 dx, __m256 dy, __m256 dz, __m256 prevX, __m256 prevY,
+                         __m256 prevZ, Lanes& l) const {
+        const __m256 radius2 = _mm256_set1_ps(a.p.radius2), zero = _mm256_setzero_ps(),
+                     one = _mm256_set1_ps(1.0f);
+        const __m256 ex = _mm256_sub_ps(dx, prevX), ey = _mm256_sub_ps(dy, prevY),
+                     ez = _mm256_sub_ps(dz, prevZ);
+        const __m256 e2 = dot3(ex, ey, ez, ex, ey, ez);
+        mask = _mm256_and_ps(mask, _mm256_cmp_ps(e2, radius2, _CMP_LT_OQ));
+        if (!_mm256_movemask_ps(mask)) return;
+        const __m256 bh = dot3(prevX, prevY, prevZ, ex, ey, ez);
+        const __m256 c = _mm256_sub_ps(dot3(prevX, prevY, prevZ, prevX, prevY, prevZ), radius2);
+        const __m256 root =
+            _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(_mm256_mul_ps(bh, bh), _mm256_mul_ps(e2, c)), zero));
+        __m256 u = _mm256_div_ps(_mm256_add_ps(_mm256_xor_ps(bh, _mm256_set1_ps(-0.0f)), root), e2);
+        u = select(_mm256_cmp_ps(u, zero, _CMP_LT_OQ), zero,
+                   select(_mm256_cmp_ps(one, u, _CMP_LT_OQ), one, u));
+        const __m256 cx = _mm256_add_ps(prevX, _mm256_mul_ps(ex, u)),
+                     cy = _mm256_add_ps(prevY, _mm256_mul_ps(ey, u)),
+                     cz = _mm256_add_ps(prevZ, _mm256_mul_ps(ez, u));
+        raiseBy(mask, cx, cy, cz, dot3(cx, cy, cz, cx, cy, cz), l);
+    }
+    // The walk samples of the lanes' pixels (ix, iy) (dead lanes, not in `alive`: their point's own or
+    // the first): their depths, and their offsets as floats; `self`: the lanes on their point's pixel.
+    __m256 load(__m256i ix, __m256i iy, __m256 alive, __m256& self, __m256& offsetX, __m256& offsetY) const {
+        const __m256i index =
+            _mm256_add_epi32(_mm256_mullo_epi32(iy, _mm256_set1_epi32(int32_t(a.b.width))), ix);
+        const __m256i live = _mm256_castps_si256(alive);
+        const __m256i chosen =
+            _mm256_or_si256(_mm256_and_si256(live, index),
+                            _mm256_andnot_si256(live, pairInt(int32_t(a.here >= 0 ? a.here : 0),
+                                                              int32_t(b.here >= 0 ? b.here : 0))));
+        self = _mm256_castsi256_ps(_mm256_cmpeq_epi32(chosen, pairInt(int32_t(a.here), int32_t(b.here))));
+        alignas(32) int32_t q[8];
+        _mm256_store_si256(reinterpret_cast<__m256i*>(q), chosen);
+        const ScreenSpaceWalkSample* walk = a.b.walk;
+        __m128i s[8];
+        for (int k = 0; k < 8; ++k) s[k] = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&walk[q[k]]));
+        __m128 depth[2], offsets[2];
+        for (int h = 0; h < 2; ++h) {
+            const __m128 lo = _mm_castsi128_ps(_mm_unpacklo_epi64(s[4 * h], s[4 * h + 1]));
+            const __m128 hi = _mm_castsi128_ps(_mm_unpacklo_epi64(s[4 * h + 2], s[4 * h + 3]));
+            depth[h] = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0));
+            offsets[h] = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1));
+        }
+        const __m256i o =
+            _mm256_castps_si256(_mm256_insertf128_ps(_mm256_castps128_ps256(offsets[0]), offsets[1], 1));
+        offsetX = _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(o, 16), 16));
+        offsetY = _mm256_cvtepi32_ps(_mm256_srai_epi32(o, 16));
+        return _mm256_insertf128_ps(_mm256_castps128_ps256(depth[0]), depth[1], 1);
+    }
+
+    // sx, sy, horizon: 8 lanes each (a's four sides, then b's); the lanes raised as bits.
+    int raise(const float* sx, const float* sy, float* horizon) const {
+        const Params& p = a.p;
+        const __m256 sxv = _mm256_loadu_ps(sx), syv = _mm256_loadu_ps(sy);
+        const __m256 width = _mm256_set1_ps(float(a.b.width)), height = _mm256_set1_ps(float(a.b.height));
+        const __m256 px = pair(a.P.x, b.P.x), py = pair(a.P.y, b.P.y), pz = pair(a.P.z, b.P.z);
+        const __m256 cx = pair(a.cx, b.cx), cy = pair(a.cy, b.cy);
+        const __m256 radius2 = _mm256_set1_ps(p.radius2), zero = _mm256_setzero_ps();
+        Lanes l{_mm256_loadu_ps(horizon), zero,
+                pair(a.N.x, b.N.x),       pair(a.N.y, b.N.y),
+                pair(a.N.z, b.N.z),       pair(a.V.x, b.V.x),
+                pair(a.V.y, b.V.y),       pair(a.V.z, b.V.z)};
+        __m256 alive = _mm256_castsi256_ps(_mm256_set1_epi32(-1)), previousInside = zero;
+        __m256 prevX = zero, prevY = zero, prevZ = zero;
+        for (int i = 0; i < p.steps; ++i) {
+            const __m256 t = pair(a.reach * a.fraction[size_t(i)], b.reach * b.fraction[size_t(i)]);
+            const __m256 fx = _mm256_add_ps(cx, _mm256_mul_ps(sxv, t));
+            const __m256 fy = _mm256_add_ps(cy, _mm256_mul_ps(syv, t));
+            alive = _mm256_and_ps(alive, _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(fx, zero, _CMP_GE_OQ),
+                                                                     _mm256_cmp_ps(fy, zero, _CMP_GE_OQ)),
+                                                       _mm256_and_ps(_mm256_cmp_ps(fx, width, _CMP_LT_OQ),
+                                                                     _mm256_cmp_ps(fy, height, _CMP_LT_OQ))));
+            if (!_mm256_movemask_ps(alive)) break;
+            const __m256i ix = _mm256_cvttps_epi32(fx), iy = _mm256_cvttps_epi32(fy);
+            __m256 self, offsetX, offsetY;
+            const __m256 depth = load(ix, iy, alive, self, offsetX, offsetY);
+            const __m256 active = _mm256_andnot_ps(self, alive);
+            const __m256 act = _mm256_and_ps(active, _mm256_cmp_ps(depth, zero, _CMP_GT_OQ));
+            const __m256 tx =
+                _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(p.txBase),
+                                            _mm256_mul_ps(_mm256_cvtepi32_ps(ix), _mm256_set1_ps(p.txStep))),
+                              _mm256_mul_ps(offsetX, _mm256_set1_ps(p.txQuant)));
+            const __m256 ty =
+                _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(p.tyBase),
+                                            _mm256_mul_ps(_mm256_cvtepi32_ps(iy), _mm256_set1_ps(p.tyStep))),
+                              _mm256_mul_ps(offsetY, _mm256_set1_ps(p.tyQuant)));
+            const __m256 dx = _mm256_sub_ps(_mm256_mul_ps(tx, depth), px),
+                         dy = _mm256_sub_ps(_mm256_mul_ps(ty, depth), py), dz = _mm256_sub_ps(depth, pz);
+            const __m256 d2 = dot3(dx, dy, dz, dx, dy, dz);
+            const __m256 inside = _mm256_and_ps(act, _mm256_cmp_ps(d2, radius2, _CMP_LT_OQ));
+            raiseBy(_mm256_and_ps(inside, _mm256_cmp_ps(d2, zero, _CMP_GT_OQ)), dx, dy, dz, d2, l);
+            const __m256 crossing = _mm256_andnot_ps(inside, _mm256_and_ps(act, previousInside));
+            if (_mm256_movemask_ps(crossing)) raiseAtCrossing(crossing, dx, dy, dz, prevX, prevY, prevZ, l);
+            prevX = select(inside, dx, prevX), prevY = select(inside, dy, prevY),
+            prevZ = select(inside, dz, prevZ);
+            previousInside = _mm256_or_ps(_mm256_andnot_ps(active, previousInside), inside);
+        }
+        _mm256_storeu_ps(horizon, l.horizon);
+        return _mm256_movemask_ps(l.raised);
+    }
+};
+#endif
+
+// The four sides of a pair of slices (lanes: screen directions sx, sy; horizons in and out; whether
+// each was raised), at once (HorizonWalk8, the point in both halves) or one at a time (`scalar`): the
+// same result bit for bit.
+template <class Buffer>
+void walkSides(const HorizonWalk<Buffer>& walk, bool scalar, const float* sx, const float* sy, float* horizon,
+               bool* raised) {
+#if VOXFX_SSAO_AVX2
+    if (!scalar && walk.b.width * walk.b.height <= INT32_MAX) {
+        float sx8[8], sy8[8], horizon8[8];
+        for (int j = 0; j < 8; ++j) sx8[j] = sx[j & 3], sy8[j] = sy[j & 3], horizon8[j] = horizon[j & 3];
+        const int bits = HorizonWalk8<Buffer>{walk, walk}.raise(sx8, sy8, horizon8);
+        for (int j = 0; j < 4; ++j) horizon[j] = horizon8[j], raised[j] = (bits >> j) & 1;
+        return;
+    }
+#else
+    (void)scalar;
+#endif
+    for (int j = 0; j < 4; ++j) raised[j] = walk.raise(sx[j], sy[j], horizon[j]);
+}
+
+// One slice of GTAO at a point (unit normal N, unit direction to the eye V): the plane through the eye
+// ray and the screen direction (dx, dy), spanned by V and `axis` (the screen direction in world, made
+// orthogonal to V). Angles are measured from V, positive towards axis (the side of +(dx, dy) on
+// screen). `valid` false: the slice is degenerate (it adds nothing).
+struct Slice {
+    bool valid = false;
+    float weight = 0, cosG = 0, sinG = 0, gamma = 0;
+};
+
+// What the slices of one point share: N.V, and the camera's right and up against V and N.
+struct SliceBasis {
+    float nv, rv, uv, nr, nu;
+};
+SliceBasis sliceBasis(const Params& p, const Vec3f& N, const Vec3f& V) {
+    return {dot(N, V), dot(p.right, V), dot(p.up, V), dot(N, p.right), dot(N, p.up)};
+}
+
+// In the orthonormal basis V, axis, V x axis of the slice, N's projection onto the slice plane is
+// (N.V) V + (N.axis) axis, so its length (the slice's weight) and angle gamma need only N.V and
+// N.axis: with screen = right dx + up dy (a unit vector) and s = screen.V, axis = (screen - s V) / L,
+// L^2 = 1 - s^2, and N.axis = (N.screen - s N.V) / L. No cross product, no projected vector.
+Slice sliceOf(const SliceBasis& sb, float dx, float dy) {
+    Slice s;
+    const float sv = dx * sb.rv + dy * sb.uv;
+    const float axis2 = 1 - sv * sv;
+    if (!(axis2 > 1e-12f)) return s;
+    const float na = dx * sb.nr + dy * sb.nu - sb.nv * sv; // N.axis times L
+    const float weight2 = sb.nv * sb.nv + na * na / axis2;
+    s.weight = std::sqrt(weight2);
+    if (!(s.weight > 1e-6f)) return s;
+    s.cosG = sb.nv / s.weight, s.sinG = na / std::sqrt(axis2 * weight2);
+    if (!(s.cosG > 0)) { // a normal turned away in this slice: taken as grazing
+        s.cosG = 0;
+        s.sinG = s.sinG >= 0 ? 1.0f : -1.0f;
+    }
+    s.gamma = s.sinG >= 0 ? fastAcos(s.cosG) : -fastAcos(s.cosG);
+    s.valid = true;
+    return s;
+}
+
+// The slice's visible part between its horizons (cosines of their angles from V; `raised` false: the
+// tangent plane, gamma -+ pi/2), and with both at the tangent plane (open), through the same
+// arithmetic so that a slice nothing occludes gives visible == open exactly.
+void addSlice(const Slice& s, const float* horizon, const bool* raised, float& sum, float& sumOpen) {
+    const float cosG = s.cosG, sinG = s.sinG;
+    const float hMinus = s.gamma - 0.5f * kPi, hPlus = s.gamma + 0.5f * kPi;
+    const float openMinus = arc(hMinus, sinG, -cosG, cosG, sinG);
+    const float openPlus = arc(hPlus, -sinG, cosG, cosG, sinG);
+    float a = 0;
+    if (raised[0]) {
+        const float c = horizon[0];
+        a += arc(-fastAcos(c), c, -std::sqrt(std::max(0.0f, 1 - c * c)), cosG, sinG);
+    } else {
+        a += openMinus;
+    }
+    if (raised[1]) {
+        const float c = horizon[1];
+        a += arc(fastAcos(c), c, std::sqrt(std::max(0.0f, 1 - c * c)), cosG, sinG);
+    } else {
+        a += openPlus;
+    }
+    sum += s.weight * a;
+    sumOpen += s.weight * (openMinus + openPlus);
+}
+
 // GTAO at point P with unit normal N over buffer `b`, the point at (cx, cy) in b's pixels (`here`:
-// its own pixel, which the walk skips; -1: none), slices and offsets of pattern index k.
+// its own pixel, which the walk skips; -1: none), slices and offsets of pattern index k, in steps
+// (so that two points can walk in one SIMD register, HorizonWalk8): per pair of slices s0, s0 + 1,
+// `prepare` sets the four sides' lanes (slice s0's -axis and +axis sides, then slice s0 + 1's, or
+// s0's again where there is none), a walk raises their horizons, `add` integrates the slices.
+template <class Buffer> struct GtaoPoint {
+    const Params& p;
+    const std::array<float, kMaxDirections>& dirX;
+    const std::array<float, kMaxDirections>& dirY;
+    std::optional<HorizonWalk<Buffer>> walk; ///< empty: nothing occludes the point (1)
+    SliceBasis basis{};
+    float sum = 0, sumOpen = 0;
+    Slice slice[2];
+    int s0 = 0, s1 = 0;
+    float sx[4] = {}, sy[4] = {}, horizon[4] = {};
+    bool raised[4] = {};
+
+    GtaoPoint(const Buffer& b, const Params& params, const Vec3f& P, const Vec3f& N, float cx, float cy,
+              int64_t here, int k)
+        : p(params), dirX(params.dirX[size_t(k)]), dirY(params.dirY[size_t(k)]) {
+        const Vec3f toEye = p.eye - P;
+        const float eyeDistance = length(toEye);
+        const float depth = dot(P - p.eye, p.forward);
+        if (!(eyeDistance > 0) || !(depth > 0)) return;
+        const Vec3f V = toEye / eyeDistance;
+        // The radius in working pixels at this depth; under a pixel nothing but p itself is in reach.
+        const float radiusPixels = p.radius * p.pixelsPerTan / depth;
+        if (!(radiusPixels >= 1)) return;
+        basis = sliceBasis(p, N, V);
+        const Vec3f rel = P - p.eye;
+        walk.emplace(HorizonWalk<Buffer>{b,
+                                         p,
+                                         p.stepFraction[size_t(k)],
+                                         here,
+                                         cx,
+                                         cy,
+                                         kReach * radiusPixels,
+                                         {dot(rel, p.right), dot(rel, p.up), depth},
+                                         {basis.nr, basis.nu, dot(N, p.forward)},
+                                         {basis.rv, basis.uv, dot(V, p.forward)}});
+    }
+    // False: both slices are degenerate (nothing to walk or add).
+    bool prepare(int first) {
+        s0 = first, s1 = std::min(first + 1, p.directions - 1);
+        slice[0] = sliceOf(basis, dirX[size_t(s0)], dirY[size_t(s0)]);
+        slice[1] = sliceOf(basis, dirX[size_t(s1)], dirY[size_t(s1)]);
+        if (!slice[0].valid && !(s1 > s0 && slice[1].valid)) return false;
+        for (int j = 0; j < 2; ++j) {
+            const float dx = dirX[size_t(j ? s1 : s0)], dy = dirY[size_t(j ? s1 : s0)];
+            sx[2 * j] = -dx, sy[2 * j] = -dy, sx[2 * j + 1] = dx, sy[2 * j + 1] = dy;
+            horizon[2 * j] = slice[j].sinG, horizon[2 * j + 1] = -slice[j].sinG;
+            raised[2 * j] = raised[2 * j + 1] = false;
+        }
+        return true;
+    }
+    void add() {
+        if (slice[0].valid) addSlice(slice[0], horizon, raised, sum, sumOpen);
+        if (s1 > s0 && slice[1].valid) addSlice(slice[1], horizon + 2, raised + 2, sum, sumOpen);
+    }
+    float result() const { return sumOpen > 0 ? std::clamp(sum / sumOpen, 0.0f, 1.0f) : 1.0f; }
+    // The whole of it, one point.
+    float run() {
+        if (!walk) return 1;
+        for (int first = 0; first < p.directions; first += 2)
+            if (prepare(first)) {
+                walkSides(*walk, p.scalarWalk, sx, sy, horizon, raised);
+                add();
+            }
+        return result();
+    }
+};
+
 template <class Buffer>
 float occlusionOf(const Buffer& b, const Params& p, const Vec3f& P, const Vec3f& N, float cx, float cy,
                   int64_t here, int k) {
-    const Vec3f toEye = p.eye - P;
-    const float eyeDistance = length(toEye);
-    const float depth = dot(P - p.eye, p.forward);
-    if (!(eyeDistance > 0) || !(depth > 0)) return 1;
-    const Vec3f V = toEye / eyeDistance;
-    // The radius in working pixels at this depth; under a pixel nothing but p itself is in reach.
-    const float radiusPixels = p.radius * p.pixelsPerTan / depth;
-    if (!(radiusPixels >= 1)) return 1;
-    const auto& dirX = p.dirX[size_t(k)];
-    const auto& dirY = p.dirY[size_t(k)];
-    const std::array<float, kMaxSteps>& fraction = p.stepFraction[size_t(k)];
-    const HorizonWalk<Buffer> walk{b, p, fraction, here, cx, cy, kReach * radiusPixels, P, N, V};
-    float sum = 0, sumOpen = 0;
-    for (int s = 0; s < p.directions; ++s) {
-        const float dx = dirX[size_t(s)], dy = dirY[size_t(s)];
-        // The slice: the plane through the eye ray and the screen direction (dx, dy), spanned by V
-        // and `axis` (the screen direction in world, made orthogonal to V). Angles are measured
-        // from V, positive towards axis (the side of +(dx, dy) on screen).
-        const Vec3f screen = p.right * dx + p.up * dy;
-        Vec3f axis = screen - V * dot(screen, V);
-        const float axisLength = length(axis);
-        if (!(axisLength > 1e-6f)) continue;
-        axis = axis / axisLength;
-        const Vec3f sliceNormal = cross(axis, V);
-        const Vec3f projected = N - sliceNormal * dot(N, sliceNormal);
-        const float weight = length(projected);
-        if (!(weight > 1e-6f)) continue;
-        float cosG = dot(projected, V) / weight, sinG = dot(projected, axis) / weight;
-        if (!(cosG > 0)) { // a normal turned away in this slice: taken as grazing
-            cosG = 0;
-            sinG = sinG >= 0 ? 1.0f : -1.0f;
-        }
-        const float gamma = sinG >= 0 ? fastAcos(cosG) : -fastAcos(cosG);
-        // Horizons as cosines of their angle from V, starting at the tangent plane (gamma -+ pi/2).
-        float horizon[2] = {sinG, -sinG}; // [0]: the -axis side, [1]: the +axis side
-        bool raised[2] = {false, false};
-        for (int side = 0; side < 2; ++side)
-            raised[side] = walk.raise(side ? dx : -dx, side ? dy : -dy, horizon[side]);
-        // The open slice (horizons at the tangent plane) and this one, through the same arithmetic so
-        // that a slice nothing occludes gives a == open exactly.
-        const float hMinus = gamma - 0.5f * kPi, hPlus = gamma + 0.5f * kPi;
-        const float openMinus = arc(hMinus, sinG, -cosG, cosG, sinG);
-        const float openPlus = arc(hPlus, -sinG, cosG, cosG, sinG);
-        float a = 0;
-        if (raised[0]) {
-            const float c = horizon[0];
-            a += arc(-fastAcos(c), c, -std::sqrt(std::max(0.0f, 1 - c * c)), cosG, sinG);
-        } else {
-            a += openMinus;
-        }
-        if (raised[1]) {
-            const float c = horizon[1];
-            a += arc(fastAcos(c), c, std::sqrt(std::max(0.0f, 1 - c * c)), cosG, sinG);
-        } else {
-            a += openPlus;
-        }
-        sum += weight * a;
-        sumOpen += weight * (openMinus + openPlus);
-    }
-    if (!(sumOpen > 0)) return 1;
-    return std::clamp(sum / sumOpen, 0.0f, 1.0f);
+    return GtaoPoint<Buffer>(b, p, P, N, cx, cy, here, k).run();
 }
 
 // GTAO at working pixel (x, y): the visibility in [0, 1], 1 for background.
@@ -367,6 +646,69 @@ template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int6
     if (!b.covered(here)) return 1;
     return occlusionOf(b, p, b.position(here), b.normal(here), float(x) + 0.5f, float(y) + 0.5f, here,
                        kBayer[y & 3][x & 3]);
+}
+
+// Two points' GTAO (each prepared as GtaoPoint, with slices to walk): where both have a pair of
+// slices to walk, in one AVX register (HorizonWalk8), else one at a time; each result as run() gives it.
+template <class Buffer> void runPair(GtaoPoint<Buffer>& g0, GtaoPoint<Buffer>& g1) {
+#if VOXFX_SSAO_AVX2
+    for (int first = 0; first < g0.p.directions; first += 2) {
+        const bool walk0 = g0.prepare(first), walk1 = g1.prepare(first);
+        if (walk0 && walk1) {
+            float sx[8], sy[8], horizon[8];
+            for (int j = 0; j < 4; ++j) {
+                sx[j] = g0.sx[j], sy[j] = g0.sy[j], horizon[j] = g0.horizon[j];
+                sx[4 + j] = g1.sx[j], sy[4 + j] = g1.sy[j], horizon[4 + j] = g1.horizon[j];
+            }
+            const int bits = HorizonWalk8<Buffer>{*g0.walk, *g1.walk}.raise(sx, sy, horizon);
+            for (int j = 0; j < 4; ++j) {
+                g0.horizon[j] = horizon[j], g0.raised[j] = (bits >> j) & 1;
+                g1.horizon[j] = horizon[4 + j], g1.raised[j] = (bits >> (4 + j)) & 1;
+            }
+        } else if (walk0) {
+            walkSides(*g0.walk, false, g0.sx, g0.sy, g0.horizon, g0.raised);
+        } else if (walk1) {
+            walkSides(*g1.walk, false, g1.sx, g1.sy, g1.horizon, g1.raised);
+        }
+        if (walk0) g0.add();
+        if (walk1) g1.add();
+    }
+#else
+    g0.run(), g1.run();
+#endif
+}
+
+// GTAO along row y of working buffer b into out (b.width values), as occlusionAt gives it: the pixels
+// with something to walk two at a time (runPair), in row order, so that a row broken by background
+// (the forest's leaves against the sky) still fills both halves of the register.
+template <class Buffer> void occlusionRow(const Buffer& b, const Params& p, int64_t y, float* out) {
+#if VOXFX_SSAO_AVX2
+    const bool paired = !p.scalarWalk && b.width * b.height <= INT32_MAX;
+#else
+    const bool paired = false;
+#endif
+    std::optional<GtaoPoint<Buffer>> pending;
+    int64_t pendingX = 0;
+    for (int64_t x = 0; x < b.width; ++x) {
+        const int64_t i = y * b.width + x;
+        if (!b.covered(i) || !paired) {
+            out[x] = occlusionAt(b, p, x, y);
+            continue;
+        }
+        GtaoPoint<Buffer> g(b, p, b.position(i), b.normal(i), float(x) + 0.5f, float(y) + 0.5f, i,
+                            kBayer[y & 3][x & 3]);
+        if (!g.walk) {
+            out[x] = 1; // as run() gives it
+        } else if (!pending) {
+            pending.emplace(g);
+            pendingX = x;
+        } else {
+            runPair(*pending, g);
+            out[pendingX] = pending->result(), out[x] = g.result();
+            pending.reset();
+        }
+    }
+    if (pending) out[pendingX] = pending->run();
 }
 
 // How much neighbour (q, m) belongs to the surface of p with unit normal n, in [0, tolerance]
@@ -414,6 +756,36 @@ void linkNeighbours(const Packed& b, const Params& p, std::vector<uint8_t>& link
                 links[size_t(i)] = l;
             }
     });
+}
+
+// A walk sample's offset from its pixel's central ray (tangent units) in units of `quant`, clamped
+// to int16 (a point more than 4 pixels off its pixel's ray, which no buffer of this file holds).
+int16_t offsetUnits(float offset, float quant) {
+    const float u = std::round(offset / quant);
+    return int16_t(u > 32767 ? 32767.0f : u >= -32767 ? u : -32767.0f);
+}
+
+// The horizon search's copy of working buffer b (Packed::walk): per pixel that occludes, its depth and
+// offsets in view space.
+void walkSamples(Packed& b, const Params& p, std::vector<ScreenSpaceWalkSample>& out) {
+    out.resize(std::size_t(b.width * b.height));
+    parallelFor(0, b.height, 16, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < b.width; ++x) {
+                const int64_t i = y * b.width + x;
+                ScreenSpaceWalkSample w;
+                const Vec3f rel = b.position(i) - p.eye;
+                const float z = dot(rel, p.forward);
+                if (b.occludes(i) && z > 0) {
+                    w.depth = z;
+                    w.offsetX =
+                        offsetUnits(dot(rel, p.right) / z - (p.txBase + float(x) * p.txStep), p.txQuant);
+                    w.offsetY = offsetUnits(dot(rel, p.up) / z - (p.tyBase + float(y) * p.tyStep), p.tyQuant);
+                }
+                out[std::size_t(i)] = w;
+            }
+    });
+    b.walk = out.data();
 }
 
 // Step 3: the separable blur, weights 1 2 2 2 1 over the pixels linked to the centre through a chain
@@ -500,12 +872,11 @@ void fullResolution(const Source& full, const Params& fullParams, std::span<floa
                 normals[i] = full.normal(x, y);
             }
     });
-    const Packed packed{W, H, samples.data(), normals.data()};
+    Packed packed{W, H, samples.data(), normals.data()};
+    walkSamples(packed, fullParams, scratch.walk);
     scratch.raw.resize(count);
     parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = 0; x < W; ++x)
-                scratch.raw[size_t(y * W + x)] = occlusionAt(packed, fullParams, x, y);
+        for (int64_t y = y0; y < y1; ++y) occlusionRow(packed, fullParams, y, &scratch.raw[size_t(y * W)]);
     });
     scratch.links.assign(count, 0);
     linkNeighbours(packed, fullParams, scratch.links);
@@ -694,15 +1065,15 @@ void upsample(const Source& full, const Params& fullParams, const Upsample& up, 
 template <class Source>
 Upsample workingOcclusion(const Source& full, const Params& fullParams, const Frame& camera, int scale,
                           const ScreenSpaceOcclusionOptions& options, ScreenSpaceOcclusionScratch& scratch) {
-    const Packed low = downsample(full, fullParams, camera, scratch);
+    Packed low = downsample(full, fullParams, camera, scratch);
     const int64_t w = low.width, h = low.height;
     const auto lowCount = std::size_t(w * h);
     std::vector<uint8_t>& links = scratch.links;
     const Params p = makeParams(camera, 2 * scale, options);
+    walkSamples(low, p, scratch.walk);
     scratch.raw.resize(lowCount);
     parallelFor(0, h, 4, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y)
-            for (int64_t x = 0; x < w; ++x) scratch.raw[size_t(y * w + x)] = occlusionAt(low, p, x, y);
+        for (int64_t y = y0; y < y1; ++y) occlusionRow(low, p, y, &scratch.raw[size_t(y * w)]);
     });
     linkNeighbours(low, p, links);
     scratch.across.resize(lowCount);

@@ -70,6 +70,10 @@ struct ScreenSpaceOcclusionOptions {
     /// coarsely tessellated curved surface must not occlude itself where its flat facets rise above
     /// the plane of the interpolated normal. Surfaces meeting at a larger angle occlude fully.
     double bias = 0.1;
+    /// Walk the four sides of two slices of two pixels at once in SIMD lanes (builds with AVX2, as
+    /// x86-64-v3; elsewhere always one side at a time). False: one side at a time, the scalar
+    /// reference the tests compare it with; both give the same output bit for bit.
+    bool vectorWalk = true;
 };
 
 /// Visibility (1 = unoccluded, cosine-weighted, as AmbientOcclusion::visibility) per sample of a
@@ -80,10 +84,12 @@ struct ScreenSpaceOcclusionOptions {
 /// materials; see gatherSurfaces); the others only receive. `camera` is the G-buffer's perspective
 /// Frame (width x height columns). Deterministic: no random numbers (a fixed 4x4 pattern), the same
 /// output for every thread count. Cost at the defaults, 1280 x 720 (the tree demo, one core of the
-/// project's 2.1 GHz machine, bench/bench_ssao.cpp): 66 ms of CPU with fresh buffers, 43 ms with a
-/// kept ScreenSpaceOcclusionScratch (the field method: 73 ms to build, 323 ms of lookups);
-/// full resolution about 3x. Rows run in parallel. Throws voxfx::Error for a camera that is not
-/// perspective or not width x height, spans of other sizes, or options out of range.
+/// project's 2.1 GHz machine, bench/bench_ssao.cpp, with the scalar horizon search of before
+/// vectorWalk): 66 ms of CPU with fresh buffers, 43 ms with a kept ScreenSpaceOcclusionScratch (the
+/// field method: 73 ms to build, 323 ms of lookups); full resolution about 3x. The SIMD search took
+/// about a quarter off the occlusion's share of a renderer's frame (BENCHMARKS.md, #34). Rows run in
+/// parallel. Throws voxfx::Error for a camera that is not perspective or not width x height, spans of other
+/// sizes, or options out of range.
 std::vector<float> screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height,
                                         std::span<const Vec3f> position, std::span<const Vec3f> normal,
                                         std::span<const uint8_t> covered,
@@ -96,13 +102,21 @@ struct alignas(16) ScreenSpaceSample {
     Vec3f position;
     uint32_t flags = 0;
 };
-/// The buffers screenSpaceOcclusion works in (about 14 bytes per sample at half resolution, 40 at
+/// A sample as the horizon search reads it, in 8 bytes: its depth along the camera's forward axis
+/// (0: it does not occlude) and its offset from its pixel's central ray in 1/8192ths of a pixel, so
+/// that the rows within the search's reach stay in a core's cache (internal).
+struct alignas(8) ScreenSpaceWalkSample {
+    float depth = 0;
+    int16_t offsetX = 0, offsetY = 0;
+};
+/// The buffers screenSpaceOcclusion works in (about 16 bytes per sample at half resolution, 48 at
 /// full). A caller that computes occlusion frame after frame keeps one, so that the memory is
 /// reused: fresh buffers cost a page fault per 4 KiB touched (on this project's virtual machines
 /// about a third of the call; bench/bench_ssao.cpp measures both). Nothing carries over between
 /// calls but the allocations; not for concurrent calls.
 struct ScreenSpaceOcclusionScratch {
     std::vector<ScreenSpaceSample> samples;
+    std::vector<ScreenSpaceWalkSample> walk;
     std::vector<Vec3f> normals;
     std::vector<uint8_t> links;
     std::vector<float> raw, across, smooth;
