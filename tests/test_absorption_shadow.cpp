@@ -81,16 +81,8 @@ TEST(ShadowTest, AbsorptionOfColouredGridsIsExpOfEveryGridsWritesInFront) {
                 const int64_t x = std::clamp<int64_t>(int64_t(std::floor(g.x)), 0, W - 1),
                               y = std::clamp<int64_t>(int64_t(std::floor(g.y)), 0, H - 1);
                 const Vec3f want = columnByDefinition(columns, groups, y * W + x, g.z, skip);
-                Vec3f blend{0, 0, 0};
-                const int64_t x0 = int64_t(std::floor(g.x - 0.5)), y0 = int64_t(std::floor(g.y - 0.5));
-                const double wx = g.x - 0.5 - double(x0), wy = g.y - 0.5 - double(y0);
-                for (int dy = 0; dy < 2; ++dy)
-                    for (int dx = 0; dx < 2; ++dx) {
-                        const int64_t c = std::clamp<int64_t>(y0 + dy, 0, H - 1) * W +
-                                          std::clamp<int64_t>(x0 + dx, 0, W - 1);
-                        blend += columnByDefinition(columns, groups, c, g.z, skip) *
-                                 float((dx ? wx : 1 - wx) * (dy ? wy : 1 - wy));
-                    }
+                const Vec3f blend = test::bilinearByDefinition(
+                    W, H, g, [&](int64_t c) { return columnByDefinition(columns, groups, c, g.z, skip); });
                 const Vec3f got = map.transmittance(p, skip), gotBlend = map.transmittanceBilinear(p, skip);
                 for (int c = 0; c < 3; ++c) {
                     ASSERT_NEAR(got[c], want[c], 1e-5f) << what << " point " << i;
