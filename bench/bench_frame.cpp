@@ -42,6 +42,11 @@
 //                                one: mae over every channel of every pixel, mae_shadowed over the
 //                                pixels the exact shadows change (`shadowed`: their fraction), and
 //                                exact_mean (the exact image's mean) for scale.
+//   BM_ForestShadowLookups/<kind>/leavesPerTree:1000
+//                                the shadow lookups alone: shadowVisibility of the built shadow at
+//                                the points of the forest's frame that ask the sun, 2 threads;
+//                                cpu_ns (process CPU ns per lookup), ns (wall), lit (mean
+//                                visibility: unchanged by a change that keeps the answers).
 //   BM_DsmDeepVsExact/epsilon_x1000:<1000 eps>
 //                                the DSM demo (examples/dsm-demo/scene.json) at 1280x720: deep
 //                                shadows at compression tolerance eps against exact shadows, which
