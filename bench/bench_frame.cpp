@@ -42,6 +42,11 @@
 //                                one: mae over every channel of every pixel, mae_shadowed over the
 //                                pixels the exact shadows change (`shadowed`: their fraction), and
 //                                exact_mean (the exact image's mean) for scale.
+//   BM_ForestShadowLookups/<kind>/leavesPerTree:1000
+//                                the shadow lookups alone: shadowVisibility of the built shadow at
+//                                the points of the forest's frame that ask the sun, 2 threads;
+//                                cpu_ns (process CPU ns per lookup), ns (wall), lit (mean
+//                                visibility: unchanged by a change that keeps the answers).
 //   BM_DsmDeepVsExact/epsilon_x1000:<1000 eps>
 //                                the DSM demo (examples/dsm-demo/scene.json) at 1280x720: deep
 //                                shadows at compression tolerance eps against exact shadows, which
@@ -81,6 +86,7 @@
 #include "voxfx/parallel.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/scene_io.hpp"
+#include "voxfx/shadow.hpp"
 #include "voxfx/view.hpp"
 
 namespace {
@@ -568,6 +574,90 @@ VOXFX_FOREST_KIND(transmittance);
 VOXFX_FOREST_KIND(absorption);
 VOXFX_FOREST_KIND(map);
 VOXFX_FOREST_KIND(deep);
+
+// The shading points of the forest's first frame that ask the sun for its shadow, as the shading
+// pass asks (surfaces facing the light, and leaves lit from behind: the normal turned to the
+// light's side), made once per forest.
+struct LookupPoints {
+    std::vector<Vec3d> position, normal;
+};
+const LookupPoints& forestLookupPoints(const BenchScene& b) {
+    static std::map<const BenchScene*, LookupPoints> made;
+    auto it = made.find(&b);
+    if (it != made.end()) return it->second;
+    const SceneGeometry geometry = flattenScene(b.scene);
+    const GBuffer gbuffer = renderGBuffer(geometry, cameraFrame(b.camera, kWidth, kHeight));
+    const Vec3d toLight = -normalize(b.scene.lights.at(0).direction);
+    LookupPoints out;
+    for (int64_t y = 0; y < kHeight; ++y)
+        for (int64_t x = 0; x < kWidth; ++x) {
+            SurfacePoint s;
+            if (!surfaceAt(gbuffer, geometry, x, y, s)) continue;
+            const bool front = dot(s.geometricNormal, toLight) > 0;
+            if ((front ? 1.0 : -1.0) * dot(s.normal, toLight) <= 0) continue;
+            out.position.push_back(s.position);
+            out.normal.push_back(front ? s.geometricNormal : -s.geometricNormal);
+        }
+    return made.emplace(&b, std::move(out)).first->second;
+}
+
+// BM_ForestShadowLookups/<kind>: the shadow lookups alone (shadowVisibility of the built shadow at
+// each of the frame's points above, on kThreads threads), in process CPU ns per lookup (cpu_ns) and
+// wall ns per lookup (ns); `lit` is the mean visibility (the same for any change that keeps the
+// answers).
+void BM_ForestShadowLookups(benchmark::State& state, const std::string& kind) {
+    const BenchScene& b = forest(int(state.range(0)));
+    const LookupPoints& points = forestLookupPoints(b);
+    const RenderOptions o = frameOptions(b.scene, kind);
+    const LightShadow shadow = buildLightShadow(b.scene, b.scene.lights.at(0), o.shadow);
+    const auto n = int64_t(points.position.size());
+    std::vector<float> lit(static_cast<std::size_t>(n));
+    double cpu = 0, wall = 0;
+    for (auto _ : state) {
+        const double cpu0 = processCpuMs();
+        const auto t0 = std::chrono::steady_clock::now();
+        withThreads(kThreads, [&] {
+            parallelFor(0, n, 4096, [&](int64_t i0, int64_t i1) {
+                for (int64_t i = i0; i < i1; ++i) {
+                    const Vec3f v =
+                        shadowVisibility(shadow, points.position[size_t(i)], points.normal[size_t(i)]);
+                    lit[size_t(i)] = (v.x + v.y + v.z) / 3;
+                }
+            });
+        });
+        wall += msSince(t0);
+        cpu += processCpuMs() - cpu0;
+        benchmark::DoNotOptimize(lit.data());
+    }
+    const double lookups = double(n) * double(state.iterations());
+    state.counters["ns"] = wall * 1e6 / lookups;
+    state.counters["cpu_ns"] = cpu * 1e6 / lookups;
+    state.counters["lookups"] = double(n);
+    double sum = 0;
+    for (const float v : lit) sum += double(v);
+    state.counters["lit"] = sum / double(n);
+    state.SetLabel(kind + " lookups, forest of " + b.label);
+}
+BENCHMARK_CAPTURE(BM_ForestShadowLookups, transmittance, std::string("transmittance"))
+    ->Arg(1000)
+    ->ArgName("leavesPerTree")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_ForestShadowLookups, absorption, std::string("absorption"))
+    ->Arg(1000)
+    ->ArgName("leavesPerTree")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_ForestShadowLookups, map, std::string("map"))
+    ->Arg(1000)
+    ->ArgName("leavesPerTree")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_ForestShadowLookups, exact, std::string("exact"))
+    ->Arg(1000)
+    ->ArgName("leavesPerTree")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_DsmDeepVsExact(benchmark::State& state) {
     const BenchScene& b = benchScene("dsm-demo");

@@ -226,5 +226,35 @@ TEST(ShadowTest, ShadowMapLookupIsItsFilterByDefinitionOnGroundTrunksAndLeaves) 
     EXPECT_GT(partial, 2000);
 }
 
+TEST(ShadowTest, ShadowMapLookupUnderAWideCasterIsItsFilterByDefinition) {
+    // A roof over the ground, wider than many blocks of texels: ground points under it lie behind
+    // every tap around them (the lookup may answer "every tap dark" from the greatest depth of a
+    // block), points near its edges see both. The lookup must equal the filter counted tap by tap.
+    const Scene s = leafScene(10, 1, 7, 1.0f);
+    Mesh casters = s.meshes[0].mesh; // the ground
+    const Mesh roof = test::makeBox({-1.5, 1.0, -1.2}, {1.3, 1.1, 1.4});
+    const auto base = uint32_t(casters.positions.size());
+    casters.positions.insert(casters.positions.end(), roof.positions.begin(), roof.positions.end());
+    for (const uint32_t i : roof.indices) casters.indices.push_back(base + i);
+    const LightView view = makeLightViews(sun({0.55, -1, 0.35}), computeBounds(casters.view()), 300, 1)[0];
+    const ShadowMap map = ShadowMap::build(casters.view(), view);
+    const double texel = view.columnWorldSize({0, 0, 0});
+    std::mt19937_64 rng(9);
+    std::uniform_real_distribution<double> u(-3.2, 3.2);
+    int64_t dark = 0, other = 0;
+    for (int i = 0; i < 20000; ++i) {
+        const Vec3d p{u(rng), texel * (i % 5) * 0.5, u(rng)};
+        for (const int r : {0, 1, 2})
+            for (const double bias : {0.0, 1.0, 2.5}) {
+                const float got = map.visibility(p, r, bias * texel),
+                            want = pcfByDefinition(map, p, r, bias * texel);
+                ASSERT_EQ(got, want) << p.x << ", " << p.y << ", " << p.z << " r " << r << " bias " << bias;
+                (want == 0 ? dark : other) += 1;
+            }
+    }
+    EXPECT_GT(dark, 15000); // the roof's shadow: about a sixth of the ground
+    EXPECT_GT(other, 30000);
+}
+
 } // namespace
 } // namespace voxfx

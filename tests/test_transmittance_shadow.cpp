@@ -153,16 +153,8 @@ TEST(ShadowTest, TransmittanceIsEachChannelsFactorToThePowerOfItsCellsInFront) {
                           y = std::clamp<int64_t>(int64_t(std::floor(g.y)), 0, H - 1);
             const Vec3f want = columnByDefinition(map, factors, runs, y * W + x, g.z, skip);
             const Vec3f got = map.transmittance(p, skip);
-            Vec3f blend{0, 0, 0};
-            const int64_t x0 = int64_t(std::floor(g.x - 0.5)), y0 = int64_t(std::floor(g.y - 0.5));
-            const double wx = g.x - 0.5 - double(x0), wy = g.y - 0.5 - double(y0);
-            for (int dy = 0; dy < 2; ++dy)
-                for (int dx = 0; dx < 2; ++dx) {
-                    const int64_t c =
-                        std::clamp<int64_t>(y0 + dy, 0, H - 1) * W + std::clamp<int64_t>(x0 + dx, 0, W - 1);
-                    blend += columnByDefinition(map, factors, runs, c, g.z, skip) *
-                             float((dx ? wx : 1 - wx) * (dy ? wy : 1 - wy));
-                }
+            const Vec3f blend = test::bilinearByDefinition(
+                W, H, g, [&](int64_t c) { return columnByDefinition(map, factors, runs, c, g.z, skip); });
             const Vec3f gotBlend = map.transmittanceBilinear(p, skip);
             for (int c = 0; c < 3; ++c) {
                 ASSERT_NEAR(got[c], want[c], 1e-6f) << toString(mode) << " point " << i;

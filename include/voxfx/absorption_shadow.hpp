@@ -97,9 +97,14 @@ private:
     /// One bit per column: set where some grid holds a write (a lookup of an empty column needs
     /// neither its depth nor its entries; a few kilobytes where the entries' offsets take hundreds).
     std::vector<uint64_t> occupied_;
-    /// One grid without glass (every grey scene): exp(-optical depth) up to each entry, as the
-    /// lookup computes it, so that a lookup needs no exp.
+    /// Grids without glass on one frame (every grey scene, and coloured foliage: a grid per
+    /// colour): per column the union of their entries' slices (entryOffsets_, entrySlice_), each
+    /// with exp(-optical depth) of every grid's entries up to it, as columnDepth sums them, so
+    /// that a lookup scans one run of entries and needs no exp.
+    std::vector<int64_t> entryOffsets_;
+    std::vector<uint32_t> entrySlice_;
     std::vector<Vec3f> entryLight_;
+    void buildEntryLight();
 };
 
 /// RGB optical depth of one crossing of `m`: -ln(shadowCrossingTransmittance) per channel, or

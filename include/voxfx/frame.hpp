@@ -35,6 +35,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <type_traits>
 #include <vector>
 
@@ -178,18 +179,18 @@ public:
     /// Orthographic: the world box the grid tiles, and the world size of one cell per world axis.
     /// Oriented: the local box, and the cell size along (right, up, forward).
     const Box3d& box() const { return box_; }
-    Vec3d cellSize() const;
+    Vec3d cellSize() const { return cell_; }
 
     /// Grid coordinates of a world point (see the file comment). For perspective frames the
     /// point must lie in front of the eye (view depth > 0).
-    Vec3d gridFromWorld(const Vec3d& p) const;
+    Vec3d gridFromWorld(const Vec3d& p) const { return projection_.gridFromWorld(p); }
     /// World point of grid coordinates (gx, gy, depth).
     Vec3d worldFromGrid(const Vec3d& g) const;
     /// World-space centre of cell (x, y, s) under the frame's slicing.
     Vec3d cellCenter(int64_t x, int64_t y, int64_t s) const;
 
     /// Perspective: view depth of a world point (distance along the view direction).
-    double viewDepth(const Vec3d& p) const;
+    double viewDepth(const Vec3d& p) const { return dot(p - eye_, forward_); }
     const Vec3d& eye() const { return eye_; }
     /// Orthonormal camera basis (right, up, forward); orthographic: the column x, y and slice axes.
     const Vec3d& right() const { return right_; }
@@ -236,11 +237,18 @@ private:
     static Frame withCamera(bool perspective, Axis axis, int64_t w, int64_t h, int64_t d, const Vec3d& eye,
                             const Vec3d& right, const Vec3d& up, const Vec3d& forward, double nearDepth,
                             double farDepth);
+    /// Sets the box and the cell size cellSize() returns (kept, not recomputed: light lookups ask
+    /// for it per shaded sample).
+    void setBox(const Box3d& box);
 
     bool perspective_ = false;
     Axis axis_ = Axis::Z;
     int64_t w_ = 0, h_ = 0, d_ = 0;
     Box3d box_;
+    // box_'s extent per cell (see cellSize()); a frame without a box (perspective) keeps the
+    // default box's, -inf.
+    Vec3d cell_{-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                -std::numeric_limits<double>::infinity()};
     Vec3d eye_, right_{1, 0, 0}, up_{0, 1, 0}, forward_{0, 0, 1};
     double tanHalfY_ = 0, tanHalfX_ = 0;
     double near_ = 0, far_ = 0;
@@ -248,5 +256,24 @@ private:
     std::vector<DepthToSlice> local_;
     Projection projection_;
 };
+
+// Inline: light lookups take a receiver plane from it per shaded sample.
+inline Vec3d Frame::worldFromGrid(const Vec3d& g) const {
+    if (projection_.oriented)
+        return projection_.origin + right_ * (g.x * cell_.x) + up_ * (g.y * cell_.y) +
+               forward_ * (g.z * cell_.z);
+    if (!perspective_) {
+        const int cx = columnXAxis(axis_), cy = columnYAxis(axis_), cs = sliceAxis(axis_);
+        Vec3d p;
+        p[cx] = box_.lo[cx] + g.x * cell_[cx];
+        p[cy] = box_.lo[cy] + g.y * cell_[cy];
+        p[cs] = box_.lo[cs] + g.z * cell_[cs];
+        return p;
+    }
+    const double z = g.z;
+    const double px = (g.x / (0.5 * double(w_)) - 1.0) * z * tanHalfX_;
+    const double py = (g.y / (0.5 * double(h_)) - 1.0) * z * tanHalfY_;
+    return eye_ + right_ * px + up_ * py + forward_ * z;
+}
 
 } // namespace voxfx

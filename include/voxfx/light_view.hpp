@@ -11,6 +11,7 @@
 // Thread-safety: LightView is a value; makeLightViews and viewIndexFor are pure.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -28,12 +29,30 @@ struct LightView {
     /// lie in front of the eye (check covers first).
     Vec3d gridFromWorld(const Vec3d& world) const { return frame.gridFromWorld(world); }
     /// True when p lies in front of the light (perspective) and projects into the columns.
-    bool covers(const Vec3d& world) const;
+    bool covers(const Vec3d& world) const {
+        Vec3d g;
+        return locate(world, g);
+    }
+    /// covers(world), with p's grid coordinates in `grid` where true (one projection for both; the
+    /// lookups of the light grids and shadow maps).
+    bool locate(const Vec3d& world, Vec3d& grid) const {
+        if (frame.isPerspective() && !(frame.viewDepth(world) > 0)) return false;
+        grid = frame.gridFromWorld(world);
+        // A relative tolerance of 1e-9 columns: cube faces meet exactly at their borders, and a point
+        // on a face diagonal must not fall between two faces by a rounding error.
+        const double ex = 1e-9 * double(frame.width()), ey = 1e-9 * double(frame.height());
+        return grid.x >= -ex && grid.x <= double(frame.width()) + ex && grid.y >= -ey &&
+               grid.y <= double(frame.height()) + ey;
+    }
     /// World size of one column at p (the texel footprint: constant for orthographic views, growing
     /// with the view depth for perspective ones).
-    double columnWorldSize(const Vec3d& world) const;
+    double columnWorldSize(const Vec3d& world) const {
+        if (!frame.isPerspective()) return frame.cellSize().x;
+        const double depth = std::max(frame.viewDepth(world), frame.nearDepth());
+        return depth * 2.0 * frame.tanHalfFovY() / double(frame.height());
+    }
     /// World length of one frame depth unit (orthographic: a slice; perspective: 1).
-    double worldPerDepthUnit() const;
+    double worldPerDepthUnit() const { return frame.isPerspective() ? 1.0 : frame.cellSize().z; }
 };
 
 /// The views that cover `casterBounds` for `light`, with columns along the longer side and d slices
@@ -41,6 +60,10 @@ struct LightView {
 std::vector<LightView> makeLightViews(const Light& light, const Box3d& casterBounds, int64_t columns,
                                       int64_t d);
 /// Index of the view that covers p (the cube face for point lights), or -1.
-int viewIndexFor(const std::vector<LightView>& views, const Vec3d& world);
+int viewIndexForFaces(const std::vector<LightView>& views, const Vec3d& world);
+inline int viewIndexFor(const std::vector<LightView>& views, const Vec3d& world) {
+    if (views.size() == 1) return views[0].covers(world) ? 0 : -1; // inline: once per shaded sample
+    return viewIndexForFaces(views, world);
+}
 
 } // namespace voxfx

@@ -50,10 +50,12 @@ private:
     // arithmetic. A lookup whose taps all lie there and whose point is not behind either bound at
     // the lowest tap is lit by every tap (open ground beside the casters, most of a forest floor,
     // leaves above a trunk's block), answered without reading the taps; the answer is the same.
+    // Also the greatest depth there (+inf where a texel holds no caster): a point behind it is
+    // dark at every tap (the ground under a trunk or branch whose block it fills).
     static constexpr int64_t kTile = 16, kTileBorder = 1;
     struct DepthPlane {
         float a, b, c;
-        float least;
+        float least, most;
         double at(int64_t dx, int64_t dy) const {
             return double(a) + double(b) * double(dx) + double(c) * double(dy);
         }

@@ -46,7 +46,7 @@ Frame Frame::orthographic(const Box3d& box, Axis axis, int64_t w, int64_t h, int
     u[cy] = 1;
     fw[cs] = 1;
     Frame f = withCamera(false, axis, w, h, d, box.lo, r, u, fw, 0, double(d));
-    f.box_ = box;
+    f.setBox(box);
     Projection& pr = f.projection_;
     pr.axisX = cx;
     pr.axisY = cy;
@@ -78,7 +78,6 @@ Frame Frame::orthographic(const Box3d& localBox, const Vec3d& right, const Vec3d
         fail("orthographic frame needs a box with positive extent along every axis");
     const Vec3d origin = right * localBox.lo.x + up * localBox.lo.y + forward * localBox.lo.z;
     Frame f = withCamera(false, Axis::Z, w, h, d, origin, right, up, forward, 0, double(d));
-    f.box_ = localBox;
     Projection& pr = f.projection_;
     pr.oriented = true;
     pr.axisX = 0;
@@ -86,6 +85,7 @@ Frame Frame::orthographic(const Box3d& localBox, const Vec3d& right, const Vec3d
     pr.axisS = 2;
     pr.origin = origin;
     pr.scale = {double(w) / ext.x, double(h) / ext.y, double(d) / ext.z};
+    f.setBox(localBox);
     return f;
 }
 
@@ -110,39 +110,18 @@ Frame Frame::perspective(const Vec3d& eye, const Vec3d& target, const Vec3d& up,
     return f;
 }
 
-Vec3d Frame::cellSize() const {
+void Frame::setBox(const Box3d& box) {
+    box_ = box;
     const Vec3d ext = box_.extent();
-    if (projection_.oriented) return {ext.x / double(w_), ext.y / double(h_), ext.z / double(d_)};
+    if (projection_.oriented) {
+        cell_ = {ext.x / double(w_), ext.y / double(h_), ext.z / double(d_)};
+        return;
+    }
     Vec3d n;
     n[columnXAxis(axis_)] = double(w_);
     n[columnYAxis(axis_)] = double(h_);
     n[sliceAxis(axis_)] = double(d_);
-    return {ext.x / n.x, ext.y / n.y, ext.z / n.z};
-}
-
-double Frame::viewDepth(const Vec3d& p) const { return dot(p - eye_, forward_); }
-
-Vec3d Frame::gridFromWorld(const Vec3d& p) const { return projection_.gridFromWorld(p); }
-
-Vec3d Frame::worldFromGrid(const Vec3d& g) const {
-    if (projection_.oriented) {
-        const Vec3d ext = box_.extent();
-        return projection_.origin + right_ * (g.x * (ext.x / double(w_))) +
-               up_ * (g.y * (ext.y / double(h_))) + forward_ * (g.z * (ext.z / double(d_)));
-    }
-    if (!perspective_) {
-        const int cx = columnXAxis(axis_), cy = columnYAxis(axis_), cs = sliceAxis(axis_);
-        const Vec3d ext = box_.extent();
-        Vec3d p;
-        p[cx] = box_.lo[cx] + g.x * (ext[cx] / double(w_));
-        p[cy] = box_.lo[cy] + g.y * (ext[cy] / double(h_));
-        p[cs] = box_.lo[cs] + g.z * (ext[cs] / double(d_));
-        return p;
-    }
-    const double z = g.z;
-    const double px = (g.x / (0.5 * double(w_)) - 1.0) * z * tanHalfX_;
-    const double py = (g.y / (0.5 * double(h_)) - 1.0) * z * tanHalfY_;
-    return eye_ + right_ * px + up_ * py + forward_ * z;
+    cell_ = {ext.x / n.x, ext.y / n.y, ext.z / n.z};
 }
 
 Vec3d Frame::cellCenter(int64_t x, int64_t y, int64_t s) const {

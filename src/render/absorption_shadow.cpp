@@ -106,14 +106,57 @@ AbsorptionShadowMap AbsorptionShadowMap::build(const LightView& view, std::span<
         for (int64_t c = 0; c < columns; ++c)
             if (g.offsets[size_t(c)] != g.offsets[size_t(c) + 1])
                 map.occupied_[size_t(c >> 6)] |= uint64_t(1) << (c & 63);
-    if (map.grids_.size() == 1 && map.grids_[0].chord.empty()) {
-        // columnDepth of one grid without glass is depthPerUnit * prefix, exactly.
-        const Grid& g = map.grids_[0];
-        map.entryLight_.resize(g.prefix.size());
-        for (std::size_t i = 0; i < g.prefix.size(); ++i)
-            map.entryLight_[i] = absorptionExp(g.depthPerUnit * g.prefix[i]);
-    }
+    map.buildEntryLight();
     return map;
+}
+
+void AbsorptionShadowMap::buildEntryLight() {
+    if (grids_.empty()) return;
+    for (const Grid& g : grids_)
+        if (!g.chord.empty() || !g.frame.sameGrid(grids_[0].frame)) return;
+    const int64_t columns = grids_[0].frame.columnCount();
+    const std::size_t G = grids_.size();
+    // Column c's entries merged in slice order: at each distinct slice, every grid's entries up to
+    // it taken, then emit(slice, grid i's last entry taken + 1 or its column's start: i == b, none).
+    const auto merge = [&](int64_t c, std::vector<int64_t>& at, const auto& emit) {
+        for (std::size_t k = 0; k < G; ++k) at[k] = grids_[k].offsets[size_t(c)];
+        for (;;) {
+            uint32_t s = UINT32_MAX;
+            for (std::size_t k = 0; k < G; ++k)
+                if (at[k] < grids_[k].offsets[size_t(c) + 1]) s = std::min(s, grids_[k].slice[size_t(at[k])]);
+            if (s == UINT32_MAX) return;
+            for (std::size_t k = 0; k < G; ++k)
+                while (at[k] < grids_[k].offsets[size_t(c) + 1] && grids_[k].slice[size_t(at[k])] <= s)
+                    ++at[k];
+            emit(s);
+        }
+    };
+    entryOffsets_.assign(size_t(columns) + 1, 0);
+    parallelFor(0, columns, 4096, [&](int64_t c0, int64_t c1) {
+        std::vector<int64_t> at(G);
+        for (int64_t c = c0; c < c1; ++c) merge(c, at, [&](uint32_t) { ++entryOffsets_[size_t(c) + 1]; });
+    });
+    for (int64_t c = 0; c < columns; ++c) entryOffsets_[size_t(c) + 1] += entryOffsets_[size_t(c)];
+    entrySlice_.resize(size_t(entryOffsets_.back()));
+    entryLight_.resize(entrySlice_.size());
+    parallelFor(0, columns, 4096, [&](int64_t c0, int64_t c1) {
+        std::vector<int64_t> at(G);
+        for (int64_t c = c0; c < c1; ++c) {
+            auto i = size_t(entryOffsets_[size_t(c)]);
+            merge(c, at, [&](uint32_t s) {
+                // As columnDepth: the grids in order, each its prefix up to p (0 for none) times
+                // its depth per unit (the chord term is +0 without glass).
+                Vec3f depth{0, 0, 0};
+                for (std::size_t k = 0; k < G; ++k) {
+                    const Grid& g = grids_[k];
+                    const float sum = at[k] == g.offsets[size_t(c)] ? 0.0f : g.prefix[size_t(at[k] - 1)];
+                    depth += g.depthPerUnit * sum;
+                }
+                entrySlice_[i] = s;
+                entryLight_[i++] = absorptionExp(depth);
+            });
+        }
+    });
 }
 
 float AbsorptionShadowMap::columnSum(const Grid& g, int64_t column, double depth, int64_t skipCells,
@@ -153,11 +196,10 @@ Vec3f AbsorptionShadowMap::columnDepth(int64_t column, double depth, int64_t ski
 Vec3f AbsorptionShadowMap::columnLight(int64_t column, double depth, int64_t skipCells,
                                        double lengthPerDepth) const {
     if (entryLight_.empty()) return absorptionExp(columnDepth(column, depth, skipCells, lengthPerDepth));
-    const Grid& g = grids_[0];
-    const int64_t end = detail::slicesInFront(g.frame, column, depth, skipCells);
-    const int64_t b = g.offsets[size_t(column)], e = g.offsets[size_t(column) + 1];
+    const int64_t end = detail::slicesInFront(grids_[0].frame, column, depth, skipCells);
+    const int64_t b = entryOffsets_[size_t(column)], e = entryOffsets_[size_t(column) + 1];
     int64_t i = b;
-    while (i < e && int64_t(g.slice[size_t(i)]) < end) ++i;
+    while (i < e && int64_t(entrySlice_[size_t(i)]) < end) ++i;
     return i == b ? Vec3f{1, 1, 1} : entryLight_[size_t(i - 1)];
 }
 
@@ -173,11 +215,12 @@ Vec3f AbsorptionShadowMap::transmittance(const Vec3d& world, int64_t skipCells) 
 
 Vec3f AbsorptionShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells, const Vec3d& normal,
                                                  double sharpness) const {
-    if (grids_.empty() || !view_.covers(world)) return {1, 1, 1};
-    // Only glass needs the length per depth unit (one grid without glass: none).
+    Vec3d grid;
+    if (grids_.empty() || !view_.locate(world, grid)) return {1, 1, 1};
+    // Only glass needs the length per depth unit (grids without glass: none).
     const double lengthPerDepth = entryLight_.empty() ? detail::worldLengthPerDepth(view_, world) : 0.0;
-    return detail::bilinearColumnsLazy<Vec3f, float>(
-        view_, world, normal,
+    return detail::bilinearColumnsAt<Vec3f, float>(
+        view_, grid, normal,
         [&](int64_t column, const auto& depth) {
             // A column no grid writes: exp(-0), without the receiver plane's depth.
             if (((occupied_[size_t(column >> 6)] >> (column & 63)) & 1u) == 0) return Vec3f{1, 1, 1};

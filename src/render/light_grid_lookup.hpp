@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <optional>
+#include <memory>
 #include <vector>
 
 #include "voxfx/frame.hpp"
@@ -76,21 +76,55 @@ public:
         nx_ = dot(n, ax);
         ny_ = dot(n, ay);
         footprint_ = length(ax);
+        if (!perspective_) { // one depth step for every column: its slope and reach taken once
+            slope_ = dot(n_, along_);
+            reach_ = 2 * footprint_ / length(along_);
+        }
     }
     /// The depth where the plane crosses the centre line through grid point (x, y).
+#pragma GCC diagnostic push // LazyReceiverPlane's union: GCC cannot see that made_ means constructed
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
     double depthAt(double x, double y) const {
         const double u = x - qGrid_.x, v = y - qGrid_.y;
-        const Vec3d along = perspective_ ? along_ + alongX_ * u + alongY_ * v : along_;
-        const double slope = dot(n_, along);
+        double slope = slope_, reach = reach_;
+        if (perspective_) {
+            const Vec3d along = along_ + alongX_ * u + alongY_ * v;
+            slope = dot(n_, along);
+            reach = 2 * footprint_ / length(along);
+        }
         if (!(std::abs(slope) > 0)) return qGrid_.z;
-        const double reach = 2 * footprint_ / length(along);
         return qGrid_.z + std::clamp(-(nx_ * u + ny_ * v) / slope, -reach, reach);
     }
+#pragma GCC diagnostic pop
 
 private:
     Vec3d n_, qGrid_, along_, alongX_, alongY_;
-    double nx_ = 0, ny_ = 0, footprint_ = 0;
+    double nx_ = 0, ny_ = 0, footprint_ = 0, slope_ = 0, reach_ = 0;
     bool perspective_;
+};
+
+/// A ReceiverPlane made by the first column that asks for a depth, its storage untouched until then
+/// (a std::optional's was cleared on every lookup: a 176-byte `rep stos` per lookup).
+class LazyReceiverPlane {
+public:
+    LazyReceiverPlane(const LightView& view, const Vec3d& qGrid, const Vec3d& n)
+        : view_(view), qGrid_(qGrid), n_(n) {}
+    double depthAt(double x, double y) {
+        if (!made_) {
+            std::construct_at(&plane_, view_, qGrid_, n_);
+            made_ = true;
+        }
+        return plane_.depthAt(x, y);
+    }
+
+private:
+    const LightView& view_;
+    const Vec3d& qGrid_;
+    const Vec3d& n_;
+    bool made_ = false;
+    union {
+        ReceiverPlane plane_;
+    };
 };
 
 /// A blend v of values between lo and hi (one channel) stretched about their middle by slope k:
@@ -123,18 +157,17 @@ inline Vec3f blendMax(const Vec3f& a, const Vec3f& b) {
 /// callable returning that depth, computed only when called: a map whose column is empty answers
 /// without it (most lookups in sparse foliage). Weights are computed in double and applied as S
 /// (float for colours, double for scalars). The blend is sharpened by `sharpness` between the four
-/// values' lowest and highest (sharpenBlend; LightGridOptions::sharpness). Precondition:
-/// view.covers(world).
+/// values' lowest and highest (sharpenBlend; LightGridOptions::sharpness). `p` is the point's grid
+/// coordinates (LightView::locate: true).
 template <class T, class S, class Value>
-T bilinearColumnsLazy(const LightView& view, const Vec3d& world, const Vec3d& n, const Value& value,
-                      double sharpness = 1) {
-    const Vec3d p = view.frame.projection().gridFromWorld(world); // inline: once per lookup
+T bilinearColumnsAt(const LightView& view, const Vec3d& p, const Vec3d& n, const Value& value,
+                    double sharpness = 1) {
     const int64_t W = view.frame.width(), H = view.frame.height();
     const double fx = p.x - 0.5, fy = p.y - 0.5;
     const int64_t x0 = int64_t(std::floor(fx)), y0 = int64_t(std::floor(fy));
     const double wx = fx - double(x0), wy = fy - double(y0);
     const bool plane = n.x != 0 || n.y != 0 || n.z != 0;
-    std::optional<ReceiverPlane> receiver; // made by the first column that asks for its depth
+    LazyReceiverPlane receiver(view, p, n);
     T out{}, lo{}, hi{};
     for (int dy = 0; dy < 2; ++dy)
         for (int dx = 0; dx < 2; ++dx) {
@@ -143,8 +176,7 @@ T bilinearColumnsLazy(const LightView& view, const Vec3d& world, const Vec3d& n,
             const S w = S((dx ? wx : 1 - wx) * (dy ? wy : 1 - wy));
             const auto depth = [&] {
                 if (!plane) return p.z;
-                if (!receiver) receiver.emplace(view, p, n);
-                return receiver->depthAt(double(x) + 0.5, double(y) + 0.5);
+                return receiver.depthAt(double(x) + 0.5, double(y) + 0.5);
             };
             const T v = value(y * W + x, depth);
             out += v * w;
@@ -152,6 +184,13 @@ T bilinearColumnsLazy(const LightView& view, const Vec3d& world, const Vec3d& n,
             hi = dx || dy ? blendMax(hi, v) : v;
         }
     return sharpness == 1 ? out : sharpenBlend(out, lo, hi, sharpness);
+}
+
+/// bilinearColumnsAt at world point `world`. Precondition: view.covers(world).
+template <class T, class S, class Value>
+T bilinearColumnsLazy(const LightView& view, const Vec3d& world, const Vec3d& n, const Value& value,
+                      double sharpness = 1) {
+    return bilinearColumnsAt<T, S>(view, view.frame.gridFromWorld(world), n, value, sharpness);
 }
 
 /// bilinearColumnsLazy for a value(ColumnAt) that always reads the depth.

@@ -54,14 +54,15 @@ ShadowMap::DepthPlane ShadowMap::lowerPlane(int64_t x0, int64_t y0) const {
     const int64_t xa = std::max<int64_t>(x0 - kTileBorder, 0), xb = std::min(x0 + kTile + kTileBorder, W);
     const int64_t ya = std::max<int64_t>(y0 - kTileBorder, 0), yb = std::min(y0 + kTile + kTileBorder, H);
     constexpr float inf = std::numeric_limits<float>::infinity();
-    const DepthPlane never{-inf, 0, 0, -inf};
-    float least = inf;
+    const DepthPlane never{-inf, 0, 0, -inf, inf};
+    float least = inf, most = -inf;
     // Least squares over the texels holding a caster (a plane for flat ground; anything else, such
     // as a trunk standing on it, only lowers the bound below what a lookup can use).
     double n = 0, sx = 0, sy = 0, sz = 0, sxx = 0, syy = 0, sxy = 0, sxz = 0, syz = 0;
     for (int64_t y = ya; y < yb; ++y)
         for (int64_t x = xa; x < xb; ++x) {
             const float d = depth_[size_t(y * W + x)];
+            most = std::max(most, d);
             if (d == inf) continue;
             if (!std::isfinite(d)) return never;
             least = std::min(least, d);
@@ -69,14 +70,14 @@ ShadowMap::DepthPlane ShadowMap::lowerPlane(int64_t x0, int64_t y0) const {
             n += 1, sx += u, sy += v, sz += z, sxx += u * u, syy += v * v, sxy += u * v, sxz += u * z,
                 syz += v * z;
         }
-    if (n == 0) return {inf, 0, 0, inf};
+    if (n == 0) return {inf, 0, 0, inf, inf};
     // Centred sums; the slopes solve the 2 x 2 normal equations (0 where they are singular).
     const double cxx = sxx - sx * sx / n, cyy = syy - sy * sy / n, cxy = sxy - sx * sy / n;
     const double cxz = sxz - sx * sz / n, cyz = syz - sy * sz / n, det = cxx * cyy - cxy * cxy;
     const bool solvable = det > 1e-9 * (cxx * cyy + 1);
     DepthPlane p{0, solvable ? float((cxz * cyy - cyz * cxy) / det) : 0.0f,
-                 solvable ? float((cyz * cxx - cxz * cxy) / det) : 0.0f, least};
-    if (!std::isfinite(p.b) || !std::isfinite(p.c)) return {-inf, 0, 0, least};
+                 solvable ? float((cyz * cxx - cxz * cxy) / det) : 0.0f, least, most};
+    if (!std::isfinite(p.b) || !std::isfinite(p.c)) return {-inf, 0, 0, least, most};
     double a = std::numeric_limits<double>::infinity();
     for (int64_t y = ya; y < yb; ++y)
         for (int64_t x = xa; x < xb; ++x)
@@ -86,7 +87,8 @@ ShadowMap::DepthPlane ShadowMap::lowerPlane(int64_t x0, int64_t y0) const {
     p.a = float(a - 1e-6 * (std::abs(a) + 1));
     for (int64_t y = ya; y < yb; ++y)
         for (int64_t x = xa; x < xb; ++x)
-            if (!(p.at(x - x0, y - y0) <= double(depth_[size_t(y * W + x)]))) return {-inf, 0, 0, least};
+            if (!(p.at(x - x0, y - y0) <= double(depth_[size_t(y * W + x)])))
+                return {-inf, 0, 0, least, most};
     return p;
 }
 
@@ -101,8 +103,8 @@ void ShadowMap::buildLowerPlanes() {
 }
 
 float ShadowMap::visibility(const Vec3d& world, int pcfRadius, double bias) const {
-    if (depth_.empty() || !view_.covers(world)) return 1.0f;
-    const Vec3d g = view_.frame.projection().gridFromWorld(world); // inline: once per lookup
+    Vec3d g;
+    if (depth_.empty() || !view_.locate(world, g)) return 1.0f;
     const double limit = g.z - bias / view_.worldPerDepthUnit();
     const int64_t W = view_.frame.width(), H = view_.frame.height();
     // Clamp: a point on the frame's border (or a rounding error) must not walk off the map.
@@ -116,6 +118,7 @@ float ShadowMap::visibility(const Vec3d& world, int pcfRadius, double bias) cons
         const int64_t x = std::clamp<int64_t>(p.b >= 0 ? cx - pcfRadius : cx + pcfRadius, 0, W - 1);
         const int64_t y = std::clamp<int64_t>(p.c >= 0 ? cy - pcfRadius : cy + pcfRadius, 0, H - 1);
         if (double(p.least) >= limit || p.at(x - bx * kTile, y - by * kTile) >= limit) return 1.0f;
+        if (double(p.most) < limit) return 0.0f; // every tap in front of p
     }
     int lit = 0, taps = 0;
     for (int64_t dy = -pcfRadius; dy <= pcfRadius; ++dy)

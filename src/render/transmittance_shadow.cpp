@@ -258,10 +258,11 @@ Vec3f TransmittanceShadowMap::transmittance(const Vec3d& world, int64_t skipCell
 
 Vec3f TransmittanceShadowMap::transmittanceBilinear(const Vec3d& world, int64_t skipCells,
                                                     const Vec3d& normal, double sharpness) const {
-    if (channels_.empty() || !view_.covers(world)) return {1, 1, 1};
+    Vec3d grid;
+    if (channels_.empty() || !view_.locate(world, grid)) return {1, 1, 1};
     if (!eventOffsets_.empty())
-        return detail::bilinearColumnsLazy<Vec3f, float>(
-            view_, world, normal,
+        return detail::bilinearColumnsAt<Vec3f, float>(
+            view_, grid, normal,
             [&](int64_t column, const auto& depth) {
                 // An empty column: no need for the receiver plane's depth.
                 if (((eventColumns_[size_t(column >> 6)] >> (column & 63)) & 1u) == 0) return Vec3f{1, 1, 1};

@@ -46,24 +46,6 @@ LightView perspectiveView(const Vec3d& eye, const Vec3d& forward, double fovY, c
 
 } // namespace
 
-bool LightView::covers(const Vec3d& world) const {
-    if (frame.isPerspective() && !(frame.viewDepth(world) > 0)) return false;
-    const Vec3d g = frame.gridFromWorld(world);
-    // A relative tolerance of 1e-9 columns: cube faces meet exactly at their borders, and a point on
-    // a face diagonal must not fall between two faces by a rounding error.
-    const double ex = 1e-9 * double(frame.width()), ey = 1e-9 * double(frame.height());
-    return g.x >= -ex && g.x <= double(frame.width()) + ex && g.y >= -ey &&
-           g.y <= double(frame.height()) + ey;
-}
-
-double LightView::columnWorldSize(const Vec3d& world) const {
-    if (!frame.isPerspective()) return frame.cellSize().x;
-    const double depth = std::max(frame.viewDepth(world), frame.nearDepth());
-    return depth * 2.0 * frame.tanHalfFovY() / double(frame.height());
-}
-
-double LightView::worldPerDepthUnit() const { return frame.isPerspective() ? 1.0 : frame.cellSize().z; }
-
 std::vector<LightView> makeLightViews(const Light& light, const Box3d& bounds, int64_t columns, int64_t d) {
     if (bounds.empty() || !isFinite(bounds.lo) || !isFinite(bounds.hi))
         fail("light '", light.name, "': nothing to fit a light view to (no shadow casters)");
@@ -135,7 +117,7 @@ std::vector<LightView> makeLightViews(const Light& light, const Box3d& bounds, i
     return views;
 }
 
-int viewIndexFor(const std::vector<LightView>& views, const Vec3d& world) {
+int viewIndexForFaces(const std::vector<LightView>& views, const Vec3d& world) {
     if (views.empty()) return -1;
     if (views.size() == 1) return views[0].covers(world) ? 0 : -1;
     // Cube faces share the eye: the face whose axis is closest to the direction owns the point.

@@ -43,6 +43,21 @@ inline Scene oneLeafScene(const Vec3d& c, const Vec3d& u, const Vec3d& v, const 
     return s;
 }
 
+/// The bilinear blend by its definition of value(column) over the four columns of a W x H light
+/// grid whose centres surround grid point g (beyond the border, the border column).
+template <class Value> Vec3f bilinearByDefinition(int64_t W, int64_t H, const Vec3d& g, const Value& value) {
+    Vec3f blend{0, 0, 0};
+    const int64_t x0 = int64_t(std::floor(g.x - 0.5)), y0 = int64_t(std::floor(g.y - 0.5));
+    const double wx = g.x - 0.5 - double(x0), wy = g.y - 0.5 - double(y0);
+    for (int dy = 0; dy < 2; ++dy)
+        for (int dx = 0; dx < 2; ++dx) {
+            const int64_t c =
+                std::clamp<int64_t>(y0 + dy, 0, H - 1) * W + std::clamp<int64_t>(x0 + dx, 0, W - 1);
+            blend += value(c) * float((dx ? wx : 1 - wx) * (dy ? wy : 1 - wy));
+        }
+    return blend;
+}
+
 /// Random leaf quads (size ~0.25) in the slab [-2, 2] x [1.5, 3] x [-2, 2], `groups` colours, over a
 /// ground plane that only receives.
 inline Scene leafScene(int leaves, int groups, uint64_t seed, float opacity = 0.7f) {

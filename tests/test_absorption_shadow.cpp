@@ -1,0 +1,98 @@
+// Tests of the absorption shadow map's lookups (CHANG §3: voxfx/absorption_shadow.hpp) against the
+// optical depth summed write by write from each group's own attribute voxelization: several grids
+// (coloured foliage: a grid per colour) read as one, with and without the receiver's plane.
+// Against exact light transport and the other techniques: test_light_grid.cpp,
+// test_shadow_cross_technique.cpp.
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "support/shadow_reference.hpp"
+#include "voxfx/absorption_shadow.hpp"
+#include "voxfx/attribute_grid.hpp"
+#include "voxfx/light_view.hpp"
+
+namespace voxfx {
+namespace {
+
+// exp(-optical depth) of column `column` in front of `depth`, less p's `skip` cells: over the
+// groups, depthPerUnit times the absorption of every entry of the group's voxelization whose slice
+// lies in front, summed in double.
+Vec3f columnByDefinition(const std::vector<AttributeColumns>& columns,
+                         const std::vector<AbsorptionShadowMap::Group>& groups, int64_t column, double depth,
+                         int64_t skip) {
+    double optical[3] = {0, 0, 0};
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+        const AttributeColumns& c = columns[g];
+        const int64_t D = c.frame.depth();
+        const double z = c.frame.depthToSlice(column)(depth);
+        const int64_t end =
+            z >= 0 ? std::clamp<int64_t>((z >= double(D) ? D : int64_t(z)) - skip + 1, 0, D) : 0;
+        double sum = 0;
+        for (int64_t i = c.offsets[size_t(column)]; i < c.offsets[size_t(column) + 1]; ++i)
+            if (int64_t(c.slice[size_t(i)]) < end) sum += double(c.absorption[size_t(i)]);
+        for (int k = 0; k < 3; ++k) optical[k] += double(groups[g].depthPerUnit[k]) * sum;
+    }
+    return {float(std::exp(-optical[0])), float(std::exp(-optical[1])), float(std::exp(-optical[2]))};
+}
+
+TEST(ShadowTest, AbsorptionOfColouredGridsIsExpOfEveryGridsWritesInFront) {
+    // Three colour groups of foliage, each its own grid with its own RGB depth per unit, centre and
+    // conservative writes, uniform slicing (the grids share a frame and are read as one) and local
+    // (each grid fits its own): at random points the lookup must be exp(-the summed depth of every
+    // write in front of p's skipped cells), and the bilinear lookup with no normal the weighted sum
+    // of that over the four columns around p.
+    const Scene s = test::leafScene(600, 3, 11);
+    std::vector<std::vector<float>> absorption;
+    Box3d bounds;
+    for (std::size_t g = 1; g <= 3; ++g) {
+        absorption.emplace_back(s.meshes[g].mesh.triangleCount(), 0.2f + 0.15f * float(g));
+        bounds.extend(computeBounds(s.meshes[g].mesh.view()));
+    }
+    std::vector<AbsorptionShadowMap::Group> groups;
+    for (std::size_t g = 1; g <= 3; ++g)
+        groups.push_back({s.meshes[g].mesh.view(), absorption[g - 1],
+                          Vec3f{0.3f * float(g), 1.0f, 1.6f - 0.4f * float(g)}, Vec3f{0, 0, 0}});
+    const LightView view = makeLightViews(test::sun(), bounds, 64, 48)[0];
+    const int64_t W = view.frame.width(), H = view.frame.height();
+    for (const Coverage coverage : {Coverage::Center, Coverage::Conservative})
+        for (const Slicing slicing : {Slicing::Uniform, Slicing::Local}) {
+            const std::string what = std::string(toString(coverage)) + " " + toString(slicing);
+            const AbsorptionShadowMap map = AbsorptionShadowMap::build(view, groups, coverage, slicing);
+            AttributeOptions ao;
+            ao.coverage = coverage;
+            ao.channels = AttributeChannels::shadows();
+            ao.slicing = slicing;
+            std::vector<AttributeColumns> columns;
+            for (std::size_t g = 0; g < groups.size(); ++g)
+                columns.push_back(voxelizeAttributeColumns(groups[g].mesh, view.frame, absorption[g], ao));
+            std::mt19937_64 rng(3);
+            std::uniform_real_distribution<double> u(-2.5, 2.5), h(0, 3.5);
+            int shaded = 0;
+            for (int i = 0; i < 4000; ++i) {
+                const Vec3d p{u(rng), h(rng), u(rng)};
+                const int64_t skip = i % 3;
+                if (!view.covers(p)) continue;
+                const Vec3d g = view.gridFromWorld(p);
+                const int64_t x = std::clamp<int64_t>(int64_t(std::floor(g.x)), 0, W - 1),
+                              y = std::clamp<int64_t>(int64_t(std::floor(g.y)), 0, H - 1);
+                const Vec3f want = columnByDefinition(columns, groups, y * W + x, g.z, skip);
+                const Vec3f blend = test::bilinearByDefinition(
+                    W, H, g, [&](int64_t c) { return columnByDefinition(columns, groups, c, g.z, skip); });
+                const Vec3f got = map.transmittance(p, skip), gotBlend = map.transmittanceBilinear(p, skip);
+                for (int c = 0; c < 3; ++c) {
+                    ASSERT_NEAR(got[c], want[c], 1e-5f) << what << " point " << i;
+                    ASSERT_NEAR(gotBlend[c], blend[c], 1e-5f) << what << " point " << i;
+                }
+                shaded += want.x < 0.99f;
+            }
+            EXPECT_GT(shaded, 500) << what;
+        }
+}
+
+} // namespace
+} // namespace voxfx
