@@ -302,13 +302,16 @@ struct VolumeComposite {
     /// Phong shading of volume samples (RenderOptions::volumeShading) with lights to shade by.
     bool shaded;
     const std::vector<double>& fullGradient;
+    std::vector<LightCone> cones; ///< per light of the frame
 
     VolumeComposite(const FrameState& f, const VolumeSetup& s)
         : frame(f), setup(s), vs(s.vs), materials(s.materials), surfaces(s.surfaces),
           emptySpace(s.emptySpace), preintegrated(s.preintegrated), step(s.step), boxShape(s.boxShape),
           leafTracer(s.leafTracer.get()),
           shaded(f.options.volumeShading == VolumeShading::Phong && !f.lights.empty()),
-          fullGradient(s.fullGradient) {}
+          fullGradient(s.fullGradient) {
+        for (const Light& l : f.lights) cones.emplace_back(l);
+    }
 
     // A surface of object o at depth z: shaded and composited; false stops the walk.
     bool surface(PixelRay& r, double z, std::size_t o, bool entering) const {
@@ -346,7 +349,7 @@ struct VolumeComposite {
         lights.clear();
         for (std::size_t l = 0; l < sceneLights.size(); ++l) {
             Vec3d toLight;
-            const Vec3f e = lightIrradiance(sceneLights[l], p, toLight);
+            const Vec3f e = lightIrradiance(sceneLights[l], cones[l], p, toLight);
             if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
             const Vec3f vis =
                 l < frame.shadows.size() ? shadowAt(*frame.shadows[l], p, toLight, inside) : Vec3f{1, 1, 1};
