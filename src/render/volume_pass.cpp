@@ -370,10 +370,9 @@ struct VolumeComposite {
         if (!deep) return shadowVisibility(shadow, q, toLight);
         const DeepShadowOptions* o = std::get_if<DeepShadowOptions>(&frame.options.shadow);
         const double offsets = o ? o->normalOffset + o->depthBias : 2.0;
-        const int view = viewIndexFor(deep->views(), q);
-        const double texel = view < 0 ? 0.0 : deep->views()[std::size_t(view)].columnWorldSize(q);
-        return deep->visibility(q, toLight) *
-               float(ownTransmittance(p, q + toLight * (offsets * texel), inside));
+        double texel = 0;
+        const Vec3f visibility = deep->visibility(q, toLight, texel);
+        return visibility * float(ownTransmittance(p, q + toLight * (offsets * texel), inside));
     }
 
     // The transmittance of the volume objects `inside` (those holding p) along the segment from p
