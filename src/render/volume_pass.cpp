@@ -408,11 +408,8 @@ struct VolumeComposite {
             const Vec3d c = p + (q - p) * t1;
             if (emptySpace[o].emptyBetween(p, c)) continue;
             const double a = volume.sample(p), b = volume.sample(c);
-            const PreintegratedTransfer& pre = preintegrated[o];
-            // The extinction at a value: extinction(v, v) without the two cumulative integrals it
-            // would take and not use (equal ends take the point's extinction).
-            auto at = [&](double value) { return pre.extinction(value, 0.0, value, 0.0); };
-            depth += std::min(at(a), at(b)) * length(c - p);
+            // The smaller of the two ends' extinctions (one logarithm, no cumulative integrals).
+            depth += preintegrated[o].smallerPointExtinction(a, b) * length(c - p);
         }
         return std::exp(-depth);
     }
