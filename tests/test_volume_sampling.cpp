@@ -32,6 +32,19 @@ using test::dsmrSmokeTransfer;
 using test::homogeneousSlabScene;
 using test::linearBlackOptions;
 
+// Slab test of the ray eye + t d (t >= 0) against `box`: the parameter by which the ray misses it
+// (the entry beyond the exit), <= 0 where it crosses.
+double rayBoxGap(const Vec3d& eye, const Vec3d& d, const Box3d& box) {
+    double t0 = 0, t1 = 1e30;
+    for (int a = 0; a < 3; ++a) {
+        double ta = (box.lo[a] - eye[a]) / d[a], tb = (box.hi[a] - eye[a]) / d[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+    }
+    return t0 - t1;
+}
+
 TEST(DeepShadowRenderTest, RayCastingCompositesVolumesOverTheImageAndOnlyThere) {
     RenderOptions o;
     o.width = 64;
@@ -51,17 +64,10 @@ TEST(DeepShadowRenderTest, RayCastingCompositesVolumesOverTheImageAndOnlyThere) 
     for (int64_t y = 0; y < 48; ++y)
         for (int64_t x = 0; x < 64; ++x) {
             const Vec3d eye = cam.eye(), p = cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0});
-            const Vec3d d = p - eye;
-            double t0 = 0, t1 = 1e30;
-            for (int a = 0; a < 3; ++a) {
-                double ta = (box.lo[a] - eye[a]) / d[a], tb = (box.hi[a] - eye[a]) / d[a];
-                if (ta > tb) std::swap(ta, tb);
-                t0 = std::max(t0, ta);
-                t1 = std::min(t1, tb);
-            }
+            const double gap = rayBoxGap(eye, p - eye, box);
             const Vec3f a = with.image.at(x, 47 - y), b = without.image.at(x, 47 - y);
             const bool diff = a.x != b.x || a.y != b.y || a.z != b.z;
-            if (t0 > t1 + 1e-3) {
+            if (gap > 1e-3) {
                 same += !diff;
                 EXPECT_FALSE(diff) << x << ", " << y;
             } else {
@@ -284,14 +290,7 @@ bool twoSpacingsRayCrosses(const Frame& cam, int64_t x, int64_t y, const Box3d& 
     to = cam.worldFromGrid({double(x) + 0.5, double(cam.height() - 1 - y) + 0.5, 1.0});
     const Vec3d d = to - from;
     to = from + d * 20.0;
-    double t0 = 0, t1 = 1e30;
-    for (int a = 0; a < 3; ++a) {
-        double ta = (box.lo[a] - from[a]) / d[a], tb = (box.hi[a] - from[a]) / d[a];
-        if (ta > tb) std::swap(ta, tb);
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-    }
-    return t0 <= t1 + 1e-6;
+    return rayBoxGap(from, d, box) <= 1e-6;
 }
 
 // A volume is sampled at its own spacing whatever other volumes the scene holds: the smoke's pixels
