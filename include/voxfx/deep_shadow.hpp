@@ -99,6 +99,9 @@ public:
     Vec3f visibility(const Vec3d& p, const Vec3d& n) const;
     /// The same with the given offsets (texel footprints at p).
     Vec3f visibility(const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias) const;
+    /// visibility(p, n), and in `texel` the texel footprint at p of the view that covers p
+    /// (viewIndexFor over views(); 0 where none does): the lookup's own, not searched again.
+    Vec3f visibility(const Vec3d& p, const Vec3d& n, double& texel) const;
     const std::vector<LightView>& views() const { return views_; }
     /// One map per view: the red channel, or every channel where the view's scene is grey.
     const std::vector<DeepShadowMap>& maps() const { return maps_; }

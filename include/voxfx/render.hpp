@@ -188,7 +188,8 @@ struct RenderOptions {
     bool defaultLights = true;
     int threads = 0;              ///< 0 = all; output is identical for every value
     Progress* progress = nullptr; ///< polled between tiles of every pass; may cancel
-    /// Volume ray casting (scene.volumeScene): sample step in smallest voxel spacings.
+    /// Volume ray casting (scene.volumeScene): sample step in voxel spacings, each volume at its own
+    /// smallest spacing (where volumes overlap, the finest of them).
     double volumeStep = 1.0;
     /// Volume ray casting: volume bricks the transfer function leaves transparent are not sampled
     /// (EmptySpace, voxfx/segment_walker.hpp); the image is the same either way, only faster.

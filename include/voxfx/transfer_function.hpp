@@ -109,15 +109,22 @@ public:
     double cumulative(double v) const;
     /// extinction(a, b) given ca = cumulative(a) and cb = cumulative(b).
     double extinction(double a, double ca, double b, double cb) const;
+    /// The smaller of the extinctions at values a and b, min(extinction(a, a), extinction(b, b)),
+    /// with one logarithm: the extinction grows with the opacity.
+    double smallerPointExtinction(double a, double b) const;
     /// Extinction-weighted mean colour over the same interval.
     Vec3d color(double a, double b) const;
     const TransferFunction& transfer() const { return tf_; }
 
 private:
     double pointExtinction(double v) const;
+    double pieceFrom(std::size_t i, double a1, double dv) const;
     TransferFunction tf_;
     double opacityLength_ = 1;
     std::vector<double> prefix_; ///< integral up to each opacity point
+    /// Per opacity point: the antiderivative of -ln(1 - alpha) at its opacity, and -ln(1 - alpha)
+    /// there (alpha clamped): cumulative's integral from the point takes one logarithm, not three.
+    std::vector<double> antiAt_, depthAt_;
     double lo_ = 0, cell_ = 1;   ///< colour table: cell i spans lo + [i, i + 1] * cell
     std::vector<double> tableS_; ///< integral of sigma at cell boundaries
     std::vector<Vec3d> tableE_;  ///< integral of sigma * colour at cell boundaries

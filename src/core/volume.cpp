@@ -52,6 +52,7 @@ Volume::Volume(const Vec3i& dims, const Vec3d& lo, const Vec3d& spacing, ScalarT
         fail("volume spacing must be positive and finite, got (", spacing.x, ", ", spacing.y, ", ", spacing.z,
              ")");
     if (!isFinite(lo)) fail("volume origin must be finite, got (", lo.x, ", ", lo.y, ", ", lo.z, ")");
+    invSpacing_ = {1 / spacing.x, 1 / spacing.y, 1 / spacing.z};
     values_.assign(std::size_t(voxelCount()), 0.0f);
 }
 

@@ -612,16 +612,19 @@ int deepShadowViewIndex(const LightView* views, std::size_t count, const Vec3d& 
 }
 
 // Lookup among views [b, e) (one light's views: one frame, or six cube faces); greenBlue: per view,
-// the maps of the green and blue channels, or none (the first map holds every channel).
+// the maps of the green and blue channels, or none (the first map holds every channel). `texelAt`
+// (when given): the texel footprint at p of the view that covers it, 0 where none does.
 Vec3f deepShadowLookup(const std::vector<LightView>& views, const std::vector<DeepShadowMap>& maps,
                        const std::vector<std::vector<DeepShadowMap>>& greenBlue, std::size_t b, std::size_t e,
                        const Vec3d& p, const Vec3d& n, double normalOffset, double depthBias,
-                       DsmFilter filter) {
+                       DsmFilter filter, double* texelAt = nullptr) {
     const LightView* group = views.data() + b;
     const std::size_t count = e - b;
     int i = deepShadowViewIndex(group, count, p);
+    if (texelAt) *texelAt = 0;
     if (i < 0) return {1, 1, 1};
     const double texel = group[i].columnWorldSize(p);
+    if (texelAt) *texelAt = texel;
     const Vec3d q = p + n * (normalOffset * texel);
     if (count > 1) {
         const int j = deepShadowViewIndex(group, count, q);
@@ -650,6 +653,18 @@ Vec3f DeepShadow::visibility(const Vec3d& p, const Vec3d& n, double normalOffset
         v = v * deepShadowLookup(views_, maps_, greenBlue_, groupBegin_[g], groupBegin_[g + 1], p, n,
                                  normalOffset, depthBias, options_.filter);
     return v;
+}
+
+Vec3f DeepShadow::visibility(const Vec3d& p, const Vec3d& n, double& texel) const {
+    texel = 0;
+    if (groupBegin_.size() != 2) { // clusters: the views of all of them, as viewIndexFor sees them
+        const int view = viewIndexFor(views_, p);
+        if (view >= 0) texel = views_[std::size_t(view)].columnWorldSize(p);
+        return visibility(p, n);
+    }
+    // One group: its views are views(), and the lookup's search is viewIndexFor's.
+    return deepShadowLookup(views_, maps_, greenBlue_, groupBegin_[0], groupBegin_[1], p, n,
+                            options_.normalOffset, options_.depthBias, options_.filter, &texel);
 }
 
 DeepShadowStats DeepShadow::stats() const {

@@ -53,7 +53,8 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
         tripleOption<O, &O::groundAlbedo>(
             "groundAlbedo", "procedural sky: the albedo of the ground below the horizon, linear RGB", 0, 1),
         numberOption<O, &O::volumeStep>(
-            "volumeStep", "volume ray casting: sample step in smallest voxel spacings", 1e-3, 1000),
+            "volumeStep", "volume ray casting: sample step in voxel spacings (each volume's smallest)", 1e-3,
+            1000),
         flagOption<O, &O::skipEmptySpace>(
             "emptySpaceSkipping",
             "volumes: skip the bricks the transfer function leaves transparent (same image)"),

@@ -17,7 +17,14 @@
 
 namespace voxfx::detail {
 
-Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight) {
+LightCone::LightCone(const Light& light) {
+    if (light.type != LightType::Spot) return;
+    axis = normalize(light.direction);
+    cosOuter = std::cos(light.outerConeAngle);
+    cosInner = std::cos(light.innerConeAngle);
+}
+
+Vec3f lightIrradiance(const Light& light, const LightCone& cone, const Vec3d& p, Vec3d& toLight) {
     const Vec3f e = light.color * light.intensity;
     if (!light.positioned()) {
         toLight = light.towards(p);
@@ -31,8 +38,8 @@ Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight) {
         // Smoothstep between the outer and inner cone in the angle's cosine: continuous with a
         // continuous slope at both cones (glTF's reference t^2 has a kink at the inner cone, which
         // the eye sees as a bright ring: a Mach band).
-        const double cosAngle = dot(-toLight, normalize(light.direction));
-        const double cosOuter = std::cos(light.outerConeAngle), cosInner = std::cos(light.innerConeAngle);
+        const double cosAngle = dot(-toLight, cone.axis);
+        const double cosOuter = cone.cosOuter, cosInner = cone.cosInner;
         double s =
             cosInner > cosOuter ? (cosAngle - cosOuter) / (cosInner - cosOuter) : (cosAngle >= cosOuter);
         s = std::clamp(s, 0.0, 1.0);
@@ -61,6 +68,7 @@ SurfaceShader::SurfaceShader(const FrameState& frame)
         t.shadow = k < frame.shadows.size() ? frame.shadows[k].get() : nullptr;
         t.directional = !l.positioned();
         t.irradiance = l.color * l.intensity;
+        t.cone = LightCone(l);
         if (t.directional) t.toLight = l.towards(Vec3d{0, 0, 0}); // the same from everywhere
         if (t.irradiance.x <= 0 && t.irradiance.y <= 0 && t.irradiance.z <= 0) continue;
         lights_.push_back(t);
@@ -125,7 +133,7 @@ Vec3f SurfaceShader::shadeWith(const SurfacePoint& s, const ShadeMaterial& m, co
     const bool lightsBehind = m.behind.x > 0 || m.behind.y > 0 || m.behind.z > 0;
     for (const LightTerm& lt : lights_) {
         Vec3d l = lt.toLight;
-        const Vec3f e = lt.directional ? lt.irradiance : lightIrradiance(*lt.light, s.position, l);
+        const Vec3f e = lt.directional ? lt.irradiance : lightIrradiance(*lt.light, lt.cone, s.position, l);
         if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
         // Which side of the surface the light is on decides lit front vs. transmitted back light.
         const bool front = dot(s.geometricNormal, l) > 0;

@@ -9,9 +9,22 @@
 
 namespace voxfx::detail {
 
+/// What lightIrradiance reads of a light beyond its position, computed once per light: a spot's unit
+/// axis and the cosines of its cones (two cos per lookup were 3 % of the DSM demo's frame).
+struct LightCone {
+    Vec3d axis{0, 0, -1};
+    double cosOuter = 0, cosInner = 1;
+    LightCone() = default;
+    explicit LightCone(const Light& light);
+};
+
 /// Irradiance the light delivers at p without shadow (spot cone and 1/d^2 falloff included), and the
-/// unit direction from p towards the light.
-Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight);
+/// unit direction from p towards the light; `cone` is LightCone(light).
+Vec3f lightIrradiance(const Light& light, const LightCone& cone, const Vec3d& p, Vec3d& toLight);
+/// The same, the cone computed here.
+inline Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight) {
+    return lightIrradiance(light, LightCone(light), p, toLight);
+}
 
 /// What shading reads of a material, computed once (SurfaceShader::prepare).
 struct ShadeMaterial {
@@ -59,6 +72,7 @@ private:
         const LightShadow* shadow = nullptr;
         Vec3f irradiance; ///< colour times intensity
         Vec3d toLight;    ///< directional: the unit direction towards it
+        LightCone cone;
         bool directional = false;
     };
     const Environment* environment_;

@@ -17,7 +17,8 @@ namespace voxfx::detail {
 /// crosses its visible surface (ObjectSurfaceHit): it is shaded like a mesh of the object's colour
 /// (Blinn–Phong, shadows) and composited with α = 1 (opaque: the walk stops) or the object's
 /// opacity. Segments inside volume objects are sampled at their ends and at steps of
-/// `options.volumeStep` smallest voxel spacings from a start jittered per pixel (sampleJitter, so no
+/// `options.volumeStep` voxel spacings (the smallest spacing of the finest volume the segment is
+/// inside: each volume at its own) from a start jittered per pixel (sampleJitter, so no
 /// rings where equal steps from each segment's start would draw them) and composited front to back:
 /// each interval of length dl between two samples has the pre-integrated extinction σ of the values
 /// at its ends (PreintegratedTransfer; opacity 1 - exp(-σ dl)), its colour = pre-integrated transfer
