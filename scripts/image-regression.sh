@@ -4,7 +4,7 @@
 #
 #   scripts/image-regression.sh OLD/voxfx before/      # e.g. a build of main
 #   scripts/image-regression.sh build/voxfx after/
-#   scripts/image-regression.sh --compare before/ after/
+#   scripts/image-regression.sh --compare before/ after/   # a differing .pfm: by how much (pfm-diff.py)
 #
 # The set: every demo scene (tree, bunny, cgal, glass) with every shadow kind that renders it,
 # every glass method, the deep-shadow demo (plain, clustered, fixed storage, no empty-space
@@ -23,7 +23,11 @@ if [ "${1-}" = "--compare" ]; then
     if [ ! -f "$b/$name" ]; then
       echo "missing in $b: $name"; bad=$((bad + 1))
     elif ! cmp -s "$a/$name" "$b/$name"; then
-      echo "differs: $name"; bad=$((bad + 1))
+      case "$name" in
+        *.pfm) echo "differs: $name: $("$root/scripts/pfm-diff.py" "$a/$name" "$b/$name" 2>&1)" ;;
+        *) echo "differs: $name" ;;
+      esac
+      bad=$((bad + 1))
     fi
   done < <(cd "$a" && find . -type f ! -name '*.log' | sort)
   while IFS= read -r name; do

@@ -446,7 +446,9 @@ TEST(RenderImageTest, OneSkyLightsTheGroundAndFillsTheBackground) {
 
 TEST(RenderImageTest, SceneWithLightsShowsTheSameSkyAsOneWithout) {
     // demo's scenes have lights, render's default scenes none: both show the procedural sky, not a
-    // flat colour. The background pixel along the camera's axis equals the sky's radiance there.
+    // flat colour. The background pixel along the camera's axis equals the sky's radiance there. The
+    // axis is 3 degrees above the horizon: below it the sky's ground is lit as the scene lights its
+    // own ground (#37), so there the two differ by design.
     Scene s;
     SceneMesh g;
     g.name = "ground";
@@ -457,7 +459,7 @@ TEST(RenderImageTest, SceneWithLightsShowsTheSameSkyAsOneWithout) {
     sun.direction = {0, -1, 0};
     Camera c;
     c.position = {0, 0.5, 5};
-    c.target = {0, 0.5, 0};
+    c.target = {0, 0.5 + 5 * std::tan(3 * M_PI / 180), 0};
     c.fovY = 0.4;
     RenderOptions o;
     o.width = 33;
@@ -469,7 +471,7 @@ TEST(RenderImageTest, SceneWithLightsShowsTheSameSkyAsOneWithout) {
     const Vec3f without = render(s, c, o).image.at(16, 16);
     s.lights.push_back(sun);
     const Vec3f with = render(s, c, o).image.at(16, 16);
-    const Vec3f sky = Environment::sky().lookup({0, 0, -1});
+    const Vec3f sky = Environment::sky().lookup(normalize(c.target - c.position));
     EXPECT_NEAR(with.x, sky.x, 1e-3f);
     EXPECT_NEAR(with.z, sky.z, 1e-3f);
     EXPECT_NEAR(without.x, with.x, 1e-6f);

@@ -21,6 +21,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
@@ -35,6 +36,10 @@
 #include "voxfx/shadow_options.hpp"
 
 namespace voxfx {
+
+namespace detail {
+class GlassCrossingFresnel;
+}
 
 /// The absorption columns of one light view: per group of casters an attribute voxelization (its
 /// sparse form, voxelizeAttributeColumns: only written voxels are stored), reduced to inclusive
@@ -130,6 +135,8 @@ private:
     AbsorptionShadowOptions options_;
     std::vector<LightView> views_;
     std::vector<AbsorptionShadowMap> maps_;
+    // Per view: the whole Fresnel of each glass crossing at its angle (none without glass).
+    std::vector<std::shared_ptr<const detail::GlassCrossingFresnel>> fresnel_;
 };
 
 } // namespace voxfx

@@ -50,6 +50,14 @@ struct SkyOptions {
     double turbidity = kDefaultTurbidity; ///< 1.7 .. 10 (clamped)
     /// The ground below the horizon: a Lambertian plane of this albedo under the sun and the sky.
     Vec3f groundAlbedo{0.3f, 0.3f, 0.3f};
+    /// How that ground is lit: by skyLight's share of the sky's irradiance, by the sky's sun when
+    /// groundSun, and by groundLight (irradiance on an upward face, linear RGB, sky units). The
+    /// renderer sets them as it lights the scene (the scene's directional lights, or the sky's sun
+    /// when it has none; RenderOptions::ambient and skyLight), so the sky's ground is the scene's
+    /// ground lit as the scene lights it, far from its spot and point lights.
+    double groundSkyLight = 1;
+    bool groundSun = true;
+    Vec3f groundLight{0, 0, 0};
     double sunAngularRadius = 0.02; ///< radians of the disc drawn (the real sun: 0.0047; wider reads better)
     int width = 512, height = 256;  ///< resolution of the baked map
 };

@@ -229,8 +229,9 @@ struct RenderOptions {
     static std::span<const OptionField<RenderOptions>> fields();
 };
 
-/// The procedural sky RenderOptions describe (sunElevation, sunAzimuth, turbidity, groundAlbedo;
-/// SkyOptions' defaults otherwise): the one render() uses without an environment map.
+/// The procedural sky RenderOptions describe (sunElevation, sunAzimuth, turbidity, groundAlbedo, and
+/// skyLight's share of the sky on its ground; SkyOptions' defaults otherwise). render() uses it
+/// without an environment map, its ground lit as it lights the scene's (SkyOptions::groundLight).
 SkyOptions skyOptions(const RenderOptions& options);
 
 /// Sets the option `name` (lowerCamelCase, or its kebab- or snake-case spelling) wherever the

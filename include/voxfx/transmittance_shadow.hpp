@@ -13,14 +13,16 @@
 // next leaving, and multiply by beerLambert(sigma_k, chord): the world length between the paired
 // cells (cell centres; conservative grids: run centres), up to p when p lies inside (the column
 // holds an even number of crossings and an odd number lies in front of p). A glass crossing at an
-// angle passes the Fresnel of that angle: the depth beyond normal incidence's is quantized
-// (1/256) and each of its binary digits is a grey channel of the glass triangles that have it.
+// angle passes the Fresnel of that angle, beyond normal incidence's: taken per column of each light
+// view where its centre line crosses the glass, with the glass's stored normal interpolated there
+// (render/glass_crossing_fresnel.hpp), so a curved glass's shadow darkens smoothly to its rim.
 //
 // Thread-safety: a built shadow is read-only (lookups from any number of threads); build voxelizes
 // with worker threads.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
@@ -37,6 +39,10 @@
 #include "voxfx/voxelize.hpp"
 
 namespace voxfx {
+
+namespace detail {
+class GlassCrossingFresnel;
+}
 
 /// The slicemaps of one light view, one per channel.
 class TransmittanceShadowMap {
@@ -123,6 +129,8 @@ private:
     MapShadow opaque_;
     std::vector<LightView> views_;
     std::vector<TransmittanceShadowMap> maps_;
+    // Per view: the Fresnel of each glass crossing beyond normal incidence's (none without glass).
+    std::vector<std::shared_ptr<const detail::GlassCrossingFresnel>> fresnel_;
 };
 
 } // namespace voxfx

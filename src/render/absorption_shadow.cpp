@@ -13,6 +13,7 @@
 #include <cmath>
 #include <map>
 
+#include "render/glass_crossing_fresnel.hpp"
 #include "render/light_grid_lookup.hpp"
 #include "render/shadow_casters.hpp"
 #include "voxfx/glass_optics.hpp"
@@ -249,7 +250,7 @@ std::span<const OptionField<AbsorptionShadowOptions>> AbsorptionShadowOptions::f
 Vec3f absorptionPerCrossing(const Material& m, float opaqueAbsorption) {
     if (m.isOpaque()) return {opaqueAbsorption, opaqueAbsorption, opaqueAbsorption};
     // Glass: half the tint per crossing; its Fresnel depends on the crossing's angle
-    // (detail::glassCrossingFresnelDepth, written per triangle).
+    // (render/glass_crossing_fresnel.hpp, per column of the light grid).
     Vec3f t = m.shadowCrossingTransmittance();
     if (m.isGlass())
         for (int c = 0; c < 3; ++c) t[c] = float(std::sqrt(double(m.crossingTransmittance()[c])));
@@ -300,26 +301,15 @@ AbsorptionShadow AbsorptionShadow::build(const Scene& scene, const Light& light,
     std::vector<Mesh> meshes(oneGroup ? 0 : keys.size());
     std::vector<std::vector<float>> scalars(keys.size());
     const Mesh& all = casters.all;
-    // Glass adds its crossing's Fresnel depth to the grey group: in its scalar when its material is
-    // grey, else as a second write of the triangle there (its own group pairs the crossings).
-    const auto copyTriangle = [&](Mesh& mesh, std::size_t t) {
-        for (int k = 0; k < 3; ++k) {
-            mesh.indices.push_back(uint32_t(mesh.positions.size()));
-            mesh.positions.push_back(all.positions[all.indices[3 * t + size_t(k)]]);
-        }
-    };
     for (std::size_t t = 0; t < casters.allMaterialIndex.size(); ++t) {
         const uint32_t m = casters.allMaterialIndex[t], g = materialGroup[m];
-        const Material& mat = scene.materials[m];
-        const float fresnel = mat.isGlass() ? detail::glassCrossingFresnelDepth(all, t, light, mat.ior,
-                                                                                options.opaqueAbsorption)
-                                            : 0.0f;
-        scalars[g].push_back(g == 0 ? std::min(options.opaqueAbsorption, materialScalar[m] + fresnel)
-                                    : materialScalar[m]);
-        if (!oneGroup) copyTriangle(meshes[g], t);
-        if (g != 0 && fresnel > 0) {
-            scalars[0].push_back(fresnel);
-            copyTriangle(meshes[0], t);
+        scalars[g].push_back(materialScalar[m]);
+        if (!oneGroup) {
+            Mesh& mesh = meshes[g];
+            for (int k = 0; k < 3; ++k) {
+                mesh.indices.push_back(uint32_t(mesh.positions.size()));
+                mesh.positions.push_back(all.positions[all.indices[3 * t + size_t(k)]]);
+            }
         }
     }
     std::vector<AbsorptionShadowMap::Group> groups;
@@ -333,6 +323,8 @@ AbsorptionShadow AbsorptionShadow::build(const Scene& scene, const Light& light,
     for (const LightView& v : out.views_)
         out.maps_.push_back(
             AbsorptionShadowMap::build(v, groups, options.coverage, options.grid.slicing, progress));
+    // Each glass crossing's whole Fresnel, at its angle, per column.
+    out.fresnel_ = detail::buildGlassFresnelViews(scene, out.views_, false);
     return out;
 }
 
@@ -342,8 +334,9 @@ Vec3f AbsorptionShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     if (i < 0) return {1, 1, 1};
     const AbsorptionShadowMap& m = maps_[size_t(i)];
     const int64_t skip = options_.grid.skipCells;
-    return options_.grid.bilinear ? m.transmittanceBilinear(q, skip, n, options_.grid.sharpness)
-                                  : m.transmittance(q, skip);
+    const Vec3f v = options_.grid.bilinear ? m.transmittanceBilinear(q, skip, n, options_.grid.sharpness)
+                                           : m.transmittance(q, skip);
+    return v * float(detail::glassFresnelPass(fresnel_, views_, i, q, n, options_.grid));
 }
 
 AbsorptionShadow::Stats AbsorptionShadow::stats() const {

@@ -158,7 +158,8 @@ Environment Environment::sky(const SkyOptions& o, Daylight* daylight) {
         }
     }
     const Vec3f sunE = skyUnits(sunIrradianceXyz(std::clamp(o.turbidity, 1.7, 10.0), std::acos(sun.y)));
-    const Vec3f ground = o.groundAlbedo * Vec3f(skyHorizontal + Vec3d(sunE) * sun.y) * float(1 / M_PI);
+    const Vec3d direct = Vec3d(o.groundLight) + (o.groundSun ? Vec3d(sunE) * sun.y : Vec3d{0, 0, 0});
+    const Vec3f ground = o.groundAlbedo * Vec3f(skyHorizontal * o.groundSkyLight + direct) * float(1 / M_PI);
     for (int64_t j = 0; j < img.height; ++j)
         for (int64_t i = 0; i < img.width; ++i)
             if (equirectToDirection((double(i) + 0.5) / double(img.width),

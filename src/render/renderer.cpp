@@ -144,9 +144,11 @@ constexpr RenderPass kPasses[] = {{"flatten", 0.0, flattenPass},
 // The procedural sky of these options, baked once and kept (the last few) for the next frames.
 std::shared_ptr<const Environment> cachedSky(const SkyOptions& o) {
     static std::mutex mutex;
-    static std::vector<std::pair<std::array<double, 8>, std::shared_ptr<const Environment>>> kept;
-    const std::array<double, 8> key{o.sunDirection.x, o.sunDirection.y, o.sunDirection.z, o.turbidity,
-                                    o.groundAlbedo.x, o.groundAlbedo.y, o.groundAlbedo.z, o.sunAngularRadius};
+    static std::vector<std::pair<std::array<double, 13>, std::shared_ptr<const Environment>>> kept;
+    const std::array<double, 13> key{
+        o.sunDirection.x, o.sunDirection.y, o.sunDirection.z,   o.turbidity,      o.groundAlbedo.x,
+        o.groundAlbedo.y, o.groundAlbedo.z, o.sunAngularRadius, o.groundSkyLight, double(o.groundSun),
+        o.groundLight.x,  o.groundLight.y,  o.groundLight.z};
     std::lock_guard lock(mutex);
     for (const auto& [k, env] : kept)
         if (k == key) return env;
@@ -176,8 +178,27 @@ SkyOptions skyOptions(const RenderOptions& o) {
     s.sunDirection = sunDirectionFromAngles(o.sunElevation, o.sunAzimuth);
     s.turbidity = o.turbidity;
     s.groundAlbedo = o.groundAlbedo;
+    s.groundSkyLight = o.skyLight;
     return s;
 }
+
+namespace {
+
+// The sky of a frame: its ground below the horizon lit as the scene's own ground is, far from
+// everything: by skyLight's share of the sky, the constant ambient and the scene's directional
+// lights (spot and point lights do not reach the horizon), or the sky's sun when that is the
+// scene's default light.
+SkyOptions frameSky(const Scene& scene, const RenderOptions& o) {
+    SkyOptions s = skyOptions(o);
+    s.groundSun = scene.lights.empty() && o.defaultLights;
+    s.groundLight = o.ambient * float(M_PI);
+    for (const Light& l : scene.lights)
+        if (l.type == LightType::Directional)
+            s.groundLight += l.color * float(double(l.intensity) * std::max(0.0, -normalize(l.direction).y));
+    return s;
+}
+
+} // namespace
 
 RenderResult render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
     RenderCache cache; // this frame's alone
@@ -195,7 +216,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderOption
     std::optional<Environment> flat;
     const Environment* env = options.environment.get();
     if (!env && options.sky == SkyKind::Flat) env = &flat.emplace(Image(1, 1, options.background));
-    if (!env) env = (keep = cachedSky(skyOptions(options))).get();
+    if (!env) env = (keep = cachedSky(frameSky(scene, options))).get();
     std::span<const Light> lights = scene.lights;
     Light sun;
     if (scene.lights.empty() && options.defaultLights) {

@@ -1,9 +1,6 @@
 // voxfx — the casters of a scene split by how they shadow (render/shadow_casters.hpp).
 #include "render/shadow_casters.hpp"
 
-#include <algorithm>
-#include <cmath>
-
 namespace voxfx::detail {
 
 namespace {
@@ -31,18 +28,6 @@ CasterSets collectCasters(const Scene& scene) {
         }
     }
     return s;
-}
-
-float glassCrossingFresnelDepth(const Mesh& mesh, std::size_t t, const Light& light, double ior, float cap) {
-    const Vec3d a(mesh.positions[mesh.indices[3 * t]]), b(mesh.positions[mesh.indices[3 * t + 1]]),
-        c(mesh.positions[mesh.indices[3 * t + 2]]);
-    const Vec3d n = cross(b - a, c - a);
-    const Vec3d toLight =
-        light.type == LightType::Directional ? -light.direction : light.position - (a + b + c) * (1.0 / 3);
-    const double nl = length(n) * length(toLight);
-    const double cosine = nl > 0 ? std::min(1.0, std::abs(dot(n, toLight)) / nl) : 1.0;
-    const double pass = 1 - fresnelDielectric(cosine, 1.0, std::max(1.0, ior));
-    return std::min(cap, float(-std::log(std::max(pass, 1e-30))));
 }
 
 } // namespace voxfx::detail

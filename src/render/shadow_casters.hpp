@@ -23,10 +23,4 @@ struct CasterSets {
 /// The meshes with SceneMesh::castsShadow, in scene order.
 CasterSets collectCasters(const Scene& scene);
 
-/// The optical depth of the Fresnel loss where the light crosses triangle t of `mesh` (glass of
-/// index ior): -ln(1 - F) at the angle between the light's direction and the triangle's normal, as
-/// the exact tracer's crossing passes it (capped at `cap`). The absorption and transmittance
-/// shadows' glass crossings.
-float glassCrossingFresnelDepth(const Mesh& mesh, std::size_t t, const Light& light, double ior, float cap);
-
 } // namespace voxfx::detail

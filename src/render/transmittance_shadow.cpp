@@ -4,7 +4,7 @@
 // equal crossing transmittance, e.g. leaves of one colour). At a point p the light has crossed
 // n = popcount(column bits in front of p) filled cells, and is attenuated by t^n per channel;
 // through glass also by Beer–Lambert over the chord between paired crossings (entering, leaving),
-// and by each crossing's Fresnel at its angle (binary digit channels: fresnelDigits below).
+// and by each crossing's Fresnel at its angle (render/glass_crossing_fresnel.hpp).
 // The lookup skips the cell holding p (its own surface; see light_grid.hpp's bias note). Opaque
 // casters go to a standard shadow map (shadow_map.hpp). Where the channels share one frame and
 // none is glass, the counts are read from one sparse index of every channel's column (the slices
@@ -16,6 +16,7 @@
 #include <bit>
 #include <cmath>
 
+#include "render/glass_crossing_fresnel.hpp"
 #include "render/light_grid_lookup.hpp"
 #include "render/shadow_casters.hpp"
 #include "voxfx/grid_query.hpp"
@@ -323,51 +324,6 @@ std::string TransmittanceShadowStats::summary() const {
            " filled cells; opaque casters: " + opaque.summary();
 }
 
-namespace {
-
-// Glass crossed at an angle loses more to Fresnel than the 1 - F0 its own channel passes
-// (Material::shadowCrossingTransmittance): e = -ln(1 - F(cos)) + ln(1 - F0) >= 0 more optical depth
-// (detail::glassCrossingFresnelDepth, the absorption shadow's per-triangle depth). A count of cells
-// cannot weigh crossings, so e is quantized in steps of kFresnelStep and split into its binary
-// digits: digit channel k holds the glass triangles whose digit k is set and passes
-// exp(-2^k kFresnelStep) per crossing, so the counts of a column sum the quantized e of every glass
-// crossing in front of p (to within half a step per crossing), with one channel per digit in use
-// rather than one per value.
-constexpr double kFresnelStep = 1.0 / 256;
-constexpr int kFresnelDigits = 11; // e up to 8 (a crossing passing 3e-4 more)
-
-struct FresnelDigit {
-    float pass;
-    Mesh mesh;
-};
-
-std::vector<FresnelDigit> fresnelDigits(const Scene& scene, const detail::CasterSets& casters,
-                                        const Light& light) {
-    std::vector<FresnelDigit> out(kFresnelDigits);
-    for (int k = 0; k < kFresnelDigits; ++k)
-        out[size_t(k)].pass = float(std::exp(-std::ldexp(kFresnelStep, k)));
-    const Mesh& all = casters.all;
-    for (std::size_t t = 0; t < casters.allMaterialIndex.size(); ++t) {
-        const Material& m = scene.materials[casters.allMaterialIndex[t]];
-        if (!m.isGlass() || m.isOpaque()) continue;
-        const double n = std::max(1.0f, m.ior), f0 = ((n - 1) / (n + 1)) * ((n - 1) / (n + 1));
-        const double e = detail::glassCrossingFresnelDepth(all, t, light, n, 1000.0f) + std::log(1 - f0);
-        const auto q = int64_t(std::min(std::ldexp(1.0, kFresnelDigits) - 1, std::round(e / kFresnelStep)));
-        for (int k = 0; k < kFresnelDigits; ++k) {
-            if (q <= 0 || ((q >> k) & 1) == 0) continue;
-            Mesh& mesh = out[size_t(k)].mesh;
-            for (int v = 0; v < 3; ++v) {
-                mesh.indices.push_back(uint32_t(mesh.positions.size()));
-                mesh.positions.push_back(all.positions[all.indices[3 * t + size_t(v)]]);
-            }
-        }
-    }
-    std::erase_if(out, [](const FresnelDigit& d) { return d.mesh.indices.empty(); });
-    return out;
-}
-
-} // namespace
-
 TransmittanceShadow TransmittanceShadow::build(const Scene& scene, const Light& light,
                                                const TransmittanceShadowOptions& options,
                                                Progress* progress) {
@@ -387,17 +343,13 @@ TransmittanceShadow TransmittanceShadow::build(const Scene& scene, const Light& 
         transmittances.push_back({key[0], key[1], key[2]});
         attenuations.push_back({key[3], key[4], key[5]});
     }
-    const std::vector<FresnelDigit> digits = fresnelDigits(scene, casters, light);
-    for (const FresnelDigit& d : digits) {
-        groups.push_back(d.mesh.view());
-        transmittances.push_back({d.pass, d.pass, d.pass});
-        attenuations.push_back({0, 0, 0});
-    }
     out.views_ = makeLightViews(light, bounds, options.grid.resolution, options.grid.depth);
     for (const LightView& v : out.views_)
         out.maps_.push_back(TransmittanceShadowMap::build(v, groups, transmittances, options.voxelMode,
                                                           options.grid.slicing, progress, options.device,
                                                           attenuations));
+    // The grids pass 1 - F0 per glass crossing; the columns the rest of each crossing's Fresnel.
+    out.fresnel_ = detail::buildGlassFresnelViews(scene, out.views_, true);
     return out;
 }
 
@@ -411,8 +363,9 @@ Vec3f TransmittanceShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     if (i < 0) return v;
     const TransmittanceShadowMap& m = maps_[size_t(i)];
     const int64_t skip = options_.grid.skipCells;
-    return v * (options_.grid.bilinear ? m.transmittanceBilinear(q, skip, n, options_.grid.sharpness)
-                                       : m.transmittance(q, skip));
+    v = v * (options_.grid.bilinear ? m.transmittanceBilinear(q, skip, n, options_.grid.sharpness)
+                                    : m.transmittance(q, skip));
+    return v * float(detail::glassFresnelPass(fresnel_, views_, i, q, n, options_.grid));
 }
 
 TransmittanceShadow::Stats TransmittanceShadow::stats() const {

@@ -12,6 +12,7 @@
 #include <optional>
 #include <random>
 
+#include "voxfx/environment.hpp"
 #include "voxfx/error.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/volume_scene.hpp"
@@ -380,7 +381,11 @@ Scene makeBunnyScene(const std::string& meshesDir, int leaves, uint64_t seed) {
     spot.innerConeAngle = 25 * M_PI / 180;
     spot.outerConeAngle = 38 * M_PI / 180;
     scene.lights.push_back(spot);
-    matchSky(scene, {0.45f, 0.42f, 0.36f});
+    // A low afternoon sun behind the camera, the sky's: without it the ground outside the spot was
+    // lit by the blue sky alone (dark navy) under a sky that shows daylight.
+    const Vec3d towardsSun = sunDirectionFromAngles(25, 130);
+    scene.lights.push_back(directionalLight("Sun", -towardsSun, {1.0f, 0.95f, 0.86f}, 2.5f));
+    matchSky(scene, {0.45f, 0.42f, 0.36f}, towardsSun);
 
     return withView(std::move(scene), {-1.0, 1.3, 6.4}, {0.2, 1.15, 0}, 46);
 }

@@ -4,7 +4,8 @@
 //
 //   tree    a procedural tree: an opaque trunk with branches, thousands of leaf quads in colour
 //           groups (partial occluders), a ground plane that only receives, a sun (directional).
-//   bunny   the Stanford bunny (bunny00.off) under a canopy of leaves, lit by a spot light.
+//   bunny   the Stanford bunny (bunny00.off) under a canopy of leaves, lit by a spot light and a low
+//           sun (directional).
 //   cgal    meshes from the CGAL data set (elephant, armadillo, cactus) under a leafy pergola lit by
 //           a point light and a directional one.
 //   glass   glass objects (the bunny, a torus knot, two coloured glasses, a ruby bunny inside a glass

@@ -97,6 +97,68 @@ void glassDemoPlace(Mesh& mesh, double height, double x, double y0, double z) {
             Vec3d{(double(p.x) - c.x) * s + x, (double(p.y) - b.lo.y) * s + y0, (double(p.z) - c.z) * s + z});
 }
 
+// The checkered ground (the "texture" the glass distorts): 16 x 16 tiles of two materials over
+// [-4, 4]^2, their contrast fading to their mean over the next 8 units (a ring of 2 tiles per step),
+// then a ground of that mean out to 500 units, so the ground, not a wall of the sky's ground
+// colour, meets the horizon (the sky's ground beyond has the same albedo: groundAlbedo).
+constexpr Vec3f kTileLight{0.80f, 0.78f, 0.72f}, kTileDark{0.12f, 0.13f, 0.16f};
+constexpr Vec3f kGroundMean{0.46f, 0.455f, 0.44f};
+
+void appendGroundQuad(Mesh& m, double x0, double z0, double x1, double z1) {
+    const auto b = uint32_t(m.positions.size());
+    for (const Vec3d p : {Vec3d{x0, 0, z0}, Vec3d{x0, 0, z1}, Vec3d{x1, 0, z1}, Vec3d{x1, 0, z0}})
+        m.positions.push_back(Vec3f(p));
+    m.indices.insert(m.indices.end(), {b, b + 1, b + 2, b, b + 2, b + 3});
+}
+
+uint32_t groundMaterial(Scene& scene, const std::string& name, Vec3f colour) {
+    Material m;
+    m.name = name;
+    m.baseColor = colour;
+    m.specular = 0.05f;
+    return scene.addMaterial(m);
+}
+
+// checker: step 0 (the scene's first meshes and materials, as before the fade); else the rest.
+void glassDemoGround(Scene& scene, bool checker) {
+    const double tile = 0.5;
+    const int inner = 8, steps = 8; // tiles from the centre to the checker's edge; fading steps
+    auto ground = [&](const std::string& name, uint32_t material) {
+        SceneMesh g;
+        g.name = name;
+        g.material = material;
+        g.castsShadow = false;
+        return g;
+    };
+    // Step 0: the full checker (|i|, |j| < inner tiles); step k: the ring of 2 tiles beyond step k - 1.
+    for (int step = checker ? 0 : 1; step <= (checker ? 0 : steps); ++step) {
+        const float contrast = 1 - float(step) / float(steps + 1);
+        auto faded = [&](Vec3f c) { return step == 0 ? c : kGroundMean + (c - kGroundMean) * contrast; };
+        const std::string suffix = step == 0 ? "" : "-fade" + std::to_string(step);
+        SceneMesh parts[2] = {
+            ground("Ground-light" + suffix, groundMaterial(scene, "tile-light" + suffix, faded(kTileLight))),
+            ground("Ground-dark" + suffix, groundMaterial(scene, "tile-dark" + suffix, faded(kTileDark)))};
+        const int lo = step == 0 ? 0 : inner + 2 * (step - 1), hi = step == 0 ? inner : inner + 2 * step;
+        for (int i = -hi; i < hi; ++i)
+            for (int j = -hi; j < hi; ++j) {
+                const int r = std::max(i < 0 ? -i - 1 : i, j < 0 ? -j - 1 : j); // ring of tile (i, j)
+                if (r < lo || r >= hi) continue;
+                appendGroundQuad(parts[(i + j + 2 * hi) % 2].mesh, i * tile, j * tile, (i + 1) * tile,
+                                 (j + 1) * tile);
+            }
+        for (SceneMesh& p : parts) scene.meshes.push_back(std::move(p));
+    }
+    if (checker) return;
+    // The plain ground: four quads around the fading square, out to 500 units.
+    const double e = (inner + 2 * steps) * tile, far = 500;
+    SceneMesh plain = ground("Ground-far", groundMaterial(scene, "ground-far", kGroundMean));
+    appendGroundQuad(plain.mesh, -far, -far, far, -e);
+    appendGroundQuad(plain.mesh, -far, e, far, far);
+    appendGroundQuad(plain.mesh, -far, -e, -e, e);
+    appendGroundQuad(plain.mesh, e, -e, far, e);
+    scene.meshes.push_back(std::move(plain));
+}
+
 } // namespace
 
 Scene makeGlassScene(const std::string& meshesDir) {
@@ -105,33 +167,7 @@ Scene makeGlassScene(const std::string& meshesDir) {
         fail("demo 'glass': ", (std::filesystem::path(meshesDir) / "bunny00.off").string(), " not found");
     Scene scene;
     scene.source = "demo:glass";
-    // A checkered ground (the "texture" the glass distorts): 16 x 16 tiles of two materials.
-    Material light, dark;
-    light.name = "tile-light";
-    light.baseColor = {0.80f, 0.78f, 0.72f};
-    dark.name = "tile-dark";
-    dark.baseColor = {0.12f, 0.13f, 0.16f};
-    light.specular = dark.specular = 0.05f;
-    const uint32_t tiles[2] = {scene.addMaterial(light), scene.addMaterial(dark)};
-    const int n = 16;
-    const double half = 4.0, tile = 2 * half / n;
-    for (int k = 0; k < 2; ++k) {
-        SceneMesh g;
-        g.name = k == 0 ? "Ground-light" : "Ground-dark";
-        g.material = tiles[k];
-        g.castsShadow = false;
-        for (int i = 0; i < n; ++i)
-            for (int j = 0; j < n; ++j) {
-                if ((i + j) % 2 != k) continue;
-                const auto b = uint32_t(g.mesh.positions.size());
-                const double x0 = -half + i * tile, z0 = -half + j * tile;
-                for (const Vec3d p : {Vec3d{x0, 0, z0}, Vec3d{x0, 0, z0 + tile},
-                                      Vec3d{x0 + tile, 0, z0 + tile}, Vec3d{x0 + tile, 0, z0}})
-                    g.mesh.positions.push_back(Vec3f(p));
-                g.mesh.indices.insert(g.mesh.indices.end(), {b, b + 1, b + 2, b, b + 2, b + 3});
-            }
-        scene.meshes.push_back(std::move(g));
-    }
+    glassDemoGround(scene, true);
     const uint32_t clear =
         scene.addMaterial(glassDemoMaterial("clear-glass", {1, 1, 1}, {0.85f, 0.95f, 0.92f}, 1.0f));
     const uint32_t green =
@@ -182,13 +218,15 @@ Scene makeGlassScene(const std::string& meshesDir) {
         scene.meshes.push_back(std::move(m));
     }
 
+    glassDemoGround(scene, false);
+
     Camera cam;
     cam.name = "View";
     cam.position = {0.2, 2.3, 4.6};
     cam.target = {0.1, 0.55, 0};
     cam.fovY = 42 * M_PI / 180;
     cam.nearDepth = 0.05;
-    cam.farDepth = 100;
+    cam.farDepth = 2000;
     scene.cameras.push_back(cam);
     // A second camera close to the ball (render --camera 1): the nested glass fills the view.
     Camera close = cam;
@@ -205,8 +243,8 @@ Scene makeGlassScene(const std::string& meshesDir) {
     block.target = {1.65, 0.6, -0.1};
     block.fovY = 36 * M_PI / 180;
     scene.cameras.push_back(block);
-    // Beyond the 8 x 8 tiles the sky's ground runs on to the horizon in the tiles' mean colour.
-    scene.settings.render.emplace_back("groundAlbedo", Vec3d{0.46, 0.455, 0.44});
+    // Beyond the ground's 1 km the sky's ground runs on to the horizon in the tiles' mean colour.
+    scene.settings.render.emplace_back("groundAlbedo", Vec3d(kGroundMean));
     scene.validate();
     return scene;
 }
