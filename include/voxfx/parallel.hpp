@@ -103,11 +103,6 @@ void withThreads(int threads, const std::function<void()>& f);
 /// Number of hardware threads.
 int hardwareThreads();
 
-/// Starts the worker threads in the background and returns at once, so that a program which
-/// reads its input before the first parallel call finds them running (their start, a few ms on
-/// a cold process, then overlaps the reading). Optional; calling it again does nothing.
-void startThreads();
-
 /// Progress and cancellation, polled between tiles of long operations (the CLI prints it).
 class Progress {
 public:

@@ -197,7 +197,6 @@ int runVoxelize(const VoxelizeArgs& a) {
     fo.checkDenseMemory = !canSparse || !(format == GridFormat::Vdb || streamable);
 
     MeshLoadReport report;
-    if (vo.device == Device::Cpu) startThreads(); // their start overlaps the reading
     const Mesh mesh = loadMesh(a.input, &report);
     const double loadMs = msSince(t0);
 

@@ -39,15 +39,4 @@ void withThreads(int threads, const std::function<void()>& f) {
 
 int hardwareThreads() { return tbb::info::default_concurrency(); }
 
-void startThreads() {
-    // A task enqueued (fire and forget) in an arena of every thread wakes the pool, which TBB
-    // otherwise creates at the first parallel call; the arena is kept so the pool stays up.
-    static tbb::task_arena* const arena = [] {
-        auto* a = new tbb::task_arena(hardwareThreads());
-        a->enqueue([] {});
-        return a;
-    }();
-    (void)arena;
-}
-
 } // namespace voxfx
