@@ -70,17 +70,10 @@ TEST(ShadowTest, AbsorptionOfColouredGridsIsExpOfEveryGridsWritesInFront) {
             std::vector<AttributeColumns> columns;
             for (std::size_t g = 0; g < groups.size(); ++g)
                 columns.push_back(voxelizeAttributeColumns(groups[g].mesh, view.frame, absorption[g], ao));
-            std::mt19937_64 rng(3);
-            std::uniform_real_distribution<double> u(-2.5, 2.5), h(0, 3.5);
             int shaded = 0;
-            for (int i = 0; i < 4000; ++i) {
-                const Vec3d p{u(rng), h(rng), u(rng)};
-                const int64_t skip = i % 3;
-                if (!view.covers(p)) continue;
-                const Vec3d g = view.gridFromWorld(p);
-                const int64_t x = std::clamp<int64_t>(int64_t(std::floor(g.x)), 0, W - 1),
-                              y = std::clamp<int64_t>(int64_t(std::floor(g.y)), 0, H - 1);
-                const Vec3f want = columnByDefinition(columns, groups, y * W + x, g.z, skip);
+            test::forEachCoveredPoint(view, [&](int i, const Vec3d& p, const Vec3d& g, int64_t column,
+                                                int64_t skip) {
+                const Vec3f want = columnByDefinition(columns, groups, column, g.z, skip);
                 const Vec3f blend = test::bilinearByDefinition(
                     W, H, g, [&](int64_t c) { return columnByDefinition(columns, groups, c, g.z, skip); });
                 const Vec3f got = map.transmittance(p, skip), gotBlend = map.transmittanceBilinear(p, skip);
@@ -89,7 +82,7 @@ TEST(ShadowTest, AbsorptionOfColouredGridsIsExpOfEveryGridsWritesInFront) {
                     ASSERT_NEAR(gotBlend[c], blend[c], 1e-5f) << what << " point " << i;
                 }
                 shaded += want.x < 0.99f;
-            }
+            });
             EXPECT_GT(shaded, 500) << what;
         }
 }

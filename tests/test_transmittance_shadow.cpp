@@ -141,27 +141,20 @@ TEST(ShadowTest, TransmittanceIsEachChannelsFactorToThePowerOfItsCellsInFront) {
         const TransmittanceShadowMap map =
             TransmittanceShadowMap::build(view, groups, factors, mode, Slicing::Uniform);
         const bool runs = mode == VoxelizeMode::Conservative;
-        std::mt19937_64 rng(3);
-        std::uniform_real_distribution<double> u(-2.5, 2.5), h(0, 3.5);
         int shaded = 0;
-        for (int i = 0; i < 4000; ++i) {
-            const Vec3d p{u(rng), h(rng), u(rng)};
-            const int64_t skip = i % 3;
-            if (!view.covers(p)) continue;
-            const Vec3d g = view.gridFromWorld(p);
-            const int64_t x = std::clamp<int64_t>(int64_t(std::floor(g.x)), 0, W - 1),
-                          y = std::clamp<int64_t>(int64_t(std::floor(g.y)), 0, H - 1);
-            const Vec3f want = columnByDefinition(map, factors, runs, y * W + x, g.z, skip);
-            const Vec3f got = map.transmittance(p, skip);
-            const Vec3f blend = test::bilinearByDefinition(
-                W, H, g, [&](int64_t c) { return columnByDefinition(map, factors, runs, c, g.z, skip); });
-            const Vec3f gotBlend = map.transmittanceBilinear(p, skip);
-            for (int c = 0; c < 3; ++c) {
-                ASSERT_NEAR(got[c], want[c], 1e-6f) << toString(mode) << " point " << i;
-                ASSERT_NEAR(gotBlend[c], blend[c], 1e-5f) << toString(mode) << " point " << i;
-            }
-            shaded += want.y < 1;
-        }
+        test::forEachCoveredPoint(
+            view, [&](int i, const Vec3d& p, const Vec3d& g, int64_t column, int64_t skip) {
+                const Vec3f want = columnByDefinition(map, factors, runs, column, g.z, skip);
+                const Vec3f got = map.transmittance(p, skip);
+                const Vec3f blend = test::bilinearByDefinition(
+                    W, H, g, [&](int64_t c) { return columnByDefinition(map, factors, runs, c, g.z, skip); });
+                const Vec3f gotBlend = map.transmittanceBilinear(p, skip);
+                for (int c = 0; c < 3; ++c) {
+                    ASSERT_NEAR(got[c], want[c], 1e-6f) << toString(mode) << " point " << i;
+                    ASSERT_NEAR(gotBlend[c], blend[c], 1e-5f) << toString(mode) << " point " << i;
+                }
+                shaded += want.y < 1;
+            });
         EXPECT_GT(shaded, 500) << toString(mode);
     }
 }

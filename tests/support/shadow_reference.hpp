@@ -58,6 +58,24 @@ template <class Value> Vec3f bilinearByDefinition(int64_t W, int64_t H, const Ve
     return blend;
 }
 
+/// The lookup tests' sample points: 4000 random points in [-2.5, 2.5] x [0, 3.5] x [-2.5, 2.5]
+/// (a fixed seed), those `view` covers, each with its grid position, its own column (y * W + x, the
+/// column the point falls in) and a skip of 0, 1 or 2 by turn: visit(i, p, g, column, skip).
+template <class Visit> void forEachCoveredPoint(const LightView& view, const Visit& visit) {
+    const int64_t W = view.frame.width(), H = view.frame.height();
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> u(-2.5, 2.5), h(0, 3.5);
+    for (int i = 0; i < 4000; ++i) {
+        const Vec3d p{u(rng), h(rng), u(rng)};
+        const int64_t skip = i % 3;
+        if (!view.covers(p)) continue;
+        const Vec3d g = view.gridFromWorld(p);
+        const int64_t x = std::clamp<int64_t>(int64_t(std::floor(g.x)), 0, W - 1),
+                      y = std::clamp<int64_t>(int64_t(std::floor(g.y)), 0, H - 1);
+        visit(i, p, g, y * W + x, skip);
+    }
+}
+
 /// Random leaf quads (size ~0.25) in the slab [-2, 2] x [1.5, 3] x [-2, 2], `groups` colours, over a
 /// ground plane that only receives.
 inline Scene leafScene(int leaves, int groups, uint64_t seed, float opacity = 0.7f) {
