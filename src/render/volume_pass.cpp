@@ -372,11 +372,15 @@ struct VolumeComposite {
         return ambient;
     }
 
-    // The shadow of volume sample p (see lightAt): looked up at q, a step towards the light; under
-    // deep shadows times ownTransmittance from p to where the map is read (q moved towards the
-    // light by the normal offset and the depth bias, a texel footprint each by default).
+    // The shadow of volume sample p (see lightAt): looked up at q, a step towards the light (exact
+    // shadows: marched from p); under deep shadows times ownTransmittance from p to where the map
+    // is read (q moved towards the light by the normal offset and the depth bias, a texel
+    // footprint each by default).
     Vec3f shadowAt(const LightShadow& shadow, const Vec3d& p, const Vec3d& toLight,
                    std::span<const uint8_t> inside) const {
+        // Exact shadows march the medium from p itself, in fine steps: no map to step over (the
+        // step towards the light made a uniform slab brighter by exp(sigma * step)).
+        if (std::holds_alternative<ExactShadow>(shadow)) return shadowVisibility(shadow, p, toLight);
         const Vec3d q = p + toLight * step;
         const DeepShadow* deep = std::get_if<DeepShadow>(&shadow);
         if (!deep) return shadowVisibility(shadow, q, toLight);
