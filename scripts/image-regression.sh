@@ -7,7 +7,7 @@
 #   scripts/image-regression.sh --compare before/ after/   # a differing .pfm: by how much (pfm-diff.py)
 #
 # The set: every demo scene (tree, bunny, cgal, glass) with every shadow kind that renders it,
-# every glass method, the deep-shadow demo (plain, clustered, fixed storage, no empty-space
+# every glass method, the jade dragon, the deep-shadow demo (plain, clustered, fixed storage, no empty-space
 # skipping, supersampled; the CT skull and smoke as volumes), and grids of every voxelization
 # mode and fill.
 # Images are written as PFM (linear floats: no sRGB rounding hides a change) at a small size;
@@ -84,6 +84,11 @@ for g in exact multi two-surface frosted; do
 done
 run "$bin" render "$scenes/glass.glb" -o "$out/glass-multi-transmittance.pfm" "${size[@]}" --glass multi \
   --glass-grid 96 --shadows transmittance -q
+
+# The jade dragon (a translucent solid seen through, #37: blurred by the matter crossed).
+for j in scene translucent; do
+  run "$bin" render "$root/examples/jade-dragon/$j.json" -o "$out/jade-$j.pfm" "${size[@]}" --shadows translucency -q
+done
 
 # The deep-shadow demo: mixed meshes, volumes and Boolean shapes.
 dsm="$root/examples/dsm-demo/scene.json"

@@ -382,6 +382,7 @@ TranslucentSetup translucentSetup() {
     o.defaultLights = false;
     o.ambientOcclusion = Occlusion::Off;
     o.translucencySlices = 256;
+    o.translucencyBlur = 0; // the chords' closed form is of the unblurred image (the blur: below)
     return t;
 }
 
@@ -494,6 +495,7 @@ TEST(TranslucencyShadowTest, RenderedTranslucencyIsTheSameForEveryThreadCount) {
     t.options.antiAliasing = AntiAliasing::Full; // adaptive samples too
     t.options.defaultLights = true;              // the sun lights the solids' back
     t.options.shadow = TranslucencyShadowOptions{};
+    t.options.translucencyBlur = RenderOptions{}.translucencyBlur; // its taps too
     t.options.threads = 1;
     const RenderResult one = render(t.scene, t.camera, t.options);
     t.options.threads = 3;
@@ -716,5 +718,132 @@ TEST(TranslucencyShadowTest, BadOptionsAndEmptyScenes) {
     EXPECT_EQ(none.stats().grids, 0);
 }
 
+// ---- #37 item 6: jade is not glass ---------------------------------------------------------------
+//
+// A slab of a translucent solid (diffuse transmission 1, no reflection of its own) thickness t in
+// front of a sharp black / white edge, lit by a constant ambient only: the camera sees the edge
+// through it, attenuated by exp(-sigma t) and blurred by the scattering, over a disc whose 10-90 %
+// width grows with t. The oracle: a uniform disc of radius r across a step rises from 10 % to 90 %
+// over 2 u r, F(u) = 1/2 + (u sqrt(1 - u^2) + asin u) / pi = 0.9 (u = 0.687), r the cone of
+// half-angle blur * t / attenuationDistance from the slab's front face to the edge, seen from the
+// eye (the model RenderOptions::translucencyBlur states, from the scene's geometry here).
+struct EdgeSlab {
+    static constexpr double kEye = 5, kWall = -2, kFov = 0.4, kAttenuationDistance = 1;
+    static constexpr int64_t kWidth = 200, kHeight = 100;
+};
+
+Scene edgeSlabScene(double t, bool glass) {
+    Scene s;
+    Material black, white, slab;
+    black.baseColor = {0, 0, 0};
+    white.baseColor = {1, 1, 1};
+    black.specular = white.specular = slab.specular = 0;
+    if (glass) {
+        slab.transmission = 1;
+        slab.baseColor = {1, 1, 1};
+    } else {
+        slab.diffuseTransmission = 1;
+        slab.baseColor = {0.5f, 0.5f, 0.5f};
+    }
+    slab.attenuationDistance = float(EdgeSlab::kAttenuationDistance);
+    slab.attenuationColor = {0.8f, 0.8f, 0.8f};
+    const uint32_t b = s.addMaterial(black), w = s.addMaterial(white), j = s.addMaterial(slab);
+    const double z = EdgeSlab::kWall;
+    s.meshes.push_back({"black", test::makeBox({-8, -8, z - 0.2}, {0, 8, z}), {}, b, true});
+    s.meshes.push_back({"white", test::makeBox({0, -8, z - 0.2}, {8, 8, z}), {}, w, true});
+    if (t > 0) s.meshes.push_back({"slab", test::makeBox({-4, -4, -t / 2}, {4, 4, t / 2}), {}, j, true});
+    Camera c;
+    c.position = {0, 0, EdgeSlab::kEye};
+    c.target = {0, 0, 0};
+    c.fovY = EdgeSlab::kFov;
+    s.cameras.push_back(c);
+    return s;
+}
+
+RenderOptions edgeSlabOptions(double blur) {
+    RenderOptions o;
+    o.width = EdgeSlab::kWidth, o.height = EdgeSlab::kHeight;
+    o.antiAliasing = AntiAliasing::Off;
+    o.toneMap = ToneMap::Clamp;
+    o.exposure = 1;
+    o.sky = SkyKind::Flat;
+    o.background = {0, 0, 0};
+    o.skyLight = 0;
+    o.ambient = {1, 1, 1};
+    o.defaultLights = false;
+    o.ambientOcclusion = Occlusion::Off;
+    o.shadow = NoShadowOptions{};
+    o.translucencyBlur = blur;
+    return o;
+}
+
+// The 10-90 % width (pixels) of the edge along the image's middle row: the green channel
+// normalized by its mean over the 8 rightmost pixels (the black side is 0).
+double edgeWidth(const Image& image) {
+    const int64_t y = image.height / 2, W = image.width;
+    double white = 0;
+    for (int64_t x = W - 8; x < W; ++x) white += double(image.at(x, y).y) / 8;
+    auto crossing = [&](double level) {
+        for (int64_t x = 1; x < W; ++x) {
+            const double a = image.at(x - 1, y).y / white, b = image.at(x, y).y / white;
+            if (a < level && b >= level) return double(x - 1) + (level - a) / (b - a);
+        }
+        return std::nan("");
+    };
+    return crossing(0.9) - crossing(0.1);
+}
+
+double discEdgeWidth(double r) {
+    double lo = 0, hi = 1; // F(u) = 0.9 by bisection
+    for (int i = 0; i < 60; ++i) {
+        const double u = (lo + hi) / 2;
+        (0.5 + (u * std::sqrt(1 - u * u) + std::asin(u)) / M_PI < 0.9 ? lo : hi) = u;
+    }
+    return 2 * lo * r;
+}
+
+TEST(TranslucencyShadowTest, ASlabOfJadeBlursTheEdgeBehindItByItsThickness) {
+    const double blur = RenderOptions{}.translucencyBlur;
+    ASSERT_GT(blur, 0);
+    const double focal = double(EdgeSlab::kHeight) / (2 * std::tan(EdgeSlab::kFov / 2));
+    const double bare = edgeWidth(
+        render(edgeSlabScene(0, false), edgeSlabScene(0, false).cameras[0], edgeSlabOptions(blur)).image);
+    std::printf("edge behind jade, blur %.2f: no slab %.2f px\n", blur, bare);
+    EXPECT_LT(bare, 1.01);
+    double previous = bare;
+    for (const double t : {0.05, 0.1, 0.2, 0.4}) {
+        const Scene s = edgeSlabScene(t, false);
+        const double width = edgeWidth(render(s, s.cameras[0], edgeSlabOptions(blur)).image);
+        const double front = EdgeSlab::kEye - t / 2, behind = EdgeSlab::kEye - EdgeSlab::kWall;
+        const double r =
+            focal * std::tan(blur * t / EdgeSlab::kAttenuationDistance) * (behind - front) / behind;
+        std::printf("  t %.2f: width %.2f px, a disc of radius %.2f px %.2f px\n", t, width, r,
+                    discEdgeWidth(r));
+        EXPECT_GT(width, previous + 1) << t;
+        EXPECT_NEAR(width, discEdgeWidth(r), 0.25 * discEdgeWidth(r) + 1) << t;
+        previous = width;
+    }
+    // Blur 0: as sharp as with no slab (what the pass did before).
+    const Scene thick = edgeSlabScene(0.4, false);
+    const double sharp = edgeWidth(render(thick, thick.cameras[0], edgeSlabOptions(0)).image);
+    std::printf("  t 0.40, blur 0: width %.2f px\n", sharp);
+    EXPECT_LT(sharp, 1.01);
+}
+
+// Clear glass keeps its own path: the blur of translucent solids changes no pixel of it.
+TEST(TranslucencyShadowTest, TheTranslucencyBlurLeavesClearGlassAlone) {
+    const Scene s = edgeSlabScene(0.4, true);
+    RenderOptions o = edgeSlabOptions(0);
+    setRenderOption(o, "glass", std::string("exact"));
+    const RenderResult sharp = render(s, s.cameras[0], o);
+    EXPECT_THROW(setRenderOption(o, "translucency-blur", -1.0), Error);
+    EXPECT_TRUE(setRenderOption(o, "translucency-blur", 5.0));
+    EXPECT_EQ(o.translucencyBlur, 5);
+    const RenderResult blurred = render(s, s.cameras[0], o);
+    ASSERT_EQ(sharp.image.pixels.size(), blurred.image.pixels.size());
+    for (std::size_t i = 0; i < sharp.image.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c) ASSERT_EQ(sharp.image.pixels[i][c], blurred.image.pixels[i][c]) << i;
+    EXPECT_LT(edgeWidth(sharp.image), 1.01); // and glass shows the edge sharply
+}
 } // namespace
 } // namespace voxfx

@@ -30,8 +30,11 @@
 //             in the camera's frame at the output resolution (ViewMatter,
 //             voxfx/translucency_shadow.hpp; within one slice of translucencySlices per entry into
 //             the solid of the exact chord). Thin parts show the light behind, thick parts are
-//             dark; the lights' light through the solid is the shading pass's (diffuse
-//             transmission times the shadow: with `translucency` shadows, Beer-Lambert over the
+//             dark; what lies behind is blurred over a cone of translucencyBlur * L /
+//             attenuationDistance radians (at most 1: the solid scatters; 32 taps of the scene
+//             behind, the environment read blurred), so thick jade is milky, not clear; the
+//             lights' light through the solid is the shading pass's (diffuse transmission
+//             times the shadow: with `translucency` shadows, Beer-Lambert over the
 //             matter the light crossed). Nothing when no sample shows a translucent solid.
 //   glass     the pixels showing glass (Material::isGlass) get the light through it by the chosen
 //             method (voxfx/glass.hpp).
@@ -220,12 +223,16 @@ struct RenderOptions {
     /// The translucency pass: slices of the camera-space solid grid over the translucent meshes'
     /// depth range (1..65536); the matter along a ray is within one slice per entry of the chord.
     int64_t translucencySlices = 256;
+    /// The translucency pass: a translucent solid scatters, so what lies behind it is blurred over a
+    /// cone of blur * L / attenuationDistance radians (at most 1), L the matter the ray crosses
+    /// (render pass "translucency" above). 0: seen sharply, as through clear glass.
+    double translucencyBlur = 1.0;
 
     /// The named fields of RenderOptions itself: width, height, supersample, antiAliasing,
     /// adaptiveSamples, toneMap, exposure, ambient, skyLight, sky, background, sunElevation,
     /// sunAzimuth, turbidity, groundAlbedo, volumeStep,
     /// emptySpaceSkipping, volumeShading, defaultLights, creaseAngle, ambientOcclusion,
-    /// occlusionRadius, occlusionResolution, translucencySlices.
+    /// occlusionRadius, occlusionResolution, translucencySlices, translucencyBlur.
     static std::span<const OptionField<RenderOptions>> fields();
 };
 

@@ -89,7 +89,13 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
             "translucencySlices",
             "translucent solids (diffuse transmission): slices of the camera-space solid grid that "
             "measures the matter along each ray (GI08 sec. 7)",
-            1, 65536)};
+            1, 65536),
+        numberOption<O, &O::translucencyBlur>(
+            "translucencyBlur",
+            "translucent solids: what lies behind is blurred over a cone of this many radians per "
+            "attenuationDistance of matter the ray crosses (at most 1 radian; 0: seen sharply, as "
+            "through clear glass)",
+            0, 100)};
     return table;
 }
 

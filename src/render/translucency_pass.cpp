@@ -2,9 +2,13 @@
 // meshes are voxelized as a solid in the camera's own frame (viewMatterBehind), the solid cells
 // between each visible translucent surface and the opaque surface behind it counted into a length,
 // and the light from behind attenuated by Beer-Lambert over it: thin parts show what lies behind,
-// thick parts are dark.
+// thick parts are dark. A translucent solid scatters: what lies behind is averaged over a cone
+// whose angle grows with the length crossed (RenderOptions::translucencyBlur), so thick jade
+// shows a blur of the scene behind it, not a sharp image as clear glass does.
 #include "render/translucency_pass.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -59,23 +63,111 @@ void compositeTranslucency(FrameState& f) {
     const ViewMatter matter = ViewMatter::build(cameraFrame(f.camera, f.options.width, f.options.height),
                                                 solids, Fill::Auto, f.options.translucencySlices);
     const Vec3d eye = gb.frame.eye();
+    const Environment& env = *f.environment;
+    const float exposure = f.options.exposure;
+    auto background = [&](double x, double y, double blurCone) {
+        return env.lookup(gb.frame.worldFromGrid({x, y, 1.0}) - eye, blurCone) * exposure;
+    };
+    // Per sample showing a translucent solid: the matter its ray crosses and the blur cone over
+    // what lies behind (half-angle `cone`, `radius` samples across the image where it meets what
+    // lies behind: the cone's apex at the visible surface, so the blur also grows with the gap
+    // between the solid and what lies behind it; an infinite gap, the environment, gives
+    // focal * tan(cone)).
+    const double blur = f.options.translucencyBlur;
+    const double focal = double(H) / (2 * gb.frame.tanHalfFovY());
+    const size_t n = front.size();
+    std::vector<double> crossed(n, 0);
+    std::vector<float> cone(n, 0), radius(n, 0);
     parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
             for (int64_t x = 0; x < W; ++x) {
                 const auto i = size_t(y * W + x);
                 if (!std::isfinite(front[i])) continue;
                 const Material& m = materials[g.triangleMaterial[gb.triangle[i]]];
-                SurfacePoint s;
-                const Vec3f light =
-                    surfaceAt(back, behind, x, y, s)
-                        ? shadePoint(f, s, eye)
-                        : f.environment->lookup(
-                              gb.frame.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - eye) *
-                              f.options.exposure;
                 const double L = matter.between(x / k, y / k, double(front[i]), double(back.depth[i]));
-                f.shaded[i] += light * beerLambert(attenuationCoefficient(m), L) * m.diffuseTransmission;
+                crossed[i] = L;
+                const double a = translucencyCone(m, L, blur);
+                if (!(a > 0)) continue;
+                const double zb = back.triangle[i] == GBuffer::kNone ? none : double(back.depth[i]);
+                const double gap = std::isfinite(zb) ? std::max(0.0, zb - double(front[i])) / zb : 1.0;
+                cone[i] = float(a);
+                radius[i] = float(focal * std::tan(a) * gap);
             }
     });
+    // The taps of a blurred sample: kBlurTaps points of a Vogel spiral over the disc of its radius
+    // (the same pattern for every sample, so the blur is smooth and deterministic); a tap lands on
+    // the sample whose cell holds it, clamped to the image.
+    constexpr int kBlurTaps = 32;
+    std::array<std::array<double, 2>, kBlurTaps> taps;
+    for (int t = 0; t < kBlurTaps; ++t) {
+        const double rho = std::sqrt((double(t) + 0.5) / kBlurTaps), phi = 2.399963229728653 * double(t);
+        taps[size_t(t)] = {rho * std::cos(phi), rho * std::sin(phi)};
+    }
+    auto tapAt = [&](int64_t x, int64_t y, double r, int t, double& tx, double& ty) {
+        tx = std::clamp(double(x) + 0.5 + r * taps[size_t(t)][0], 0.5, double(W) - 0.5);
+        ty = std::clamp(double(y) + 0.5 + r * taps[size_t(t)][1], 0.5, double(H) - 0.5);
+        return size_t(int64_t(ty) * W + int64_t(tx));
+    };
+    // The samples of the scene behind that some tap (or an unblurred sample itself) reads: shaded
+    // once each. state: 1 needed, 2 a surface (behindLight), 3 none (the environment).
+    std::vector<uint8_t> state(n, 0);
+    for (int64_t y = 0; y < H; ++y)
+        for (int64_t x = 0; x < W; ++x) {
+            const auto i = size_t(y * W + x);
+            if (!std::isfinite(front[i])) continue;
+            state[i] = 1;
+            if (radius[i] < 0.5f) continue;
+            double tx, ty;
+            for (int t = 0; t < kBlurTaps; ++t) state[tapAt(x, y, radius[i], t, tx, ty)] = 1;
+        }
+    std::vector<Vec3f> behindLight(n);
+    parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < W; ++x) {
+                const auto i = size_t(y * W + x);
+                if (!state[i]) continue;
+                SurfacePoint s;
+                const bool surface = surfaceAt(back, behind, x, y, s);
+                if (surface) behindLight[i] = shadePoint(f, s, eye);
+                state[i] = surface ? 2 : 3;
+            }
+    });
+    parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+            for (int64_t x = 0; x < W; ++x) {
+                const auto i = size_t(y * W + x);
+                if (!std::isfinite(front[i])) continue;
+                const Material& m = materials[g.triangleMaterial[gb.triangle[i]]];
+                Vec3f light =
+                    state[i] == 2 ? behindLight[i] : background(double(x) + 0.5, double(y) + 0.5, 0);
+                if (radius[i] >= 0.5f) {
+                    // The mean of the taps, leaving out surfaces in front of this one (an opaque
+                    // object between the eye and the solid is not behind it).
+                    Vec3f sum{0, 0, 0};
+                    int count = 0;
+                    for (int t = 0; t < kBlurTaps; ++t) {
+                        double tx, ty;
+                        const size_t j = tapAt(x, y, radius[i], t, tx, ty);
+                        if (state[j] == 2) {
+                            if (back.depth[j] < front[i]) continue;
+                            sum += behindLight[j];
+                        } else {
+                            sum += background(tx, ty, cone[i]);
+                        }
+                        ++count;
+                    }
+                    if (count > 0) light = sum * (1.0f / float(count));
+                }
+                f.shaded[i] +=
+                    light * beerLambert(attenuationCoefficient(m), crossed[i]) * m.diffuseTransmission;
+            }
+    });
+}
+
+double translucencyCone(const Material& m, double length, double blur) {
+    if (!(blur > 0) || !(length > 0) || !(m.attenuationDistance > 0) || !std::isfinite(m.attenuationDistance))
+        return 0;
+    return std::min(kTranslucencyMaxCone, blur * length / double(m.attenuationDistance));
 }
 
 } // namespace voxfx::detail

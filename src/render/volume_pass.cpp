@@ -348,10 +348,10 @@ struct VolumeComposite {
     // towards the light (and given that direction as the lookup's normal, so the technique adds its
     // own offset): a shadow map samples the volume in steps of its own, and a dense layer the sample
     // lies at the front of (bone under skin) must not shadow its own surface by the step over which
-    // the map's visibility falls. Under deep shadows the medium over that step and the offsets, which
-    // the lookup leaves out, is put back (ownTransmittance; without it a uniform slab was brighter by
-    // exp(sigma * the offset), 8 %). `unshaded` is the ambient plus every light's irradiance / pi:
-    // the light a sample takes without a normal.
+    // the map's visibility falls. Under deep and exact shadows the medium over that step and the
+    // offsets, which the lookup leaves out, is put back (ownTransmittance; without it a uniform slab
+    // was brighter by exp(sigma * the offset), 8 %). `unshaded` is the ambient plus every light's
+    // irradiance / pi: the light a sample takes without a normal.
     Vec3f lightAt(const Vec3d& p, std::span<const uint8_t> inside, std::vector<LightSample>& lights,
                   Vec3f& unshaded) const {
         const std::span<const Light> sceneLights = frame.lights;
@@ -373,11 +373,16 @@ struct VolumeComposite {
     }
 
     // The shadow of volume sample p (see lightAt): looked up at q, a step towards the light; under
-    // deep shadows times ownTransmittance from p to where the map is read (q moved towards the
-    // light by the normal offset and the depth bias, a texel footprint each by default).
+    // deep and exact shadows times ownTransmittance from p to where the lookup starts (deep: q
+    // moved towards the light by the normal offset and the depth bias, a texel footprint each by
+    // default; exact: the shadow ray's start, 10 epsilons beyond q; without it a uniform slab was
+    // 4 % brighter than Beer-Lambert under exact shadows).
     Vec3f shadowAt(const LightShadow& shadow, const Vec3d& p, const Vec3d& toLight,
                    std::span<const uint8_t> inside) const {
         const Vec3d q = p + toLight * step;
+        if (const ExactShadow* exact = std::get_if<ExactShadow>(&shadow))
+            return exact->visibility(q, toLight) *
+                   float(ownTransmittance(p, q + toLight * (10 * exact->epsilon()), inside));
         const DeepShadow* deep = std::get_if<DeepShadow>(&shadow);
         if (!deep) return shadowVisibility(shadow, q, toLight);
         const DeepShadowOptions* o = std::get_if<DeepShadowOptions>(&frame.options.shadow);
