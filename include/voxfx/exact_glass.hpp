@@ -51,6 +51,9 @@ public:
 
 private:
     std::vector<Vec3f> normals_;
+    /// Per glass triangle, its outward unit face normal (normalize(cross(b - a, c - a)) of its float
+    /// corners), computed once: a hit, its interface and the surface it leaves each need it.
+    std::vector<Vec3d> faceNormal_;
     std::vector<uint32_t> medium_;
     std::vector<GlassMedium> media_;
     std::shared_ptr<const TriangleTracer> tracer_; ///< the glass triangles

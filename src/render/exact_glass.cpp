@@ -31,6 +31,16 @@ std::span<const OptionField<ExactGlassOptions>> ExactGlassOptions::fields() {
     return table;
 }
 
+namespace {
+
+Vec3d outwardNormal(const Mesh& mesh, uint32_t t) {
+    const uint32_t ia = mesh.indices[3 * t], ib = mesh.indices[3 * t + 1], ic = mesh.indices[3 * t + 2];
+    const Vec3d a(mesh.positions[ia]), b(mesh.positions[ib]), c(mesh.positions[ic]);
+    return normalize(cross(b - a, c - a));
+}
+
+} // namespace
+
 ExactGlass ExactGlass::build(const GlassInput& input, const ExactGlassOptions& options) {
     ExactGlass g(input.mesh, input.vertexNormals, input.triangleMedium, input.media);
     g.maxEvents_ = options.maxEvents;
@@ -47,6 +57,8 @@ ExactGlass::ExactGlass(const MeshView& mesh, std::vector<Vec3f> vertexNormals,
     for (const uint32_t m : medium_)
         if (m >= media_.size()) fail("exact glass: medium index ", m, " out of range");
     tracer_ = std::make_shared<const TriangleTracer>(mesh);
+    faceNormal_.resize(medium_.size());
+    for (uint32_t t = 0; t < medium_.size(); ++t) faceNormal_[t] = outwardNormal(tracer_->mesh(), t);
     // Several media: each one's triangles in a tracer of their own, so that a face of another
     // medium lying on the face just hit (touching objects) is found however Embree orders them.
     std::vector<uint8_t> used(media_.size());
@@ -71,12 +83,6 @@ ExactGlass::ExactGlass(const MeshView& mesh, std::vector<Vec3f> vertexNormals,
 
 namespace {
 
-Vec3d outwardNormal(const Mesh& mesh, uint32_t t) {
-    const uint32_t ia = mesh.indices[3 * t], ib = mesh.indices[3 * t + 1], ic = mesh.indices[3 * t + 2];
-    const Vec3d a(mesh.positions[ia]), b(mesh.positions[ib]), c(mesh.positions[ic]);
-    return normalize(cross(b - a, c - a));
-}
-
 // The shading normal at hit h of the triangle with outward face normal ng: the vertex normals
 // interpolated (on ng's side), or ng without them.
 Vec3d shadingNormal(const Mesh& mesh, const std::vector<Vec3f>& normals, const TriangleTracer::Hit& h,
@@ -96,7 +102,8 @@ Vec3d shadingNormal(const Mesh& mesh, const std::vector<Vec3f>& normals, const T
 // is a surface of its own.
 class SurfaceSkip {
 public:
-    explicit SurfaceSkip(const TriangleTracer& tracer) : tracer_(tracer), mesh_(tracer.mesh()) {}
+    SurfaceSkip(const TriangleTracer& tracer, const std::vector<Vec3d>& faceNormal)
+        : tracer_(tracer), mesh_(tracer.mesh()), faceNormal_(faceNormal) {}
 
     // The ray's next hit from o along d, past faces of the last surface.
     TriangleTracer::Hit nextHit(const Vec3d& o, const Vec3d& d) const {
@@ -120,7 +127,7 @@ public:
 private:
     bool liesOnSurface(uint32_t t, const Vec3d& o, const Vec3d& at) const {
         const double planeTolerance = 0.1 * tracer_.epsilon();
-        const Vec3d nt = outwardNormal(mesh_, t);
+        const Vec3d& nt = faceNormal_[t];
         if (std::abs(dot(nt, surfaceNormal_)) < 1 - 1e-6) return false;
         const Vec3d a(mesh_.positions[mesh_.indices[3 * size_t(t)]]);
         return std::abs(dot(at - a, nt)) < planeTolerance && std::abs(dot(o - a, nt)) < planeTolerance;
@@ -128,6 +135,7 @@ private:
 
     const TriangleTracer& tracer_;
     const Mesh& mesh_;
+    const std::vector<Vec3d>& faceNormal_;
     bool onSurface_ = false;
     Vec3d surfaceNormal_{0, 0, 1};
 };
@@ -135,15 +143,14 @@ private:
 } // namespace
 
 void ExactGlass::facesAt(const Vec3d& x, const Vec3d& d, uint32_t t, std::vector<CrossedFace>& faces) const {
-    const Mesh& mesh = tracer_->mesh();
     const double epsilon = tracer_->epsilon();
-    faces.assign(1, CrossedFace{medium_[t], dot(d, outwardNormal(mesh, t)) < 0});
+    faces.assign(1, CrossedFace{medium_[t], dot(d, faceNormal_[t]) < 0});
     for (const MediumTriangles& mt : byMedium_) {
         if (mt.medium == medium_[t]) continue;
         const TriangleTracer::Hit c = mt.tracer->intersect(x - d * epsilon, d, 0, 2 * epsilon);
         if (c.hit) {
             const uint32_t ct = mt.triangle[c.triangle];
-            faces.push_back({medium_[ct], dot(d, outwardNormal(mesh, ct)) < 0});
+            faces.push_back({medium_[ct], dot(d, faceNormal_[ct]) < 0});
         }
     }
 }
@@ -154,7 +161,7 @@ GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents
     Vec3d o = origin, d = normalize(dir);
     Vec3f thr{1, 1, 1};
     detail::MediaStack stack(media_), next(media_);
-    SurfaceSkip skip(*tracer_);
+    SurfaceSkip skip(*tracer_, faceNormal_);
     std::vector<CrossedFace> faces;
     int crossings = 0; // every crossing, including ignored ones: bounds the loop
     while (true) {
@@ -165,7 +172,7 @@ GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents
             p.throughput = thr;
             return p;
         }
-        const Vec3d ng = outwardNormal(mesh, h.triangle);
+        const Vec3d& ng = faceNormal_[h.triangle];
         const Vec3d n = shadingNormal(mesh, normals_, h, ng);
         const Vec3d x = o + d * h.t;
         thr = thr * stack.attenuation(h.t);
