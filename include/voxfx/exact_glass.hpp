@@ -63,6 +63,9 @@ private:
         uint32_t medium = 0;
         std::vector<uint32_t> triangle;
         std::shared_ptr<const TriangleTracer> tracer;
+        /// Its triangles' bounds grown by twice the glass tracer's epsilon: a crossing farther out
+        /// cannot lie on one of them, and is not queried.
+        Box3d reach;
     };
     std::vector<MediumTriangles> byMedium_;
     /// One face of a crossing: its medium and whether the ray enters its object there.

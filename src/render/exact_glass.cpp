@@ -77,6 +77,10 @@ ExactGlass::ExactGlass(const MeshView& mesh, std::vector<Vec3f> vertexNormals,
             for (int k = 0; k < 3; ++k) sub.indices.push_back(all.indices[3 * size_t(t) + size_t(k)]);
         }
         mt.tracer = std::make_shared<const TriangleTracer>(sub.view());
+        mt.reach = computeBounds(sub.view());
+        const double grow = 2 * tracer_->epsilon();
+        mt.reach.lo = mt.reach.lo - Vec3d{grow, grow, grow};
+        mt.reach.hi = mt.reach.hi + Vec3d{grow, grow, grow};
         byMedium_.push_back(std::move(mt));
     }
 }
@@ -147,6 +151,11 @@ void ExactGlass::facesAt(const Vec3d& x, const Vec3d& d, uint32_t t, std::vector
     faces.assign(1, CrossedFace{medium_[t], dot(d, faceNormal_[t]) < 0});
     for (const MediumTriangles& mt : byMedium_) {
         if (mt.medium == medium_[t]) continue;
+        // The query below spans x +- epsilon along d: none of the medium's triangles within reach
+        // when x lies outside their bounds grown by twice that.
+        const Box3d& r = mt.reach;
+        if (x.x < r.lo.x || x.y < r.lo.y || x.z < r.lo.z || x.x > r.hi.x || x.y > r.hi.y || x.z > r.hi.z)
+            continue;
         const TriangleTracer::Hit c = mt.tracer->intersect(x - d * epsilon, d, 0, 2 * epsilon);
         if (c.hit) {
             const uint32_t ct = mt.triangle[c.triangle];
