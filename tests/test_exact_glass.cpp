@@ -141,23 +141,26 @@ TEST(GlassTest, ExactTracerCrossesASheetThinnerThanItsEpsilonAsAParallelSlab) {
     // A sheet 2 x 2 and 1.2e-5 thick: the tracer's epsilon (1e-5 of the diagonal, 2.8e-5) is more
     // than the sheet's thickness. Skipping every hit within epsilon of the front face missed the back
     // face: the ray stayed bent inside. Only the surface just crossed is skipped now, so the sheet
-    // is a slab (closed form): parallel exit, (1 - F_in)(1 - F_out), two events.
-    const double h = 1.2e-5;
-    const Mesh sheet = test::makeBox({-1, -1, -h / 2}, {1, 1, h / 2});
-    GlassMedium medium;
-    medium.ior = float(kGlassIor);
-    ExactGlass glass(sheet.view(), {}, std::vector<uint32_t>(sheet.triangleCount(), 0), {medium});
-    for (const double a : {0.0, 0.3, 0.9}) {
-        const Vec3d d = glassDirAt(a);
-        const GlassPath p = glass.trace(Vec3d{0.1, 0.2, 0} - d * 2, d, 16);
-        ASSERT_TRUE(p.hit);
-        EXPECT_EQ(p.events, 2) << a;
-        EXPECT_NEAR(length(p.exitDir - d), 0, 1e-5) << a;
-        const double tt = std::asin(std::sin(a) / kGlassIor);
-        const double want = (1 - fresnelDielectric(std::cos(a), 1, kGlassIor)) *
-                            (1 - fresnelDielectric(std::cos(tt), kGlassIor, 1));
-        EXPECT_NEAR(p.throughput.x, want, 1e-4) << a;
-        EXPECT_NEAR(p.exitPoint.z, -h / 2, 1e-6) << a;
+    // is a slab (closed form): parallel exit, (1 - F_in)(1 - F_out), two events. The search for the
+    // next face starts 1/100 of epsilon past the surface, below the 1/10 of epsilon within which a
+    // parallel face counts as the surface itself: a sheet 4e-6 thick (1/7 of epsilon) is a slab too.
+    for (const double h : {1.2e-5, 4e-6}) {
+        const Mesh sheet = test::makeBox({-1, -1, -h / 2}, {1, 1, h / 2});
+        GlassMedium medium;
+        medium.ior = float(kGlassIor);
+        ExactGlass glass(sheet.view(), {}, std::vector<uint32_t>(sheet.triangleCount(), 0), {medium});
+        for (const double a : {0.0, 0.3, 0.9}) {
+            const Vec3d d = glassDirAt(a);
+            const GlassPath p = glass.trace(Vec3d{0.1, 0.2, 0} - d * 2, d, 16);
+            ASSERT_TRUE(p.hit);
+            EXPECT_EQ(p.events, 2) << a << " " << h;
+            EXPECT_NEAR(length(p.exitDir - d), 0, 1e-5) << a;
+            const double tt = std::asin(std::sin(a) / kGlassIor);
+            const double want = (1 - fresnelDielectric(std::cos(a), 1, kGlassIor)) *
+                                (1 - fresnelDielectric(std::cos(tt), kGlassIor, 1));
+            EXPECT_NEAR(p.throughput.x, want, 1e-4) << a;
+            EXPECT_NEAR(p.exitPoint.z, -h / 2, 1e-7) << a << " " << h;
+        }
     }
 }
 

@@ -183,6 +183,57 @@ TEST(NestedGlassTest, ExactTracerCrossesTwoTouchingSlabsAtOneInterface) {
     }
 }
 
+TEST(NestedGlassTest, ExactTracerCrossesIntoATouchingGlassAtTheRimOfItsBounds) {
+    // A small block B (|x|, |y| <= 1, 0 <= z <= hB) standing on a wide slab A (-hA <= z <= 0), and a
+    // third glass C far off. The tracer looks for the touching faces of other media only where the
+    // crossing lies within a medium's bounds (grown by twice its epsilon), and these crossings lie
+    // on B's bounds (its bottom plane z = 0, as rounded along the ray), in its middle and near its
+    // rim, in both orders of the meshes: they must still be one interface from B into A (the closed
+    // form of the touching slabs above), and a ray that misses B crosses A alone.
+    const double hA = 0.4, hB = 0.5;
+    const Mesh a = test::makeBox({-5, -5, -hA}, {5, 5, 0}), b = test::makeBox({-1, -1, 0}, {1, 1, hB});
+    const Mesh c = test::makeBox({20, 20, -1}, {21, 21, 1});
+    const GlassMedium A = nestedMedium(1.5, 0.3), B = nestedMedium(1.9, 1.0), C = nestedMedium(1.3, 0.1);
+    for (const bool swapped : {false, true}) {
+        TwoMedia t = swapped ? nest(b, a) : nest(a, b); // B is medium 0 when swapped
+        const auto base = uint32_t(t.mesh.positions.size());
+        t.mesh.positions.insert(t.mesh.positions.end(), c.positions.begin(), c.positions.end());
+        for (const uint32_t i : c.indices) t.mesh.indices.push_back(base + i);
+        t.medium.resize(t.mesh.triangleCount(), 2);
+        const std::vector<GlassMedium> media = swapped ? std::vector{B, A, C} : std::vector{A, B, C};
+        const ExactGlass glass(t.mesh.view(), {}, t.medium, media);
+        for (const double angle : {0.3, 0.7}) {
+            const Vec3d d = nestedDirAt(angle);
+            const double tA = std::asin(std::sin(angle) / 1.5), tB = std::asin(std::sin(angle) / 1.9);
+            // Where the ray crosses z = 0: B's middle, and near its rim.
+            for (const double cross : {0.0, 1 - 1e-3}) {
+                const Vec3d entry{cross - hB * std::tan(tB), 0.3, hB};
+                const GlassPath p = glass.trace(entry - d * 2.0, d, 16);
+                ASSERT_TRUE(p.hit);
+                EXPECT_EQ(p.events, 3) << angle << " " << cross << " " << swapped;
+                EXPECT_NEAR(length(p.exitDir - d), 0, 1e-5) << angle << " " << cross;
+                const Vec3d exitPoint{cross + hA * std::tan(tA), 0.3, -hA};
+                EXPECT_NEAR(length(p.exitPoint - exitPoint), 0, 1e-4)
+                    << angle << " " << cross << " " << swapped;
+                const double fresnel = (1 - fresnelDielectric(std::cos(angle), 1, 1.9)) *
+                                       (1 - fresnelDielectric(std::cos(tB), 1.9, 1.5)) *
+                                       (1 - fresnelDielectric(std::cos(tA), 1.5, 1));
+                const double want = fresnel * std::exp(-1.0 * hB / std::cos(tB) - 0.3 * hA / std::cos(tA));
+                EXPECT_NEAR(p.throughput.x, want, 1e-4) << angle << " " << cross << " " << swapped;
+            }
+            // Past B's side: A alone (two events, A's Fresnel and absorption).
+            const Vec3d entry{2.5, 0.3, 0};
+            const GlassPath p = glass.trace(entry - d * 2.0, d, 16);
+            ASSERT_TRUE(p.hit);
+            EXPECT_EQ(p.events, 2) << angle << " " << swapped;
+            const double want = (1 - fresnelDielectric(std::cos(angle), 1, 1.5)) *
+                                (1 - fresnelDielectric(std::cos(tA), 1.5, 1)) *
+                                std::exp(-0.3 * hA / std::cos(tA));
+            EXPECT_NEAR(p.throughput.x, want, 1e-4) << angle << " " << swapped;
+        }
+    }
+}
+
 // The exit direction of a ray along -x at height b through concentric spheres as a tracer that
 // treats every interface as glass against air would give it (what both tracers did before media
 // were tracked): into B with 1 / nB, out of B into "air", A's far side then passed as a back face

@@ -31,6 +31,16 @@ std::span<const OptionField<ExactGlassOptions>> ExactGlassOptions::fields() {
     return table;
 }
 
+namespace {
+
+Vec3d outwardNormal(const Mesh& mesh, uint32_t t) {
+    const uint32_t ia = mesh.indices[3 * t], ib = mesh.indices[3 * t + 1], ic = mesh.indices[3 * t + 2];
+    const Vec3d a(mesh.positions[ia]), b(mesh.positions[ib]), c(mesh.positions[ic]);
+    return normalize(cross(b - a, c - a));
+}
+
+} // namespace
+
 ExactGlass ExactGlass::build(const GlassInput& input, const ExactGlassOptions& options) {
     ExactGlass g(input.mesh, input.vertexNormals, input.triangleMedium, input.media);
     g.maxEvents_ = options.maxEvents;
@@ -47,6 +57,17 @@ ExactGlass::ExactGlass(const MeshView& mesh, std::vector<Vec3f> vertexNormals,
     for (const uint32_t m : medium_)
         if (m >= media_.size()) fail("exact glass: medium index ", m, " out of range");
     tracer_ = std::make_shared<const TriangleTracer>(mesh);
+    const Mesh& traced = tracer_->mesh();
+    faces_.resize(medium_.size());
+    for (uint32_t t = 0; t < medium_.size(); ++t) {
+        Face& f = faces_[t];
+        f.normal = outwardNormal(traced, t);
+        f.corner = traced.positions[traced.indices[3 * size_t(t)]];
+        f.medium = medium_[t];
+        for (int k = 0; k < 3; ++k)
+            f.vertexNormal[k] =
+                normals_.empty() ? Vec3f{0, 0, 0} : normals_[traced.indices[3 * size_t(t) + size_t(k)]];
+    }
     // Several media: each one's triangles in a tracer of their own, so that a face of another
     // medium lying on the face just hit (touching objects) is found however Embree orders them.
     std::vector<uint8_t> used(media_.size());
@@ -65,27 +86,23 @@ ExactGlass::ExactGlass(const MeshView& mesh, std::vector<Vec3f> vertexNormals,
             for (int k = 0; k < 3; ++k) sub.indices.push_back(all.indices[3 * size_t(t) + size_t(k)]);
         }
         mt.tracer = std::make_shared<const TriangleTracer>(sub.view());
+        mt.reach = computeBounds(sub.view());
+        const double grow = 2 * tracer_->epsilon();
+        mt.reach.lo = mt.reach.lo - Vec3d{grow, grow, grow};
+        mt.reach.hi = mt.reach.hi + Vec3d{grow, grow, grow};
         byMedium_.push_back(std::move(mt));
     }
 }
 
 namespace {
 
-Vec3d outwardNormal(const Mesh& mesh, uint32_t t) {
-    const uint32_t ia = mesh.indices[3 * t], ib = mesh.indices[3 * t + 1], ic = mesh.indices[3 * t + 2];
-    const Vec3d a(mesh.positions[ia]), b(mesh.positions[ib]), c(mesh.positions[ic]);
-    return normalize(cross(b - a, c - a));
-}
-
-// The shading normal at hit h of the triangle with outward face normal ng: the vertex normals
-// interpolated (on ng's side), or ng without them.
-Vec3d shadingNormal(const Mesh& mesh, const std::vector<Vec3f>& normals, const TriangleTracer::Hit& h,
-                    const Vec3d& ng) {
-    if (normals.empty()) return ng;
-    const uint32_t t = h.triangle;
-    const uint32_t ia = mesh.indices[3 * t], ib = mesh.indices[3 * t + 1], ic = mesh.indices[3 * t + 2];
-    const Vec3d ns =
-        normalize(Vec3d(normals[ia]) * (1 - h.u - h.v) + Vec3d(normals[ib]) * h.u + Vec3d(normals[ic]) * h.v);
+// The shading normal at hit h of face f (outward face normal f.normal): the vertex normals
+// interpolated (on the face normal's side), or the face normal without them.
+Vec3d shadingNormal(bool vertexNormals, const ExactGlass::Face& f, const TriangleTracer::Hit& h) {
+    const Vec3d& ng = f.normal;
+    if (!vertexNormals) return ng;
+    const Vec3d ns = normalize(Vec3d(f.vertexNormal[0]) * (1 - h.u - h.v) + Vec3d(f.vertexNormal[1]) * h.u +
+                               Vec3d(f.vertexNormal[2]) * h.v);
     if (!(length(ns) > 0)) return ng;
     return dot(ns, ng) < 0 ? -ns : ns;
 }
@@ -93,15 +110,19 @@ Vec3d shadingNormal(const Mesh& mesh, const std::vector<Vec3f>& normals, const T
 // The surface the ray was last at (a plane through its origin): the next hit skips only faces lying
 // on it (the triangle just crossed, its coplanar neighbours, a touching medium's face on it), never
 // every hit within epsilon: a sheet thinner than epsilon, or a face meeting the one just crossed,
-// is a surface of its own.
+// is a surface of its own. From a surface the search starts 1/100 of epsilon along the ray
+// (kSurfaceStart): started at 0, Embree found the triangle just crossed again, at a t of the
+// origin's rounding, on 46 % of the glass demo's events, and each such hit cost a second query; a
+// face closer than that to the crossing (1e-7 of the glass's diagonal) is passed.
 class SurfaceSkip {
 public:
-    explicit SurfaceSkip(const TriangleTracer& tracer) : tracer_(tracer), mesh_(tracer.mesh()) {}
+    SurfaceSkip(const TriangleTracer& tracer, const std::vector<ExactGlass::Face>& faces)
+        : tracer_(tracer), faces_(faces) {}
 
     // The ray's next hit from o along d, past faces of the last surface.
     TriangleTracer::Hit nextHit(const Vec3d& o, const Vec3d& d) const {
         const double epsilon = tracer_.epsilon();
-        double tNear = 0;
+        double tNear = onSurface_ ? kSurfaceStart * epsilon : 0;
         for (int skip = 0;; ++skip) {
             const TriangleTracer::Hit h =
                 tracer_.intersect(o, d, tNear, std::numeric_limits<double>::infinity());
@@ -118,16 +139,18 @@ public:
     }
 
 private:
+    static constexpr double kSurfaceStart = 1e-2;
+
     bool liesOnSurface(uint32_t t, const Vec3d& o, const Vec3d& at) const {
         const double planeTolerance = 0.1 * tracer_.epsilon();
-        const Vec3d nt = outwardNormal(mesh_, t);
+        const Vec3d& nt = faces_[t].normal;
         if (std::abs(dot(nt, surfaceNormal_)) < 1 - 1e-6) return false;
-        const Vec3d a(mesh_.positions[mesh_.indices[3 * size_t(t)]]);
+        const Vec3d a(faces_[t].corner);
         return std::abs(dot(at - a, nt)) < planeTolerance && std::abs(dot(o - a, nt)) < planeTolerance;
     }
 
     const TriangleTracer& tracer_;
-    const Mesh& mesh_;
+    const std::vector<ExactGlass::Face>& faces_;
     bool onSurface_ = false;
     Vec3d surfaceNormal_{0, 0, 1};
 };
@@ -135,26 +158,29 @@ private:
 } // namespace
 
 void ExactGlass::facesAt(const Vec3d& x, const Vec3d& d, uint32_t t, std::vector<CrossedFace>& faces) const {
-    const Mesh& mesh = tracer_->mesh();
     const double epsilon = tracer_->epsilon();
-    faces.assign(1, CrossedFace{medium_[t], dot(d, outwardNormal(mesh, t)) < 0});
+    faces.assign(1, CrossedFace{faces_[t].medium, dot(d, faces_[t].normal) < 0});
     for (const MediumTriangles& mt : byMedium_) {
-        if (mt.medium == medium_[t]) continue;
+        if (mt.medium == faces_[t].medium) continue;
+        // The query below spans x +- epsilon along d: none of the medium's triangles within reach
+        // when x lies outside their bounds grown by twice that.
+        const Box3d& r = mt.reach;
+        if (x.x < r.lo.x || x.y < r.lo.y || x.z < r.lo.z || x.x > r.hi.x || x.y > r.hi.y || x.z > r.hi.z)
+            continue;
         const TriangleTracer::Hit c = mt.tracer->intersect(x - d * epsilon, d, 0, 2 * epsilon);
         if (c.hit) {
             const uint32_t ct = mt.triangle[c.triangle];
-            faces.push_back({medium_[ct], dot(d, outwardNormal(mesh, ct)) < 0});
+            faces.push_back({faces_[ct].medium, dot(d, faces_[ct].normal) < 0});
         }
     }
 }
 
 GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents) const {
-    const Mesh& mesh = tracer_->mesh();
     GlassPath p;
     Vec3d o = origin, d = normalize(dir);
     Vec3f thr{1, 1, 1};
     detail::MediaStack stack(media_), next(media_);
-    SurfaceSkip skip(*tracer_);
+    SurfaceSkip skip(*tracer_, faces_);
     std::vector<CrossedFace> faces;
     int crossings = 0; // every crossing, including ignored ones: bounds the loop
     while (true) {
@@ -165,8 +191,9 @@ GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents
             p.throughput = thr;
             return p;
         }
-        const Vec3d ng = outwardNormal(mesh, h.triangle);
-        const Vec3d n = shadingNormal(mesh, normals_, h, ng);
+        const Face& face = faces_[h.triangle];
+        const Vec3d& ng = face.normal;
+        const Vec3d n = shadingNormal(!normals_.empty(), face, h);
         const Vec3d x = o + d * h.t;
         thr = thr * stack.attenuation(h.t);
         o = x;

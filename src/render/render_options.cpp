@@ -15,11 +15,13 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
         numberOption<O, &O::supersample>("supersample", "render k x k samples per pixel everywhere", 1, 8),
         nameOption<O, parseAntiAliasing, optionName<AntiAliasing>, &O::antiAliasing>(
             "antiAliasing",
-            "anti-aliasing: adaptive shades every sample of edge and glass pixels, post blends the "
-            "other pixels' luma edges (FXAA), full does both, off takes one sample per pixel",
+            "anti-aliasing: adaptive shades every sample of edge pixels and s of the s x s (N-rooks) in "
+            "glass pixels whose light bends or steps between their neighbours', post blends the other "
+            "pixels' luma edges (FXAA), full does both, off takes one sample per pixel",
             "off | post | adaptive | full", "aa"),
         numberOption<O, &O::adaptiveSamples>(
-            "adaptiveSamples", "adaptive anti-aliasing: s x s samples in edge and glass pixels", 2, 8),
+            "adaptiveSamples", "adaptive anti-aliasing: s x s samples in edge pixels (s in glass pixels)", 2,
+            8),
         nameOption<O, parseToneMap, optionName<ToneMap>, &O::toneMap>(
             "toneMap",
             "output transform: filmic (ACES curve, highlights roll off), linear (scene-linear radiance "
