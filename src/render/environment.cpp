@@ -188,7 +188,14 @@ Vec3f Environment::sampleLevel(const Vec3d& d, int k) const {
     const double x = u * double(im.width) - 0.5, y = v * double(im.height) - 0.5;
     const double fx = std::floor(x), fy = std::floor(y);
     const float ax = float(x - fx), ay = float(y - fy);
-    auto wrapX = [&](int64_t i) { return ((i % im.width) + im.width) % im.width; };
+    // u in [0, 1) puts the columns in [-1, width]: one add or subtract wraps them (the remainder,
+    // an integer division each, only for what no unit direction gives).
+    auto wrapX = [&](int64_t i) {
+        if (i >= 0 && i < im.width) return i;
+        if (i < 0 && i >= -im.width) return i + im.width;
+        if (i >= im.width && i < 2 * im.width) return i - im.width;
+        return ((i % im.width) + im.width) % im.width;
+    };
     auto clampY = [&](int64_t j) { return std::clamp<int64_t>(j, 0, im.height - 1); };
     const int64_t x0 = wrapX(int64_t(fx)), x1 = wrapX(int64_t(fx) + 1);
     const int64_t y0 = clampY(int64_t(fy)), y1 = clampY(int64_t(fy) + 1);
