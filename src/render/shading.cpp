@@ -206,6 +206,7 @@ std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry) {
             const double area2 = dot(n, n);
             TriangleBasis& basis = out[size_t(t)];
             basis.a = Vec3f(a);
+            for (int k = 0; k < 3; ++k) basis.cornerNormal[k] = geometry.normals[corner[k]];
             if (area2 > 0) {
                 // p - a = wb e1 + wc e2 in the plane: wb = (p - a).(e2 x n) / |n|^2 and
                 // wc = (p - a).(n x e1) / |n|^2 (triple products of (p - a) x e2 = wb n).
@@ -218,8 +219,7 @@ std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry) {
     return out;
 }
 
-Vec3f interpolatedNormal(const SceneGeometry& geometry, const TriangleBasis& basis, uint32_t t,
-                         const Vec3f& rel) {
+Vec3f interpolatedNormal(const TriangleBasis& basis, const Vec3f& rel) {
     // Barycentrics, clamped against rounding (a degenerate triangle: a third each).
     float wb = 1.0f / 3, wc = 1.0f / 3;
     const Vec3f& ng = basis.normal;
@@ -228,9 +228,7 @@ Vec3f interpolatedNormal(const SceneGeometry& geometry, const TriangleBasis& bas
         wc = std::max(0.0f, dot(rel, basis.toC));
     }
     const float wa = std::max(0.0f, 1 - wb - wc);
-    const uint32_t* corner = &geometry.mesh.indices[3 * size_t(t)];
-    const Vec3f n = geometry.normals[corner[0]] * wa + geometry.normals[corner[1]] * wb +
-                    geometry.normals[corner[2]] * wc;
+    const Vec3f n = basis.cornerNormal[0] * wa + basis.cornerNormal[1] * wb + basis.cornerNormal[2] * wc;
     const float len = length(n);
     return len > 0 ? dividedBy(n, len) : ng;
 }
@@ -244,7 +242,7 @@ bool surfaceFromBasis(const GBuffer& gbuffer, const SceneGeometry& geometry,
     // The pixel ray meets the triangle's plane where the interpolated depth says.
     const Vec3d p = gbuffer.frame.worldFromGrid({double(x) + 0.5, double(y) + 0.5, double(gbuffer.depth[i])});
     Vec3f ng = basis.normal;
-    Vec3f n = interpolatedNormal(geometry, basis, t, Vec3f(p - Vec3d(basis.a)));
+    Vec3f n = interpolatedNormal(basis, Vec3f(p - Vec3d(basis.a)));
     // Both sides are visible: turn the normals towards the viewer.
     if (dot(Vec3d(ng), gbuffer.frame.eye() - p) < 0) ng = -ng;
     if (dot(n, ng) < 0) n = -n;

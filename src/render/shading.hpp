@@ -46,11 +46,10 @@ float specularPower(float ndh, const ShadeMaterial& m);
 /// Per triangle of the flattened scene, its TriangleBasis (render/render_cache.hpp).
 std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry);
 
-/// The unit shading normal of triangle t at the point basis.a + rel of its plane: its vertex normals
-/// weighted by the point's barycentrics (clamped at 0), the face normal where they cancel; not yet
-/// turned towards the viewer (surfaceFromBasis does that).
-Vec3f interpolatedNormal(const SceneGeometry& geometry, const TriangleBasis& basis, uint32_t t,
-                         const Vec3f& rel);
+/// The unit shading normal of the triangle of `basis` at the point basis.a + rel of its plane: its
+/// vertex normals (basis.cornerNormal) weighted by the point's barycentrics (clamped at 0), the face
+/// normal where they cancel; not yet turned towards the viewer (surfaceFromBasis does that).
+Vec3f interpolatedNormal(const TriangleBasis& basis, const Vec3f& rel);
 
 /// The surface seen through G-buffer sample (x, y), as surfaceAt (voxfx/gbuffer.hpp) gives it, from
 /// the precomputed bases. False for the background.
