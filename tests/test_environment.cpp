@@ -2,12 +2,14 @@
 // equirectangular mapping against its definition, RGBE against hand-computed values, the pyramid
 // against a brute-force box average, EXR read against plain OpenEXR.
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 
 #include <OpenEXR/ImfRgbaFile.h>
 #include <gtest/gtest.h>
 
+#include "render/tabled_atan.hpp"
 #include "test_util.hpp"
 #include "voxfx/environment.hpp"
 #include "voxfx/environment_io.hpp"
@@ -29,6 +31,36 @@ TEST(EnvironmentTest, EquirectMapsKnownDirectionsWhereTheDefinitionSays) {
     EXPECT_NEAR(u, 0.75, 1e-12);
     directionToEquirect({-1, 0, 0}, u, v);
     EXPECT_NEAR(u, 0.25, 1e-12);
+}
+
+// The table-and-series atan2 the equirectangular lookups use (render/tabled_atan.hpp) against
+// libm's: within 4 ulps of the result over every octant and magnitudes 2^-30..2^30 apart, the
+// table's nodes (t = k / 64) and the half-way points between them, and the same value where an
+// argument is zero or infinite (signed zeros included).
+TEST(EnvironmentTest, TabledAtan2IsLibmsAtan2WithinAFewUlps) {
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> unit(-1, 1);
+    std::uniform_int_distribution<int> scale(-30, 30);
+    auto check = [](double y, double x) {
+        const double want = std::atan2(y, x), got = detail::tabledAtan2(y, x);
+        const double ulp = std::nextafter(std::fabs(want), INFINITY) - std::fabs(want);
+        ASSERT_LE(std::fabs(got - want), 4 * ulp) << "atan2(" << y << ", " << x << ")";
+    };
+    for (int i = 0; i < 400000; ++i) check(std::ldexp(unit(rng), scale(rng)), unit(rng));
+    for (int k = 0; k <= 128; ++k)
+        for (const double sy : {1.0, -1.0})
+            for (const double sx : {1.0, -1.0}) {
+                check(sy * k / 128.0, sx * 1.0); // nodes (k even) and half-way (odd)
+                check(sy * 1.0, sx * k / 128.0);
+                check(sy * std::nextafter(k / 128.0, 1.0), sx * 3.0);
+            }
+    const double inf = std::numeric_limits<double>::infinity();
+    for (const double y : {0.0, -0.0, 1.0, -1.0, inf, -inf})
+        for (const double x : {0.0, -0.0, 2.0, -2.0, inf, -inf}) {
+            const double want = std::atan2(y, x), got = detail::tabledAtan2(y, x);
+            EXPECT_EQ(got, want) << y << " " << x;
+            EXPECT_EQ(std::signbit(got), std::signbit(want)) << y << " " << x;
+        }
 }
 
 TEST(EnvironmentTest, TexelCentresRoundTripThroughDirections) {

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -14,6 +16,7 @@
 
 #include "demo/demo_scenes.hpp"
 #include "render/shading.hpp"
+#include "render/vec_simd.hpp"
 #include "support/ground_scenes.hpp"
 #include "test_util.hpp"
 #include "voxfx/image_io.hpp"
@@ -335,6 +338,76 @@ TEST(RenderImageTest, FilmicToneMapIsMonotoneFromZeroAndRollsOffBelowOne) {
     EXPECT_GT(filmicToneMap(4), filmicToneMap(2)); // today's clamp would make both 1
     EXPECT_GT(filmicToneMap(8), 0.95f);            // saturates
     EXPECT_GT(filmicToneMap(0.18f), 0.05f);        // mid-grey stays visible
+}
+
+// The shading and resolve passes divide and tone-map three components in one SIMD instruction
+// (render/vec_simd.hpp): each must give the scalar expression's float or double bit for bit, or the
+// images would change. Oracle: the scalar operators and filmicToneMap, on random values over many
+// magnitudes and on the special ones (zero of either sign, negative, huge, infinite, NaN).
+TEST(RenderImageTest, SimdComponentArithmeticGivesTheScalarResultsBitForBit) {
+    uint64_t state = 0x9e3779b97f4a7c15ull;
+    auto next = [&] { // xorshift64*: a value spread over magnitudes 2^-20 .. 2^20, either sign
+        state ^= state >> 12, state ^= state << 25, state ^= state >> 27;
+        const uint64_t r = state * 0x2545f4914f6cdd1dull;
+        const double mantissa = double(r >> 11) * 0x1.0p-53;
+        const int exponent = int((r >> 3) % 41) - 20;
+        return std::ldexp(0.5 + mantissa, exponent) * ((r & 1) ? -1.0 : 1.0);
+    };
+    auto sameBits = [](auto a, auto b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+    const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+    std::vector<float> specials = {0.0f, -0.0f, 1.0f, -1.0f, 1e-30f, 1e30f, inf, -inf, nan, 3.0e38f};
+    for (int i = 0; i < 200000; ++i) {
+        const Vec3d d{next(), next(), next()};
+        const double s = i % 2 ? next() : std::sqrt(dot(d, d));
+        const Vec3d want = d / s, got = detail::dividedBy(d, s);
+        ASSERT_TRUE(sameBits(want.x, got.x) && sameBits(want.y, got.y) && sameBits(want.z, got.z)) << i;
+        const Vec3f f(d);
+        const float fs = float(s);
+        const Vec3f wantF = f / fs, gotF = detail::dividedBy(f, fs);
+        ASSERT_TRUE(sameBits(wantF.x, gotF.x) && sameBits(wantF.y, gotF.y) && sameBits(wantF.z, gotF.z)) << i;
+        const Vec3d n = normalize(d), m = detail::normalized(d);
+        ASSERT_TRUE(sameBits(n.x, m.x) && sameBits(n.y, m.y) && sameBits(n.z, m.z)) << i;
+        // The tone map over the range shading gives (radiance 0 .. 2^20, and negative rounding).
+        const Vec3f c{float(std::abs(d.x)), float(d.y),
+                      i % 3 ? float(std::abs(d.z)) : specials[size_t(i / 3) % specials.size()]};
+        const Vec3f t = detail::filmicToneMapped(c);
+        ASSERT_TRUE(sameBits(t.x, filmicToneMap(c.x)) && sameBits(t.y, filmicToneMap(c.y)) &&
+                    sameBits(t.z, filmicToneMap(c.z)))
+            << c.x << " " << c.y << " " << c.z;
+    }
+    for (const float x : specials) {
+        const Vec3f t = detail::filmicToneMapped({x, x, x});
+        EXPECT_TRUE(sameBits(t.x, filmicToneMap(x))) << x;
+    }
+    EXPECT_EQ(detail::normalized(Vec3d{0, 0, 0}), (Vec3d{0, 0, 0}));
+}
+
+// The specular lobe's power by squaring for integer exponents (render/shading.hpp): against the
+// power in long double rounded once to float (an independent, correctly rounded oracle on this
+// platform's 64-bit mantissa), which it must equal; std::pow where the exponent is not an integer.
+TEST(RenderImageTest, SpecularPowerBySquaringIsTheCorrectlyRoundedPower) {
+    uint64_t state = 0x2545f4914f6cdd1dull;
+    auto unit = [&] {
+        state ^= state >> 12, state ^= state << 25, state ^= state >> 27;
+        return float(double((state * 0x2545f4914f6cdd1dull) >> 40) * 0x1.0p-24); // [0, 1)
+    };
+    for (const float s : {1.0f, 2.0f, 7.0f, 24.0f, 32.0f, 100.0f, 200.0f, 1000.0f}) {
+        Material mat;
+        mat.shininess = s;
+        const detail::ShadeMaterial m = detail::SurfaceShader::prepare(mat);
+        ASSERT_EQ(m.integerShininess, int(s));
+        for (int i = 0; i < 20000; ++i) {
+            // ndh where the lobe is evaluated (s (1 - ndh) < 9.21), and the ends.
+            const float x = i == 0 ? 0.0f : i == 1 ? 1.0f : 1.0f - unit() * std::min(1.0f, 9.21f / s);
+            const float want = float(std::pow((long double)x, (long double)s));
+            ASSERT_EQ(detail::specularPower(x, m), want) << "x " << x << " s " << s;
+        }
+    }
+    Material fractional;
+    fractional.shininess = 32.5f;
+    const detail::ShadeMaterial m = detail::SurfaceShader::prepare(fractional);
+    EXPECT_EQ(m.integerShininess, 0);
+    EXPECT_EQ(detail::specularPower(0.9f, m), std::pow(0.9f, 32.5f));
 }
 
 TEST(RenderImageTest, DefaultOutputIsFilmicAndKeepsHighlightsApart) {

@@ -182,18 +182,20 @@ VOXFX_HOSTDEV void rasterizeCenter(const RasterTriangle& t, const FrameView& fra
         // left to right, so the fragment's depth is the same double as summed in one expression.
         double rowW = 0;
         bool haveRowW = false;
+        auto prepareRow = [&] {
+            if (haveRowW) return;
+            if (!havePlane) {
+                const double uw = t.w[1] - t.w[0], vw = t.w[2] - t.w[0];
+                gx = (uw * vy - vw * uy) / det;
+                gy = (ux * vw - vx * uw) / det;
+                havePlane = true;
+            }
+            rowW = t.w[0] + gy * (sy - t.y[0]);
+            haveRowW = true;
+        };
         auto emit = [&](int64_t x) {
             const double sx = double(x) + 0.5;
-            if (!haveRowW) {
-                if (!havePlane) {
-                    const double uw = t.w[1] - t.w[0], vw = t.w[2] - t.w[0];
-                    gx = (uw * vy - vw * uy) / det;
-                    gy = (ux * vw - vx * uw) / det;
-                    havePlane = true;
-                }
-                rowW = t.w[0] + gy * (sy - t.y[0]);
-                haveRowW = true;
-            }
+            prepareRow();
             const double w = rowW + gx * (sx - t.x[0]);
             sink.fragment(x, y, perspective ? 1.0 / w : w, t.index, t.front);
         };
@@ -212,9 +214,21 @@ VOXFX_HOSTDEV void rasterizeCenter(const RasterTriangle& t, const FrameView& fra
             }
 #ifdef __AVX__
             // The covered lanes as bits (the sign bit of each all-ones lane), lowest first.
-            for (unsigned bits = unsigned(__builtin_ia32_movmskpd256(V4d(inside))); bits != 0;
-                 bits &= bits - 1)
-                emit(x + std::countr_zero(bits));
+            unsigned bits = unsigned(__builtin_ia32_movmskpd256(V4d(inside)));
+            if (bits == 0) continue;
+            if (bits & (bits - 1)) {
+                // Two or more: their depths in one vector division, lane for lane emit's
+                // operations (sx is exact either way: x + 0.5 + k for a grid-sized x).
+                prepareRow();
+                const V4d w = rowW + gx * (sx - t.x[0]);
+                const V4d depth = perspective ? 1.0 / w : w;
+                for (; bits != 0; bits &= bits - 1) {
+                    const int lane = std::countr_zero(bits);
+                    sink.fragment(x + lane, y, depth[lane], t.index, t.front);
+                }
+                continue;
+            }
+            emit(x + std::countr_zero(bits));
 #else
             for (int lane = 0; lane < 4; ++lane)
                 if (inside[lane]) emit(x + lane);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "render/vec_simd.hpp"
 #include "voxfx/file_name.hpp"
 
 namespace voxfx {
@@ -47,6 +48,11 @@ void markRefinedCells(FrameState& f) {
         for (int64_t cy = y0; cy < y1; ++cy)
             for (int64_t cx = 0; cx < cw; ++cx) {
                 const uint32_t first = g.triangle[size_t(cy * s * W + cx * s)];
+                if (s == 2) { // the default: one triangle over the cell needs no depth (most cells)
+                    const uint32_t* row0 = &g.triangle[size_t(cy * 2 * W + cx * 2)];
+                    const uint32_t* row1 = row0 + W;
+                    if (row0[1] == first && row1[0] == first && row1[1] == first) continue; // stays 0
+                }
                 bool refine = false, same = true;
                 float dmin = g.depth[size_t(cy * s * W + cx * s)], dmax = dmin;
                 for (int dy = 0; dy < s && !refine; ++dy)
@@ -81,10 +87,7 @@ float lumaOf(const Vec3f& c) {
 }
 
 // The perceptual luma of a shaded sample as the image shows it (after the output transform).
-float shownLuma(const Vec3f& c, ToneMap t) {
-    return lumaOf(t == ToneMap::Clamp ? c
-                                      : Vec3f{filmicToneMap(c.x), filmicToneMap(c.y), filmicToneMap(c.z)});
-}
+float shownLuma(const Vec3f& c, ToneMap t) { return lumaOf(t == ToneMap::Clamp ? c : filmicToneMapped(c)); }
 
 } // namespace
 

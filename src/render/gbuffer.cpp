@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "voxfx/error.hpp"
+#include "voxfx/parallel.hpp"
 #include "voxfx/raster.hpp"
 
 namespace voxfx {
@@ -164,8 +165,14 @@ GBuffer renderGBuffer(const SceneGeometry& geometry, const Frame& camera, Progre
 
 void renderGBuffer(const SceneGeometry& geometry, const Frame& camera, GBuffer& g, Progress* progress) {
     g.frame = camera;
-    g.depth.assign(size_t(camera.columnCount()), std::numeric_limits<float>::infinity());
-    g.triangle.assign(size_t(camera.columnCount()), GBuffer::kNone);
+    // Cleared in parallel: 8 bytes a sample, 30 MB at 1280x720 with 2x2 samples per pixel.
+    const auto n = size_t(camera.columnCount());
+    g.depth.resize(n);
+    g.triangle.resize(n);
+    parallelFor(0, int64_t(n), int64_t(1) << 16, [&](int64_t i0, int64_t i1) {
+        std::fill(g.depth.begin() + i0, g.depth.begin() + i1, std::numeric_limits<float>::infinity());
+        std::fill(g.triangle.begin() + i0, g.triangle.begin() + i1, GBuffer::kNone);
+    });
     if (geometry.drawnTriangles == 0) return;
     NearestFragmentConsumer consumer{camera.width(), camera.nearDepth(), g};
     RasterOptions ro;

@@ -209,15 +209,20 @@ T bilinearColumns(const LightView& view, const Vec3d& world, const Vec3d& n, con
 /// footprints of the view at p); -1 (q untouched) when no view covers p. For point lights the
 /// offset can carry q across a cube-face seam, out of the frustum of p's face (which would then
 /// report "outside the view": full light); q picks its own face.
+/// `texel`, where given: views[returned].columnWorldSize(p), which the offset needed too (a division
+/// per lookup saved where q stays on p's face).
 inline int lookupView(const std::vector<LightView>& views, const Vec3d& p, const Vec3d& n, double offset,
-                      Vec3d& q) {
+                      Vec3d& q, double* texel = nullptr) {
     int i = viewIndexFor(views, p);
     if (i < 0) return i;
-    q = p + n * (offset * views[size_t(i)].columnWorldSize(p));
+    const double size = views[size_t(i)].columnWorldSize(p);
+    q = p + n * (offset * size);
+    const int first = i;
     if (views.size() > 1) {
         const int j = viewIndexFor(views, q);
         if (j >= 0) i = j;
     }
+    if (texel) *texel = i == first ? size : views[size_t(i)].columnWorldSize(p);
     return i;
 }
 

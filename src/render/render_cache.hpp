@@ -116,9 +116,12 @@ private:
 /// Per triangle of the flattened scene, what reconstructing a surface point of it needs
 /// (render/shading.hpp, surfaceFromBasis): its first corner, barycentric duals (the weights of b
 /// and c at a point p of its plane are dot(p - a, toB) and dot(p - a, toC)), and its unit face
-/// normal (zero when degenerate).
+/// normal (zero when degenerate); and the vertex normals of its three corners (SceneGeometry::normals
+/// of its indices), copied here so that interpolatedNormal reads one record per sample instead of
+/// the index buffer and then three vertices scattered over the scene.
 struct TriangleBasis {
     Vec3f a, toB, toC, normal;
+    Vec3f cornerNormal[3];
 };
 
 /// The glass pass's structures (render/glass_pass.cpp): built once per glass key.

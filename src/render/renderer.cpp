@@ -17,6 +17,7 @@
 #include "render/technique_list.hpp"
 #include "render/translucency_pass.hpp"
 #include "render/volume_pass.hpp"
+#include "voxfx/parallel.hpp"
 #include "voxfx/render.hpp"
 
 namespace voxfx {
@@ -52,9 +53,15 @@ void flattenPass(FrameState& f, Progress*) {
 
 void gbufferPass(FrameState& f, Progress* progress) {
     renderGBuffer(f.geometry, cameraFrame(f.camera, f.width, f.height), f.gbuffer, progress);
-    int64_t covered = 0;
-    for (const uint32_t tri : f.gbuffer.triangle) covered += tri != GBuffer::kNone;
-    f.result.coveredPixels = covered;
+    const std::vector<uint32_t>& tri = f.gbuffer.triangle;
+    f.result.coveredPixels = parallelReduce(
+        0, int64_t(tri.size()), int64_t(1) << 16, int64_t(0),
+        [&](int64_t i0, int64_t i1) {
+            int64_t n = 0;
+            for (int64_t i = i0; i < i1; ++i) n += tri[size_t(i)] != GBuffer::kNone;
+            return n;
+        },
+        [](int64_t a, int64_t b) { return a + b; });
     detail::markRefinedCells(f);
 }
 

@@ -7,6 +7,7 @@
 #include "render/antialias.hpp"
 #include "render/frame_passes.hpp"
 #include "render/render_cache.hpp"
+#include "render/vec_simd.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/render.hpp"
 
@@ -17,7 +18,7 @@ namespace {
 // The output transform of one sample (t resolved: filmic or linear).
 Vec3f toneMapped(const Vec3f& c, ToneMap t) {
     if (t == ToneMap::Clamp) return c;
-    return {filmicToneMap(c.x), filmicToneMap(c.y), filmicToneMap(c.z)};
+    return filmicToneMapped(c); // filmicToneMap per component, in lanes
 }
 
 // The tone-mapped sum of the samples of cell (cx, cy) that the passes shaded, each times `scale`:

@@ -154,7 +154,7 @@ struct Cells {
     Vec3f normalAt(int64_t x, int64_t y, const Vec3f& at) const {
         const uint32_t t = triangle(x, y);
         const TriangleBasis& basis = bases[t];
-        const Vec3f n = interpolatedNormal(*geometry, basis, t, at - basis.a);
+        const Vec3f n = interpolatedNormal(basis, at - basis.a);
         Vec3f ng = basis.normal;
         if (dot(ng, eye - at) < 0) ng = -ng;
         return dot(n, ng) < 0 ? -n : n;

@@ -14,6 +14,7 @@
 
 #include "render/antialias.hpp"
 #include "render/screen_space_ao.hpp"
+#include "render/vec_simd.hpp"
 
 namespace voxfx::detail {
 
@@ -32,7 +33,7 @@ Vec3f lightIrradiance(const Light& light, const LightCone& cone, const Vec3d& p,
     }
     const Vec3d d = light.towards(p);
     const double dist2 = std::max(dot(d, d), 1e-12);
-    toLight = d / std::sqrt(dist2);
+    toLight = dividedBy(d, std::sqrt(dist2));
     double falloff = 1.0 / dist2;
     if (light.type == LightType::Spot) {
         // Smoothstep between the outer and inner cone in the angle's cosine: continuous with a
@@ -57,8 +58,12 @@ SurfaceShader::SurfaceShader(const FrameState& frame)
     sky_ = o.skyLight > 0;
     constexpr double band[9] = {M_PI,     2 * M_PI / 3, 2 * M_PI / 3, 2 * M_PI / 3, M_PI / 4,
                                 M_PI / 4, M_PI / 4,     M_PI / 4,     M_PI / 4};
-    for (int b = 0; b < 9; ++b)
+    for (int b = 0; b < 9; ++b) {
         sh_[size_t(b)] = environment_->sphericalHarmonics()[size_t(b)] * float(band[b] * o.skyLight / M_PI);
+        shLanes_[b][0] = sh_[size_t(b)].x, shLanes_[b][1] = sh_[size_t(b)].y,
+        shLanes_[b][2] = sh_[size_t(b)].z;
+        shLanes_[b][3] = 0;
+    }
     materials_.reserve(frame.scene.materials.size());
     for (const Material& m : frame.scene.materials) materials_.push_back(prepare(m));
     for (std::size_t k = 0; k < frame.lights.size(); ++k) {
@@ -90,9 +95,20 @@ Vec3f SurfaceShader::skyIrradiance(const Vec3d& normal) const {
                             0.315392f * (3 * z * z - 1),
                             1.092548f * x * z,
                             0.546274f * (x * x - y * y)};
+#ifdef VOXFX_VEC_SIMD_SSE
+    // The scalar sum below in lanes, term by term in the same order: the same floats.
+    __m128 e = _mm_setzero_ps();
+    for (int b = 0; b < 9; ++b)
+        e = _mm_add_ps(e, _mm_mul_ps(_mm_load_ps(shLanes_[b]), _mm_set1_ps(basis[b])));
+    // std::max(0.0f, v) is 0 < v ? v : 0, as maxps(v, 0).
+    alignas(16) float r[4];
+    _mm_store_ps(r, _mm_max_ps(e, _mm_setzero_ps()));
+    return {r[0], r[1], r[2]};
+#else
     Vec3f e;
     for (int b = 0; b < 9; ++b) e += sh_[size_t(b)] * basis[b];
     return {std::max(0.0f, e.x), std::max(0.0f, e.y), std::max(0.0f, e.z)};
+#endif
 }
 
 ShadeMaterial SurfaceShader::prepare(const Material& m) {
@@ -108,7 +124,20 @@ ShadeMaterial SurfaceShader::prepare(const Material& m) {
         out.behind = m.baseColor * m.crossingTransmittance() * float(1.0 / M_PI);
     out.specular = m.specular > 0 ? m.specular * (m.shininess + 8) / float(8 * M_PI) : 0.0f;
     out.shininess = m.shininess;
+    if (m.shininess >= 1 && m.shininess <= 4096 && m.shininess == std::floor(m.shininess))
+        out.integerShininess = int(m.shininess);
     return out;
+}
+
+float specularPower(float ndh, const ShadeMaterial& m) {
+    if (m.integerShininess == 0) return std::pow(ndh, m.shininess);
+    // At most 2 log2(s) products, each rounded to 53 bits: a relative error below about s 2^-53.
+    double r = 1, b = double(ndh);
+    for (int e = m.integerShininess;; b *= b) {
+        if (e & 1) r *= b;
+        if ((e >>= 1) == 0) break;
+    }
+    return float(r);
 }
 
 Vec3f SurfaceShader::shade(const SurfacePoint& s, const Vec3d& eye, float occlusion) const {
@@ -129,7 +158,7 @@ Vec3f SurfaceShader::shadeWith(const SurfacePoint& s, const ShadeMaterial& m, co
     if (field_) occlusion *= float(field_->visibility(s.position, s.normal));
     Vec3f out = ambient * m.ambientAlbedo * occlusion;
     if (lights_.empty()) return out * exposure_;
-    const Vec3d toEye = normalize(eye - s.position);
+    const Vec3d toEye = normalized(eye - s.position);
     const bool lightsBehind = m.behind.x > 0 || m.behind.y > 0 || m.behind.z > 0;
     for (const LightTerm& lt : lights_) {
         Vec3d l = lt.toLight;
@@ -143,11 +172,11 @@ Vec3f SurfaceShader::shadeWith(const SurfacePoint& s, const ShadeMaterial& m, co
             if (ndl <= 0) continue;
             float spec = 0;
             if (m.specular > 0) {
-                const Vec3d h = normalize(l + toEye);
+                const Vec3d h = normalized(l + toEye);
                 const float ndh = float(std::max(0.0, dot(s.normal, h)));
                 // x^s <= e^(s (x - 1)) (as ln x <= x - 1): below 1e-4 where s (1 - x) > 9.21, a lobe
                 // too faint to show, so most samples skip the pow.
-                if (m.shininess * (1 - ndh) < 9.21f) spec = m.specular * std::pow(ndh, m.shininess);
+                if (m.shininess * (1 - ndh) < 9.21f) spec = m.specular * specularPower(ndh, m);
             }
             radiance = (m.diffuse + Vec3f{spec, spec, spec}) * float(ndl);
         } else {
@@ -177,6 +206,7 @@ std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry) {
             const double area2 = dot(n, n);
             TriangleBasis& basis = out[size_t(t)];
             basis.a = Vec3f(a);
+            for (int k = 0; k < 3; ++k) basis.cornerNormal[k] = geometry.normals[corner[k]];
             if (area2 > 0) {
                 // p - a = wb e1 + wc e2 in the plane: wb = (p - a).(e2 x n) / |n|^2 and
                 // wc = (p - a).(n x e1) / |n|^2 (triple products of (p - a) x e2 = wb n).
@@ -189,8 +219,7 @@ std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry) {
     return out;
 }
 
-Vec3f interpolatedNormal(const SceneGeometry& geometry, const TriangleBasis& basis, uint32_t t,
-                         const Vec3f& rel) {
+Vec3f interpolatedNormal(const TriangleBasis& basis, const Vec3f& rel) {
     // Barycentrics, clamped against rounding (a degenerate triangle: a third each).
     float wb = 1.0f / 3, wc = 1.0f / 3;
     const Vec3f& ng = basis.normal;
@@ -199,11 +228,9 @@ Vec3f interpolatedNormal(const SceneGeometry& geometry, const TriangleBasis& bas
         wc = std::max(0.0f, dot(rel, basis.toC));
     }
     const float wa = std::max(0.0f, 1 - wb - wc);
-    const uint32_t* corner = &geometry.mesh.indices[3 * size_t(t)];
-    const Vec3f n = geometry.normals[corner[0]] * wa + geometry.normals[corner[1]] * wb +
-                    geometry.normals[corner[2]] * wc;
+    const Vec3f n = basis.cornerNormal[0] * wa + basis.cornerNormal[1] * wb + basis.cornerNormal[2] * wc;
     const float len = length(n);
-    return len > 0 ? n / len : ng;
+    return len > 0 ? dividedBy(n, len) : ng;
 }
 
 bool surfaceFromBasis(const GBuffer& gbuffer, const SceneGeometry& geometry,
@@ -215,7 +242,7 @@ bool surfaceFromBasis(const GBuffer& gbuffer, const SceneGeometry& geometry,
     // The pixel ray meets the triangle's plane where the interpolated depth says.
     const Vec3d p = gbuffer.frame.worldFromGrid({double(x) + 0.5, double(y) + 0.5, double(gbuffer.depth[i])});
     Vec3f ng = basis.normal;
-    Vec3f n = interpolatedNormal(geometry, basis, t, Vec3f(p - Vec3d(basis.a)));
+    Vec3f n = interpolatedNormal(basis, Vec3f(p - Vec3d(basis.a)));
     // Both sides are visible: turn the normals towards the viewer.
     if (dot(Vec3d(ng), gbuffer.frame.eye() - p) < 0) ng = -ng;
     if (dot(n, ng) < 0) n = -n;
@@ -309,6 +336,8 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                             shadeRepresentative(frame, cellOcclusion, cx, cy, rep);
                             continue;
                         }
+                        // A cell shaded once has its representative only, done in round 0.
+                        if (frame.refined[size_t(cy * cw + cx)] == 0) continue;
                         const int n = cellSamples(frame, cx, cy, samples);
                         const float occlusion =
                             screenOcclusion.empty() ? 1.0f : screenOcclusion[size_t(cy * cw + cx)];

@@ -28,21 +28,28 @@ inline Vec3f lightIrradiance(const Light& light, const Vec3d& p, Vec3d& toLight)
 
 /// What shading reads of a material, computed once (SurfaceShader::prepare).
 struct ShadeMaterial {
-    Vec3f ambientAlbedo;  ///< baseColor, times 1 - t for a translucent solid
-    Vec3f diffuse;        ///< the front's Lambert BRDF: ambientAlbedo / pi
-    Vec3f behind;         ///< radiance per unit irradiance and cosine from a light on the far side
-    float specular = 0;   ///< normalized Blinn–Phong factor: specular (s + 8) / 8 pi (0: none)
-    float shininess = 32; ///< s
+    Vec3f ambientAlbedo;      ///< baseColor, times 1 - t for a translucent solid
+    Vec3f diffuse;            ///< the front's Lambert BRDF: ambientAlbedo / pi
+    Vec3f behind;             ///< radiance per unit irradiance and cosine from a light on the far side
+    float specular = 0;       ///< normalized Blinn–Phong factor: specular (s + 8) / 8 pi (0: none)
+    float shininess = 32;     ///< s
+    int integerShininess = 0; ///< s where it is an integer in [1, 4096] (powers by squaring), else 0
 };
+
+/// ndh^m.shininess for 0 <= ndh <= 1 (the specular lobe): std::pow, or for an integer exponent
+/// (m.integerShininess) powers by squaring in double, rounded once to float: the correctly rounded
+/// power but where the exact one lies within about s 2^-53 (relative) of a float rounding boundary,
+/// so it differs from pow (within 0.82 ulp, glibc) by at most an ulp, where pow is not correctly
+/// rounded; and it costs a few multiplications instead of a pow (4 % of the CGAL scene's frame).
+float specularPower(float ndh, const ShadeMaterial& m);
 
 /// Per triangle of the flattened scene, its TriangleBasis (render/render_cache.hpp).
 std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry);
 
-/// The unit shading normal of triangle t at the point basis.a + rel of its plane: its vertex normals
-/// weighted by the point's barycentrics (clamped at 0), the face normal where they cancel; not yet
-/// turned towards the viewer (surfaceFromBasis does that).
-Vec3f interpolatedNormal(const SceneGeometry& geometry, const TriangleBasis& basis, uint32_t t,
-                         const Vec3f& rel);
+/// The unit shading normal of the triangle of `basis` at the point basis.a + rel of its plane: its
+/// vertex normals (basis.cornerNormal) weighted by the point's barycentrics (clamped at 0), the face
+/// normal where they cancel; not yet turned towards the viewer (surfaceFromBasis does that).
+Vec3f interpolatedNormal(const TriangleBasis& basis, const Vec3f& rel);
 
 /// The surface seen through G-buffer sample (x, y), as surfaceAt (voxfx/gbuffer.hpp) gives it, from
 /// the precomputed bases. False for the background.
@@ -80,7 +87,8 @@ private:
     float exposure_;
     Vec3f ambient_;
     bool sky_ = false;
-    std::array<Vec3f, 9> sh_; ///< irradiance coefficients, times skyLight / pi
+    std::array<Vec3f, 9> sh_;         ///< irradiance coefficients, times skyLight / pi
+    alignas(16) float shLanes_[9][4]; ///< the same, as four lanes (the fourth 0) for SIMD sums
     std::vector<LightTerm> lights_;
     std::vector<ShadeMaterial> materials_; ///< the scene's, prepared
 };

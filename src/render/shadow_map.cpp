@@ -105,7 +105,8 @@ void ShadowMap::buildLowerPlanes() {
 float ShadowMap::visibility(const Vec3d& world, int pcfRadius, double bias) const {
     Vec3d g;
     if (depth_.empty() || !view_.locate(world, g)) return 1.0f;
-    const double limit = g.z - bias / view_.worldPerDepthUnit();
+    // bias / worldPerDepthUnit(), which is 1 for a perspective view (x / 1 is x: no division).
+    const double limit = g.z - (view_.frame.isPerspective() ? bias : bias / view_.frame.cellSize().z);
     const int64_t W = view_.frame.width(), H = view_.frame.height();
     // Clamp: a point on the frame's border (or a rounding error) must not walk off the map.
     const int64_t cx = std::clamp<int64_t>(int64_t(std::floor(g.x)), 0, W - 1);
@@ -175,9 +176,9 @@ MapShadow MapShadow::build(const Scene& scene, const Light& light, const ShadowM
 
 float MapShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     Vec3d q;
-    const int i = detail::lookupView(views_, p, n, options_.normalOffset, q);
+    double texel = 0;
+    const int i = detail::lookupView(views_, p, n, options_.normalOffset, q, &texel);
     if (i < 0) return 1.0f;
-    const double texel = views_[size_t(i)].columnWorldSize(p);
     return maps_[size_t(i)].visibility(q, options_.pcfRadius, options_.depthBias * texel);
 }
 
