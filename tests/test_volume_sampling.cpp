@@ -403,7 +403,53 @@ TEST(DeepShadowEmptySpaceTest, SkippedSamplesAreTransparentAndSkippingChangesNoP
         }
         EXPECT_GT(empty, 2000);
     }
-    // Rendering and deep shadows with and without skipping: the same pixels, fewer samples.
+    // Runs of empty bricks along rays (emptyRun, the camera's march leaps over them) against the
+    // point test: every point of the ray before the run's end is in an empty brick, and just past
+    // its end (unless it reached maxLength) the ray is in a brick that is not empty or outside the
+    // box. Rays from random points in random directions, in both volumes.
+    for (const Volume* v : {&smoke, static_cast<const Volume*>(&turned)}) {
+        const EmptySpace es(*v, tf);
+        const VolumeView view = v->view();
+        const auto outside = [&](const Vec3d& p) {
+            const int64_t dims[3] = {view.nx, view.ny, view.nz};
+            for (int a = 0; a < 3; ++a) {
+                const double w = view.voxelCoordinate(p, a);
+                if (!(w >= 0 && w <= double(dims[a]))) return true;
+            }
+            return false;
+        };
+        const Box3d box = v->box();
+        std::uniform_real_distribution<double> x(box.lo.x, box.hi.x), y(box.lo.y, box.hi.y),
+            fz(box.lo.z, box.hi.z), d(-1, 1);
+        int64_t runs = 0, ended = 0;
+        for (int i = 0; i < 4000; ++i) {
+            const Vec3d p{x(rng), y(rng), fz(rng)};
+            Vec3d dir{d(rng), d(rng), d(rng)};
+            if (length(dir) < 0.1) continue;
+            dir = normalize(dir);
+            const double maxLength = 1.5;
+            const double run = es.emptyRun(p, dir, maxLength);
+            if (outside(p) || !es.empty(p)) {
+                EXPECT_EQ(run, 0.0);
+                continue;
+            }
+            ASSERT_GT(run, 0.0);
+            ++runs;
+            for (int k = 0; k < 400; ++k) {
+                const Vec3d q = p + dir * (run * (1 - 1e-9) * k / 400.0);
+                ASSERT_TRUE(es.empty(q) && !outside(q)) << i << ": " << k;
+            }
+            if (run < maxLength) {
+                const Vec3d q = p + dir * (run + 1e-7);
+                EXPECT_TRUE(outside(q) || !es.empty(q)) << i;
+                ended += !outside(q);
+            }
+        }
+        EXPECT_GT(runs, 500);
+        EXPECT_GT(ended, 50); // runs that end at a brick with matter, not at the box's side
+    }
+    // Rendering and deep shadows with and without skipping (the camera's leaps over empty runs
+    // included): the same pixels, fewer samples.
     const Scene scene = dsmrGroundAndSmoke(true);
     RenderOptions o;
     o.width = 48;

@@ -457,6 +457,25 @@ struct VolumeComposite {
         }
     }
 
+    // Empty-space leaping: after an interval every volume inside skipped (its ends in empty
+    // bricks), the index of the last sample before the ray, from p1 at length l1 of the segment,
+    // enters a brick of one of them that is not empty (EmptySpace::emptyRun), less a millionth of
+    // a step; j (the index of l1's sample) where that is no further. The intervals up to it lie in
+    // empty bricks, which touch while the step is at most a brick (4 voxels): each would have been
+    // skipped one by one, so leaping over them changes no pixel. The caller's next interval starts
+    // at that sample, computed as the loop computes it.
+    int64_t lastEmptySample(const PixelRay& r, const Vec3d& p1, double l1, double worldLength,
+                            double segmentStep, std::span<const uint8_t> inside, int64_t j) const {
+        const Vec3d dir = r.perDepth * (1 / r.lengthPerDepth);
+        double run = worldLength - l1;
+        for (std::size_t o = 0; o < inside.size() && run > 0; ++o)
+            if (inside[o] && vs.objects[o].kind == ObjectKind::Volume)
+                run = std::min(run, emptySpace[o].emptyRun(p1, dir, run));
+        const double until = l1 + run - 1e-6 * segmentStep;
+        const double last = std::floor(until / segmentStep - r.jitter);
+        return last > double(j) ? int64_t(last) : j;
+    }
+
     // The segment [z0, z1) inside the volume objects `inside`, composited front to back; false
     // stops the walk. Its samples lie at the segment's ends and at z0 + (j + jitter) steps between
     // them, the step of the finest volume inside (segmentStep: the smoke, 48³ over 1.8 units, is not
@@ -483,6 +502,7 @@ struct VolumeComposite {
             // Each object's extinction over the interval (opacity first: the colour only where
             // something shows).
             double sigmaSum = 0;
+            bool allEmpty = true; // every volume inside is in empty bricks over the interval
             for (std::size_t o = 0; o < inside.size(); ++o) {
                 ObjectInterval& w = (*r.objects)[o];
                 w.sigma = 0;
@@ -492,6 +512,7 @@ struct VolumeComposite {
                     w.have = false;
                     continue;
                 }
+                allEmpty = false;
                 const Volume& volume = *vs.volumes[std::size_t(obj.volume)];
                 const PreintegratedTransfer& pre = preintegrated[o];
                 if (!w.have) {
@@ -513,6 +534,10 @@ struct VolumeComposite {
             }
             if (!(sigmaSum > 0)) {
                 l0 = l1;
+                if (allEmpty && l1 < worldLength) {
+                    const int64_t last = lastEmptySample(r, p1, l1, worldLength, segmentStep, inside, j);
+                    if (last > j) j = last, l0 = std::min(worldLength, (double(j) + r.jitter) * segmentStep);
+                }
                 continue;
             }
             // A dense interval in pieces of optical depth at most kPieceDepth (up to 8), each lit
