@@ -142,8 +142,8 @@ struct RenderCacheData {
     std::vector<float> screenOcclusion;
     std::vector<uint8_t> refined, glassSamples;
     std::vector<Vec3f> volumeBehind; ///< the volume pass: per cell, the light behind its volumes
-    /// The volume pass: per cell, the light its representative's ray gathered and its transmittance
-    /// (read at the cells of the coarse lattice, from which the cells between are interpolated).
+    /// The volume pass: per cell of the coarse lattice (even x and y), the light its representative's
+    /// ray gathered and its transmittance, from which the cells between are interpolated.
     std::vector<Vec3f> volumeColor;
     std::vector<double> volumeTransmittance;
     FragmentLists volumeLists; ///< the volume pass: its fragment lists, rebuilt every frame

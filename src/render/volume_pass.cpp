@@ -732,11 +732,17 @@ struct LatticeInterpolation {
     const FrameState& frame;
     const SampleCaster& caster;
     const ColumnCrossings& crossings;
-    const std::vector<Vec3f>& color;          ///< per cell: its representative's gathered light
-    const std::vector<double>& transmittance; ///< and transmittance (read at lattice cells)
+    /// Per lattice cell (latticeIndex): its representative's gathered light and transmittance.
+    const std::vector<Vec3f>& color;
+    const std::vector<double>& transmittance;
     float threshold;
 
     static bool onLattice(int64_t cx, int64_t cy) { return cx % 2 == 0 && cy % 2 == 0; }
+    /// Lattice cells along a row of `cw` cells; lattice cell (cx, cy)'s index.
+    static int64_t latticeWidth(int64_t cw) { return (cw + 1) / 2; }
+    static std::size_t latticeIndex(int64_t cx, int64_t cy, int64_t cw) {
+        return std::size_t((cy / 2) * latticeWidth(cw) + cx / 2);
+    }
 
     // Whether cell (cx, cy), off the lattice, is interpolated over `behind` (its own background);
     // `out` is then what its volumes give.
@@ -764,9 +770,8 @@ struct LatticeInterpolation {
         double sumTransmittance = 0;
         for (int k = 0; k < n; ++k) {
             if (nx[k] < 0 || ny[k] < 0 || nx[k] >= cw || ny[k] >= ch) return false;
-            const std::size_t c = std::size_t(ny[k] * cw + nx[k]);
             // A G-buffer edge (several meshes, faces or depths in the cell): cast.
-            if (a > 1 && frame.refined[c] != 0) return false;
+            if (a > 1 && frame.refined[std::size_t(ny[k] * cw + nx[k])] != 0) return false;
             const std::size_t rep = representativeSample(frame, nx[k], ny[k]);
             const double depth = caster.zMax(rep);
             if (std::isinf(depth) != std::isinf(ownDepth)) return false;
@@ -775,6 +780,7 @@ struct LatticeInterpolation {
             const auto column =
                 caster.lists.column(int64_t(rep % std::size_t(W)), int64_t(rep / std::size_t(W)));
             if (!crossings.same(ownColumn, ownDepth, column, depth, near)) return false;
+            const std::size_t c = latticeIndex(nx[k], ny[k], cw);
             const SampleCaster::Gathered g{color[c], transmittance[c]};
             const float l = shownLuma(g.over(behind), tm);
             lo = std::min(lo, l), hi = std::max(hi, l);
@@ -818,8 +824,9 @@ void compositeVolumes(FrameState& frame) {
     std::vector<Vec3f>& latticeColor = frame.cache.volumeColor;
     std::vector<double>& latticeTransmittance = frame.cache.volumeTransmittance;
     if (refine) {
-        latticeColor.resize(std::size_t(cw * ch));
-        latticeTransmittance.resize(std::size_t(cw * ch));
+        const std::size_t cells = std::size_t(LatticeInterpolation::latticeWidth(cw) * ((ch + 1) / 2));
+        latticeColor.resize(cells);
+        latticeTransmittance.resize(cells);
     }
     const auto edgeCell = [&](int64_t cx, int64_t cy) {
         return a > 1 && frame.refined[std::size_t(cy * cw + cx)] != 0;
@@ -842,8 +849,9 @@ void compositeVolumes(FrameState& frame) {
                         Vec3f& out = frame.shaded[i];
                         if (refine && lattice && !edge && i == rep) {
                             const SampleCaster::Gathered g = caster.gather(w, x, y);
-                            latticeColor[c] = g.color;
-                            latticeTransmittance[c] = g.transmittance;
+                            const std::size_t l = LatticeInterpolation::latticeIndex(cx, cy, cw);
+                            latticeColor[l] = g.color;
+                            latticeTransmittance[l] = g.transmittance;
                             out = g.over(out);
                         } else {
                             caster.cast(w, x, y, out, out);
