@@ -2,8 +2,8 @@
 // composites volumes over the image and only there; a homogeneous slab against Beer–Lambert's
 // closed form, with and without deep shadows; no rings (wood grain, #26 item 2) in a dense medium;
 // jittered images independent of the thread count; each volume sampled at its own spacing, against
-// a dense march; and empty-space skipping, which skips only
-// transparent samples and changes no pixel.
+// a dense march; empty-space skipping, which skips only transparent samples and changes no pixel;
+// and adaptive image-space refinement (volumeRefinement) against every pixel cast.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -362,6 +362,7 @@ TEST(VolumeSamplingTest, AVolumeAtItsOwnSpacingMatchesADenseMarch) {
     for (int k = 0; k < 2; ++k) {
         RenderOptions o = twoSpacingsOptions();
         if (k == 1) o.volumeStep = kFineSpacing / kSmokeSpacing; // main's step beside the fine block
+        o.volumeRefinement = 0; // every pixel cast: the march itself (VolumeRefinementTest: the rest)
         const RenderResult r = render(alone, alone.cameras[0], o);
         n = 0;
         for (int64_t y = 0; y < o.height; y += 2)
@@ -428,7 +429,53 @@ TEST(DeepShadowEmptySpaceTest, SkippedSamplesAreTransparentAndSkippingChangesNoP
         }
         EXPECT_GT(empty, 2000);
     }
-    // Rendering and deep shadows with and without skipping: the same pixels, fewer samples.
+    // Runs of empty bricks along rays (emptyRun, the camera's march leaps over them) against the
+    // point test: every point of the ray before the run's end is in an empty brick, and just past
+    // its end (unless it reached maxLength) the ray is in a brick that is not empty or outside the
+    // box. Rays from random points in random directions, in both volumes.
+    for (const Volume* v : {&smoke, static_cast<const Volume*>(&turned)}) {
+        const EmptySpace es(*v, tf);
+        const VolumeView view = v->view();
+        const auto outside = [&](const Vec3d& p) {
+            const int64_t dims[3] = {view.nx, view.ny, view.nz};
+            for (int a = 0; a < 3; ++a) {
+                const double w = view.voxelCoordinate(p, a);
+                if (!(w >= 0 && w <= double(dims[a]))) return true;
+            }
+            return false;
+        };
+        const Box3d box = v->box();
+        std::uniform_real_distribution<double> x(box.lo.x, box.hi.x), y(box.lo.y, box.hi.y),
+            fz(box.lo.z, box.hi.z), d(-1, 1);
+        int64_t runs = 0, ended = 0;
+        for (int i = 0; i < 4000; ++i) {
+            const Vec3d p{x(rng), y(rng), fz(rng)};
+            Vec3d dir{d(rng), d(rng), d(rng)};
+            if (length(dir) < 0.1) continue;
+            dir = normalize(dir);
+            const double maxLength = 1.5;
+            const double run = es.emptyRun(p, dir, maxLength);
+            if (outside(p) || !es.empty(p)) {
+                EXPECT_EQ(run, 0.0);
+                continue;
+            }
+            ASSERT_GT(run, 0.0);
+            ++runs;
+            for (int k = 0; k < 400; ++k) {
+                const Vec3d q = p + dir * (run * (1 - 1e-9) * k / 400.0);
+                ASSERT_TRUE(es.empty(q) && !outside(q)) << i << ": " << k;
+            }
+            if (run < maxLength) {
+                const Vec3d q = p + dir * (run + 1e-7);
+                EXPECT_TRUE(outside(q) || !es.empty(q)) << i;
+                ended += !outside(q);
+            }
+        }
+        EXPECT_GT(runs, 500);
+        EXPECT_GT(ended, 50); // runs that end at a brick with matter, not at the box's side
+    }
+    // Rendering and deep shadows with and without skipping (the camera's leaps over empty runs
+    // included): the same pixels, fewer samples.
     const Scene scene = dsmrGroundAndSmoke(true);
     RenderOptions o;
     o.width = 48;
@@ -443,6 +490,126 @@ TEST(DeepShadowEmptySpaceTest, SkippedSamplesAreTransparentAndSkippingChangesNoP
     EXPECT_EQ(std::get<DeepShadowStats>(skipping.shadowStats).nodes,
               std::get<DeepShadowStats>(sampling.shadowStats).nodes);
     EXPECT_EQ(skipping.image.pixels, sampling.image.pixels);
+}
+
+// ---- adaptive image-space refinement (#34) -------------------------------------------------------
+
+// The ground and smoke (dsmrGroundAndSmoke) with a thin opaque pillar standing in front of the smoke
+// ([-0.03, 0.03] x [0, 2.2] x [1.3, 1.36]: about two pixels wide at 160 x 120), under deep shadows.
+constexpr double kPillarHalfWidth = 0.03;
+const Box3d kPillar{{-kPillarHalfWidth, 0, 1.3}, {kPillarHalfWidth, 2.2, 1.36}};
+const Box3d kRefinementSmoke{{-1, 0.5, -1}, {1, 1.5, 1}};
+
+Scene pillarAndSmokeScene() {
+    Scene s = dsmrGroundAndSmoke(true);
+    Material m;
+    m.baseColor = {0.7f, 0.2f, 0.2f};
+    SceneMesh pillar;
+    pillar.name = "pillar";
+    pillar.mesh = boxMesh(kPillar);
+    pillar.material = s.addMaterial(m);
+    s.meshes.push_back(pillar);
+    return s;
+}
+
+RenderOptions refinementOptions(double threshold) {
+    RenderOptions o;
+    o.width = 160;
+    o.height = 120;
+    DeepShadowOptions deep;
+    deep.resolution = 96;
+    o.shadow = deep;
+    o.exposure = 1; // fixed: the images are compared pixel by pixel
+    o.volumeRefinement = threshold;
+    return o;
+}
+
+// Without anti-aliasing (one ray per pixel, no post-process): a pixel the pass interpolates takes the
+// cast pixels two apart along x or y (or the four diagonal ones) only where no edge lies between. The
+// oracle for where edges lie is the geometry itself: each pixel's ray tested against the pillar's
+// and the smoke box's boxes (slabs). Every pixel off the coarse lattice (even x and y, counted from
+// the bottom left) whose ray and one of its lattice neighbours' are on different sides of the pillar
+// or of the box must be cast: identical to the image with every pixel cast. Elsewhere the image
+// stays within 0.05 of it (the refinement's threshold is in shown luma; the smoke's light varies
+// smoothly but its jittered samples differ from pixel to pixel), and most pixels through the smoke
+// are interpolated, with fewer volume samples.
+TEST(VolumeRefinementTest, NoPixelIsInterpolatedAcrossAMeshOrVolumeEdge) {
+    const Scene s = pillarAndSmokeScene();
+    RenderOptions exactOptions = refinementOptions(0), fastOptions = refinementOptions(1.0 / 64);
+    exactOptions.antiAliasing = fastOptions.antiAliasing = AntiAliasing::Off;
+    const RenderResult exact = render(s, s.cameras[0], exactOptions);
+    const RenderResult fast = render(s, s.cameras[0], fastOptions);
+    EXPECT_EQ(exact.volumeInterpolated, 0);
+    const int64_t W = 160, H = 120;
+    const Frame cam = cameraFrame(s.cameras[0], W, H);
+    // Per pixel (y up): -1 when the ray clearly misses `box`, +1 when it clearly crosses it, 0 near
+    // its silhouette (where the rasterized lists and the slab test may disagree).
+    const auto side = [&](const Box3d& box, int64_t x, int64_t y) {
+        const Vec3d eye = cam.eye(), p = cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0});
+        const double gap = rayBoxGap(eye, p - eye, box) / length(p - eye);
+        return gap > 1e-4 ? -1 : gap < -1e-4 ? 1 : 0;
+    };
+    int64_t throughSmoke = 0, edgePixels = 0;
+    double worst = 0;
+    for (int64_t y = 0; y < H; ++y)
+        for (int64_t x = 0; x < W; ++x) {
+            const Vec3f a = fast.image.at(x, H - 1 - y), b = exact.image.at(x, H - 1 - y);
+            const double d = std::max({std::abs(a.x - b.x), std::abs(a.y - b.y), std::abs(a.z - b.z)});
+            worst = std::max(worst, d);
+            throughSmoke += side(kRefinementSmoke, x, y) > 0 && side(kPillar, x, y) < 0;
+            if (x % 2 == 0 && y % 2 == 0) continue; // on the lattice: always cast
+            std::vector<std::pair<int64_t, int64_t>> neighbours;
+            if (y % 2 == 0)
+                neighbours = {{x - 1, y}, {x + 1, y}};
+            else if (x % 2 == 0)
+                neighbours = {{x, y - 1}, {x, y + 1}};
+            else
+                neighbours = {{x - 1, y - 1}, {x + 1, y - 1}, {x - 1, y + 1}, {x + 1, y + 1}};
+            bool acrossAnEdge = false;
+            for (const auto& [nx, ny] : neighbours) {
+                if (nx < 0 || ny < 0 || nx >= W || ny >= H) continue;
+                for (const Box3d* box : {&kPillar, &kRefinementSmoke}) {
+                    const int own = side(*box, x, y), other = side(*box, nx, ny);
+                    acrossAnEdge |= own != 0 && other != 0 && own != other;
+                }
+            }
+            if (!acrossAnEdge) continue;
+            ++edgePixels;
+            EXPECT_TRUE(a.x == b.x && a.y == b.y && a.z == b.z) << x << ", " << y << ": " << d;
+        }
+    std::printf("refinement, no AA: %lld of %lld pixels through the smoke interpolated, %lld edge pixels "
+                "cast; samples %lld against %lld; worst difference %.4f\n",
+                (long long)fast.volumeInterpolated, (long long)throughSmoke, (long long)edgePixels,
+                (long long)fast.volumeSamples, (long long)exact.volumeSamples, worst);
+    EXPECT_GT(edgePixels, 100);
+    EXPECT_GT(fast.volumeInterpolated, throughSmoke / 2);
+    EXPECT_LT(double(fast.volumeSamples), 0.6 * double(exact.volumeSamples));
+    EXPECT_LT(worst, 0.05);
+}
+
+// With adaptive anti-aliasing, the default: the image with refinement against the image with every
+// pixel cast (the same anti-aliasing), mean and worst absolute difference per channel, and the
+// volume samples it saves.
+TEST(VolumeRefinementTest, WithAntiAliasingTheImageStaysCloseToEveryPixelCast) {
+    const Scene s = pillarAndSmokeScene();
+    const RenderResult exact = render(s, s.cameras[0], refinementOptions(0));
+    const RenderResult fast = render(s, s.cameras[0], refinementOptions(1.0 / 64));
+    double sum = 0, worst = 0;
+    int64_t changed = 0;
+    for (std::size_t i = 0; i < exact.image.pixels.size(); ++i) {
+        const Vec3f a = fast.image.pixels[i], b = exact.image.pixels[i];
+        const double d = std::max({std::abs(a.x - b.x), std::abs(a.y - b.y), std::abs(a.z - b.z)});
+        sum += d, worst = std::max(worst, d), changed += d > 0;
+    }
+    const double mean = sum / double(exact.image.pixels.size());
+    std::printf("refinement with AA: %lld interpolated, %lld pixels changed, mean %.5f, worst %.4f; samples "
+                "%lld against %lld\n",
+                (long long)fast.volumeInterpolated, (long long)changed, mean, worst,
+                (long long)fast.volumeSamples, (long long)exact.volumeSamples);
+    EXPECT_GT(fast.volumeInterpolated, 1000);
+    EXPECT_LT(double(fast.volumeSamples), 0.7 * double(exact.volumeSamples));
+    EXPECT_LT(mean, 0.003);
+    EXPECT_LT(worst, 0.08);
 }
 
 } // namespace

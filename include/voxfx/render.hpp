@@ -197,6 +197,14 @@ struct RenderOptions {
     /// Volume ray casting: volume bricks the transfer function leaves transparent are not sampled
     /// (EmptySpace, voxfx/segment_walker.hpp); the image is the same either way, only faster.
     bool skipEmptySpace = true;
+    /// Volume ray casting, adaptive image-space refinement (Levoy 1990): the rays of every other
+    /// pixel (cell) along x and y are cast first; a pixel between them is cast too only where its
+    /// ray crosses other faces of the volume scene than theirs (a volume's box, a Boolean's or a
+    /// blended mesh's edge), the G-buffer's depth there is more than 2 % from theirs (a mesh in front
+    /// of or inside a volume), or their volumes' light composited over its own background differs in
+    /// shown luma (0..1, after the output transform) by more than this; elsewhere the volumes' light
+    /// and transmittance are interpolated from them (two or four). 0: every pixel cast.
+    double volumeRefinement = 1.0 / 64;
     /// Volume ray casting: how samples are lit. phong: the normal is -gradient / |gradient| (central
     /// differences of the volume, VolumeView::gradient: it points from high values to low, out of a
     /// dense core), each light adds diffuse max(0, n.l) / pi times the sample's colour plus the
@@ -231,8 +239,8 @@ struct RenderOptions {
     /// The named fields of RenderOptions itself: width, height, supersample, antiAliasing,
     /// adaptiveSamples, toneMap, exposure, ambient, skyLight, sky, background, sunElevation,
     /// sunAzimuth, turbidity, groundAlbedo, volumeStep,
-    /// emptySpaceSkipping, volumeShading, defaultLights, creaseAngle, ambientOcclusion,
-    /// occlusionRadius, occlusionResolution, translucencySlices, translucencyBlur.
+    /// emptySpaceSkipping, volumeRefinement, volumeShading, defaultLights, creaseAngle,
+    /// ambientOcclusion, occlusionRadius, occlusionResolution, translucencySlices, translucencyBlur.
     static std::span<const OptionField<RenderOptions>> fields();
 };
 
@@ -323,6 +331,9 @@ struct RenderResult {
     std::vector<uint8_t> glassMask;
     GlassReport glass;
     int64_t volumeSamples = 0; ///< volume samples the ray-casting pass took
+    /// Cells (output pixels) whose volume light the ray-casting pass interpolated from the casts
+    /// around them instead of casting (RenderOptions::volumeRefinement).
+    int64_t volumeInterpolated = 0;
     /// The exposure the image was made with: RenderOptions::exposure, or the automatic one.
     float exposure = 1;
 };

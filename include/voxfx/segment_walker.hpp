@@ -67,6 +67,12 @@ public:
         return empty_[std::size_t(a[0] + bricks_[0] * (a[1] + bricks_[1] * a[2]))] != 0 &&
                empty_[std::size_t(b[0] + bricks_[0] * (b[1] + bricks_[1] * b[2]))] != 0;
     }
+    /// How far the ray p + dir s (s >= 0, in the units of `dir`) runs through empty bricks from p:
+    /// the s at which it enters the first brick that is not empty or leaves the volume's box (a
+    /// 3D DDA over the bricks), at most maxLength; 0 where p itself lies outside the box or in a
+    /// brick that is not empty. Every point of the ray before it lies in an empty brick, so a march
+    /// may step over that run without sampling it.
+    double emptyRun(const Vec3d& p, const Vec3d& dir, double maxLength) const;
     /// Fraction of the bricks that are empty (0 for a volume without voxels).
     double emptyFraction() const;
 

@@ -127,6 +127,7 @@ py::dict reportDict(const RenderOptions& o, const RenderResult& r, const Camera&
     d["glass_pixels"] = r.glass.pixels;
     d["covered_pixels"] = r.coveredPixels;
     d["volume_samples"] = r.volumeSamples;
+    d["volume_interpolated"] = r.volumeInterpolated;
     d["passes_ms"] = passes;
     d["total_ms"] = r.timings.totalMs;
     return d;

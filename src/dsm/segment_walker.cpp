@@ -62,6 +62,36 @@ std::vector<EmptySpace> emptySpaceOf(const VolumeScene& scene) {
     return out;
 }
 
+double EmptySpace::emptyRun(const Vec3d& p, const Vec3d& dir, double maxLength) const {
+    if (empty_.empty() || !(maxLength > 0)) return 0;
+    double u[3], du[3];
+    int64_t b[3];
+    for (int a = 0; a < 3; ++a) {
+        u[a] = place_.voxelCoordinate(p, a);
+        du[a] = place_.voxelCoordinate(p + dir, a) - u[a]; // voxel coordinates are affine in p
+        if (!(u[a] >= 0 && u[a] <= double(voxels_[a]))) return 0;
+        b[a] = std::min(int64_t(u[a]) / kBrick, bricks_[a] - 1);
+    }
+    double s = 0;
+    for (;;) {
+        if (!empty_[std::size_t(b[0] + bricks_[0] * (b[1] + bricks_[1] * b[2]))]) return s;
+        // Where the ray leaves brick b (the last brick along an axis ends at the box's side).
+        double exit = std::numeric_limits<double>::infinity();
+        int axis = -1;
+        for (int a = 0; a < 3; ++a) {
+            double t = exit;
+            if (du[a] > 0) t = (double(std::min((b[a] + 1) * kBrick, voxels_[a])) - u[a]) / du[a];
+            if (du[a] < 0) t = (double(b[a] * kBrick) - u[a]) / du[a];
+            if (t < exit) exit = t, axis = a;
+        }
+        if (axis < 0) return maxLength; // dir is zero: p stays in its empty brick
+        s = std::max(s, exit);
+        if (s >= maxLength) return maxLength;
+        b[axis] += du[axis] > 0 ? 1 : -1;
+        if (b[axis] < 0 || b[axis] >= bricks_[axis]) return s; // leaves the box
+    }
+}
+
 double EmptySpace::emptyFraction() const {
     if (empty_.empty()) return 0;
     return double(std::count(empty_.begin(), empty_.end(), uint8_t(1))) / double(empty_.size());

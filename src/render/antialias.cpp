@@ -86,10 +86,10 @@ float lumaOf(const Vec3f& c) {
     return std::sqrt(0.299f * r + 0.587f * g + 0.114f * b); // perceptual (gamma 2) luma
 }
 
+} // namespace
+
 // The perceptual luma of a shaded sample as the image shows it (after the output transform).
 float shownLuma(const Vec3f& c, ToneMap t) { return lumaOf(t == ToneMap::Clamp ? c : filmicToneMapped(c)); }
-
-} // namespace
 
 std::size_t representativeSample(const FrameState& f, int64_t cx, int64_t cy) {
     const int a = f.adaptive;

@@ -41,6 +41,10 @@ inline constexpr std::size_t kNoSample = ~std::size_t(0);
 /// cell; what anti-aliasing needs at an edge is which surface covers each sample).
 std::size_t neighbourShowing(const FrameState& frame, int64_t cx, int64_t cy, uint32_t triangle);
 
+/// The perceptual luma (gamma 2, of values clamped to [0, 1]) of linear radiance `c` as the image
+/// shows it, after the output transform `t`.
+float shownLuma(const Vec3f& c, ToneMap t);
+
 /// Whether the shown luma of cell (cx, cy)'s representative departs from the straight line through
 /// its two neighbours' along x or along y by more than kRefineContrast (the second difference
 /// |l(-1) + l(+1) - 2 l(0)|; a neighbour past the image's side counts as the cell): light that

@@ -60,6 +60,12 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
         flagOption<O, &O::skipEmptySpace>(
             "emptySpaceSkipping",
             "volumes: skip the bricks the transfer function leaves transparent (same image)"),
+        numberOption<O, &O::volumeRefinement>(
+            "volumeRefinement",
+            "volume ray casting: cast every other pixel along x and y, and the pixels between them only "
+            "where a volume's, mesh's or depth edge lies between or the volumes' light of their neighbours "
+            "differs by more than this (shown luma, 0..1); interpolate elsewhere (0: cast every pixel)",
+            0, 1),
         nameOption<O, parseVolumeShading, optionName<VolumeShading>, &O::volumeShading>(
             "volumeShading",
             "volumes: phong (DSM sec. 3.2) lights each sample by Blinn-Phong about its gradient normal "

@@ -462,6 +462,25 @@ struct VolumeComposite {
         }
     }
 
+    // Empty-space leaping: after an interval every volume inside skipped (its ends in empty
+    // bricks), the index of the last sample before the ray, from p1 at length l1 of the segment,
+    // enters a brick of one of them that is not empty (EmptySpace::emptyRun), less a millionth of
+    // a step; j (the index of l1's sample) where that is no further. The intervals up to it lie in
+    // empty bricks, which touch while the step is at most a brick (4 voxels): each would have been
+    // skipped one by one, so leaping over them changes no pixel. The caller's next interval starts
+    // at that sample, computed as the loop computes it.
+    int64_t lastEmptySample(const PixelRay& r, const Vec3d& p1, double l1, double worldLength,
+                            double segmentStep, std::span<const uint8_t> inside, int64_t j) const {
+        const Vec3d dir = r.perDepth * (1 / r.lengthPerDepth);
+        double run = worldLength - l1;
+        for (std::size_t o = 0; o < inside.size() && run > 0; ++o)
+            if (inside[o] && vs.objects[o].kind == ObjectKind::Volume)
+                run = std::min(run, emptySpace[o].emptyRun(p1, dir, run));
+        const double until = l1 + run - 1e-6 * segmentStep;
+        const double last = std::floor(until / segmentStep - r.jitter);
+        return last > double(j) ? int64_t(last) : j;
+    }
+
     // The segment [z0, z1) inside the volume objects `inside`, composited front to back; false
     // stops the walk. Its samples lie at the segment's ends and at z0 + (j + jitter) steps between
     // them, the step of the finest volume inside (segmentStep: the smoke, 48³ over 1.8 units, is not
@@ -488,6 +507,7 @@ struct VolumeComposite {
             // Each object's extinction over the interval (opacity first: the colour only where
             // something shows).
             double sigmaSum = 0;
+            bool allEmpty = true; // every volume inside is in empty bricks over the interval
             for (std::size_t o = 0; o < inside.size(); ++o) {
                 ObjectInterval& w = (*r.objects)[o];
                 w.sigma = 0;
@@ -497,6 +517,7 @@ struct VolumeComposite {
                     w.have = false;
                     continue;
                 }
+                allEmpty = false;
                 const Volume& volume = *vs.volumes[std::size_t(obj.volume)];
                 const PreintegratedTransfer& pre = preintegrated[o];
                 if (!w.have) {
@@ -518,6 +539,10 @@ struct VolumeComposite {
             }
             if (!(sigmaSum > 0)) {
                 l0 = l1;
+                if (allEmpty && l1 < worldLength) {
+                    const int64_t last = lastEmptySample(r, p1, l1, worldLength, segmentStep, inside, j);
+                    if (last > j) j = last, l0 = std::min(worldLength, (double(j) + r.jitter) * segmentStep);
+                }
                 continue;
             }
             // A dense interval in pieces of optical depth at most kPieceDepth (up to 8), each lit
@@ -606,13 +631,20 @@ struct SampleCaster {
         const GBuffer& g = frame.gbuffer;
         return g.triangle[i] != GBuffer::kNone ? double(g.depth[i]) : std::numeric_limits<double>::infinity();
     }
-    // Sample (x, y) composited over `behind` into `out`.
-    void cast(Walker& w, int64_t x, int64_t y, const Vec3f& behind, Vec3f& out) const {
-        const auto col = lists.column(x, y);
-        if (col.empty()) {
-            out = behind;
-            return;
+    // What the volumes along one sample's ray give: their light (composited front to back) and the
+    // transmittance that passes the light behind them.
+    struct Gathered {
+        Vec3f color{0, 0, 0};
+        double transmittance = 1;
+        // Composited over `behind`.
+        Vec3f over(const Vec3f& behind) const {
+            return transmittance < 1.0 ? color + behind * float(transmittance) : behind;
         }
+    };
+    // The ray of sample (x, y) walked through the volume scene up to the G-buffer's surface.
+    Gathered gather(Walker& w, int64_t x, int64_t y) const {
+        const auto col = lists.column(x, y);
+        if (col.empty()) return {};
         const Frame& f = frame.gbuffer.frame;
         const std::size_t i = std::size_t(y * f.width() + x);
         PixelRay r{x, y, col, f.eye(), {}, 0, 0, sampleJitter(x, y, 1)};
@@ -627,7 +659,11 @@ struct SampleCaster {
                 return pass.segment(r, z0, z1, inside);
             });
         w.samples += r.samples;
-        out = r.transmittance < 1.0 ? r.color + behind * float(r.transmittance) : behind;
+        return {r.color, r.transmittance};
+    }
+    // Sample (x, y) composited over `behind` into `out`.
+    void cast(Walker& w, int64_t x, int64_t y, const Vec3f& behind, Vec3f& out) const {
+        out = gather(w, x, y).over(behind);
     }
 };
 
@@ -688,14 +724,92 @@ std::shared_ptr<const VolumeSetup> volumeSetup(FrameState& frame) {
     return setup->vs.objects.empty() ? nullptr : setup;
 }
 
+// Adaptive image-space refinement (RenderOptions::volumeRefinement; after Levoy 1990): the cells of
+// the coarse lattice (even cx and cy) are cast first; a cell between them takes its volumes' light
+// and transmittance from the lattice cells around it (the two along x, along y, or the four at its
+// corners) where nothing the interpolation would smooth over lies between: its representative's ray
+// crosses the same faces of the volume scene as theirs (ColumnCrossings: the edge of a volume's box,
+// a Boolean's shape or a blended mesh), the G-buffer's depths are within 2 % of its own (a mesh in
+// front of or inside a volume: G-buffer refinement's bound), and their light composited over the
+// cell's own background differs in shown luma by at most the threshold. Next to a cell the G-buffer
+// refined (an edge of the meshes) it is cast.
+struct LatticeInterpolation {
+    const FrameState& frame;
+    const SampleCaster& caster;
+    const ColumnCrossings& crossings;
+    /// Per lattice cell (latticeIndex): its representative's gathered light and transmittance.
+    const std::vector<Vec3f>& color;
+    const std::vector<double>& transmittance;
+    float threshold;
+
+    static bool onLattice(int64_t cx, int64_t cy) { return cx % 2 == 0 && cy % 2 == 0; }
+    /// Lattice cells along a row of `cw` cells; lattice cell (cx, cy)'s index.
+    static int64_t latticeWidth(int64_t cw) { return (cw + 1) / 2; }
+    static std::size_t latticeIndex(int64_t cx, int64_t cy, int64_t cw) {
+        return std::size_t((cy / 2) * latticeWidth(cw) + cx / 2);
+    }
+
+    // Whether cell (cx, cy), off the lattice, is interpolated over `behind` (its own background);
+    // `out` is then what its volumes give.
+    bool interpolate(int64_t cx, int64_t cy, const Vec3f& behind, SampleCaster::Gathered& out) const {
+        const int a = frame.adaptive;
+        const int64_t cw = frame.width / a, ch = frame.height / a;
+        int64_t nx[4], ny[4];
+        int n = 0;
+        if (cy % 2 == 0) { // between two lattice cells along x
+            nx[0] = cx - 1, nx[1] = cx + 1, ny[0] = ny[1] = cy, n = 2;
+        } else if (cx % 2 == 0) { // along y
+            nx[0] = nx[1] = cx, ny[0] = cy - 1, ny[1] = cy + 1, n = 2;
+        } else { // the four corners
+            nx[0] = nx[2] = cx - 1, nx[1] = nx[3] = cx + 1, ny[0] = ny[1] = cy - 1, ny[2] = ny[3] = cy + 1,
+            n = 4;
+        }
+        const std::size_t own = representativeSample(frame, cx, cy);
+        const int64_t W = frame.width;
+        const auto ownColumn =
+            caster.lists.column(int64_t(own % std::size_t(W)), int64_t(own / std::size_t(W)));
+        const double ownDepth = caster.zMax(own), near = frame.gbuffer.frame.nearDepth();
+        const ToneMap tm = frame.options.toneMap;
+        float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+        Vec3f sumColor{0, 0, 0};
+        double sumTransmittance = 0;
+        for (int k = 0; k < n; ++k) {
+            if (nx[k] < 0 || ny[k] < 0 || nx[k] >= cw || ny[k] >= ch) return false;
+            // A G-buffer edge (several meshes, faces or depths in the cell): cast.
+            if (a > 1 && frame.refined[std::size_t(ny[k] * cw + nx[k])] != 0) return false;
+            const std::size_t rep = representativeSample(frame, nx[k], ny[k]);
+            const double depth = caster.zMax(rep);
+            if (std::isinf(depth) != std::isinf(ownDepth)) return false;
+            if (!std::isinf(depth) && std::abs(depth - ownDepth) > 0.02 * std::min(depth, ownDepth))
+                return false;
+            const auto column =
+                caster.lists.column(int64_t(rep % std::size_t(W)), int64_t(rep / std::size_t(W)));
+            if (!crossings.same(ownColumn, ownDepth, column, depth, near)) return false;
+            const std::size_t c = latticeIndex(nx[k], ny[k], cw);
+            const SampleCaster::Gathered g{color[c], transmittance[c]};
+            const float l = shownLuma(g.over(behind), tm);
+            lo = std::min(lo, l), hi = std::max(hi, l);
+            if (hi - lo > threshold) return false;
+            sumColor += g.color;
+            sumTransmittance += g.transmittance;
+        }
+        out.color = sumColor * (1.0f / float(n));
+        out.transmittance = sumTransmittance / double(n);
+        return true;
+    }
+};
+
 } // namespace
 
-// Every sample the passes shaded (antialias.hpp's shadedSample) cast and composited; then, with
-// adaptive anti-aliasing, the cells shaded once where the volume scene draws an edge (volumeEdge)
-// get every sample: each over the light the passes before gave the cell (one mesh and material
-// shows in all its samples, or the G-buffer would have refined it), as the shading pass shares a
-// cell's shading among its samples. The second round reads only representatives, which it does not
-// change: the order of the cells does not matter.
+// Every sample the passes shaded (antialias.hpp's shadedSample) cast and composited; with adaptive
+// image-space refinement (RenderOptions::volumeRefinement > 0) the representatives of cells shaded
+// once and off the coarse lattice only after the lattice's, each cast or interpolated from them
+// (LatticeInterpolation). Then, with adaptive anti-aliasing, the cells shaded once where the volume
+// scene draws an edge (volumeEdge) get every sample: each over the light the passes before gave the
+// cell (one mesh and material shows in all its samples, or the G-buffer would have refined it), as
+// the shading pass shares a cell's shading among its samples. Each round reads only what the rounds
+// before wrote (the lattice's light; representatives, which the last round does not change): the
+// order of the cells does not matter.
 void compositeVolumes(FrameState& frame) {
     std::shared_ptr<const VolumeSetup> setup = volumeSetup(frame);
     if (!setup) return;
@@ -707,27 +821,81 @@ void compositeVolumes(FrameState& frame) {
     const SampleCaster caster{frame, pass, lists, *chosen};
     const int a = frame.adaptive;
     const int64_t W = frame.width, cw = W / a, ch = frame.height / a;
-    // The light behind each cell shaded once, before its representative is composited (round 2).
+    const bool refine = frame.options.volumeRefinement > 0;
+    // The light behind each cell shaded once, before its representative is composited (round 3).
     std::vector<Vec3f>& behind = frame.cache.volumeBehind;
     if (a > 1) behind.resize(std::size_t(cw * ch));
-    std::atomic<int64_t> samples{0};
+    // The lattice cells' gathered light and transmittance (rounds 1 and 2).
+    std::vector<Vec3f>& latticeColor = frame.cache.volumeColor;
+    std::vector<double>& latticeTransmittance = frame.cache.volumeTransmittance;
+    if (refine) {
+        const std::size_t cells = std::size_t(LatticeInterpolation::latticeWidth(cw) * ((ch + 1) / 2));
+        latticeColor.resize(cells);
+        latticeTransmittance.resize(cells);
+    }
+    const auto edgeCell = [&](int64_t cx, int64_t cy) {
+        return a > 1 && frame.refined[std::size_t(cy * cw + cx)] != 0;
+    };
+    std::atomic<int64_t> samples{0}, interpolated{0};
     parallelFor(0, ch, 2, [&](int64_t y0, int64_t y1) {
         SampleCaster::Walker w = caster.walker();
         for (int64_t cy = y0; cy < y1; ++cy)
             for (int64_t cx = 0; cx < cw; ++cx) {
-                if (a > 1 && frame.refined[std::size_t(cy * cw + cx)] == 0)
-                    behind[std::size_t(cy * cw + cx)] = frame.shaded[representativeSample(frame, cx, cy)];
+                const std::size_t c = std::size_t(cy * cw + cx);
+                const bool edge = edgeCell(cx, cy);
+                const std::size_t rep = representativeSample(frame, cx, cy);
+                if (a > 1 && !edge) behind[c] = frame.shaded[rep];
+                const bool lattice = LatticeInterpolation::onLattice(cx, cy);
+                if (refine && !edge && !lattice) continue; // round 2
                 for (int64_t y = cy * a; y < (cy + 1) * a; ++y)
                     for (int64_t x = cx * a; x < (cx + 1) * a; ++x) {
                         if (!shadedSample(frame, x, y)) continue;
-                        Vec3f& out = frame.shaded[std::size_t(y * W + x)];
-                        caster.cast(w, x, y, out, out);
+                        const std::size_t i = std::size_t(y * W + x);
+                        Vec3f& out = frame.shaded[i];
+                        if (refine && lattice && !edge && i == rep) {
+                            const SampleCaster::Gathered g = caster.gather(w, x, y);
+                            const std::size_t l = LatticeInterpolation::latticeIndex(cx, cy, cw);
+                            latticeColor[l] = g.color;
+                            latticeTransmittance[l] = g.transmittance;
+                            out = g.over(out);
+                        } else {
+                            caster.cast(w, x, y, out, out);
+                        }
                     }
             }
         samples += w.samples;
     });
+    const ColumnCrossings crossings{pass.surfaces.flat.triangleLeaf, setup->faceNormals};
+    if (refine) {
+        const LatticeInterpolation lattice{frame,
+                                           caster,
+                                           crossings,
+                                           latticeColor,
+                                           latticeTransmittance,
+                                           float(frame.options.volumeRefinement)};
+        parallelFor(0, ch, 2, [&](int64_t y0, int64_t y1) {
+            SampleCaster::Walker w = caster.walker();
+            int64_t n = 0;
+            for (int64_t cy = y0; cy < y1; ++cy)
+                for (int64_t cx = 0; cx < cw; ++cx) {
+                    if (edgeCell(cx, cy) || LatticeInterpolation::onLattice(cx, cy)) continue;
+                    const std::size_t rep = representativeSample(frame, cx, cy);
+                    const int64_t x = int64_t(rep % std::size_t(W)), y = int64_t(rep / std::size_t(W));
+                    if (lists.column(x, y).empty()) continue; // nothing to composite
+                    Vec3f& out = frame.shaded[rep];
+                    SampleCaster::Gathered g;
+                    if (lattice.interpolate(cx, cy, out, g)) {
+                        out = g.over(out);
+                        ++n;
+                    } else {
+                        caster.cast(w, x, y, out, out);
+                    }
+                }
+            samples += w.samples;
+            interpolated += n;
+        });
+    }
     if (a > 1) {
-        const ColumnCrossings crossings{pass.surfaces.flat.triangleLeaf, setup->faceNormals};
         parallelFor(0, ch, 2, [&](int64_t y0, int64_t y1) {
             SampleCaster::Walker w = caster.walker();
             for (int64_t cy = y0; cy < y1; ++cy)
@@ -746,6 +914,7 @@ void compositeVolumes(FrameState& frame) {
         });
     }
     frame.result.volumeSamples = samples.load();
+    frame.result.volumeInterpolated = interpolated.load();
 }
 
 } // namespace voxfx::detail

@@ -33,7 +33,10 @@ namespace voxfx::detail {
 /// out, are walked here too, as translucent objects shaded with their own material. With adaptive
 /// anti-aliasing (frame.adaptive > 1) the samples the passes before shaded are cast, then the cells
 /// shaded once whose samples' rays cross different faces of the volume scene, or whose composited
-/// light differs from a neighbour's, are shaded at every sample (frame.refined). Records the
+/// light differs from a neighbour's, are shaded at every sample (frame.refined). With
+/// options.volumeRefinement > 0 the cells shaded once are cast on a coarse lattice (even cx and cy)
+/// first and the cells between interpolated from it where no edge lies between (adaptive image-space
+/// refinement, RenderOptions::volumeRefinement; the count in frame.result). Records the
 /// number of volume samples taken in frame.result. Nothing happens when the scene has neither volume
 /// scene objects nor blended meshes.
 void compositeVolumes(FrameState& frame);
