@@ -162,6 +162,23 @@ TEST(ShadowTest, PointLightCubeFaceFromTheLargestComponentIsTheFrustumsFace) {
     for (const Vec3d& d : {Vec3d{inf, 1, 0}, Vec3d{inf, inf, 0}, Vec3d{-inf, 2, inf}, Vec3d{nan, 1, 0},
                            Vec3d{1, nan, 5}, Vec3d{1e308, 1e308, 1e308}})
         EXPECT_EQ(viewIndexFor(views, eye + d), viewIndexFor(untagged, eye + d));
+    // Tags in order but two eyes (faces 3-5 of another light's cube): no shared eye, so the faces'
+    // own dot products decide, each with its own eye.
+    Light other = lamp;
+    other.position = {0.3, 1.2, -2.1};
+    std::vector<LightView> mixed = views;
+    const std::vector<LightView> otherViews = makeLightViews(other, Box3d{{-5, -5, -5}, {5, 5, 5}}, 64, 1);
+    for (int k = 3; k < 6; ++k) mixed[size_t(k)] = otherViews[size_t(k)];
+    for (const Vec3d& d : offsets) {
+        const Vec3d p = eye + d;
+        int want = -1;
+        double bestDot = 0;
+        for (int k = 0; k < 6; ++k) {
+            const double dd = dot(p - mixed[size_t(k)].frame.eye(), mixed[size_t(k)].frame.forward());
+            if (dd > bestDot) want = k, bestDot = dd;
+        }
+        ASSERT_EQ(viewIndexFor(mixed, p), want) << d.x << ", " << d.y << ", " << d.z;
+    }
 }
 
 TEST(ShadowTest, PointLightInsideALeafBoxDimsEveryDirectionOnce) {

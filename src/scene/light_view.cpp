@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace voxfx {
 
@@ -45,11 +46,12 @@ LightView perspectiveView(const Vec3d& eye, const Vec3d& forward, double fovY, c
 }
 
 // The six views are the faces of one axis cube as makeLightViews makes them (cubeFace k in order,
-// one eye).
+// one eye: the same bits, compared as bytes, so that no floating-point compare branches on NaN).
 bool isAxisCube(const std::vector<LightView>& views) {
     bool cube = true;
     for (int k = 0; k < 6; ++k)
-        cube &= views[size_t(k)].cubeFace == k && views[size_t(k)].frame.eye() == views[0].frame.eye();
+        cube &= views[size_t(k)].cubeFace == k &&
+                std::memcmp(&views[size_t(k)].frame.eye(), &views[0].frame.eye(), sizeof(Vec3d)) == 0;
     return cube;
 }
 
