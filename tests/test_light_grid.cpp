@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 #include <span>
 #include <string>
@@ -77,6 +78,106 @@ TEST(ShadowTest, SpotLightShadowsThroughALeaf) {
         EXPECT_NEAR(visibilityOf(sh, {-1.0, 0, -1.7}, {0, 0, 0}).x, 0.5f, 1e-5f) << kind;
         EXPECT_EQ(visibilityOf(sh, {2.5, 0, 0}, {0, 0, 0}).x, 1.0f) << kind;
         EXPECT_EQ(visibilityOf(sh, {0, 3, 0}, {0, 0, 0}).x, 1.0f) << kind;
+    }
+}
+
+// The cube face by its definition: the first of +x, -x, +y, -y, +z, -z (in that order) whose axis
+// has the largest positive dot product with p - eye; -1 where none is positive.
+int cubeFaceByDefinition(const Vec3d& eye, const Vec3d& p) {
+    const Vec3d axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    int best = -1;
+    double bestDot = 0;
+    for (int k = 0; k < 6; ++k)
+        if (dot(p - eye, axes[k]) > bestDot) best = k, bestDot = dot(p - eye, axes[k]);
+    return best;
+}
+
+TEST(ShadowTest, PointLightCubeFaceFromTheLargestComponentIsTheFrustumsFace) {
+    // viewIndexFor picks a point light's cube face from the largest component of p - eye. On points
+    // all around the light (random directions, the faces' seams and corners where two or three
+    // components tie, one float step either side of them, the axes, signed zeros, the eye itself):
+    // the face equals the brute-force definition above, the face's frustum covers p (LightView::locate,
+    // the frustum test), no face covers p that the definition ranks lower unless p lies on their
+    // seam, and the same views without their cube tags (the six-dot-product search) agree, also on
+    // non-finite points.
+    Light lamp;
+    lamp.type = LightType::Point;
+    lamp.position = {0.3, 1.7, -2.1};
+    const std::vector<LightView> views = makeLightViews(lamp, Box3d{{-5, -5, -5}, {5, 5, 5}}, 64, 1);
+    ASSERT_EQ(views.size(), 6u);
+    for (int k = 0; k < 6; ++k) ASSERT_EQ(views[size_t(k)].cubeFace, k);
+    std::vector<LightView> untagged = views;
+    for (LightView& v : untagged) v.cubeFace = -1;
+    const Vec3d eye = lamp.position;
+
+    std::vector<Vec3d> offsets;
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(-1, 1), scale(1e-3, 40);
+    for (int i = 0; i < 20000; ++i) offsets.push_back(Vec3d{u(rng), u(rng), u(rng)} * scale(rng));
+    const double up = std::nextafter(1.0, 2.0), down = std::nextafter(1.0, 0.0);
+    for (int i = 0; i < 4000; ++i) {
+        // Seams: two components of equal magnitude (either sign), the third smaller; corners: three.
+        const double a = scale(rng), c = u(rng) * a;
+        const double sx = u(rng) < 0 ? -1 : 1, sy = u(rng) < 0 ? -1 : 1, sz = u(rng) < 0 ? -1 : 1;
+        for (const double t : {1.0, up, down}) {
+            offsets.push_back({sx * a, sy * a * t, c});
+            offsets.push_back({sx * a * t, c, sz * a});
+            offsets.push_back({c, sy * a, sz * a * t});
+            offsets.push_back({sx * a, sy * a, sz * a * t});
+            offsets.push_back({sx * a * t, sy * a, sz * a});
+        }
+    }
+    for (const double a : {1.0, 7.5})
+        for (const Vec3d& d : {Vec3d{a, 0, 0}, Vec3d{-a, 0, 0}, Vec3d{0, a, 0}, Vec3d{0, -a, 0},
+                               Vec3d{0, 0, a}, Vec3d{0, 0, -a}, Vec3d{-0.0, a, -0.0}, Vec3d{-0.0, -0.0, -a}})
+            offsets.push_back(d);
+    offsets.push_back({0, 0, 0});
+    int64_t ties = 0;
+    for (const Vec3d& d : offsets) {
+        const Vec3d p = eye + d;
+        const int want = cubeFaceByDefinition(eye, p);
+        const int got = viewIndexFor(views, p);
+        ASSERT_EQ(got, want) << d.x << ", " << d.y << ", " << d.z;
+        ASSERT_EQ(viewIndexFor(untagged, p), want) << d.x << ", " << d.y << ", " << d.z;
+        if (p == eye) {
+            ASSERT_EQ(got, -1);
+            continue;
+        }
+        ASSERT_GE(got, 0);
+        ASSERT_TRUE(views[size_t(got)].covers(p)) << d.x << ", " << d.y << ", " << d.z;
+        // Any other face whose frustum takes p holds it on a shared border (a seam within the frustum
+        // test's tolerance): its component is as large as the chosen one's, to 1e-6.
+        const Vec3d r = p - eye;
+        const double comp[3] = {std::abs(r.x), std::abs(r.y), std::abs(r.z)};
+        for (int k = 0; k < 6; ++k)
+            if (k != got && views[size_t(k)].covers(p)) {
+                EXPECT_GE(comp[k / 2], comp[got / 2] * (1 - 1e-6)) << d.x << ", " << d.y << ", " << d.z;
+                ++ties;
+            }
+    }
+    EXPECT_GT(ties, 10000); // the seams were reached
+    // Non-finite points: the tagged views leave them to the six-dot-product search.
+    const double inf = std::numeric_limits<double>::infinity(),
+                 nan = std::numeric_limits<double>::quiet_NaN();
+    for (const Vec3d& d : {Vec3d{inf, 1, 0}, Vec3d{inf, inf, 0}, Vec3d{-inf, 2, inf}, Vec3d{nan, 1, 0},
+                           Vec3d{1, nan, 5}, Vec3d{1e308, 1e308, 1e308}})
+        EXPECT_EQ(viewIndexFor(views, eye + d), viewIndexFor(untagged, eye + d));
+    // Tags in order but two eyes (faces 3-5 of another light's cube): no shared eye, so the faces'
+    // own dot products decide, each with its own eye.
+    Light other = lamp;
+    other.position = {0.3, 1.2, -2.1};
+    std::vector<LightView> mixed = views;
+    const std::vector<LightView> otherViews = makeLightViews(other, Box3d{{-5, -5, -5}, {5, 5, 5}}, 64, 1);
+    for (int k = 3; k < 6; ++k) mixed[size_t(k)] = otherViews[size_t(k)];
+    for (const Vec3d& d : offsets) {
+        const Vec3d p = eye + d;
+        int want = -1;
+        double bestDot = 0;
+        for (int k = 0; k < 6; ++k) {
+            const double dd = dot(p - mixed[size_t(k)].frame.eye(), mixed[size_t(k)].frame.forward());
+            if (dd > bestDot) want = k, bestDot = dd;
+        }
+        ASSERT_EQ(viewIndexFor(mixed, p), want) << d.x << ", " << d.y << ", " << d.z;
     }
 }
 

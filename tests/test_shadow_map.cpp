@@ -9,9 +9,11 @@
 #include <limits>
 #include <random>
 #include <variant>
+#include <vector>
 
 #include <gtest/gtest.h>
 
+#include "render/float_threshold.hpp"
 #include "support/shadow_reference.hpp"
 #include "test_util.hpp"
 #include "voxfx/grid_query.hpp"
@@ -185,6 +187,52 @@ float pcfByDefinition(const ShadowMap& map, const Vec3d& p, int r, double bias) 
             lit += double(map.depthAt(std::clamp<int64_t>(x, 0, W - 1), std::clamp<int64_t>(y, 0, H - 1))) >=
                    g.z - bias / v.worldPerDepthUnit();
     return float(lit) / float((2 * r + 1) * (2 * r + 1));
+}
+
+TEST(ShadowTest, FloatThresholdComparesFloatsAsTheDoubleLimitDoes) {
+    // The PCF taps compare float depths d with float f = leastFloatAtLeast(limit) in place of
+    // double(d) >= limit. For each limit (random doubles over 2^-30..2^30 of either sign, floats
+    // exactly, midpoints between floats and one double step either side, zeros, the float range's
+    // ends, infinities, NaN), every float within four steps of float(limit), and the special
+    // floats, must get the same answer from both compares.
+    std::vector<double> limits;
+    std::mt19937_64 rng(17);
+    std::uniform_real_distribution<double> expo(-30, 30), unit(-1, 1);
+    for (int i = 0; i < 20000; ++i) {
+        const double x = std::copysign(std::exp2(expo(rng)), unit(rng));
+        const auto f = float(x);
+        const double mid =
+            0.5 * (double(f) + double(std::nextafter(f, std::numeric_limits<float>::infinity())));
+        limits.insert(limits.end(),
+                      {x, double(f), mid, std::nextafter(mid, 0.0), std::nextafter(mid, 1e300)});
+    }
+    const double fmax = std::numeric_limits<float>::max(), dinf = std::numeric_limits<double>::infinity();
+    limits.insert(limits.end(),
+                  {0.0, -0.0, fmax, -fmax, std::nextafter(fmax, dinf), std::nextafter(-fmax, -dinf),
+                   std::nextafter(fmax, 0.0), 1e300, -1e300, dinf, -dinf,
+                   std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::denorm_min(),
+                   -std::numeric_limits<double>::denorm_min(),
+                   double(std::numeric_limits<float>::denorm_min()) * 0.5});
+    constexpr float finf = std::numeric_limits<float>::infinity();
+    int64_t lit = 0, dark = 0;
+    for (const double limit : limits) {
+        const float f = detail::leastFloatAtLeast(limit);
+        std::vector<float> ds = {
+            0.0f, -0.0f, finf, -finf, std::numeric_limits<float>::quiet_NaN(), float(fmax), -float(fmax)};
+        if (!std::isnan(limit)) {
+            float d =
+                std::isinf(float(limit)) ? float(fmax) * std::copysign(1.0f, float(limit)) : float(limit);
+            for (int k = 0; k < 4; ++k) d = std::nextafter(d, -finf);
+            for (int k = 0; k < 9; ++k, d = std::nextafter(d, finf)) ds.push_back(d);
+        }
+        for (const float d : ds) {
+            const bool want = double(d) >= limit;
+            ASSERT_EQ(d >= f, want) << "limit " << limit << " depth " << d;
+            (want ? lit : dark) += 1;
+        }
+    }
+    EXPECT_GT(lit, 200000); // both answers, many times, next to each limit
+    EXPECT_GT(dark, 200000);
 }
 
 TEST(ShadowTest, ShadowMapLookupIsItsFilterByDefinitionOnGroundTrunksAndLeaves) {

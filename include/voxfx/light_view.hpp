@@ -24,6 +24,10 @@ namespace voxfx {
 /// directional lights).
 struct LightView {
     Frame frame;
+    /// k in 0..5 where makeLightViews made this view as face k of a point light's cube (forward
+    /// exactly +x, -x, +y, -y, +z, -z for k = 0..5, the eye the light's position); -1 otherwise.
+    /// viewIndexForFaces picks such a cube's face from the largest component of p - eye.
+    int cubeFace = -1;
 
     /// Grid coordinates (gx, gy, frame depth) of a world point; for perspective views the point must
     /// lie in front of the eye (check covers first).
@@ -59,7 +63,8 @@ struct LightView {
 /// (see the file comment for the fitting). Throws voxfx::Error for an empty or non-finite box.
 std::vector<LightView> makeLightViews(const Light& light, const Box3d& casterBounds, int64_t columns,
                                       int64_t d);
-/// Index of the view that covers p (the cube face for point lights), or -1.
+/// Index of the view that covers p (the cube face for point lights: the first view whose forward
+/// has the largest positive dot product with p - eye), or -1.
 int viewIndexForFaces(const std::vector<LightView>& views, const Vec3d& world);
 inline int viewIndexFor(const std::vector<LightView>& views, const Vec3d& world) {
     if (views.size() == 1) return views[0].covers(world) ? 0 : -1; // inline: once per shaded sample

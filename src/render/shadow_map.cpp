@@ -11,6 +11,7 @@
 #include <limits>
 #include <vector>
 
+#include "render/float_threshold.hpp"
 #include "render/light_grid_lookup.hpp"
 #include "render/shadow_casters.hpp"
 #include "voxfx/raster.hpp"
@@ -121,15 +122,22 @@ float ShadowMap::visibility(const Vec3d& world, int pcfRadius, double bias) cons
         if (double(p.least) >= limit || p.at(x - bx * kTile, y - by * kTile) >= limit) return 1.0f;
         if (double(p.most) < limit) return 0.0f; // every tap in front of p
     }
-    int lit = 0, taps = 0;
-    for (int64_t dy = -pcfRadius; dy <= pcfRadius; ++dy)
-        for (int64_t dx = -pcfRadius; dx <= pcfRadius; ++dx) {
-            const int64_t x = std::clamp<int64_t>(cx + dx, 0, W - 1),
-                          y = std::clamp<int64_t>(cy + dy, 0, H - 1);
-            lit += double(depth_[size_t(y * W + x)]) >= limit;
-            ++taps;
-        }
-    return float(lit) / float(taps);
+    // The taps as rows: one clamp and one row address per row, and where the square's columns lie
+    // inside the map (all but the map's border texels) a plain run of 2r + 1 texels. A depth d is lit exactly
+    // where float d >= least, least the smallest float whose double is >= limit (rounded up from limit): the
+    // same answer as double(d) >= limit, in float compares.
+    const float least = detail::leastFloatAtLeast(limit);
+    const int64_t r = pcfRadius, side = 2 * r + 1;
+    const bool inside = cx >= r && cx + r < W;
+    int lit = 0;
+    for (int64_t dy = -r; dy <= r; ++dy) {
+        const float* row = depth_.data() + std::clamp<int64_t>(cy + dy, 0, H - 1) * W;
+        if (inside)
+            for (const float* t = row + (cx - r); t != row + (cx + r + 1); ++t) lit += *t >= least;
+        else
+            for (int64_t dx = -r; dx <= r; ++dx) lit += row[std::clamp<int64_t>(cx + dx, 0, W - 1)] >= least;
+    }
+    return float(lit) / float(side * side);
 }
 
 std::span<const OptionField<ShadowMapOptions>> ShadowMapOptions::fields() {

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace voxfx {
 
@@ -42,6 +43,16 @@ LightView perspectiveView(const Vec3d& eye, const Vec3d& forward, double fovY, c
     v.frame = Frame::perspective(eye, eye + forward, upHint(forward), fovY, columns, columns,
                                  std::min(near, far * 0.5), far, d);
     return v;
+}
+
+// The six views are the faces of one axis cube as makeLightViews makes them (cubeFace k in order,
+// one eye: the same bits, compared as bytes, so that no floating-point compare branches on NaN).
+bool isAxisCube(const std::vector<LightView>& views) {
+    bool cube = true;
+    for (int k = 0; k < 6; ++k)
+        cube &= views[size_t(k)].cubeFace == k &&
+                std::memcmp(&views[size_t(k)].frame.eye(), &views[0].frame.eye(), sizeof(Vec3d)) == 0;
+    return cube;
 }
 
 } // namespace
@@ -109,8 +120,13 @@ std::vector<LightView> makeLightViews(const Light& light, const Box3d& bounds, i
     case LightType::Point: {
         // Six 90-degree cube faces; viewIndexFor picks the face of the dominant axis.
         const Vec3d axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-        for (const Vec3d& a : axes)
-            views.push_back(perspectiveView(light.position, a, M_PI / 2, bounds, columns, d));
+        for (int k = 0; k < 6; ++k) {
+            views.push_back(perspectiveView(light.position, axes[k], M_PI / 2, bounds, columns, d));
+            // normalize((eye + a) - eye) is exactly a (the other components are exactly 0, and
+            // x / sqrt(x * x) is exactly +-1), but say so only where it holds.
+            const Frame& f = views.back().frame;
+            if (f.forward() == axes[k] && f.eye() == light.position) views.back().cubeFace = k;
+        }
         break;
     }
     }
@@ -121,6 +137,28 @@ int viewIndexForFaces(const std::vector<LightView>& views, const Vec3d& world) {
     if (views.empty()) return -1;
     if (views.size() == 1) return views[0].covers(world) ? 0 : -1;
     // Cube faces share the eye: the face whose axis is closest to the direction owns the point.
+    if (views.size() == 6 && isAxisCube(views)) {
+        // dot(p - eye, +-axis) is exactly +-(p - eye)[axis], so the loop below reduces to the first
+        // strictly largest positive |component| in the order x, y, z: three comparisons instead of
+        // six dot products. Non-finite components (where 0 * inf makes the loop's products NaN) are
+        // left to the loop.
+        const Vec3d r = world - views[0].frame.eye();
+        const double ax = std::abs(r.x), ay = std::abs(r.y), az = std::abs(r.z);
+        if (std::isfinite(ax + ay + az)) {
+            int face = -1;
+            double largest = 0;
+            if (ax > largest) {
+                face = r.x > 0 ? 0 : 1;
+                largest = ax;
+            }
+            if (ay > largest) {
+                face = r.y > 0 ? 2 : 3;
+                largest = ay;
+            }
+            if (az > largest) face = r.z > 0 ? 4 : 5;
+            return face;
+        }
+    }
     int best = -1;
     double bestDot = 0;
     for (std::size_t i = 0; i < views.size(); ++i) {
