@@ -10,6 +10,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include <gtest/gtest.h>
 #include <openvdb/openvdb.h>
@@ -170,6 +171,27 @@ TEST(GridIoTest, VdbRoundTripKeepsVoxelsBoxAndEmptyBorders) {
             expectSameVoxels(g, r);
             expectNearBox(r.frame.box(), box);
         }
+}
+
+// prepareGridFormat: loading the .vdb module ahead (in the background, from several threads at
+// once, then waited for) changes nothing in what is written; other formats and unknown
+// extensions are no-ops, not errors (the write reports a bad extension, as before).
+TEST(GridIoTest, PreparingTheVdbFormatAheadWritesTheSameGrid) {
+    test::TempDir dir;
+    const Vec3i n{23, 17, 70};
+    const Box3d box = cubicCellBox(n, 0.05);
+    const VoxelGrid g = test::randomVoxelGrid(box, Axis::Y, n, 0.4, 77);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t)
+        threads.emplace_back(
+            [&dir, t] { prepareGridFormat(dir.file("t" + std::to_string(t) + ".vdb"), true); });
+    for (std::thread& t : threads) t.join();
+    EXPECT_NO_THROW(prepareGridFormat(dir.file("a.vdb")));
+    EXPECT_NO_THROW(prepareGridFormat(dir.file("a.binvox")));
+    EXPECT_NO_THROW(prepareGridFormat(dir.file("a.unknown"), true));
+    writeGrid(g, dir.file("a.vdb"));
+    expectSameVoxels(g, readGrid(dir.file("a.vdb")));
+    EXPECT_EQ(listDir(dir.path()), std::vector<std::string>{"a.vdb"});
 }
 
 TEST(GridIoTest, VdbRoundTripOfSolidBlocksThroughTiles) {

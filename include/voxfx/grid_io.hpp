@@ -51,6 +51,13 @@ inline constexpr EnumName<GridFormat> kGridFormatNames[] = {
 GridFormat gridFormatFromPath(const std::string& path);
 const char* toString(GridFormat f);
 
+/// Loads what reading or writing `path`'s format needs (the OpenVDB module for .vdb: tens of
+/// milliseconds; nothing for the other formats or an unknown extension), so that a missing module
+/// is reported before other work and the write does not pay the load. `background`: start the
+/// load on another thread and return at once (failures are then reported by the next call that
+/// needs the module); a later call without it waits for that load.
+void prepareGridFormat(const std::string& path, bool background = false);
+
 struct GridWriteOptions {
     bool vdbFloat = false; ///< vdb: FloatGrid with 1.0 in filled voxels instead of BoolGrid
     std::string gridName = "voxels";

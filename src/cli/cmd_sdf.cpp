@@ -6,6 +6,7 @@
 
 #include "cli_common.hpp"
 #include "grid_input.hpp"
+#include "voxfx/grid_io.hpp"
 #include "voxfx/level_set.hpp"
 #include "voxfx/mesh_io.hpp"
 #include "voxfx/sdf.hpp"
@@ -66,8 +67,12 @@ int runSdf(const SdfArgs& a) {
         a.fit.margin >= 0 ? a.fit.margin : (so.full ? 0 : int64_t(std::ceil(so.bandVoxels)));
     FitOptions fo = toFitOptions(a.fit, sdfFitChoices(), margin);
 
+    prepareGridFormat(a.output, /*background=*/true); // a .vdb's module loads beside the mesh load
     const Mesh mesh = loadMesh(a.input);
     const double loadMs = msSince(t0);
+    const auto tm = Clock::now();
+    prepareGridFormat(a.output); // what is left of it, counted in the write
+    const double moduleMs = msSince(tm);
     Frame frame = fitFrame(computeBounds(mesh.view()), fo);
     if (a.offset > 0 && a.fit.margin < 0) {
         // Room for the grown surface and its band: the cell size does not depend on the margin.
@@ -92,7 +97,8 @@ int runSdf(const SdfArgs& a) {
         made = writeSdf(mesh.view(), frame, so, a.output);
     }
     const SignedDistanceField& field = made.field; // its description; the values are in the file
-    const double writeMs = made.writeSeconds * 1000, sdfMs = msSince(ts) - writeMs;
+    const double sdfMs = msSince(ts) - made.writeSeconds * 1000,
+                 writeMs = made.writeSeconds * 1000 + moduleMs;
     progress.done();
 
     if (!a.quiet) {

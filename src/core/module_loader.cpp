@@ -7,6 +7,8 @@
 #include <mutex>
 #include <string_view>
 #include <system_error>
+#include <thread>
+#include <vector>
 
 #include <dlfcn.h>
 
@@ -21,6 +23,19 @@ namespace voxfx::detail {
 namespace {
 
 namespace fs = std::filesystem;
+
+// The modules loaded so far (their tables), and the prefetch threads, which are joined at exit
+// before the map goes (they are destroyed in the reverse order of these definitions).
+std::mutex gLoadedMutex;
+std::map<std::string, const void*> gLoaded;
+
+struct PrefetchThreads {
+    std::mutex mutex;
+    std::vector<std::thread> threads;
+    ~PrefetchThreads() {
+        for (std::thread& t : threads) t.join();
+    }
+} gPrefetch;
 
 // The directory of the binary holding this function: dladdr names the shared library, or for the
 // main program whatever argv[0] was, so the executable is read from /proc/self/exe instead.
@@ -65,11 +80,9 @@ std::vector<std::string> moduleSearchPath() {
 }
 
 const void* loadModule(const char* name, uint32_t abi, const char* purpose) {
-    static std::mutex mutex;
-    static std::map<std::string, const void*> loaded;
-    const std::lock_guard lock(mutex);
-    const auto it = loaded.find(name);
-    if (it != loaded.end()) return it->second;
+    const std::lock_guard lock(gLoadedMutex);
+    const auto it = gLoaded.find(name);
+    if (it != gLoaded.end()) return it->second;
 
     const std::string file = concat("voxfx_", name, ".so"), entry = concat("voxfx_module_", name);
     const std::vector<std::string> dirs = moduleSearchPath();
@@ -94,12 +107,26 @@ const void* loadModule(const char* name, uint32_t abi, const char* purpose) {
         if (!table)
             fail("module '", candidate.string(), "' does not speak this library's interface version ", abi,
                  " (needed ", purpose, "; it is from another voxfx build)");
-        loaded.emplace(name, table);
+        gLoaded.emplace(name, table);
         return table;
     }
     fail("module ", file, " (needed ", purpose,
          ") was not found; searched: ", searched.empty() ? std::string("no directories") : searched,
          " (set VOXFX_MODULE_PATH to the directory that holds it)");
+}
+
+void prefetchModule(const char* name, uint32_t abi) {
+    {
+        const std::lock_guard lock(gLoadedMutex);
+        if (gLoaded.count(name)) return;
+    }
+    const std::lock_guard lock(gPrefetch.mutex);
+    gPrefetch.threads.emplace_back([module = std::string(name), abi] {
+        try {
+            loadModule(module.c_str(), abi, "ahead of use");
+        } catch (...) { // reported by the call that needs the module
+        }
+    });
 }
 
 } // namespace voxfx::detail

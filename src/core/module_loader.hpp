@@ -21,4 +21,11 @@ std::vector<std::string> moduleSearchPath();
 /// answers no table for this ABI; `purpose` says what the module was needed for.
 const void* loadModule(const char* name, uint32_t abi, const char* purpose);
 
+/// Starts loadModule(name, abi) on a background thread and returns at once, so that a later
+/// loadModule() of it finds it loaded or waits for the load under way (OpenVDB's module takes
+/// ~40 ms to load: a command that knows it will write a .vdb starts it before its other work).
+/// Errors are not reported here: the later loadModule() meets them again and reports them with
+/// its purpose. The thread is joined at exit.
+void prefetchModule(const char* name, uint32_t abi);
+
 } // namespace voxfx::detail

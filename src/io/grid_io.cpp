@@ -11,6 +11,7 @@
 
 #include "core/atomic_file.hpp"
 #include "io/grid_formats.hpp"
+#include "io/module_api.hpp"
 #include "voxfx/file_name.hpp"
 
 namespace voxfx {
@@ -71,6 +72,14 @@ GridFormat gridFormatFromPath(const std::string& path) {
 }
 
 const char* toString(GridFormat f) { return enumName(f, kGridFormatNames); }
+
+void prepareGridFormat(const std::string& path, bool background) {
+    if (fileExtension(path) != ".vdb") return;
+    if (background)
+        detail::prefetchVdbModule();
+    else
+        detail::vdbModule();
+}
 
 void writeGrid(const VoxelGrid& grid, const std::string& path, const GridWriteOptions& options) {
     const GridFormat format = gridFormatFromPath(path);

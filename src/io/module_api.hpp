@@ -336,5 +336,7 @@ struct ExrModule {
 const VdbModule& vdbModule();
 const AssimpModule& assimpModule();
 const ExrModule& exrModule();
+/// Starts loading voxfx_vdb.so in the background (core/module_loader.hpp: prefetchModule).
+void prefetchVdbModule();
 
 } // namespace voxfx::detail

@@ -22,6 +22,8 @@ const VdbModule& vdbModule() {
     return table;
 }
 
+void prefetchVdbModule() { prefetchModule("vdb", kModuleAbi); }
+
 const AssimpModule& assimpModule() {
     static const AssimpModule& table = load<AssimpModule>("assimp", "for glTF and the formats Assimp reads");
     return table;

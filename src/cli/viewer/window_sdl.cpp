@@ -2,6 +2,11 @@
 // surface, mouse and keys turned into camera moves and option changes, and the refinement rule:
 // every change asks for a preview at once and, once nothing has changed for kRefineAfter and the
 // preview is shown, for the full frame.
+//
+// SDL2 is opened with dlopen() when the window opens, not linked: linked, it put SDL and the ~45
+// libraries it needs (X11, Wayland, PulseAudio, D-Bus, ...) into every voxfx command's global
+// scope, and each later dlopen() of a module (OpenVDB's 69K relocations, Embree) looked its
+// symbols up through all of them: the .vdb module took ~1.6x as long to load.
 #define SDL_MAIN_HANDLED // voxfx's own main() stays main (SDL would rename it to SDL_main)
 #include <chrono>
 #include <cmath>
@@ -10,6 +15,7 @@
 #include <optional>
 
 #include <SDL.h>
+#include <dlfcn.h>
 
 #include "framebuffer.hpp"
 #include "render_worker.hpp"
@@ -19,6 +25,43 @@ namespace voxfx::cli::viewer {
 
 namespace {
 
+// The SDL functions the window calls, looked up in libSDL2 once (see the file's comment).
+#define VOXFX_SDL_FUNCTIONS(X)                                                                               \
+    X(SDL_ConvertPixels)                                                                                     \
+    X(SDL_CreateWindow) X(SDL_DestroyWindow) X(SDL_GetError) X(SDL_GetModState) X(SDL_GetMouseState)         \
+        X(SDL_GetWindowSurface) X(SDL_Init) X(SDL_LockSurface) X(SDL_PollEvent) X(SDL_PushEvent) X(SDL_Quit) \
+            X(SDL_RegisterEvents) X(SDL_SetMainReady) X(SDL_SetWindowTitle) X(SDL_UnlockSurface)             \
+                X(SDL_UpdateWindowSurface) X(SDL_WaitEventTimeout)
+struct SdlApi {
+#define VOXFX_SDL_MEMBER(name) decltype(&::name) name = nullptr;
+    VOXFX_SDL_FUNCTIONS(VOXFX_SDL_MEMBER)
+#undef VOXFX_SDL_MEMBER
+};
+
+constexpr const char* kSdlLibrary = "libSDL2-2.0.so.0";
+
+SdlApi loadSdl() {
+    void* handle = dlopen(kSdlLibrary, RTLD_NOW | RTLD_LOCAL);
+    if (!handle) {
+        const char* why = dlerror();
+        fail("voxfx view needs SDL2's library ", kSdlLibrary,
+             " (Debian: libsdl2-2.0-0): ", why ? why : "dlopen failed");
+    }
+    SdlApi api;
+#define VOXFX_SDL_LOOKUP(name)                                                                               \
+    api.name = reinterpret_cast<decltype(api.name)>(dlsym(handle, #name));                                   \
+    if (!api.name) fail("voxfx view: ", kSdlLibrary, " has no ", #name, " (SDL 2.0.10 or newer is needed)");
+    VOXFX_SDL_FUNCTIONS(VOXFX_SDL_LOOKUP)
+#undef VOXFX_SDL_LOOKUP
+    return api; // the library stays loaded for the process
+}
+
+/// SDL, loaded on first use; throws voxfx::Error when it is missing.
+const SdlApi& sdl() {
+    static const SdlApi api = loadSdl();
+    return api;
+}
+
 using Clock = std::chrono::steady_clock;
 /// How long the view must stay still before the full frame is rendered.
 constexpr auto kRefineAfter = std::chrono::milliseconds(150);
@@ -27,7 +70,7 @@ struct SdlSession {
     SdlSession() = default;
     SdlSession(const SdlSession&) = delete;
     SdlSession& operator=(const SdlSession&) = delete;
-    ~SdlSession() { SDL_Quit(); }
+    ~SdlSession() { sdl().SDL_Quit(); }
 };
 
 struct WindowHandle {
@@ -36,7 +79,7 @@ struct WindowHandle {
     WindowHandle& operator=(const WindowHandle&) = delete;
     explicit WindowHandle(SDL_Window* w) : window(w) {}
     ~WindowHandle() {
-        if (window) SDL_DestroyWindow(window);
+        if (window) sdl().SDL_DestroyWindow(window);
     }
 };
 
@@ -51,11 +94,11 @@ enum class Drag { None, Orbit, Pan };
 class Viewer {
 public:
     Viewer(SDL_Window* window, ViewState& state)
-        : window_(window), state_(state), renderer_(state.setup().scene), frameEvent_(SDL_RegisterEvents(1)),
-          worker_(renderer_, [event = frameEvent_] {
+        : window_(window), state_(state), renderer_(state.setup().scene),
+          frameEvent_(sdl().SDL_RegisterEvents(1)), worker_(renderer_, [event = frameEvent_] {
               SDL_Event e{};
               e.type = event;
-              SDL_PushEvent(&e);
+              sdl().SDL_PushEvent(&e);
           }) {
         overlay_ = state.setup().overlay;
     }
@@ -71,9 +114,9 @@ public:
             }
             changed_ = false;
             SDL_Event e;
-            if (SDL_WaitEventTimeout(&e, timeout)) {
+            if (sdl().SDL_WaitEventTimeout(&e, timeout)) {
                 handle(e);
-                while (SDL_PollEvent(&e)) handle(e);
+                while (sdl().SDL_PollEvent(&e)) handle(e);
             }
             if (changed_) requestPreview();
             takeFrames();
@@ -162,14 +205,14 @@ private:
             dirty_ = true;
             break;
         case SDL_MOUSEBUTTONDOWN:
-            if (e.button.button == SDL_BUTTON_LEFT && !(SDL_GetModState() & KMOD_SHIFT))
+            if (e.button.button == SDL_BUTTON_LEFT && !(sdl().SDL_GetModState() & KMOD_SHIFT))
                 drag_ = Drag::Orbit;
             else if (e.button.button == SDL_BUTTON_LEFT || e.button.button == SDL_BUTTON_RIGHT ||
                      e.button.button == SDL_BUTTON_MIDDLE)
                 drag_ = Drag::Pan;
             break;
         case SDL_MOUSEBUTTONUP:
-            if (!(SDL_GetMouseState(nullptr, nullptr) &
+            if (!(sdl().SDL_GetMouseState(nullptr, nullptr) &
                   (SDL_BUTTON(SDL_BUTTON_LEFT) | SDL_BUTTON(SDL_BUTTON_RIGHT) |
                    SDL_BUTTON(SDL_BUTTON_MIDDLE))))
                 drag_ = Drag::None;
@@ -256,9 +299,9 @@ private:
                             std::to_string(state_.width) + " x " + std::to_string(state_.height);
         if (shown_ && shown_->generation == state_.generation)
             title += " | " + msText(shown_->timings.totalMs);
-        SDL_SetWindowTitle(window_, (title + " | " + status()).c_str());
+        sdl().SDL_SetWindowTitle(window_, (title + " | " + status()).c_str());
 
-        SDL_Surface* surface = SDL_GetWindowSurface(window_);
+        SDL_Surface* surface = sdl().SDL_GetWindowSurface(window_);
         if (!surface) return; // minimized, or being resized: the next event redraws
         if (fb_.width != surface->w || fb_.height != surface->h) fb_ = Framebuffer(surface->w, surface->h);
         if (shown_)
@@ -278,11 +321,11 @@ private:
             const int h = int(lines.size()) * kLineHeight * scale;
             drawPanel(fb_, std::max(0, (fb_.width - w) / 2), std::max(0, (fb_.height - h) / 2), lines, scale);
         }
-        if (SDL_MUSTLOCK(surface)) SDL_LockSurface(surface);
-        SDL_ConvertPixels(fb_.width, fb_.height, SDL_PIXELFORMAT_ARGB8888, fb_.pixels.data(), fb_.width * 4,
-                          surface->format->format, surface->pixels, surface->pitch);
-        if (SDL_MUSTLOCK(surface)) SDL_UnlockSurface(surface);
-        SDL_UpdateWindowSurface(window_);
+        if (SDL_MUSTLOCK(surface)) sdl().SDL_LockSurface(surface);
+        sdl().SDL_ConvertPixels(fb_.width, fb_.height, SDL_PIXELFORMAT_ARGB8888, fb_.pixels.data(),
+                                fb_.width * 4, surface->format->format, surface->pixels, surface->pitch);
+        if (SDL_MUSTLOCK(surface)) sdl().SDL_UnlockSurface(surface);
+        sdl().SDL_UpdateWindowSurface(window_);
     }
 
     SDL_Window* window_;
@@ -305,14 +348,14 @@ int runViewer(ViewSetup setup) {
     if (!hasDisplay())
         fail("no display: $DISPLAY is not set, and voxfx view opens a window (on a machine without a "
              "screen, run it under Xvfb: xvfb-run -s '-screen 0 1280x1024x24' voxfx view ...)");
-    SDL_SetMainReady();
-    if (SDL_Init(SDL_INIT_VIDEO) != 0) fail("voxfx view cannot open a window: ", SDL_GetError());
-    SdlSession sdl;
+    sdl().SDL_SetMainReady();
+    if (sdl().SDL_Init(SDL_INIT_VIDEO) != 0) fail("voxfx view cannot open a window: ", sdl().SDL_GetError());
+    SdlSession session;
     ViewState state(std::move(setup));
-    WindowHandle window(SDL_CreateWindow(("voxfx view: " + state.setup().name).c_str(),
-                                         SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED, int(state.width),
-                                         int(state.height), SDL_WINDOW_RESIZABLE));
-    if (!window.window) fail("voxfx view cannot open a window: ", SDL_GetError());
+    WindowHandle window(sdl().SDL_CreateWindow(("voxfx view: " + state.setup().name).c_str(),
+                                               SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED,
+                                               int(state.width), int(state.height), SDL_WINDOW_RESIZABLE));
+    if (!window.window) fail("voxfx view cannot open a window: ", sdl().SDL_GetError());
     std::cout << "voxfx view: " << state.setup().name << ", " << state.width << " x " << state.height
               << " (H in the window lists the keys)" << std::endl;
     // The worker joins (cancelling what it renders) before the window and SDL go.
