@@ -1,9 +1,10 @@
-// Tests of the volume pass's deep-shadow visibility grid (src/render/volume_light_grid.hpp): the
+// Tests of the volume pass's grids (src/render/volume_light_grid.hpp): the deep-shadow visibility
 // grid is the map's own lookup at the voxel corners, interpolated (recomputed here from the
 // corners' lookups, an upright and a turned volume, under a spot light); against the map's lookup
 // at random points in a homogeneous slab, within a bound from the grid spacing (the closed form's
 // second derivative) plus the map's own departure from that closed form; and the frames that build
-// it and reuse it from a RenderCache give the uncached image.
+// it and reuse it from a RenderCache give the uncached image; the gradient grid (phong's normals) is
+// Volume::gradient inside the volume and defers to it near the faces.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -202,6 +203,52 @@ TEST(VolumeLightGridTest, AgainstTheMapsLookupInAHomogeneousSlabWithinTheGridSpa
     // grid displaced by half a voxel (an error of about sigma h / 2 cos = 0.13 of the light).
     EXPECT_LT(worstMapError, 0.01);
     EXPECT_LT(mean, second);
+}
+
+// Phong's normals: the gradient grid at random points of the volume's interior is the volume's own
+// gradient (central differences of the trilinear samples one voxel either side) within float
+// rounding, upright and turned; within a voxel and a half of a face (one-sided differences) the
+// grid has no value.
+TEST(VolumeLightGridTest, TheGradientGridIsTheVolumesGradientInsideAndDefersNearTheFaces) {
+    for (const bool turned : {false, true}) {
+        const VlgSmoke s = vlgSmoke(turned);
+        const detail::GradientGrid grid(*s.volume);
+        const Vec3i n = s.volume->dims();
+        std::mt19937_64 rng(3);
+        std::uniform_real_distribution<double> U(0, 1);
+        double worst = 0, largest = 0;
+        int64_t inside = 0, deferred = 0;
+        for (int k = 0; k < 4000; ++k) {
+            const Vec3d u{U(rng) * double(n.x), U(rng) * double(n.y), U(rng) * double(n.z)};
+            const Vec3d p = s.volume->worldFromVoxel(u);
+            // Lattice coordinates u - 1/2 within [1, n - 2) on every axis (a margin against rounding).
+            const auto interior = [&](double m) {
+                return u.x - 0.5 >= 1 + m && u.x - 0.5 < double(n.x - 2) - m && u.y - 0.5 >= 1 + m &&
+                       u.y - 0.5 < double(n.y - 2) - m && u.z - 0.5 >= 1 + m &&
+                       u.z - 0.5 < double(n.z - 2) - m;
+            };
+            Vec3d g;
+            const bool got = grid.lookup(p, g);
+            if (interior(1e-9)) {
+                ASSERT_TRUE(got) << u.x << " " << u.y << " " << u.z;
+                const Vec3d want = s.volume->gradient(p);
+                worst = std::max(worst, length(g - want));
+                largest = std::max(largest, length(want));
+                ++inside;
+            } else if (!interior(-1e-9)) {
+                EXPECT_FALSE(got) << u.x << " " << u.y << " " << u.z;
+                ++deferred;
+            }
+        }
+        std::printf("%s: gradient grid against Volume::gradient at %lld interior points: worst %.3g (largest "
+                    "|g| %.3g); %lld points near the faces deferred\n",
+                    turned ? "turned" : "upright", static_cast<long long>(inside), worst, largest,
+                    static_cast<long long>(deferred));
+        EXPECT_GT(inside, 1000);
+        EXPECT_GT(deferred, 500);
+        EXPECT_GT(largest, 1.0);
+        EXPECT_LT(worst, 1e-5 * largest);
+    }
 }
 
 bool vlgCached(const RenderResult& r, std::string_view pass) {

@@ -76,6 +76,44 @@ private:
     std::vector<Node> nodes_; ///< x fastest: i + (nx + 1) (j + (ny + 1) k)
 };
 
+/// A volume's gradient (VolumeView::gradient: central differences one voxel either side, in world
+/// axes) at every voxel centre, read back by trilinear interpolation: in the interior of the
+/// volume (every lattice coordinate c = voxel coordinate - 1/2 within [1, n - 2], where gradient()
+/// takes full central differences) that is gradient() itself up to rounding, since a central
+/// difference of the trilinear interpolant one lattice unit either side has the same weights as
+/// the interpolant of the centres' differences; six trilinear lookups become one of three floats.
+/// Nearer the faces (one-sided differences) lookup returns false and the caller asks the volume.
+class GradientGrid {
+public:
+    GradientGrid() = default; ///< no nodes: every lookup false
+    explicit GradientGrid(const Volume& volume);
+
+    bool lookup(const Vec3d& p, Vec3d& gradient) const {
+        if (nodes_.empty()) return false;
+        const int64_t n[3] = {place_.nx, place_.ny, place_.nz};
+        int64_t i[3];
+        float t[3];
+        for (int a = 0; a < 3; ++a) {
+            const double c = place_.voxelCoordinate(p, a) - 0.5;
+            if (!(c >= 1 && c < double(n[a] - 2))) return false;
+            i[a] = int64_t(c); // c >= 1: truncation is floor; i + 1 <= n - 2
+            t[a] = float(c - double(i[a]));
+        }
+        const int64_t sx = 1, sy = n[0], sz = n[0] * n[1];
+        const Vec3f* c = nodes_.data() + (i[0] + i[1] * sy + i[2] * sz);
+        const float w0 = 1 - t[0], w1 = t[0];
+        const Vec3f x00 = c[0] * w0 + c[sx] * w1, x10 = c[sy] * w0 + c[sy + sx] * w1;
+        const Vec3f x01 = c[sz] * w0 + c[sz + sx] * w1, x11 = c[sz + sy] * w0 + c[sz + sy + sx] * w1;
+        const Vec3f y0 = x00 + (x10 - x00) * t[1], y1 = x01 + (x11 - x01) * t[1];
+        gradient = Vec3d(y0 + (y1 - y0) * t[2]);
+        return true;
+    }
+
+private:
+    VolumeView place_;         ///< the volume's placement (no values)
+    std::vector<Vec3f> nodes_; ///< per voxel centre, x fastest (zero on the outermost layer, unused)
+};
+
 /// One light's grids over a volume scene, per object (no nodes for objects that are not volumes):
 /// what the RenderCache keeps per (volume pass setup, light's shadow).
 struct VolumeLightGrids {

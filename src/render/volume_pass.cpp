@@ -196,6 +196,8 @@ struct VolumeSetup {
     /// Phong: a change of this fraction of the volume's value range per voxel shades fully.
     static constexpr double kFullShadingChange = 0.05;
     std::vector<Vec3f> faceNormals; ///< unit, per flattened triangle (zero when degenerate)
+    /// Per Volume object, its volume's gradient at the voxel centres (phong's normals; GradientGrid).
+    std::vector<GradientGrid> gradients;
 
     VolumeSetup(const Scene& scene, std::shared_ptr<const VolumeScene> chosen, const RenderOptions& options,
                 bool deep)
@@ -217,6 +219,10 @@ struct VolumeSetup {
                 cross(volumePassCorner(m, uint32_t(t), 1) - p, volumePassCorner(m, uint32_t(t), 2) - p);
             faceNormals[t] = length(n) > 0 ? Vec3f(normalize(n)) : Vec3f{0, 0, 0};
         }
+        gradients.resize(vs.objects.size());
+        for (std::size_t o = 0; o < vs.objects.size(); ++o)
+            if (vs.objects[o].kind == ObjectKind::Volume)
+                gradients[o] = GradientGrid(*vs.volumes[std::size_t(vs.objects[o].volume)]);
     }
 
     static std::vector<uint8_t> boxShapes(const VolumeScene& vs) {
@@ -450,8 +456,8 @@ struct VolumeComposite {
     // specular = s sum E ks (m + 8) / (8 pi) max(0, n.h)^m max(0, n.l) with n = -g / |g|.
     void phong(const Vec3d& p, std::size_t o, const Vec3d& eye, const std::vector<LightSample>& lights,
                const Vec3f& ambient, const Vec3f& unshaded, Vec3f& diffuse, Vec3f& specular) const {
-        const Volume& volume = *vs.volumes[std::size_t(vs.objects[o].volume)];
-        const Vec3d g = volume.gradient(p);
+        Vec3d g;
+        if (!setup.gradients[o].lookup(p, g)) g = vs.volumes[std::size_t(vs.objects[o].volume)]->gradient(p);
         const double gm = length(g);
         const double s = std::min(1.0, gm / fullGradient[o]);
         specular = {0, 0, 0};
