@@ -38,16 +38,16 @@ Vec3f vlgLookup(const DeepShadow& deep, const Light& light, const Vec3d& p, doub
     return deep.visibility(p + toLight * step, toLight, texel);
 }
 
-// Smoke (24 x 20 x 16 voxels, turned about y by 30 degrees when `turned`) under a spot light.
+// Smoke (24 x 20 x 16 voxels unless told, turned about y by 30 degrees when `turned`) under a spot light.
 struct VlgSmoke {
     Scene scene;
     std::shared_ptr<Volume> volume;
     Light light;
 };
-VlgSmoke vlgSmoke(bool turned) {
+VlgSmoke vlgSmoke(bool turned, Vec3i dims = {24, 20, 16}) {
     VlgSmoke s;
     SmokeParams sp;
-    sp.dims = {24, 20, 16};
+    sp.dims = dims;
     sp.box = {{-0.6, 0, -0.4}, {0.6, 1.0, 0.4}};
     sp.seed = 7;
     s.volume = std::make_shared<Volume>(makeSmoke(sp));
@@ -127,6 +127,55 @@ TEST(VolumeLightGridTest, TheGridIsTheMapsLookupAtTheVoxelCornersInterpolated) {
         EXPECT_FALSE(grid.lookup(s.volume->worldFromVoxel({1, double(n.y) + 0.01, 1}), v, texel));
         EXPECT_FALSE(grid.lookup(Vec3d{std::nan(""), 0, 0}, v, texel));
     }
+}
+
+// With the volume's empty bricks the grid fills only the nodes near matter: wherever the march can
+// light a piece (a point within a step of a brick that is not empty) the lookup has the full grid's
+// value, bit for bit; elsewhere it may return false (the volume pass then looks the map up).
+TEST(VolumeLightGridTest, NodesAwayFromMatterAreLeftToTheMapAndTheRestAreTheFullGrids) {
+    const VlgSmoke s = vlgSmoke(false, {64, 56, 48}); // bricks enough that some lie far from matter
+    DeepShadowOptions o;
+    o.resolution = 128;
+    const DeepShadow deep = DeepShadow::build(s.scene, s.light, o);
+    const VolumeSceneObject& obj = s.scene.volumeScene->objects[0];
+    const EmptySpace skip(*s.volume, obj.transfer);
+    const double step = s.volume->spacing().x; // the march's step: a voxel
+    const LightCone cone(s.light);
+    const LightVisibilityGrid full = LightVisibilityGrid::build(*s.volume, deep, s.light, cone, step);
+    const LightVisibilityGrid sparse =
+        LightVisibilityGrid::build(*s.volume, deep, s.light, cone, step, &skip, step);
+    const Vec3i n = s.volume->dims();
+    EXPECT_EQ(full.filledNodes(), (n.x + 1) * (n.y + 1) * (n.z + 1));
+    EXPECT_LT(sparse.filledNodes(), full.filledNodes());
+    EXPECT_GT(skip.emptyFraction(), 0.2);
+    std::mt19937_64 rng(9);
+    std::uniform_real_distribution<double> U(0, 1), D(-1, 1);
+    int64_t nearMatter = 0, left = 0;
+    for (int k = 0; k < 4000; ++k) {
+        const Vec3d p =
+            s.volume->worldFromVoxel({U(rng) * double(n.x), U(rng) * double(n.y), U(rng) * double(n.z)});
+        // A point within a step of p in a brick with matter: the march may light p.
+        const Vec3d q = p + Vec3d{D(rng), D(rng), D(rng)} * (step / std::sqrt(3.0));
+        Vec3f a, b;
+        double ta = 0, tb = 0;
+        ASSERT_TRUE(full.lookup(p, a, ta));
+        if (sparse.lookup(p, b, tb)) {
+            EXPECT_EQ(a.x, b.x);
+            EXPECT_EQ(a.y, b.y);
+            EXPECT_EQ(a.z, b.z);
+            EXPECT_EQ(ta, tb);
+        } else {
+            ++left;
+            EXPECT_TRUE(skip.empty(q)) << p.x << " " << p.y << " " << p.z;
+        }
+        nearMatter += !skip.empty(q);
+    }
+    std::printf("smoke: %lld of %lld nodes filled (%.0f %% of the bricks empty); %lld of 4000 random points "
+                "left to the map, %lld within a step of matter\n",
+                static_cast<long long>(sparse.filledNodes()), static_cast<long long>(full.filledNodes()),
+                100 * skip.emptyFraction(), static_cast<long long>(left), static_cast<long long>(nearMatter));
+    EXPECT_GT(left, 0);
+    EXPECT_GT(nearMatter, 500);
 }
 
 // In a homogeneous slab (extinction sigma) under a sun, the light at depth d below the top face

@@ -15,11 +15,13 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
 #include "render/shading.hpp"
 #include "voxfx/deep_shadow.hpp"
+#include "voxfx/segment_walker.hpp"
 #include "voxfx/volume.hpp"
 
 namespace voxfx::detail {
@@ -30,12 +32,18 @@ public:
     /// The lookup of `shadow` at every voxel corner c of `volume` (world point worldFromVoxel(i, j,
     /// k)): shadow.visibility(c + toLight * step, toLight, texel), toLight the unit direction from c
     /// to `light` (lightIrradiance's; `cone` is LightCone(light)). Nodes are filled in parallel,
-    /// each on its own: the same values whatever the thread count.
+    /// each on its own: the same values whatever the thread count. With `skip` (the volume's
+    /// EmptySpace), only the nodes of voxels within `reach` (world units: the longest interval the
+    /// march lights, its step) and a voxel diagonal of a brick that is not empty are filled (the
+    /// march lights no piece elsewhere); the others hold NaN, and a lookup that reads one returns
+    /// false, so the caller looks the map up itself: never a wrong value, at worst the map's cost.
     static LightVisibilityGrid build(const Volume& volume, const DeepShadow& shadow, const Light& light,
-                                     const LightCone& cone, double step);
+                                     const LightCone& cone, double step, const EmptySpace* skip = nullptr,
+                                     double reach = 0);
 
     /// Trilinear interpolation of the nodes at world point p (visibility per channel and the texel
-    /// footprint); false, with nothing set, where p lies outside the volume's box (or is NaN).
+    /// footprint); false where p lies outside the volume's box (or is NaN) or a node it reads was
+    /// not filled.
     bool lookup(const Vec3d& p, Vec3f& visibility, double& texel) const {
         if (nodes_.empty()) return false;
         const int64_t n[3] = {place_.nx, place_.ny, place_.nz};
@@ -59,6 +67,7 @@ public:
             const float y0 = x00 + (x10 - x00) * t[1], y1 = x01 + (x11 - x01) * t[1];
             out.v[k] = y0 + (y1 - y0) * t[2];
         }
+        if (std::isnan(out.v[3])) return false; // an unfilled node (NaN) weighs in, even at weight 0
         visibility = {out.v[0], out.v[1], out.v[2]};
         texel = double(out.v[3]);
         return true;
@@ -66,6 +75,8 @@ public:
 
     /// Nodes along each voxel axis (voxels + 1; 0 when empty).
     Vec3i nodeCounts() const;
+    /// Nodes filled from the map (all of them without `skip`).
+    int64_t filledNodes() const { return filled_; }
     std::size_t bytes() const { return nodes_.size() * sizeof(Node); }
 
 private:
@@ -74,6 +85,7 @@ private:
     };
     VolumeView place_;        ///< the volume's placement (no values): voxelCoordinate and voxel counts
     std::vector<Node> nodes_; ///< x fastest: i + (nx + 1) (j + (ny + 1) k)
+    int64_t filled_ = 0;
 };
 
 /// A volume's gradient (VolumeView::gradient: central differences one voxel either side, in world

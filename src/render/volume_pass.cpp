@@ -769,9 +769,9 @@ lightGrids(FrameState& frame, const VolumeSetup& setup, uint64_t setupKey,
             const LightCone cone(frame.lights[l]);
             for (std::size_t o = 0; o < vs.objects.size(); ++o)
                 if (vs.objects[o].kind == ObjectKind::Volume)
-                    built->objects[o] =
-                        LightVisibilityGrid::build(*vs.volumes[std::size_t(vs.objects[o].volume)], *deep,
-                                                   frame.lights[l], cone, setup.step);
+                    built->objects[o] = LightVisibilityGrid::build(
+                        *vs.volumes[std::size_t(vs.objects[o].volume)], *deep, frame.lights[l], cone,
+                        setup.step, &setup.emptySpace[o], setup.objectStep[o]);
             g = std::move(built);
             frame.cache.volumeLight.insert(key.get(), g);
         }
