@@ -60,6 +60,9 @@ struct FrameState {
     /// Screen-space occlusion before its upsample to the cells, which the shading pass does where it
     /// has each cell's surface point (filling screenOcclusion); null otherwise.
     std::shared_ptr<const CellOcclusion> cellOcclusion = nullptr;
+    /// Per light, the key its shadow is kept under in cache.shadows (what it was built from; the
+    /// shadow pass sets it with `shadows`).
+    std::vector<uint64_t> shadowKeys = {};
 };
 
 } // namespace voxfx::detail

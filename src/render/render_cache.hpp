@@ -128,6 +128,9 @@ struct TriangleBasis {
 struct GlassSetup;
 /// The volume pass's structures (render/volume_pass.cpp): built once per volume key.
 struct VolumeSetup;
+/// The volume pass's deep-shadow visibility per volume of one light (render/volume_light_grid.hpp):
+/// built once per volume key and light's shadow key.
+struct VolumeLightGrids;
 
 struct RenderCacheData {
     std::optional<uint64_t> geometryKey;
@@ -139,6 +142,7 @@ struct RenderCacheData {
     KeyedCache<const AmbientOcclusion> occlusion{2};
     KeyedCache<const GlassSetup> glass{3};
     KeyedCache<const VolumeSetup> volume{2};
+    KeyedCache<const VolumeLightGrids> volumeLight{4};
     // Frame buffers: overwritten every frame, kept for their memory.
     GBuffer gbuffer;
     std::vector<Vec3f> shaded;

@@ -116,6 +116,7 @@ void shadowPass(FrameState& f, Progress* progress) {
         prepareLightShadow(*shadow, f.gbuffer, f.geometry);
         accumulate(f.result.shadowStats, shadowStats(*shadow));
         f.shadows.push_back(std::move(shadow));
+        f.shadowKeys.push_back(h.get());
     }
     f.cachedPass = allCached;
 }

@@ -13,6 +13,7 @@
 
 #include "render/antialias.hpp"
 #include "render/shading.hpp"
+#include "render/volume_light_grid.hpp"
 #include "voxfx/deep_shadow.hpp"
 #include "voxfx/triangle_tracer.hpp"
 #include "voxfx/volume_scene.hpp"
@@ -195,6 +196,8 @@ struct VolumeSetup {
     /// Phong: a change of this fraction of the volume's value range per voxel shades fully.
     static constexpr double kFullShadingChange = 0.05;
     std::vector<Vec3f> faceNormals; ///< unit, per flattened triangle (zero when degenerate)
+    /// Per Volume object, its volume's gradient at the voxel centres (phong's normals; GradientGrid).
+    std::vector<GradientGrid> gradients;
 
     VolumeSetup(const Scene& scene, std::shared_ptr<const VolumeScene> chosen, const RenderOptions& options,
                 bool deep)
@@ -216,6 +219,10 @@ struct VolumeSetup {
                 cross(volumePassCorner(m, uint32_t(t), 1) - p, volumePassCorner(m, uint32_t(t), 2) - p);
             faceNormals[t] = length(n) > 0 ? Vec3f(normalize(n)) : Vec3f{0, 0, 0};
         }
+        gradients.resize(vs.objects.size());
+        for (std::size_t o = 0; o < vs.objects.size(); ++o)
+            if (vs.objects[o].kind == ObjectKind::Volume)
+                gradients[o] = GradientGrid(*vs.volumes[std::size_t(vs.objects[o].volume)]);
     }
 
     static std::vector<uint8_t> boxShapes(const VolumeScene& vs) {
@@ -315,14 +322,17 @@ struct VolumeComposite {
     bool shaded;
     const std::vector<double>& fullGradient;
     std::vector<LightCone> cones; ///< per light of the frame
+    /// Per light under deep shadows, its visibility grids per volume object (lightGrids); else null.
+    std::vector<const VolumeLightGrids*> grids;
 
-    VolumeComposite(const FrameState& f, const VolumeSetup& s)
+    VolumeComposite(const FrameState& f, const VolumeSetup& s, std::vector<const VolumeLightGrids*> g)
         : frame(f), setup(s), vs(s.vs), materials(s.materials), surfaces(s.surfaces),
           emptySpace(s.emptySpace), preintegrated(s.preintegrated), step(s.step), boxShape(s.boxShape),
           leafTracer(s.leafTracer.get()),
           shaded(f.options.volumeShading == VolumeShading::Phong && !f.lights.empty()),
-          fullGradient(s.fullGradient) {
+          fullGradient(s.fullGradient), grids(std::move(g)) {
         for (const Light& l : f.lights) cones.emplace_back(l);
+        grids.resize(f.lights.size(), nullptr);
     }
 
     // A surface of object o at depth z: shaded and composited; false stops the walk.
@@ -363,8 +373,9 @@ struct VolumeComposite {
             Vec3d toLight;
             const Vec3f e = lightIrradiance(sceneLights[l], cones[l], p, toLight);
             if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
-            const Vec3f vis =
-                l < frame.shadows.size() ? shadowAt(*frame.shadows[l], p, toLight, inside) : Vec3f{1, 1, 1};
+            const Vec3f vis = l < frame.shadows.size()
+                                  ? shadowAt(*frame.shadows[l], grids[l], p, toLight, inside)
+                                  : Vec3f{1, 1, 1};
             const Vec3f ev = e * vis;
             unshaded += ev * float(1.0 / M_PI);
             lights.push_back({ev, toLight});
@@ -376,9 +387,12 @@ struct VolumeComposite {
     // deep and exact shadows times ownTransmittance from p to where the lookup starts (deep: q
     // moved towards the light by the normal offset and the depth bias, a texel footprint each by
     // default; exact: the shadow ray's start, 10 epsilons beyond q; without it a uniform slab was
-    // 4 % brighter than Beer-Lambert under exact shadows).
-    Vec3f shadowAt(const LightShadow& shadow, const Vec3d& p, const Vec3d& toLight,
-                   std::span<const uint8_t> inside) const {
+    // 4 % brighter than Beer-Lambert under exact shadows). Under deep shadows the map's lookup (its
+    // visibility and texel footprint) is read from the light's grid of the first volume inside
+    // that covers p (`grids`, LightVisibilityGrid: the same lookup at the volume's voxel corners,
+    // interpolated), else made here.
+    Vec3f shadowAt(const LightShadow& shadow, const VolumeLightGrids* grids, const Vec3d& p,
+                   const Vec3d& toLight, std::span<const uint8_t> inside) const {
         const Vec3d q = p + toLight * step;
         if (const ExactShadow* exact = std::get_if<ExactShadow>(&shadow))
             return exact->visibility(q, toLight) *
@@ -388,7 +402,12 @@ struct VolumeComposite {
         const DeepShadowOptions* o = std::get_if<DeepShadowOptions>(&frame.options.shadow);
         const double offsets = o ? o->normalOffset + o->depthBias : 2.0;
         double texel = 0;
-        const Vec3f visibility = deep->visibility(q, toLight, texel);
+        Vec3f visibility;
+        bool cached = false;
+        if (grids)
+            for (std::size_t k = 0; k < inside.size() && !cached; ++k)
+                cached = inside[k] && grids->objects[k].lookup(p, visibility, texel);
+        if (!cached) visibility = deep->visibility(q, toLight, texel);
         return visibility * float(ownTransmittance(p, q + toLight * (offsets * texel), inside));
     }
 
@@ -437,8 +456,8 @@ struct VolumeComposite {
     // specular = s sum E ks (m + 8) / (8 pi) max(0, n.h)^m max(0, n.l) with n = -g / |g|.
     void phong(const Vec3d& p, std::size_t o, const Vec3d& eye, const std::vector<LightSample>& lights,
                const Vec3f& ambient, const Vec3f& unshaded, Vec3f& diffuse, Vec3f& specular) const {
-        const Volume& volume = *vs.volumes[std::size_t(vs.objects[o].volume)];
-        const Vec3d g = volume.gradient(p);
+        Vec3d g;
+        if (!setup.gradients[o].lookup(p, g)) g = vs.volumes[std::size_t(vs.objects[o].volume)]->gradient(p);
         const double gm = length(g);
         const double s = std::min(1.0, gm / fullGradient[o]);
         specular = {0, 0, 0};
@@ -697,7 +716,7 @@ bool volumeEdge(const FrameState& f, const SampleCaster& c, const ColumnCrossing
 // The volume pass's setup for this frame's scene and options: from the cache while the meshes,
 // materials, volume scene and the options it reads stay the same; null when the camera sees no
 // volume scene object and no blended mesh.
-std::shared_ptr<const VolumeSetup> volumeSetup(FrameState& frame) {
+std::shared_ptr<const VolumeSetup> volumeSetup(FrameState& frame, uint64_t& setupKey) {
     const Scene& scene = frame.scene;
     const RenderOptions& options = frame.options;
     // What the camera draws here: the volume scene's objects, and the meshes of blended materials
@@ -711,6 +730,7 @@ std::shared_ptr<const VolumeSetup> volumeSetup(FrameState& frame) {
     Hasher key;
     key.value(frame.meshesKey), key.value(frame.materialsKey), key.value(options.skipEmptySpace);
     key.value(options.volumeStep), key.value(deep);
+    setupKey = key.get();
     std::shared_ptr<const VolumeSetup> setup = frame.cache.volume.find(key.get());
     if (setup) {
         frame.cachedPass = true;
@@ -722,6 +742,43 @@ std::shared_ptr<const VolumeSetup> volumeSetup(FrameState& frame) {
         frame.cache.volume.insert(key.get(), setup);
     }
     return setup->vs.objects.empty() ? nullptr : setup;
+}
+
+// Per light of the frame under deep shadows, its LightVisibilityGrid of every volume object of the
+// setup's scene (null for other lights): from the cache while the setup (`setupKey`) and the light's
+// shadow (FrameState::shadowKeys: its meshes, materials, light and options) stay the same, else
+// built, which the first frame pays (the pass's time is then not "cached"). `lights` keeps them.
+std::vector<const VolumeLightGrids*>
+lightGrids(FrameState& frame, const VolumeSetup& setup, uint64_t setupKey,
+           std::vector<std::shared_ptr<const VolumeLightGrids>>& lights) {
+    const std::size_t n = frame.lights.size();
+    std::vector<const VolumeLightGrids*> out(n, nullptr);
+    lights.assign(n, nullptr);
+    frame.cache.volumeLight.setCapacity(std::max<std::size_t>(4, 2 * n));
+    const VolumeScene& vs = setup.vs;
+    for (std::size_t l = 0; l < n && l < frame.shadows.size() && l < frame.shadowKeys.size(); ++l) {
+        const DeepShadow* deep = std::get_if<DeepShadow>(frame.shadows[l].get());
+        if (!deep) continue;
+        Hasher key;
+        key.value(setupKey), key.value(frame.shadowKeys[l]);
+        std::shared_ptr<const VolumeLightGrids> g = frame.cache.volumeLight.find(key.get());
+        if (!g) {
+            frame.cachedPass = false;
+            auto built = std::make_shared<VolumeLightGrids>();
+            built->objects.resize(vs.objects.size());
+            const LightCone cone(frame.lights[l]);
+            for (std::size_t o = 0; o < vs.objects.size(); ++o)
+                if (vs.objects[o].kind == ObjectKind::Volume)
+                    built->objects[o] = LightVisibilityGrid::build(
+                        *vs.volumes[std::size_t(vs.objects[o].volume)], *deep, frame.lights[l], cone,
+                        setup.step, &setup.emptySpace[o], setup.objectStep[o]);
+            g = std::move(built);
+            frame.cache.volumeLight.insert(key.get(), g);
+        }
+        out[l] = g.get();
+        lights[l] = std::move(g);
+    }
+    return out;
 }
 
 // Adaptive image-space refinement (RenderOptions::volumeRefinement; after Levoy 1990): the cells of
@@ -811,9 +868,11 @@ struct LatticeInterpolation {
 // before wrote (the lattice's light; representatives, which the last round does not change): the
 // order of the cells does not matter.
 void compositeVolumes(FrameState& frame) {
-    std::shared_ptr<const VolumeSetup> setup = volumeSetup(frame);
+    uint64_t setupKey = 0;
+    std::shared_ptr<const VolumeSetup> setup = volumeSetup(frame, setupKey);
     if (!setup) return;
-    const VolumeComposite pass(frame, *setup);
+    std::vector<std::shared_ptr<const VolumeLightGrids>> keptGrids;
+    const VolumeComposite pass(frame, *setup, lightGrids(frame, *setup, setupKey, keptGrids));
     const VolumeScene* chosen = &setup->vs;
     const Frame& f = frame.gbuffer.frame;
     FragmentLists& lists = frame.cache.volumeLists;

@@ -27,7 +27,9 @@ namespace voxfx::detail {
 /// shadow looked up one step towards the light (with that direction as the lookup's normal), under
 /// deep shadows times the transmittance of the volumes over that step and the map's offsets (the
 /// medium the lookup leaves out, at the smaller extinction of its two ends: a uniform slab is
-/// Beer–Lambert, a dense layer does not shadow its own front). The walk
+/// Beer–Lambert, a dense layer does not shadow its own front); the map's lookup itself is read,
+/// trilinearly, from a grid of the same lookups at the volume's voxel corners built once per (volume,
+/// light) and kept in frame.cache (render/volume_light_grid.hpp; the first frame builds it). The walk
 /// stops when the accumulated opacity reaches 0.999, and the result is blended over frame.shaded
 /// (row-major, y up). The meshes of blended materials (Material::blend), which the G-buffer leaves
 /// out, are walked here too, as translucent objects shaded with their own material. With adaptive
