@@ -9,7 +9,9 @@
 //   2. per working pixel, `directions` slices, each with two horizons found by `steps` samples per
 //      side, integrated in closed form; the sides walked in AVX2 lanes (two pixels' four sides at
 //      once) on an 8-byte view-space copy of the working buffer, bit for bit the scalar walk
-//      (ScreenSpaceOcclusionOptions::vectorWalk);
+//      (ScreenSpaceOcclusionOptions::vectorWalk); skipped where no occluder lies within reach on
+//      screen and within twice the radius in view depth, coplanar points of a flat mesh excepted
+//      (skipTiles, per 8x8 tile; the G-buffer entries with flatMeshes): the search's output exactly;
 //   3. links between neighbouring working pixels on one smooth surface, and a separable blur over
 //      5 x 5 linked pixels, weights 1 2 2 2 1 (every phase of the 4x4 pattern gets the same weight,
 //      so the pattern cancels on a smooth surface);

@@ -23,7 +23,11 @@
 // Beyond the paper: the horizon is interpolated up to the radius between the last sample within it
 // and the first beyond (where the segment between them crosses the sphere), so a wall occludes as
 // far as the radius and not as far as the last sample happened to fall; the blur and the upsample
-// follow links between neighbouring pixels on one smooth surface (a binary bilateral filter).
+// follow links between neighbouring pixels on one smooth surface (a binary bilateral filter); and
+// the G-buffer entries skip the horizon search of a working pixel that it could not raise (no
+// occluder within twice the radius in view depth within its reach on screen, but coplanar points of
+// its own flat mesh: ScreenSpaceOcclusionOptions::flatMeshes), which is most of them (the tree demo's
+// frame: 72 % of the covered working pixels), with the search's output bit for bit.
 //
 // Accuracy (tests/test_screen_space_ao.cpp): a floor meeting a wall, against the closed form,
 // mean error 0.007 within the radius (max 0.09, next to the crease at half resolution); the tree
