@@ -486,6 +486,74 @@ BitCompare compareBits(const std::vector<float>& a, const std::vector<float>& b)
     return c;
 }
 
+// The working pixels (half resolution, after a G-buffer entry's call in `scratch`) whose horizon search
+// was skipped (ScreenSpaceOcclusionOptions::flatMeshes), and the covered ones.
+std::pair<int64_t, int64_t> skippedPixels(const detail::ScreenSpaceOcclusionScratch& scratch, int64_t w,
+                                          int64_t h) {
+    int64_t skipped = 0, covered = 0;
+    const int64_t tw = (w + 7) / 8;
+    for (int64_t y = 0; y < h; ++y)
+        for (int64_t x = 0; x < w; ++x) {
+            const auto i = std::size_t(y * w + x);
+            if (!(scratch.samples[i].flags & 1)) continue;
+            ++covered;
+            const auto& t = scratch.tiles[std::size_t((y / 8) * tw + x / 8)];
+            skipped += t.skipAll || (t.skipMesh >= 0 && scratch.meshes[i] == t.skipMesh);
+        }
+    return {skipped, covered};
+}
+
+TEST(ScreenSpaceOcclusionTest, SkippingSearchesThatCouldFindNothingGivesTheSameBits) {
+    // Where no occluder within reach on screen lies within twice the radius in view depth (its own
+    // flat mesh's excepted), a working pixel's horizon search cannot raise a horizon, so skipping it
+    // (visibility 1) must give the search's output bit for bit; and it must skip something, most of
+    // the ground and the open surfaces. The tree, the bunny, a 25-tree forest and the corner (the
+    // floor beyond twice the radius from the wall skips; nearer it must search), G-buffer entry at 1
+    // and 2 samples per cell.
+    const Scene tree = demo::makeTreeScene();
+    demo::ForestOptions fo;
+    fo.trees = 25;
+    const Scene forest = demo::makeForestScene(fo);
+    const Corner corner;
+    std::vector<std::pair<const char*, const Scene*>> scenes = {{"tree", &tree}, {"forest", &forest}};
+    Scene bunny;
+    if (test::missingData("meshes/bunny00.off").empty()) { // else left out (the data test above says why)
+        bunny = demo::makeBunnyScene(test::dataPath("meshes"));
+        scenes.emplace_back("bunny", &bunny);
+    }
+    scenes.emplace_back("corner", &corner.scene);
+    for (const auto& [name, scene] : scenes)
+        for (const int adaptive : {1, 2}) {
+            const Camera& camera = scene == &corner.scene ? corner.camera : scene->cameras[0];
+            const int64_t w = 320, h = 180;
+            const SceneGeometry geometry = flattenScene(*scene);
+            const GBuffer g = renderGBuffer(geometry, cameraFrame(camera, adaptive * w, adaptive * h));
+            const std::vector<detail::TriangleBasis> bases = detail::triangleBases(geometry);
+            std::vector<uint8_t> opaque;
+            for (const Material& m : scene->materials) opaque.push_back(m.isOpaque());
+            const detail::FieldOcclusionSetup setup =
+                detail::fieldOcclusionSetup(geometry, scene->materials, scene->meshes.size(), 0, 0);
+            ScreenSpaceOcclusionOptions o;
+            o.radius = scene == &corner.scene ? Corner::kRadius : setup.radius;
+            std::vector<float> searched(std::size_t(w * h)), skipping(searched.size());
+            detail::ScreenSpaceOcclusionScratch scratch;
+            detail::screenSpaceOcclusion(g, geometry, bases, opaque, adaptive, o, searched, scratch);
+            o.flatMeshes = setup.flatMeshes;
+            detail::screenSpaceOcclusion(g, geometry, bases, opaque, adaptive, o, skipping, scratch);
+            const auto [skipped, covered] = skippedPixels(scratch, (w + 1) / 2, (h + 1) / 2);
+            const BitCompare bits = compareBits(searched, skipping);
+            std::printf(
+                "%s, %d x %d samples per cell: %lld of %lld working pixels skip the search (%.1f %%); "
+                "%lld of %lld cells occluded; %lld differ\n",
+                name, adaptive, adaptive, (long long)skipped, (long long)covered,
+                100.0 * double(skipped) / double(std::max<int64_t>(covered, 1)), (long long)bits.occluded,
+                (long long)searched.size(), (long long)bits.differ);
+            EXPECT_GT(bits.occluded, 100) << name;
+            EXPECT_EQ(bits.differ, 0) << name << " " << adaptive;
+            EXPECT_GT(skipped, covered / 10) << name << ": the test needs skipped pixels";
+        }
+}
+
 TEST(ScreenSpaceOcclusionTest, OutputIsTheSameForEveryThreadCount) {
     const Scene scene = demo::makeTreeScene();
     const View v = viewOf(scene, scene.cameras[0], 320, 180);

@@ -18,14 +18,15 @@ namespace {
 // shading pass shades there, read from the G-buffer itself (no gather of surface points): all but the
 // upsample to the cells, which the shading pass does where it has each cell's surface point
 // (f.cellOcclusion; it fills f.screenOcclusion).
-void screenOcclusion(FrameState& f, double radius) {
+void screenOcclusion(FrameState& f, const FieldOcclusionSetup& setup) {
     const int a = f.adaptive;
     std::vector<uint8_t>& opaque = f.cache.screen.opaque;
     opaque.resize(f.scene.materials.size());
     for (std::size_t m = 0; m < opaque.size(); ++m) opaque[m] = f.scene.materials[m].isOpaque();
     f.screenOcclusion.resize(size_t((f.width / a) * (f.height / a)));
     ScreenSpaceOcclusionOptions so;
-    so.radius = radius;
+    so.radius = setup.radius;
+    so.flatMeshes = setup.flatMeshes; // kept in the cache with the setup
     f.cellOcclusion = std::make_shared<const CellOcclusion>(f.gbuffer, f.geometry, f.triangleBases, opaque, a,
                                                             so, f.cache.screen.scratch);
 }
@@ -55,7 +56,7 @@ void occlusionPass(FrameState& f, Progress* progress) {
         return;
     }
     if (o.ambientOcclusion == Occlusion::Screen) {
-        screenOcclusion(f, setup->radius);
+        screenOcclusion(f, *setup);
         return;
     }
     f.occlusion = f.cache.occlusion.find(key.get());

@@ -9,7 +9,9 @@
 //   2. per working pixel, `directions` slices, each with two horizons found by `steps` samples per
 //      side, integrated in closed form; the sides walked in AVX2 lanes (two pixels' four sides at
 //      once) on an 8-byte view-space copy of the working buffer, bit for bit the scalar walk
-//      (ScreenSpaceOcclusionOptions::vectorWalk);
+//      (ScreenSpaceOcclusionOptions::vectorWalk); skipped where no occluder lies within reach on
+//      screen and within twice the radius in view depth, coplanar points of a flat mesh excepted
+//      (skipTiles, per 8x8 tile; the G-buffer entries with flatMeshes): the search's output exactly;
 //   3. links between neighbouring working pixels on one smooth surface, and a separable blur over
 //      5 x 5 linked pixels, weights 1 2 2 2 1 (every phase of the 4x4 pattern gets the same weight,
 //      so the pattern cancels on a smooth surface);
@@ -66,6 +68,17 @@ struct Packed {
     const Sample* sample = nullptr;
     const Vec3f* normals = nullptr;
     const ScreenSpaceWalkSample* walk = nullptr; ///< the horizon search's copy (walkSamples)
+    /// Where the search may be skipped (skipTiles; null: nowhere): per working pixel its mesh, per
+    /// 8x8 tile (tileColumns per row) its verdict.
+    const int32_t* mesh = nullptr;
+    const ScreenSpaceOcclusionScratch::Tile* tiles = nullptr;
+    int64_t tileColumns = 0;
+    // Whether working pixel (x, y), covered, skips the search (its visibility is then exactly 1).
+    bool skips(int64_t x, int64_t y, int64_t i) const {
+        if (!tiles) return false;
+        const ScreenSpaceOcclusionScratch::Tile& t = tiles[(y >> 3) * tileColumns + (x >> 3)];
+        return t.skipAll || (t.skipMesh >= 0 && mesh[i] == t.skipMesh);
+    }
     bool covered(int64_t i) const { return sample[i].flags & kCovered; }
     bool occludes(int64_t i) const { return sample[i].flags == (kCovered | kOccluder); }
     const Vec3f& position(int64_t i) const { return sample[i].position; }
@@ -93,7 +106,11 @@ struct Spans {
     Vec3f position(int64_t x, int64_t y) const { return positions[y * width + x]; }
     Vec3f normal(int64_t x, int64_t y) const { return normals[y * width + x]; }
     Vec3f testNormal(int64_t x, int64_t y) const { return normals[y * width + x]; }
+    Vec3f testNormal(int64_t x, int64_t y, const Vec3f&) const { return normals[y * width + x]; }
+    Vec3f normalAt(int64_t x, int64_t y, const Vec3f&) const { return normals[y * width + x]; }
     Vec3f upsampleNormal(int64_t x, int64_t y) const { return normals[y * width + x]; }
+    static constexpr bool kMeshes = false; // the buffers do not say
+    int32_t meshOf(int64_t, int64_t) const { return -1; }
     Vec3f meanNormal(const Vec3f& sum, int64_t, int64_t, const Vec3f&) const {
         return length(sum) > 0 ? normalize(sum) : Vec3f{0, 0, 0};
     }
@@ -134,6 +151,8 @@ struct Cells {
         return std::size_t((y * adaptive + adaptive / 2) * g->frame.width() + x * adaptive + adaptive / 2);
     }
     uint32_t triangle(int64_t x, int64_t y) const { return g->triangle[sample(x, y)]; }
+    static constexpr bool kMeshes = true;
+    int32_t meshOf(int64_t x, int64_t y) const { return int32_t(geometry->triangleMesh[triangle(x, y)]); }
     bool covered(int64_t x, int64_t y) const { return triangle(x, y) != GBuffer::kNone; }
     bool occludes(int64_t x, int64_t y) const {
         const uint32_t t = triangle(x, y);
@@ -146,9 +165,11 @@ struct Cells {
         return eye + (right * columnTan[size_t(x)] + up * rowTan[size_t(y)] + forward) * z;
     }
     // The face normal, turned towards the eye.
-    Vec3f testNormal(int64_t x, int64_t y) const {
+    Vec3f testNormal(int64_t x, int64_t y) const { return testNormal(x, y, position(x, y)); }
+    // The same, where the caller has its position (`at`, position(x, y)).
+    Vec3f testNormal(int64_t x, int64_t y, const Vec3f& at) const {
         const Vec3f n = bases[triangle(x, y)].normal;
-        return dot(n, eye - position(x, y)) < 0 ? -n : n;
+        return dot(n, eye - at) < 0 ? -n : n;
     }
     // The shading normal at `at` on the triangle of cell (x, y), turned as surfaceFromBasis turns it.
     Vec3f normalAt(int64_t x, int64_t y, const Vec3f& at) const {
@@ -643,7 +664,7 @@ float occlusionOf(const Buffer& b, const Params& p, const Vec3f& P, const Vec3f&
 // GTAO at working pixel (x, y): the visibility in [0, 1], 1 for background.
 template <class Buffer> float occlusionAt(const Buffer& b, const Params& p, int64_t x, int64_t y) {
     const int64_t here = y * b.width + x;
-    if (!b.covered(here)) return 1;
+    if (!b.covered(here) || b.skips(x, y, here)) return 1;
     return occlusionOf(b, p, b.position(here), b.normal(here), float(x) + 0.5f, float(y) + 0.5f, here,
                        kBayer[y & 3][x & 3]);
 }
@@ -691,7 +712,7 @@ template <class Buffer> void occlusionRow(const Buffer& b, const Params& p, int6
     int64_t pendingX = 0;
     for (int64_t x = 0; x < b.width; ++x) {
         const int64_t i = y * b.width + x;
-        if (!b.covered(i) || !paired) {
+        if (!b.covered(i) || !paired || b.skips(x, y, i)) {
             out[x] = occlusionAt(b, p, x, y);
             continue;
         }
@@ -786,6 +807,103 @@ void walkSamples(Packed& b, const Params& p, std::vector<ScreenSpaceWalkSample>&
             }
     });
     b.walk = out.data();
+}
+
+// Where the horizon search may be skipped (ScreenSpaceOcclusionOptions::flatMeshes), per 8x8 tile of
+// working buffer b (walk copy made, scratch.meshes filled): the tile's occluders' depth range and mesh;
+// then per tile, over the tiles its pixels' search can reach (its pixels' extent grown by the reach
+// at its nearest pixel, plus one pixel for the truncation of the sample positions), whether every
+// occluder there lies at least 2 radii from its pixels in view depth (skipAll), or from its pixels
+// of one flat mesh, that mesh's own occluders excepted (skipMesh). A walk raises a horizon only by an
+// occluder within the radius, or by the crossing of the sphere between one within the radius and
+// the next sample, which lies within twice the radius; points of a flat mesh rise above a tangent
+// plane of it by rounding only, far below the bias angle. So a skipped pixel's search would have
+// found nothing, and its visibility is 1 exactly as the search gives it (the open slices' sums are
+// the visible ones, term for term). Windows wider than kMaxWindowTiles tiles are not checked.
+constexpr int64_t kTile = 8, kMaxWindowTiles = 24;
+void skipTiles(Packed& b, const Params& p, std::span<const uint8_t> flatMeshes,
+               ScreenSpaceOcclusionScratch& scratch) {
+    using Tile = ScreenSpaceOcclusionScratch::Tile;
+    const int64_t W = b.width, H = b.height, tw = (W + kTile - 1) / kTile, th = (H + kTile - 1) / kTile;
+    std::vector<Tile>& tiles = scratch.tiles;
+    tiles.assign(std::size_t(tw * th), Tile{});
+    const int32_t* mesh = scratch.meshes.data();
+    const auto isFlat = [&](int32_t m) {
+        return m >= 0 && std::size_t(m) < flatMeshes.size() && flatMeshes[size_t(m)];
+    };
+    // The tiles' occluders.
+    parallelFor(0, th, 4, [&](int64_t t0, int64_t t1) {
+        for (int64_t ty = t0; ty < t1; ++ty)
+            for (int64_t tx = 0; tx < tw; ++tx) {
+                Tile& t = tiles[std::size_t(ty * tw + tx)];
+                for (int64_t y = ty * kTile; y < std::min(H, (ty + 1) * kTile); ++y)
+                    for (int64_t x = tx * kTile; x < std::min(W, (tx + 1) * kTile); ++x) {
+                        const int64_t i = y * W + x;
+                        const float z = b.walk[i].depth;
+                        if (!(z > 0)) continue;
+                        if (t.occluderMesh == -1) {
+                            t.occluderMin = t.occluderMax = z;
+                            t.occluderMesh = mesh[i] >= 0 ? mesh[i] : -2;
+                        } else {
+                            t.occluderMin = std::min(t.occluderMin, z),
+                            t.occluderMax = std::max(t.occluderMax, z);
+                            if (t.occluderMesh != mesh[i]) t.occluderMesh = -2;
+                        }
+                    }
+            }
+    });
+    const float twoRadii = 2 * p.radius;
+    // The verdicts (each tile reads the others' occluders only).
+    parallelFor(0, th, 4, [&](int64_t t0, int64_t t1) {
+        for (int64_t ty = t0; ty < t1; ++ty)
+            for (int64_t tx = 0; tx < tw; ++tx) {
+                // The tile's pixels: their depth range, and that of its first flat mesh's.
+                float allMin = 0, allMax = 0, flatMin = 0, flatMax = 0;
+                bool any = false, anyFlat = false;
+                int32_t flat = -1;
+                const int64_t x0 = tx * kTile, x1 = std::min(W, x0 + kTile), y0 = ty * kTile,
+                              y1 = std::min(H, y0 + kTile);
+                for (int64_t y = y0; y < y1; ++y)
+                    for (int64_t x = x0; x < x1; ++x) {
+                        const int64_t i = y * W + x;
+                        if (!b.covered(i)) continue;
+                        const float z = dot(b.position(i) - p.eye, p.forward);
+                        allMin = any ? std::min(allMin, z) : z, allMax = any ? std::max(allMax, z) : z;
+                        any = true;
+                        if (flat < 0 && isFlat(mesh[i])) flat = mesh[i];
+                        if (flat >= 0 && mesh[i] == flat) {
+                            flatMin = anyFlat ? std::min(flatMin, z) : z;
+                            flatMax = anyFlat ? std::max(flatMax, z) : z;
+                            anyFlat = true;
+                        }
+                    }
+                if (!any || !(allMin > 0)) continue;
+                // Each group's verdict over the tiles in reach of its nearest pixel.
+                const auto clear = [&](float zMin, float zMax, int32_t own) {
+                    const float reach = 1.01f * kReach * p.radius * p.pixelsPerTan / zMin + 2;
+                    if (!(reach < float(kMaxWindowTiles * kTile))) return false;
+                    const auto r = int64_t(std::ceil(reach));
+                    const int64_t ux0 = std::max<int64_t>(0, (x0 - r) / kTile),
+                                  ux1 = std::min(tw - 1, (x1 - 1 + r) / kTile),
+                                  uy0 = std::max<int64_t>(0, (y0 - r) / kTile),
+                                  uy1 = std::min(th - 1, (y1 - 1 + r) / kTile);
+                    for (int64_t uy = uy0; uy <= uy1; ++uy)
+                        for (int64_t ux = ux0; ux <= ux1; ++ux) {
+                            const Tile& u = tiles[std::size_t(uy * tw + ux)];
+                            if (u.occluderMesh == -1 || (own >= 0 && u.occluderMesh == own)) continue;
+                            if (u.occluderMax < zMin - twoRadii || u.occluderMin > zMax + twoRadii) continue;
+                            return false;
+                        }
+                    return true;
+                };
+                Tile& t = tiles[std::size_t(ty * tw + tx)];
+                t.skipAll = clear(allMin, allMax, -1);
+                if (!t.skipAll && anyFlat && flatMin > 0 && clear(flatMin, flatMax, flat)) t.skipMesh = flat;
+            }
+    });
+    b.mesh = mesh;
+    b.tiles = tiles.data();
+    b.tileColumns = tw;
 }
 
 // Step 3: the separable blur, weights 1 2 2 2 1 over the pixels linked to the centre through a chain
@@ -903,7 +1021,7 @@ bool oneTriangle(const Cells& cells, const BlockSample* block) {
 // kUniform marks a block of one smooth surface).
 template <class Source>
 Packed downsample(const Source& full, const Params& fullParams, const Frame& camera,
-                  ScreenSpaceOcclusionScratch& scratch) {
+                  ScreenSpaceOcclusionScratch& scratch, bool meshes) {
     const int64_t W = full.width, H = full.height;
     // Step 1: per 2x2 block, the mean of its samples where they all show one smooth surface (then
     // the working pixel sits at the block's centre, where the upsample expects it), else the covered
@@ -916,6 +1034,10 @@ Packed downsample(const Source& full, const Params& fullParams, const Frame& cam
     lowSample.resize(lowCount);
     lowNormal.resize(lowCount);
     links.resize(lowCount);
+    // With `meshes`, per working pixel the mesh its point lies on (skipTiles): its sample's, or for a
+    // block's mean, the one mesh of all its samples (-1 where they show several).
+    std::vector<int32_t>& lowMesh = scratch.meshes;
+    if (meshes) lowMesh.resize(lowCount);
     const Vec3f eye(camera.eye()), forward(camera.forward());
     parallelFor(0, h, 16, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y)
@@ -937,6 +1059,7 @@ Packed downsample(const Source& full, const Params& fullParams, const Frame& cam
                 if (best < 0) {
                     lowSample[l] = {};
                     lowNormal[l] = {};
+                    if (meshes) lowMesh[l] = -1;
                     continue;
                 }
                 const BlockSample& b = block[best];
@@ -949,11 +1072,11 @@ Packed downsample(const Source& full, const Params& fullParams, const Frame& cam
                 } else {
                     // One smooth surface: all occluders or none, within a sample's footprint of the
                     // nearest sample's tangent plane, normals within about 18 degrees of its normal.
-                    const Vec3f N = full.testNormal(b.x, b.y);
+                    const Vec3f N = full.testNormal(b.x, b.y, P);
                     const float footprint = bestDepth * fullParams.pixelSize;
                     for (int k = 0; k < n && uniform; ++k) {
                         const BlockSample& c = block[k];
-                        const Vec3f m = k == best ? N : full.testNormal(c.x, c.y);
+                        const Vec3f m = k == best ? N : full.testNormal(c.x, c.y, c.position);
                         uniform = full.occludes(c.x, c.y) == occludes &&
                                   std::fabs(dot(c.position - P, N)) <= footprint && dot(m, N) >= 0.95f;
                         sumPosition += c.position;
@@ -964,13 +1087,21 @@ Packed downsample(const Source& full, const Params& fullParams, const Frame& cam
                 const Vec3f mean = sumPosition * 0.25f;
                 const Vec3f meanNormal =
                     uniform && inside == 4 ? full.meanNormal(sumNormal, b.x, b.y, mean) : Vec3f{0, 0, 0};
-                if (length(meanNormal) > 0) {
+                const bool isMean = length(meanNormal) > 0;
+                if (isMean) {
                     lowSample[l].position = mean;
                     lowNormal[l] = meanNormal;
                     links[l] = kUniform;
                 } else {
                     lowSample[l].position = P;
-                    lowNormal[l] = full.normal(b.x, b.y);
+                    lowNormal[l] = full.normalAt(b.x, b.y, P);
+                }
+                if (meshes) {
+                    int32_t m = full.meshOf(b.x, b.y);
+                    if (isMean)
+                        for (int k = 0; k < n; ++k)
+                            if (full.meshOf(block[k].x, block[k].y) != m) m = -1;
+                    lowMesh[l] = m;
                 }
             }
     });
@@ -1065,12 +1196,14 @@ void upsample(const Source& full, const Params& fullParams, const Upsample& up, 
 template <class Source>
 Upsample workingOcclusion(const Source& full, const Params& fullParams, const Frame& camera, int scale,
                           const ScreenSpaceOcclusionOptions& options, ScreenSpaceOcclusionScratch& scratch) {
-    Packed low = downsample(full, fullParams, camera, scratch);
+    const bool skipping = !options.flatMeshes.empty() && Source::kMeshes;
+    Packed low = downsample(full, fullParams, camera, scratch, skipping);
     const int64_t w = low.width, h = low.height;
     const auto lowCount = std::size_t(w * h);
     std::vector<uint8_t>& links = scratch.links;
     const Params p = makeParams(camera, 2 * scale, options);
     walkSamples(low, p, scratch.walk);
+    if (skipping) skipTiles(low, p, options.flatMeshes, scratch);
     scratch.raw.resize(lowCount);
     parallelFor(0, h, 4, [&](int64_t y0, int64_t y1) {
         for (int64_t y = y0; y < y1; ++y) occlusionRow(low, p, y, &scratch.raw[size_t(y * w)]);
@@ -1258,6 +1391,33 @@ FieldOcclusionSetup fieldOcclusionSetup(const SceneGeometry& g, std::span<const 
         m.box.extend(a), m.box.extend(b), m.box.extend(c);
         const Vec3d n = cross(b - a, c - a);
         if (dot(n, n) > m.area2) m.area2 = dot(n, n), m.normal = n, m.point = a;
+    }
+    // Per mesh, flat over all its triangles (any material): every vertex on the plane of its largest
+    // triangle, to 1e-6 of its size.
+    {
+        std::vector<PerMesh> all(meshCount);
+        for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
+            if (g.triangleMesh[t] >= meshCount) continue;
+            PerMesh& m = all[g.triangleMesh[t]];
+            const Vec3d a = Vec3d(mesh.positions[mesh.indices[3 * t]]),
+                        b = Vec3d(mesh.positions[mesh.indices[3 * t + 1]]),
+                        c = Vec3d(mesh.positions[mesh.indices[3 * t + 2]]);
+            m.box.extend(a), m.box.extend(b), m.box.extend(c);
+            const Vec3d n = cross(b - a, c - a);
+            if (dot(n, n) > m.area2) m.area2 = dot(n, n), m.normal = n, m.point = a;
+        }
+        for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
+            if (g.triangleMesh[t] >= meshCount) continue;
+            PerMesh& m = all[g.triangleMesh[t]];
+            if (!m.flat || m.area2 <= 0) continue;
+            const double tol = 1e-6 * length(m.box.extent());
+            const Vec3d n = m.normal / std::sqrt(m.area2);
+            for (int k = 0; k < 3; ++k)
+                if (std::fabs(dot(Vec3d(mesh.positions[mesh.indices[3 * t + k]]) - m.point, n)) > tol)
+                    m.flat = false;
+        }
+        out.flatMeshes.resize(meshCount);
+        for (std::size_t i = 0; i < meshCount; ++i) out.flatMeshes[i] = all[i].flat && all[i].area2 > 0;
     }
     if (opaque.empty()) return out;
     for (const std::size_t t : opaque) {

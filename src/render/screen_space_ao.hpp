@@ -23,7 +23,11 @@
 // Beyond the paper: the horizon is interpolated up to the radius between the last sample within it
 // and the first beyond (where the segment between them crosses the sphere), so a wall occludes as
 // far as the radius and not as far as the last sample happened to fall; the blur and the upsample
-// follow links between neighbouring pixels on one smooth surface (a binary bilateral filter).
+// follow links between neighbouring pixels on one smooth surface (a binary bilateral filter); and
+// the G-buffer entries skip the horizon search of a working pixel that it could not raise (no
+// occluder within twice the radius in view depth within its reach on screen, but coplanar points of
+// its own flat mesh: ScreenSpaceOcclusionOptions::flatMeshes), which is most of them (the tree demo's
+// frame: 72 % of the covered working pixels), with the search's output bit for bit.
 //
 // Accuracy (tests/test_screen_space_ao.cpp): a floor meeting a wall, against the closed form,
 // mean error 0.007 within the radius (max 0.09, next to the crease at half resolution); the tree
@@ -74,6 +78,15 @@ struct ScreenSpaceOcclusionOptions {
     /// x86-64-v3; elsewhere always one side at a time). False: one side at a time, the scalar
     /// reference the tests compare it with; both give the same output bit for bit.
     bool vectorWalk = true;
+    /// The G-buffer entries (whose samples know their mesh), at half resolution: per mesh index of the
+    /// geometry, nonzero where the mesh is flat (FieldOcclusionSetup::flatMeshes). A working pixel
+    /// skips its horizon search, and is 1, where the search could find nothing: where no occluding
+    /// sample within its reach on screen lies within twice the radius of it in view depth (the
+    /// nearest an occluder or a crossing of the sphere can be), occluders of its own flat mesh
+    /// excepted when it lies on one (coplanar points never rise above its tangent plane by the bias
+    /// angle). Checked per 8x8 tile of working pixels against the depth ranges of the tiles in reach.
+    /// The output is the search's bit for bit (tested); empty: no skipping.
+    std::span<const uint8_t> flatMeshes;
 };
 
 /// Visibility (1 = unoccluded, cosine-weighted, as AmbientOcclusion::visibility) per sample of a
@@ -120,6 +133,14 @@ struct ScreenSpaceOcclusionScratch {
     std::vector<Vec3f> normals;
     std::vector<uint8_t> links;
     std::vector<float> raw, across, smooth;
+    std::vector<int32_t> meshes; ///< per working pixel: its mesh (-1: none or several); flatMeshes only
+    struct Tile {
+        float occluderMin = 0, occluderMax = 0; ///< occluders' view depths
+        int32_t occluderMesh = -1;              ///< -1: no occluder, -2: several meshes, else the one
+        int32_t skipMesh = -1;                  ///< its pixels of this flat mesh skip the search
+        uint8_t skipAll = 0;                    ///< all its pixels skip the search
+    };
+    std::vector<Tile> tiles;
 };
 /// screenSpaceOcclusion into `visibility` (width x height entries, every one written), working in
 /// `scratch`. Throws voxfx::Error as below, and for a `visibility` of another size.
@@ -190,6 +211,9 @@ SurfaceBuffers gatherSurfaces(const GBuffer& gbuffer, const SceneGeometry& geome
 /// else a tenth of the median diagonal of those meshes) and the field's resolution (`resolution`,
 /// at least 4 cells per radius, clamped to 8..2048). radius 0 when nothing occludes.
 struct FieldOcclusionSetup {
+    /// Per mesh index: 1 where every vertex of every triangle of the mesh lies on one plane (to 1e-6
+    /// of its size; ScreenSpaceOcclusionOptions::flatMeshes).
+    std::vector<uint8_t> flatMeshes;
     std::vector<uint32_t> indices;
     Box3d region;
     double radius = 0;
