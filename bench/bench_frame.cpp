@@ -84,7 +84,6 @@
 #include "voxfx/error.hpp"
 #include "voxfx/exact_glass.hpp"
 #include "voxfx/gbuffer.hpp"
-#include "voxfx/glass.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/scene_io.hpp"
@@ -455,102 +454,73 @@ BENCHMARK_CAPTURE(BM_FrameCost, dsm_demo, std::string("dsm-demo"))
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// The exact glass tracer's paths of the glass demo's camera (one per pixel centre that meets glass,
-// 1280x720, the demo's first camera): traced one at a time (ExactGlass::trace) and eight side by
-// side (traceMany: each step's next-face queries one Embree packet), in rows of pixels, alternating
-// in one process on one thread: one_ms, many_ms (process CPU ms per pass over the paths) and
-// one/many. The paths only (no opaque scene, no shading): what the glass pass's packets change.
+// Where a glass path's CPU goes, on the glass demo's camera paths (one per pixel centre at 1280x720
+// that meets glass, the demo's first camera), each query kind timed alone, one at a time, on one
+// thread (process CPU ms per pass over the paths): path_ms, the whole ExactGlass::trace of each (its
+// first query from the eye, then the next-face queries inside the glass and the touching-glass
+// queries); eye_ms, the eye rays' first query alone (Embree over the glass triangles);
+// reflect_ms and exit_ms, the glass pass's two queries into the opaque scene per path (the
+// reflection at the first surface, the light leaving the glass); events_per_path. The shading of
+// what those queries find is not in it (the frame's glass_ms has it).
 void BM_GlassPaths(benchmark::State& state) {
     const BenchScene& b = benchScene("glass");
     const SceneGeometry g = flattenScene(b.scene);
-    Mesh glass;
-    glass.positions = g.mesh.positions;
+    Mesh glass, opaque;
+    glass.positions = opaque.positions = g.mesh.positions;
     std::vector<uint32_t> medium;
     std::vector<GlassMedium> media;
     for (const Material& m : b.scene.materials) media.push_back(glassMedium(m));
     for (size_t t = 0; t < g.mesh.triangleCount(); ++t) {
-        if (!b.scene.materials[g.triangleMaterial[t]].isGlass()) continue;
-        for (int k = 0; k < 3; ++k) glass.indices.push_back(g.mesh.indices[3 * t + size_t(k)]);
-        medium.push_back(g.triangleMaterial[t]);
+        const bool isGlass = b.scene.materials[g.triangleMaterial[t]].isGlass();
+        for (int k = 0; k < 3; ++k)
+            (isGlass ? glass : opaque).indices.push_back(g.mesh.indices[3 * t + size_t(k)]);
+        if (isGlass) medium.push_back(g.triangleMaterial[t]);
     }
     const ExactGlass exact(glass.view(), g.normals, medium, media);
+    const TriangleTracer glassTracer(glass.view()), behind(opaque.view());
     const voxfx::Frame frame = cameraFrame(b.camera, kWidth, kHeight);
     const Vec3d eye = frame.eye();
-    std::vector<GlassHit> hits; // row by row, the pixels whose ray meets glass
+    struct Ray {
+        Vec3d origin, dir;
+    };
+    std::vector<Ray> eyeRays, reflections, exits;
+    double events = 0;
     for (int64_t y = 0; y < kHeight; ++y)
         for (int64_t x = 0; x < kWidth; ++x) {
             const Vec3d d = normalize(frame.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - eye);
-            const GlassHit h{eye, d, eye, d, 0};
-            if (exact.trace(h).hit) hits.push_back(h);
+            const GlassPath p = exact.trace(eye, d, ExactGlassOptions{}.maxEvents);
+            const TriangleTracer::Hit first = glassTracer.intersect(eye, d, 0, 1e30);
+            if (!p.hit || !first.hit) continue;
+            eyeRays.push_back({eye, d});
+            events += p.events;
+            reflections.push_back({eye + d * first.t, p.reflectDir});
+            exits.push_back({p.exitPoint, p.exitDir});
         }
-    std::vector<GlassPath> one(hits.size()), many(hits.size());
-    const TriangleTracer tracer(glass.view());
-    std::vector<TriangleTracer::Ray> eyeRays;
-    for (const GlassHit& h : hits) eyeRays.push_back({h.eye, h.dir});
-    std::vector<TriangleTracer::Hit> firstHits(hits.size());
-    double oneMs = 0, manyMs = 0, firstOneMs = 0, firstManyMs = 0;
+    const auto queries = [](const TriangleTracer& tracer, const std::vector<Ray>& rays) {
+        const double c0 = processCpuMs();
+        int hits = 0;
+        for (const Ray& r : rays) hits += tracer.intersect(r.origin, r.dir, 0, 1e30).hit;
+        benchmark::DoNotOptimize(hits);
+        return processCpuMs() - c0;
+    };
+    double pathMs = 0, eyeMs = 0, reflectMs = 0, exitMs = 0;
     int64_t n = 0;
     for (auto _ : state) {
-        double c0 = processCpuMs();
-        for (size_t k = 0; k < hits.size(); ++k)
-            firstHits[k] = tracer.intersect(eyeRays[k].origin, eyeRays[k].dir, 0, eyeRays[k].tFar);
-        firstOneMs += processCpuMs() - c0;
-        c0 = processCpuMs();
-        tracer.intersect(eyeRays, firstHits);
-        firstManyMs += processCpuMs() - c0;
-        c0 = processCpuMs();
-        for (size_t k = 0; k < hits.size(); ++k) one[k] = exact.trace(hits[k]);
-        oneMs += processCpuMs() - c0;
-        c0 = processCpuMs();
-        exact.traceMany(hits, many);
-        manyMs += processCpuMs() - c0;
+        const double c0 = processCpuMs();
+        for (const Ray& r : eyeRays)
+            benchmark::DoNotOptimize(exact.trace(r.origin, r.dir, ExactGlassOptions{}.maxEvents));
+        pathMs += processCpuMs() - c0;
+        eyeMs += queries(glassTracer, eyeRays);
+        reflectMs += queries(behind, reflections);
+        exitMs += queries(behind, exits);
         ++n;
-        benchmark::DoNotOptimize(one.data());
-        benchmark::DoNotOptimize(many.data());
     }
-    // What the glass pass asks the opaque scene per path (the reflection at the first surface and the
-    // exit), traced one at a time: their CPU per pass over the paths.
-    Mesh opaque;
-    opaque.positions = g.mesh.positions;
-    for (size_t t = 0; t < g.mesh.triangleCount(); ++t)
-        if (!b.scene.materials[g.triangleMaterial[t]].isGlass())
-            for (int k = 0; k < 3; ++k) opaque.indices.push_back(g.mesh.indices[3 * t + size_t(k)]);
-    const TriangleTracer behind(opaque.view());
-    std::vector<TriangleTracer::Ray> reflections, exits;
-    double events = 0;
-    for (size_t k = 0; k < hits.size(); ++k) {
-        events += one[k].events;
-        if (!one[k].hit || !firstHits[k].hit) continue;
-        reflections.push_back({hits[k].eye + hits[k].dir * firstHits[k].t, one[k].reflectDir});
-        exits.push_back({one[k].exitPoint, one[k].exitDir});
-    }
-    double reflectMs = 0, exitMs = 0;
-    int opaqueHits = 0;
-    for (int r = 0; r < 3; ++r) {
-        double c0 = processCpuMs();
-        for (const TriangleTracer::Ray& q : reflections)
-            opaqueHits += behind.intersect(q.origin, q.dir, 0, q.tFar).hit;
-        reflectMs += (processCpuMs() - c0) / 3;
-        c0 = processCpuMs();
-        for (const TriangleTracer::Ray& q : exits)
-            opaqueHits += behind.intersect(q.origin, q.dir, 0, q.tFar).hit;
-        exitMs += (processCpuMs() - c0) / 3;
-    }
-    state.counters["events_per_path"] = events / double(hits.size());
-    state.counters["reflect_ms"] = reflectMs;
-    state.counters["exit_ms"] = exitMs;
-    state.counters["opaque_hit_share"] = double(opaqueHits) / 3 / double(reflections.size() + exits.size());
-    int differ = 0;
-    for (size_t k = 0; k < hits.size(); ++k)
-        differ += one[k].events != many[k].events || !(one[k].exitDir == many[k].exitDir) ||
-                  !(one[k].throughput == many[k].throughput);
-    state.counters["paths"] = double(hits.size());
-    state.counters["one_ms"] = oneMs / double(n);
-    state.counters["many_ms"] = manyMs / double(n);
-    state.counters["one/many"] = oneMs / manyMs;
-    state.counters["differ"] = differ;
-    state.counters["first_one_ms"] = firstOneMs / double(n);
-    state.counters["first_many_ms"] = firstManyMs / double(n);
+    state.counters["paths"] = double(eyeRays.size());
+    state.counters["events_per_path"] = events / double(eyeRays.size());
+    state.counters["path_ms"] = pathMs / double(n);
+    state.counters["eye_ms"] = eyeMs / double(n);
+    state.counters["reflect_ms"] = reflectMs / double(n);
+    state.counters["exit_ms"] = exitMs / double(n);
     state.SetLabel("glass demo, 1280x720 pixel centres on glass, 1 thread, process CPU");
 }
 BENCHMARK(BM_GlassPaths)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -48,10 +48,6 @@ public:
     GlassPath trace(const Vec3d& origin, const Vec3d& dir, int maxEvents) const;
     /// The camera ray of `hit`, from the eye, with the options' maxEvents.
     GlassPath trace(const GlassHit& hit) const { return trace(hit.eye, hit.dir, maxEvents_); }
-    /// The camera rays of `hits` into `out` (as many): out[k] is trace(hits[k]), the paths traced
-    /// eight side by side, each step's next-face queries one Embree packet (the rays of neighbouring
-    /// pixels are coherent: they share the traversal).
-    void traceMany(std::span<const GlassHit> hits, std::span<GlassPath> out) const;
 
 private:
     std::vector<Vec3f> normals_;
@@ -67,7 +63,6 @@ public:
     };
 
 private:
-    class Walk; // one path, a query at a time (exact_glass.cpp)
     std::vector<Face> faces_;
     std::vector<uint32_t> medium_;
     std::vector<GlassMedium> media_;

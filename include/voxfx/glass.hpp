@@ -107,9 +107,6 @@ GlassGridChoice chooseGlassGrid(int64_t requested, std::span<const Box3d> object
 /// Builds the method `options` holds.
 BuiltGlass buildGlass(const GlassInput& input, const GlassOptions& options);
 GlassPath traceGlass(const BuiltGlass& glass, const GlassHit& hit);
-/// out[k] = traceGlass(glass, hits[k]) for every k (as many), side by side where the method can
-/// (exact glass: Embree packets over neighbouring pixels' rays).
-void traceGlass(const BuiltGlass& glass, std::span<const GlassHit> hits, std::span<GlassPath> out);
 
 /// Mean absolute error and PSNR of `test` against `reference` over the pixels where mask != 0,
 /// values clamped to [0, 1] per channel first (peak 1). psnr is +inf for identical images.

@@ -7,9 +7,7 @@
 #pragma once
 
 #include <cstdint>
-#include <limits>
 #include <memory>
-#include <span>
 
 #include "voxfx/math.hpp"
 #include "voxfx/mesh.hpp"
@@ -33,15 +31,6 @@ public:
     TriangleTracer& operator=(const TriangleTracer&) = delete;
     /// Nearest hit of origin + t * dir (dir unit) with t in (tNear, tFar).
     Hit intersect(const Vec3d& origin, const Vec3d& dir, double tNear, double tFar) const;
-    /// One query of a batch: origin + t * dir (dir unit) with t in (tNear, tFar).
-    struct Ray {
-        Vec3d origin, dir;
-        double tNear = 0, tFar = std::numeric_limits<double>::infinity();
-    };
-    /// The nearest hits of `rays` into `hits` (as many), 8 rays to an Embree packet (rtcIntersect8):
-    /// coherent rays (neighbouring pixels') share one traversal. hits[k] is the hit intersect gives
-    /// rays[k] (the same triangle, t, u and v: TriangleTracerTest.PacketsFindTheSingleRaysHits).
-    void intersect(std::span<const Ray> rays, std::span<Hit> hits) const;
     /// The triangles traced (the copy made at construction; Hit::triangle indexes them).
     const Mesh& mesh() const { return mesh_; }
     /// The step that leaves a triangle just crossed behind, for a ray continued from the hit: 1e-5

@@ -12,7 +12,7 @@
 namespace voxfx::detail {
 
 /// Bump when the table changes.
-inline constexpr uint32_t kEmbreeModuleAbi = 2;
+inline constexpr uint32_t kEmbreeModuleAbi = 1;
 
 struct EmbreeModule {
     uint32_t abi;
@@ -26,12 +26,6 @@ struct EmbreeModule {
     /// Thread-safe on one scene.
     bool (*intersect)(const void* scene, const float origin[3], const float dir[3], float tNear, float tFar,
                       float* t, uint32_t* triangle, float* u, float* v);
-    /// Up to 8 nearest-hit queries as one packet (rtcIntersect8): ray k < count from origins[3k..3k+2]
-    /// along dirs[3k..3k+2] with t in (tNear[k], tFar[k]); hit[k] 1 with t[k], triangle[k], u[k], v[k]
-    /// set where it hit, else 0. Thread-safe on one scene.
-    void (*intersect8)(const void* scene, int count, const float* origins, const float* dirs,
-                       const float* tNear, const float* tFar, float* t, uint32_t* triangle, float* u,
-                       float* v, uint8_t* hit);
 };
 
 /// The loaded module (on first call; voxfx::Error naming where it was searched when missing).

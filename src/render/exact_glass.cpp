@@ -2,11 +2,9 @@
 #include "voxfx/exact_glass.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <iterator>
 #include <limits>
-#include <optional>
 
 #include "render/media_stack.hpp"
 #include "voxfx/error.hpp"
@@ -109,10 +107,6 @@ Vec3d shadingNormal(bool vertexNormals, const ExactGlass::Face& f, const Triangl
     return dot(ns, ng) < 0 ? -ns : ns;
 }
 
-} // namespace
-
-namespace detail {
-
 // The surface the ray was last at (a plane through its origin): the next hit skips only faces lying
 // on it (the triangle just crossed, its coplanar neighbours, a touching medium's face on it), never
 // every hit within epsilon: a sheet thinner than epsilon, or a face meeting the one just crossed,
@@ -120,22 +114,22 @@ namespace detail {
 // (kSurfaceStart): started at 0, Embree found the triangle just crossed again, at a t of the
 // origin's rounding, on 46 % of the glass demo's events, and each such hit cost a second query; a
 // face closer than that to the crossing (1e-7 of the glass's diagonal) is passed.
-class ExactGlassSurfaceSkip {
+class SurfaceSkip {
 public:
-    ExactGlassSurfaceSkip(const TriangleTracer& tracer, const std::vector<ExactGlass::Face>& faces)
+    SurfaceSkip(const TriangleTracer& tracer, const std::vector<ExactGlass::Face>& faces)
         : tracer_(tracer), faces_(faces) {}
 
-    // Where the query for the ray's next hit starts (its tNear).
-    double firstNear() const { return onSurface_ ? kSurfaceStart * tracer_.epsilon() : 0; }
-    // The ray's next hit from o along d, past faces of the last surface, given `h`, the hit of the
-    // query from firstNear() (one ray's or a packet's): h, or a query after it.
-    TriangleTracer::Hit past(const Vec3d& o, const Vec3d& d, TriangleTracer::Hit h) const {
+    // The ray's next hit from o along d, past faces of the last surface.
+    TriangleTracer::Hit nextHit(const Vec3d& o, const Vec3d& d) const {
         const double epsilon = tracer_.epsilon();
+        double tNear = onSurface_ ? kSurfaceStart * epsilon : 0;
         for (int skip = 0;; ++skip) {
+            const TriangleTracer::Hit h =
+                tracer_.intersect(o, d, tNear, std::numeric_limits<double>::infinity());
             if (!h.hit || !onSurface_ || h.t >= epsilon || skip >= 16 ||
                 !liesOnSurface(h.triangle, o, o + d * h.t))
                 return h;
-            h = tracer_.intersect(o, d, h.t + 1e-3 * epsilon, std::numeric_limits<double>::infinity());
+            tNear = h.t + 1e-3 * epsilon;
         }
     }
     // The ray is now at a surface with outward face normal ng.
@@ -161,7 +155,7 @@ private:
     Vec3d surfaceNormal_{0, 0, 1};
 };
 
-} // namespace detail
+} // namespace
 
 void ExactGlass::facesAt(const Vec3d& x, const Vec3d& d, uint32_t t, std::vector<CrossedFace>& faces) const {
     const double epsilon = tracer_->epsilon();
@@ -181,115 +175,57 @@ void ExactGlass::facesAt(const Vec3d& x, const Vec3d& d, uint32_t t, std::vector
     }
 }
 
-// One path through the glass (see the file comment), a query at a time: ray() is the next query,
-// advance() takes its first hit. trace() queries one path alone, traceMany() eight side by side.
-class ExactGlass::Walk {
-public:
-    Walk(const ExactGlass& glass, const Vec3d& origin, const Vec3d& dir, int maxEvents)
-        : g_(glass), o_(origin), d_(normalize(dir)), stack_(glass.media_), next_(glass.media_),
-          skip_(*glass.tracer_, glass.faces_), maxEvents_(maxEvents) {}
-
-    TriangleTracer::Ray ray() const {
-        return {o_, d_, skip_.firstNear(), std::numeric_limits<double>::infinity()};
-    }
-    // Follows the path to the hit of ray()'s query `first` (and the queries past the last surface
-    // after it); false when the path is done: path() holds it.
-    bool advance(const TriangleTracer::Hit& first) {
-        const TriangleTracer::Hit h = skip_.past(o_, d_, first);
+GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents) const {
+    GlassPath p;
+    Vec3d o = origin, d = normalize(dir);
+    Vec3f thr{1, 1, 1};
+    detail::MediaStack stack(media_), next(media_);
+    SurfaceSkip skip(*tracer_, faces_);
+    std::vector<CrossedFace> faces;
+    int crossings = 0; // every crossing, including ignored ones: bounds the loop
+    while (true) {
+        const TriangleTracer::Hit h = skip.nextHit(o, d);
         if (!h.hit) {
-            p_.exitPoint = o_;
-            p_.exitDir = d_;
-            p_.throughput = thr_;
-            return false;
+            p.exitPoint = o;
+            p.exitDir = d;
+            p.throughput = thr;
+            return p;
         }
-        const Face& face = g_.faces_[h.triangle];
+        const Face& face = faces_[h.triangle];
         const Vec3d& ng = face.normal;
-        const Vec3d n = shadingNormal(!g_.normals_.empty(), face, h);
-        const Vec3d x = o_ + d_ * h.t;
-        thr_ = thr_ * stack_.attenuation(h.t);
-        o_ = x;
-        skip_.at(ng);
-        if (++crossings_ > 4 * maxEvents_ + 8 || p_.events >= maxEvents_) {
-            if (p_.hit) p_.truncate(x, d_, thr_);
-            return false;
+        const Vec3d n = shadingNormal(!normals_.empty(), face, h);
+        const Vec3d x = o + d * h.t;
+        thr = thr * stack.attenuation(h.t);
+        o = x;
+        skip.at(ng);
+        if (++crossings > 4 * maxEvents + 8 || p.events >= maxEvents) {
+            if (!p.hit) return p;
+            p.truncate(x, d, thr);
+            return p;
         }
         // Every face at this point (within epsilon): the one hit and those of other media lying on it
         // (two objects touching). They are crossed together, as one interface.
-        g_.facesAt(x, d_, h.triangle, faces_);
+        facesAt(x, d, h.triangle, faces);
         Vec3f tint{1, 1, 1};
-        if (!g_.mediaAfter(faces_, stack_, next_, tint)) return true;
+        if (!mediaAfter(faces, stack, next, tint)) continue;
         // Facing the ray: the shading normal unless it faces away (grazing), then the face's.
-        const Vec3d nf = dot(d_, ng) < 0 ? (dot(d_, n) < 0 ? n : ng) : (dot(d_, n) > 0 ? -n : -ng);
-        const double etaFrom = stack_.current().ior, etaTo = next_.current().ior;
-        const double F = fresnelDielectric(-dot(d_, nf), etaFrom, etaTo);
-        if (!p_.hit) {
-            p_.hit = true;
-            p_.reflectDir = reflectDirection(d_, nf);
-            p_.reflectance = float(F);
+        const Vec3d nf = dot(d, ng) < 0 ? (dot(d, n) < 0 ? n : ng) : (dot(d, n) > 0 ? -n : -ng);
+        const double etaFrom = stack.current().ior, etaTo = next.current().ior;
+        const double F = fresnelDielectric(-dot(d, nf), etaFrom, etaTo);
+        if (!p.hit) {
+            p.hit = true;
+            p.reflectDir = reflectDirection(d, nf);
+            p.reflectance = float(F);
         }
         Vec3d r;
-        if (refractDirection(d_, nf, etaFrom / etaTo, r)) {
-            thr_ = thr_ * tint * float(1 - F);
-            d_ = r;
-            std::swap(stack_, next_);
+        if (refractDirection(d, nf, etaFrom / etaTo, r)) {
+            thr = thr * tint * float(1 - F);
+            d = r;
+            std::swap(stack, next);
         } else {
-            d_ = reflectDirection(d_, nf); // total internal reflection: the ray stays where it was
+            d = reflectDirection(d, nf); // total internal reflection: the ray stays where it was
         }
-        ++p_.events;
-        return true;
-    }
-    const GlassPath& path() const { return p_; }
-
-private:
-    const ExactGlass& g_;
-    GlassPath p_;
-    Vec3d o_, d_;
-    Vec3f thr_{1, 1, 1};
-    detail::MediaStack stack_, next_;
-    detail::ExactGlassSurfaceSkip skip_;
-    std::vector<CrossedFace> faces_;
-    int crossings_ = 0; // every crossing, including ignored ones: bounds the loop
-    int maxEvents_;
-};
-
-GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents) const {
-    Walk w(*this, origin, dir, maxEvents);
-    for (;;) {
-        const TriangleTracer::Ray r = w.ray();
-        if (!w.advance(tracer_->intersect(r.origin, r.dir, r.tNear, r.tFar))) return w.path();
-    }
-}
-
-void ExactGlass::traceMany(std::span<const GlassHit> hits, std::span<GlassPath> out) const {
-    if (out.size() != hits.size()) fail("exact glass: one path per hit expected");
-    constexpr size_t kLanes = 8;
-    for (size_t k0 = 0; k0 < hits.size(); k0 += kLanes) {
-        const size_t n = std::min(kLanes, hits.size() - k0);
-        std::array<std::optional<Walk>, kLanes> walks;
-        std::array<size_t, kLanes> active;
-        for (size_t k = 0; k < n; ++k) {
-            walks[k].emplace(*this, hits[k0 + k].eye, hits[k0 + k].dir, maxEvents_);
-            active[k] = k;
-        }
-        std::array<TriangleTracer::Ray, kLanes> rays;
-        std::array<TriangleTracer::Hit, kLanes> first;
-        // Each round: the active paths' next queries, one packet; the paths done leave it.
-        for (size_t m = n; m > 0;) {
-            for (size_t j = 0; j < m; ++j) rays[j] = walks[active[j]]->ray();
-            if (m == 1)
-                first[0] = tracer_->intersect(rays[0].origin, rays[0].dir, rays[0].tNear, rays[0].tFar);
-            else
-                tracer_->intersect(std::span(rays.data(), m), std::span(first.data(), m));
-            size_t kept = 0;
-            for (size_t j = 0; j < m; ++j) {
-                Walk& w = *walks[active[j]];
-                if (w.advance(first[j]))
-                    active[kept++] = active[j];
-                else
-                    out[k0 + active[j]] = w.path();
-            }
-            m = kept;
-        }
+        ++p.events;
     }
 }
 

@@ -7,7 +7,6 @@
 #include <type_traits>
 
 #include "render/technique_list.hpp"
-#include "voxfx/error.hpp"
 
 namespace voxfx {
 
@@ -134,18 +133,6 @@ BuiltGlass buildGlass(const GlassInput& input, const GlassOptions& options) {
 
 GlassPath traceGlass(const BuiltGlass& glass, const GlassHit& hit) {
     return std::visit([&](const auto& g) { return g.trace(hit); }, glass);
-}
-
-void traceGlass(const BuiltGlass& glass, std::span<const GlassHit> hits, std::span<GlassPath> out) {
-    if (out.size() != hits.size()) fail("traceGlass: one path per hit expected");
-    std::visit(
-        [&]<class G>(const G& g) {
-            if constexpr (requires { g.traceMany(hits, out); })
-                g.traceMany(hits, out);
-            else
-                for (size_t k = 0; k < hits.size(); ++k) out[k] = g.trace(hits[k]);
-        },
-        glass);
 }
 
 } // namespace voxfx

@@ -10,7 +10,6 @@
 #include <limits>
 #include <map>
 #include <memory>
-#include <span>
 #include <type_traits>
 #include <vector>
 
@@ -159,58 +158,25 @@ GlassOptions glassWithGrid(FrameState& frame) {
     return method;
 }
 
-// Glass samples queued and traced kLanes at a time (traceGlass over a span: the exact method's
-// Embree packets), in the order queued; `traceMany` takes the queued samples. The callers flush at
-// the end of every row: what a batch holds depends on its row only, whatever the thread count.
-struct GlassSample {
-    int64_t x, y;
-    size_t i;
-};
-inline constexpr size_t kLanes = 8;
-template <class TraceMany> class GlassQueue {
-public:
-    explicit GlassQueue(const TraceMany& traceMany) : traceMany_(traceMany) {}
-    GlassQueue(const GlassQueue&) = delete;
-    GlassQueue& operator=(const GlassQueue&) = delete;
-    void operator()(int64_t x, int64_t y, size_t i) {
-        samples_[n_++] = {x, y, i};
-        if (n_ == kLanes) flush();
-    }
-    void flush() {
-        if (n_ > 0) traceMany(std::span<const GlassSample>(samples_.data(), n_));
-        n_ = 0;
-    }
-
-private:
-    void traceMany(std::span<const GlassSample> s) const { traceMany_(s); }
-    const TraceMany& traceMany_;
-    std::array<GlassSample, kLanes> samples_{};
-    size_t n_ = 0;
-};
-
 // Adaptive anti-aliasing at glass edges: every cell's representative traced, then the other samples
 // of edge cells, each as the shading pass shaded it: a sample whose shading was an earlier sample's
 // of its cell, or a neighbouring cell's representative's (the same triangle: shadeGBuffer), takes
 // that sample's light through the glass too, the rest are traced. What an edge cell needs is which
 // surface covers each sample; the light through one triangle varies little over a cell. The second
 // round reads representatives and its own cell only, so the order of the cells does not matter.
-// `traceMany` traces a span of samples (their light through the glass mixed into their shading).
-template <class ShowsGlass, class TraceMany>
-void traceCells(FrameState& f, const ShowsGlass& showsGlass, const TraceMany& traceMany) {
+template <class ShowsGlass, class Trace>
+void traceCells(FrameState& f, const ShowsGlass& showsGlass, const Trace& trace) {
     const int a = f.adaptive;
     const int64_t W = f.width, cw = W / a, ch = f.height / a;
     const std::vector<uint32_t>& triangle = f.gbuffer.triangle;
+    const auto traceAt = [&](size_t i) { trace(int64_t(i % size_t(W)), int64_t(i / size_t(W)), i); };
     parallelFor(0, ch, 4, [&](int64_t y0, int64_t y1) {
-        GlassQueue<TraceMany> trace(traceMany);
-        for (int64_t cy = y0; cy < y1; ++cy) {
+        for (int64_t cy = y0; cy < y1; ++cy)
             for (int64_t cx = 0; cx < cw; ++cx) {
                 const size_t rep = representativeSample(f, cx, cy);
-                if (showsGlass(rep)) trace(int64_t(rep % size_t(W)), int64_t(rep / size_t(W)), rep);
+                if (showsGlass(rep)) traceAt(rep);
             }
-            trace.flush();
-        }
     });
-    // The samples copied from an earlier sample of their cell must see it traced: one at a time.
     parallelFor(0, ch, 4, [&](int64_t y0, int64_t y1) {
         std::array<std::size_t, 64> samples;
         for (int64_t cy = y0; cy < y1; ++cy)
@@ -225,8 +191,7 @@ void traceCells(FrameState& f, const ShowsGlass& showsGlass, const TraceMany& tr
                     const size_t from =
                         same < k ? samples[size_t(same)] : neighbourShowing(f, cx, cy, triangle[i]);
                     if (from == kNoSample) {
-                        const GlassSample one{int64_t(i % size_t(W)), int64_t(i / size_t(W)), i};
-                        traceMany(std::span<const GlassSample>(&one, 1));
+                        traceAt(i);
                     } else {
                         f.shaded[i] = f.shaded[from];
                         f.glassSamples[i] = f.glassSamples[from];
@@ -239,15 +204,14 @@ void traceCells(FrameState& f, const ShowsGlass& showsGlass, const TraceMany& tr
 // Adaptive anti-aliasing inside glass: a glass cell shaded once (no edge) whose light through it
 // bends or steps between its neighbours' (curvesAcrossNeighbours, on the traced representatives) gets its
 // N-rooks samples, each shaded as a surface and traced. The cells decide on representatives only,
-// which no cell changes, so the order does not matter (and a sample's tracing may wait in a queue).
-template <class ShowsGlass, class TraceMany>
-void addRookSamples(FrameState& f, const ShowsGlass& showsGlass, const TraceMany& traceMany) {
+// which no cell changes, so the order does not matter.
+template <class ShowsGlass, class Trace>
+void addRookSamples(FrameState& f, const ShowsGlass& showsGlass, const Trace& trace) {
     const int a = f.adaptive;
     const int64_t W = f.width, cw = W / a, ch = f.height / a;
     const Vec3d eye = f.gbuffer.frame.eye();
     parallelFor(0, ch, 4, [&](int64_t y0, int64_t y1) {
-        GlassQueue<TraceMany> trace(traceMany);
-        for (int64_t cy = y0; cy < y1; ++cy) {
+        for (int64_t cy = y0; cy < y1; ++cy)
             for (int64_t cx = 0; cx < cw; ++cx) {
                 uint8_t& kind = f.refined[size_t(cy * cw + cx)];
                 const size_t rep = representativeSample(f, cx, cy);
@@ -266,8 +230,6 @@ void addRookSamples(FrameState& f, const ShowsGlass& showsGlass, const TraceMany
                     if (showsGlass(i)) trace(x, y, i);
                 }
             }
-            trace.flush();
-        }
     });
 }
 
@@ -307,17 +269,14 @@ void shadeGlass(FrameState& frame) {
     const TriangleTracer* behind = setup.behind.get();
     const double epsilon = setup.epsilon;
     const std::vector<uint32_t>& opaqueTriangle = setup.opaqueTriangle;
-    // The opaque scene's query for the light arriving at `from` along `dir`. The opaque scene holds no
-    // glass triangle, so `from` (on the glass) left none of its triangles: a hit within epsilon
-    // counts, on either side (a glass box standing on the ground leaves through its bottom into the
-    // ground at t = 0 up to rounding; skipping it showed the sky below the ground through the box).
-    const auto behindRay = [&](const Vec3d& from, const Vec3d& dir) {
-        return TriangleTracer::Ray{from - dir * epsilon, dir, 0, std::numeric_limits<double>::infinity()};
-    };
-    // The light arriving at `from` along `dir`: the opaque point behindRay's query found (`found`),
-    // shaded, else the environment.
-    auto incoming = [&](const Vec3d& from, const Vec3d& dir, TriangleTracer::Hit h) -> Vec3f {
+    auto incoming = [&](const Vec3d& from, const Vec3d& dir, double blur) -> Vec3f {
         if (behind) {
+            // The opaque scene holds no glass triangle, so `from` (on the glass) left none of its
+            // triangles: a hit within epsilon counts, on either side (a glass box standing on the
+            // ground leaves through its bottom into the ground at t = 0 up to rounding; skipping
+            // it showed the sky below the ground through the box).
+            TriangleTracer::Hit h =
+                behind->intersect(from - dir * epsilon, dir, 0, std::numeric_limits<double>::infinity());
             h.t -= epsilon;
             if (h.hit) {
                 const size_t t = opaqueTriangle[h.triangle];
@@ -338,79 +297,41 @@ void shadeGlass(FrameState& frame) {
                 return shadePoint(frame, s, from) * (1.0f / options.exposure);
             }
         }
-        return env.lookup(dir, 0);
+        return env.lookup(dir, blur);
     };
     const auto t1 = Clock::now();
     frame.result.glass.prepareMs += std::chrono::duration<double, std::milli>(t1 - t0).count();
 
     const int64_t W = gbuffer.frame.width(), H = gbuffer.frame.height();
     const Vec3d eye = gbuffer.frame.eye();
-    // The light through the glass at samples (x, y) (index i) mixed into their shading, up to kLanes
-    // at a time: the camera rays side by side (traceGlass over a span), then the reflections' and
-    // the exits' queries into the opaque scene, each a packet.
-    const auto traceMany = [&](std::span<const GlassSample> samples) {
-        std::array<SurfacePoint, kLanes> s;
-        std::array<GlassHit, kLanes> hits;
-        std::array<GlassPath, kLanes> paths;
-        std::array<size_t, kLanes> at{};
-        size_t n = 0;
-        for (const GlassSample& g : samples) {
-            if (!surfaceAt(gbuffer, geometry, g.x, g.y, s[n])) continue;
-            hits[n] =
-                GlassHit{eye, normalize(s[n].position - eye), s[n].position, s[n].normal, s[n].material};
-            at[n++] = g.i;
-        }
-        traceGlass(built, std::span<const GlassHit>(hits.data(), n), std::span<GlassPath>(paths.data(), n));
-        // Rays [0, kLanes): the reflections, [kLanes, 2 kLanes): the exits (frosted light is the
-        // blurred environment, ED06's pre-filtered map, never the scene).
-        std::array<TriangleTracer::Ray, 2 * kLanes> rays;
-        std::array<TriangleTracer::Hit, 2 * kLanes> found;
-        std::array<uint8_t, kLanes> exitAsked{};
-        size_t reflections = 0, exits = 0;
-        std::array<size_t, 2 * kLanes> slot{}; // the ray of lane k's reflection (k) and exit (kLanes + k)
-        for (size_t k = 0; k < n; ++k) {
-            if (!paths[k].hit) continue;
-            slot[k] = reflections;
-            rays[reflections++] = behindRay(s[k].position, paths[k].reflectDir);
-            if (paths[k].blurAngle > 0) continue;
-            slot[kLanes + k] = kLanes + exits;
-            exitAsked[k] = 1;
-            rays[kLanes + exits++] = behindRay(paths[k].exitPoint, paths[k].exitDir);
-        }
-        if (behind) {
-            behind->intersect(std::span<const TriangleTracer::Ray>(rays.data(), reflections),
-                              std::span<TriangleTracer::Hit>(found.data(), reflections));
-            behind->intersect(std::span<const TriangleTracer::Ray>(rays.data() + kLanes, exits),
-                              std::span<TriangleTracer::Hit>(found.data() + kLanes, exits));
-        }
-        for (size_t k = 0; k < n; ++k) {
-            const GlassPath& p = paths[k];
-            if (!p.hit) continue;
-            const size_t i = at[k];
-            const Vec3f exit = exitAsked[k] ? incoming(p.exitPoint, p.exitDir, found[slot[kLanes + k]])
-                                            : env.lookup(p.exitDir, p.blurAngle);
-            const Vec3f through =
-                incoming(s[k].position, p.reflectDir, found[slot[k]]) * p.reflectance + exit * p.throughput;
-            const float tr = std::clamp(scene.materials[s[k].material].transmission, 0.0f, 1.0f);
-            shaded[i] = shaded[i] * (1 - tr) + through * (tr * options.exposure);
-            sampleMask[i] = 1;
-        }
+    // The light through the glass at sample (x, y) (index i) mixed into its shading.
+    const auto trace = [&](int64_t x, int64_t y, size_t i) {
+        SurfacePoint s;
+        if (!surfaceAt(gbuffer, geometry, x, y, s)) return;
+        const Vec3d d = normalize(s.position - eye);
+        const GlassPath p = traceGlass(built, GlassHit{eye, d, s.position, s.normal, s.material});
+        if (!p.hit) return;
+        // Frosted light is the blurred environment (ED06's pre-filtered map), never the scene.
+        const Vec3f through =
+            incoming(s.position, p.reflectDir, 0) * p.reflectance +
+            (p.blurAngle > 0 ? env.lookup(p.exitDir, p.blurAngle) : incoming(p.exitPoint, p.exitDir, 0)) *
+                p.throughput;
+        const float tr = std::clamp(scene.materials[s.material].transmission, 0.0f, 1.0f);
+        shaded[i] = shaded[i] * (1 - tr) + through * (tr * options.exposure);
+        sampleMask[i] = 1;
     };
     const auto showsGlass = [&](size_t i) {
         const uint32_t tri = gbuffer.triangle[i];
         return tri != GBuffer::kNone && isGlass[geometry.triangleMaterial[tri]];
     };
     if (frame.adaptive > 1) {
-        traceCells(frame, showsGlass, traceMany);
-        addRookSamples(frame, showsGlass, traceMany);
+        traceCells(frame, showsGlass, trace);
+        addRookSamples(frame, showsGlass, trace);
     } else {
         parallelFor(0, H, 4, [&](int64_t y0, int64_t y1) {
-            GlassQueue<decltype(traceMany)> trace(traceMany);
-            for (int64_t y = y0; y < y1; ++y) {
+            for (int64_t y = y0; y < y1; ++y)
                 for (int64_t x = 0; x < W; ++x)
                     if (showsGlass(size_t(y * W + x))) trace(x, y, size_t(y * W + x));
-                trace.flush();
-            }
         });
     }
     frame.result.glass.traceMs += std::chrono::duration<double, std::milli>(Clock::now() - t1).count();

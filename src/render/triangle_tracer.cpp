@@ -79,35 +79,4 @@ TriangleTracer::Hit TriangleTracer::intersect(const Vec3d& origin, const Vec3d& 
     return h;
 }
 
-void TriangleTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
-    if (hits.size() != rays.size()) fail("TriangleTracer::intersect: one hit per ray expected");
-    constexpr float kMax = std::numeric_limits<float>::max();
-    for (size_t k0 = 0; k0 < rays.size(); k0 += 8) {
-        const int n = int(std::min<size_t>(8, rays.size() - k0));
-        float o[24], d[24], tNear[8], tFar[8], t[8], u[8], v[8];
-        uint32_t tri[8];
-        uint8_t hit[8];
-        for (int k = 0; k < n; ++k) {
-            const Ray& r = rays[k0 + size_t(k)];
-            for (int c = 0; c < 3; ++c) {
-                o[3 * k + c] = float(r.origin[c]);
-                d[3 * k + c] = float(r.dir[c]);
-            }
-            tNear[k] = float(r.tNear);
-            tFar[k] = r.tFar > double(kMax) ? std::numeric_limits<float>::infinity() : float(r.tFar);
-        }
-        impl_->module->intersect8(impl_->scene, n, o, d, tNear, tFar, t, tri, u, v, hit);
-        for (int k = 0; k < n; ++k) {
-            Hit& h = hits[k0 + size_t(k)];
-            h = Hit{};
-            if (!hit[k]) continue;
-            h.hit = true;
-            h.t = t[k];
-            h.triangle = tri[k];
-            h.u = u[k];
-            h.v = v[k];
-        }
-    }
-}
-
 } // namespace voxfx

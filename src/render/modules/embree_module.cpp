@@ -94,43 +94,7 @@ bool intersect(const void* p, const float origin[3], const float dir[3], float t
     return true;
 }
 
-void intersect8(const void* p, int count, const float* origins, const float* dirs, const float* tNear,
-                const float* tFar, float* t, uint32_t* triangle, float* u, float* v, uint8_t* hit) {
-    const auto* s = static_cast<const EmbreeScene*>(p);
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    alignas(32) int valid[8];
-    RTCRayHit8 rh; // RTC_ALIGN(32) in rtcore_ray.h
-    std::memset(&rh, 0, sizeof rh);
-    for (int k = 0; k < 8; ++k) {
-        valid[k] = k < count ? -1 : 0;
-        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-        rh.ray.mask[k] = 0xffffffffu;
-        if (k >= count) continue;
-        rh.ray.org_x[k] = origins[3 * k];
-        rh.ray.org_y[k] = origins[3 * k + 1];
-        rh.ray.org_z[k] = origins[3 * k + 2];
-        rh.ray.dir_x[k] = dirs[3 * k];
-        rh.ray.dir_y[k] = dirs[3 * k + 1];
-        rh.ray.dir_z[k] = dirs[3 * k + 2];
-        rh.ray.tnear[k] = tNear[k];
-        rh.ray.tfar[k] = tFar[k];
-    }
-    rtcIntersect8(valid, s->scene, &context, &rh);
-    for (int k = 0; k < count; ++k) {
-        hit[k] = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
-        if (!hit[k]) continue;
-        t[k] = rh.ray.tfar[k];
-        triangle[k] = rh.hit.primID[k];
-        u[k] = rh.hit.u[k];
-        v[k] = rh.hit.v[k];
-    }
-}
-
-constexpr EmbreeModule kTable{kEmbreeModuleAbi, sizeof(EmbreeModule), createScene, releaseScene, intersect,
-                              intersect8};
+constexpr EmbreeModule kTable{kEmbreeModuleAbi, sizeof(EmbreeModule), createScene, releaseScene, intersect};
 
 } // namespace
 } // namespace voxfx::detail
