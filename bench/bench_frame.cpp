@@ -52,6 +52,9 @@
 //                                shadows at compression tolerance eps against exact shadows, which
 //                                march the skull and the smoke (voxfx/exact_shadow.hpp); the same
 //                                counters as the forest's.
+//   BM_GlassPaths                where a glass path's CPU goes: the glass demo's exact paths (one per
+//                                pixel centre on glass) and each query kind alone, one thread
+//                                (path_ms, eye_ms, reflect_ms, exit_ms, events_per_path).
 //
 //   build/bench_frame --benchmark_filter='BM_Frame/' --benchmark_repetitions=3
 //   build/bench_frame --benchmark_filter=BM_FrameCost
