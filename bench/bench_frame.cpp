@@ -52,6 +52,9 @@
 //                                shadows at compression tolerance eps against exact shadows, which
 //                                march the skull and the smoke (voxfx/exact_shadow.hpp); the same
 //                                counters as the forest's.
+//   BM_GlassPaths                where a glass path's CPU goes: the glass demo's exact paths (one per
+//                                pixel centre on glass) and each query kind alone, one thread
+//                                (path_ms, eye_ms, reflect_ms, exit_ms, events_per_path).
 //
 //   build/bench_frame --benchmark_filter='BM_Frame/' --benchmark_repetitions=3
 //   build/bench_frame --benchmark_filter=BM_FrameCost
@@ -82,11 +85,13 @@
 #include "voxfx/environment.hpp"
 #include "voxfx/environment_io.hpp"
 #include "voxfx/error.hpp"
+#include "voxfx/exact_glass.hpp"
 #include "voxfx/gbuffer.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/scene_io.hpp"
 #include "voxfx/shadow.hpp"
+#include "voxfx/triangle_tracer.hpp"
 #include "voxfx/view.hpp"
 
 namespace {
@@ -451,6 +456,77 @@ BENCHMARK_CAPTURE(BM_FrameCost, forest, std::string("forest"))->Unit(benchmark::
 BENCHMARK_CAPTURE(BM_FrameCost, dsm_demo, std::string("dsm-demo"))
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// Where a glass path's CPU goes, on the glass demo's camera paths (one per pixel centre at 1280x720
+// that meets glass, the demo's first camera), each query kind timed alone, one at a time, on one
+// thread (process CPU ms per pass over the paths): path_ms, the whole ExactGlass::trace of each (its
+// first query from the eye, then the next-face queries inside the glass and the touching-glass
+// queries); eye_ms, the eye rays' first query alone (Embree over the glass triangles);
+// reflect_ms and exit_ms, the glass pass's two queries into the opaque scene per path (the
+// reflection at the first surface, the light leaving the glass); events_per_path. The shading of
+// what those queries find is not in it (the frame's glass_ms has it).
+void BM_GlassPaths(benchmark::State& state) {
+    const BenchScene& b = benchScene("glass");
+    const SceneGeometry g = flattenScene(b.scene);
+    Mesh glass, opaque;
+    glass.positions = opaque.positions = g.mesh.positions;
+    std::vector<uint32_t> medium;
+    std::vector<GlassMedium> media;
+    for (const Material& m : b.scene.materials) media.push_back(glassMedium(m));
+    for (size_t t = 0; t < g.mesh.triangleCount(); ++t) {
+        const bool isGlass = b.scene.materials[g.triangleMaterial[t]].isGlass();
+        for (int k = 0; k < 3; ++k)
+            (isGlass ? glass : opaque).indices.push_back(g.mesh.indices[3 * t + size_t(k)]);
+        if (isGlass) medium.push_back(g.triangleMaterial[t]);
+    }
+    const ExactGlass exact(glass.view(), g.normals, medium, media);
+    const TriangleTracer glassTracer(glass.view()), behind(opaque.view());
+    const voxfx::Frame frame = cameraFrame(b.camera, kWidth, kHeight);
+    const Vec3d eye = frame.eye();
+    struct Ray {
+        Vec3d origin, dir;
+    };
+    std::vector<Ray> eyeRays, reflections, exits;
+    double events = 0;
+    for (int64_t y = 0; y < kHeight; ++y)
+        for (int64_t x = 0; x < kWidth; ++x) {
+            const Vec3d d = normalize(frame.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - eye);
+            const GlassPath p = exact.trace(eye, d, ExactGlassOptions{}.maxEvents);
+            const TriangleTracer::Hit first = glassTracer.intersect(eye, d, 0, 1e30);
+            if (!p.hit || !first.hit) continue;
+            eyeRays.push_back({eye, d});
+            events += p.events;
+            reflections.push_back({eye + d * first.t, p.reflectDir});
+            exits.push_back({p.exitPoint, p.exitDir});
+        }
+    const auto queries = [](const TriangleTracer& tracer, const std::vector<Ray>& rays) {
+        const double c0 = processCpuMs();
+        int hits = 0;
+        for (const Ray& r : rays) hits += tracer.intersect(r.origin, r.dir, 0, 1e30).hit;
+        benchmark::DoNotOptimize(hits);
+        return processCpuMs() - c0;
+    };
+    double pathMs = 0, eyeMs = 0, reflectMs = 0, exitMs = 0;
+    int64_t n = 0;
+    for (auto _ : state) {
+        const double c0 = processCpuMs();
+        for (const Ray& r : eyeRays)
+            benchmark::DoNotOptimize(exact.trace(r.origin, r.dir, ExactGlassOptions{}.maxEvents));
+        pathMs += processCpuMs() - c0;
+        eyeMs += queries(glassTracer, eyeRays);
+        reflectMs += queries(behind, reflections);
+        exitMs += queries(behind, exits);
+        ++n;
+    }
+    state.counters["paths"] = double(eyeRays.size());
+    state.counters["events_per_path"] = events / double(eyeRays.size());
+    state.counters["path_ms"] = pathMs / double(n);
+    state.counters["eye_ms"] = eyeMs / double(n);
+    state.counters["reflect_ms"] = reflectMs / double(n);
+    state.counters["exit_ms"] = exitMs / double(n);
+    state.SetLabel("glass demo, 1280x720 pixel centres on glass, 1 thread, process CPU");
+}
+BENCHMARK(BM_GlassPaths)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // For counting rather than timing (the machine is shared: `perf stat -e cycles:u,instructions:u`
 // counts the process's own work whatever the load): one warm-up frame, then VOXFX_BENCH_FRAMES
