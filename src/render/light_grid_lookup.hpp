@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <new>
 #include <vector>
 
 #include "voxfx/frame.hpp"
@@ -118,7 +119,7 @@ public:
         : view_(view), qGrid_(qGrid), n_(n) {}
     VOXFX_ALWAYS_INLINE double depthAt(double x, double y) {
         if (!made_) {
-            std::construct_at(&plane_, view_, qGrid_, n_);
+            ::new (static_cast<void*>(&plane_)) ReceiverPlane(view_, qGrid_, n_); // (construct_at: a call)
             made_ = true;
         }
         return plane_.depthAt(x, y);
@@ -218,8 +219,8 @@ T bilinearColumns(const LightView& view, const Vec3d& world, const Vec3d& n, con
 /// report "outside the view": full light); q picks its own face.
 /// `texel`, where given: views[returned].columnWorldSize(p), which the offset needed too (a division
 /// per lookup saved where q stays on p's face).
-inline int lookupView(const std::vector<LightView>& views, const Vec3d& p, const Vec3d& n, double offset,
-                      Vec3d& q, double* texel = nullptr) {
+VOXFX_ALWAYS_INLINE inline int lookupView(const std::vector<LightView>& views, const Vec3d& p, const Vec3d& n,
+                                          double offset, Vec3d& q, double* texel = nullptr) {
     int i = viewIndexFor(views, p);
     if (i < 0) return i;
     const double size = views[size_t(i)].columnWorldSize(p);
