@@ -17,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "demo/demo_scenes.hpp"
+#include "render/light_grid_lookup.hpp"
 #include "support/shadow_reference.hpp"
 #include "test_util.hpp"
 #include "voxfx/exact_shadow.hpp"
@@ -466,6 +467,56 @@ TEST(ShadowTest, BilinearLookupsKeepTheShortStaircaseWithoutRaisingTheMeanErrorO
                 ++ratios;
             }
     EXPECT_LT(ratioSum / ratios, 1.0); // lower than the own column's on average
+}
+
+TEST(ShadowTest, ReceiverPlaneDepthIsWhereThePlaneCrossesTheColumnWithinTwoFootprints) {
+    // The bilinear lookups read each column at the depth where the receiver's plane (through q,
+    // normal n) crosses the column's centre line, kept within two column footprints of q's depth.
+    // By its definition, in world space: the centre line L(d) = worldFromGrid(x, y, d) is affine in
+    // d, so the crossing is d* = qz - n.(L(qz) - Q) / n.(L(qz + 1) - L(qz)), clamped to
+    // +-2 |L(x + 1) - L(x)| / |L(qz + 1) - L(qz)| about qz (both at q's depth). Orthographic (sun) and
+    // perspective (spot) views; normals facing the light (crossings inside the reach) and nearly
+    // along its rays (clamped at the reach), both many times.
+    const Box3d bounds{{-2, 0, -2}, {2, 2, 2}};
+    Light spot;
+    spot.type = LightType::Spot;
+    spot.position = {0.5, 6, 0.3};
+    spot.direction = {0, -1, 0};
+    spot.outerConeAngle = 0.9;
+    std::mt19937_64 rng(21);
+    std::uniform_real_distribution<double> unit(-1, 1), at(0, 1);
+    for (const Light& light : {sun({0.3, -1, 0.2}), spot}) {
+        const LightView view = makeLightViews(light, bounds, 64, 48)[0];
+        const Frame& f = view.frame;
+        const bool perspective = f.isPerspective();
+        int inside = 0, clamped = 0;
+        for (int i = 0; i < 20000; ++i) {
+            const Vec3d qGrid{at(rng) * double(f.width()), at(rng) * double(f.height()),
+                              perspective ? 2 + 4 * at(rng) : at(rng) * double(f.depth())};
+            // Half the normals nearly perpendicular to the view's depth axis: a plane nearly along the
+            // light's rays, whose crossings run far along the neighbouring columns.
+            Vec3d n = normalize(Vec3d{unit(rng), unit(rng), unit(rng)});
+            if (i % 2) n = normalize(n - f.forward() * (dot(n, f.forward()) * (1 - 1e-3 * at(rng))));
+            const detail::ReceiverPlane plane(view, qGrid, n);
+            const Vec3d Q = f.worldFromGrid(qGrid);
+            for (int k = 0; k < 4; ++k) {
+                const double x = std::floor(qGrid.x - 0.5) + 0.5 + double(k & 1),
+                             y = std::floor(qGrid.y - 0.5) + 0.5 + double(k >> 1);
+                const Vec3d L0 = f.worldFromGrid({x, y, qGrid.z}), L1 = f.worldFromGrid({x, y, qGrid.z + 1});
+                const double slope = dot(n, L1 - L0);
+                const double footprint = length(f.worldFromGrid(qGrid + Vec3d{1, 0, 0}) - Q);
+                const double reach = 2 * footprint / length(L1 - L0);
+                const double free = -dot(n, L0 - Q) / slope;
+                const double want = qGrid.z + std::clamp(free, -reach, reach);
+                const double got = plane.depthAt(x, y);
+                ASSERT_NEAR(got, want, 1e-7 * (1 + std::abs(want)))
+                    << (perspective ? "spot" : "sun") << " point " << i << " column " << k;
+                (std::abs(free) < reach ? inside : clamped) += 1;
+            }
+        }
+        EXPECT_GT(inside, 15000) << (perspective ? "spot" : "sun");
+        EXPECT_GT(clamped, 15000) << (perspective ? "spot" : "sun");
+    }
 }
 
 } // namespace

@@ -304,5 +304,59 @@ TEST(ShadowTest, ShadowMapLookupUnderAWideCasterIsItsFilterByDefinition) {
     EXPECT_GT(other, 30000);
 }
 
+TEST(ShadowTest, MapShadowLookupIsTheFilterAtTheNormalOffsetPointWithItsBias) {
+    // MapShadow moves p by normalOffset texel footprints along n and counts casters depthBias
+    // footprints in front (its orthographic views take that bias in depth units once per view):
+    // its answer must be the filter counted tap by tap at p + n * offset * texel with a bias of
+    // depthBias * texel world units, for points on the ground, on the boxes and among the leaves,
+    // with normals up, towards the light and at random, every PCF radius, offset and bias.
+    const Scene s = leafScene(300, 1, 7, 1.0f);
+    Mesh casters = s.meshes[0].mesh; // the ground
+    auto add = [&](const Mesh& m) {
+        const auto base = uint32_t(casters.positions.size());
+        casters.positions.insert(casters.positions.end(), m.positions.begin(), m.positions.end());
+        for (const uint32_t i : m.indices) casters.indices.push_back(base + i);
+    };
+    add(s.meshes[1].mesh);
+    for (const Vec3d& at : {Vec3d{-1, 0, -1}, Vec3d{1.2, 0, 0.3}})
+        add(test::makeBox(at - Vec3d{0.1, 0, 0.1}, at + Vec3d{0.1, 2, 0.1}));
+    const Light light = sun({0.55, -1, 0.35});
+    const Vec3d toLight = normalize(Vec3d{-0.55, 1, -0.35});
+    std::mt19937_64 rng(13);
+    std::uniform_real_distribution<double> u(-3.2, 3.2), h(0, 3), unit(-1, 1);
+    int64_t lit = 0, dark = 0, partial = 0;
+    for (const int r : {0, 1, 2})
+        for (const double offset : {0.0, 1.0, 2.5})
+            for (const double bias : {0.0, 1.0, 2.5}) {
+                ShadowMapOptions o;
+                o.resolution = 300;
+                o.pcfRadius = r;
+                o.normalOffset = offset;
+                o.depthBias = bias;
+                const MapShadow shadow = MapShadow::build(light, casters.view(), o);
+                ASSERT_EQ(shadow.maps().size(), 1u);
+                const ShadowMap& map = shadow.maps()[0];
+                const double texel = map.view().columnWorldSize({0, 0, 0});
+                for (int i = 0; i < 3000; ++i) {
+                    const Vec3d p = i % 2 ? Vec3d{u(rng), h(rng), u(rng)} : Vec3d{u(rng), 0, u(rng)};
+                    const Vec3d n = i % 3 == 0   ? Vec3d{0, 1, 0}
+                                    : i % 3 == 1 ? toLight
+                                                 : normalize(Vec3d{unit(rng), unit(rng), unit(rng)});
+                    const float got = shadow.visibility(p, n);
+                    const Vec3d q = p + n * (offset * texel);
+                    // Outside the view (p, or q beyond its border): full light.
+                    const float want = map.view().covers(p) && map.view().covers(q)
+                                           ? pcfByDefinition(map, q, r, bias * texel)
+                                           : 1.0f;
+                    ASSERT_EQ(got, want) << p.x << ", " << p.y << ", " << p.z << " r " << r << " offset "
+                                         << offset << " bias " << bias;
+                    (want == 1 ? lit : want == 0 ? dark : partial) += 1;
+                }
+            }
+    EXPECT_GT(lit, 20000);
+    EXPECT_GT(dark, 5000);
+    EXPECT_GT(partial, 1000);
+}
+
 } // namespace
 } // namespace voxfx

@@ -93,7 +93,7 @@ struct Projection {
     }
     VOXFX_HOSTDEV double imageX(double cx, double cz) const { return (cx / (cz * tanX) + 1.0) * halfW; }
     VOXFX_HOSTDEV double imageY(double cy, double cz) const { return (cy / (cz * tanY) + 1.0) * halfH; }
-    VOXFX_HOSTDEV Vec3d gridFromWorld(const Vec3d& p) const {
+    VOXFX_HOSTDEV VOXFX_ALWAYS_INLINE Vec3d gridFromWorld(const Vec3d& p) const {
         if (!perspective) {
             if (!oriented)
                 return {(p[axisX] - origin[axisX]) * scale.x, (p[axisY] - origin[axisY]) * scale.y,
@@ -191,9 +191,9 @@ public:
 
     /// Grid coordinates of a world point (see the file comment). For perspective frames the
     /// point must lie in front of the eye (view depth > 0).
-    Vec3d gridFromWorld(const Vec3d& p) const { return projection_.gridFromWorld(p); }
+    VOXFX_ALWAYS_INLINE Vec3d gridFromWorld(const Vec3d& p) const { return projection_.gridFromWorld(p); }
     /// World point of grid coordinates (gx, gy, depth).
-    Vec3d worldFromGrid(const Vec3d& g) const;
+    VOXFX_ALWAYS_INLINE Vec3d worldFromGrid(const Vec3d& g) const;
     /// World-space centre of cell (x, y, s) under the frame's slicing.
     Vec3d cellCenter(int64_t x, int64_t y, int64_t s) const;
 

@@ -31,15 +31,15 @@ struct LightView {
 
     /// Grid coordinates (gx, gy, frame depth) of a world point; for perspective views the point must
     /// lie in front of the eye (check covers first).
-    Vec3d gridFromWorld(const Vec3d& world) const { return frame.gridFromWorld(world); }
+    VOXFX_ALWAYS_INLINE Vec3d gridFromWorld(const Vec3d& world) const { return frame.gridFromWorld(world); }
     /// True when p lies in front of the light (perspective) and projects into the columns.
-    bool covers(const Vec3d& world) const {
+    VOXFX_ALWAYS_INLINE bool covers(const Vec3d& world) const {
         Vec3d g;
         return locate(world, g);
     }
     /// covers(world), with p's grid coordinates in `grid` where true (one projection for both; the
     /// lookups of the light grids and shadow maps).
-    bool locate(const Vec3d& world, Vec3d& grid) const {
+    VOXFX_ALWAYS_INLINE bool locate(const Vec3d& world, Vec3d& grid) const {
         if (frame.isPerspective() && !(frame.viewDepth(world) > 0)) return false;
         grid = frame.gridFromWorld(world);
         // A relative tolerance of 1e-9 columns: cube faces meet exactly at their borders, and a point
@@ -66,7 +66,7 @@ std::vector<LightView> makeLightViews(const Light& light, const Box3d& casterBou
 /// Index of the view that covers p (the cube face for point lights: the first view whose forward
 /// has the largest positive dot product with p - eye), or -1.
 int viewIndexForFaces(const std::vector<LightView>& views, const Vec3d& world);
-inline int viewIndexFor(const std::vector<LightView>& views, const Vec3d& world) {
+VOXFX_ALWAYS_INLINE inline int viewIndexFor(const std::vector<LightView>& views, const Vec3d& world) {
     if (views.size() == 1) return views[0].covers(world) ? 0 : -1; // inline: once per shaded sample
     return viewIndexForFaces(views, world);
 }

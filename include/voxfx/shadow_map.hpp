@@ -37,6 +37,9 @@ public:
     /// Fraction in [0, 1] of the (2r+1)^2 texels around p's texel whose nearest caster is not in
     /// front of p by more than `bias` (world units). 1 outside the view.
     float visibility(const Vec3d& world, int pcfRadius, double bias) const;
+    /// visibility with the bias in the frame's depth units (bias / worldPerDepthUnit()), for a
+    /// caller that has it at hand (MapShadow: one division per orthographic view, not per lookup).
+    float visibilityWithDepthBias(const Vec3d& world, int pcfRadius, double depthBias) const;
     /// Nearest caster depth of texel (x, y) in frame depth units; +inf where there is none.
     float depthAt(int64_t x, int64_t y) const { return depth_[size_t(y * view_.frame.width() + x)]; }
     const LightView& view() const { return view_; }
@@ -89,6 +92,10 @@ private:
     ShadowMapOptions options_;
     std::vector<LightView> views_;
     std::vector<ShadowMap> maps_;
+    // Per view: the depth bias in frame depth units, depthBias * texel / worldPerDepthUnit(), where
+    // it is the same at every point (orthographic views: the texel footprint is constant); NaN for
+    // perspective views, whose lookups take it at the point.
+    std::vector<double> depthBias_;
 };
 
 } // namespace voxfx

@@ -95,13 +95,14 @@ private:
     std::vector<std::vector<Vec3f>> powers_;
     // Every channel's columns in one sparse index, where the channels share one frame and none is
     // glass (every leaf scene): per column the slices at which some channel's count steps (a filled
-    // cell; conservative grids: the last cell of a run), in depth order, each with every channel's
-    // count up to and including it. A lookup then reads one short, mostly empty run of entries
-    // instead of a bit column per channel; the counts, and so the transmittance, are the same.
+    // cell; conservative grids: the last cell of a run), in depth order, each with the transmittance
+    // of every channel's count up to and including it (the product of the power tables that
+    // columnTransmittance takes, in its order: the same floats). A lookup then reads one short,
+    // mostly empty run of entries instead of a bit column per channel and a table per channel.
     // Built where it is no larger than the bit columns; eventOffsets_ empty otherwise.
     std::vector<uint32_t> eventOffsets_; // columnCount() + 1
     std::vector<uint16_t> eventSlice_;
-    std::vector<uint16_t> eventCounts_;  // channels_.size() per event
+    std::vector<Vec3f> eventLight_;      // one per event
     std::vector<uint64_t> eventColumns_; // one bit per column: set where it holds an event
     void buildEventIndex();
     // The transmittance of column `column` through its slices [0, end), from the index.

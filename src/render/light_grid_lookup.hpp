@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <new>
 #include <vector>
 
 #include "voxfx/frame.hpp"
@@ -63,7 +64,7 @@ inline double worldLengthPerDepth(const LightView& view, const Vec3d& world) {
 class ReceiverPlane {
 public:
     /// The plane through the point at grid coordinates qGrid with world normal n.
-    ReceiverPlane(const LightView& view, const Vec3d& qGrid, const Vec3d& n)
+    VOXFX_ALWAYS_INLINE ReceiverPlane(const LightView& view, const Vec3d& qGrid, const Vec3d& n)
         : n_(n), qGrid_(qGrid), perspective_(view.frame.isPerspective()) {
         const Frame& f = view.frame;
         const Vec3d a = f.worldFromGrid(qGrid), ax = f.worldFromGrid(qGrid + Vec3d{1, 0, 0}) - a,
@@ -75,31 +76,38 @@ public:
         }
         nx_ = dot(n, ax);
         ny_ = dot(n, ay);
-        footprint_ = length(ax);
-        if (!perspective_) { // one depth step for every column: its slope and reach taken once
+        footprintSquared_ = dot(ax, ax);
+        if (!perspective_) { // one depth step for every column: its slope taken once
             slope_ = dot(n_, along_);
-            reach_ = 2 * footprint_ / length(along_);
+            alongSquared_ = dot(along_, along_);
         }
     }
     /// The depth where the plane crosses the centre line through grid point (x, y).
 #pragma GCC diagnostic push // LazyReceiverPlane's union: GCC cannot see that made_ means constructed
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-    double depthAt(double x, double y) const {
+    VOXFX_ALWAYS_INLINE double depthAt(double x, double y) const {
         const double u = x - qGrid_.x, v = y - qGrid_.y;
-        double slope = slope_, reach = reach_;
+        double slope = slope_, alongSquared = alongSquared_;
         if (perspective_) {
             const Vec3d along = along_ + alongX_ * u + alongY_ * v;
             slope = dot(n_, along);
-            reach = 2 * footprint_ / length(along);
+            alongSquared = dot(along, along);
         }
         if (!(std::abs(slope) > 0)) return qGrid_.z;
-        return qGrid_.z + std::clamp(-(nx_ * u + ny_ * v) / slope, -reach, reach);
+        const double step = -(nx_ * u + ny_ * v) / slope;
+        // The reach, 2 |ax| / |along|, is a square root each and a division; a step inside it by a
+        // margin far above their rounding (step^2 |along|^2 < 4 |ax|^2 (1 - 1e-9)) is what the clamp
+        // returns, so only a step near or beyond it needs them (the same answer, bit for bit; NaN
+        // and infinite steps fail the test and take the clamp as before).
+        if (step * step * alongSquared < 4 * footprintSquared_ * (1 - 1e-9)) return qGrid_.z + step;
+        const double reach = 2 * std::sqrt(footprintSquared_) / std::sqrt(alongSquared);
+        return qGrid_.z + std::clamp(step, -reach, reach);
     }
 #pragma GCC diagnostic pop
 
 private:
     Vec3d n_, qGrid_, along_, alongX_, alongY_;
-    double nx_ = 0, ny_ = 0, footprint_ = 0, slope_ = 0, reach_ = 0;
+    double nx_ = 0, ny_ = 0, footprintSquared_ = 0, slope_ = 0, alongSquared_ = 0;
     bool perspective_;
 };
 
@@ -109,9 +117,9 @@ class LazyReceiverPlane {
 public:
     LazyReceiverPlane(const LightView& view, const Vec3d& qGrid, const Vec3d& n)
         : view_(view), qGrid_(qGrid), n_(n) {}
-    double depthAt(double x, double y) {
+    VOXFX_ALWAYS_INLINE double depthAt(double x, double y) {
         if (!made_) {
-            std::construct_at(&plane_, view_, qGrid_, n_);
+            ::new (static_cast<void*>(&plane_)) ReceiverPlane(view_, qGrid_, n_); // (construct_at: a call)
             made_ = true;
         }
         return plane_.depthAt(x, y);
@@ -211,8 +219,8 @@ T bilinearColumns(const LightView& view, const Vec3d& world, const Vec3d& n, con
 /// report "outside the view": full light); q picks its own face.
 /// `texel`, where given: views[returned].columnWorldSize(p), which the offset needed too (a division
 /// per lookup saved where q stays on p's face).
-inline int lookupView(const std::vector<LightView>& views, const Vec3d& p, const Vec3d& n, double offset,
-                      Vec3d& q, double* texel = nullptr) {
+VOXFX_ALWAYS_INLINE inline int lookupView(const std::vector<LightView>& views, const Vec3d& p, const Vec3d& n,
+                                          double offset, Vec3d& q, double* texel = nullptr) {
     int i = viewIndexFor(views, p);
     if (i < 0) return i;
     const double size = views[size_t(i)].columnWorldSize(p);

@@ -104,10 +104,15 @@ void ShadowMap::buildLowerPlanes() {
 }
 
 float ShadowMap::visibility(const Vec3d& world, int pcfRadius, double bias) const {
+    // bias / worldPerDepthUnit(), which is 1 for a perspective view (x / 1 is x: no division).
+    return visibilityWithDepthBias(world, pcfRadius,
+                                   view_.frame.isPerspective() ? bias : bias / view_.frame.cellSize().z);
+}
+
+float ShadowMap::visibilityWithDepthBias(const Vec3d& world, int pcfRadius, double depthBias) const {
     Vec3d g;
     if (depth_.empty() || !view_.locate(world, g)) return 1.0f;
-    // bias / worldPerDepthUnit(), which is 1 for a perspective view (x / 1 is x: no division).
-    const double limit = g.z - (view_.frame.isPerspective() ? bias : bias / view_.frame.cellSize().z);
+    const double limit = g.z - depthBias;
     const int64_t W = view_.frame.width(), H = view_.frame.height();
     // Clamp: a point on the frame's border (or a rounding error) must not walk off the map.
     const int64_t cx = std::clamp<int64_t>(int64_t(std::floor(g.x)), 0, W - 1);
@@ -172,7 +177,14 @@ MapShadow MapShadow::build(const Light& light, const MeshView& casters, const Sh
     out.options_ = options;
     if (casters.triangleCount == 0) return out;
     out.views_ = makeLightViews(light, computeBounds(casters), options.resolution, 1);
-    for (const LightView& v : out.views_) out.maps_.push_back(ShadowMap::build(casters, v, progress));
+    for (const LightView& v : out.views_) {
+        out.maps_.push_back(ShadowMap::build(casters, v, progress));
+        // What a lookup's bias comes to (visibility below): depthBias * columnWorldSize, divided
+        // by the cell's depth; the same operands at every point of an orthographic view.
+        out.depthBias_.push_back(v.frame.isPerspective()
+                                     ? std::numeric_limits<double>::quiet_NaN()
+                                     : options.depthBias * v.frame.cellSize().x / v.frame.cellSize().z);
+    }
     return out;
 }
 
@@ -187,7 +199,10 @@ float MapShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     double texel = 0;
     const int i = detail::lookupView(views_, p, n, options_.normalOffset, q, &texel);
     if (i < 0) return 1.0f;
-    return maps_[size_t(i)].visibility(q, options_.pcfRadius, options_.depthBias * texel);
+    const ShadowMap& map = maps_[size_t(i)];
+    if (!views_[size_t(i)].frame.isPerspective())
+        return map.visibilityWithDepthBias(q, options_.pcfRadius, depthBias_[size_t(i)]);
+    return map.visibility(q, options_.pcfRadius, options_.depthBias * texel);
 }
 
 MapShadow::Stats MapShadow::stats() const {

@@ -152,7 +152,7 @@ void TransmittanceShadowMap::buildEventIndex() {
         if (perColumn[c] != 0) eventColumns_[c >> 6] |= uint64_t(1) << (c & 63);
     }
     eventSlice_.assign(total, 0);
-    eventCounts_.assign(total * C, 0);
+    eventLight_.assign(total, Vec3f{1, 1, 1});
     parallelFor(0, columns, 4096, [&](int64_t c0, int64_t c1) {
         std::vector<uint64_t> own(C);
         std::vector<uint16_t> count(C);
@@ -165,24 +165,23 @@ void TransmittanceShadowMap::buildEventIndex() {
                     for (std::size_t k = 0; k < C; ++k)
                         count[k] = uint16_t(count[k] + ((own[k] >> bit) & 1u));
                     eventSlice_[i] = uint16_t(w * 64 + bit);
-                    std::copy(count.begin(), count.end(), eventCounts_.begin() + std::ptrdiff_t(i * C));
+                    // As columnTransmittance: the channels in order, those with no cell in front
+                    // left out.
+                    Vec3f light{1, 1, 1};
+                    for (std::size_t k = 0; k < C; ++k)
+                        if (count[k] != 0) light = light * powers_[k][count[k]];
+                    eventLight_[i] = light;
                 }
         }
     });
 }
 
-Vec3f TransmittanceShadowMap::indexedTransmittance(int64_t column, int64_t end) const {
+VOXFX_ALWAYS_INLINE inline Vec3f TransmittanceShadowMap::indexedTransmittance(int64_t column,
+                                                                              int64_t end) const {
     const std::size_t b = eventOffsets_[size_t(column)], e = eventOffsets_[size_t(column) + 1];
     std::size_t i = b;
     while (i < e && int64_t(eventSlice_[i]) < end) ++i;
-    Vec3f out{1, 1, 1};
-    if (i == b) return out;
-    const std::size_t C = channels_.size();
-    const uint16_t* n = eventCounts_.data() + (i - 1) * C;
-    // As columnTransmittance: the channels in order, those with no cell in front left out.
-    for (std::size_t k = 0; k < C; ++k)
-        if (n[k] != 0) out = out * powers_[k][n[k]];
-    return out;
+    return i == b ? Vec3f{1, 1, 1} : eventLight_[i - 1];
 }
 
 double TransmittanceShadowMap::columnChord(std::size_t k, int64_t column, double depth,
@@ -365,7 +364,9 @@ Vec3f TransmittanceShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     const int64_t skip = options_.grid.skipCells;
     v = v * (options_.grid.bilinear ? m.transmittanceBilinear(q, skip, n, options_.grid.sharpness)
                                     : m.transmittance(q, skip));
-    return v * float(detail::glassFresnelPass(fresnel_, views_, i, q, n, options_.grid));
+    // No glass (fresnel_ empty): the pass is 1, and v * 1 is v.
+    return fresnel_.empty() ? v
+                            : v * float(detail::glassFresnelPass(fresnel_, views_, i, q, n, options_.grid));
 }
 
 TransmittanceShadow::Stats TransmittanceShadow::stats() const {
