@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <initializer_list>
 #include <limits>
 #include <random>
 #include <variant>
@@ -235,12 +236,8 @@ TEST(ShadowTest, FloatThresholdComparesFloatsAsTheDoubleLimitDoes) {
     EXPECT_GT(dark, 200000);
 }
 
-TEST(ShadowTest, ShadowMapLookupIsItsFilterByDefinitionOnGroundTrunksAndLeaves) {
-    // A ground that casts (as a forest's floor does), lit at a slant, boxes standing on it like
-    // trunks and leaves above: the lookup (which may answer "every tap lit" from a bound of the depths around
-    // a block of texels) must equal the filter counted tap by tap, for points on the ground, just
-    // above it, on the boxes' sides and among the leaves, with every PCF radius and bias.
-    const Scene s = leafScene(300, 1, 7, 1.0f);
+// One caster mesh: leafScene's ground and leaves, and a 0.2 x 2 x 0.2 box standing at each of `trunks`.
+Mesh groundLeavesAndTrunks(const Scene& s, std::initializer_list<Vec3d> trunks) {
     Mesh casters = s.meshes[0].mesh; // the ground
     auto add = [&](const Mesh& m) {
         const auto base = uint32_t(casters.positions.size());
@@ -248,8 +245,17 @@ TEST(ShadowTest, ShadowMapLookupIsItsFilterByDefinitionOnGroundTrunksAndLeaves) 
         for (const uint32_t i : m.indices) casters.indices.push_back(base + i);
     };
     add(s.meshes[1].mesh);
-    for (const Vec3d& at : {Vec3d{-1, 0, -1}, Vec3d{1.2, 0, 0.3}, Vec3d{0, 0, 1.5}})
-        add(test::makeBox(at - Vec3d{0.1, 0, 0.1}, at + Vec3d{0.1, 2, 0.1}));
+    for (const Vec3d& at : trunks) add(test::makeBox(at - Vec3d{0.1, 0, 0.1}, at + Vec3d{0.1, 2, 0.1}));
+    return casters;
+}
+
+TEST(ShadowTest, ShadowMapLookupIsItsFilterByDefinitionOnGroundTrunksAndLeaves) {
+    // A ground that casts (as a forest's floor does), lit at a slant, boxes standing on it like
+    // trunks and leaves above: the lookup (which may answer "every tap lit" from a bound of the depths around
+    // a block of texels) must equal the filter counted tap by tap, for points on the ground, just
+    // above it, on the boxes' sides and among the leaves, with every PCF radius and bias.
+    const Scene s = leafScene(300, 1, 7, 1.0f);
+    const Mesh casters = groundLeavesAndTrunks(s, {Vec3d{-1, 0, -1}, Vec3d{1.2, 0, 0.3}, Vec3d{0, 0, 1.5}});
     const Light light = sun({0.55, -1, 0.35});
     const LightView view = makeLightViews(light, computeBounds(casters.view()), 300, 1)[0];
     const ShadowMap map = ShadowMap::build(casters.view(), view);
@@ -311,15 +317,7 @@ TEST(ShadowTest, MapShadowLookupIsTheFilterAtTheNormalOffsetPointWithItsBias) {
     // depthBias * texel world units, for points on the ground, on the boxes and among the leaves,
     // with normals up, towards the light and at random, every PCF radius, offset and bias.
     const Scene s = leafScene(300, 1, 7, 1.0f);
-    Mesh casters = s.meshes[0].mesh; // the ground
-    auto add = [&](const Mesh& m) {
-        const auto base = uint32_t(casters.positions.size());
-        casters.positions.insert(casters.positions.end(), m.positions.begin(), m.positions.end());
-        for (const uint32_t i : m.indices) casters.indices.push_back(base + i);
-    };
-    add(s.meshes[1].mesh);
-    for (const Vec3d& at : {Vec3d{-1, 0, -1}, Vec3d{1.2, 0, 0.3}})
-        add(test::makeBox(at - Vec3d{0.1, 0, 0.1}, at + Vec3d{0.1, 2, 0.1}));
+    const Mesh casters = groundLeavesAndTrunks(s, {Vec3d{-1, 0, -1}, Vec3d{1.2, 0, 0.3}});
     const Light light = sun({0.55, -1, 0.35});
     const Vec3d toLight = normalize(Vec3d{-0.55, 1, -0.35});
     std::mt19937_64 rng(13);

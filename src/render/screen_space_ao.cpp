@@ -1378,34 +1378,29 @@ FieldOcclusionSetup fieldOcclusionSetup(const SceneGeometry& g, std::span<const 
         double area2 = 0;
         bool flat = true;
     };
-    std::vector<PerMesh> meshes(meshCount);
-    std::vector<std::size_t> opaque;
-    for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
-        const uint32_t mat = g.triangleMaterial[t];
-        if (mat >= materials.size() || !materials[mat].isOpaque() || g.triangleMesh[t] >= meshCount) continue;
-        opaque.push_back(t);
-        PerMesh& m = meshes[g.triangleMesh[t]];
+    // Triangle t into its mesh's box and largest triangle.
+    auto addTriangle = [&](PerMesh& m, std::size_t t) {
         const Vec3d a = Vec3d(mesh.positions[mesh.indices[3 * t]]),
                     b = Vec3d(mesh.positions[mesh.indices[3 * t + 1]]),
                     c = Vec3d(mesh.positions[mesh.indices[3 * t + 2]]);
         m.box.extend(a), m.box.extend(b), m.box.extend(c);
         const Vec3d n = cross(b - a, c - a);
         if (dot(n, n) > m.area2) m.area2 = dot(n, n), m.normal = n, m.point = a;
+    };
+    std::vector<PerMesh> meshes(meshCount);
+    std::vector<std::size_t> opaque;
+    for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
+        const uint32_t mat = g.triangleMaterial[t];
+        if (mat >= materials.size() || !materials[mat].isOpaque() || g.triangleMesh[t] >= meshCount) continue;
+        opaque.push_back(t);
+        addTriangle(meshes[g.triangleMesh[t]], t);
     }
     // Per mesh, flat over all its triangles (any material): every vertex on the plane of its largest
     // triangle, to 1e-6 of its size.
     {
         std::vector<PerMesh> all(meshCount);
-        for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
-            if (g.triangleMesh[t] >= meshCount) continue;
-            PerMesh& m = all[g.triangleMesh[t]];
-            const Vec3d a = Vec3d(mesh.positions[mesh.indices[3 * t]]),
-                        b = Vec3d(mesh.positions[mesh.indices[3 * t + 1]]),
-                        c = Vec3d(mesh.positions[mesh.indices[3 * t + 2]]);
-            m.box.extend(a), m.box.extend(b), m.box.extend(c);
-            const Vec3d n = cross(b - a, c - a);
-            if (dot(n, n) > m.area2) m.area2 = dot(n, n), m.normal = n, m.point = a;
-        }
+        for (std::size_t t = 0; t < mesh.triangleCount(); ++t)
+            if (g.triangleMesh[t] < meshCount) addTriangle(all[g.triangleMesh[t]], t);
         for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
             if (g.triangleMesh[t] >= meshCount) continue;
             PerMesh& m = all[g.triangleMesh[t]];

@@ -25,13 +25,29 @@ namespace voxfx::cli::viewer {
 
 namespace {
 
-// The SDL functions the window calls, looked up in libSDL2 once (see the file's comment).
+// The SDL functions the window calls, looked up in libSDL2 once (see the file's comment). One per
+// line, unformatted: clang-format 14 reflows a run of macro calls differently on each pass.
+// clang-format off
 #define VOXFX_SDL_FUNCTIONS(X)                                                                               \
     X(SDL_ConvertPixels)                                                                                     \
-    X(SDL_CreateWindow) X(SDL_DestroyWindow) X(SDL_GetError) X(SDL_GetModState) X(SDL_GetMouseState)         \
-        X(SDL_GetWindowSurface) X(SDL_Init) X(SDL_LockSurface) X(SDL_PollEvent) X(SDL_PushEvent) X(SDL_Quit) \
-            X(SDL_RegisterEvents) X(SDL_SetMainReady) X(SDL_SetWindowTitle) X(SDL_UnlockSurface)             \
-                X(SDL_UpdateWindowSurface) X(SDL_WaitEventTimeout)
+    X(SDL_CreateWindow)                                                                                      \
+    X(SDL_DestroyWindow)                                                                                     \
+    X(SDL_GetError)                                                                                          \
+    X(SDL_GetModState)                                                                                       \
+    X(SDL_GetMouseState)                                                                                     \
+    X(SDL_GetWindowSurface)                                                                                  \
+    X(SDL_Init)                                                                                              \
+    X(SDL_LockSurface)                                                                                       \
+    X(SDL_PollEvent)                                                                                         \
+    X(SDL_PushEvent)                                                                                         \
+    X(SDL_Quit)                                                                                              \
+    X(SDL_RegisterEvents)                                                                                    \
+    X(SDL_SetMainReady)                                                                                      \
+    X(SDL_SetWindowTitle)                                                                                    \
+    X(SDL_UnlockSurface)                                                                                     \
+    X(SDL_UpdateWindowSurface)                                                                               \
+    X(SDL_WaitEventTimeout)
+// clang-format on
 struct SdlApi {
 #define VOXFX_SDL_MEMBER(name) decltype(&::name) name = nullptr;
     VOXFX_SDL_FUNCTIONS(VOXFX_SDL_MEMBER)
