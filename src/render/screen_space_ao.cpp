@@ -1387,6 +1387,16 @@ FieldOcclusionSetup fieldOcclusionSetup(const SceneGeometry& g, std::span<const 
         const Vec3d n = cross(b - a, c - a);
         if (dot(n, n) > m.area2) m.area2 = dot(n, n), m.normal = n, m.point = a;
     };
+    // Triangle t's corners on the plane of its mesh's largest triangle, to 1e-6 of the mesh's size,
+    // or the mesh is not flat.
+    auto checkFlat = [&](PerMesh& m, std::size_t t) {
+        if (!m.flat || m.area2 <= 0) return;
+        const double tol = 1e-6 * length(m.box.extent());
+        const Vec3d n = m.normal / std::sqrt(m.area2);
+        for (int k = 0; k < 3; ++k)
+            if (std::fabs(dot(Vec3d(mesh.positions[mesh.indices[3 * t + k]]) - m.point, n)) > tol)
+                m.flat = false;
+    };
     std::vector<PerMesh> meshes(meshCount);
     std::vector<std::size_t> opaque;
     for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
@@ -1401,29 +1411,13 @@ FieldOcclusionSetup fieldOcclusionSetup(const SceneGeometry& g, std::span<const 
         std::vector<PerMesh> all(meshCount);
         for (std::size_t t = 0; t < mesh.triangleCount(); ++t)
             if (g.triangleMesh[t] < meshCount) addTriangle(all[g.triangleMesh[t]], t);
-        for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
-            if (g.triangleMesh[t] >= meshCount) continue;
-            PerMesh& m = all[g.triangleMesh[t]];
-            if (!m.flat || m.area2 <= 0) continue;
-            const double tol = 1e-6 * length(m.box.extent());
-            const Vec3d n = m.normal / std::sqrt(m.area2);
-            for (int k = 0; k < 3; ++k)
-                if (std::fabs(dot(Vec3d(mesh.positions[mesh.indices[3 * t + k]]) - m.point, n)) > tol)
-                    m.flat = false;
-        }
+        for (std::size_t t = 0; t < mesh.triangleCount(); ++t)
+            if (g.triangleMesh[t] < meshCount) checkFlat(all[g.triangleMesh[t]], t);
         out.flatMeshes.resize(meshCount);
         for (std::size_t i = 0; i < meshCount; ++i) out.flatMeshes[i] = all[i].flat && all[i].area2 > 0;
     }
     if (opaque.empty()) return out;
-    for (const std::size_t t : opaque) {
-        PerMesh& m = meshes[g.triangleMesh[t]];
-        if (!m.flat || m.area2 <= 0) continue;
-        const double tol = 1e-6 * length(m.box.extent());
-        const Vec3d n = m.normal / std::sqrt(m.area2);
-        for (int k = 0; k < 3; ++k)
-            if (std::fabs(dot(Vec3d(mesh.positions[mesh.indices[3 * t + k]]) - m.point, n)) > tol)
-                m.flat = false;
-    }
+    for (const std::size_t t : opaque) checkFlat(meshes[g.triangleMesh[t]], t);
     out.indices.reserve(3 * opaque.size());
     for (const std::size_t t : opaque)
         for (int k = 0; k < 3; ++k) out.indices.push_back(mesh.indices[3 * t + k]);
