@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <set>
 #include <string_view>
 #include <system_error>
 #include <thread>
@@ -32,6 +33,7 @@ std::map<std::string, const void*> gLoaded;
 struct PrefetchThreads {
     std::mutex mutex;
     std::vector<std::thread> threads;
+    std::set<std::string> started; ///< one thread per module, however often it is prefetched
     ~PrefetchThreads() {
         for (std::thread& t : threads) t.join();
     }
@@ -116,11 +118,9 @@ const void* loadModule(const char* name, uint32_t abi, const char* purpose) {
 }
 
 void prefetchModule(const char* name, uint32_t abi) {
-    {
-        const std::lock_guard lock(gLoadedMutex);
-        if (gLoaded.count(name)) return;
-    }
+    // Not gLoadedMutex: a load under way holds it for its whole dlopen(), and this returns at once.
     const std::lock_guard lock(gPrefetch.mutex);
+    if (!gPrefetch.started.insert(name).second) return; // prefetched before: loaded or being loaded
     gPrefetch.threads.emplace_back([module = std::string(name), abi] {
         try {
             loadModule(module.c_str(), abi, "ahead of use");
