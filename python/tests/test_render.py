@@ -138,9 +138,13 @@ def test_ctrl_c_stops_a_render_between_tiles(tmp_path):
     scene = voxfx.load_scene(write_scene(tmp_path))
     # One sample per supersample (aa="post"): with adaptive anti-aliasing (on where the blended cube
     # is drawn too) the frame below would allocate 8 x 8 samples per pixel before its first tile.
-    start = time.perf_counter()
-    voxfx.render(scene, shadows="exact", width=320, height=180, aa="post")
-    small = time.perf_counter() - start  # 1/256 of the samples below
+
+    def small_frame():  # 1/256 of the samples of the frame below
+        start = time.perf_counter()
+        voxfx.render(scene, shadows="exact", width=320, height=180, aa="post")
+        return time.perf_counter() - start
+
+    small = small_frame()
     old = signal.signal(signal.SIGINT, lambda signum, frame: (_ for _ in ()).throw(Interrupted()))
     timer = threading.Timer(0.2, lambda: os.kill(os.getpid(), signal.SIGINT))
     timer.start()
@@ -152,5 +156,9 @@ def test_ctrl_c_stops_a_render_between_tiles(tmp_path):
         timer.cancel()
         timer.join()
         signal.signal(signal.SIGINT, old)
-    # Uninterrupted, that frame takes about 256 x small (seconds); it stops at the next tile instead.
-    assert time.perf_counter() - start < 0.2 + 32 * small + 0.5
+    elapsed = time.perf_counter() - start
+    # Uninterrupted, that frame takes about 256 x small (seconds); it stops at the next tile instead,
+    # so well within a quarter of it. The small frame is timed before and after, the slower counting,
+    # so that a test beside this one (ctest -j) slows the bound as it slows the frame.
+    small = max(small, small_frame())
+    assert elapsed < 0.2 + 64 * small + 0.5, f"{elapsed:.2f} s after SIGINT at 0.2 s (small frame {small:.3f} s)"
