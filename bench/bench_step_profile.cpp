@@ -31,7 +31,10 @@ int main(int argc, char** argv) {
         const int64_t n = std::atoi(argv[2]);
         PreparedMemory prepared;
         if (prepare) prepared = prepareVoxelizeMemory(voxelizeMemoryBound(n, n, n));
+        const auto tl = std::chrono::steady_clock::now();
         const Mesh mesh = loadMesh(argv[1]);
+        const double loadMs =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tl).count();
         FitOptions fo;
         fo.resolution = std::atoi(argv[2]);
         const Frame frame = fitFrame(computeBounds(mesh.view()), fo);
@@ -42,15 +45,22 @@ int main(int argc, char** argv) {
         VoxelGrid last;
         for (int i = 0; i < calls; ++i) {
             const auto t0 = std::chrono::steady_clock::now();
-            if (i == 0) prepared.wait();
+            double waitMs = 0;
+            if (i == 0) {
+                prepared.wait();
+                waitMs =
+                    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+            }
             VoxelGrid g = voxelize(mesh.view(), frame, vo);
             const double ms =
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
             last = std::move(g);
             std::printf("call %d: %.2f ms\n", i, ms);
             if (i == 0 && prepare)
-                std::printf("prepared memory left after call 0: %.1f MiB\n",
-                            double(detail::reservedPageBytes()) / double(1 << 20));
+                std::printf(
+                    "load %.2f ms, then waited %.2f ms for the prepared memory (in call 0); left after "
+                    "call 0: %.1f MiB\n",
+                    loadMs, waitMs, double(detail::reservedPageBytes()) / double(1 << 20));
         }
         std::printf("%lld filled voxels\n", static_cast<long long>(last.bits.count()));
     } catch (const std::exception& e) {
