@@ -130,7 +130,7 @@ LumaDifference lumaDifference(const RenderResult& fast, const RenderResult& exac
 // or two sharing an edge, so not across a tile, nor past a checker's corner where two tiles of one
 // colour meet (comparing the meshes alone let 4 pixels there through, by up to 0.33). Over all the
 // glass, the mean and the largest difference, and the paths saved.
-TEST(GlassRefinementTest, NoPixelIsInterpolatedAcrossTheRefractedCheckersEdges) {
+TEST(GlassRefinementTest, WhereTheRefractedCheckersEdgesPassThePixelsStayWithinTheContrast) {
     const Scene s = ballOverAChecker();
     RenderOptions exactOptions = refinementOptions(0), fastOptions = refinementOptions(1.0 / 32);
     exactOptions.antiAliasing = fastOptions.antiAliasing = AntiAliasing::Off;
