@@ -52,6 +52,9 @@
 //                                shadows at compression tolerance eps against exact shadows, which
 //                                march the skull and the smoke (voxfx/exact_shadow.hpp); the same
 //                                counters as the forest's.
+//   BM_GlassLattice              the glass demo's interactive frame with the glass lattice (the
+//                                default) against every cell traced (--glass-refinement 0),
+//                                interleaved: lattice_ratio(_cpu), glass_ms, paths, interpolated.
 //   BM_GlassPaths                where a glass path's CPU goes: the glass demo's exact paths (one per
 //                                pixel centre on glass) and each query kind alone, one thread
 //                                (path_ms, eye_ms, reflect_ms, exit_ms, events_per_path).
@@ -456,6 +459,45 @@ BENCHMARK_CAPTURE(BM_FrameCost, forest, std::string("forest"))->Unit(benchmark::
 BENCHMARK_CAPTURE(BM_FrameCost, dsm_demo, std::string("dsm-demo"))
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// The glass lattice (RenderOptions::glassRefinement) on the glass demo's interactive frames: the default
+// frame against the same with every cell traced (glassRefinement 0, the image before the lattice),
+// each with a RenderCache of its own and the camera orbiting, interleaved. lattice_ratio = frame /
+// every_cell (wall; _cpu: process CPU), glass_ms and every_glass_ms the glass pass, paths and
+// every_paths the glass paths traced per frame, interpolated the cells interpolated per frame.
+void BM_GlassLattice(benchmark::State& state) {
+    const BenchScene& b = benchScene("glass");
+    const RenderOptions options = frameOptions(b.scene);
+    RenderOptions every = options;
+    every.glassRefinement = 0;
+    PassSums lattice, all;
+    double paths = 0, everyPaths = 0, interpolated = 0;
+    auto into = [&](const RenderOptions& o, PassSums& sums, double& pathSum) {
+        FrameFn frame = cachedFrames(b, o);
+        return [&sums, &pathSum, &interpolated, frame, cells = o.glassRefinement > 0](bool timed) {
+            const double cpu0 = processCpuMs();
+            const RenderResult r = frame();
+            benchmark::DoNotOptimize(r.image.pixels.data());
+            if (!timed) return;
+            sums.add(r, processCpuMs() - cpu0);
+            pathSum += double(r.glass.paths);
+            if (cells) interpolated += double(r.glass.interpolated);
+        };
+    };
+    interleaved(state, {into(options, lattice, paths), into(every, all, everyPaths)});
+    const double n = double(state.iterations());
+    state.counters["frame_ms"] = lattice.total / n;
+    state.counters["every_cell_ms"] = all.total / n;
+    state.counters["glass_ms"] = lattice.pass("glass") / n;
+    state.counters["every_glass_ms"] = all.pass("glass") / n;
+    state.counters["lattice_ratio"] = lattice.total / all.total;
+    state.counters["lattice_ratio_cpu"] = lattice.cpu / all.cpu;
+    state.counters["paths"] = paths / n;
+    state.counters["every_paths"] = everyPaths / n;
+    state.counters["interpolated"] = interpolated / n;
+    state.SetLabel("glass: default against --glass-refinement 0; 1280x720, cached, orbiting");
+}
+BENCHMARK(BM_GlassLattice)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Where a glass path's CPU goes, on the glass demo's camera paths (one per pixel centre at 1280x720
 // that meets glass, the demo's first camera), each query kind timed alone, one at a time, on one

@@ -46,6 +46,11 @@ struct GlassPath {
     int events = 0;         ///< refractions and reflections followed (the first surface included)
     bool truncated = false; ///< stopped at maxEvents: leaves along its current direction
     double blurAngle = 0;   ///< frosted: the cone the environment is averaged over (radians)
+    /// What the path crossed, in order (exact: a hash of each event's faces, their media and sides,
+    /// and whether it refracted or reflected totally; 0 for the other methods): two neighbouring
+    /// paths with the same value went through the same objects the same way (the glass pass's
+    /// lattice interpolates only between such paths).
+    uint64_t crossed = 0;
 
     /// Stops the path after maxEvents: it leaves at `at` along its current direction with what it
     /// carries (black pixels where a ray is trapped by total internal reflection would be a worse

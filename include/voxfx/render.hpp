@@ -183,6 +183,15 @@ struct RenderOptions {
     /// log-average luminance (Reinhard et al. 2002, key 0.18: RenderResult::exposure).
     float exposure = 1;
     GlassOptions glass; ///< the glass method and its options (default none: shaded as surfaces)
+    /// Glass, adaptive image-space refinement: the light through every other pixel (cell) along x
+    /// and y is traced first; a pixel between them is traced too only where their paths part: other
+    /// glass objects crossed or crossed otherwise (GlassPath::crossed, total internal reflection),
+    /// another object, or triangles that do not share an edge, where the light leaving the glass or
+    /// its reflection lands, exit directions more than 3 degrees apart, a pixel the G-buffer refined
+    /// (an edge) among them, or their shown light (luma, 0..1, after the output transform) departing
+    /// from a straight line through their lattice neighbours' by more than this; elsewhere the light
+    /// through the glass is interpolated from them (two or four). 0: every pixel traced.
+    double glassRefinement = 1.0 / 32;
     /// Radiance around the scene: shown as the background, seen through and in glass, and the ambient
     /// light. Null: the procedural sky (Environment::sky), or the flat `background` (sky = flat).
     std::shared_ptr<const Environment> environment;
@@ -239,7 +248,7 @@ struct RenderOptions {
     /// The named fields of RenderOptions itself: width, height, supersample, antiAliasing,
     /// adaptiveSamples, toneMap, exposure, ambient, skyLight, sky, background, sunElevation,
     /// sunAzimuth, turbidity, groundAlbedo, volumeStep,
-    /// emptySpaceSkipping, volumeRefinement, volumeShading, defaultLights, creaseAngle,
+    /// emptySpaceSkipping, volumeRefinement, glassRefinement, volumeShading, defaultLights, creaseAngle,
     /// ambientOcclusion, occlusionRadius, occlusionResolution, translucencySlices, translucencyBlur.
     static std::span<const OptionField<RenderOptions>> fields();
 };
@@ -312,6 +321,10 @@ struct GlassReport {
     int64_t pixels = 0;   ///< output pixels showing glass
     double prepareMs = 0; ///< Embree build (exact) or the grids (voxel methods, frosted)
     double traceMs = 0;   ///< tracing the glass pixels
+    int64_t paths = 0;    ///< samples traced through the glass (the method's traceGlass calls)
+    /// Cells (output pixels) whose light through the glass was interpolated from the traced cells
+    /// around them instead of traced (RenderOptions::glassRefinement).
+    int64_t interpolated = 0;
     /// Voxel methods: the grid's voxels along the glass's longest side, and why (given, or auto from
     /// the glass objects' size on screen: chooseGlassGrid); 0 and empty for the other methods.
     int64_t grid = 0;

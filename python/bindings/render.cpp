@@ -125,6 +125,8 @@ py::dict reportDict(const RenderOptions& o, const RenderResult& r, const Camera&
     d["glass"] = std::string(glassName(o.glass));
     d["glass_options"] = std::visit([](const auto& g) { return optionsText(g, snakeCase); }, o.glass);
     d["glass_pixels"] = r.glass.pixels;
+    d["glass_paths"] = r.glass.paths;
+    d["glass_interpolated"] = r.glass.interpolated;
     d["covered_pixels"] = r.coveredPixels;
     d["volume_samples"] = r.volumeSamples;
     d["volume_interpolated"] = r.volumeInterpolated;

@@ -53,7 +53,8 @@ void printSummary(const RenderArgs& a, const Scene& scene, const Camera& camera,
             std::visit([](const auto& g) { return optionsText(g, kebabCase); }, o.glass);
         std::cout << "glass " << r.glass.method << " (" << glass << "): " << withCommas(r.glass.pixels)
                   << " pixels, prepare " << fmtMs(r.glass.prepareMs) << ", trace " << fmtMs(r.glass.traceMs)
-                  << "\n";
+                  << " (" << withCommas(r.glass.paths) << " paths, " << withCommas(r.glass.interpolated)
+                  << " pixels interpolated)\n";
         if (r.glass.grid > 0)
             std::cout << "glass grid " << r.glass.grid << " (" << r.glass.gridReason << ")\n";
     }

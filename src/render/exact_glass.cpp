@@ -155,6 +155,14 @@ private:
     Vec3d surfaceNormal_{0, 0, 1};
 };
 
+// One step of GlassPath::crossed's hash (splitmix64's finalizer over the running value and `v`).
+uint64_t mixCrossed(uint64_t h, uint64_t v) {
+    uint64_t z = h ^ (v + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2));
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+
 } // namespace
 
 void ExactGlass::facesAt(const Vec3d& x, const Vec3d& d, uint32_t t, std::vector<CrossedFace>& faces) const {
@@ -218,13 +226,17 @@ GlassPath ExactGlass::trace(const Vec3d& origin, const Vec3d& dir, int maxEvents
             p.reflectance = float(F);
         }
         Vec3d r;
-        if (refractDirection(d, nf, etaFrom / etaTo, r)) {
+        const bool refracted = refractDirection(d, nf, etaFrom / etaTo, r);
+        if (refracted) {
             thr = thr * tint * float(1 - F);
             d = r;
             std::swap(stack, next);
         } else {
             d = reflectDirection(d, nf); // total internal reflection: the ray stays where it was
         }
+        for (const CrossedFace& f : faces)
+            p.crossed = mixCrossed(p.crossed, 2 * uint64_t(f.medium) + f.entering);
+        p.crossed = mixCrossed(p.crossed, refracted ? ~uint64_t(0) : ~uint64_t(1));
         ++p.events;
     }
 }

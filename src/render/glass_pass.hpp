@@ -2,6 +2,8 @@
 // with the light that comes through them (voxfx/glass.hpp).
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -19,6 +21,11 @@ struct GlassSetup {
     std::vector<uint32_t> opaqueTriangle; ///< per triangle of `behind`: its index in the scene
     BuiltGlass built;
     std::unique_ptr<TriangleTracer> behind; ///< null: the environment alone behind the glass
+    /// Per triangle of `behind`: the triangles of `behind` sharing each of its edges (by vertex
+    /// index), or kNoTriangle (the glass lattice interpolates only between paths that land on one
+    /// triangle or on two that meet along an edge).
+    std::vector<std::array<uint32_t, 3>> behindNeighbours;
+    static constexpr uint32_t kNoTriangle = ~uint32_t(0);
     double epsilon = 1e-6;
 };
 

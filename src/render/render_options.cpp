@@ -66,6 +66,13 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
             "where a volume's, mesh's or depth edge lies between or the volumes' light of their neighbours "
             "differs by more than this (shown luma, 0..1); interpolate elsewhere (0: cast every pixel)",
             0, 1),
+        numberOption<O, &O::glassRefinement>(
+            "glassRefinement",
+            "glass: trace every other pixel along x and y, and the pixels between them only where their "
+            "paths cross other glass or land on other objects or depths, or their light departs from a "
+            "straight line by more than this (shown luma, 0..1); interpolate elsewhere (0: trace every "
+            "pixel)",
+            0, 1),
         nameOption<O, parseVolumeShading, optionName<VolumeShading>, &O::volumeShading>(
             "volumeShading",
             "volumes: phong (DSM sec. 3.2) lights each sample by Blinn-Phong about its gradient normal "

@@ -266,8 +266,7 @@ namespace {
 // Sample i of the G-buffer: its surface point shaded with the ambient light's `occlusion`, or the
 // environment along its ray where it shows the background.
 // `known`: its surface point, where the caller has it.
-Vec3f shadeSample(const FrameState& frame, std::size_t i, float occlusion,
-                  const SurfacePoint* known = nullptr) {
+Vec3f shadeSampleAt(const FrameState& frame, std::size_t i, float occlusion, const SurfacePoint* known) {
     const GBuffer& gbuffer = frame.gbuffer;
     const Frame& cam = gbuffer.frame;
     if (known) return frame.shader->shade(*known, cam.eye(), occlusion);
@@ -298,10 +297,22 @@ void shadeRepresentative(FrameState& frame, const CellOcclusion* cells, int64_t 
     } else if (!frame.screenOcclusion.empty()) {
         occlusion = frame.screenOcclusion[cell];
     }
-    frame.shaded[i] = shadeSample(frame, i, occlusion, covered ? &s : nullptr);
+    frame.shaded[i] = covered && glassReplacesShading(frame, s.material)
+                          ? Vec3f{0, 0, 0}
+                          : shadeSampleAt(frame, i, occlusion, covered ? &s : nullptr);
 }
 
 } // namespace
+
+bool glassReplacesShading(const FrameState& frame, uint32_t m) {
+    const Material& material = frame.scene.materials[m];
+    return !std::holds_alternative<NoGlassOptions>(frame.options.glass) && material.isGlass() &&
+           material.transmission >= 1;
+}
+
+Vec3f shadeSample(const FrameState& frame, std::size_t i, float occlusion) {
+    return shadeSampleAt(frame, i, occlusion, nullptr);
+}
 
 // In two rounds where adaptive anti-aliasing is on: every cell's representative sample, then the
 // other samples of edge cells, each shaded only where neither an earlier sample of its cell nor a
@@ -353,7 +364,8 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                                 continue;
                             }
                             const std::size_t proxy = neighbourShowing(frame, cx, cy, tri);
-                            out[i] = proxy != kNoSample ? out[proxy] : shadeSample(frame, i, occlusion);
+                            out[i] =
+                                proxy != kNoSample ? out[proxy] : shadeSampleAt(frame, i, occlusion, nullptr);
                         }
                     }
                 steps.step();

@@ -101,7 +101,16 @@ Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material&
 
 /// The shading pass: every pixel of the G-buffer into frame.shaded (background where nothing was
 /// hit, or the environment along the pixel's ray when one was given), rows in parallel; `progress`
-/// is polled between row blocks.
+/// is polled between row blocks. A cell's representative that shows glass the glass pass replaces
+/// (glassReplacesShading) is left black: the glass pass shades it where no path goes through.
 void shadeGBuffer(FrameState& frame, Progress* progress);
+
+/// Whether the glass pass replaces the surface shading of material `m` entirely: a glass method is
+/// chosen and `m` is glass of transmission 1 (its shading would be mixed in times 0).
+bool glassReplacesShading(const FrameState& frame, uint32_t m);
+
+/// Sample i's shading as the shading pass gives a cell's representative, with the cell's `occlusion`
+/// (the glass pass's, for a representative glassReplacesShading left black and no path went through).
+Vec3f shadeSample(const FrameState& frame, std::size_t i, float occlusion);
 
 } // namespace voxfx::detail
