@@ -36,9 +36,10 @@ namespace voxfx::detail {
 /// anti-aliasing (frame.adaptive > 1) the samples the passes before shaded are cast, then the cells
 /// shaded once whose samples' rays cross different faces of the volume scene, or whose composited
 /// light differs from a neighbour's, are shaded at every sample (frame.refined). With
-/// options.volumeRefinement > 0 the cells shaded once are cast on a coarse lattice (even cx and cy)
-/// first and the cells between interpolated from it where no edge lies between (adaptive image-space
-/// refinement, RenderOptions::volumeRefinement; the count in frame.result). Records the
+/// options.volumeRefinement > 0 the cells shaded once are cast on a coarse lattice (cx and cy
+/// multiples of 4) first and the cells between, level by level (spacing 2, then 1), interpolated
+/// from the levels before where no edge lies between, else cast (adaptive image-space refinement,
+/// RenderOptions::volumeRefinement; the count in frame.result). Records the
 /// number of volume samples taken in frame.result. Nothing happens when the scene has neither volume
 /// scene objects nor blended meshes.
 void compositeVolumes(FrameState& frame);
