@@ -840,6 +840,20 @@ struct LatticeInterpolation {
         const std::size_t c = std::size_t(cy * cellsWide() + cx);
         color[c] = g.color, transmittance[c] = g.transmittance, firstHit[c] = float(g.firstHit);
     }
+    // Whether the volume scene gave nothing (transmittance exactly 1, no light) in cell (cx, cy) and
+    // the eight around it inside the image, cast or interpolated: an edge of the volume scene there
+    // (a volume's box in air, where its bricks are empty) changes no sample, so adaptive
+    // anti-aliasing's volume round gives its samples the light behind without walking their rays.
+    // A G-buffer edge cell (stored as transmittance -1) counts as something.
+    bool nothingAround(int64_t cx, int64_t cy) const {
+        for (int64_t y = std::max<int64_t>(0, cy - 1); y <= std::min(cellsHigh() - 1, cy + 1); ++y)
+            for (int64_t x = std::max<int64_t>(0, cx - 1); x <= std::min(cellsWide() - 1, cx + 1); ++x) {
+                const std::size_t c = std::size_t(y * cellsWide() + x);
+                if (transmittance[c] != 1.0 || color[c].x != 0 || color[c].y != 0 || color[c].z != 0)
+                    return false;
+            }
+        return true;
+    }
     SampleCaster::Gathered at(int64_t x, int64_t y) const {
         const std::size_t c = std::size_t(y * cellsWide() + x);
         return {color[c], transmittance[c], double(firstHit[c])};
@@ -870,6 +884,7 @@ struct LatticeInterpolation {
         const ToneMap tm = frame.options.toneMap;
         const auto luma = [&](int64_t x, int64_t y) { return shownLuma(at(x, y).over(behind), tm); };
         float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+        float nl[4]; // the neighbours' lumas
         double hitLo = std::numeric_limits<double>::infinity(), hitHi = -hitLo;
         int hits = 0;
         Vec3f sumColor{0, 0, 0};
@@ -889,7 +904,7 @@ struct LatticeInterpolation {
                 ++hits, sumHit += g.firstHit;
                 hitLo = std::min(hitLo, g.firstHit), hitHi = std::max(hitHi, g.firstHit);
             }
-            const float l = shownLuma(g.over(behind), tm);
+            const float l = nl[k] = shownLuma(g.over(behind), tm);
             lo = std::min(lo, l), hi = std::max(hi, l);
             sumColor += g.color;
             sumTransmittance += g.transmittance;
@@ -898,34 +913,26 @@ struct LatticeInterpolation {
         if (hits != 0 && (hits != n || hitHi - hitLo > 0.02 * hitLo)) return false;
         // Departure from the line (plane) through the neighbours: second differences of the lattice's
         // lumas at spacing 2h along each axis of the interpolation, through each neighbour line.
-        float departure = 0;
         int differences = 0;
-        const auto second = [&](int64_t x0, int64_t y0, int64_t dx, int64_t dy) {
-            // Lattice cells at (x0, y0) + t (dx, dy), t = -3, -1, 1, 3 (in steps of h): the two second
-            // differences centred on t = -1 and t = 1.
-            const int64_t xs[4] = {x0 - 3 * dx, x0 - dx, x0 + dx, x0 + 3 * dx};
-            const int64_t ys[4] = {y0 - 3 * dy, y0 - dy, y0 + dy, y0 + 3 * dy};
-            float l[4];
-            bool ok[4];
-            for (int t = 0; t < 4; ++t) {
-                ok[t] = t == 1 || t == 2 || usable(xs[t], ys[t]);
-                l[t] = ok[t] ? luma(xs[t], ys[t]) : 0;
+        // Along the line (x0, y0) + t (dx, dy), t = -3, -1, 1, 3 (in steps of h), whose cells at -1
+        // and 1 are neighbours of lumas l1 and l2: whether either second difference (centred on -1 and
+        // on 1) departs by more than the threshold.
+        const auto departs = [&](int64_t x0, int64_t y0, int64_t dx, int64_t dy, float l1, float l2) {
+            for (const int64_t t : {-3, 3}) {
+                const int64_t x = x0 + t * dx, y = y0 + t * dy;
+                if (!usable(x, y)) continue;
+                ++differences;
+                const float l = luma(x, y);
+                if (0.5f * std::abs(t < 0 ? l - 2 * l1 + l2 : l1 - 2 * l2 + l) > threshold) return true;
             }
-            if (ok[0])
-                departure = std::max(departure, 0.5f * std::abs(l[0] - 2 * l[1] + l[2])), ++differences;
-            if (ok[3])
-                departure = std::max(departure, 0.5f * std::abs(l[1] - 2 * l[2] + l[3])), ++differences;
+            return false;
         };
-        if (alongX) {
-            second(cx, cy, h, 0);
-        } else if (alongY) {
-            second(cx, cy, 0, h);
-        } else {
-            second(cx, cy - h, h, 0), second(cx, cy + h, h, 0);
-            second(cx - h, cy, 0, h), second(cx + h, cy, 0, h);
-        }
-        if (differences == 0) departure = hi - lo; // no second difference to take: the range
-        if (departure > threshold) return false;
+        if (alongX   ? departs(cx, cy, h, 0, nl[0], nl[1])
+            : alongY ? departs(cx, cy, 0, h, nl[0], nl[1])
+                     : departs(cx, cy - h, h, 0, nl[0], nl[1]) || departs(cx, cy + h, h, 0, nl[2], nl[3]) ||
+                           departs(cx - h, cy, 0, h, nl[0], nl[2]) || departs(cx + h, cy, 0, h, nl[1], nl[3]))
+            return false;
+        if (differences == 0 && hi - lo > threshold) return false; // no second difference: the range
         out.color = sumColor * (1.0f / float(n));
         out.transmittance = sumTransmittance / double(n);
         out.firstHit = hits == 0 ? std::numeric_limits<double>::infinity() : sumHit / double(hits);
@@ -939,11 +946,12 @@ struct LatticeInterpolation {
 // image-space refinement (RenderOptions::volumeRefinement > 0) the representatives of cells shaded
 // once and off the coarsest lattice only after it, level by level, each cast or interpolated from the
 // levels before (LatticeInterpolation). Then, with adaptive anti-aliasing, the cells shaded once where the
-// volume scene draws an edge (volumeEdge) get every sample: each over the light the passes before gave the
-// cell (one mesh and material shows in all its samples, or the G-buffer would have refined it), as
-// the shading pass shares a cell's shading among its samples. Each round reads only what the rounds
-// before wrote (the lattice's light; representatives, which the last round does not change): the
-// order of the cells does not matter.
+// volume scene draws an edge (volumeEdge) get every sample (with refinement, where the volumes gave nothing
+// in the cell and the eight around it, LatticeInterpolation::nothingAround, the light behind without a walk):
+// each over the light the passes before gave the cell (one mesh and material shows in all its samples, or the
+// G-buffer would have refined it), as the shading pass shares a cell's shading among its samples. Each round
+// reads only what the rounds before wrote (the lattice's light; representatives, which the last round does
+// not change): the order of the cells does not matter.
 void compositeVolumes(FrameState& frame) {
     uint64_t setupKey = 0;
     std::shared_ptr<const VolumeSetup> setup = volumeSetup(frame, setupKey);
@@ -988,6 +996,7 @@ void compositeVolumes(FrameState& frame) {
                 const bool edge = edgeCell(cx, cy);
                 const std::size_t rep = representativeSample(frame, cx, cy);
                 if (a > 1 && !edge) behind[c] = frame.shaded[rep];
+                if (refine && edge) lattice.store(cx, cy, {{0, 0, 0}, -1}); // nothing known: cast
                 const bool coarsest = LatticeInterpolation::spacing(cx, cy) == 0;
                 if (refine && !edge && !coarsest) continue; // a later level
                 for (int64_t y = cy * a; y < (cy + 1) * a; ++y)
@@ -1042,11 +1051,19 @@ void compositeVolumes(FrameState& frame) {
                     if (kind != 0 || !volumeEdge(frame, caster, crossings, cx, cy)) continue;
                     kind = kEveryRefinedSample;
                     const std::size_t rep = representativeSample(frame, cx, cy);
+                    // Nothing of the volumes in or around the cell: its samples keep the light behind
+                    // (what a cast that gathers nothing gives), without the walk.
+                    const bool nothing = refine && lattice.nothingAround(cx, cy);
+                    const Vec3f& under = behind[std::size_t(cy * cw + cx)];
                     for (int64_t y = cy * a; y < (cy + 1) * a; ++y)
                         for (int64_t x = cx * a; x < (cx + 1) * a; ++x)
-                            if (std::size_t(y * W + x) != rep)
-                                caster.cast(w, x, y, behind[std::size_t(cy * cw + cx)],
-                                            frame.shaded[std::size_t(y * W + x)]);
+                            if (std::size_t(y * W + x) != rep) {
+                                Vec3f& out = frame.shaded[std::size_t(y * W + x)];
+                                if (nothing)
+                                    out = under;
+                                else
+                                    caster.cast(w, x, y, under, out);
+                            }
                 }
             samples += w.samples;
         });

@@ -35,7 +35,9 @@ namespace voxfx::detail {
 /// out, are walked here too, as translucent objects shaded with their own material. With adaptive
 /// anti-aliasing (frame.adaptive > 1) the samples the passes before shaded are cast, then the cells
 /// shaded once whose samples' rays cross different faces of the volume scene, or whose composited
-/// light differs from a neighbour's, are shaded at every sample (frame.refined). With
+/// light differs from a neighbour's, are shaded at every sample (frame.refined; with refinement, where
+/// the volumes gave nothing in the cell and the eight around it, a box's edge in air, each sample
+/// takes the light behind without a walk). With
 /// options.volumeRefinement > 0 the cells shaded once are cast on a coarse lattice (cx and cy
 /// multiples of 4) first and the cells between, level by level (spacing 2, then 1), interpolated
 /// from the levels before where no edge lies between, else cast (adaptive image-space refinement,
