@@ -321,6 +321,11 @@ struct VolumeComposite {
     const std::vector<uint8_t>& boxShape;
     const TriangleTracer* leafTracer;
     static constexpr double kPieceDepth = 0.5; ///< optical depth of the pieces of a dense interval
+    /// Early ray termination inside volumes: a walk whose transmittance falls below this stops, and
+    /// the light it would still have let through is that of the piece it stops at (the matter
+    /// behind, in the layer's own shadow, lit like its front: dropping it would show what lies
+    /// behind by up to this fraction).
+    static constexpr double kOpaque = 1e-2;
     /// Phong shading of volume samples (RenderOptions::volumeShading) with lights to shade by.
     bool shaded;
     const std::vector<double>& fullGradient;
@@ -575,10 +580,11 @@ struct VolumeComposite {
             const int64_t pieces = std::clamp<int64_t>(int64_t(std::ceil(sigmaSum * dl / kPieceDepth)), 1, 8);
             const double pl = dl / double(pieces), x = sigmaSum * pl;
             const double lightDepth = x < 1e-6 ? 0.5 * pl : (1 - x / std::expm1(x)) / sigmaSum;
-            for (int64_t k = 0; k < pieces && r.transmittance >= 1e-3; ++k) {
+            for (int64_t k = 0; k < pieces && r.transmittance >= kOpaque; ++k) {
                 const Vec3d p = p0 + (p1 - p0) * ((double(k) * pl + lightDepth) / dl);
                 Vec3f unshaded;
                 const Vec3f ambient = lightAt(p, inside, *r.lights, unshaded);
+                Vec3f lit{0, 0, 0}; // the last object's light per unit opacity
                 for (std::size_t o = 0; o < inside.size(); ++o) {
                     const ObjectInterval& w = (*r.objects)[o];
                     if (!(w.sigma > 0)) continue;
@@ -587,16 +593,21 @@ struct VolumeComposite {
                     if (shaded) {
                         Vec3f diffuse, specular;
                         phong(p, o, r.eye, *r.lights, ambient, unshaded, diffuse, specular);
-                        r.color += (w.color * diffuse + specular) * weight;
+                        lit = w.color * diffuse + specular;
                     } else {
-                        r.color += w.color * unshaded * weight;
+                        lit = w.color * unshaded;
                     }
+                    r.color += lit * weight;
                     r.transmittance *= 1.0 - alpha;
                 }
                 if (r.transmittance <= 0.5 && std::isinf(r.firstHit))
                     r.firstHit = z0 + (l0 + double(k) * pl + lightDepth) * depthPerLength;
+                if (r.transmittance < kOpaque) { // terminated: the rest lit like this piece
+                    r.color += lit * float(r.transmittance * frame.options.exposure);
+                    r.transmittance = 0;
+                }
             }
-            if (r.transmittance < 1e-3) return false;
+            if (r.transmittance < kOpaque) return false;
             l0 = l1;
         }
         return true;

@@ -30,7 +30,9 @@ namespace voxfx::detail {
 /// Beer–Lambert, a dense layer does not shadow its own front); the map's lookup itself is read,
 /// trilinearly, from a grid of the same lookups at the volume's voxel corners built once per (volume,
 /// light) and kept in frame.cache (render/volume_light_grid.hpp; the first frame builds it). The walk
-/// stops when the accumulated opacity reaches 0.999, and the result is blended over frame.shaded
+/// stops when the accumulated opacity reaches 0.99 inside a volume (the light it would still have
+/// let through taken as that of the piece it stops at) or 0.999 at a surface, and the result is
+/// blended over frame.shaded
 /// (row-major, y up). The meshes of blended materials (Material::blend), which the G-buffer leaves
 /// out, are walked here too, as translucent objects shaded with their own material. With adaptive
 /// anti-aliasing (frame.adaptive > 1) the samples the passes before shaded are cast, then the cells
