@@ -206,13 +206,16 @@ struct RenderOptions {
     /// Volume ray casting: volume bricks the transfer function leaves transparent are not sampled
     /// (EmptySpace, voxfx/segment_walker.hpp); the image is the same either way, only faster.
     bool skipEmptySpace = true;
-    /// Volume ray casting, adaptive image-space refinement (Levoy 1990): the rays of every other
-    /// pixel (cell) along x and y are cast first; a pixel between them is cast too only where its
-    /// ray crosses other faces of the volume scene than theirs (a volume's box, a Boolean's or a
-    /// blended mesh's edge), the G-buffer's depth there is more than 2 % from theirs (a mesh in front
-    /// of or inside a volume), or their volumes' light composited over its own background differs in
-    /// shown luma (0..1, after the output transform) by more than this; elsewhere the volumes' light
-    /// and transmittance are interpolated from them (two or four). 0: every pixel cast.
+    /// Volume ray casting, adaptive image-space refinement (Levoy 1990) on a lattice of three
+    /// levels: the rays of every fourth pixel (cell) along x and y are cast first, then those of
+    /// every second pixel and then the rest are each interpolated from the pixels 2 (then 1) apart
+    /// that the level before gave (two along x or y, or four diagonal), or cast where its ray crosses
+    /// other faces of the volume scene than theirs (a volume's box, a Boolean's or a blended mesh's
+    /// edge), the G-buffer's depth there is more than 2 % from theirs (a mesh in front of or inside a
+    /// volume), their rays reach opacity one half at depths more than 2 % apart or not all of them do
+    /// (the silhouette of the volume's matter), or their volumes' light composited over its own
+    /// background departs from a straight line in shown luma (0..1, after the output transform) by
+    /// more than this (half the lattice's largest second difference there). 0: every pixel cast.
     double volumeRefinement = 1.0 / 64;
     /// Volume ray casting: how samples are lit. phong: the normal is -gradient / |gradient| (central
     /// differences of the volume, VolumeView::gradient: it points from high values to low, out of a

@@ -149,10 +149,12 @@ struct RenderCacheData {
     std::vector<float> screenOcclusion;
     std::vector<uint8_t> refined, glassSamples;
     std::vector<Vec3f> volumeBehind; ///< the volume pass: per cell, the light behind its volumes
-    /// The volume pass: per cell of the coarse lattice (even x and y), the light its representative's
-    /// ray gathered and its transmittance, from which the cells between are interpolated.
+    /// The volume pass: per cell, the light its representative's ray gathered (or the lattice's
+    /// interpolation gave), its transmittance and the depth where its opacity reached one half (+inf:
+    /// never), from which the cells of the next lattice level are interpolated.
     std::vector<Vec3f> volumeColor;
     std::vector<double> volumeTransmittance;
+    std::vector<float> volumeFirstHit;
     FragmentLists volumeLists; ///< the volume pass: its fragment lists, rebuilt every frame
     struct ScreenOcclusion {   ///< the screen-space occlusion's opaque materials, and its scratch
         std::vector<uint8_t> opaque;

@@ -62,9 +62,10 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
             "volumes: skip the bricks the transfer function leaves transparent (same image)"),
         numberOption<O, &O::volumeRefinement>(
             "volumeRefinement",
-            "volume ray casting: cast every other pixel along x and y, and the pixels between them only "
-            "where a volume's, mesh's or depth edge lies between or the volumes' light of their neighbours "
-            "differs by more than this (shown luma, 0..1); interpolate elsewhere (0: cast every pixel)",
+            "volume ray casting: cast every fourth pixel along x and y, then every second and then the "
+            "rest only where a volume's, mesh's or depth edge or the silhouette of a volume's matter lies "
+            "between them and the pixels 2 (then 1) apart, or those pixels' volume light departs from a "
+            "straight line by more than this (shown luma, 0..1); interpolate elsewhere (0: cast every pixel)",
             0, 1),
         numberOption<O, &O::glassRefinement>(
             "glassRefinement",

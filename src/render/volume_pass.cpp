@@ -161,6 +161,9 @@ struct PixelRay {
     Vec3f color{0, 0, 0};
     double transmittance = 1;
     int64_t samples = 0;
+    /// The frame depth where the transmittance first fell to one half (+inf: not yet): where the
+    /// ray's matter shows, compared between the cells of refinement's lattice.
+    double firstHit = std::numeric_limits<double>::infinity();
     std::vector<ObjectInterval>* objects = nullptr; ///< per object of the scene
     std::vector<LightSample>* lights = nullptr;     ///< per light of the scene, at the current sample
 };
@@ -318,6 +321,11 @@ struct VolumeComposite {
     const std::vector<uint8_t>& boxShape;
     const TriangleTracer* leafTracer;
     static constexpr double kPieceDepth = 0.5; ///< optical depth of the pieces of a dense interval
+    /// Early ray termination inside volumes: a walk whose transmittance falls below this stops, and
+    /// the light it would still have let through is that of the piece it stops at (the matter
+    /// behind, in the layer's own shadow, lit like its front: dropping it would show what lies
+    /// behind by up to this fraction).
+    static constexpr double kOpaque = 1e-2;
     /// Phong shading of volume samples (RenderOptions::volumeShading) with lights to shade by.
     bool shaded;
     const std::vector<double>& fullGradient;
@@ -349,6 +357,7 @@ struct VolumeComposite {
         const double a = m.opacity;
         r.color += shadePoint(frame, s, m, r.eye) * float(a * r.transmittance);
         r.transmittance *= 1.0 - a;
+        if (r.transmittance <= 0.5 && std::isinf(r.firstHit)) r.firstHit = z;
         return r.transmittance >= 1e-3;
     }
 
@@ -571,10 +580,11 @@ struct VolumeComposite {
             const int64_t pieces = std::clamp<int64_t>(int64_t(std::ceil(sigmaSum * dl / kPieceDepth)), 1, 8);
             const double pl = dl / double(pieces), x = sigmaSum * pl;
             const double lightDepth = x < 1e-6 ? 0.5 * pl : (1 - x / std::expm1(x)) / sigmaSum;
-            for (int64_t k = 0; k < pieces && r.transmittance >= 1e-3; ++k) {
+            for (int64_t k = 0; k < pieces && r.transmittance >= kOpaque; ++k) {
                 const Vec3d p = p0 + (p1 - p0) * ((double(k) * pl + lightDepth) / dl);
                 Vec3f unshaded;
                 const Vec3f ambient = lightAt(p, inside, *r.lights, unshaded);
+                Vec3f lit{0, 0, 0}; // the last object's light per unit opacity
                 for (std::size_t o = 0; o < inside.size(); ++o) {
                     const ObjectInterval& w = (*r.objects)[o];
                     if (!(w.sigma > 0)) continue;
@@ -583,14 +593,21 @@ struct VolumeComposite {
                     if (shaded) {
                         Vec3f diffuse, specular;
                         phong(p, o, r.eye, *r.lights, ambient, unshaded, diffuse, specular);
-                        r.color += (w.color * diffuse + specular) * weight;
+                        lit = w.color * diffuse + specular;
                     } else {
-                        r.color += w.color * unshaded * weight;
+                        lit = w.color * unshaded;
                     }
+                    r.color += lit * weight;
                     r.transmittance *= 1.0 - alpha;
                 }
+                if (r.transmittance <= 0.5 && std::isinf(r.firstHit))
+                    r.firstHit = z0 + (l0 + double(k) * pl + lightDepth) * depthPerLength;
+                if (r.transmittance < kOpaque) { // terminated: the rest lit like this piece
+                    r.color += lit * float(r.transmittance * frame.options.exposure);
+                    r.transmittance = 0;
+                }
             }
-            if (r.transmittance < 1e-3) return false;
+            if (r.transmittance < kOpaque) return false;
             l0 = l1;
         }
         return true;
@@ -655,6 +672,7 @@ struct SampleCaster {
     struct Gathered {
         Vec3f color{0, 0, 0};
         double transmittance = 1;
+        double firstHit = std::numeric_limits<double>::infinity(); ///< PixelRay::firstHit
         // Composited over `behind`.
         Vec3f over(const Vec3f& behind) const {
             return transmittance < 1.0 ? color + behind * float(transmittance) : behind;
@@ -678,7 +696,7 @@ struct SampleCaster {
                 return pass.segment(r, z0, z1, inside);
             });
         w.samples += r.samples;
-        return {r.color, r.transmittance};
+        return {r.color, r.transmittance, r.firstHit};
     }
     // Sample (x, y) composited over `behind` into `out`.
     void cast(Walker& w, int64_t x, int64_t y, const Vec3f& behind, Vec3f& out) const {
@@ -781,44 +799,92 @@ lightGrids(FrameState& frame, const VolumeSetup& setup, uint64_t setupKey,
     return out;
 }
 
-// Adaptive image-space refinement (RenderOptions::volumeRefinement; after Levoy 1990): the cells of
-// the coarse lattice (even cx and cy) are cast first; a cell between them takes its volumes' light
-// and transmittance from the lattice cells around it (the two along x, along y, or the four at its
-// corners) where nothing the interpolation would smooth over lies between: its representative's ray
-// crosses the same faces of the volume scene as theirs (ColumnCrossings: the edge of a volume's box,
-// a Boolean's shape or a blended mesh), the G-buffer's depths are within 2 % of its own (a mesh in
-// front of or inside a volume: G-buffer refinement's bound), and their light composited over the
-// cell's own background differs in shown luma by at most the threshold. Next to a cell the G-buffer
-// refined (an edge of the meshes) it is cast.
+// Adaptive image-space refinement (RenderOptions::volumeRefinement; after Levoy 1990) on a lattice of
+// kLevels levels: the cells whose cx and cy are multiples of kCoarse (4) are cast first; then, level by
+// level, the cells whose coordinates are multiples of h (2, then 1) and not of 2h take their volumes'
+// light, transmittance and first-hit depth from the cells h away that the levels before gave (the two
+// along x, along y, or the four at its corners), or are cast, and keep what they got for the next
+// level. A cell is interpolated only where nothing the interpolation would smooth over lies between:
+// its representative's ray crosses the same faces of the volume scene as its neighbours' (ColumnCrossings:
+// the edge of a volume's box, a Boolean's shape or a blended mesh), the G-buffer's depths are within
+// 2 % of its own (a mesh in front of or inside a volume: G-buffer refinement's bound), the neighbours'
+// rays all reach opacity one half within 2 % of the same depth or none does (a silhouette of the
+// volume's matter against what lies behind, an edge of matter in front of matter further away), and
+// their light composited over the cell's own background departs from a straight line by at most the
+// threshold in shown luma: half the largest second difference of the lattice's lumas along the
+// interpolation's axes (the neighbours and the cells 3h away beyond them), which a step between the
+// neighbours of J raises to J / 2 and a smooth ramp, however steep, leaves near 0; where no second
+// difference can be taken (the image's side, edge cells) the neighbours' own range. Next to a cell
+// the G-buffer refined (an edge of the meshes) it is cast. Each level reads only what the levels
+// before wrote: the same image whatever the thread count.
 struct LatticeInterpolation {
     const FrameState& frame;
     const SampleCaster& caster;
     const ColumnCrossings& crossings;
-    /// Per lattice cell (latticeIndex): its representative's gathered light and transmittance.
-    const std::vector<Vec3f>& color;
-    const std::vector<double>& transmittance;
+    /// Per cell (cy * cw + cx): its representative's gathered light, transmittance and first-hit depth,
+    /// written by the cell's own level.
+    std::vector<Vec3f>& color;
+    std::vector<double>& transmittance;
+    std::vector<float>& firstHit;
     float threshold;
 
-    static bool onLattice(int64_t cx, int64_t cy) { return cx % 2 == 0 && cy % 2 == 0; }
-    /// Lattice cells along a row of `cw` cells; lattice cell (cx, cy)'s index.
-    static int64_t latticeWidth(int64_t cw) { return (cw + 1) / 2; }
-    static std::size_t latticeIndex(int64_t cx, int64_t cy, int64_t cw) {
-        return std::size_t((cy / 2) * latticeWidth(cw) + cx / 2);
+    static constexpr int kLevels = 2;                ///< levels interpolated: spacings 2 and 1
+    static constexpr int64_t kCoarse = 1 << kLevels; ///< the spacing of the cells cast first
+
+    /// 0 for a cell of the coarsest lattice (cast), else the spacing h its level interpolates at.
+    static int64_t spacing(int64_t cx, int64_t cy) {
+        if (cx % kCoarse == 0 && cy % kCoarse == 0) return 0;
+        int64_t h = kCoarse / 2;
+        while (cx % h != 0 || cy % h != 0) h /= 2;
+        return h;
     }
 
-    // Whether cell (cx, cy), off the lattice, is interpolated over `behind` (its own background);
-    // `out` is then what its volumes give.
-    bool interpolate(int64_t cx, int64_t cy, const Vec3f& behind, SampleCaster::Gathered& out) const {
-        const int a = frame.adaptive;
-        const int64_t cw = frame.width / a, ch = frame.height / a;
+    int64_t cellsWide() const { return frame.width / frame.adaptive; }
+    int64_t cellsHigh() const { return frame.height / frame.adaptive; }
+    // Whether cell (x, y) holds a value a level can read (inside the image, not an edge cell, which
+    // the first round cast at every sample instead).
+    bool usable(int64_t x, int64_t y) const {
+        if (x < 0 || y < 0 || x >= cellsWide() || y >= cellsHigh()) return false;
+        return !(frame.adaptive > 1 && frame.refined[std::size_t(y * cellsWide() + x)] != 0);
+    }
+    void store(int64_t cx, int64_t cy, const SampleCaster::Gathered& g) {
+        const std::size_t c = std::size_t(cy * cellsWide() + cx);
+        color[c] = g.color, transmittance[c] = g.transmittance, firstHit[c] = float(g.firstHit);
+    }
+    // Whether the volume scene gave nothing (transmittance exactly 1, no light) in cell (cx, cy) and
+    // the eight around it inside the image, cast or interpolated: an edge of the volume scene there
+    // (a volume's box in air, where its bricks are empty) changes no sample, so adaptive
+    // anti-aliasing's volume round gives its samples the light behind without walking their rays.
+    // A G-buffer edge cell (stored as transmittance -1) counts as something.
+    bool nothingAround(int64_t cx, int64_t cy) const {
+        for (int64_t y = std::max<int64_t>(0, cy - 1); y <= std::min(cellsHigh() - 1, cy + 1); ++y)
+            for (int64_t x = std::max<int64_t>(0, cx - 1); x <= std::min(cellsWide() - 1, cx + 1); ++x) {
+                const std::size_t c = std::size_t(y * cellsWide() + x);
+                if (transmittance[c] != 1.0 || color[c].x != 0 || color[c].y != 0 || color[c].z != 0)
+                    return false;
+            }
+        return true;
+    }
+    SampleCaster::Gathered at(int64_t x, int64_t y) const {
+        const std::size_t c = std::size_t(y * cellsWide() + x);
+        return {color[c], transmittance[c], double(firstHit[c])};
+    }
+
+    // Whether cell (cx, cy), of spacing h, is interpolated over `behind` (its own background); `out` is
+    // then what its volumes give.
+    bool interpolate(int64_t cx, int64_t cy, int64_t h, const Vec3f& behind,
+                     SampleCaster::Gathered& out) const {
         int64_t nx[4], ny[4];
         int n = 0;
-        if (cy % 2 == 0) { // between two lattice cells along x
-            nx[0] = cx - 1, nx[1] = cx + 1, ny[0] = ny[1] = cy, n = 2;
-        } else if (cx % 2 == 0) { // along y
-            nx[0] = nx[1] = cx, ny[0] = cy - 1, ny[1] = cy + 1, n = 2;
+        // The axes along which second differences are taken: (dx, dy) steps of h, and per axis the
+        // lines (offsets across it) through the neighbours.
+        const bool alongX = (cy / h) % 2 == 0, alongY = !alongX && (cx / h) % 2 == 0;
+        if (alongX) {
+            nx[0] = cx - h, nx[1] = cx + h, ny[0] = ny[1] = cy, n = 2;
+        } else if (alongY) {
+            nx[0] = nx[1] = cx, ny[0] = cy - h, ny[1] = cy + h, n = 2;
         } else { // the four corners
-            nx[0] = nx[2] = cx - 1, nx[1] = nx[3] = cx + 1, ny[0] = ny[1] = cy - 1, ny[2] = ny[3] = cy + 1,
+            nx[0] = nx[2] = cx - h, nx[1] = nx[3] = cx + h, ny[0] = ny[1] = cy - h, ny[2] = ny[3] = cy + h,
             n = 4;
         }
         const std::size_t own = representativeSample(frame, cx, cy);
@@ -827,13 +893,15 @@ struct LatticeInterpolation {
             caster.lists.column(int64_t(own % std::size_t(W)), int64_t(own / std::size_t(W)));
         const double ownDepth = caster.zMax(own), near = frame.gbuffer.frame.nearDepth();
         const ToneMap tm = frame.options.toneMap;
+        const auto luma = [&](int64_t x, int64_t y) { return shownLuma(at(x, y).over(behind), tm); };
         float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+        float nl[4]; // the neighbours' lumas
+        double hitLo = std::numeric_limits<double>::infinity(), hitHi = -hitLo;
+        int hits = 0;
         Vec3f sumColor{0, 0, 0};
-        double sumTransmittance = 0;
+        double sumTransmittance = 0, sumHit = 0;
         for (int k = 0; k < n; ++k) {
-            if (nx[k] < 0 || ny[k] < 0 || nx[k] >= cw || ny[k] >= ch) return false;
-            // A G-buffer edge (several meshes, faces or depths in the cell): cast.
-            if (a > 1 && frame.refined[std::size_t(ny[k] * cw + nx[k])] != 0) return false;
+            if (!usable(nx[k], ny[k])) return false; // outside, or a G-buffer edge: cast
             const std::size_t rep = representativeSample(frame, nx[k], ny[k]);
             const double depth = caster.zMax(rep);
             if (std::isinf(depth) != std::isinf(ownDepth)) return false;
@@ -842,16 +910,43 @@ struct LatticeInterpolation {
             const auto column =
                 caster.lists.column(int64_t(rep % std::size_t(W)), int64_t(rep / std::size_t(W)));
             if (!crossings.same(ownColumn, ownDepth, column, depth, near)) return false;
-            const std::size_t c = latticeIndex(nx[k], ny[k], cw);
-            const SampleCaster::Gathered g{color[c], transmittance[c]};
-            const float l = shownLuma(g.over(behind), tm);
+            const SampleCaster::Gathered g = at(nx[k], ny[k]);
+            if (!std::isinf(g.firstHit)) {
+                ++hits, sumHit += g.firstHit;
+                hitLo = std::min(hitLo, g.firstHit), hitHi = std::max(hitHi, g.firstHit);
+            }
+            const float l = nl[k] = shownLuma(g.over(behind), tm);
             lo = std::min(lo, l), hi = std::max(hi, l);
-            if (hi - lo > threshold) return false;
             sumColor += g.color;
             sumTransmittance += g.transmittance;
         }
+        // The matter's silhouette or a jump in its depth: cast.
+        if (hits != 0 && (hits != n || hitHi - hitLo > 0.02 * hitLo)) return false;
+        // Departure from the line (plane) through the neighbours: second differences of the lattice's
+        // lumas at spacing 2h along each axis of the interpolation, through each neighbour line.
+        int differences = 0;
+        // Along the line (x0, y0) + t (dx, dy), t = -3, -1, 1, 3 (in steps of h), whose cells at -1
+        // and 1 are neighbours of lumas l1 and l2: whether either second difference (centred on -1 and
+        // on 1) departs by more than the threshold.
+        const auto departs = [&](int64_t x0, int64_t y0, int64_t dx, int64_t dy, float l1, float l2) {
+            for (const int64_t t : {-3, 3}) {
+                const int64_t x = x0 + t * dx, y = y0 + t * dy;
+                if (!usable(x, y)) continue;
+                ++differences;
+                const float l = luma(x, y);
+                if (0.5f * std::abs(t < 0 ? l - 2 * l1 + l2 : l1 - 2 * l2 + l) > threshold) return true;
+            }
+            return false;
+        };
+        if (alongX   ? departs(cx, cy, h, 0, nl[0], nl[1])
+            : alongY ? departs(cx, cy, 0, h, nl[0], nl[1])
+                     : departs(cx, cy - h, h, 0, nl[0], nl[1]) || departs(cx, cy + h, h, 0, nl[2], nl[3]) ||
+                           departs(cx - h, cy, 0, h, nl[0], nl[2]) || departs(cx + h, cy, 0, h, nl[1], nl[3]))
+            return false;
+        if (differences == 0 && hi - lo > threshold) return false; // no second difference: the range
         out.color = sumColor * (1.0f / float(n));
         out.transmittance = sumTransmittance / double(n);
+        out.firstHit = hits == 0 ? std::numeric_limits<double>::infinity() : sumHit / double(hits);
         return true;
     }
 };
@@ -860,13 +955,14 @@ struct LatticeInterpolation {
 
 // Every sample the passes shaded (antialias.hpp's shadedSample) cast and composited; with adaptive
 // image-space refinement (RenderOptions::volumeRefinement > 0) the representatives of cells shaded
-// once and off the coarse lattice only after the lattice's, each cast or interpolated from them
-// (LatticeInterpolation). Then, with adaptive anti-aliasing, the cells shaded once where the volume
-// scene draws an edge (volumeEdge) get every sample: each over the light the passes before gave the
-// cell (one mesh and material shows in all its samples, or the G-buffer would have refined it), as
-// the shading pass shares a cell's shading among its samples. Each round reads only what the rounds
-// before wrote (the lattice's light; representatives, which the last round does not change): the
-// order of the cells does not matter.
+// once and off the coarsest lattice only after it, level by level, each cast or interpolated from the
+// levels before (LatticeInterpolation). Then, with adaptive anti-aliasing, the cells shaded once where the
+// volume scene draws an edge (volumeEdge) get every sample (with refinement, where the volumes gave nothing
+// in the cell and the eight around it, LatticeInterpolation::nothingAround, the light behind without a walk):
+// each over the light the passes before gave the cell (one mesh and material shows in all its samples, or the
+// G-buffer would have refined it), as the shading pass shares a cell's shading among its samples. Each round
+// reads only what the rounds before wrote (the lattice's light; representatives, which the last round does
+// not change): the order of the cells does not matter.
 void compositeVolumes(FrameState& frame) {
     uint64_t setupKey = 0;
     std::shared_ptr<const VolumeSetup> setup = volumeSetup(frame, setupKey);
@@ -884,14 +980,21 @@ void compositeVolumes(FrameState& frame) {
     // The light behind each cell shaded once, before its representative is composited (round 3).
     std::vector<Vec3f>& behind = frame.cache.volumeBehind;
     if (a > 1) behind.resize(std::size_t(cw * ch));
-    // The lattice cells' gathered light and transmittance (rounds 1 and 2).
-    std::vector<Vec3f>& latticeColor = frame.cache.volumeColor;
-    std::vector<double>& latticeTransmittance = frame.cache.volumeTransmittance;
+    // Per cell, what its volumes gave (the lattice's levels).
     if (refine) {
-        const std::size_t cells = std::size_t(LatticeInterpolation::latticeWidth(cw) * ((ch + 1) / 2));
-        latticeColor.resize(cells);
-        latticeTransmittance.resize(cells);
+        const std::size_t cells = std::size_t(cw * ch);
+        frame.cache.volumeColor.resize(cells);
+        frame.cache.volumeTransmittance.resize(cells);
+        frame.cache.volumeFirstHit.resize(cells);
     }
+    const ColumnCrossings crossings{pass.surfaces.flat.triangleLeaf, setup->faceNormals};
+    LatticeInterpolation lattice{frame,
+                                 caster,
+                                 crossings,
+                                 frame.cache.volumeColor,
+                                 frame.cache.volumeTransmittance,
+                                 frame.cache.volumeFirstHit,
+                                 float(frame.options.volumeRefinement)};
     const auto edgeCell = [&](int64_t cx, int64_t cy) {
         return a > 1 && frame.refined[std::size_t(cy * cw + cx)] != 0;
     };
@@ -904,18 +1007,17 @@ void compositeVolumes(FrameState& frame) {
                 const bool edge = edgeCell(cx, cy);
                 const std::size_t rep = representativeSample(frame, cx, cy);
                 if (a > 1 && !edge) behind[c] = frame.shaded[rep];
-                const bool lattice = LatticeInterpolation::onLattice(cx, cy);
-                if (refine && !edge && !lattice) continue; // round 2
+                if (refine && edge) lattice.store(cx, cy, {{0, 0, 0}, -1}); // nothing known: cast
+                const bool coarsest = LatticeInterpolation::spacing(cx, cy) == 0;
+                if (refine && !edge && !coarsest) continue; // a later level
                 for (int64_t y = cy * a; y < (cy + 1) * a; ++y)
                     for (int64_t x = cx * a; x < (cx + 1) * a; ++x) {
                         if (!shadedSample(frame, x, y)) continue;
                         const std::size_t i = std::size_t(y * W + x);
                         Vec3f& out = frame.shaded[i];
-                        if (refine && lattice && !edge && i == rep) {
+                        if (refine && !edge && i == rep) {
                             const SampleCaster::Gathered g = caster.gather(w, x, y);
-                            const std::size_t l = LatticeInterpolation::latticeIndex(cx, cy, cw);
-                            latticeColor[l] = g.color;
-                            latticeTransmittance[l] = g.transmittance;
+                            lattice.store(cx, cy, g);
                             out = g.over(out);
                         } else {
                             caster.cast(w, x, y, out, out);
@@ -924,36 +1026,33 @@ void compositeVolumes(FrameState& frame) {
             }
         samples += w.samples;
     });
-    const ColumnCrossings crossings{pass.surfaces.flat.triangleLeaf, setup->faceNormals};
-    if (refine) {
-        const LatticeInterpolation lattice{frame,
-                                           caster,
-                                           crossings,
-                                           latticeColor,
-                                           latticeTransmittance,
-                                           float(frame.options.volumeRefinement)};
+    // The levels, coarse to fine: each cell of spacing h interpolated from, or cast beside, the
+    // cells the levels before gave.
+    for (int64_t h = LatticeInterpolation::kCoarse / 2; refine && h >= 1; h /= 2)
         parallelFor(0, ch, 2, [&](int64_t y0, int64_t y1) {
             SampleCaster::Walker w = caster.walker();
             int64_t n = 0;
             for (int64_t cy = y0; cy < y1; ++cy)
                 for (int64_t cx = 0; cx < cw; ++cx) {
-                    if (edgeCell(cx, cy) || LatticeInterpolation::onLattice(cx, cy)) continue;
+                    if (edgeCell(cx, cy) || LatticeInterpolation::spacing(cx, cy) != h) continue;
                     const std::size_t rep = representativeSample(frame, cx, cy);
                     const int64_t x = int64_t(rep % std::size_t(W)), y = int64_t(rep / std::size_t(W));
-                    if (lists.column(x, y).empty()) continue; // nothing to composite
+                    if (lists.column(x, y).empty()) { // nothing to composite
+                        lattice.store(cx, cy, {});
+                        continue;
+                    }
                     Vec3f& out = frame.shaded[rep];
                     SampleCaster::Gathered g;
-                    if (lattice.interpolate(cx, cy, out, g)) {
-                        out = g.over(out);
+                    if (lattice.interpolate(cx, cy, h, out, g))
                         ++n;
-                    } else {
-                        caster.cast(w, x, y, out, out);
-                    }
+                    else
+                        g = caster.gather(w, x, y);
+                    lattice.store(cx, cy, g);
+                    out = g.over(out);
                 }
             samples += w.samples;
             interpolated += n;
         });
-    }
     if (a > 1) {
         parallelFor(0, ch, 2, [&](int64_t y0, int64_t y1) {
             SampleCaster::Walker w = caster.walker();
@@ -963,11 +1062,19 @@ void compositeVolumes(FrameState& frame) {
                     if (kind != 0 || !volumeEdge(frame, caster, crossings, cx, cy)) continue;
                     kind = kEveryRefinedSample;
                     const std::size_t rep = representativeSample(frame, cx, cy);
+                    // Nothing of the volumes in or around the cell: its samples keep the light behind
+                    // (what a cast that gathers nothing gives), without the walk.
+                    const bool nothing = refine && lattice.nothingAround(cx, cy);
+                    const Vec3f& under = behind[std::size_t(cy * cw + cx)];
                     for (int64_t y = cy * a; y < (cy + 1) * a; ++y)
                         for (int64_t x = cx * a; x < (cx + 1) * a; ++x)
-                            if (std::size_t(y * W + x) != rep)
-                                caster.cast(w, x, y, behind[std::size_t(cy * cw + cx)],
-                                            frame.shaded[std::size_t(y * W + x)]);
+                            if (std::size_t(y * W + x) != rep) {
+                                Vec3f& out = frame.shaded[std::size_t(y * W + x)];
+                                if (nothing)
+                                    out = under;
+                                else
+                                    caster.cast(w, x, y, under, out);
+                            }
                 }
             samples += w.samples;
         });

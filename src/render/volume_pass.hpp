@@ -30,15 +30,20 @@ namespace voxfx::detail {
 /// Beer–Lambert, a dense layer does not shadow its own front); the map's lookup itself is read,
 /// trilinearly, from a grid of the same lookups at the volume's voxel corners built once per (volume,
 /// light) and kept in frame.cache (render/volume_light_grid.hpp; the first frame builds it). The walk
-/// stops when the accumulated opacity reaches 0.999, and the result is blended over frame.shaded
+/// stops when the accumulated opacity reaches 0.99 inside a volume (the light it would still have
+/// let through taken as that of the piece it stops at) or 0.999 at a surface, and the result is
+/// blended over frame.shaded
 /// (row-major, y up). The meshes of blended materials (Material::blend), which the G-buffer leaves
 /// out, are walked here too, as translucent objects shaded with their own material. With adaptive
 /// anti-aliasing (frame.adaptive > 1) the samples the passes before shaded are cast, then the cells
 /// shaded once whose samples' rays cross different faces of the volume scene, or whose composited
-/// light differs from a neighbour's, are shaded at every sample (frame.refined). With
-/// options.volumeRefinement > 0 the cells shaded once are cast on a coarse lattice (even cx and cy)
-/// first and the cells between interpolated from it where no edge lies between (adaptive image-space
-/// refinement, RenderOptions::volumeRefinement; the count in frame.result). Records the
+/// light differs from a neighbour's, are shaded at every sample (frame.refined; with refinement, where
+/// the volumes gave nothing in the cell and the eight around it, a box's edge in air, each sample
+/// takes the light behind without a walk). With
+/// options.volumeRefinement > 0 the cells shaded once are cast on a coarse lattice (cx and cy
+/// multiples of 4) first and the cells between, level by level (spacing 2, then 1), interpolated
+/// from the levels before where no edge lies between, else cast (adaptive image-space refinement,
+/// RenderOptions::volumeRefinement; the count in frame.result). Records the
 /// number of volume samples taken in frame.result. Nothing happens when the scene has neither volume
 /// scene objects nor blended meshes.
 void compositeVolumes(FrameState& frame);
