@@ -260,69 +260,10 @@ Vec3f TransmittanceShadowMap::transmittanceBilinear(const Vec3d& world, int64_t 
                                                     const Vec3d& normal, double sharpness) const {
     Vec3d grid;
     if (channels_.empty() || !view_.locate(world, grid)) return {1, 1, 1};
-    // bilinearColumnsAt over the index for an oriented orthographic view (the sun's) with uniform slices
-    // and no sharpening, in one pass: the four columns' occupancy first (none: light, with no plane), the
-    // receiver plane's steps per column from the view's constant cell steps (right, up and forward times
-    // the cell size: worldFromGrid's differences, which the general ReceiverPlane takes at the point
-    // with their rounding there), its slope divided once. The same blend of the same columns, at depths
-    // that may differ from the general path's in the last bits (a column's count only where a depth
-    // lies within about 1e-13 of a slice boundary).
-    const auto orientedIndexedBilinear = [&](const Vec3d& p, const Vec3d& n) {
-        const Frame& f = view_.frame;
-        const int64_t W = f.width(), H = f.height();
-        const double fx = p.x - 0.5, fy = p.y - 0.5;
-        const int64_t x0 = int64_t(std::floor(fx)), y0 = int64_t(std::floor(fy));
-        const double wx = fx - double(x0), wy = fy - double(y0);
-        const int64_t xs[2] = {std::clamp<int64_t>(x0, 0, W - 1), std::clamp<int64_t>(x0 + 1, 0, W - 1)};
-        const int64_t ys[2] = {std::clamp<int64_t>(y0, 0, H - 1), std::clamp<int64_t>(y0 + 1, 0, H - 1)};
-        int64_t column[4];
-        unsigned occupied = 0;
-        for (int k = 0; k < 4; ++k) {
-            column[k] = ys[k >> 1] * W + xs[k & 1];
-            occupied |= unsigned((eventColumns_[size_t(column[k] >> 6)] >> (column[k] & 63)) & 1u) << k;
-        }
-        Vec3f v[4] = {{1, 1, 1}, {1, 1, 1}, {1, 1, 1}, {1, 1, 1}};
-        if (occupied) {
-            const Vec3d cell = f.cellSize();
-            const Vec3d ax = f.right() * cell.x, ay = f.up() * cell.y, along = f.forward() * cell.z;
-            const double slope = dot(n, along);
-            const bool plane = (n.x != 0 || n.y != 0 || n.z != 0) && std::abs(slope) > 0;
-            const double kx = plane ? -dot(n, ax) / slope : 0, ky = plane ? -dot(n, ay) / slope : 0;
-            const double reach2 = 4 * dot(ax, ax) * (1 - 1e-9), alongSquared = dot(along, along);
-            const Frame& slices = channels_[0].grid.frame; // as slicesInFront reads it
-            const DepthToSlice toSlice = slices.depthToSlice(0);
-            const int64_t D = slices.depth();
-            for (int k = 0; k < 4; ++k) {
-                if (!((occupied >> k) & 1u)) continue;
-                double depth = p.z;
-                if (plane) {
-                    const double step =
-                        kx * (double(xs[k & 1]) + 0.5 - p.x) + ky * (double(ys[k >> 1]) + 0.5 - p.y);
-                    if (step * step * alongSquared < reach2) {
-                        depth = p.z + step;
-                    } else {
-                        const double reach = 2 * std::sqrt(dot(ax, ax)) / std::sqrt(alongSquared);
-                        depth = p.z + std::clamp(step, -reach, reach);
-                    }
-                }
-                // detail::slicesInFront with the uniform slicing.
-                const double t = toSlice(depth);
-                int64_t end = 0;
-                if (t >= 0)
-                    end = std::clamp<int64_t>((t >= double(D) ? D : int64_t(t)) - skipCells + 1, 0, D);
-                v[k] = indexedTransmittance(column[k], end);
-            }
-        }
-        Vec3f out{};
-        for (int k = 0; k < 4; ++k) {
-            const float w = float(((k & 1) ? wx : 1 - wx) * ((k >> 1) ? wy : 1 - wy));
-            out += v[k] * w;
-        }
-        return out;
-    };
-    if (!eventOffsets_.empty() && sharpness == 1 && view_.frame.isOriented() &&
-        channels_[0].grid.frame.slicing() == Slicing::Uniform)
-        return orientedIndexedBilinear(grid, normal);
+    if (!eventOffsets_.empty() && detail::orientedBilinearApplies(view_, channels_[0].grid.frame, sharpness))
+        return detail::orientedBilinearColumns(
+            view_, channels_[0].grid.frame, grid, normal, skipCells, eventColumns_.data(),
+            [&](int64_t column, int64_t end) { return indexedTransmittance(column, end); });
     if (!eventOffsets_.empty())
         return detail::bilinearColumnsAt<Vec3f, float>(
             view_, grid, normal,
