@@ -491,23 +491,25 @@ BitCompare compareBits(const std::vector<float>& a, const std::vector<float>& b)
 std::pair<int64_t, int64_t> skippedPixels(const detail::ScreenSpaceOcclusionScratch& scratch, int64_t w,
                                           int64_t h) {
     int64_t skipped = 0, covered = 0;
+    const int64_t tw = (w + 7) / 8;
     for (int64_t y = 0; y < h; ++y)
         for (int64_t x = 0; x < w; ++x) {
             const auto i = std::size_t(y * w + x);
             if (!(scratch.samples[i].flags & 1)) continue;
             ++covered;
-            skipped += scratch.skip[i];
+            const auto& t = scratch.tiles[std::size_t((y / 8) * tw + x / 8)];
+            skipped += t.skipAll || (t.skipMesh >= 0 && scratch.meshes[i] == t.skipMesh);
         }
     return {skipped, covered};
 }
 
 TEST(ScreenSpaceOcclusionTest, SkippingSearchesThatCouldFindNothingGivesTheSameBits) {
-    // Where no occluder within reach on screen lies within the radius, or every one within twice
-    // the radius lies below the tangent plane (its own flat mesh's excepted), a working pixel's
-    // horizon search cannot raise a horizon, so skipping it (visibility 1) must give the search's
-    // output bit for bit; and it must skip something, most of the ground and the open surfaces. The tree, the
-    // bunny, a 25-tree forest and the corner (the floor beyond twice the radius from the wall skips; nearer
-    // it must search), G-buffer entry at 1 and 2 samples per cell.
+    // Where no occluder within reach on screen lies within twice the radius in view depth (its own
+    // flat mesh's excepted), a working pixel's horizon search cannot raise a horizon, so skipping it
+    // (visibility 1) must give the search's output bit for bit; and it must skip something, most of
+    // the ground and the open surfaces. The tree, the bunny, a 25-tree forest and the corner (the
+    // floor beyond twice the radius from the wall skips; nearer it must search), G-buffer entry at 1
+    // and 2 samples per cell.
     const Scene tree = demo::makeTreeScene();
     demo::ForestOptions fo;
     fo.trees = 25;

@@ -9,10 +9,9 @@
 //   2. per working pixel, `directions` slices, each with two horizons found by `steps` samples per
 //      side, integrated in closed form; the sides walked in AVX2 lanes (two pixels' four sides at
 //      once) on an 8-byte view-space copy of the working buffer, bit for bit the scalar walk
-//      (ScreenSpaceOcclusionOptions::vectorWalk); skipped where no occluder within reach on screen
-//      lies within the radius, or every one within twice the radius lies below the tangent plane,
-//      coplanar points of a flat mesh excepted (skipTiles, per 8x8 tile and per pixel; the G-buffer
-//      entries with flatMeshes): the search's output exactly;
+//      (ScreenSpaceOcclusionOptions::vectorWalk); skipped where no occluder lies within reach on
+//      screen and within twice the radius in view depth, coplanar points of a flat mesh excepted
+//      (skipTiles, per 8x8 tile; the G-buffer entries with flatMeshes): the search's output exactly;
 //   3. links between neighbouring working pixels on one smooth surface, and a separable blur over
 //      5 x 5 linked pixels, weights 1 2 2 2 1 (every phase of the 4x4 pattern gets the same weight,
 //      so the pattern cancels on a smooth surface);
@@ -69,10 +68,17 @@ struct Packed {
     const Sample* sample = nullptr;
     const Vec3f* normals = nullptr;
     const ScreenSpaceWalkSample* walk = nullptr; ///< the horizon search's copy (walkSamples)
-    /// Where the search may be skipped (skipTiles; null: nowhere): per working pixel, 1 where it does.
-    const uint8_t* skip = nullptr;
-    // Whether working pixel i, covered, skips the search (its visibility is then exactly 1).
-    bool skips(int64_t, int64_t, int64_t i) const { return skip && skip[i]; }
+    /// Where the search may be skipped (skipTiles; null: nowhere): per working pixel its mesh, per
+    /// 8x8 tile (tileColumns per row) its verdict.
+    const int32_t* mesh = nullptr;
+    const ScreenSpaceOcclusionScratch::Tile* tiles = nullptr;
+    int64_t tileColumns = 0;
+    // Whether working pixel (x, y), covered, skips the search (its visibility is then exactly 1).
+    bool skips(int64_t x, int64_t y, int64_t i) const {
+        if (!tiles) return false;
+        const ScreenSpaceOcclusionScratch::Tile& t = tiles[(y >> 3) * tileColumns + (x >> 3)];
+        return t.skipAll || (t.skipMesh >= 0 && mesh[i] == t.skipMesh);
+    }
     bool covered(int64_t i) const { return sample[i].flags & kCovered; }
     bool occludes(int64_t i) const { return sample[i].flags == (kCovered | kOccluder); }
     const Vec3f& position(int64_t i) const { return sample[i].position; }
@@ -803,90 +809,29 @@ void walkSamples(Packed& b, const Params& p, std::vector<ScreenSpaceWalkSample>&
     b.walk = out.data();
 }
 
-// Where the horizon search may be skipped (ScreenSpaceOcclusionOptions::flatMeshes). A walk raises a
-// horizon only through a point X with d = X - P above the tangent plane of the pixel's point P
-// (d.N > 0, by the bias angle): an occluding sample within the radius of P, or the crossing of the
-// sphere on the segment between such a sample and the next one, which then lies within twice the
-// radius. So a working pixel's search can find nothing, and gives exactly 1 (the open slices' sums
-// are the visible ones, term for term), where within its reach on screen
-//   - no occluder lies within the radius of P (a crossing needs one there too), or
-//   - every occluder within twice the radius of P lies below its tangent plane (then so does any
-//     crossing between two of them),
-// and for a pixel of a flat mesh, whose own points rise above a tangent plane of it by rounding
-// only (far below the bias angle), the same with that mesh's own occluders left out but twice the
-// radius in the first test (a crossing from one of its points to another mesh's within 2 radii).
-// Checked per 8x8 tile of working buffer b (walk copy made, scratch.meshes filled): per tile its
-// occluders' view-space box and mesh; then per tile, over the tiles its pixels' search can reach (its
-// pixels' extent grown by the reach at its nearest pixel, plus one pixel for the truncation of the
-// sample positions), the occluder tiles whose box comes within one and two radii of the box of its
-// pixels' points, in one box each; then per pixel, the two tests against those boxes (the box's
-// distance from P; its highest corner over the tangent plane). Distances and heights are compared
-// with margins (1e-4 of the radius and 1e-5 of the coordinates' size) far above the walk's float
-// rounding. Windows wider than kMaxWindowTiles tiles are not checked.
+// Where the horizon search may be skipped (ScreenSpaceOcclusionOptions::flatMeshes), per 8x8 tile of
+// working buffer b (walk copy made, scratch.meshes filled): the tile's occluders' depth range and mesh;
+// then per tile, over the tiles its pixels' search can reach (its pixels' extent grown by the reach
+// at its nearest pixel, plus one pixel for the truncation of the sample positions), whether every
+// occluder there lies at least 2 radii from its pixels in view depth (skipAll), or from its pixels
+// of one flat mesh, that mesh's own occluders excepted (skipMesh). A walk raises a horizon only by an
+// occluder within the radius, or by the crossing of the sphere between one within the radius and
+// the next sample, which lies within twice the radius; points of a flat mesh rise above a tangent
+// plane of it by rounding only, far below the bias angle. So a skipped pixel's search would have
+// found nothing, and its visibility is 1 exactly as the search gives it (the open slices' sums are
+// the visible ones, term for term). Windows wider than kMaxWindowTiles tiles are not checked.
 constexpr int64_t kTile = 8, kMaxWindowTiles = 24;
-// Windows whose reach is wider than this (working pixels) take the depth test alone: it stops at the
-// first occluder tile within two radii, where the boxes' tests scan the whole window.
-constexpr int64_t kBoxReach = 64;
-
-// A box in the walk's view space (right, up, forward from the eye).
-struct ViewBox {
-    bool any = false;
-    float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-    void add(const float* a, const float* b) {
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = any ? std::min(lo[k], a[k]) : a[k];
-            hi[k] = any ? std::max(hi[k], b[k]) : b[k];
-        }
-        any = true;
-    }
-    void add(const ViewBox& o) {
-        if (o.any) add(o.lo, o.hi);
-    }
-    // The largest absolute coordinate.
-    double size() const {
-        double m = 0;
-        for (int k = 0; k < 3; ++k) m = std::max({m, std::fabs(double(lo[k])), std::fabs(double(hi[k]))});
-        return m;
-    }
-    // Whether every point of the box lies farther than `distance` from P, by the margins above.
-    bool beyond(const float* P, double distance) const {
-        if (!any) return true;
-        double d2 = 0, scale = 0;
-        for (int k = 0; k < 3; ++k) {
-            const double gap = std::max({double(lo[k]) - double(P[k]), double(P[k]) - double(hi[k]), 0.0});
-            d2 += gap * gap;
-            scale += std::fabs(double(P[k]));
-        }
-        const double limit = distance * (1 + 1e-4) + 1e-5 * (scale + 3 * size());
-        return d2 > limit * limit;
-    }
-    // Whether every point of the box lies below the plane through P with normal N, by the margin.
-    bool below(const float* P, const float* N) const {
-        if (!any) return true;
-        double highest = 0, scale = 0;
-        for (int k = 0; k < 3; ++k) {
-            const double n = double(N[k]);
-            highest += (n >= 0 ? double(hi[k]) : double(lo[k])) * n - double(P[k]) * n;
-            scale += std::fabs(double(P[k]));
-        }
-        return highest < -1e-5 * (scale + 3 * size());
-    }
-};
-
 void skipTiles(Packed& b, const Params& p, std::span<const uint8_t> flatMeshes,
                ScreenSpaceOcclusionScratch& scratch) {
     using Tile = ScreenSpaceOcclusionScratch::Tile;
     const int64_t W = b.width, H = b.height, tw = (W + kTile - 1) / kTile, th = (H + kTile - 1) / kTile;
     std::vector<Tile>& tiles = scratch.tiles;
     tiles.assign(std::size_t(tw * th), Tile{});
-    scratch.skip.assign(std::size_t(W * H), 0);
-    uint8_t* skip = scratch.skip.data();
     const int32_t* mesh = scratch.meshes.data();
     const auto isFlat = [&](int32_t m) {
         return m >= 0 && std::size_t(m) < flatMeshes.size() && flatMeshes[size_t(m)];
     };
-    // The tiles' occluders: their view-space box (the points as the walk computes them,
-    // HorizonWalk::viewPoint) and mesh.
+    // The tiles' occluders.
     parallelFor(0, th, 4, [&](int64_t t0, int64_t t1) {
         for (int64_t ty = t0; ty < t1; ++ty)
             for (int64_t tx = 0; tx < tw; ++tx) {
@@ -894,135 +839,71 @@ void skipTiles(Packed& b, const Params& p, std::span<const uint8_t> flatMeshes,
                 for (int64_t y = ty * kTile; y < std::min(H, (ty + 1) * kTile); ++y)
                     for (int64_t x = tx * kTile; x < std::min(W, (tx + 1) * kTile); ++x) {
                         const int64_t i = y * W + x;
-                        const ScreenSpaceWalkSample& w = b.walk[i];
-                        const float z = w.depth;
+                        const float z = b.walk[i].depth;
                         if (!(z > 0)) continue;
-                        const float vx =
-                            ((p.txBase + float(x) * p.txStep) + float(w.offsetX) * p.txQuant) * z;
-                        const float vy =
-                            ((p.tyBase + float(y) * p.tyStep) + float(w.offsetY) * p.tyQuant) * z;
                         if (t.occluderMesh == -1) {
                             t.occluderMin = t.occluderMax = z;
-                            t.occluderLo[0] = t.occluderHi[0] = vx, t.occluderLo[1] = t.occluderHi[1] = vy;
                             t.occluderMesh = mesh[i] >= 0 ? mesh[i] : -2;
                         } else {
                             t.occluderMin = std::min(t.occluderMin, z),
                             t.occluderMax = std::max(t.occluderMax, z);
-                            t.occluderLo[0] = std::min(t.occluderLo[0], vx),
-                            t.occluderHi[0] = std::max(t.occluderHi[0], vx);
-                            t.occluderLo[1] = std::min(t.occluderLo[1], vy),
-                            t.occluderHi[1] = std::max(t.occluderHi[1], vy);
                             if (t.occluderMesh != mesh[i]) t.occluderMesh = -2;
                         }
                     }
             }
     });
-    const double radius = p.radius;
+    const float twoRadii = 2 * p.radius;
     // The verdicts (each tile reads the others' occluders only).
     parallelFor(0, th, 4, [&](int64_t t0, int64_t t1) {
-        float P[kTile * kTile][3], N[kTile * kTile][3];
         for (int64_t ty = t0; ty < t1; ++ty)
             for (int64_t tx = 0; tx < tw; ++tx) {
+                // The tile's pixels: their depth range, and that of its first flat mesh's.
+                float allMin = 0, allMax = 0, flatMin = 0, flatMax = 0;
+                bool any = false, anyFlat = false;
+                int32_t flat = -1;
                 const int64_t x0 = tx * kTile, x1 = std::min(W, x0 + kTile), y0 = ty * kTile,
                               y1 = std::min(H, y0 + kTile);
-                // The tile's pixels' points and normals (as GtaoPoint makes them), their box, and that
-                // of the pixels of its first flat mesh.
-                ViewBox all, flatBox;
-                int32_t flat = -1;
                 for (int64_t y = y0; y < y1; ++y)
                     for (int64_t x = x0; x < x1; ++x) {
-                        const int64_t i = y * W + x, j = (y - y0) * kTile + (x - x0);
+                        const int64_t i = y * W + x;
                         if (!b.covered(i)) continue;
-                        const Vec3f rel = b.position(i) - p.eye, &n = b.normal(i);
-                        P[j][0] = dot(rel, p.right), P[j][1] = dot(rel, p.up), P[j][2] = dot(rel, p.forward);
-                        N[j][0] = dot(n, p.right), N[j][1] = dot(n, p.up), N[j][2] = dot(n, p.forward);
-                        all.add(P[j], P[j]);
+                        const float z = dot(b.position(i) - p.eye, p.forward);
+                        allMin = any ? std::min(allMin, z) : z, allMax = any ? std::max(allMax, z) : z;
+                        any = true;
                         if (flat < 0 && isFlat(mesh[i])) flat = mesh[i];
-                        if (flat >= 0 && mesh[i] == flat) flatBox.add(P[j], P[j]);
+                        if (flat >= 0 && mesh[i] == flat) {
+                            flatMin = anyFlat ? std::min(flatMin, z) : z;
+                            flatMax = anyFlat ? std::max(flatMax, z) : z;
+                            anyFlat = true;
+                        }
                     }
-                if (!all.any || !(all.lo[2] > 0)) continue;
-                const float reach = 1.01f * kReach * p.radius * p.pixelsPerTan / all.lo[2] + 2;
-                if (!(reach < float(kMaxWindowTiles * kTile))) continue;
-                const auto r = int64_t(std::ceil(reach));
-                Tile& t = tiles[std::size_t(ty * tw + tx)];
-                if (r > kBoxReach) {
-                    // A wide window (pixels near the eye): the depth test alone, which stops at the
-                    // first occluder tile within two radii in view depth of the pixels (of the flat
-                    // mesh's pixels, that mesh's tiles left out).
-                    const float twoRadii = 2 * p.radius;
-                    const auto clear = [&](float zMin, float zMax, int32_t own) {
-                        for (int64_t uy = std::max<int64_t>(0, (y0 - r) / kTile);
-                             uy <= std::min(th - 1, (y1 - 1 + r) / kTile); ++uy)
-                            for (int64_t ux = std::max<int64_t>(0, (x0 - r) / kTile);
-                                 ux <= std::min(tw - 1, (x1 - 1 + r) / kTile); ++ux) {
-                                const Tile& u = tiles[std::size_t(uy * tw + ux)];
-                                if (u.occluderMesh == -1 || (own >= 0 && u.occluderMesh == own)) continue;
-                                if (u.occluderMax < zMin - twoRadii || u.occluderMin > zMax + twoRadii)
-                                    continue;
-                                return false;
-                            }
-                        return true;
-                    };
-                    t.skipAll = clear(all.lo[2], all.hi[2], -1);
-                    if (!t.skipAll && flat >= 0 && clear(flatBox.lo[2], flatBox.hi[2], flat))
-                        t.skipMesh = flat;
-                    for (int64_t y = y0; y < y1; ++y)
-                        for (int64_t x = x0; x < x1; ++x)
-                            skip[size_t(y * W + x)] =
-                                t.skipAll || (flat >= 0 && mesh[y * W + x] == t.skipMesh);
-                    continue;
-                }
-                // The occluders in reach within one radius of the pixels' box (near), within two (wide),
-                // and within two of the flat mesh's pixels' box, that mesh's own tiles left out (others).
-                // Classified in float against limits with the margins above (far above float rounding).
-                ViewBox near, wide, others;
-                const double margin = 1e-4 * radius + 1e-5 * 6 * all.size();
-                const float one = float((radius + margin) * (radius + margin)),
-                            two = float((2 * radius + margin) * (2 * radius + margin)),
-                            twoDepth = float(2 * radius + margin);
-                const auto gap2 = [](const ViewBox& a, const float* lo, const float* hi) {
-                    float d2 = 0;
-                    for (int k = 0; k < 3; ++k) {
-                        const float g = std::max(std::max(lo[k] - a.hi[k], a.lo[k] - hi[k]), 0.0f);
-                        d2 += g * g;
-                    }
-                    return d2;
+                if (!any || !(allMin > 0)) continue;
+                // Each group's verdict over the tiles in reach of its nearest pixel.
+                const auto clear = [&](float zMin, float zMax, int32_t own) {
+                    const float reach = 1.01f * kReach * p.radius * p.pixelsPerTan / zMin + 2;
+                    if (!(reach < float(kMaxWindowTiles * kTile))) return false;
+                    const auto r = int64_t(std::ceil(reach));
+                    const int64_t ux0 = std::max<int64_t>(0, (x0 - r) / kTile),
+                                  ux1 = std::min(tw - 1, (x1 - 1 + r) / kTile),
+                                  uy0 = std::max<int64_t>(0, (y0 - r) / kTile),
+                                  uy1 = std::min(th - 1, (y1 - 1 + r) / kTile);
+                    for (int64_t uy = uy0; uy <= uy1; ++uy)
+                        for (int64_t ux = ux0; ux <= ux1; ++ux) {
+                            const Tile& u = tiles[std::size_t(uy * tw + ux)];
+                            if (u.occluderMesh == -1 || (own >= 0 && u.occluderMesh == own)) continue;
+                            if (u.occluderMax < zMin - twoRadii || u.occluderMin > zMax + twoRadii) continue;
+                            return false;
+                        }
+                    return true;
                 };
-                for (int64_t uy = std::max<int64_t>(0, (y0 - r) / kTile);
-                     uy <= std::min(th - 1, (y1 - 1 + r) / kTile); ++uy)
-                    for (int64_t ux = std::max<int64_t>(0, (x0 - r) / kTile);
-                         ux <= std::min(tw - 1, (x1 - 1 + r) / kTile); ++ux) {
-                        const Tile& u = tiles[std::size_t(uy * tw + ux)];
-                        if (u.occluderMesh == -1) continue;
-                        // Beyond two radii in depth alone: in no set.
-                        if (u.occluderMin - all.hi[2] >= twoDepth || all.lo[2] - u.occluderMax >= twoDepth)
-                            continue;
-                        const float lo[3] = {u.occluderLo[0], u.occluderLo[1], u.occluderMin},
-                                    hi[3] = {u.occluderHi[0], u.occluderHi[1], u.occluderMax};
-                        const float d2 = gap2(all, lo, hi);
-                        if (!(d2 < two)) continue;
-                        wide.add(lo, hi);
-                        if (d2 < one) near.add(lo, hi);
-                        if (flat >= 0 && u.occluderMesh != flat && gap2(flatBox, lo, hi) < two)
-                            others.add(lo, hi);
-                    }
-                t.skipAll = !near.any;
-                if (flat >= 0 && !others.any) t.skipMesh = flat;
-                for (int64_t y = y0; y < y1; ++y)
-                    for (int64_t x = x0; x < x1; ++x) {
-                        const int64_t i = y * W + x, j = (y - y0) * kTile + (x - x0);
-                        if (!b.covered(i)) continue;
-                        bool skips = t.skipAll;
-                        if (!skips && flat >= 0 && mesh[i] == flat)
-                            skips = t.skipMesh == flat || near.beyond(P[j], radius) ||
-                                    others.beyond(P[j], 2 * radius) || others.below(P[j], N[j]);
-                        else if (!skips)
-                            skips = near.beyond(P[j], radius) || wide.below(P[j], N[j]);
-                        skip[size_t(i)] = skips;
-                    }
+                Tile& t = tiles[std::size_t(ty * tw + tx)];
+                t.skipAll = clear(allMin, allMax, -1);
+                if (!t.skipAll && anyFlat && flatMin > 0 && clear(flatMin, flatMax, flat)) t.skipMesh = flat;
             }
     });
-    b.skip = skip;
+    b.mesh = mesh;
+    b.tiles = tiles.data();
+    b.tileColumns = tw;
 }
 
 // Step 3: the separable blur, weights 1 2 2 2 1 over the pixels linked to the centre through a chain

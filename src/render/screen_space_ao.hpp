@@ -25,10 +25,9 @@
 // far as the radius and not as far as the last sample happened to fall; the blur and the upsample
 // follow links between neighbouring pixels on one smooth surface (a binary bilateral filter); and
 // the G-buffer entries skip the horizon search of a working pixel that it could not raise (no
-// occluder within the radius within its reach on screen, or every one within twice the radius below
-// its tangent plane, but coplanar points of its own flat mesh: ScreenSpaceOcclusionOptions::
-// flatMeshes), which is most of them (the tree demo at 320 x 180 cells: 85 % of the covered working
-// pixels), with the search's output bit for bit.
+// occluder within twice the radius in view depth within its reach on screen, but coplanar points of
+// its own flat mesh: ScreenSpaceOcclusionOptions::flatMeshes), which is most of them (the tree demo's
+// frame: 72 % of the covered working pixels), with the search's output bit for bit.
 //
 // Accuracy (tests/test_screen_space_ao.cpp): a floor meeting a wall, against the closed form,
 // mean error 0.007 within the radius (max 0.09, next to the crease at half resolution); the tree
@@ -82,13 +81,11 @@ struct ScreenSpaceOcclusionOptions {
     /// The G-buffer entries (whose samples know their mesh), at half resolution: per mesh index of the
     /// geometry, nonzero where the mesh is flat (FieldOcclusionSetup::flatMeshes). A working pixel
     /// skips its horizon search, and is 1, where the search could find nothing: where no occluding
-    /// sample within its reach on screen lies within the radius of it (a crossing of the sphere
-    /// needs one there too), or every one within twice the radius lies below its tangent plane;
-    /// occluders of its own flat mesh excepted when it lies on one (coplanar points never rise above
-    /// its tangent plane by the bias angle). Checked per 8x8 tile of working pixels against the
-    /// view-space boxes of the occluders of the tiles in reach, then per pixel (render/
-    /// screen_space_ao.cpp, skipTiles). The output is the search's bit for bit (tested); empty: no
-    /// skipping.
+    /// sample within its reach on screen lies within twice the radius of it in view depth (the
+    /// nearest an occluder or a crossing of the sphere can be), occluders of its own flat mesh
+    /// excepted when it lies on one (coplanar points never rise above its tangent plane by the bias
+    /// angle). Checked per 8x8 tile of working pixels against the depth ranges of the tiles in reach.
+    /// The output is the search's bit for bit (tested); empty: no skipping.
     std::span<const uint8_t> flatMeshes;
 };
 
@@ -138,14 +135,12 @@ struct ScreenSpaceOcclusionScratch {
     std::vector<float> raw, across, smooth;
     std::vector<int32_t> meshes; ///< per working pixel: its mesh (-1: none or several); flatMeshes only
     struct Tile {
-        float occluderMin = 0, occluderMax = 0;               ///< occluders' view depths
-        float occluderLo[2] = {0, 0}, occluderHi[2] = {0, 0}; ///< their view-space x, y range
-        int32_t occluderMesh = -1; ///< -1: no occluder, -2: several meshes, else the one
-        int32_t skipMesh = -1;     ///< its pixels of this flat mesh skip the search
-        uint8_t skipAll = 0;       ///< all its pixels skip the search
+        float occluderMin = 0, occluderMax = 0; ///< occluders' view depths
+        int32_t occluderMesh = -1;              ///< -1: no occluder, -2: several meshes, else the one
+        int32_t skipMesh = -1;                  ///< its pixels of this flat mesh skip the search
+        uint8_t skipAll = 0;                    ///< all its pixels skip the search
     };
     std::vector<Tile> tiles;
-    std::vector<uint8_t> skip; ///< per working pixel: 1 where it skips the search (flatMeshes only)
 };
 /// screenSpaceOcclusion into `visibility` (width x height entries, every one written), working in
 /// `scratch`. Throws voxfx::Error as below, and for a `visibility` of another size.
