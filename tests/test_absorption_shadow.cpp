@@ -5,6 +5,7 @@
 // test_shadow_cross_technique.cpp.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <string>
 #include <vector>
@@ -85,6 +86,73 @@ TEST(ShadowTest, AbsorptionOfColouredGridsIsExpOfEveryGridsWritesInFront) {
             });
             EXPECT_GT(shaded, 500) << what;
         }
+}
+
+TEST(ShadowTest, TheSunsAbsorptionLookupWithANormalReadsEachColumnWhereTheReceiverPlaneCrossesIt) {
+    // As the transmittance test of the same name: the sun's bilinear lookups with a normal (the fast
+    // path for an oriented orthographic view with uniform slices) against the blend, by definition,
+    // of the four columns around p, each at the depth where the plane through p with normal n
+    // crosses the column's centre line (solved in world space, within two column footprints of p's
+    // depth); points with a crossing within 1e-9 slices of a slice boundary left out (few).
+    const Scene s = test::leafScene(600, 3, 11);
+    std::vector<std::vector<float>> absorption;
+    Box3d bounds;
+    for (std::size_t g = 1; g <= 3; ++g) {
+        absorption.emplace_back(s.meshes[g].mesh.triangleCount(), 0.2f + 0.15f * float(g));
+        bounds.extend(computeBounds(s.meshes[g].mesh.view()));
+    }
+    std::vector<AbsorptionShadowMap::Group> groups;
+    for (std::size_t g = 1; g <= 3; ++g)
+        groups.push_back({s.meshes[g].mesh.view(), absorption[g - 1],
+                          Vec3f{0.3f * float(g), 1.0f, 1.6f - 0.4f * float(g)}, Vec3f{0, 0, 0}});
+    const LightView view = makeLightViews(test::sun(), bounds, 64, 48)[0];
+    ASSERT_TRUE(view.frame.isOriented());
+    const Frame& f = view.frame;
+    const int64_t W = f.width(), H = f.height();
+    std::mt19937_64 rng(17);
+    std::uniform_real_distribution<double> unit(-1, 1);
+    for (const Coverage coverage : {Coverage::Center, Coverage::Conservative}) {
+        const AbsorptionShadowMap map = AbsorptionShadowMap::build(view, groups, coverage, Slicing::Uniform);
+        AttributeOptions ao;
+        ao.coverage = coverage;
+        ao.channels = AttributeChannels::shadows();
+        ao.slicing = Slicing::Uniform;
+        std::vector<AttributeColumns> columns;
+        for (std::size_t g = 0; g < groups.size(); ++g)
+            columns.push_back(voxelizeAttributeColumns(groups[g].mesh, view.frame, absorption[g], ao));
+        int compared = 0, shaded = 0, onBoundary = 0, tilted = 0;
+        test::forEachCoveredPoint(view, [&](int i, const Vec3d& p, const Vec3d& g, int64_t, int64_t skip) {
+            Vec3d n = normalize(Vec3d{unit(rng), unit(rng), unit(rng)});
+            if (i % 2) n = normalize(n - f.forward() * (dot(n, f.forward()) * 0.999));
+            bool boundary = false;
+            const Vec3f want = test::bilinearByDefinition(W, H, g, [&](int64_t c) {
+                const double x = double(c % W) + 0.5, y = double(c / W) + 0.5;
+                const Vec3d L0 = f.worldFromGrid({x, y, g.z}), L1 = f.worldFromGrid({x, y, g.z + 1});
+                const double reach = 2 * length(f.worldFromGrid(g + Vec3d{1, 0, 0}) - p) / length(L1 - L0);
+                const double d = g.z + std::clamp(-dot(n, L0 - p) / dot(n, L1 - L0), -reach, reach);
+                const double t = f.depthToSlice(c)(d);
+                boundary = boundary || std::abs(t - std::round(t)) < 1e-9;
+                tilted += std::abs(d - g.z) > 0.5;
+                return columnByDefinition(columns, groups, c, d, skip);
+            });
+            if (boundary) {
+                ++onBoundary;
+                return;
+            }
+            const Vec3f got = map.transmittanceBilinear(p, skip, n);
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(got[c], want[c], 1e-5f) << toString(coverage) << " point " << i;
+            ++compared;
+            shaded += want.x < 0.99f;
+        });
+        std::printf(
+            "%s: %d lookups with a normal compared (%d shadowed, %d columns read more than half a slice "
+            "off p's depth), %d left out on a slice boundary\n",
+            toString(coverage), compared, shaded, tilted, onBoundary);
+        EXPECT_GT(shaded, 500) << toString(coverage);
+        EXPECT_GT(tilted, 1000) << toString(coverage);
+        EXPECT_LT(onBoundary, compared / 100) << toString(coverage);
+    }
 }
 
 } // namespace

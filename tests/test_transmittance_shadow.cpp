@@ -159,6 +159,72 @@ TEST(ShadowTest, TransmittanceIsEachChannelsFactorToThePowerOfItsCellsInFront) {
     }
 }
 
+TEST(ShadowTest, TheSunsBilinearLookupWithANormalReadsEachColumnWhereTheReceiverPlaneCrossesIt) {
+    // The sun's lookups (an oriented orthographic view, uniform slices: the fast path of
+    // transmittanceBilinear, whose plane steps come from the view's cell steps) with a normal: the
+    // blend of the four columns around p, each counted bit by bit at the depth where the plane
+    // through p with normal n crosses the column's centre line, solved in world space (the centre
+    // line L(d) = worldFromGrid(x, y, d) is affine in d), kept within two column footprints of p's
+    // depth. Points whose crossing lies within 1e-9 slices of a slice boundary are left out (the
+    // rounding of either side may put it on the other); they must be few.
+    const Scene s = leafScene(600, 3, 11);
+    std::vector<MeshView> groups;
+    std::vector<Vec3f> factors;
+    Box3d bounds;
+    for (std::size_t g = 1; g <= 3; ++g) {
+        groups.push_back(s.meshes[g].mesh.view());
+        factors.push_back(s.materials[s.meshes[g].material].shadowCrossingTransmittance());
+        bounds.extend(computeBounds(groups.back()));
+    }
+    const LightView view = makeLightViews(sun(), bounds, 64, 48)[0];
+    ASSERT_TRUE(view.frame.isOriented());
+    const Frame& f = view.frame;
+    const int64_t W = f.width(), H = f.height();
+    std::mt19937_64 rng(17);
+    std::uniform_real_distribution<double> unit(-1, 1);
+    for (const VoxelizeMode mode : {VoxelizeMode::Surface, VoxelizeMode::Conservative}) {
+        const TransmittanceShadowMap map =
+            TransmittanceShadowMap::build(view, groups, factors, mode, Slicing::Uniform);
+        const bool runs = mode == VoxelizeMode::Conservative;
+        int compared = 0, shaded = 0, onBoundary = 0, tilted = 0;
+        test::forEachCoveredPoint(view, [&](int i, const Vec3d& p, const Vec3d& g, int64_t, int64_t skip) {
+            // Half the normals nearly along the light's rays (crossings clamped at the reach).
+            Vec3d n = normalize(Vec3d{unit(rng), unit(rng), unit(rng)});
+            if (i % 2) n = normalize(n - f.forward() * (dot(n, f.forward()) * 0.999));
+            bool boundary = false;
+            const auto depthOf = [&](int64_t c) {
+                const double x = double(c % W) + 0.5, y = double(c / W) + 0.5;
+                const Vec3d L0 = f.worldFromGrid({x, y, g.z}), L1 = f.worldFromGrid({x, y, g.z + 1});
+                const double reach = 2 * length(f.worldFromGrid(g + Vec3d{1, 0, 0}) - p) / length(L1 - L0);
+                const double d = g.z + std::clamp(-dot(n, L0 - p) / dot(n, L1 - L0), -reach, reach);
+                const double t = f.depthToSlice(c)(d);
+                boundary = boundary || std::abs(t - std::round(t)) < 1e-9;
+                tilted += std::abs(d - g.z) > 0.5;
+                return d;
+            };
+            const Vec3f want = test::bilinearByDefinition(W, H, g, [&](int64_t c) {
+                return columnByDefinition(map, factors, runs, c, depthOf(c), skip);
+            });
+            if (boundary) {
+                ++onBoundary;
+                return;
+            }
+            const Vec3f got = map.transmittanceBilinear(p, skip, n);
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(got[c], want[c], 1e-5f) << toString(mode) << " point " << i;
+            ++compared;
+            shaded += want.y < 1;
+        });
+        std::printf(
+            "%s: %d lookups with a normal compared (%d shadowed, %d columns read more than half a slice "
+            "off p's depth), %d left out on a slice boundary\n",
+            toString(mode), compared, shaded, tilted, onBoundary);
+        EXPECT_GT(shaded, 500) << toString(mode);
+        EXPECT_GT(tilted, 1000) << toString(mode);
+        EXPECT_LT(onBoundary, compared / 100) << toString(mode);
+    }
+}
+
 TEST(ShadowTest, RejectsBadInput) {
     EXPECT_THROW(shadowOptionsNamed("soft"), Error);
     try {

@@ -218,6 +218,16 @@ Vec3f AbsorptionShadowMap::transmittanceBilinear(const Vec3d& world, int64_t ski
                                                  double sharpness) const {
     Vec3d grid;
     if (grids_.empty() || !view_.locate(world, grid)) return {1, 1, 1};
+    if (!entryLight_.empty() && detail::orientedBilinearApplies(view_, grids_[0].frame, sharpness))
+        return detail::orientedBilinearColumns(
+            view_, grids_[0].frame, grid, normal, skipCells, occupied_.data(),
+            [&](int64_t column, int64_t end) {
+                // columnLight from the entries, at the slices in front given.
+                const int64_t b = entryOffsets_[size_t(column)], e = entryOffsets_[size_t(column) + 1];
+                int64_t i = b;
+                while (i < e && int64_t(entrySlice_[size_t(i)]) < end) ++i;
+                return i == b ? Vec3f{1, 1, 1} : entryLight_[size_t(i - 1)];
+            });
     // Only glass needs the length per depth unit (grids without glass: none).
     const double lengthPerDepth = entryLight_.empty() ? detail::worldLengthPerDepth(view_, world) : 0.0;
     return detail::bilinearColumnsAt<Vec3f, float>(

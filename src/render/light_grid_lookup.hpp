@@ -194,6 +194,71 @@ T bilinearColumnsAt(const LightView& view, const Vec3d& p, const Vec3d& n, const
     return sharpness == 1 ? out : sharpenBlend(out, lo, hi, sharpness);
 }
 
+/// Whether orientedBilinearColumns applies: an oriented orthographic view (the sun's) whose grids
+/// (`slices`, the frame the slices are counted in) slice uniformly, and no sharpening.
+inline bool orientedBilinearApplies(const LightView& view, const Frame& slices, double sharpness) {
+    return sharpness == 1 && view.frame.isOriented() && slices.slicing() == Slicing::Uniform;
+}
+
+/// bilinearColumnsAt<Vec3f, float> for a map whose columns are read as light(column, end), `end` the
+/// slices in front of the column's depth (slicesInFront with `skipCells`), and an empty column (bit
+/// clear in `occupied`, one bit per column) is light, where orientedBilinearApplies: the four
+/// columns' occupancy first (none: no plane at all), then the receiver plane's step per column from
+/// the view's constant cell steps (right, up and forward times the cell size, the differences of
+/// worldFromGrid that ReceiverPlane takes at the point with their rounding there), its slope divided
+/// once. The same columns and weights; the depths may differ from ReceiverPlane's in the last bits
+/// (a column's count only where a depth lies within about 1e-13 of a slice boundary; tested against
+/// the plane's crossings solved in world space). `p`: the point's grid coordinates.
+template <class Light>
+Vec3f orientedBilinearColumns(const LightView& view, const Frame& slices, const Vec3d& p, const Vec3d& n,
+                              int64_t skipCells, const uint64_t* occupied, const Light& light) {
+    const Frame& f = view.frame;
+    const int64_t W = f.width(), H = f.height();
+    const double fx = p.x - 0.5, fy = p.y - 0.5;
+    const int64_t x0 = int64_t(std::floor(fx)), y0 = int64_t(std::floor(fy));
+    const double wx = fx - double(x0), wy = fy - double(y0);
+    const int64_t xs[2] = {std::clamp<int64_t>(x0, 0, W - 1), std::clamp<int64_t>(x0 + 1, 0, W - 1)};
+    const int64_t ys[2] = {std::clamp<int64_t>(y0, 0, H - 1), std::clamp<int64_t>(y0 + 1, 0, H - 1)};
+    int64_t column[4];
+    unsigned any = 0;
+    for (int k = 0; k < 4; ++k) { // k = 2 dy + dx, the order of bilinearColumnsAt
+        column[k] = ys[k >> 1] * W + xs[k & 1];
+        any |= unsigned((occupied[size_t(column[k] >> 6)] >> (column[k] & 63)) & 1u) << k;
+    }
+    Vec3f v[4] = {{1, 1, 1}, {1, 1, 1}, {1, 1, 1}, {1, 1, 1}};
+    if (any) {
+        const Vec3d cell = f.cellSize();
+        const Vec3d ax = f.right() * cell.x, ay = f.up() * cell.y, along = f.forward() * cell.z;
+        const double slope = dot(n, along);
+        const bool plane = (n.x != 0 || n.y != 0 || n.z != 0) && std::abs(slope) > 0;
+        const double kx = plane ? -dot(n, ax) / slope : 0, ky = plane ? -dot(n, ay) / slope : 0;
+        const double footprintSquared = dot(ax, ax), alongSquared = dot(along, along);
+        const DepthToSlice toSlice = slices.depthToSlice(0);
+        const int64_t D = slices.depth();
+        for (int k = 0; k < 4; ++k) {
+            if (!((any >> k) & 1u)) continue;
+            double depth = p.z;
+            if (plane) {
+                const double step =
+                    kx * (double(xs[k & 1]) + 0.5 - p.x) + ky * (double(ys[k >> 1]) + 0.5 - p.y);
+                if (step * step * alongSquared < 4 * footprintSquared * (1 - 1e-9)) {
+                    depth = p.z + step;
+                } else {
+                    const double reach = 2 * std::sqrt(footprintSquared) / std::sqrt(alongSquared);
+                    depth = p.z + std::clamp(step, -reach, reach);
+                }
+            }
+            const double t = toSlice(depth); // slicesInFront, uniform slices
+            int64_t end = 0;
+            if (t >= 0) end = std::clamp<int64_t>((t >= double(D) ? D : int64_t(t)) - skipCells + 1, 0, D);
+            v[k] = light(column[k], end);
+        }
+    }
+    Vec3f out{};
+    for (int k = 0; k < 4; ++k) out += v[k] * float(((k & 1) ? wx : 1 - wx) * ((k >> 1) ? wy : 1 - wy));
+    return out;
+}
+
 /// bilinearColumnsAt at world point `world`. Precondition: view.covers(world).
 template <class T, class S, class Value>
 T bilinearColumnsLazy(const LightView& view, const Vec3d& world, const Vec3d& n, const Value& value,

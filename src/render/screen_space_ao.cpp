@@ -1069,16 +1069,20 @@ Packed downsample(const Source& full, const Params& fullParams, const Frame& cam
                 Vec3f sumPosition{0, 0, 0}, sumNormal{0, 0, 0};
                 if (uniform && oneTriangle(full, block)) { // one plane, one material
                     for (const BlockSample& c : block) sumPosition += c.position;
-                } else {
+                } else if (uniform) {
                     // One smooth surface: all occluders or none, within a sample's footprint of the
-                    // nearest sample's tangent plane, normals within about 18 degrees of its normal.
+                    // nearest sample's tangent plane, normals within about 18 degrees of its normal
+                    // (a sample's normal read only where the other two tests pass: a block that
+                    // fails is not a mean, and its sums go unused).
                     const Vec3f N = full.testNormal(b.x, b.y, P);
                     const float footprint = bestDepth * fullParams.pixelSize;
                     for (int k = 0; k < n && uniform; ++k) {
                         const BlockSample& c = block[k];
-                        const Vec3f m = k == best ? N : full.testNormal(c.x, c.y, c.position);
                         uniform = full.occludes(c.x, c.y) == occludes &&
-                                  std::fabs(dot(c.position - P, N)) <= footprint && dot(m, N) >= 0.95f;
+                                  std::fabs(dot(c.position - P, N)) <= footprint;
+                        if (!uniform) break;
+                        const Vec3f m = k == best ? N : full.testNormal(c.x, c.y, c.position);
+                        uniform = dot(m, N) >= 0.95f;
                         sumPosition += c.position;
                         sumNormal += m;
                     }

@@ -260,6 +260,10 @@ Vec3f TransmittanceShadowMap::transmittanceBilinear(const Vec3d& world, int64_t 
                                                     const Vec3d& normal, double sharpness) const {
     Vec3d grid;
     if (channels_.empty() || !view_.locate(world, grid)) return {1, 1, 1};
+    if (!eventOffsets_.empty() && detail::orientedBilinearApplies(view_, channels_[0].grid.frame, sharpness))
+        return detail::orientedBilinearColumns(
+            view_, channels_[0].grid.frame, grid, normal, skipCells, eventColumns_.data(),
+            [&](int64_t column, int64_t end) { return indexedTransmittance(column, end); });
     if (!eventOffsets_.empty())
         return detail::bilinearColumnsAt<Vec3f, float>(
             view_, grid, normal,
