@@ -428,6 +428,58 @@ TEST(RasterTest, TileSizesAndTheDirectPathEmitTheSameFragmentsAndSpans) {
     }
 }
 
+// The same, taking a row's four neighbours in one call where the rasterizer offers them
+// (QuadSink), each expanded to the fragment it stands for.
+struct QuadCollector : Collector {
+    std::atomic<int64_t> quadCalls{0}; // calls of fragments(), from every tile's sink
+    struct Sink4 : Sink {
+        std::atomic<int64_t>* calls;
+        void fragments(int64_t x, int64_t y, const double* depth, unsigned bits, uint32_t t, bool front) {
+            EXPECT_NE(bits, 0u);
+            EXPECT_EQ(bits & ~15u, 0u);
+            ++*calls;
+            for (int k = 0; k < 4; ++k)
+                if (bits >> k & 1) fragment(x + k, y, depth[k], t, front);
+        }
+    };
+    Sink4 tile(const Tile& t) {
+        Collector::tile(t);
+        return {{*this, {}, {}}, &quadCalls};
+    }
+};
+
+TEST(RasterTest, AQuadSinkGetsTheFragmentsTheOneByOneSinkGets) {
+    // The path a G-buffer's vector depth test takes (four neighbours of a row per call) against the
+    // one-fragment-at-a-time path: the same fragments, bit for bit (depths too), orthographic and
+    // perspective, at several tile sizes.
+    std::mt19937_64 rng(21);
+    const auto tris = testTriangles(rng);
+    Mesh mesh;
+    for (const auto& t : tris) addTriangle(mesh, t[0], t[1], t[2]);
+    const Frame frames[2] = {
+        Frame::orthographic({{0, 0, 0}, {12, 10, 8}}, Axis::Z, 37, 29, 8),
+        Frame::perspective({6.3, 5.2, 20}, {6, 5, 4}, {0, 1, 0}, 0.9, 53, 41, 1, 40, 32)};
+    for (const Frame& frame : frames)
+        for (int64_t rows : {1, 5, 0}) {
+            Collector one;
+            rasterizeInto(one, frame, mesh, Coverage::Center, RasterPath::Binned, rows);
+            ASSERT_GT(one.fragments.size(), 500u);
+            QuadCollector quad;
+            {
+                RasterOptions o;
+                o.rowsPerTile = rows;
+                rasterize(frame, mesh.view(), o, quad);
+                quad.sort();
+            }
+            EXPECT_TRUE(quad.fragments == one.fragments) << rows << " rows per tile";
+            const int64_t calls = quad.quadCalls;
+#if defined(__AVX__) && defined(__GNUC__)
+            EXPECT_GT(calls, 0) << "the vector path took the quad calls";
+#endif
+            EXPECT_LE(calls, int64_t(one.fragments.size()));
+        }
+}
+
 TEST(RasterTest, CancellingThroughProgressFailsWithAnError) {
     struct Stop : Progress {
         bool update(double) override { return false; }

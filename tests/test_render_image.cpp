@@ -19,6 +19,7 @@
 #include "render/vec_simd.hpp"
 #include "support/ground_scenes.hpp"
 #include "test_util.hpp"
+#include "voxfx/gbuffer.hpp"
 #include "voxfx/image_io.hpp"
 #include "voxfx/render.hpp"
 #include "voxfx/volume_scene.hpp"
@@ -219,6 +220,68 @@ TEST(RenderImageTest, AdaptiveAntiAliasingOfAForestIsCloseToBruteForce) {
     fo.trees = 25;
     fo.leavesPerTree = 300;
     compareWithBruteForce("forest", demo::makeForestScene(fo), 0.65);
+}
+
+// Which cells adaptive anti-aliasing shades at every sample, against its rules applied here by brute
+// force to a G-buffer of 2 x 2 samples per pixel: a cell whose samples show the background and
+// geometry, two meshes or materials, faces more than 30 degrees apart (either side), or depths more
+// than 2 % apart (of the first sample's triangle's and the others'). The render's count of refined
+// pixels and of covered samples must be these, exactly.
+TEST(RenderImageTest, TheCellsAdaptiveAntiAliasingRefinesFollowItsRules) {
+    demo::ForestOptions fo;
+    fo.trees = 16;
+    fo.leavesPerTree = 300;
+    const Scene scene = demo::makeForestScene(fo);
+    RenderOptions o = renderOptionsFor(scene);
+    o.width = 160, o.height = 90;
+    o.ambientOcclusion = Occlusion::Off;
+    const Camera camera = sceneCamera(scene, 0, double(o.width) / double(o.height));
+    const RenderResult r = render(scene, camera, o);
+    const SceneGeometry geo = flattenScene(scene, o.creaseAngle);
+    const int64_t W = 2 * o.width, H = 2 * o.height;
+    const GBuffer g = renderGBuffer(geo, cameraFrame(camera, W, H));
+    const auto normal = [&](uint32_t t) {
+        Vec3d c[3];
+        for (int k = 0; k < 3; ++k)
+            c[k] = Vec3d(geo.mesh.positions[geo.mesh.indices[3 * size_t(t) + size_t(k)]]);
+        const Vec3d n = cross(c[1] - c[0], c[2] - c[0]);
+        return normalize(n);
+    };
+    int64_t refined = 0, covered = 0, borderline = 0;
+    for (int64_t cy = 0; cy < o.height; ++cy)
+        for (int64_t cx = 0; cx < o.width; ++cx) {
+            std::vector<std::size_t> samples;
+            for (int dy = 0; dy < 2; ++dy)
+                for (int dx = 0; dx < 2; ++dx) samples.push_back(size_t((2 * cy + dy) * W + 2 * cx + dx));
+            const uint32_t first = g.triangle[samples[0]];
+            bool refine = false, near = false;
+            double dmin = g.depth[samples[0]], dmax = dmin;
+            for (const std::size_t i : samples) {
+                const uint32_t t = g.triangle[i];
+                covered += t != GBuffer::kNone;
+                if (t == first) continue;
+                if (t == GBuffer::kNone || first == GBuffer::kNone ||
+                    geo.triangleMesh[t] != geo.triangleMesh[first] ||
+                    geo.triangleMaterial[t] != geo.triangleMaterial[first]) {
+                    refine = true;
+                    continue;
+                }
+                dmin = std::min(dmin, double(g.depth[i]));
+                dmax = std::max(dmax, double(g.depth[i]));
+                const double c = std::abs(dot(normal(t), normal(first))), c30 = std::cos(M_PI / 6);
+                refine |= c < c30;
+                near |= std::abs(c - c30) < 1e-5;
+            }
+            if (!refine && dmax - dmin > 0.02 * dmin) refine = true;
+            near |= !refine && std::abs(dmax - dmin - 0.02 * dmin) < 1e-5 * dmin;
+            refined += refine;
+            borderline += near;
+        }
+    std::printf("forest at 160 x 90: %lld of %lld pixels refined (%lld within rounding of a threshold)\n",
+                (long long)refined, (long long)(o.width * o.height), (long long)borderline);
+    EXPECT_GT(refined, o.width * o.height / 20);
+    EXPECT_LE(std::abs(r.refinedPixels - refined), borderline);
+    EXPECT_EQ(r.coveredPixels, covered);
 }
 
 // Glass: the light through it varies inside the objects, where no edge is. Measured (4,794

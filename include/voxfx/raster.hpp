@@ -28,6 +28,11 @@
 //                   sink.finish()                         after the tile's last triangle
 //   CenterSink      sink.fragment(x, y, depth, triangle, front)          for Coverage::Center
 //   ConservativeSink sink.span(x, y, depthMin, depthMax, triangle)       for Coverage::Conservative
+//   QuadSink (optional, with CenterSink) sink.fragments(x, y, depth, bits, triangle, front): the
+//                   covered samples among (x + k, y), k < 4 (bit k of `bits`, at least one), their
+//                   depths depth[k], in one call: the fragments fragment() would get one by one
+//                   (the same depths), for a sink that merges four neighbours in vector registers
+//                   (the G-buffer's depth test). The rasterizer may call either for any sample.
 // A sink needs at least one of fragment/span. rasterize<Coverage::X>(...) checks the one it needs
 // at compile time (static_assert); plain rasterize(...) with a run-time coverage throws
 // voxfx::Error when the sink lacks the member for it (never silently emits nothing).
@@ -100,6 +105,11 @@ struct Tile {
 template <class S>
 concept CenterSink = requires(S& s, int64_t x, int64_t y, double depth, uint32_t triangle, bool front) {
     s.fragment(x, y, depth, triangle, front);
+};
+template <class S>
+concept QuadSink = requires(S& s, int64_t x, int64_t y, const double* depth, unsigned bits, uint32_t triangle,
+                            bool front) {
+    s.fragments(x, y, depth, bits, triangle, front);
 };
 template <class S>
 concept ConservativeSink = requires(S& s, int64_t x, int64_t y, double depth, uint32_t triangle) {

@@ -216,6 +216,16 @@ VOXFX_HOSTDEV void rasterizeCenter(const RasterTriangle& t, const FrameView& fra
             // The covered lanes as bits (the sign bit of each all-ones lane), lowest first.
             unsigned bits = unsigned(__builtin_ia32_movmskpd256(V4d(inside)));
             if (bits == 0) continue;
+            if constexpr (QuadSink<Sink>) {
+                // The four lanes' depths as below (a lane's are emit's operations), in one call.
+                prepareRow();
+                const V4d w = rowW + gx * (sx - t.x[0]);
+                const V4d depth = perspective ? 1.0 / w : w;
+                double lanes[4];
+                for (int lane = 0; lane < 4; ++lane) lanes[lane] = depth[lane];
+                sink.fragments(x, y, lanes, bits, t.index, t.front);
+                continue;
+            }
             if (bits & (bits - 1)) {
                 // Two or more: their depths in one vector division, lane for lane emit's
                 // operations (sx is exact either way: x + 0.5 + k for a grid-sized x).

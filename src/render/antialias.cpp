@@ -35,47 +35,81 @@ float filmicToneMap(float x) {
 
 namespace detail {
 
-void markRefinedCells(FrameState& f) {
+int64_t markRefinedCells(FrameState& f) {
     const int s = f.adaptive;
-    if (s <= 1) return;
+    if (s <= 1) return -1;
     const GBuffer& g = f.gbuffer;
     const SceneGeometry& geo = f.geometry;
     const int64_t W = f.width, cw = f.width / s, ch = f.height / s;
-    f.refined.assign(size_t(cw * ch), 0);
+    f.refined.resize(size_t(cw * ch));
     auto faceNormal = [&](uint32_t t) { return f.triangleBases[t].normal; };
     const float cos30 = float(std::cos(30 * M_PI / 180));
-    parallelFor(0, ch, 8, [&](int64_t y0, int64_t y1) {
-        for (int64_t cy = y0; cy < y1; ++cy)
-            for (int64_t cx = 0; cx < cw; ++cx) {
-                const uint32_t first = g.triangle[size_t(cy * s * W + cx * s)];
-                if (s == 2) { // the default: one triangle over the cell needs no depth (most cells)
-                    const uint32_t* row0 = &g.triangle[size_t(cy * 2 * W + cx * 2)];
-                    const uint32_t* row1 = row0 + W;
-                    if (row0[1] == first && row1[0] == first && row1[1] == first) continue; // stays 0
-                }
-                bool refine = false, same = true;
-                float dmin = g.depth[size_t(cy * s * W + cx * s)], dmax = dmin;
-                for (int dy = 0; dy < s && !refine; ++dy)
-                    for (int dx = 0; dx < s && !refine; ++dx) {
-                        const size_t i = size_t((cy * s + dy) * W + cx * s + dx);
-                        const uint32_t t = g.triangle[i];
-                        if (t == first) continue;
-                        same = false;
-                        if (t == GBuffer::kNone || first == GBuffer::kNone ||
-                            geo.triangleMesh[t] != geo.triangleMesh[first] ||
-                            geo.triangleMaterial[t] != geo.triangleMaterial[first])
-                            refine = true;
-                        else {
-                            dmin = std::min(dmin, g.depth[i]);
-                            dmax = std::max(dmax, g.depth[i]);
-                            // Both sides of a face shade alike: the angle between the lines.
-                            if (std::abs(dot(faceNormal(t), faceNormal(first))) < cos30) refine = true;
-                        }
-                    }
-                if (!refine && !same && dmax - dmin > 0.02f * dmin) refine = true;
-                f.refined[size_t(cy * cw + cx)] = refine ? kEveryRefinedSample : 0;
+    constexpr uint32_t kNone = GBuffer::kNone;
+    // Whether the samples of a cell that do not all show one triangle ask for every sample shaded
+    // (any of the reasons above): the background and the depths first (the samples' own arrays,
+    // read in order), the meshes, materials and face normals (random reads per triangle) only
+    // where those leave it open.
+    const auto refineCell = [&](int64_t cx, int64_t cy) {
+        const size_t at = size_t(cy * s * W + cx * s);
+        const uint32_t first = g.triangle[at];
+        float dmin = g.depth[at], dmax = dmin;
+        bool mixed = false;
+        for (int dy = 0; dy < s; ++dy)
+            for (int dx = 0; dx < s; ++dx) {
+                const size_t i = at + size_t(dy * W + dx);
+                const uint32_t t = g.triangle[i];
+                if (t == first) continue;
+                if (t == kNone || first == kNone) return true;
+                mixed = true;
+                dmin = std::min(dmin, g.depth[i]);
+                dmax = std::max(dmax, g.depth[i]);
             }
-    });
+        if (!mixed) return false; // one triangle (or the background) over the cell
+        if (dmax - dmin > 0.02f * dmin) return true;
+        const Vec3f n = faceNormal(first);
+        for (int dy = 0; dy < s; ++dy)
+            for (int dx = 0; dx < s; ++dx) {
+                const uint32_t t = g.triangle[at + size_t(dy * W + dx)];
+                if (t == first) continue;
+                if (geo.triangleMesh[t] != geo.triangleMesh[first] ||
+                    geo.triangleMaterial[t] != geo.triangleMaterial[first])
+                    return true;
+                // Both sides of a face shade alike: the angle between the lines.
+                if (std::abs(dot(faceNormal(t), n)) < cos30) return true;
+            }
+        return false;
+    };
+    // One pass over the samples: each cell's refinement and the samples showing geometry (the
+    // G-buffer pass's count, which would otherwise read them again).
+    return parallelReduce(
+        int64_t(0), ch, int64_t(8), int64_t(0),
+        [&](int64_t y0, int64_t y1) {
+            int64_t covered = 0;
+            for (int64_t cy = y0; cy < y1; ++cy) {
+                uint8_t* out = &f.refined[size_t(cy * cw)];
+                if (s == 2) { // the default: one triangle over the cell needs no depth (most cells)
+                    const uint32_t* row0 = &g.triangle[size_t(cy * 2 * W)];
+                    const uint32_t* row1 = row0 + W;
+                    for (int64_t cx = 0; cx < cw; ++cx) {
+                        const uint32_t a = row0[2 * cx], b = row0[2 * cx + 1], c = row1[2 * cx],
+                                       d = row1[2 * cx + 1];
+                        covered += int64_t(a != kNone) + int64_t(b != kNone) + int64_t(c != kNone) +
+                                   int64_t(d != kNone);
+                        out[cx] =
+                            (a == b && a == c && a == d) || !refineCell(cx, cy) ? 0 : kEveryRefinedSample;
+                    }
+                    continue;
+                }
+                for (int64_t cx = 0; cx < cw; ++cx) {
+                    for (int dy = 0; dy < s; ++dy)
+                        for (int dx = 0; dx < s; ++dx)
+                            covered += g.triangle[size_t((cy * s + dy) * W + cx * s + dx)] != kNone;
+                    out[cx] = refineCell(cx, cy) ? kEveryRefinedSample : 0;
+                }
+            }
+            return covered;
+        },
+        [](int64_t a, int64_t b) { return a + b; });
 }
 
 namespace {
@@ -187,9 +221,24 @@ void postAntiAlias(const Image& in, const std::vector<uint8_t>& skip, Image& out
     };
     constexpr int kSearch = 12;
     parallelFor(0, H, 16, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y)
+        std::vector<int64_t> candidates(size_t(W) + 1);
+        for (int64_t y = y0; y < y1; ++y) {
+            // The pixels the test below lets through, listed without a branch per pixel (whether
+            // a pixel's contrast passes is as good as random on foliage: a mispredicted branch).
+            const float* row = &luma[size_t(y * W)];
+            const float* above = &luma[size_t(std::min(y + 1, H - 1) * W)];
+            const float* below = &luma[size_t(std::max<int64_t>(y - 1, 0) * W)];
+            const uint8_t* skipRow = skip.empty() ? nullptr : &skip[size_t(y * W)];
+            int64_t count = 0;
             for (int64_t x = 0; x < W; ++x) {
-                if (!skip.empty() && skip[size_t(y * W + x)]) continue;
+                const float m = row[x], n = above[x], s = below[x], e = row[x + 1 < W ? x + 1 : W - 1],
+                            w = row[x > 0 ? x - 1 : 0];
+                const float hi = std::max({m, n, s, e, w}), lo = std::min({m, n, s, e, w});
+                candidates[size_t(count)] = x;
+                count += int64_t(!(hi - lo < std::max(1.0f / 32, hi / 8))) & int64_t(!skipRow || !skipRow[x]);
+            }
+            for (int64_t c = 0; c < count; ++c) {
+                const int64_t x = candidates[size_t(c)];
                 const float m = L(x, y), n = L(x, y + 1), s = L(x, y - 1), e = L(x + 1, y), w = L(x - 1, y);
                 const float hi = std::max({m, n, s, e, w}), lo = std::min({m, n, s, e, w});
                 const float range = hi - lo;
@@ -243,6 +292,7 @@ void postAntiAlias(const Image& in, const std::vector<uint8_t>& skip, Image& out
                 const Vec3f across = isHorizontal ? C(x, y + side) : C(x + side, y);
                 out.at(x, y) = in.at(x, y) * (1 - offset) + across * offset;
             }
+        }
     });
 }
 

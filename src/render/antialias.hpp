@@ -26,8 +26,9 @@ inline constexpr float kRefineContrast = 1.0f / 32;
 /// Fills frame.refined from the G-buffer: every sample of a cell (adaptive x adaptive samples)
 /// where its samples show different meshes or materials, background and geometry, faces whose
 /// normals differ by more than 30 degrees or depths more than 2 % apart; 0 elsewhere (glass cells:
-/// see curvesAcrossNeighbours).
-void markRefinedCells(FrameState& frame);
+/// see curvesAcrossNeighbours). Returns the number of samples showing geometry (it reads them all);
+/// -1 without adaptive anti-aliasing (frame.adaptive 1: nothing to mark).
+int64_t markRefinedCells(FrameState& frame);
 
 /// The index of cell (cx, cy)'s representative sample (adaptive / 2, adaptive / 2).
 std::size_t representativeSample(const FrameState& frame, int64_t cx, int64_t cy);

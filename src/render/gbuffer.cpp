@@ -8,6 +8,10 @@
 #include <cmath>
 #include <limits>
 
+#ifdef __AVX2__
+#include <immintrin.h>
+#endif
+
 #include "voxfx/error.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/raster.hpp"
@@ -24,6 +28,7 @@ struct NearestFragmentConsumer {
         int64_t width;
         double nearDepth;
         GBuffer& g;
+        int64_t end; ///< the row's end (the tile's rows are its own)
         void fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool) {
             if (!(depth >= nearDepth)) return; // the rasterizer keeps geometry in front of near
             const auto i = size_t(y * width + x);
@@ -34,9 +39,46 @@ struct NearestFragmentConsumer {
                 g.triangle[i] = triangle;
             }
         }
+#ifdef __AVX2__
+        // Four neighbours of a row at once, branch-free: lane k is fragment(x + k, ...)'s test
+        // and writes (the depth as float, the same comparisons). The tile owns its rows, so the
+        // four are read and written back whole (a lane it does not cover keeps its value); at the
+        // row's end, masked to the covered lanes (nothing past the row is touched).
+        void fragments(int64_t x, int64_t y, const double* depth, unsigned bits, uint32_t triangle, bool) {
+            const __m256d d = _mm256_loadu_pd(depth);
+            // !(depth >= nearDepth) leaves the lane (NaN too: an ordered comparison).
+            bits &= unsigned(_mm256_movemask_pd(_mm256_cmp_pd(d, _mm256_set1_pd(nearDepth), _CMP_GE_OQ)));
+            if (bits == 0) return;
+            const __m128i lane = _mm_setr_epi32(1, 2, 4, 8);
+            const __m128i mask = _mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(int(bits)), lane), lane);
+            const auto i = size_t(y * width + x);
+            float* depthAt = g.depth.data() + i;
+            auto* triangleAt = reinterpret_cast<__m128i*>(g.triangle.data() + i);
+            const bool whole = x + 4 <= end;
+            const __m128 f = _mm256_cvtpd_ps(d); // float(depth), rounded to nearest as the cast
+            const __m128 old = whole ? _mm_loadu_ps(depthAt) : _mm_maskload_ps(depthAt, mask);
+            const __m128i oldTriangle = whole ? _mm_loadu_si128(triangleAt)
+                                              : _mm_maskload_epi32(reinterpret_cast<int*>(triangleAt), mask);
+            const __m128i t = _mm_set1_epi32(int(triangle));
+            // triangle < old triangle, unsigned: a signed comparison with the sign bits flipped.
+            const __m128i sign = _mm_set1_epi32(int(0x80000000u));
+            const __m128i lower = _mm_cmpgt_epi32(_mm_xor_si128(oldTriangle, sign), _mm_xor_si128(t, sign));
+            const __m128i nearer =
+                _mm_or_si128(_mm_castps_si128(_mm_cmp_ps(f, old, _CMP_LT_OQ)),
+                             _mm_and_si128(_mm_castps_si128(_mm_cmp_ps(f, old, _CMP_EQ_OQ)), lower));
+            const __m128i write = _mm_and_si128(mask, nearer);
+            if (whole) { // stored whatever the test gave: no branch on it (as good as random)
+                _mm_storeu_ps(depthAt, _mm_blendv_ps(old, f, _mm_castsi128_ps(write)));
+                _mm_storeu_si128(triangleAt, _mm_blendv_epi8(oldTriangle, t, write));
+            } else {
+                _mm_maskstore_ps(depthAt, write, f);
+                _mm_maskstore_epi32(reinterpret_cast<int*>(triangleAt), write, t);
+            }
+        }
+#endif
         void finish() {}
     };
-    Sink tile(const Tile&) const { return {width, nearDepth, g}; }
+    Sink tile(const Tile&) const { return {width, nearDepth, g, width}; }
 };
 
 } // namespace

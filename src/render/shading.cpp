@@ -330,7 +330,8 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
     // cell's surface point; round 1 and the passes after read the cells' values.
     const std::vector<float>& screenOcclusion = frame.screenOcclusion;
     const CellOcclusion* cellOcclusion = frame.cellOcclusion.get();
-    constexpr int64_t kRows = 4; // cell rows per step
+    constexpr int64_t kRows = 4;  // cell rows per step
+    constexpr int64_t kAhead = 4; // cells ahead whose triangle's basis is fetched
     const int64_t blocks = (ch + kRows - 1) / kRows;
     const int rounds = a > 1 ? 2 : 1;
     ProgressSteps steps(progress, rounds * blocks);
@@ -344,6 +345,17 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                         if (round == 0) {
                             const std::size_t rep =
                                 a > 1 ? representativeSample(frame, cx, cy) : size_t(cy * W + cx);
+                            // The basis of the triangle a few cells on (a random read: its miss
+                            // overlaps this cell's shading).
+                            if (cx + kAhead < cw) {
+                                const uint32_t ahead = gbuffer.triangle[rep + size_t(kAhead * a)];
+                                if (ahead != GBuffer::kNone) {
+                                    const char* basis =
+                                        reinterpret_cast<const char*>(&frame.triangleBases[ahead]);
+                                    __builtin_prefetch(basis);
+                                    __builtin_prefetch(basis + sizeof(TriangleBasis) - 1);
+                                }
+                            }
                             shadeRepresentative(frame, cellOcclusion, cx, cy, rep);
                             continue;
                         }
