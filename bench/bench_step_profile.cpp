@@ -7,9 +7,6 @@
 //       build/bench_step_profile data/meshes/bunny00.off 512 1 1   # the step's instructions, 1 thread
 //   perf stat -e page-faults build/bench_step_profile data/meshes/bunny00.off 512 21 2
 //                                                            # minus the run with CALLS 1: 20 calls
-//   build/bench_step_profile MESH.off RES CALLS THREADS prepare
-//       as `voxfx voxelize` runs it: prepareVoxelizeMemory(voxelizeMemoryBound(RES^3)) before the
-//       mesh load, wait() before the first call (the wait counted in it)
 // Prints the wall time of each call.
 #include <chrono>
 #include <cstdio>
@@ -17,24 +14,16 @@
 #include <string>
 #include <utility>
 
-#include "voxfx/page_memory.hpp"
 #include "voxfx/voxfx.hpp"
 
 int main(int argc, char** argv) {
     using namespace voxfx;
-    const bool prepare = argc == 6 && std::string(argv[5]) == "prepare";
-    if (argc != 5 && !prepare) {
-        std::fprintf(stderr, "usage: %s MESH RES CALLS THREADS [prepare]\n", argv[0]);
+    if (argc != 5) {
+        std::fprintf(stderr, "usage: %s MESH RES CALLS THREADS\n", argv[0]);
         return 2;
     }
     try {
-        const int64_t n = std::atoi(argv[2]);
-        PreparedMemory prepared;
-        if (prepare) prepared = prepareVoxelizeMemory(voxelizeMemoryBound(n, n, n));
-        const auto tl = std::chrono::steady_clock::now();
         const Mesh mesh = loadMesh(argv[1]);
-        const double loadMs =
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tl).count();
         FitOptions fo;
         fo.resolution = std::atoi(argv[2]);
         const Frame frame = fitFrame(computeBounds(mesh.view()), fo);
@@ -45,22 +34,11 @@ int main(int argc, char** argv) {
         VoxelGrid last;
         for (int i = 0; i < calls; ++i) {
             const auto t0 = std::chrono::steady_clock::now();
-            double waitMs = 0;
-            if (i == 0) {
-                prepared.wait();
-                waitMs =
-                    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-            }
             VoxelGrid g = voxelize(mesh.view(), frame, vo);
             const double ms =
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
             last = std::move(g);
             std::printf("call %d: %.2f ms\n", i, ms);
-            if (i == 0 && prepare)
-                std::printf(
-                    "load %.2f ms, then waited %.2f ms for the prepared memory (in call 0); left after "
-                    "call 0: %.1f MiB\n",
-                    loadMs, waitMs, double(detail::reservedPageBytes()) / double(1 << 20));
         }
         std::printf("%lld filled voxels\n", static_cast<long long>(last.bits.count()));
     } catch (const std::exception& e) {

@@ -59,39 +59,5 @@ TEST(PageMemoryTest, VectorKeepsItsElementsWhenItGrowsAcrossTheThreshold) {
     EXPECT_EQ(std::accumulate(v.begin(), v.end(), uint64_t(0)), uint64_t(45) * 2654435761u);
 }
 
-TEST(PageMemoryTest, ReservedPagesAreHandedOutZeroAlignedAndOnlyOnce) {
-    const std::size_t before = reservedPageBytes();
-    int owner = 0;
-    reservePages(5 * kTwoMiB - 7, &owner); // rounded up to 5 huge pages
-    ASSERT_EQ(reservedPageBytes() - before, 5 * kTwoMiB);
-    auto* a = static_cast<unsigned char*>(mapPages(kTwoMiB + 1)); // two pages from the reserve
-    EXPECT_EQ(reservedPageBytes() - before, 3 * kTwoMiB);
-    auto* b = static_cast<unsigned char*>(mapPages(kPageBlockBytes)); // one more
-    EXPECT_EQ(reservedPageBytes() - before, 2 * kTwoMiB);
-    auto* c = static_cast<unsigned char*>(mapPages(3 * kTwoMiB)); // does not fit: a fresh mapping
-    EXPECT_EQ(reservedPageBytes() - before, 2 * kTwoMiB);
-    for (auto* p : {a, b, c}) EXPECT_EQ(reinterpret_cast<std::uintptr_t>(p) % kTwoMiB, 0u);
-    EXPECT_TRUE(a + 2 * kTwoMiB <= b || b + kTwoMiB <= a);
-    for (std::size_t i = 0; i < 2 * kTwoMiB; i += 4093) ASSERT_EQ(a[i], 0) << "byte " << i;
-    for (std::size_t i = 0; i < kTwoMiB; i += 4093) ASSERT_EQ(b[i], 0) << "byte " << i;
-    a[0] = 1;
-    b[kTwoMiB - 1] = 2;
-    // Given back, a range is unmapped, not reserved again.
-    unmapPages(a, kTwoMiB + 1);
-    EXPECT_EQ(reservedPageBytes() - before, 2 * kTwoMiB);
-    // Another owner's release leaves this reserve; this owner's unmaps what is left, not what was taken.
-    int other = 0;
-    releasePageReserve(&other);
-    EXPECT_EQ(reservedPageBytes() - before, 2 * kTwoMiB);
-    releasePageReserve(&owner);
-    EXPECT_EQ(reservedPageBytes(), before);
-    EXPECT_EQ(b[kTwoMiB - 1], 2);
-    auto* d = static_cast<unsigned char*>(mapPages(kTwoMiB)); // fresh again
-    EXPECT_EQ(d[0], 0);
-    unmapPages(b, kPageBlockBytes);
-    unmapPages(c, 3 * kTwoMiB);
-    unmapPages(d, kTwoMiB);
-}
-
 } // namespace
 } // namespace voxfx::detail

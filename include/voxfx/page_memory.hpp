@@ -23,18 +23,6 @@ void* mapPages(std::size_t bytes);
 /// Unmaps what mapPages(bytes) returned (the same `bytes`).
 void unmapPages(void* p, std::size_t bytes) noexcept;
 
-/// Maps `bytes` (rounded up to 2 MiB) and writes one zero into every 4 KiB page of it on the
-/// calling thread, so that the kernel zeroes those pages now, then offers them to mapPages: a
-/// later mapPages that fits in what is left takes its range from the front instead of a fresh
-/// mapping, and its first touches fault nothing. `owner` tags the pages for releasePageReserve.
-/// Throws std::bad_alloc when the mapping fails.
-void reservePages(std::size_t bytes, const void* owner);
-/// Unmaps what is left of the pages reservePages(..., owner) offered (ranges mapPages took stay
-/// with their takers).
-void releasePageReserve(const void* owner) noexcept;
-/// Bytes reservePages offered that no mapPages has taken yet (all owners).
-std::size_t reservedPageBytes() noexcept;
-
 /// std::allocator with mapPages for blocks of kPageBlockBytes or more.
 template <class T> struct PageAllocator {
     using value_type = T;

@@ -28,7 +28,6 @@
 #include "voxfx/attribute_grid.hpp"
 #include "voxfx/contains.hpp"
 #include "voxfx/device.hpp"
-#include "voxfx/prepared_memory.hpp"
 #include "voxfx/threshold.hpp"
 #include "voxfx/tiled.hpp"
 #include "voxfx/voxelize.hpp"

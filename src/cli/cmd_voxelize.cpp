@@ -1,6 +1,5 @@
 // voxfx voxelize MESH -o GRID — mesh to voxel grid in any mode, with the summary line; a volume
 // with --threshold T becomes a bit grid on its own lattice (voxelize_volume.cpp).
-#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -15,7 +14,6 @@
 #include "cli_common.hpp"
 #include "grid_input.hpp"
 #include "voxelize_volume.hpp"
-#include "voxfx/prepared_memory.hpp"
 
 namespace voxfx::cli {
 namespace {
@@ -151,31 +149,14 @@ VoxelizeRun runSparse(const Mesh& mesh, const Frame& frame, const VoxelizeOption
     return r;
 }
 
-// The whole grid's memory (and the temporaries'), mapped and zeroed by the kernel on another
-// thread beside the mesh load (voxfx/prepared_memory.hpp) where its size is known before the load
-// (--resolution or --dims) and it is small against the budget; nothing otherwise. A cold 512^3
-// voxelize step otherwise pays that zeroing under the rasterizer's first touches.
-PreparedMemory prepareWholeGridMemory(const FitOptions& fo, int64_t padding) {
-    Vec3i n{fo.resolution, fo.resolution, fo.resolution};
-    if (fo.resolution <= 0) n = fo.dims;
-    if (n.x <= 0 || n.y <= 0 || n.z <= 0) return {};
-    const int64_t extra = 2 * (std::max<int64_t>(fo.marginCells, 0) + std::max<int64_t>(padding, 0));
-    const uint64_t bytes = voxelizeMemoryBound(n.x + extra, n.y + extra, n.z + extra);
-    if (bytes > availableMemoryBytes() / 4) return {};
-    return prepareVoxelizeMemory(bytes);
-}
-
-VoxelizeRun runDense(const Mesh& mesh, const Frame& frame, VoxelizeOptions vo, const VoxelizeArgs& a,
-                     PreparedMemory& prepared) {
+VoxelizeRun runDense(const Mesh& mesh, const Frame& frame, VoxelizeOptions vo, const VoxelizeArgs& a) {
     VoxelizeRun r;
     std::string deviceNote;
     vo.deviceNote = &deviceNote;
     ProgressLine progress("voxelizing", !a.quiet);
     vo.progress = &progress;
     const auto tv = Clock::now();
-    prepared.wait(); // what is left of the zeroing beside the load counts in the step
     const VoxelGrid grid = voxelize(mesh.view(), frame, vo);
-    prepared.release(); // what the grid and its temporaries did not take
     r.voxelMs = msSince(tv);
     progress.done();
     if (!deviceNote.empty() && vo.device == Device::Cuda && !a.quiet)
@@ -218,7 +199,6 @@ int runVoxelize(const VoxelizeArgs& a) {
     const bool canSparse = !a.dense && vo.slicing == Slicing::Uniform && vo.device == Device::Cpu;
     const bool streamable = format == GridFormat::Binvox || format == GridFormat::Nrrd;
     fo.checkDenseMemory = !canSparse || !(format == GridFormat::Vdb || streamable);
-    PreparedMemory prepared = prepareWholeGridMemory(fo, a.fit.padding);
 
     MeshLoadReport report;
     const Mesh mesh = loadMesh(a.input, &report);
@@ -258,8 +238,7 @@ int runVoxelize(const VoxelizeArgs& a) {
               : vo.slicing != Slicing::Uniform ? "local slicing needs the whole grid"
                                                : "--device needs the whole grid";
     }
-    if (sparse) prepared.release();
-    VoxelizeRun r = sparse ? runSparse(mesh, frame, vo, a) : runDense(mesh, frame, vo, a, prepared);
+    VoxelizeRun r = sparse ? runSparse(mesh, frame, vo, a) : runDense(mesh, frame, vo, a);
     r.writeMs += moduleMs;
     if (sparse)
         r.path = detail::concat(r.tiled ? "tiled: " : "whole grid, then the tree: ", why);
