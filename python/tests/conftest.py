@@ -51,8 +51,11 @@ def gil_stall():
     """gil_stall(call) runs call() while a Python thread takes timestamps and returns the call's
     duration and the longest gap between timestamps within it: with the GIL held for the whole
     call the gap is most of the call (around its start and end the interpreter may switch threads
-    either way). The call should use one thread, so that a core stays free for the counter."""
-    def run(call):
+    either way). The call should use one thread, so that a core stays free for the counter. Of up
+    to three tries, the one with the smallest gap for its duration counts: a machine busy with other
+    work (ctest -j beside other jobs) can keep the counter off the CPU for part of one call, while
+    with the GIL held every try stalls."""
+    def once(call):
         stamps = []
         stop = threading.Event()
 
@@ -71,5 +74,15 @@ def gil_stall():
         t.join()
         inside = [t0] + [s for s in stamps if t0 < s < t1] + [t1]
         return t1 - t0, max(b - a for a, b in zip(inside, inside[1:]))
+
+    def run(call):
+        best = None
+        for _ in range(3):
+            duration, gap = once(call)
+            if best is None or gap / duration < best[1] / best[0]:
+                best = (duration, gap)
+            if gap < 0.25 * duration:
+                break
+        return best
 
     return run
