@@ -482,9 +482,8 @@ py::list taskMeshes(const PyMesh& mesh, const Frame& frame, int64_t brick, int64
     return out;
 }
 
-} // namespace
-
-void bindVoxelize(py::module_& m) {
+// voxfx.voxelize: a mesh (or vertices and faces) into a grid, dense or sparse.
+void bindVoxelizeFunction(py::module_& m) {
     m.def(
         "voxelize",
         [](const py::object& meshObj, const py::object& faces, std::optional<Int> resolution,
@@ -552,7 +551,10 @@ void bindVoxelize(py::module_& m) {
         "voxfx.SparseGrid voxelized tile by tile, no dense grid at any point (the same voxels; its "
         "coordinates() are the (N, 3) int32 cells; VOXFX_MEMORY_LIMIT caps it; like= takes no sparse "
         "grid). Ctrl-C stops it.");
+}
 
+// voxfx.dask's planning steps (private): the frame a grid gets, and its stacks of bricks voxelized.
+void bindDaskPlanning(py::module_& m) {
     m.def(
         "_grid_frame",
         [](const py::object& meshObj, std::optional<Int> resolution, std::optional<double> voxelSize,
@@ -634,7 +636,11 @@ void bindVoxelize(py::module_& m) {
         "of those bytes (a zarr DirectoryStore's chunks) and not handed to visit_stack; with zstd_level > 0 "
         "(a store of PackBits then numcodecs.Zstd(level=zstd_level)) mixed bricks too, compressed as "
         "numcodecs does; returns how many files were written.");
+}
 
+// voxfx.dask's region steps (private): the fill a mesh needs, its triangles split per task, a
+// region voxelized into a sparse .vdb.
+void bindDaskRegions(py::module_& m) {
     m.def(
         "_resolve_fill",
         [](const py::object& meshObj, const py::tuple& frame, const std::string& mode,
@@ -681,7 +687,14 @@ void bindVoxelize(py::module_& m) {
         "One task of voxfx.dask.voxelize_regions: the stacks (x0, y0, x1, y1) of the grid `frame` as a "
         "sparse grid written to the .vdb `path` (atomically; the whole grid's frame and dims, so that "
         "`voxfx merge` unites the regions); returns its filled cells.");
+}
 
+} // namespace
+
+void bindVoxelize(py::module_& m) {
+    bindVoxelizeFunction(m);
+    bindDaskPlanning(m);
+    bindDaskRegions(m);
     m.def(
         "cuda_status",
         [] {

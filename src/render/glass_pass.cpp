@@ -438,6 +438,44 @@ void addRookSamples(FrameState& f, const ShowsGlass& showsGlass, const Trace& tr
     });
 }
 
+// The light arriving at `from` (on the glass) along `dir` from behind it: the opaque scene's shading
+// where a ray meets it (what it landed on into `landing`), else the environment (blurred by `blur`).
+Vec3f lightBehindGlass(FrameState& frame, const GlassSetup& setup, const Vec3d& from, const Vec3d& dir,
+                       double blur, Landing& landing) {
+    const SceneGeometry& geometry = frame.geometry;
+    if (const TriangleTracer* behind = setup.behind.get()) {
+        // The opaque scene holds no glass triangle, so `from` (on the glass) left none of its
+        // triangles: a hit within epsilon counts, on either side (a glass box standing on the
+        // ground leaves through its bottom into the ground at t = 0 up to rounding; skipping
+        // it showed the sky below the ground through the box).
+        const double epsilon = setup.epsilon;
+        TriangleTracer::Hit h =
+            behind->intersect(from - dir * epsilon, dir, 0, std::numeric_limits<double>::infinity());
+        h.t -= epsilon;
+        if (h.hit) {
+            const size_t t = setup.opaqueTriangle[h.triangle];
+            const uint32_t ia = geometry.mesh.indices[3 * t], ib = geometry.mesh.indices[3 * t + 1],
+                           ic = geometry.mesh.indices[3 * t + 2];
+            const Vec3d a(geometry.mesh.positions[ia]), b(geometry.mesh.positions[ib]),
+                c(geometry.mesh.positions[ic]);
+            SurfacePoint s;
+            s.position = from + dir * h.t;
+            s.geometricNormal = normalize(cross(b - a, c - a));
+            if (dot(s.geometricNormal, dir) > 0) s.geometricNormal = -s.geometricNormal;
+            s.normal = normalize(Vec3d(geometry.normals[ia]) * (1 - h.u - h.v) +
+                                 Vec3d(geometry.normals[ib]) * h.u + Vec3d(geometry.normals[ic]) * h.v);
+            if (!(length(s.normal) > 0)) s.normal = s.geometricNormal;
+            if (dot(s.normal, s.geometricNormal) < 0) s.normal = -s.normal;
+            s.material = geometry.triangleMaterial[t];
+            landing.object = uint64_t(geometry.triangleMesh[t]) << 32 | s.material;
+            landing.triangle = h.triangle;
+            // shadePoint applies the exposure; the caller applies it to the whole glass radiance.
+            return shadePoint(frame, s, from) * (1.0f / frame.options.exposure);
+        }
+    }
+    return frame.environment->lookup(dir, blur);
+}
+
 } // namespace
 
 void shadeGlass(FrameState& frame) {
@@ -471,40 +509,8 @@ void shadeGlass(FrameState& frame) {
     const GlassSetup& setup = *cached;
     const std::vector<uint8_t>& isGlass = setup.isGlass;
     const BuiltGlass& built = setup.built;
-    const TriangleTracer* behind = setup.behind.get();
-    const double epsilon = setup.epsilon;
-    const std::vector<uint32_t>& opaqueTriangle = setup.opaqueTriangle;
-    auto incoming = [&](const Vec3d& from, const Vec3d& dir, double blur, Landing& landing) -> Vec3f {
-        if (behind) {
-            // The opaque scene holds no glass triangle, so `from` (on the glass) left none of its
-            // triangles: a hit within epsilon counts, on either side (a glass box standing on the
-            // ground leaves through its bottom into the ground at t = 0 up to rounding; skipping
-            // it showed the sky below the ground through the box).
-            TriangleTracer::Hit h =
-                behind->intersect(from - dir * epsilon, dir, 0, std::numeric_limits<double>::infinity());
-            h.t -= epsilon;
-            if (h.hit) {
-                const size_t t = opaqueTriangle[h.triangle];
-                const uint32_t ia = geometry.mesh.indices[3 * t], ib = geometry.mesh.indices[3 * t + 1],
-                               ic = geometry.mesh.indices[3 * t + 2];
-                const Vec3d a(geometry.mesh.positions[ia]), b(geometry.mesh.positions[ib]),
-                    c(geometry.mesh.positions[ic]);
-                SurfacePoint s;
-                s.position = from + dir * h.t;
-                s.geometricNormal = normalize(cross(b - a, c - a));
-                if (dot(s.geometricNormal, dir) > 0) s.geometricNormal = -s.geometricNormal;
-                s.normal = normalize(Vec3d(geometry.normals[ia]) * (1 - h.u - h.v) +
-                                     Vec3d(geometry.normals[ib]) * h.u + Vec3d(geometry.normals[ic]) * h.v);
-                if (!(length(s.normal) > 0)) s.normal = s.geometricNormal;
-                if (dot(s.normal, s.geometricNormal) < 0) s.normal = -s.normal;
-                s.material = geometry.triangleMaterial[t];
-                landing.object = uint64_t(geometry.triangleMesh[t]) << 32 | s.material;
-                landing.triangle = h.triangle;
-                // shadePoint applies the exposure; the caller applies it to the whole glass radiance.
-                return shadePoint(frame, s, from) * (1.0f / options.exposure);
-            }
-        }
-        return env.lookup(dir, blur);
+    const auto incoming = [&](const Vec3d& from, const Vec3d& dir, double blur, Landing& landing) {
+        return lightBehindGlass(frame, setup, from, dir, blur, landing);
     };
     const auto t1 = Clock::now();
     frame.result.glass.prepareMs += std::chrono::duration<double, std::milli>(t1 - t0).count();

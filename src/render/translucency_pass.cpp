@@ -18,6 +18,66 @@
 
 namespace voxfx::detail {
 
+namespace {
+
+// The samples the passes shade that show a translucent surface: their depth, the rest infinity;
+// empty where there is none.
+std::vector<float> translucentDepths(const FrameState& f, const std::vector<uint8_t>& translucent) {
+    const SceneGeometry& g = f.geometry;
+    const GBuffer& gb = f.gbuffer;
+    std::vector<float> front(gb.depth.size(), std::numeric_limits<float>::infinity());
+    bool anySample = false;
+    for (int64_t y = 0; y < f.height; ++y)
+        for (int64_t x = 0; x < f.width; ++x) {
+            const auto i = size_t(y * f.width + x);
+            const uint32_t t = gb.triangle[i];
+            if (t == GBuffer::kNone || !translucent[g.triangleMaterial[t]] || !shadedSample(f, x, y))
+                continue;
+            front[i] = gb.depth[i];
+            anySample = true;
+        }
+    if (!anySample) front.clear();
+    return front;
+}
+
+// What lies behind: the scene without the translucent meshes (their triangles collapsed to a
+// point, so the triangle numbers and surfaceAt stay valid); the translucent triangles' vertex
+// indices appended to `solid`.
+SceneGeometry withoutTranslucent(const SceneGeometry& g, const std::vector<uint8_t>& translucent,
+                                 std::vector<uint32_t>& solid) {
+    SceneGeometry behind = g;
+    for (std::size_t t = 0; t < g.drawnTriangles; ++t) {
+        if (!translucent[g.triangleMaterial[t]]) continue;
+        for (int k = 0; k < 3; ++k) solid.push_back(g.mesh.indices[3 * t + k]);
+        behind.mesh.indices[3 * t + 1] = behind.mesh.indices[3 * t + 2] = behind.mesh.indices[3 * t];
+    }
+    return behind;
+}
+
+// The taps of a blurred sample: kTaps points of a Vogel spiral over the disc of its radius (the
+// same pattern for every sample, so the blur is smooth and deterministic); a tap lands on the
+// sample whose cell holds it, clamped to the W x H image.
+struct BlurTaps {
+    static constexpr int kTaps = 32;
+    std::array<std::array<double, 2>, kTaps> taps;
+    int64_t W, H;
+    BlurTaps(int64_t width, int64_t height) : W(width), H(height) {
+        for (int t = 0; t < kTaps; ++t) {
+            const double rho = std::sqrt((double(t) + 0.5) / kTaps), phi = 2.399963229728653 * double(t);
+            taps[size_t(t)] = {rho * std::cos(phi), rho * std::sin(phi)};
+        }
+    }
+    // The sample tap t of the sample (x, y) with blur radius r lands on; its position in (tx, ty).
+    size_t at(int64_t x, int64_t y, double r, int t, double& tx, double& ty) const {
+        tx = std::clamp(double(x) + 0.5 + r * taps[size_t(t)][0], 0.5, double(W) - 0.5);
+        ty = std::clamp(double(y) + 0.5 + r * taps[size_t(t)][1], 0.5, double(H) - 0.5);
+        return size_t(int64_t(ty) * W + int64_t(tx));
+    }
+};
+constexpr int kBlurTaps = BlurTaps::kTaps;
+
+} // namespace
+
 void compositeTranslucency(FrameState& f) {
     const std::vector<Material>& materials = f.scene.materials;
     std::vector<uint8_t> translucent(materials.size(), 0);
@@ -28,29 +88,11 @@ void compositeTranslucency(FrameState& f) {
     const SceneGeometry& g = f.geometry;
     const GBuffer& gb = f.gbuffer;
     const int64_t W = f.width, H = f.height;
-    // The samples the passes shade that show a translucent surface: their depth, the rest none.
     const float none = std::numeric_limits<float>::infinity();
-    std::vector<float> front(gb.depth.size(), none);
-    bool anySample = false;
-    for (int64_t y = 0; y < H; ++y)
-        for (int64_t x = 0; x < W; ++x) {
-            const auto i = size_t(y * W + x);
-            const uint32_t t = gb.triangle[i];
-            if (t == GBuffer::kNone || !translucent[g.triangleMaterial[t]] || !shadedSample(f, x, y))
-                continue;
-            front[i] = gb.depth[i];
-            anySample = true;
-        }
-    if (!anySample) return;
-    // What lies behind: the G-buffer of the scene without the translucent meshes (their triangles
-    // collapsed to a point, so the triangle numbers and surfaceAt stay valid).
-    SceneGeometry behind = g;
+    const std::vector<float> front = translucentDepths(f, translucent);
+    if (front.empty()) return;
     std::vector<uint32_t> solid;
-    for (std::size_t t = 0; t < g.drawnTriangles; ++t) {
-        if (!translucent[g.triangleMaterial[t]]) continue;
-        for (int k = 0; k < 3; ++k) solid.push_back(g.mesh.indices[3 * t + k]);
-        behind.mesh.indices[3 * t + 1] = behind.mesh.indices[3 * t + 2] = behind.mesh.indices[3 * t];
-    }
+    const SceneGeometry behind = withoutTranslucent(g, translucent, solid);
     const GBuffer back = renderGBuffer(behind, gb.frame);
     MeshView solids;
     solids.positions = &g.mesh.positions[0].x;
@@ -94,19 +136,9 @@ void compositeTranslucency(FrameState& f) {
                 radius[i] = float(focal * std::tan(a) * gap);
             }
     });
-    // The taps of a blurred sample: kBlurTaps points of a Vogel spiral over the disc of its radius
-    // (the same pattern for every sample, so the blur is smooth and deterministic); a tap lands on
-    // the sample whose cell holds it, clamped to the image.
-    constexpr int kBlurTaps = 32;
-    std::array<std::array<double, 2>, kBlurTaps> taps;
-    for (int t = 0; t < kBlurTaps; ++t) {
-        const double rho = std::sqrt((double(t) + 0.5) / kBlurTaps), phi = 2.399963229728653 * double(t);
-        taps[size_t(t)] = {rho * std::cos(phi), rho * std::sin(phi)};
-    }
-    auto tapAt = [&](int64_t x, int64_t y, double r, int t, double& tx, double& ty) {
-        tx = std::clamp(double(x) + 0.5 + r * taps[size_t(t)][0], 0.5, double(W) - 0.5);
-        ty = std::clamp(double(y) + 0.5 + r * taps[size_t(t)][1], 0.5, double(H) - 0.5);
-        return size_t(int64_t(ty) * W + int64_t(tx));
+    const BlurTaps taps(W, H);
+    const auto tapAt = [&](int64_t x, int64_t y, double r, int t, double& tx, double& ty) {
+        return taps.at(x, y, r, t, tx, ty);
     };
     // The samples of the scene behind that some tap (or an unblurred sample itself) reads: shaded
     // once each. state: 1 needed, 2 a surface (behindLight), 3 none (the environment).
