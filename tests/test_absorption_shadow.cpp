@@ -41,24 +41,36 @@ Vec3f columnByDefinition(const std::vector<AttributeColumns>& columns,
     return {float(std::exp(-optical[0])), float(std::exp(-optical[1])), float(std::exp(-optical[2]))};
 }
 
+// Three groups of foliage (600 leaves), each its own colour and depth per unit, and the sun's 64 x
+// 48 view of them.
+struct ColouredLeafGroups {
+    Scene scene = test::leafScene(600, 3, 11);
+    std::vector<std::vector<float>> absorption;
+    std::vector<AbsorptionShadowMap::Group> groups;
+    LightView view;
+    ColouredLeafGroups() {
+        Box3d bounds;
+        for (std::size_t g = 1; g <= 3; ++g) {
+            absorption.emplace_back(scene.meshes[g].mesh.triangleCount(), 0.2f + 0.15f * float(g));
+            bounds.extend(computeBounds(scene.meshes[g].mesh.view()));
+        }
+        for (std::size_t g = 1; g <= 3; ++g)
+            groups.push_back({scene.meshes[g].mesh.view(), absorption[g - 1],
+                              Vec3f{0.3f * float(g), 1.0f, 1.6f - 0.4f * float(g)}, Vec3f{0, 0, 0}});
+        view = makeLightViews(test::sun(), bounds, 64, 48)[0];
+    }
+};
+
 TEST(ShadowTest, AbsorptionOfColouredGridsIsExpOfEveryGridsWritesInFront) {
     // Three colour groups of foliage, each its own grid with its own RGB depth per unit, centre and
     // conservative writes, uniform slicing (the grids share a frame and are read as one) and local
     // (each grid fits its own): at random points the lookup must be exp(-the summed depth of every
     // write in front of p's skipped cells), and the bilinear lookup with no normal the weighted sum
     // of that over the four columns around p.
-    const Scene s = test::leafScene(600, 3, 11);
-    std::vector<std::vector<float>> absorption;
-    Box3d bounds;
-    for (std::size_t g = 1; g <= 3; ++g) {
-        absorption.emplace_back(s.meshes[g].mesh.triangleCount(), 0.2f + 0.15f * float(g));
-        bounds.extend(computeBounds(s.meshes[g].mesh.view()));
-    }
-    std::vector<AbsorptionShadowMap::Group> groups;
-    for (std::size_t g = 1; g <= 3; ++g)
-        groups.push_back({s.meshes[g].mesh.view(), absorption[g - 1],
-                          Vec3f{0.3f * float(g), 1.0f, 1.6f - 0.4f * float(g)}, Vec3f{0, 0, 0}});
-    const LightView view = makeLightViews(test::sun(), bounds, 64, 48)[0];
+    const ColouredLeafGroups leaves;
+    const std::vector<AbsorptionShadowMap::Group>& groups = leaves.groups;
+    const std::vector<std::vector<float>>& absorption = leaves.absorption;
+    const LightView& view = leaves.view;
     const int64_t W = view.frame.width(), H = view.frame.height();
     for (const Coverage coverage : {Coverage::Center, Coverage::Conservative})
         for (const Slicing slicing : {Slicing::Uniform, Slicing::Local}) {
@@ -94,23 +106,14 @@ TEST(ShadowTest, TheSunsAbsorptionLookupWithANormalReadsEachColumnWhereTheReceiv
     // of the four columns around p, each at the depth where the plane through p with normal n
     // crosses the column's centre line (solved in world space, within two column footprints of p's
     // depth); points with a crossing within 1e-9 slices of a slice boundary left out (few).
-    const Scene s = test::leafScene(600, 3, 11);
-    std::vector<std::vector<float>> absorption;
-    Box3d bounds;
-    for (std::size_t g = 1; g <= 3; ++g) {
-        absorption.emplace_back(s.meshes[g].mesh.triangleCount(), 0.2f + 0.15f * float(g));
-        bounds.extend(computeBounds(s.meshes[g].mesh.view()));
-    }
-    std::vector<AbsorptionShadowMap::Group> groups;
-    for (std::size_t g = 1; g <= 3; ++g)
-        groups.push_back({s.meshes[g].mesh.view(), absorption[g - 1],
-                          Vec3f{0.3f * float(g), 1.0f, 1.6f - 0.4f * float(g)}, Vec3f{0, 0, 0}});
-    const LightView view = makeLightViews(test::sun(), bounds, 64, 48)[0];
+    const ColouredLeafGroups leaves;
+    const std::vector<AbsorptionShadowMap::Group>& groups = leaves.groups;
+    const std::vector<std::vector<float>>& absorption = leaves.absorption;
+    const LightView& view = leaves.view;
     ASSERT_TRUE(view.frame.isOriented());
     const Frame& f = view.frame;
     const int64_t W = f.width(), H = f.height();
     std::mt19937_64 rng(17);
-    std::uniform_real_distribution<double> unit(-1, 1);
     for (const Coverage coverage : {Coverage::Center, Coverage::Conservative}) {
         const AbsorptionShadowMap map = AbsorptionShadowMap::build(view, groups, coverage, Slicing::Uniform);
         AttributeOptions ao;
@@ -122,18 +125,11 @@ TEST(ShadowTest, TheSunsAbsorptionLookupWithANormalReadsEachColumnWhereTheReceiv
             columns.push_back(voxelizeAttributeColumns(groups[g].mesh, view.frame, absorption[g], ao));
         int compared = 0, shaded = 0, onBoundary = 0, tilted = 0;
         test::forEachCoveredPoint(view, [&](int i, const Vec3d& p, const Vec3d& g, int64_t, int64_t skip) {
-            Vec3d n = normalize(Vec3d{unit(rng), unit(rng), unit(rng)});
-            if (i % 2) n = normalize(n - f.forward() * (dot(n, f.forward()) * 0.999));
+            const Vec3d n = test::randomReceiverNormal(rng, f, i);
             bool boundary = false;
             const Vec3f want = test::bilinearByDefinition(W, H, g, [&](int64_t c) {
-                const double x = double(c % W) + 0.5, y = double(c / W) + 0.5;
-                const Vec3d L0 = f.worldFromGrid({x, y, g.z}), L1 = f.worldFromGrid({x, y, g.z + 1});
-                const double reach = 2 * length(f.worldFromGrid(g + Vec3d{1, 0, 0}) - p) / length(L1 - L0);
-                const double d = g.z + std::clamp(-dot(n, L0 - p) / dot(n, L1 - L0), -reach, reach);
-                const double t = f.depthToSlice(c)(d);
-                boundary = boundary || std::abs(t - std::round(t)) < 1e-9;
-                tilted += std::abs(d - g.z) > 0.5;
-                return columnByDefinition(columns, groups, c, d, skip);
+                return columnByDefinition(columns, groups, c,
+                                          test::receiverPlaneDepth(f, p, g, n, c, boundary, tilted), skip);
             });
             if (boundary) {
                 ++onBoundary;

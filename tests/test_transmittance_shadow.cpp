@@ -121,21 +121,33 @@ Vec3f columnByDefinition(const TransmittanceShadowMap& map, std::span<const Vec3
     return out;
 }
 
+// Three groups of foliage (600 leaves) as separate casters, their crossing factors and the sun's
+// 64 x 48 view of them.
+struct LeafGroups {
+    Scene scene = leafScene(600, 3, 11);
+    std::vector<MeshView> groups;
+    std::vector<Vec3f> factors;
+    LightView view;
+    LeafGroups() {
+        Box3d bounds;
+        for (std::size_t g = 1; g <= 3; ++g) {
+            groups.push_back(scene.meshes[g].mesh.view());
+            factors.push_back(scene.materials[scene.meshes[g].material].shadowCrossingTransmittance());
+            bounds.extend(computeBounds(groups.back()));
+        }
+        view = makeLightViews(sun(), bounds, 64, 48)[0];
+    }
+};
+
 TEST(ShadowTest, TransmittanceIsEachChannelsFactorToThePowerOfItsCellsInFront) {
     // Three colour channels of foliage, surface and conservative grids: at random points the lookup
     // must be the product over the channels of each one's factor to the power of its cells in front
     // of p's skipped cells, counted bit by bit; the bilinear lookup with no normal (each column at
     // p's depth) the weighted sum of those products over the four columns around p.
-    const Scene s = leafScene(600, 3, 11);
-    std::vector<MeshView> groups;
-    std::vector<Vec3f> factors;
-    Box3d bounds;
-    for (std::size_t g = 1; g <= 3; ++g) {
-        groups.push_back(s.meshes[g].mesh.view());
-        factors.push_back(s.materials[s.meshes[g].material].shadowCrossingTransmittance());
-        bounds.extend(computeBounds(groups.back()));
-    }
-    const LightView view = makeLightViews(sun(), bounds, 64, 48)[0];
+    const LeafGroups leaves;
+    const std::vector<MeshView>& groups = leaves.groups;
+    const std::vector<Vec3f>& factors = leaves.factors;
+    const LightView& view = leaves.view;
     const int64_t W = view.frame.width(), H = view.frame.height();
     for (const VoxelizeMode mode : {VoxelizeMode::Surface, VoxelizeMode::Conservative}) {
         const TransmittanceShadowMap map =
@@ -167,21 +179,14 @@ TEST(ShadowTest, TheSunsBilinearLookupWithANormalReadsEachColumnWhereTheReceiver
     // line L(d) = worldFromGrid(x, y, d) is affine in d), kept within two column footprints of p's
     // depth. Points whose crossing lies within 1e-9 slices of a slice boundary are left out (the
     // rounding of either side may put it on the other); they must be few.
-    const Scene s = leafScene(600, 3, 11);
-    std::vector<MeshView> groups;
-    std::vector<Vec3f> factors;
-    Box3d bounds;
-    for (std::size_t g = 1; g <= 3; ++g) {
-        groups.push_back(s.meshes[g].mesh.view());
-        factors.push_back(s.materials[s.meshes[g].material].shadowCrossingTransmittance());
-        bounds.extend(computeBounds(groups.back()));
-    }
-    const LightView view = makeLightViews(sun(), bounds, 64, 48)[0];
+    const LeafGroups leaves;
+    const std::vector<MeshView>& groups = leaves.groups;
+    const std::vector<Vec3f>& factors = leaves.factors;
+    const LightView& view = leaves.view;
     ASSERT_TRUE(view.frame.isOriented());
     const Frame& f = view.frame;
     const int64_t W = f.width(), H = f.height();
     std::mt19937_64 rng(17);
-    std::uniform_real_distribution<double> unit(-1, 1);
     for (const VoxelizeMode mode : {VoxelizeMode::Surface, VoxelizeMode::Conservative}) {
         const TransmittanceShadowMap map =
             TransmittanceShadowMap::build(view, groups, factors, mode, Slicing::Uniform);
@@ -189,18 +194,10 @@ TEST(ShadowTest, TheSunsBilinearLookupWithANormalReadsEachColumnWhereTheReceiver
         int compared = 0, shaded = 0, onBoundary = 0, tilted = 0;
         test::forEachCoveredPoint(view, [&](int i, const Vec3d& p, const Vec3d& g, int64_t, int64_t skip) {
             // Half the normals nearly along the light's rays (crossings clamped at the reach).
-            Vec3d n = normalize(Vec3d{unit(rng), unit(rng), unit(rng)});
-            if (i % 2) n = normalize(n - f.forward() * (dot(n, f.forward()) * 0.999));
+            const Vec3d n = test::randomReceiverNormal(rng, f, i);
             bool boundary = false;
             const auto depthOf = [&](int64_t c) {
-                const double x = double(c % W) + 0.5, y = double(c / W) + 0.5;
-                const Vec3d L0 = f.worldFromGrid({x, y, g.z}), L1 = f.worldFromGrid({x, y, g.z + 1});
-                const double reach = 2 * length(f.worldFromGrid(g + Vec3d{1, 0, 0}) - p) / length(L1 - L0);
-                const double d = g.z + std::clamp(-dot(n, L0 - p) / dot(n, L1 - L0), -reach, reach);
-                const double t = f.depthToSlice(c)(d);
-                boundary = boundary || std::abs(t - std::round(t)) < 1e-9;
-                tilted += std::abs(d - g.z) > 0.5;
-                return d;
+                return test::receiverPlaneDepth(f, p, g, n, c, boundary, tilted);
             };
             const Vec3f want = test::bilinearByDefinition(W, H, g, [&](int64_t c) {
                 return columnByDefinition(map, factors, runs, c, depthOf(c), skip);

@@ -106,6 +106,31 @@ inline Scene leafScene(int leaves, int groups, uint64_t seed, float opacity = 0.
 }
 
 /// A directional light shining along `dir` (normalized), named "sun".
+/// Where the plane through p (grid position g of the oriented frame f) with normal n crosses the
+/// centre line of column c: solved in world space (the line L(d) = worldFromGrid(x, y, d) is affine
+/// in d), kept within two column footprints of p's depth. A crossing within 1e-9 slices of a slice
+/// boundary sets `boundary` (the rounding of either side may put it on the other); one more than
+/// half a slice off p's depth counts into `tilted`.
+inline double receiverPlaneDepth(const Frame& f, const Vec3d& p, const Vec3d& g, const Vec3d& n, int64_t c,
+                                 bool& boundary, int& tilted) {
+    const double x = double(c % f.width()) + 0.5, y = double(c / f.width()) + 0.5;
+    const Vec3d L0 = f.worldFromGrid({x, y, g.z}), L1 = f.worldFromGrid({x, y, g.z + 1});
+    const double reach = 2 * length(f.worldFromGrid(g + Vec3d{1, 0, 0}) - p) / length(L1 - L0);
+    const double d = g.z + std::clamp(-dot(n, L0 - p) / dot(n, L1 - L0), -reach, reach);
+    const double t = f.depthToSlice(c)(d);
+    boundary = boundary || std::abs(t - std::round(t)) < 1e-9;
+    tilted += std::abs(d - g.z) > 0.5;
+    return d;
+}
+
+/// A random unit normal for lookup i; odd ones nearly along the rays of f (their crossings clamp).
+inline Vec3d randomReceiverNormal(std::mt19937_64& rng, const Frame& f, int i) {
+    std::uniform_real_distribution<double> unit(-1, 1);
+    Vec3d n = normalize(Vec3d{unit(rng), unit(rng), unit(rng)});
+    if (i % 2) n = normalize(n - f.forward() * (dot(n, f.forward()) * 0.999));
+    return n;
+}
+
 inline Light sun(Vec3d dir = {0.3, -1, 0.2}) {
     Light l;
     l.name = "sun";
