@@ -346,9 +346,7 @@ Vec3f AbsorptionShadow::visibility(const Vec3d& p, const Vec3d& n) const {
     const int64_t skip = options_.grid.skipCells;
     const Vec3f v = options_.grid.bilinear ? m.transmittanceBilinear(q, skip, n, options_.grid.sharpness)
                                            : m.transmittance(q, skip);
-    // No glass (fresnel_ empty): the pass is 1, and v * 1 is v.
-    return fresnel_.empty() ? v
-                            : v * float(detail::glassFresnelPass(fresnel_, views_, i, q, n, options_.grid));
+    return v * float(detail::glassFresnelPass(fresnel_, views_, i, q, n, options_.grid));
 }
 
 AbsorptionShadow::Stats AbsorptionShadow::stats() const {

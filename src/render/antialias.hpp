@@ -54,6 +54,31 @@ float shownLuma(const Vec3f& c, ToneMap t);
 /// and the volume pass (every sample) refine by it.
 bool curvesAcrossNeighbours(const FrameState& frame, int64_t cx, int64_t cy);
 
+/// The cells a cell of an image-space refinement lattice at spacing h takes its value from (the glass
+/// and volume passes' lattices, after Levoy 1990): the two along x where cy is a multiple of 2h
+/// ((cx - h, cy), (cx + h, cy)), else the two along y where cx is ((cx, cy - h), (cx, cy + h)), else
+/// the four corners ((cx -+ h, cy - h), then (cx -+ h, cy + h)). May lie outside the image.
+struct LatticeNeighbours {
+    int n = 0;
+    int64_t x[4] = {}, y[4] = {};
+    bool alongX = false, alongY = false;
+};
+inline LatticeNeighbours latticeNeighbours(int64_t cx, int64_t cy, int64_t h) {
+    LatticeNeighbours l;
+    l.alongX = (cy / h) % 2 == 0;
+    l.alongY = !l.alongX && (cx / h) % 2 == 0;
+    if (l.alongX) {
+        l.x[0] = cx - h, l.x[1] = cx + h, l.y[0] = l.y[1] = cy, l.n = 2;
+    } else if (l.alongY) {
+        l.x[0] = l.x[1] = cx, l.y[0] = cy - h, l.y[1] = cy + h, l.n = 2;
+    } else {
+        l.x[0] = l.x[2] = cx - h, l.x[1] = l.x[3] = cx + h, l.y[0] = l.y[1] = cy - h,
+        l.y[2] = l.y[3] = cy + h;
+        l.n = 4;
+    }
+    return l;
+}
+
 /// Whether the passes shade sample (x, y) (every sample when adaptive is 1).
 bool shadedSample(const FrameState& frame, int64_t x, int64_t y);
 

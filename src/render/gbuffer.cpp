@@ -28,7 +28,6 @@ struct NearestFragmentConsumer {
         int64_t width;
         double nearDepth;
         GBuffer& g;
-        int64_t end; ///< the row's end (the tile's rows are its own)
         void fragment(int64_t x, int64_t y, double depth, uint32_t triangle, bool) {
             if (!(depth >= nearDepth)) return; // the rasterizer keeps geometry in front of near
             const auto i = size_t(y * width + x);
@@ -41,9 +40,9 @@ struct NearestFragmentConsumer {
         }
 #ifdef __AVX2__
         // Four neighbours of a row at once, branch-free: lane k is fragment(x + k, ...)'s test
-        // and writes (the depth as float, the same comparisons). The tile owns its rows, so the
-        // four are read and written back whole (a lane it does not cover keeps its value); at the
-        // row's end, masked to the covered lanes (nothing past the row is touched).
+        // and writes (the depth as float, the same comparisons). A tile is whole rows (Tile), so
+        // the four are read and written back whole (a lane it does not cover keeps its value); at
+        // the row's end, masked to the covered lanes (nothing past the row is touched).
         void fragments(int64_t x, int64_t y, const double* depth, unsigned bits, uint32_t triangle, bool) {
             const __m256d d = _mm256_loadu_pd(depth);
             // !(depth >= nearDepth) leaves the lane (NaN too: an ordered comparison).
@@ -54,7 +53,7 @@ struct NearestFragmentConsumer {
             const auto i = size_t(y * width + x);
             float* depthAt = g.depth.data() + i;
             auto* triangleAt = reinterpret_cast<__m128i*>(g.triangle.data() + i);
-            const bool whole = x + 4 <= end;
+            const bool whole = x + 4 <= width;
             const __m128 f = _mm256_cvtpd_ps(d); // float(depth), rounded to nearest as the cast
             const __m128 old = whole ? _mm_loadu_ps(depthAt) : _mm_maskload_ps(depthAt, mask);
             const __m128i oldTriangle = whole ? _mm_loadu_si128(triangleAt)
@@ -78,7 +77,7 @@ struct NearestFragmentConsumer {
 #endif
         void finish() {}
     };
-    Sink tile(const Tile&) const { return {width, nearDepth, g, width}; }
+    Sink tile(const Tile&) const { return {width, nearDepth, g}; }
 };
 
 } // namespace

@@ -207,8 +207,8 @@ GlassFresnelViews buildGlassFresnelViews(const Scene& scene, const std::vector<L
     return out;
 }
 
-double glassFresnelPass(const GlassFresnelViews& fresnel, const std::vector<LightView>& views, int i,
-                        const Vec3d& q, const Vec3d& n, const LightGridOptions& grid) {
+double glassFresnelPassThrough(const GlassFresnelViews& fresnel, const std::vector<LightView>& views, int i,
+                               const Vec3d& q, const Vec3d& n, const LightGridOptions& grid) {
     if (i < 0 || size_t(i) >= fresnel.size() || fresnel[size_t(i)]->empty()) return 1;
     const LightView& view = views[size_t(i)];
     if (!view.covers(q)) return 1;

@@ -64,9 +64,15 @@ private:
 using GlassFresnelViews = std::vector<std::shared_ptr<const GlassCrossingFresnel>>;
 GlassFresnelViews buildGlassFresnelViews(const Scene& scene, const std::vector<LightView>& views,
                                          bool beyondNormalIncidence);
+/// glassFresnelPass where the scene has shadow-casting glass (fresnel not empty).
+double glassFresnelPassThrough(const GlassFresnelViews& fresnel, const std::vector<LightView>& views, int i,
+                               const Vec3d& q, const Vec3d& n, const LightGridOptions& grid);
 /// The fraction the glass crossings in front of lookup point q pass, through view i's columns as the
-/// light grid's lookup reads them (bilinear and sharpened, or q's column; grid.skipCells).
-double glassFresnelPass(const GlassFresnelViews& fresnel, const std::vector<LightView>& views, int i,
-                        const Vec3d& q, const Vec3d& n, const LightGridOptions& grid);
+/// light grid's lookup reads them (bilinear and sharpened, or q's column; grid.skipCells). Without
+/// shadow-casting glass 1, here without a call (every light-grid lookup asks).
+inline double glassFresnelPass(const GlassFresnelViews& fresnel, const std::vector<LightView>& views, int i,
+                               const Vec3d& q, const Vec3d& n, const LightGridOptions& grid) {
+    return fresnel.empty() ? 1.0 : glassFresnelPassThrough(fresnel, views, i, q, n, grid);
+}
 
 } // namespace voxfx::detail

@@ -277,16 +277,9 @@ public:
     // Whether cell (cx, cy), off the lattice, of material `material`, takes its light through the
     // glass from the lattice: then `through` is it.
     bool interpolate(int64_t cx, int64_t cy, uint32_t material, Vec3f& through) const {
-        int64_t nx[4], ny[4];
-        int n = 0;
-        if (cy % 2 == 0) { // between two lattice cells along x
-            nx[0] = cx - 1, nx[1] = cx + 1, ny[0] = ny[1] = cy, n = 2;
-        } else if (cx % 2 == 0) { // along y
-            nx[0] = nx[1] = cx, ny[0] = cy - 1, ny[1] = cy + 1, n = 2;
-        } else { // the four corners
-            nx[0] = nx[2] = cx - 1, nx[1] = nx[3] = cx + 1, ny[0] = ny[1] = cy - 1, ny[2] = ny[3] = cy + 1,
-            n = 4;
-        }
+        const LatticeNeighbours around = latticeNeighbours(cx, cy, 1);
+        const int64_t *nx = around.x, *ny = around.y;
+        const int n = around.n;
         Vec3f sum{0, 0, 0};
         const LatticePath* p[4];
         for (int k = 0; k < n; ++k) {

@@ -261,12 +261,7 @@ Vec3f shadePoint(const FrameState& frame, const SurfacePoint& s, const Material&
     return frame.shader->shade(s, m, eye);
 }
 
-namespace {
-
-// Sample i of the G-buffer: its surface point shaded with the ambient light's `occlusion`, or the
-// environment along its ray where it shows the background.
-// `known`: its surface point, where the caller has it.
-Vec3f shadeSampleAt(const FrameState& frame, std::size_t i, float occlusion, const SurfacePoint* known) {
+Vec3f shadeSample(const FrameState& frame, std::size_t i, float occlusion, const SurfacePoint* known) {
     const GBuffer& gbuffer = frame.gbuffer;
     const Frame& cam = gbuffer.frame;
     if (known) return frame.shader->shade(*known, cam.eye(), occlusion);
@@ -278,6 +273,8 @@ Vec3f shadeSampleAt(const FrameState& frame, std::size_t i, float occlusion, con
     return frame.environment->lookup(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - cam.eye()) *
            frame.options.exposure;
 }
+
+namespace {
 
 // Round 0 at cell (cx, cy): its representative sample `i`, with the screen-space occlusion's upsample
 // to the cell where the occlusion pass left it (`cells`), whose value the cell keeps for round 1 and
@@ -299,7 +296,7 @@ void shadeRepresentative(FrameState& frame, const CellOcclusion* cells, int64_t 
     }
     frame.shaded[i] = covered && glassReplacesShading(frame, s.material)
                           ? Vec3f{0, 0, 0}
-                          : shadeSampleAt(frame, i, occlusion, covered ? &s : nullptr);
+                          : shadeSample(frame, i, occlusion, covered ? &s : nullptr);
 }
 
 } // namespace
@@ -308,10 +305,6 @@ bool glassReplacesShading(const FrameState& frame, uint32_t m) {
     const Material& material = frame.scene.materials[m];
     return !std::holds_alternative<NoGlassOptions>(frame.options.glass) && material.isGlass() &&
            material.transmission >= 1;
-}
-
-Vec3f shadeSample(const FrameState& frame, std::size_t i, float occlusion) {
-    return shadeSampleAt(frame, i, occlusion, nullptr);
 }
 
 // In two rounds where adaptive anti-aliasing is on: every cell's representative sample, then the
@@ -376,8 +369,7 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                                 continue;
                             }
                             const std::size_t proxy = neighbourShowing(frame, cx, cy, tri);
-                            out[i] =
-                                proxy != kNoSample ? out[proxy] : shadeSampleAt(frame, i, occlusion, nullptr);
+                            out[i] = proxy != kNoSample ? out[proxy] : shadeSample(frame, i, occlusion);
                         }
                     }
                 steps.step();

@@ -109,8 +109,11 @@ void shadeGBuffer(FrameState& frame, Progress* progress);
 /// chosen and `m` is glass of transmission 1 (its shading would be mixed in times 0).
 bool glassReplacesShading(const FrameState& frame, uint32_t m);
 
-/// Sample i's shading as the shading pass gives a cell's representative, with the cell's `occlusion`
-/// (the glass pass's, for a representative glassReplacesShading left black and no path went through).
-Vec3f shadeSample(const FrameState& frame, std::size_t i, float occlusion);
+/// Sample i of the G-buffer: its surface point shaded with the ambient light's `occlusion`, or the
+/// environment along its ray where it shows the background (the shading pass's, and the glass
+/// pass's for a representative glassReplacesShading left black and no path went through).
+/// `known`: its surface point, where the caller has it.
+Vec3f shadeSample(const FrameState& frame, std::size_t i, float occlusion,
+                  const SurfacePoint* known = nullptr);
 
 } // namespace voxfx::detail

@@ -874,19 +874,11 @@ struct LatticeInterpolation {
     // then what its volumes give.
     bool interpolate(int64_t cx, int64_t cy, int64_t h, const Vec3f& behind,
                      SampleCaster::Gathered& out) const {
-        int64_t nx[4], ny[4];
-        int n = 0;
-        // The axes along which second differences are taken: (dx, dy) steps of h, and per axis the
-        // lines (offsets across it) through the neighbours.
-        const bool alongX = (cy / h) % 2 == 0, alongY = !alongX && (cx / h) % 2 == 0;
-        if (alongX) {
-            nx[0] = cx - h, nx[1] = cx + h, ny[0] = ny[1] = cy, n = 2;
-        } else if (alongY) {
-            nx[0] = nx[1] = cx, ny[0] = cy - h, ny[1] = cy + h, n = 2;
-        } else { // the four corners
-            nx[0] = nx[2] = cx - h, nx[1] = nx[3] = cx + h, ny[0] = ny[1] = cy - h, ny[2] = ny[3] = cy + h,
-            n = 4;
-        }
+        // The neighbours, and the axes along which second differences are taken below.
+        const LatticeNeighbours around = latticeNeighbours(cx, cy, h);
+        const int64_t *nx = around.x, *ny = around.y;
+        const int n = around.n;
+        const bool alongX = around.alongX, alongY = around.alongY;
         const std::size_t own = representativeSample(frame, cx, cy);
         const int64_t W = frame.width;
         const auto ownColumn =
