@@ -54,6 +54,25 @@ namespace voxfx::detail {
 
 struct TriangleBasis; // render/render_cache.hpp
 
+/// Per triangle of the flattened scene, what the passes that test triangles at random per sample
+/// read (the anti-aliasing's marking of cells, the screen-space occlusion's downsample): its unit face
+/// normal (TriangleBasis::normal) and, in `mesh`, its mesh (SceneGeometry::triangleMesh, kTagMesh
+/// bits), kTagOccludes where its material is opaque (an index past the materials: not) and kTagFlat
+/// where its shading normal is its face normal: its three corner normals one vector within
+/// kTagFlatCos of the face's (a leaf, a facet of a flat-shaded mesh), so that a pass needing the
+/// shading normal takes the face normal without reading the 84-byte basis. 16 bytes a triangle
+/// (render/shading.hpp triangleTags; kept in the render cache).
+struct TriangleTag {
+    Vec3f normal;
+    uint32_t mesh = 0;
+};
+inline constexpr uint32_t kTagOccludes = 0x80000000u, kTagFlat = 0x40000000u, kTagMesh = 0x3fffffffu;
+/// The bits two triangles of one mesh and one material share.
+inline constexpr uint32_t kTagSurface = kTagMesh | kTagOccludes;
+/// The cosine within which a flat triangle's corner normals lie of its face normal (about 0.08
+/// degrees: float rounding of a mean of coplanar faces' normals).
+inline constexpr float kTagFlatCos = 1 - 1e-6f;
+
 struct ScreenSpaceOcclusionOptions {
     /// Occluders farther than this from a point do not occlude it (world units, > 0): the radius the
     /// field method uses (RenderOptions::occlusionRadius, or fieldOcclusionSetup's default).
@@ -160,11 +179,13 @@ void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, st
 /// overload above on gatherSurfaces' buffers (tests/test_screen_space_ao.cpp runs both). A triangle occludes
 /// where opaqueMaterial[its material] is nonzero (an index past it does not). Throws voxfx::Error as the
 /// overload above, and for a G-buffer that is not whole cells, bases of another count or `visibility` of
-/// another size.
+/// another size. `tags`: triangleTags of the geometry, bases and opaqueMaterial where the caller keeps
+/// them (the renderer, in its cache); empty: made here.
 void screenSpaceOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
                           std::span<const TriangleBasis> bases, std::span<const uint8_t> opaqueMaterial,
                           int adaptive, const ScreenSpaceOcclusionOptions& options,
-                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch);
+                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch,
+                          std::span<const TriangleTag> tags = {});
 
 /// The renderer's entry in two halves, so that the last step, the bilateral upsample to the cells,
 /// runs where the shading pass has each cell's surface point already (position and face normal: no
@@ -173,12 +194,14 @@ void screenSpaceOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
 /// halfResolution, every cell), `at` gives one covered cell's visibility. The same method and
 /// arithmetic as that entry, which upsamples through `at`'s code with the position from the depth
 /// and the face normal of its cell. The object reads its arguments and `scratch` until it is
-/// destroyed; `at` is thread-safe. Throws voxfx::Error as the G-buffer entry does.
+/// destroyed; `at` is thread-safe. `tags` as the G-buffer entry's. Throws voxfx::Error as the
+/// G-buffer entry does.
 class CellOcclusion {
 public:
     CellOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry, std::span<const TriangleBasis> bases,
                   std::span<const uint8_t> opaqueMaterial, int adaptive,
-                  const ScreenSpaceOcclusionOptions& options, ScreenSpaceOcclusionScratch& scratch);
+                  const ScreenSpaceOcclusionOptions& options, ScreenSpaceOcclusionScratch& scratch,
+                  std::span<const TriangleTag> tags = {});
     ~CellOcclusion();
     CellOcclusion(const CellOcclusion&) = delete;
     CellOcclusion& operator=(const CellOcclusion&) = delete;
