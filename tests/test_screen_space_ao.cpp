@@ -559,12 +559,13 @@ TEST(ScreenSpaceOcclusionTest, SkippingSearchesThatCouldFindNothingGivesTheSameB
 
 // The compact per-triangle records (detail::TriangleTag) the downsample and the anti-aliasing's
 // marking read, against the geometry itself: the face normal from the corner positions (double), the
-// mesh, whether the material occludes (Material::isOpaque), and flat where the three vertex normals
-// are one vector along the face normal. On a forest of 4 trees (2,466 triangles) 315 are flat, the
-// trunks and most leaves not (their corner normals are smoothed with their neighbours'); a flat
-// triangle's shading normal (interpolatedNormal, what the downsample would otherwise
-// compute) lies within 0.1 degrees of its face normal at every point, which is what lets the
-// downsample take the face normal there.
+// mesh, whether the material occludes (Material::isOpaque), and flat where each of the three vertex
+// normals lies within kTagFlatCos (0.01 rad) of the face normal (either side; triangles within 1e-6
+// of the threshold in cosine are left out, where float and double may disagree). On a forest of 4
+// trees (2,466 triangles) 2,370 are flat (the leaves, whose vertex normals are their face's to float
+// rounding), 96 not (the trunks); a flat triangle's shading normal (interpolatedNormal, what the
+// downsample would otherwise compute) lies within 0.01 rad of its face normal at every point (measured
+// 3.7e-4), which is what lets the downsample take the face normal there.
 TEST(ScreenSpaceOcclusionTest, TriangleTagsMatchTheGeometry) {
     demo::ForestOptions fo;
     fo.trees = 4;
@@ -577,7 +578,7 @@ TEST(ScreenSpaceOcclusionTest, TriangleTagsMatchTheGeometry) {
     opaque.back() = 0; // one material that does not occlude, so that both answers are checked
     const std::vector<detail::TriangleTag> tags = detail::triangleTags(g, bases, opaque);
     ASSERT_EQ(tags.size(), g.mesh.triangleCount());
-    int64_t flat = 0, notFlat = 0, occluding = 0;
+    int64_t flat = 0, notFlat = 0, occluding = 0, borderline = 0;
     double worst = 0;
     uint64_t seed = 12345;
     const auto uniform = [&] {
@@ -597,10 +598,15 @@ TEST(ScreenSpaceOcclusionTest, TriangleTagsMatchTheGeometry) {
         const bool occludes = m < opaque.size() && opaque[m];
         EXPECT_EQ((tags[t].mesh & detail::kTagOccludes) != 0, occludes) << t;
         occluding += occludes;
-        const Vec3f& v0 = g.normals[corner[0]];
-        const bool isFlat = v0 == g.normals[corner[1]] && v0 == g.normals[corner[2]] &&
-                            std::abs(dot(Vec3d(v0), face)) > double(detail::kTagFlatCos);
-        ASSERT_EQ((tags[t].mesh & detail::kTagFlat) != 0, isFlat) << t;
+        bool isFlat = true, near = false;
+        for (int k = 0; k < 3; ++k) {
+            const double cosine = std::abs(dot(Vec3d(g.normals[corner[k]]), face));
+            isFlat = isFlat && cosine > double(detail::kTagFlatCos);
+            near = near || std::abs(cosine - double(detail::kTagFlatCos)) < 1e-6;
+        }
+        borderline += near;
+        if (!near) { ASSERT_EQ((tags[t].mesh & detail::kTagFlat) != 0, isFlat) << t; }
+        isFlat = (tags[t].mesh & detail::kTagFlat) != 0;
         if (!isFlat) {
             ++notFlat;
             continue;
@@ -615,21 +621,22 @@ TEST(ScreenSpaceOcclusionTest, TriangleTagsMatchTheGeometry) {
             worst = std::max(worst, std::acos(std::min(1.0, std::abs(dot(Vec3d(s), face)))));
         }
     }
-    std::printf(
-        "forest of %zu triangles: %lld flat, %lld not; %lld occlude; a flat triangle's shading normal "
-        "at most %.2e rad from its face normal\n",
-        tags.size(), (long long)flat, (long long)notFlat, (long long)occluding, worst);
-    EXPECT_GT(flat, 100) << "the test needs flat triangles";
-    EXPECT_GT(notFlat, 100) << "and smooth ones";
+    std::printf("forest of %zu triangles: %lld flat, %lld not (%lld within rounding of the threshold); %lld "
+                "occlude; a flat triangle's shading normal at most %.2e rad from its face normal\n",
+                tags.size(), (long long)flat, (long long)notFlat, (long long)borderline, (long long)occluding,
+                worst);
+    EXPECT_GT(flat, 1000) << "the leaves are flat";
+    EXPECT_GT(notFlat, 50) << "the trunks are not";
     EXPECT_GT(occluding, 0);
     EXPECT_LT(occluding, int64_t(tags.size()));
-    EXPECT_LT(worst, 0.1 * M_PI / 180);
+    EXPECT_LT(worst, 0.0101);
 }
 
 // The downsample takes a flat triangle's face normal (kTagFlat) instead of interpolating its corner
 // normals: against the same G-buffer entry with every flat bit cleared (the interpolation everywhere),
-// the forest's occlusion may move by rounding only, through the slices' angles (measured at 640 x 360:
-// 212 of 230,400 samples differ, by at most 2.4e-7).
+// the forest's occlusion may move by no more than its normals' few 1e-4 rad do, through the slices'
+// angles (measured at 640 x 360, 19,802 flat triangles: 3,846 of 230,400 samples differ, by at most
+// 4.1e-6).
 TEST(ScreenSpaceOcclusionTest, AFlatTrianglesFaceNormalMovesTheOcclusionByRoundingOnly) {
     demo::ForestOptions fo;
     fo.trees = 25;

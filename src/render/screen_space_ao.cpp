@@ -123,9 +123,9 @@ struct Spans {
 // record (TriangleTag, with its mesh and whether it occludes: 16 bytes a triangle, read at random,
 // instead of the 84-byte basis and two tables), the interpolated one (interpolatedNormal, as the
 // shading pass's) from its basis for the working pixel and the upsample's slow path, except on a
-// flat triangle (kTagFlat: a leaf), whose shading normal is its face normal to float rounding and
-// is taken from the record. So the downsample evaluates one shading normal per block, not four, and
-// visits no basis on the forest's leaves.
+// flat triangle (kTagFlat: its corner normals within 0.01 rad of its face normal; the forest's leaves,
+// to float rounding), whose face normal from the record stands for its shading normal. So the downsample
+// evaluates one shading normal per block, not four, and visits no basis on the forest's leaves.
 struct Cells {
     int64_t width = 0, height = 0; ///< cells
     const GBuffer* g = nullptr;

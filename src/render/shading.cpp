@@ -227,9 +227,8 @@ std::vector<TriangleTag> triangleTags(const SceneGeometry& geometry, std::span<c
             const uint32_t m = geometry.triangleMaterial[t];
             const bool opaque = m < opaqueMaterial.size() && opaqueMaterial[m];
             const TriangleBasis& b = bases[t];
-            const Vec3f& c = b.cornerNormal[0];
-            const bool flat =
-                c == b.cornerNormal[1] && c == b.cornerNormal[2] && std::fabs(dot(c, b.normal)) > kTagFlatCos;
+            bool flat = true;
+            for (const Vec3f& c : b.cornerNormal) flat = flat && std::fabs(dot(c, b.normal)) > kTagFlatCos;
             out[t] = {b.normal, (geometry.triangleMesh[t] & kTagMesh) | (opaque ? kTagOccludes : 0u) |
                                     (flat ? kTagFlat : 0u)};
         }
