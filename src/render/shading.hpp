@@ -46,7 +46,7 @@ float specularPower(float ndh, const ShadeMaterial& m);
 /// Per triangle of the flattened scene, its TriangleBasis (render/render_cache.hpp).
 std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry);
 
-/// Per triangle of the flattened scene, its TriangleTag (render/render_cache.hpp) from its basis,
+/// Per triangle of the flattened scene, its TriangleTag (render/screen_space_ao.hpp) from its basis,
 /// and whether it occludes from opaqueMaterial (per material index; past it: not).
 std::vector<TriangleTag> triangleTags(const SceneGeometry& geometry, std::span<const TriangleBasis> bases,
                                       std::span<const uint8_t> opaqueMaterial);
