@@ -704,9 +704,14 @@ TEST(VolumePrelitTest, ACtLikeVolumeLitFromThePrelitVolumeStaysWithinTheStatedSh
     const Scene s = ctLikeScene();
     const RenderOptions o = ctLikeOptions(0, AntiAliasing::Off);
     ASSERT_TRUE(detail::volumePrelit()); // the default
-    detail::setVolumePrelit(false);
-    const RenderResult perPiece = render(s, s.cameras[0], o);
-    detail::setVolumePrelit(true);
+    RenderResult perPiece;
+    {
+        struct Restore { // the switch is process-wide: back on whatever happens
+            ~Restore() { detail::setVolumePrelit(true); }
+        } restore;
+        detail::setVolumePrelit(false);
+        perPiece = render(s, s.cameras[0], o);
+    }
     const RenderResult prelit = render(s, s.cameras[0], o);
     const Frame cam = cameraFrame(s.cameras[0], o.width, o.height);
     double sum = 0, worst = 0, headSum = 0;
