@@ -147,6 +147,7 @@ struct ObjectInterval {
     bool have = false;
     double sigma = 0; ///< the interval's extinction (0: transparent or not inside)
     Vec3f color;      ///< its pre-integrated colour
+    double alpha = 0; ///< the opacity of each of the interval's pieces
 };
 
 // One light as a volume sample receives it: irradiance times shadow, and the direction to it.
@@ -610,6 +611,10 @@ struct VolumeComposite {
             const int64_t pieces = std::clamp<int64_t>(int64_t(std::ceil(sigmaSum * dl / kPieceDepth)), 1, 8);
             const double pl = dl / double(pieces), x = sigmaSum * pl;
             const double lightDepth = x < 1e-6 ? 0.5 * pl : (1 - x / std::expm1(x)) / sigmaSum;
+            for (std::size_t o = 0; o < inside.size(); ++o) {
+                ObjectInterval& w = (*r.objects)[o];
+                if (w.sigma > 0) w.alpha = -std::expm1(-w.sigma * pl); // the same for every piece
+            }
             for (int64_t k = 0; k < pieces && r.transmittance >= kOpaque; ++k) {
                 const Vec3d p = p0 + (p1 - p0) * ((double(k) * pl + lightDepth) / dl);
                 Vec3f unshaded;
@@ -618,7 +623,7 @@ struct VolumeComposite {
                 for (std::size_t o = 0; o < inside.size(); ++o) {
                     const ObjectInterval& w = (*r.objects)[o];
                     if (!(w.sigma > 0)) continue;
-                    const double alpha = -std::expm1(-w.sigma * pl);
+                    const double alpha = w.alpha;
                     const float weight = float(alpha * r.transmittance * frame.options.exposure);
                     if (shaded) {
                         Vec3f diffuse, specular;
