@@ -129,6 +129,69 @@ TEST(VolumeLightGridTest, TheGridIsTheMapsLookupAtTheVoxelCornersInterpolated) {
     }
 }
 
+// The pre-lit volume (built with an own-transmittance function) at p is the trilinear interpolation,
+// over the eight voxel corners around p, of the light's irradiance x the map's lookup x that function
+// at the corner (recomputed here: lightIrradiance, the map's lookup, the function; in double), within
+// float rounding relative to the largest light; the function is given the corner, the direction to
+// the light and the lookup's texel footprint. Without the function there is no pre-lit volume.
+TEST(VolumeLightGridTest, ThePrelitVolumeIsTheLightAtTheVoxelCornersInterpolated) {
+    for (const bool turned : {false, true}) {
+        const VlgSmoke s = vlgSmoke(turned);
+        DeepShadowOptions o;
+        o.resolution = 128;
+        const DeepShadow deep = DeepShadow::build(s.scene, s.light, o);
+        const double step = 0.05;
+        // Any function of the corner, the direction and the footprint: one that varies with all three.
+        const auto ownOf = [&](const Vec3d& c, const Vec3d& toLight, double texel) {
+            return std::exp(-0.7 * (c.y + 0.6) - 0.3 * toLight.x - 20 * texel);
+        };
+        const LightVisibilityGrid::OwnTransmittance own = ownOf;
+        const LightCone cone(s.light);
+        const LightVisibilityGrid grid =
+            LightVisibilityGrid::build(*s.volume, deep, s.light, cone, step, nullptr, 0, &own);
+        EXPECT_TRUE(grid.prelit());
+        EXPECT_FALSE(LightVisibilityGrid::build(*s.volume, deep, s.light, cone, step).prelit());
+        const Vec3i n = s.volume->dims();
+        std::mt19937_64 rng(13);
+        std::uniform_real_distribution<double> U(0, 1);
+        double worst = 0, largest = 0, lo = 1e30;
+        for (int k = 0; k < 2000; ++k) {
+            const Vec3d u{U(rng) * double(n.x), U(rng) * double(n.y), U(rng) * double(n.z)};
+            const Vec3d p = s.volume->worldFromVoxel(u);
+            const int64_t i0[3] = {std::min<int64_t>(int64_t(u.x), n.x - 1),
+                                   std::min<int64_t>(int64_t(u.y), n.y - 1),
+                                   std::min<int64_t>(int64_t(u.z), n.z - 1)};
+            const double t[3] = {u.x - double(i0[0]), u.y - double(i0[1]), u.z - double(i0[2])};
+            Vec3d want{0, 0, 0};
+            for (int c = 0; c < 8; ++c) {
+                const int d[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};
+                double w = 1;
+                for (int a = 0; a < 3; ++a) w *= d[a] ? t[a] : 1 - t[a];
+                const Vec3d corner = s.volume->worldFromVoxel(
+                    {double(i0[0] + d[0]), double(i0[1] + d[1]), double(i0[2] + d[2])});
+                Vec3d toLight;
+                const Vec3f e = detail::lightIrradiance(s.light, corner, toLight);
+                double texel = 0;
+                const Vec3f v = deep.visibility(corner + toLight * step, toLight, texel);
+                want = want + Vec3d(e) * Vec3d(v) * (ownOf(corner, toLight, texel) * w);
+            }
+            Vec3f got;
+            ASSERT_TRUE(grid.lookupLight(p, got)) << u.x << " " << u.y << " " << u.z;
+            worst = std::max(worst, length(Vec3d(got) - want));
+            largest = std::max(largest, length(want));
+            lo = std::min(lo, length(want));
+        }
+        std::printf("%s: pre-lit volume against the corners' light interpolated: worst %.3g (largest %.3g, "
+                    "smallest %.3g)\n",
+                    turned ? "turned" : "upright", worst, largest, lo);
+        EXPECT_GT(largest, 2 * lo); // the light varies: the comparison sees more than a constant
+        EXPECT_LT(worst, 2e-6 * largest);
+        Vec3f v;
+        EXPECT_FALSE(grid.lookupLight(s.volume->worldFromVoxel({-0.01, 1, 1}), v));
+        EXPECT_FALSE(grid.lookupLight(Vec3d{std::nan(""), 0, 0}, v));
+    }
+}
+
 // With the volume's empty bricks the grid fills only the nodes near matter: wherever the march can
 // light a piece (a point within a step of a brick that is not empty) the lookup has the full grid's
 // value, bit for bit; elsewhere it may return false (the volume pass then looks the map up).

@@ -156,8 +156,9 @@ struct RenderCacheData {
     std::vector<Vec3f> volumeColor;
     std::vector<double> volumeTransmittance;
     std::vector<float> volumeFirstHit;
-    FragmentLists volumeLists; ///< the volume pass: its fragment lists, rebuilt every frame
-    struct ScreenOcclusion {   ///< the screen-space occlusion's opaque materials, and its scratch
+    std::vector<float> volumeLuma; ///< the volume pass: per cell, its representative's shown luma (AA round)
+    FragmentLists volumeLists;     ///< the volume pass: its fragment lists, rebuilt every frame
+    struct ScreenOcclusion {       ///< the screen-space occlusion's opaque materials, and its scratch
         std::vector<uint8_t> opaque;
         ScreenSpaceOcclusionScratch scratch;
     } screen;

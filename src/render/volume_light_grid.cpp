@@ -11,7 +11,8 @@ namespace voxfx::detail {
 
 LightVisibilityGrid LightVisibilityGrid::build(const Volume& volume, const DeepShadow& shadow,
                                                const Light& light, const LightCone& cone, double step,
-                                               const EmptySpace* skip, double reach) {
+                                               const EmptySpace* skip, double reach,
+                                               const OwnTransmittance* own) {
     LightVisibilityGrid g;
     g.place_ = volume.view();
     g.place_.values = nullptr;
@@ -56,6 +57,7 @@ LightVisibilityGrid LightVisibilityGrid::build(const Volume& volume, const DeepS
     }
     const float nan = std::numeric_limits<float>::quiet_NaN();
     g.nodes_.assign(std::size_t(nx * ny * nz), Node{{nan, nan, nan, nan}});
+    if (own) g.lit_.assign(g.nodes_.size(), Node{{nan, nan, nan, nan}});
     parallelFor(0, nz, 1, [&](int64_t k0, int64_t k1) {
         for (int64_t k = k0; k < k1; ++k)
             for (int64_t j = 0; j < ny; ++j)
@@ -64,10 +66,14 @@ LightVisibilityGrid LightVisibilityGrid::build(const Volume& volume, const DeepS
                     if (!wanted.empty() && !wanted[n]) continue;
                     const Vec3d c = volume.worldFromVoxel({double(i), double(j), double(k)});
                     Vec3d toLight;
-                    lightIrradiance(light, cone, c, toLight);
+                    const Vec3f e = lightIrradiance(light, cone, c, toLight);
                     double texel = 0;
                     const Vec3f v = shadow.visibility(c + toLight * step, toLight, texel);
                     g.nodes_[n] = {{v.x, v.y, v.z, float(texel)}};
+                    if (own) {
+                        const Vec3f l = e * v * float((*own)(c, toLight, texel));
+                        g.lit_[n] = {{l.x, l.y, l.z, 0}};
+                    }
                 }
     });
     g.filled_ = wanted.empty() ? nx * ny * nz : int64_t(std::count(wanted.begin(), wanted.end(), uint8_t(1)));

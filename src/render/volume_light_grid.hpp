@@ -12,11 +12,17 @@
 // read eight nodes instead of projecting p into the light's views and searching four texels'
 // visibility functions per channel. Outside the volume's box the grid has no value (lookup returns
 // false) and the caller looks the map up itself.
+//
+// The pre-lit volume (built with the own term as a function of the corner): the whole light term,
+// irradiance x the lookup x the own transmittance, at the same corners, read back by one trilinear
+// lookup (lookupLight). It trades the own term's fall within a voxel at a dense front for one
+// lookup per piece: blurred by a voxel there (the error is measured in BENCHMARKS.md, frames-dsm7).
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "render/shading.hpp"
@@ -37,15 +43,53 @@ public:
     /// march lights, its step) and a voxel diagonal of a brick that is not empty are filled (the
     /// march lights no piece elsewhere); the others hold NaN, and a lookup that reads one returns
     /// false, so the caller looks the map up itself: never a wrong value, at worst the map's cost.
+    /// With `own` (the volume's own transmittance from a corner c towards the light, given the
+    /// direction and the lookup's texel footprint), the pre-lit volume as well (lookupLight).
+    using OwnTransmittance = std::function<double(const Vec3d& c, const Vec3d& toLight, double texel)>;
     static LightVisibilityGrid build(const Volume& volume, const DeepShadow& shadow, const Light& light,
                                      const LightCone& cone, double step, const EmptySpace* skip = nullptr,
-                                     double reach = 0);
+                                     double reach = 0, const OwnTransmittance* own = nullptr);
 
     /// Trilinear interpolation of the nodes at world point p (visibility per channel and the texel
     /// footprint); false where p lies outside the volume's box (or is NaN) or a node it reads was
     /// not filled.
     bool lookup(const Vec3d& p, Vec3f& visibility, double& texel) const {
-        if (nodes_.empty()) return false;
+        float out[4];
+        if (!interpolate(nodes_, p, out)) return false;
+        visibility = {out[0], out[1], out[2]};
+        texel = double(out[3]);
+        return true;
+    }
+
+    /// The pre-lit volume (built with `own`): the light's irradiance times the map's lookup times the
+    /// volume's own transmittance over the lookup's step and offsets, all evaluated at the voxel
+    /// corners, interpolated at p. False where lookup() is, and where the grid was built without
+    /// `own`.
+    bool lookupLight(const Vec3d& p, Vec3f& light) const {
+        float out[4];
+        if (!interpolate(lit_, p, out)) return false;
+        light = {out[0], out[1], out[2]};
+        return true;
+    }
+    bool prelit() const { return !lit_.empty(); }
+
+    /// Nodes along each voxel axis (voxels + 1; 0 when empty).
+    Vec3i nodeCounts() const;
+    /// Nodes filled from the map (all of them without `skip`).
+    int64_t filledNodes() const { return filled_; }
+    std::size_t bytes() const { return (nodes_.size() + lit_.size()) * sizeof(Node); }
+
+private:
+    struct Node {
+        float v[4]; ///< visibility r, g, b; the texel footprint (lit_: the light r, g, b; 0)
+    };
+    VolumeView place_;        ///< the volume's placement (no values): voxelCoordinate and voxel counts
+    std::vector<Node> nodes_; ///< x fastest: i + (nx + 1) (j + (ny + 1) k)
+    std::vector<Node> lit_;   ///< the pre-lit volume, the same nodes (empty without `own`)
+
+    // Trilinear interpolation of `nodes` at p; false outside the box, at NaN p or an unfilled node.
+    bool interpolate(const std::vector<Node>& nodes, const Vec3d& p, float (&out)[4]) const {
+        if (nodes.empty()) return false;
         const int64_t n[3] = {place_.nx, place_.ny, place_.nz};
         int64_t i[3];
         float t[3];
@@ -56,8 +100,7 @@ public:
             t[a] = float(u - double(i[a]));
         }
         const int64_t sx = 1, sy = n[0] + 1, sz = sy * (n[1] + 1);
-        const Node* c = nodes_.data() + (i[0] * sx + i[1] * sy + i[2] * sz);
-        Node out;
+        const Node* c = nodes.data() + (i[0] * sx + i[1] * sy + i[2] * sz);
         const float w0 = 1 - t[0], w1 = t[0];
         for (int k = 0; k < 4; ++k) {
             const float x00 = c[0].v[k] * w0 + c[sx].v[k] * w1;
@@ -65,26 +108,11 @@ public:
             const float x01 = c[sz].v[k] * w0 + c[sz + sx].v[k] * w1;
             const float x11 = c[sz + sy].v[k] * w0 + c[sz + sy + sx].v[k] * w1;
             const float y0 = x00 + (x10 - x00) * t[1], y1 = x01 + (x11 - x01) * t[1];
-            out.v[k] = y0 + (y1 - y0) * t[2];
+            out[k] = y0 + (y1 - y0) * t[2];
         }
-        if (std::isnan(out.v[3])) return false; // an unfilled node (NaN) weighs in, even at weight 0
-        visibility = {out.v[0], out.v[1], out.v[2]};
-        texel = double(out.v[3]);
-        return true;
+        // An unfilled node (NaN) weighs in, even at weight 0.
+        return !std::isnan(out[3]);
     }
-
-    /// Nodes along each voxel axis (voxels + 1; 0 when empty).
-    Vec3i nodeCounts() const;
-    /// Nodes filled from the map (all of them without `skip`).
-    int64_t filledNodes() const { return filled_; }
-    std::size_t bytes() const { return nodes_.size() * sizeof(Node); }
-
-private:
-    struct Node {
-        float v[4]; ///< visibility r, g, b; the texel footprint
-    };
-    VolumeView place_;        ///< the volume's placement (no values): voxelCoordinate and voxel counts
-    std::vector<Node> nodes_; ///< x fastest: i + (nx + 1) (j + (ny + 1) k)
     int64_t filled_ = 0;
 };
 

@@ -31,11 +31,16 @@ namespace voxfx::detail {
 
 namespace {
 
+std::atomic<bool> prelitSwitch{true};
+
 Vec3d volumePassCorner(const Mesh& m, uint32_t t, int k) {
     return Vec3d(m.positions[m.indices[3 * std::size_t(t) + std::size_t(k)]]);
 }
 
 } // namespace
+
+bool volumePrelit() { return prelitSwitch.load(std::memory_order_relaxed); }
+void setVolumePrelit(bool on) { prelitSwitch.store(on, std::memory_order_relaxed); }
 
 ObjectSurfaces::ObjectSurfaces(const VolumeScene& s) : scene(&s), flat(flattenLeaves(s, false)) {
     objectLeaves.reserve(s.objects.size());
@@ -142,6 +147,7 @@ struct ObjectInterval {
     bool have = false;
     double sigma = 0; ///< the interval's extinction (0: transparent or not inside)
     Vec3f color;      ///< its pre-integrated colour
+    double alpha = 0; ///< the opacity of each of the interval's pieces
 };
 
 // One light as a volume sample receives it: irradiance times shadow, and the direction to it.
@@ -226,6 +232,45 @@ struct VolumeSetup {
         for (std::size_t o = 0; o < vs.objects.size(); ++o)
             if (vs.objects[o].kind == ObjectKind::Volume)
                 gradients[o] = GradientGrid(*vs.volumes[std::size_t(vs.objects[o].volume)]);
+    }
+
+    // The transmittance of the volume objects `inside` (those holding p) along the segment from p
+    // to q that the shadow lookup leaves out: per object, the part of the segment inside its
+    // volume's box and, where its shape is not that box, up to the first surface of the volume
+    // scene's leaves, with the smaller of the extinctions at its two ends. A homogeneous medium
+    // passes its Beer–Lambert (a uniform slab is the closed form within the map's epsilon); a
+    // dense layer the sample lies at the front of passes what lies in front of it, so the layer
+    // does not shadow its own surface (the lookup's step is there for that; the pre-integrated
+    // mean of the two ends, between bone and skin, lit each sample by where its jittered start
+    // fell: speckle on the DSM demo's skull).
+    double ownTransmittance(const Vec3d& p, const Vec3d& q, std::span<const uint8_t> inside) const {
+        double depth = 0;
+        for (std::size_t o = 0; o < inside.size(); ++o) {
+            const VolumeSceneObject& obj = vs.objects[o];
+            if (!inside[o] || obj.kind != ObjectKind::Volume) continue;
+            const Volume& volume = *vs.volumes[std::size_t(obj.volume)];
+            const VolumeView v = volume.view();
+            // The segment's parameter range inside the box: 0 <= voxel coordinate <= n on each axis.
+            const int64_t n[3] = {v.nx, v.ny, v.nz};
+            double t1 = 1;
+            for (int a = 0; a < 3 && t1 > 0; ++a) {
+                const double wp = v.voxelCoordinate(p, a), dw = v.voxelCoordinate(q, a) - wp;
+                if (dw > 0) t1 = std::min(t1, (double(n[a]) - wp) / dw);
+                if (dw < 0) t1 = std::min(t1, -wp / dw);
+            }
+            if (!(t1 > 0)) continue;
+            if (!boxShape[o] && leafTracer) {
+                const double len = length(q - p);
+                const TriangleTracer::Hit h = leafTracer->intersect(p, (q - p) * (1 / len), 0, t1 * len);
+                if (h.hit) t1 = h.t / len;
+            }
+            const Vec3d c = p + (q - p) * t1;
+            if (emptySpace[o].emptyBetween(p, c)) continue;
+            const double a = volume.sample(p), b = volume.sample(c);
+            // The smaller of the two ends' extinctions (one logarithm, no cumulative integrals).
+            depth += preintegrated[o].smallerPointExtinction(a, b) * length(c - p);
+        }
+        return std::exp(-depth);
     }
 
     static std::vector<uint8_t> boxShapes(const VolumeScene& vs) {
@@ -332,6 +377,8 @@ struct VolumeComposite {
     std::vector<LightCone> cones; ///< per light of the frame
     /// Per light under deep shadows, its visibility grids per volume object (lightGrids); else null.
     std::vector<const VolumeLightGrids*> grids;
+    /// Whether pieces inside one volume take their light from the pre-lit grids (volumePrelit()).
+    bool prelit = volumePrelit();
 
     VolumeComposite(const FrameState& f, const VolumeSetup& s, std::vector<const VolumeLightGrids*> g)
         : frame(f), setup(s), vs(s.vs), materials(s.materials), surfaces(s.surfaces),
@@ -371,8 +418,13 @@ struct VolumeComposite {
     // offsets, which the lookup leaves out, is put back (ownTransmittance; without it a uniform slab
     // was brighter by exp(sigma * the offset), 8 %). `unshaded` is the ambient plus every light's
     // irradiance / pi: the light a sample takes without a normal.
-    Vec3f lightAt(const Vec3d& p, std::span<const uint8_t> inside, std::vector<LightSample>& lights,
-                  Vec3f& unshaded) const {
+    //
+    // Where p lies inside one volume object only (`single`, else -1) and a deep-shadowed light's
+    // grids hold the pre-lit volume (LightVisibilityGrid::lookupLight, built for volumes whose shape
+    // is their box: irradiance, the map's lookup and the volume's own transmittance made at the
+    // voxel corners), that light's term is read from it by one trilinear lookup instead.
+    Vec3f lightAt(const Vec3d& p, std::span<const uint8_t> inside, int single,
+                  std::vector<LightSample>& lights, Vec3f& unshaded) const {
         const std::span<const Light> sceneLights = frame.lights;
         const Vec3f ambient = frame.options.ambient + frame.environment->sphericalHarmonics()[0] *
                                                           float(0.282095 * frame.options.skyLight);
@@ -380,12 +432,22 @@ struct VolumeComposite {
         lights.clear();
         for (std::size_t l = 0; l < sceneLights.size(); ++l) {
             Vec3d toLight;
+            Vec3f ev;
+            if (single >= 0 && prelit && grids[l] &&
+                grids[l]->objects[std::size_t(single)].lookupLight(p, ev)) {
+                if (ev.x <= 0 && ev.y <= 0 && ev.z <= 0) continue;
+                const Vec3d d = sceneLights[l].towards(p);
+                toLight = sceneLights[l].positioned() ? d * (1 / std::sqrt(std::max(dot(d, d), 1e-12))) : d;
+                unshaded += ev * float(1.0 / M_PI);
+                lights.push_back({ev, toLight});
+                continue;
+            }
             const Vec3f e = lightIrradiance(sceneLights[l], cones[l], p, toLight);
             if (e.x <= 0 && e.y <= 0 && e.z <= 0) continue;
             const Vec3f vis = l < frame.shadows.size()
                                   ? shadowAt(*frame.shadows[l], grids[l], p, toLight, inside)
                                   : Vec3f{1, 1, 1};
-            const Vec3f ev = e * vis;
+            ev = e * vis;
             unshaded += ev * float(1.0 / M_PI);
             lights.push_back({ev, toLight});
         }
@@ -420,43 +482,8 @@ struct VolumeComposite {
         return visibility * float(ownTransmittance(p, q + toLight * (offsets * texel), inside));
     }
 
-    // The transmittance of the volume objects `inside` (those holding p) along the segment from p
-    // to q that the shadow lookup leaves out: per object, the part of the segment inside its
-    // volume's box and, where its shape is not that box, up to the first surface of the volume
-    // scene's leaves, with the smaller of the extinctions at its two ends. A homogeneous medium
-    // passes its Beer–Lambert (a uniform slab is the closed form within the map's epsilon); a
-    // dense layer the sample lies at the front of passes what lies in front of it, so the layer
-    // does not shadow its own surface (the lookup's step is there for that; the pre-integrated
-    // mean of the two ends, between bone and skin, lit each sample by where its jittered start
-    // fell: speckle on the DSM demo's skull).
     double ownTransmittance(const Vec3d& p, const Vec3d& q, std::span<const uint8_t> inside) const {
-        double depth = 0;
-        for (std::size_t o = 0; o < inside.size(); ++o) {
-            const VolumeSceneObject& obj = vs.objects[o];
-            if (!inside[o] || obj.kind != ObjectKind::Volume) continue;
-            const Volume& volume = *vs.volumes[std::size_t(obj.volume)];
-            const VolumeView v = volume.view();
-            // The segment's parameter range inside the box: 0 <= voxel coordinate <= n on each axis.
-            const int64_t n[3] = {v.nx, v.ny, v.nz};
-            double t1 = 1;
-            for (int a = 0; a < 3 && t1 > 0; ++a) {
-                const double wp = v.voxelCoordinate(p, a), dw = v.voxelCoordinate(q, a) - wp;
-                if (dw > 0) t1 = std::min(t1, (double(n[a]) - wp) / dw);
-                if (dw < 0) t1 = std::min(t1, -wp / dw);
-            }
-            if (!(t1 > 0)) continue;
-            if (!boxShape[o] && leafTracer) {
-                const double len = length(q - p);
-                const TriangleTracer::Hit h = leafTracer->intersect(p, (q - p) * (1 / len), 0, t1 * len);
-                if (h.hit) t1 = h.t / len;
-            }
-            const Vec3d c = p + (q - p) * t1;
-            if (emptySpace[o].emptyBetween(p, c)) continue;
-            const double a = volume.sample(p), b = volume.sample(c);
-            // The smaller of the two ends' extinctions (one logarithm, no cumulative integrals).
-            depth += preintegrated[o].smallerPointExtinction(a, b) * length(c - p);
-        }
-        return std::exp(-depth);
+        return setup.ownTransmittance(p, q, inside);
     }
 
     // Phong (DSM §3.2) at sample p of volume object o: the diffuse light (times the sample's colour)
@@ -525,6 +552,10 @@ struct VolumeComposite {
         for (std::size_t o = 0; o < inside.size(); ++o)
             if (inside[o]) segmentStep = std::min(segmentStep, setup.objectStep[o]);
         if (!(segmentStep < std::numeric_limits<double>::infinity())) segmentStep = step; // no volume
+        int single = -1; // the only volume object inside, if one
+        for (std::size_t o = 0; o < inside.size(); ++o)
+            if (inside[o] && vs.objects[o].kind == ObjectKind::Volume) single = single == -1 ? int(o) : -2;
+        single = std::max(single, -1);
         double l0 = 0;
         for (int64_t j = 0; l0 < worldLength; ++j) {
             const double l1 = std::min(worldLength, (double(j) + r.jitter) * segmentStep);
@@ -580,15 +611,19 @@ struct VolumeComposite {
             const int64_t pieces = std::clamp<int64_t>(int64_t(std::ceil(sigmaSum * dl / kPieceDepth)), 1, 8);
             const double pl = dl / double(pieces), x = sigmaSum * pl;
             const double lightDepth = x < 1e-6 ? 0.5 * pl : (1 - x / std::expm1(x)) / sigmaSum;
+            for (std::size_t o = 0; o < inside.size(); ++o) {
+                ObjectInterval& w = (*r.objects)[o];
+                if (w.sigma > 0) w.alpha = -std::expm1(-w.sigma * pl); // the same for every piece
+            }
             for (int64_t k = 0; k < pieces && r.transmittance >= kOpaque; ++k) {
                 const Vec3d p = p0 + (p1 - p0) * ((double(k) * pl + lightDepth) / dl);
                 Vec3f unshaded;
-                const Vec3f ambient = lightAt(p, inside, *r.lights, unshaded);
+                const Vec3f ambient = lightAt(p, inside, single, *r.lights, unshaded);
                 Vec3f lit{0, 0, 0}; // the last object's light per unit opacity
                 for (std::size_t o = 0; o < inside.size(); ++o) {
                     const ObjectInterval& w = (*r.objects)[o];
                     if (!(w.sigma > 0)) continue;
-                    const double alpha = -std::expm1(-w.sigma * pl);
+                    const double alpha = w.alpha;
                     const float weight = float(alpha * r.transmittance * frame.options.exposure);
                     if (shaded) {
                         Vec3f diffuse, specular;
@@ -710,8 +745,8 @@ struct SampleCaster {
 // something and the cell's composited light bends or steps between its neighbours' by more than
 // the post-process would leave (curvesAcrossNeighbours: an edge inside a volume, the bone under
 // skin).
-bool volumeEdge(const FrameState& f, const SampleCaster& c, const ColumnCrossings& crossings, int64_t cx,
-                int64_t cy) {
+bool volumeEdge(const FrameState& f, const SampleCaster& c, const ColumnCrossings& crossings,
+                std::span<const float> lumas, int64_t cx, int64_t cy) {
     const int a = f.adaptive;
     const std::size_t rep = representativeSample(f, cx, cy);
     const int64_t W = f.width, rx = int64_t(rep % std::size_t(W)), ry = int64_t(rep / std::size_t(W));
@@ -728,7 +763,16 @@ bool volumeEdge(const FrameState& f, const SampleCaster& c, const ColumnCrossing
             if ((!col.empty() || !own.empty()) && !crossings.same(own, c.zMax(rep), col, c.zMax(i), near))
                 return true;
         }
-    return crossed && curvesAcrossNeighbours(f, cx, cy);
+    if (!crossed) return false;
+    // curvesAcrossNeighbours(f, cx, cy), its shown lumas read from `lumas` (per cell, its
+    // representative's: the round changes no representative).
+    const int64_t cw = W / a, ch = f.height / a;
+    const float mine = lumas[std::size_t(cy * cw + cx)];
+    const auto at = [&](int64_t x, int64_t y) {
+        return x < 0 || y < 0 || x >= cw || y >= ch ? mine : lumas[std::size_t(y * cw + x)];
+    };
+    return std::abs(at(cx - 1, cy) + at(cx + 1, cy) - 2 * mine) > kRefineContrast ||
+           std::abs(at(cx, cy - 1) + at(cx, cy + 1) - 2 * mine) > kRefineContrast;
 }
 
 // The volume pass's setup for this frame's scene and options: from the cache while the meshes,
@@ -785,11 +829,26 @@ lightGrids(FrameState& frame, const VolumeSetup& setup, uint64_t setupKey,
             auto built = std::make_shared<VolumeLightGrids>();
             built->objects.resize(vs.objects.size());
             const LightCone cone(frame.lights[l]);
+            const DeepShadowOptions* d = std::get_if<DeepShadowOptions>(&frame.options.shadow);
+            const double offsets = d ? d->normalOffset + d->depthBias : 2.0; // as shadowAt's
             for (std::size_t o = 0; o < vs.objects.size(); ++o)
-                if (vs.objects[o].kind == ObjectKind::Volume)
-                    built->objects[o] = LightVisibilityGrid::build(
-                        *vs.volumes[std::size_t(vs.objects[o].volume)], *deep, frame.lights[l], cone,
-                        setup.step, &setup.emptySpace[o], setup.objectStep[o]);
+                if (vs.objects[o].kind == ObjectKind::Volume) {
+                    // The pre-lit volume: the own transmittance of this volume alone, as shadowAt
+                    // takes it from a sample inside it alone. Only for a volume whose shape is its
+                    // box: elsewhere corners outside the shape would weigh in with a medium the
+                    // march never sees (a dense ball's rim was drawn as rings).
+                    std::vector<uint8_t> inside(vs.objects.size(), 0);
+                    inside[o] = 1;
+                    const LightVisibilityGrid::OwnTransmittance own =
+                        [&](const Vec3d& c, const Vec3d& toLight, double texel) {
+                            return setup.ownTransmittance(c, c + toLight * (setup.step + offsets * texel),
+                                                          inside);
+                        };
+                    built->objects[o] =
+                        LightVisibilityGrid::build(*vs.volumes[std::size_t(vs.objects[o].volume)], *deep,
+                                                   frame.lights[l], cone, setup.step, &setup.emptySpace[o],
+                                                   setup.objectStep[o], setup.boxShape[o] ? &own : nullptr);
+                }
             g = std::move(built);
             frame.cache.volumeLight.insert(key.get(), g);
         }
@@ -885,7 +944,17 @@ struct LatticeInterpolation {
             caster.lists.column(int64_t(own % std::size_t(W)), int64_t(own / std::size_t(W)));
         const double ownDepth = caster.zMax(own), near = frame.gbuffer.frame.nearDepth();
         const ToneMap tm = frame.options.toneMap;
-        const auto luma = [&](int64_t x, int64_t y) { return shownLuma(at(x, y).over(behind), tm); };
+        // A cell that let all the light through (transmittance 1: over() gives the background) shows
+        // the cell's own background: its luma is taken once.
+        float behindLuma = -1;
+        const auto lumaOver = [&](const SampleCaster::Gathered& g) {
+            if (!(g.transmittance < 1.0)) {
+                if (behindLuma < 0) behindLuma = shownLuma(behind, tm);
+                return behindLuma;
+            }
+            return shownLuma(g.over(behind), tm);
+        };
+        const auto luma = [&](int64_t x, int64_t y) { return lumaOver(at(x, y)); };
         float lo = std::numeric_limits<float>::infinity(), hi = -lo;
         float nl[4]; // the neighbours' lumas
         double hitLo = std::numeric_limits<double>::infinity(), hitHi = -hitLo;
@@ -907,7 +976,7 @@ struct LatticeInterpolation {
                 ++hits, sumHit += g.firstHit;
                 hitLo = std::min(hitLo, g.firstHit), hitHi = std::max(hitHi, g.firstHit);
             }
-            const float l = nl[k] = shownLuma(g.over(behind), tm);
+            const float l = nl[k] = lumaOver(g);
             lo = std::min(lo, l), hi = std::max(hi, l);
             sumColor += g.color;
             sumTransmittance += g.transmittance;
@@ -1046,12 +1115,22 @@ void compositeVolumes(FrameState& frame) {
             interpolated += n;
         });
     if (a > 1) {
+        // Each cell's representative's shown luma, once (volumeEdge's test of the light's curve).
+        std::vector<float>& lumas = frame.cache.volumeLuma;
+        lumas.resize(std::size_t(cw * ch));
+        const ToneMap tm = frame.options.toneMap;
+        parallelFor(0, ch, 8, [&](int64_t y0, int64_t y1) {
+            for (int64_t cy = y0; cy < y1; ++cy)
+                for (int64_t cx = 0; cx < cw; ++cx)
+                    lumas[std::size_t(cy * cw + cx)] =
+                        shownLuma(frame.shaded[representativeSample(frame, cx, cy)], tm);
+        });
         parallelFor(0, ch, 2, [&](int64_t y0, int64_t y1) {
             SampleCaster::Walker w = caster.walker();
             for (int64_t cy = y0; cy < y1; ++cy)
                 for (int64_t cx = 0; cx < cw; ++cx) {
                     uint8_t& kind = frame.refined[std::size_t(cy * cw + cx)];
-                    if (kind != 0 || !volumeEdge(frame, caster, crossings, cx, cy)) continue;
+                    if (kind != 0 || !volumeEdge(frame, caster, crossings, lumas, cx, cy)) continue;
                     kind = kEveryRefinedSample;
                     const std::size_t rep = representativeSample(frame, cx, cy);
                     // Nothing of the volumes in or around the cell: its samples keep the light behind

@@ -29,7 +29,11 @@ namespace voxfx::detail {
 /// medium the lookup leaves out, at the smaller extinction of its two ends: a uniform slab is
 /// Beer–Lambert, a dense layer does not shadow its own front); the map's lookup itself is read,
 /// trilinearly, from a grid of the same lookups at the volume's voxel corners built once per (volume,
-/// light) and kept in frame.cache (render/volume_light_grid.hpp; the first frame builds it). The walk
+/// light) and kept in frame.cache (render/volume_light_grid.hpp; the first frame builds it); a piece
+/// inside one volume whose shape is its box takes the whole term (irradiance x lookup x own
+/// transmittance) from the pre-lit volume, the same product made at the voxel corners and
+/// interpolated (volumePrelit; the own transmittance's fall across a dense front is then blurred
+/// by a voxel, BENCHMARKS.md "frames-dsm7"). The walk
 /// stops when the accumulated opacity reaches 0.99 inside a volume (the light it would still have
 /// let through taken as that of the piece it stops at) or 0.999 at a surface, and the result is
 /// blended over frame.shaded
@@ -47,6 +51,14 @@ namespace voxfx::detail {
 /// number of volume samples taken in frame.result. Nothing happens when the scene has neither volume
 /// scene objects nor blended meshes.
 void compositeVolumes(FrameState& frame);
+
+/// Whether the pass lights a piece inside one box-shaped volume only from the pre-lit volume (the
+/// light's irradiance x the deep shadow map's lookup x the volume's own transmittance over the
+/// lookup's step, made once per (volume, light) at the voxel corners and interpolated; on by
+/// default), or per piece (tests compare the two; the switch is process-wide, not for renders in
+/// flight).
+bool volumePrelit();
+void setVolumePrelit(bool on);
 
 /// A crossing of an opaque or translucent object's boundary along a camera ray.
 struct ObjectSurfaceHit {
