@@ -192,6 +192,13 @@ struct RenderOptions {
     /// from a straight line through their lattice neighbours' by more than this; elsewhere the light
     /// through the glass is interpolated from them (two or four). 0: every pixel traced.
     double glassRefinement = 1.0 / 32;
+    /// Glass, adaptive anti-aliasing (antiAliasing adaptive or full): a glass pixel shaded once gets
+    /// its N-rooks samples where its shown light (luma, 0..1) departs from the straight line through
+    /// its neighbours' by more than this (a bend or a step inside the glass). The default is the
+    /// smallest step the post-process blends (1/32, as volumes); larger values trade accuracy for
+    /// speed (BENCHMARKS.md, frames-glass7: on the glass demo 1/4 takes about a tenth off the cached
+    /// frame and leaves a 16-sample reference 8 % further away in mean shown luma; 1 takes none).
+    double glassSampleContrast = 1.0 / 32;
     /// Radiance around the scene: shown as the background, seen through and in glass, and the ambient
     /// light. Null: the procedural sky (Environment::sky), or the flat `background` (sky = flat).
     std::shared_ptr<const Environment> environment;
@@ -328,6 +335,9 @@ struct GlassReport {
     /// Cells (output pixels) whose light through the glass was interpolated from the traced cells
     /// around them instead of traced (RenderOptions::glassRefinement).
     int64_t interpolated = 0;
+    /// Anti-aliasing samples inside glass (N-rooks, besides the cells' representatives) whose light
+    /// through the glass was interpolated from the representatives around them instead of traced.
+    int64_t samplesInterpolated = 0;
     /// Voxel methods: the grid's voxels along the glass's longest side, and why (given, or auto from
     /// the glass objects' size on screen: chooseGlassGrid); 0 and empty for the other methods.
     int64_t grid = 0;

@@ -52,7 +52,8 @@ float shownLuma(const Vec3f& c, ToneMap t);
 /// varies linearly across a cell averages to its centre's value, so only a bend or a step (an edge
 /// inside glass or a volume) needs more samples. The glass pass (glass shaded once, N-rooks samples)
 /// and the volume pass (every sample) refine by it.
-bool curvesAcrossNeighbours(const FrameState& frame, int64_t cx, int64_t cy);
+bool curvesAcrossNeighbours(const FrameState& frame, int64_t cx, int64_t cy,
+                            float contrast = kRefineContrast);
 
 /// The cells a cell of an image-space refinement lattice at spacing h takes its value from (the glass
 /// and volume passes' lattices, after Levoy 1990): the two along x where cy is a multiple of 2h
