@@ -465,8 +465,8 @@ BENCHMARK_CAPTURE(BM_FrameCost, dsm_demo, std::string("dsm-demo"))
 // The glass demo's interactive frames with the default options against `other`, each with a
 // RenderCache of its own and the camera orbiting, interleaved: <ratio> = frame / other_ms (wall;
 // <ratio>_cpu: process CPU), glass_ms and other_glass_ms the glass pass, paths and other_paths the
-// glass paths traced per frame, interpolated and samples_interpolated the cells and the
-// anti-aliasing samples whose light through the glass was interpolated (default frame).
+// glass paths traced per frame, interpolated the cells whose light through the glass was
+// interpolated (default frame).
 void glassAgainst(benchmark::State& state, const RenderOptions& other, const std::string& ratio,
                   const std::string& label) {
     const BenchScene& b = benchScene("glass");
@@ -475,18 +475,17 @@ void glassAgainst(benchmark::State& state, const RenderOptions& other, const std
     o2.glassRefinement = other.glassRefinement;
     o2.glassSampleContrast = other.glassSampleContrast;
     PassSums mine, theirs;
-    double paths = 0, otherPaths = 0, interpolated = 0, samples = 0;
+    double paths = 0, otherPaths = 0, interpolated = 0;
     auto into = [&](const RenderOptions& o, PassSums& sums, double& pathSum, bool counts) {
         FrameFn frame = cachedFrames(b, o);
-        return [&sums, &pathSum, &interpolated, &samples, frame, counts](bool timed) {
+        return [&sums, &pathSum, &interpolated, frame, counts](bool timed) {
             const double cpu0 = processCpuMs();
             const RenderResult r = frame();
             benchmark::DoNotOptimize(r.image.pixels.data());
             if (!timed) return;
             sums.add(r, processCpuMs() - cpu0);
             pathSum += double(r.glass.paths);
-            if (counts)
-                interpolated += double(r.glass.interpolated), samples += double(r.glass.samplesInterpolated);
+            if (counts) interpolated += double(r.glass.interpolated);
         };
     };
     interleaved(state, {into(options, mine, paths, true), into(o2, theirs, otherPaths, false)});
@@ -500,7 +499,6 @@ void glassAgainst(benchmark::State& state, const RenderOptions& other, const std
     state.counters["paths"] = paths / n;
     state.counters["other_paths"] = otherPaths / n;
     state.counters["interpolated"] = interpolated / n;
-    state.counters["samples_interpolated"] = samples / n;
     state.SetLabel("glass: default against " + label + "; 1280x720, cached, orbiting");
 }
 
@@ -516,7 +514,7 @@ BENCHMARK(BM_GlassLattice)->Unit(benchmark::kMillisecond)->UseRealTime();
 // Anti-aliasing inside glass (RenderOptions::glassSampleContrast): the default frame (N-rooks samples
 // where the glass's light bends by more than 1/32) against fewer samples, where it bends by more than
 // 1/4 or 1 (none): what the option buys (the image's error against a supersampled reference:
-// BENCHMARKS.md, frames-glass7).
+// BENCHMARKS.md, "N-rooks samples inside glass against a supersampled reference").
 void BM_GlassSamples(benchmark::State& state) {
     RenderOptions coarse;
     coarse.glassSampleContrast = state.range(0) == 0 ? 1.0 / 4 : 1.0;

@@ -204,12 +204,11 @@ TEST(GlassRefinementTest, WithAntiAliasingTheImageStaysCloseToEveryPixelTraced) 
 
 // Anti-aliasing inside glass against a brute-force reference: the same frame with 4 x 4 samples in
 // every pixel, each traced (supersample 4, glassRefinement 0, no adaptive samples, no post-process).
-// The default (the lattice, and the N-rooks samples' light interpolated where the four
-// representatives around them agree: GlassLattice::interpolatedSample) against every cell and every
-// N-rooks sample traced: its mean shown-luma error over the glass may give back at most a third of
-// what anti-aliasing inside glass gains over the post-process alone (antiAliasing post, one sample per
-// pixel), for a third fewer paths. And glassSampleContrast trades: at 1/4, fewer N-rooks samples
-// and a larger error.
+// Anti-aliasing inside glass must be worth its paths: with every cell traced, the default (N-rooks
+// samples where the light bends by more than glassSampleContrast's 1/32) is closer to the reference
+// than the post-process alone (antiAliasing post, one sample per pixel); the lattice
+// (glassRefinement 1/32) may give back at most a third of that gain, for a third fewer paths; and
+// glassSampleContrast trades: at 1/4, fewer paths and a larger error.
 TEST(GlassRefinementTest, AntiAliasingInsideGlassStaysCloseToASupersampledReference) {
     const Scene s = ballOverAChecker();
     RenderOptions ref = refinementOptions(0);
@@ -227,15 +226,13 @@ TEST(GlassRefinementTest, AntiAliasingInsideGlassStaysCloseToASupersampledRefere
                          dPost = lumaDifference(postOnly, reference),
                          dFewer = lumaDifference(fewer, reference);
     std::printf("glass AA against 16 traced samples per pixel (%lld glass pixels), mean shown luma error: "
-                "every sample traced %.5f (%lld paths), default %.5f (%lld paths, %lld N-rooks samples "
-                "interpolated), post-process alone %.5f, N-rooks samples at contrast 1/4 %.5f (%lld paths); "
-                "pixels over 1/32: %lld, %lld, %lld, %lld\n",
+                "every cell traced %.5f (%lld paths), with the lattice %.5f (%lld paths), post-process alone "
+                "%.5f, N-rooks samples at contrast 1/4 %.5f (%lld paths); pixels over 1/32: %lld, %lld, "
+                "%lld, %lld\n",
                 (long long)dAll.glassPixels, dAll.mean, (long long)all.glass.paths, dFast.mean,
-                (long long)fast.glass.paths, (long long)fast.glass.samplesInterpolated, dPost.mean,
-                dFewer.mean, (long long)fewer.glass.paths, (long long)dAll.overContrast,
-                (long long)dFast.overContrast, (long long)dPost.overContrast, (long long)dFewer.overContrast);
-    EXPECT_EQ(all.glass.samplesInterpolated, 0);
-    EXPECT_GT(fast.glass.samplesInterpolated, 200);
+                (long long)fast.glass.paths, dPost.mean, dFewer.mean, (long long)fewer.glass.paths,
+                (long long)dAll.overContrast, (long long)dFast.overContrast, (long long)dPost.overContrast,
+                (long long)dFewer.overContrast);
     EXPECT_GT(dPost.mean, dAll.mean * 1.1); // anti-aliasing inside glass matters here
     EXPECT_LT(dFast.mean, dAll.mean + (dPost.mean - dAll.mean) / 3);
     EXPECT_LT(double(fast.glass.paths), 0.7 * double(all.glass.paths));

@@ -335,9 +335,6 @@ struct GlassReport {
     /// Cells (output pixels) whose light through the glass was interpolated from the traced cells
     /// around them instead of traced (RenderOptions::glassRefinement).
     int64_t interpolated = 0;
-    /// Anti-aliasing samples inside glass (N-rooks, besides the cells' representatives) whose light
-    /// through the glass was interpolated from the representatives around them instead of traced.
-    int64_t samplesInterpolated = 0;
     /// Voxel methods: the grid's voxels along the glass's longest side, and why (given, or auto from
     /// the glass objects' size on screen: chooseGlassGrid); 0 and empty for the other methods.
     int64_t grid = 0;

@@ -127,7 +127,6 @@ py::dict reportDict(const RenderOptions& o, const RenderResult& r, const Camera&
     d["glass_pixels"] = r.glass.pixels;
     d["glass_paths"] = r.glass.paths;
     d["glass_interpolated"] = r.glass.interpolated;
-    d["glass_samples_interpolated"] = r.glass.samplesInterpolated;
     d["covered_pixels"] = r.coveredPixels;
     d["volume_samples"] = r.volumeSamples;
     d["volume_interpolated"] = r.volumeInterpolated;

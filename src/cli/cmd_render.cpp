@@ -54,8 +54,7 @@ void printSummary(const RenderArgs& a, const Scene& scene, const Camera& camera,
         std::cout << "glass " << r.glass.method << " (" << glass << "): " << withCommas(r.glass.pixels)
                   << " pixels, prepare " << fmtMs(r.glass.prepareMs) << ", trace " << fmtMs(r.glass.traceMs)
                   << " (" << withCommas(r.glass.paths) << " paths, " << withCommas(r.glass.interpolated)
-                  << " pixels and " << withCommas(r.glass.samplesInterpolated)
-                  << " anti-aliasing samples interpolated)\n";
+                  << " pixels interpolated)\n";
         if (r.glass.grid > 0)
             std::cout << "glass grid " << r.glass.grid << " (" << r.glass.gridReason << ")\n";
     }

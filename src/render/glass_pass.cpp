@@ -184,8 +184,6 @@ GlassOptions glassWithGrid(FrameState& frame) {
     return method;
 }
 
-} // namespace
-
 // Where a ray from the glass (the light leaving it, or the reflection) lands: the opaque object
 // (mesh and material) and its triangle, or the environment (kSky).
 struct Landing {
@@ -194,10 +192,10 @@ struct Landing {
     uint32_t triangle = GlassSetup::kNoTriangle; ///< of GlassSetup::behind
 };
 
-// What a cell's representative path found (RenderOptions::glassRefinement): a lattice cell's, and
-// every other's traced or interpolated (for the N-rooks samples between them).
+// What a lattice cell's representative path found (RenderOptions::glassRefinement).
 struct LatticePath {
-    bool bends = false; ///< its shown light departs from the line through its lattice neighbours'
+    bool traced = false; ///< a path that met glass (else nothing below holds)
+    bool bends = false;  ///< its shown light departs from the line through its lattice neighbours'
     uint32_t material = 0;
     int events = 0;
     bool truncated = false;
@@ -205,9 +203,6 @@ struct LatticePath {
     Landing exit, reflection;
     Vec3f exitDir{0, 0, 0};
     Vec3f through{0, 0, 0}; ///< the light through the glass (before the transmission and exposure)
-    /// Off the lattice: `through` interpolated from the lattice paths around it (the rest is the first
-    /// of them's, which all agree with it).
-    bool interpolated = false;
 
     // Whether the two paths went through the same glass the same way and landed on the same objects
     // (mesh and material), on one triangle or two that share an edge (`neighbours`: a continuous
@@ -223,8 +218,8 @@ struct LatticePath {
             const std::array<uint32_t, 3>& n = neighbours[a];
             return n[0] == b || n[1] == b || n[2] == b;
         };
-        return material == o.material && events == o.events && truncated == o.truncated &&
-               crossed == o.crossed && exit.object == o.exit.object &&
+        return traced && o.traced && material == o.material && events == o.events &&
+               truncated == o.truncated && crossed == o.crossed && exit.object == o.exit.object &&
                reflection.object == o.reflection.object && dot(exitDir, o.exitDir) >= kCosTurn &&
                touch(exit.triangle, o.exit.triangle) && touch(reflection.triangle, o.reflection.triangle);
     }
@@ -233,16 +228,6 @@ struct LatticePath {
     /// strongly minifying curve).
     static constexpr double kMaxExitTurn = 3 * M_PI / 180;
 };
-
-/// Per cell, its representative's path (GlassLattice), and whether the frame wrote it: the records
-/// are kept from frame to frame for their memory (a 1280x720 frame with anti-aliasing has 921,600
-/// cells), only `written` is cleared.
-struct GlassCellPaths {
-    std::vector<LatticePath> path;
-    std::vector<uint8_t> written;
-};
-
-namespace {
 
 // Adaptive image-space refinement of the light through the glass (RenderOptions::glassRefinement,
 // after Levoy 1990, as the volume pass does): the cells of the coarse lattice (even cx and cy) are
@@ -255,26 +240,14 @@ namespace {
 // exact) and their material is the cell's own. The cell is traced otherwise.
 class GlassLattice {
 public:
-    GlassLattice(FrameState& f, float threshold, const std::vector<std::array<uint32_t, 3>>& neighbours)
+    GlassLattice(const FrameState& f, float threshold, const std::vector<std::array<uint32_t, 3>>& neighbours)
         : f_(f), neighbours_(neighbours), threshold_(threshold), a_(f.adaptive), cw_(f.width / a_),
-          ch_(f.height / a_), lw_((cw_ + 1) / 2) {
-        if (!enabled()) return;
-        std::shared_ptr<GlassCellPaths>& kept = f.cache.glassPaths;
-        if (!kept) kept = std::make_shared<GlassCellPaths>();
-        paths_ = kept.get();
-        if (paths_->path.size() < std::size_t(cw_ * ch_)) paths_->path.resize(std::size_t(cw_ * ch_));
-        paths_->written.assign(std::size_t(cw_ * ch_), 0);
-    }
+          ch_(f.height / a_), lw_((cw_ + 1) / 2),
+          paths_(threshold > 0 ? std::size_t(lw_ * ((ch_ + 1) / 2)) : 0) {}
 
     bool enabled() const { return threshold_ > 0; }
     static bool onLattice(int64_t cx, int64_t cy) { return cx % 2 == 0 && cy % 2 == 0; }
-    /// Cell (cx, cy)'s representative's path: a lattice cell's, and (for the N-rooks samples,
-    /// interpolatedSample) every other cell's traced or interpolated.
-    LatticePath& at(int64_t cx, int64_t cy) { return paths_->path[index(cx, cy)]; }
-    const LatticePath& at(int64_t cx, int64_t cy) const { return paths_->path[index(cx, cy)]; }
-    /// Whether this frame wrote cell (cx, cy)'s path (a path that met glass, traced or interpolated).
-    bool has(int64_t cx, int64_t cy) const { return paths_->written[index(cx, cy)] != 0; }
-    void wrote(int64_t cx, int64_t cy) { paths_->written[index(cx, cy)] = 1; }
+    LatticePath& at(int64_t cx, int64_t cy) { return paths_[index(cx, cy)]; }
 
     // After the lattice is traced: which of its cells bend (rows in parallel; each reads the
     // representatives' shading only).
@@ -284,15 +257,14 @@ public:
         parallelFor(0, lh, 16, [&](int64_t y0, int64_t y1) {
             for (int64_t ly = y0; ly < y1; ++ly)
                 for (int64_t lx = 0; lx < lw_; ++lx) {
+                    LatticePath& p = paths_[std::size_t(ly * lw_ + lx)];
+                    if (!p.traced) continue;
                     const int64_t cx = 2 * lx, cy = 2 * ly;
-                    if (!has(cx, cy)) continue;
-                    LatticePath& p = at(cx, cy);
                     const float own = luma(cx, cy, tm);
                     // A neighbour whose path does not agree (or past the image's side) counts as the
                     // cell itself: what lies beyond a parting is not interpolated over anyway.
                     const auto l = [&](int64_t nx, int64_t ny) {
-                        if (nx < 0 || ny < 0 || nx >= cw_ || ny >= ch_ || !has(nx, ny) ||
-                            !p.agrees(at(nx, ny), neighbours_))
+                        if (nx < 0 || ny < 0 || nx >= cw_ || ny >= ch_ || !p.agrees(at(nx, ny), neighbours_))
                             return own;
                         return luma(nx, ny, tm);
                     };
@@ -304,7 +276,7 @@ public:
 
     // Whether cell (cx, cy), off the lattice, of material `material`, takes its light through the
     // glass from the lattice: then `through` is it.
-    bool interpolate(int64_t cx, int64_t cy, uint32_t material, Vec3f& through) {
+    bool interpolate(int64_t cx, int64_t cy, uint32_t material, Vec3f& through) const {
         const LatticeNeighbours around = latticeNeighbours(cx, cy, 1);
         const int64_t *nx = around.x, *ny = around.y;
         const int n = around.n;
@@ -313,60 +285,18 @@ public:
         for (int k = 0; k < n; ++k) {
             if (nx[k] < 0 || ny[k] < 0 || nx[k] >= cw_ || ny[k] >= ch_) return false;
             if (a_ > 1 && f_.refined[std::size_t(ny[k] * cw_ + nx[k])] != 0) return false; // an edge
-            if (!has(nx[k], ny[k])) return false;
-            p[k] = &at(nx[k], ny[k]);
-            if (p[k]->bends || p[k]->material != material) return false;
+            p[k] = &paths_[index(nx[k], ny[k])];
+            if (!p[k]->traced || p[k]->bends || p[k]->material != material) return false;
             for (int j = 0; j < k; ++j) // every pair: triangles that touch are not transitive
                 if (!p[j]->agrees(*p[k], neighbours_)) return false;
             sum += p[k]->through;
         }
         through = sum * (1.0f / float(n));
-        LatticePath& own = at(cx, cy);
-        own = *p[0];
-        own.interpolated = true;
-        own.through = through;
-        wrote(cx, cy);
         return true;
     }
-
-    // Whether sample (x, y) (an N-rooks sample of a cell shaded once, of material `material`) takes
-    // its light through the glass from the representatives of the four cells around it, bilinearly:
-    // then `through` is it. They must all be glass cells off the G-buffer's edges, of the sample's
-    // material, traced or interpolated, their paths agreeing pairwise (LatticePath::agrees: the light
-    // varies continuously between them), and their shown luma within kRookSpan of each other (no
-    // step of the shading behind the glass, a shadow's edge, between them).
-    bool interpolatedSample(int64_t x, int64_t y, uint32_t material, Vec3f& through) const {
-        const ToneMap tm = f_.options.toneMap;
-        const double u = (double(x) - a_ / 2) / a_, v = (double(y) - a_ / 2) / a_;
-        const int64_t x0 = int64_t(std::floor(u)), y0 = int64_t(std::floor(v));
-        const float wx = float(u - double(x0)), wy = float(v - double(y0));
-        const float w[4] = {(1 - wx) * (1 - wy), wx * (1 - wy), (1 - wx) * wy, wx * wy};
-        const LatticePath* p[4];
-        float lo = 1, hi = 0;
-        Vec3f sum{0, 0, 0};
-        for (int k = 0; k < 4; ++k) {
-            const int64_t nx = x0 + (k & 1), ny = y0 + (k >> 1);
-            if (nx < 0 || ny < 0 || nx >= cw_ || ny >= ch_) return false;
-            if (a_ > 1 && f_.refined[std::size_t(ny * cw_ + nx)] == kEveryRefinedSample) return false;
-            if (!has(nx, ny)) return false;
-            p[k] = &at(nx, ny);
-            if (p[k]->material != material) return false;
-            for (int j = 0; j < k; ++j)
-                if (!p[j]->agrees(*p[k], neighbours_)) return false;
-            const float l = luma(nx, ny, tm);
-            lo = std::min(lo, l), hi = std::max(hi, l);
-            sum += p[k]->through * w[k];
-        }
-        if (hi - lo > kRookSpan) return false;
-        through = sum;
-        return true;
-    }
-    /// The largest span of the four representatives' shown luma an N-rooks sample is interpolated
-    /// over: a larger one is a step of the light behind the glass (a shadow's edge on one object).
-    static constexpr float kRookSpan = 1.0f / 8;
 
 private:
-    std::size_t index(int64_t cx, int64_t cy) const { return std::size_t(cy * cw_ + cx); }
+    std::size_t index(int64_t cx, int64_t cy) const { return std::size_t((cy / 2) * lw_ + cx / 2); }
     float luma(int64_t cx, int64_t cy, ToneMap tm) const {
         return shownLuma(f_.shaded[representativeSample(f_, cx, cy)], tm);
     }
@@ -376,7 +306,7 @@ private:
     float threshold_;
     int a_;
     int64_t cw_, ch_, lw_;
-    GlassCellPaths* paths_ = nullptr; ///< the cache's (RenderCacheData::glassPaths), with the lattice
+    std::vector<LatticePath> paths_;
 };
 
 // Every cell's representative that shows glass: with the lattice (RenderOptions::glassRefinement >
@@ -389,19 +319,16 @@ private:
 // what the rounds before wrote only (the lattice; representatives), so the order of the cells does
 // not matter.
 template <class ShowsGlass, class Trace, class Mix>
-void traceCells(FrameState& f, GlassLattice& lattice, const ShowsGlass& showsGlass, const Trace& trace,
+void traceCells(FrameState& f, const GlassSetup& setup, const ShowsGlass& showsGlass, const Trace& trace,
                 const Mix& mix, std::atomic<int64_t>& interpolated) {
     const int a = f.adaptive;
     const int64_t W = f.width, cw = W / a, ch = f.height / a;
     const std::vector<uint32_t>& triangle = f.gbuffer.triangle;
     const auto traceAt = [&](size_t i, LatticePath* into) {
-        return trace(int64_t(i % size_t(W)), int64_t(i / size_t(W)), i, into);
-    };
-    // Traces cell (cx, cy)'s representative, its path into the lattice's record of the cell.
-    const auto traceCell = [&](int64_t cx, int64_t cy, size_t rep) {
-        if (traceAt(rep, &lattice.at(cx, cy))) lattice.wrote(cx, cy);
+        trace(int64_t(i % size_t(W)), int64_t(i / size_t(W)), i, into);
     };
     const auto edge = [&](int64_t cx, int64_t cy) { return a > 1 && f.refined[size_t(cy * cw + cx)] != 0; };
+    GlassLattice lattice(f, float(f.options.glassRefinement), setup.behindNeighbours);
     parallelFor(0, ch, 4, [&](int64_t y0, int64_t y1) {
         for (int64_t cy = y0; cy < y1; ++cy)
             for (int64_t cx = 0; cx < cw; ++cx) {
@@ -409,8 +336,10 @@ void traceCells(FrameState& f, GlassLattice& lattice, const ShowsGlass& showsGla
                 if (!showsGlass(rep)) continue;
                 if (!lattice.enabled()) {
                     traceAt(rep, nullptr);
-                } else if (GlassLattice::onLattice(cx, cy) || edge(cx, cy)) {
-                    traceCell(cx, cy, rep);
+                } else if (GlassLattice::onLattice(cx, cy)) {
+                    traceAt(rep, &lattice.at(cx, cy));
+                } else if (edge(cx, cy)) {
+                    traceAt(rep, nullptr);
                 }
             }
     });
@@ -429,7 +358,7 @@ void traceCells(FrameState& f, GlassLattice& lattice, const ShowsGlass& showsGla
                         mix(rep, through);
                         ++n;
                     } else {
-                        traceCell(cx, cy, rep);
+                        traceAt(rep, nullptr);
                     }
                 }
             interpolated += n;
@@ -461,34 +390,23 @@ void traceCells(FrameState& f, GlassLattice& lattice, const ShowsGlass& showsGla
 }
 
 // Adaptive anti-aliasing inside glass: a glass cell shaded once (no edge) whose light through it
-// bends or steps between its neighbours' (curvesAcrossNeighbours, on the traced representatives) gets its
-// N-rooks samples, each shaded as a surface and traced, or, with the lattice, its light through the
-// glass interpolated from the four representatives around it where their paths agree
-// (GlassLattice::interpolatedSample). The cells decide on representatives only, which no cell
-// changes, and are all marked before any sample reads the marks, so the order does not matter.
-template <class ShowsGlass, class Trace, class Mix>
-void addRookSamples(FrameState& f, const GlassLattice& lattice, const ShowsGlass& showsGlass,
-                    const Trace& trace, const Mix& mix, std::atomic<int64_t>& interpolated) {
+// bends or steps between its neighbours' by more than RenderOptions::glassSampleContrast
+// (curvesAcrossNeighbours, on the traced representatives) gets its N-rooks samples, each shaded as a
+// surface and traced. The cells decide on representatives only,
+// which no cell changes, so the order does not matter.
+template <class ShowsGlass, class Trace>
+void addRookSamples(FrameState& f, const ShowsGlass& showsGlass, const Trace& trace) {
     const int a = f.adaptive;
     const int64_t W = f.width, cw = W / a, ch = f.height / a;
     const Vec3d eye = f.gbuffer.frame.eye();
     const float contrast = float(f.options.glassSampleContrast);
-    parallelFor(0, ch, 8, [&](int64_t y0, int64_t y1) {
+    parallelFor(0, ch, 4, [&](int64_t y0, int64_t y1) {
         for (int64_t cy = y0; cy < y1; ++cy)
             for (int64_t cx = 0; cx < cw; ++cx) {
                 uint8_t& kind = f.refined[size_t(cy * cw + cx)];
-                if (kind == 0 && showsGlass(representativeSample(f, cx, cy)) &&
-                    curvesAcrossNeighbours(f, cx, cy, contrast))
-                    kind = kRookSamples;
-            }
-    });
-    const std::vector<uint32_t>& material = f.geometry.triangleMaterial;
-    parallelFor(0, ch, 4, [&](int64_t y0, int64_t y1) {
-        int64_t n = 0;
-        for (int64_t cy = y0; cy < y1; ++cy)
-            for (int64_t cx = 0; cx < cw; ++cx) {
-                if (f.refined[size_t(cy * cw + cx)] != kRookSamples) continue;
                 const size_t rep = representativeSample(f, cx, cy);
+                if (kind != 0 || !showsGlass(rep) || !curvesAcrossNeighbours(f, cx, cy, contrast)) continue;
+                kind = kRookSamples;
                 const float occlusion =
                     f.screenOcclusion.empty() ? 1.0f : f.screenOcclusion[size_t(cy * cw + cx)];
                 for (int dy = 0; dy < a; ++dy) {
@@ -500,14 +418,8 @@ void addRookSamples(FrameState& f, const GlassLattice& lattice, const ShowsGlass
                     const auto shade = [&] {
                         return surface ? f.shader->shade(s, eye, occlusion) : f.shaded[rep];
                     };
-                    Vec3f through;
                     if (!showsGlass(i)) {
                         f.shaded[i] = shade();
-                    } else if (lattice.enabled() &&
-                               lattice.interpolatedSample(x, y, material[f.gbuffer.triangle[i]], through)) {
-                        f.shaded[i] = glassReplacesShading(f, s.material) ? Vec3f{0, 0, 0} : shade();
-                        mix(i, through);
-                        ++n;
                     } else if (glassReplacesShading(f, s.material)) {
                         // Mixed in times 0 where a path goes through: shaded only where none does.
                         f.shaded[i] = {0, 0, 0};
@@ -518,7 +430,6 @@ void addRookSamples(FrameState& f, const GlassLattice& lattice, const ShowsGlass
                     }
                 }
             }
-        interpolated += n;
     });
 }
 
@@ -642,21 +553,18 @@ void shadeGlass(FrameState& frame) {
                                   p.throughput;
         mix(i, through);
         if (lattice)
-            *lattice = LatticePath{false, s.material, p.events,         p.truncated, p.crossed,
-                                   exit,  reflection, Vec3f(p.exitDir), through};
+            *lattice = LatticePath{true,      false, s.material, p.events,         p.truncated,
+                                   p.crossed, exit,  reflection, Vec3f(p.exitDir), through};
         return true;
     };
     const auto showsGlass = [&](size_t i) {
         const uint32_t tri = gbuffer.triangle[i];
         return tri != GBuffer::kNone && isGlass[geometry.triangleMaterial[tri]];
     };
-    GlassLattice lattice(frame, float(options.glassRefinement), setup.behindNeighbours);
-    traceCells(frame, lattice, showsGlass, trace, mix, interpolated);
-    std::atomic<int64_t> samplesInterpolated{0};
-    if (frame.adaptive > 1) addRookSamples(frame, lattice, showsGlass, trace, mix, samplesInterpolated);
+    traceCells(frame, setup, showsGlass, trace, mix, interpolated);
+    if (frame.adaptive > 1) addRookSamples(frame, showsGlass, trace);
     frame.result.glass.paths += paths.load();
     frame.result.glass.interpolated += interpolated.load();
-    frame.result.glass.samplesInterpolated += samplesInterpolated.load();
     frame.result.glass.traceMs += std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
 }
 

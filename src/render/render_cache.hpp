@@ -126,8 +126,6 @@ struct TriangleBasis {
 
 /// The glass pass's structures (render/glass_pass.cpp): built once per glass key.
 struct GlassSetup;
-/// The glass pass's per-cell paths (render/glass_pass.cpp): rewritten every frame, kept for their memory.
-struct GlassCellPaths;
 /// The volume pass's structures (render/volume_pass.cpp): built once per volume key.
 struct VolumeSetup;
 /// The volume pass's deep-shadow visibility per volume of one light (render/volume_light_grid.hpp):
@@ -150,7 +148,6 @@ struct RenderCacheData {
     std::vector<Vec3f> shaded;
     std::vector<float> screenOcclusion;
     std::vector<uint8_t> refined, glassSamples;
-    std::shared_ptr<GlassCellPaths> glassPaths;
     std::vector<Vec3f> volumeBehind; ///< the volume pass: per cell, the light behind its volumes
     /// The volume pass: per cell, the light its representative's ray gathered (or the lattice's
     /// interpolation gave), its transmittance and the depth where its opacity reached one half (+inf:
