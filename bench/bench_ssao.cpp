@@ -6,7 +6,8 @@
 //
 //   ./build/bench_ssao --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 //
-// ScreenSpace*/D/S: D directions, S steps (the defaults 2/5, and cheaper and dearer settings);
+// ScreenSpace*/D/S: D directions, S steps (2/4 the default since 2026-12-08, 2/5 before it, and
+// cheaper and dearer settings);
 // *Reused: the buffers kept from call to call (ScreenSpaceOcclusionScratch); */D/S/V: V 1 the horizon
 // search in SIMD lanes (the default), 0 one side at a time. Times are process CPU
 // time (all threads) next to wall time. Counters: samples/s (items processed), covered (samples

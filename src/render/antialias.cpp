@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "render/render_cache.hpp"
 #include "render/vec_simd.hpp"
 #include "voxfx/file_name.hpp"
 
@@ -42,12 +43,15 @@ int64_t markRefinedCells(FrameState& f) {
     const SceneGeometry& geo = f.geometry;
     const int64_t W = f.width, cw = f.width / s, ch = f.height / s;
     f.refined.resize(size_t(cw * ch));
-    auto faceNormal = [&](uint32_t t) { return f.triangleBases[t].normal; };
+    // The face normals and meshes from the compact per-triangle records (16 bytes a triangle, kept
+    // with the geometry) rather than the 84-byte bases: a random read per triangle that stays in the
+    // cache beside the 4x G-buffer.
+    const TriangleTag* tags = f.cache.triangleTags.data();
     const float cos30 = float(std::cos(30 * M_PI / 180));
     constexpr uint32_t kNone = GBuffer::kNone;
     // Whether the samples of a cell that do not all show one triangle ask for every sample shaded
     // (any of the reasons above): the background and the depths first (the samples' own arrays,
-    // read in order), the meshes, materials and face normals (random reads per triangle) only
+    // read in order), the meshes, face normals and materials (random reads per triangle) only
     // where those leave it open.
     const auto refineCell = [&](int64_t cx, int64_t cy) {
         const size_t at = size_t(cy * s * W + cx * s);
@@ -66,16 +70,18 @@ int64_t markRefinedCells(FrameState& f) {
             }
         if (!mixed) return false; // one triangle (or the background) over the cell
         if (dmax - dmin > 0.02f * dmin) return true;
-        const Vec3f n = faceNormal(first);
+        const TriangleTag& ft = tags[first];
         for (int dy = 0; dy < s; ++dy)
             for (int dx = 0; dx < s; ++dx) {
                 const uint32_t t = g.triangle[at + size_t(dy * W + dx)];
                 if (t == first) continue;
-                if (geo.triangleMesh[t] != geo.triangleMesh[first] ||
+                // The same mesh (the tags' meshes with their opaque bit: equal only where the meshes
+                // are), faces within 30 degrees (both sides of a face shade alike: the angle between
+                // the lines) and the same material.
+                const TriangleTag& tt = tags[t];
+                if (((tt.mesh ^ ft.mesh) & kTagSurface) || std::abs(dot(tt.normal, ft.normal)) < cos30 ||
                     geo.triangleMaterial[t] != geo.triangleMaterial[first])
                     return true;
-                // Both sides of a face shade alike: the angle between the lines.
-                if (std::abs(dot(faceNormal(t), n)) < cos30) return true;
             }
         return false;
     };

@@ -28,7 +28,7 @@ void screenOcclusion(FrameState& f, const FieldOcclusionSetup& setup) {
     so.radius = setup.radius;
     so.flatMeshes = setup.flatMeshes; // kept in the cache with the setup
     f.cellOcclusion = std::make_shared<const CellOcclusion>(f.gbuffer, f.geometry, f.triangleBases, opaque, a,
-                                                            so, f.cache.screen.scratch);
+                                                            so, f.cache.screen.scratch, f.cache.triangleTags);
 }
 
 } // namespace

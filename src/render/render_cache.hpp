@@ -136,6 +136,7 @@ struct RenderCacheData {
     std::optional<uint64_t> geometryKey;
     SceneGeometry geometry;
     std::vector<TriangleBasis> triangleBases; ///< of `geometry`
+    std::vector<TriangleTag> triangleTags;    ///< of `geometry` and the materials' opacity
     /// Built shadows of every light and technique used lately (several kinds per light).
     KeyedCache<LightShadow> shadows{8};
     KeyedCache<const FieldOcclusionSetup> occlusionSetup{2};

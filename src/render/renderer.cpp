@@ -48,6 +48,10 @@ void flattenPass(FrameState& f, Progress*) {
     f.cache.geometryKey.reset();
     f.geometry = flattenScene(f.scene, f.options.creaseAngle);
     f.triangleBases = detail::triangleBases(f.geometry);
+    // The compact records, with the occlusion's rule of what occludes (Material::isOpaque).
+    std::vector<uint8_t> opaque(f.scene.materials.size());
+    for (std::size_t m = 0; m < opaque.size(); ++m) opaque[m] = f.scene.materials[m].isOpaque();
+    f.cache.triangleTags = detail::triangleTags(f.geometry, f.triangleBases, opaque);
     f.cache.geometryKey = h.get();
 }
 

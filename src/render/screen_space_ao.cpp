@@ -119,24 +119,35 @@ struct Spans {
 // The renderer's samples: cell (x, y) of a G-buffer of `adaptive` x `adaptive` samples per cell is
 // its sample (x a + a / 2, y a + a / 2), the one the shading pass shades. Its position comes from
 // the depth (a multiply-add per coordinate: the eye ray's offsets per cell column and row are kept),
-// its normals from the triangle's basis only where asked: the face normal for the one-surface test,
-// the interpolated one (interpolatedNormal, as the shading pass's) for the working pixel and the
-// upsample's slow path. So the downsample evaluates one shading normal per block, not four.
+// its normals only where asked: the face normal for the one-surface test from the triangle's compact
+// record (TriangleTag, with its mesh and whether it occludes: 16 bytes a triangle, read at random,
+// instead of the 84-byte basis and two tables), the interpolated one (interpolatedNormal, as the
+// shading pass's) from its basis for the working pixel and the upsample's slow path, except on a
+// flat triangle (kTagFlat: its corner normals within 0.01 rad of its face normal; the forest's leaves,
+// to float rounding), whose face normal from the record stands for its shading normal. So the downsample
+// evaluates one shading normal per block, not four, and visits no basis on the forest's leaves.
 struct Cells {
     int64_t width = 0, height = 0; ///< cells
     const GBuffer* g = nullptr;
     const SceneGeometry* geometry = nullptr;
     const TriangleBasis* bases = nullptr;
-    std::span<const uint8_t> opaque; ///< per material: whether it occludes
+    std::vector<TriangleTag> ownTags; ///< made here where the caller has none
+    const TriangleTag* tags = nullptr;
     int adaptive = 1;
     Vec3f eye, right, up, forward;
     std::vector<float> columnTan, rowTan; ///< the eye ray's offset along right, up per unit depth
 
     Cells(const GBuffer& gbuffer, const SceneGeometry& geo, std::span<const TriangleBasis> b,
-          std::span<const uint8_t> opaqueMaterial, int a)
+          std::span<const uint8_t> opaqueMaterial, int a, std::span<const TriangleTag> triangleTagsOrNone)
         : width(gbuffer.frame.width() / a), height(gbuffer.frame.height() / a), g(&gbuffer), geometry(&geo),
-          bases(b.data()), opaque(opaqueMaterial), adaptive(a), eye(gbuffer.frame.eye()),
-          right(gbuffer.frame.right()), up(gbuffer.frame.up()), forward(gbuffer.frame.forward()) {
+          bases(b.data()), adaptive(a), eye(gbuffer.frame.eye()), right(gbuffer.frame.right()),
+          up(gbuffer.frame.up()), forward(gbuffer.frame.forward()) {
+        if (triangleTagsOrNone.empty()) {
+            ownTags = triangleTags(geo, b, opaqueMaterial);
+            tags = ownTags.data();
+        } else {
+            tags = triangleTagsOrNone.data();
+        }
         const Frame& f = gbuffer.frame;
         columnTan.resize(size_t(width));
         rowTan.resize(size_t(height));
@@ -152,13 +163,11 @@ struct Cells {
     }
     uint32_t triangle(int64_t x, int64_t y) const { return g->triangle[sample(x, y)]; }
     static constexpr bool kMeshes = true;
-    int32_t meshOf(int64_t x, int64_t y) const { return int32_t(geometry->triangleMesh[triangle(x, y)]); }
+    int32_t meshOf(int64_t x, int64_t y) const { return int32_t(tags[triangle(x, y)].mesh & kTagMesh); }
     bool covered(int64_t x, int64_t y) const { return triangle(x, y) != GBuffer::kNone; }
     bool occludes(int64_t x, int64_t y) const {
         const uint32_t t = triangle(x, y);
-        if (t == GBuffer::kNone) return false;
-        const uint32_t m = geometry->triangleMaterial[t];
-        return m < opaque.size() && opaque[m];
+        return t != GBuffer::kNone && (tags[t].mesh & kTagOccludes);
     }
     Vec3f position(int64_t x, int64_t y) const {
         const float z = g->depth[sample(x, y)];
@@ -168,12 +177,14 @@ struct Cells {
     Vec3f testNormal(int64_t x, int64_t y) const { return testNormal(x, y, position(x, y)); }
     // The same, where the caller has its position (`at`, position(x, y)).
     Vec3f testNormal(int64_t x, int64_t y, const Vec3f& at) const {
-        const Vec3f n = bases[triangle(x, y)].normal;
+        const Vec3f n = tags[triangle(x, y)].normal;
         return dot(n, eye - at) < 0 ? -n : n;
     }
     // The shading normal at `at` on the triangle of cell (x, y), turned as surfaceFromBasis turns it.
+    // A flat triangle's (kTagFlat) is its face normal, turned so, without a visit to its basis.
     Vec3f normalAt(int64_t x, int64_t y, const Vec3f& at) const {
         const uint32_t t = triangle(x, y);
+        if (tags[t].mesh & kTagFlat) return testNormal(x, y, at);
         const TriangleBasis& basis = bases[t];
         const Vec3f n = interpolatedNormal(basis, at - basis.a);
         Vec3f ng = basis.normal;
@@ -1248,7 +1259,7 @@ void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, st
 namespace {
 
 void checkCells(const GBuffer& gbuffer, const SceneGeometry& geometry, std::span<const TriangleBasis> bases,
-                int adaptive) {
+                int adaptive, std::span<const TriangleTag> tags) {
     const Frame& camera = gbuffer.frame;
     if (!camera.isPerspective()) fail("screen-space ambient occlusion: the camera frame must be perspective");
     if (adaptive < 1 || camera.width() % adaptive || camera.height() % adaptive)
@@ -1257,6 +1268,9 @@ void checkCells(const GBuffer& gbuffer, const SceneGeometry& geometry, std::span
     if (bases.size() != geometry.mesh.triangleCount())
         fail("screen-space ambient occlusion: ", bases.size(), " triangle bases for ",
              geometry.mesh.triangleCount(), " triangles");
+    if (!tags.empty() && tags.size() != bases.size())
+        fail("screen-space ambient occlusion: ", tags.size(), " triangle tags for ", bases.size(),
+             " triangles");
     if (camera.width() / adaptive <= 0 || camera.height() / adaptive <= 0)
         fail("screen-space ambient occlusion: the G-buffer has no cells");
 }
@@ -1266,9 +1280,10 @@ void checkCells(const GBuffer& gbuffer, const SceneGeometry& geometry, std::span
 void screenSpaceOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
                           std::span<const TriangleBasis> bases, std::span<const uint8_t> opaqueMaterial,
                           int adaptive, const ScreenSpaceOcclusionOptions& options,
-                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch) {
-    checkCells(gbuffer, geometry, bases, adaptive);
-    const Cells full(gbuffer, geometry, bases, opaqueMaterial, adaptive);
+                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch,
+                          std::span<const TriangleTag> tags) {
+    checkCells(gbuffer, geometry, bases, adaptive, tags);
+    const Cells full(gbuffer, geometry, bases, opaqueMaterial, adaptive, tags);
     if (visibility.size() != std::size_t(full.width * full.height))
         fail("screen-space ambient occlusion: ", full.width * full.height, " cells but room for ",
              visibility.size(), " results");
@@ -1293,8 +1308,8 @@ struct CellOcclusionState final : CellOcclusion::Impl {
     CellOcclusionState(const GBuffer& gbuffer, const SceneGeometry& geometry,
                        std::span<const TriangleBasis> bases, std::span<const uint8_t> opaqueMaterial,
                        int adaptive, const ScreenSpaceOcclusionOptions& options,
-                       ScreenSpaceOcclusionScratch& scratch)
-        : full(gbuffer, geometry, bases, opaqueMaterial, adaptive),
+                       ScreenSpaceOcclusionScratch& scratch, std::span<const TriangleTag> tags)
+        : full(gbuffer, geometry, bases, opaqueMaterial, adaptive, tags),
           fullParams(makeParams(gbuffer.frame, adaptive, options)) {
         width = full.width;
         height = full.height;
@@ -1318,11 +1333,11 @@ struct CellOcclusionState final : CellOcclusion::Impl {
 CellOcclusion::CellOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
                              std::span<const TriangleBasis> bases, std::span<const uint8_t> opaqueMaterial,
                              int adaptive, const ScreenSpaceOcclusionOptions& options,
-                             ScreenSpaceOcclusionScratch& scratch) {
-    checkCells(gbuffer, geometry, bases, adaptive);
+                             ScreenSpaceOcclusionScratch& scratch, std::span<const TriangleTag> tags) {
+    checkCells(gbuffer, geometry, bases, adaptive, tags);
     checkOptions(options);
     impl_ = std::make_unique<CellOcclusionState>(gbuffer, geometry, bases, opaqueMaterial, adaptive, options,
-                                                 scratch);
+                                                 scratch, tags);
 }
 
 CellOcclusion::~CellOcclusion() = default;

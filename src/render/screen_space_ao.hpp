@@ -29,10 +29,11 @@
 // its own flat mesh: ScreenSpaceOcclusionOptions::flatMeshes), which is most of them (the tree demo's
 // frame: 72 % of the covered working pixels), with the search's output bit for bit.
 //
-// Accuracy (tests/test_screen_space_ao.cpp): a floor meeting a wall, against the closed form,
-// mean error 0.007 within the radius (max 0.09, next to the crease at half resolution); the tree
-// and bunny demos, where something is occluded, 0.05-0.07 from the field method and 0.06 from
-// counted rays (the field method: 0.03-0.04). What it misses: occluders outside the image or
+// Accuracy (tests/test_screen_space_ao.cpp, at the default 4 steps per side): a floor meeting a
+// wall, against the closed form, mean error 0.011 within the radius (max 0.094, next to the crease
+// at half resolution; 5 steps: 0.007 and 0.090); the tree and bunny demos, where something is
+// occluded, 0.06-0.08 from the field method and 0.07 from counted rays (5 steps: 0.05-0.07 and
+// 0.06; the field method: 0.03-0.04). What it misses: occluders outside the image or
 // hidden behind nearer surfaces, and the far side of thin objects (a branch counts as a solid slab
 // behind it): screen-space methods see only the depth buffer.
 //
@@ -54,6 +55,27 @@ namespace voxfx::detail {
 
 struct TriangleBasis; // render/render_cache.hpp
 
+/// Per triangle of the flattened scene, what the passes that test triangles at random per sample
+/// read (the anti-aliasing's marking of cells, the screen-space occlusion's downsample): its unit face
+/// normal (TriangleBasis::normal) and, in `mesh`, its mesh (SceneGeometry::triangleMesh, kTagMesh
+/// bits), kTagOccludes where its material is opaque (an index past the materials: not) and kTagFlat
+/// where its shading normal is its face normal to within about half a degree: each of its three
+/// corner normals within kTagFlatCos of the face normal (either side; a leaf, a facet of a
+/// flat-shaded mesh or of a finely tessellated one), so that a pass needing the shading normal takes
+/// the face normal without reading the 84-byte basis. 16 bytes a triangle (render/shading.hpp
+/// triangleTags; kept in the render cache).
+struct TriangleTag {
+    Vec3f normal;
+    uint32_t mesh = 0;
+};
+inline constexpr uint32_t kTagOccludes = 0x80000000u, kTagFlat = 0x40000000u, kTagMesh = 0x3fffffffu;
+/// The bits two triangles of one mesh and one material share.
+inline constexpr uint32_t kTagSurface = kTagMesh | kTagOccludes;
+/// The cosine within which a flat triangle's corner normals lie of its face normal: 0.01 radians
+/// (0.57 degrees). The forest's leaves: about three quarters of its triangles (the rest trunks and
+/// branches); the occlusion moves by at most a few thousandths (tests/test_screen_space_ao.cpp).
+inline constexpr float kTagFlatCos = 1 - 5e-5f;
+
 struct ScreenSpaceOcclusionOptions {
     /// Occluders farther than this from a point do not occlude it (world units, > 0): the radius the
     /// field method uses (RenderOptions::occlusionRadius, or fieldOcclusionSetup's default).
@@ -64,8 +86,10 @@ struct ScreenSpaceOcclusionOptions {
     /// Horizon samples per side of a slice (1..32), spaced as the 1.5th power of their index out to
     /// 1.2 radii on screen (denser near the pixel, where contact occlusion is), offset per pixel by
     /// the pattern; the horizon is interpolated to the radius between the last sample within it and
-    /// the first beyond. Directions x steps = 2 x 5: 20 samples per working pixel.
-    int steps = 5;
+    /// the first beyond. Directions x steps = 2 x 4: 16 samples per working pixel (5 steps, the
+    /// default before 2026-12-08: 20, a fifth more search for errors about a tenth smaller; see the
+    /// accuracy figures above).
+    int steps = 4;
     /// Compute on a 2x2-downsampled buffer (per block the mean of its samples where they show one
     /// smooth surface, else its sample nearest the eye) and upsample bilaterally: about a third of
     /// the cost. False: one evaluation per sample (the quality option).
@@ -160,11 +184,13 @@ void screenSpaceOcclusion(const Frame& camera, int64_t width, int64_t height, st
 /// overload above on gatherSurfaces' buffers (tests/test_screen_space_ao.cpp runs both). A triangle occludes
 /// where opaqueMaterial[its material] is nonzero (an index past it does not). Throws voxfx::Error as the
 /// overload above, and for a G-buffer that is not whole cells, bases of another count or `visibility` of
-/// another size.
+/// another size. `tags`: triangleTags of the geometry, bases and opaqueMaterial where the caller keeps
+/// them (the renderer, in its cache); empty: made here.
 void screenSpaceOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
                           std::span<const TriangleBasis> bases, std::span<const uint8_t> opaqueMaterial,
                           int adaptive, const ScreenSpaceOcclusionOptions& options,
-                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch);
+                          std::span<float> visibility, ScreenSpaceOcclusionScratch& scratch,
+                          std::span<const TriangleTag> tags = {});
 
 /// The renderer's entry in two halves, so that the last step, the bilateral upsample to the cells,
 /// runs where the shading pass has each cell's surface point already (position and face normal: no
@@ -173,12 +199,14 @@ void screenSpaceOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry,
 /// halfResolution, every cell), `at` gives one covered cell's visibility. The same method and
 /// arithmetic as that entry, which upsamples through `at`'s code with the position from the depth
 /// and the face normal of its cell. The object reads its arguments and `scratch` until it is
-/// destroyed; `at` is thread-safe. Throws voxfx::Error as the G-buffer entry does.
+/// destroyed; `at` is thread-safe. `tags` as the G-buffer entry's. Throws voxfx::Error as the
+/// G-buffer entry does.
 class CellOcclusion {
 public:
     CellOcclusion(const GBuffer& gbuffer, const SceneGeometry& geometry, std::span<const TriangleBasis> bases,
                   std::span<const uint8_t> opaqueMaterial, int adaptive,
-                  const ScreenSpaceOcclusionOptions& options, ScreenSpaceOcclusionScratch& scratch);
+                  const ScreenSpaceOcclusionOptions& options, ScreenSpaceOcclusionScratch& scratch,
+                  std::span<const TriangleTag> tags = {});
     ~CellOcclusion();
     CellOcclusion(const CellOcclusion&) = delete;
     CellOcclusion& operator=(const CellOcclusion&) = delete;

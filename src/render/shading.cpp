@@ -219,6 +219,23 @@ std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry) {
     return out;
 }
 
+std::vector<TriangleTag> triangleTags(const SceneGeometry& geometry, std::span<const TriangleBasis> bases,
+                                      std::span<const uint8_t> opaqueMaterial) {
+    std::vector<TriangleTag> out(bases.size());
+    parallelFor(0, int64_t(out.size()), 4096, [&](int64_t t0, int64_t t1) {
+        for (auto t = std::size_t(t0); t < std::size_t(t1); ++t) {
+            const uint32_t m = geometry.triangleMaterial[t];
+            const bool opaque = m < opaqueMaterial.size() && opaqueMaterial[m];
+            const TriangleBasis& b = bases[t];
+            bool flat = true;
+            for (const Vec3f& c : b.cornerNormal) flat = flat && std::fabs(dot(c, b.normal)) > kTagFlatCos;
+            out[t] = {b.normal, (geometry.triangleMesh[t] & kTagMesh) | (opaque ? kTagOccludes : 0u) |
+                                    (flat ? kTagFlat : 0u)};
+        }
+    });
+    return out;
+}
+
 Vec3f interpolatedNormal(const TriangleBasis& basis, const Vec3f& rel) {
     // Barycentrics, clamped against rounding (a degenerate triangle: a third each).
     float wb = 1.0f / 3, wc = 1.0f / 3;

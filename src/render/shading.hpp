@@ -46,6 +46,11 @@ float specularPower(float ndh, const ShadeMaterial& m);
 /// Per triangle of the flattened scene, its TriangleBasis (render/render_cache.hpp).
 std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry);
 
+/// Per triangle of the flattened scene, its TriangleTag (render/screen_space_ao.hpp) from its basis,
+/// and whether it occludes from opaqueMaterial (per material index; past it: not).
+std::vector<TriangleTag> triangleTags(const SceneGeometry& geometry, std::span<const TriangleBasis> bases,
+                                      std::span<const uint8_t> opaqueMaterial);
+
 /// The unit shading normal of the triangle of `basis` at the point basis.a + rel of its plane: its
 /// vertex normals (basis.cornerNormal) weighted by the point's barycentrics (clamped at 0), the face
 /// normal where they cancel; not yet turned towards the viewer (surfaceFromBasis does that).
