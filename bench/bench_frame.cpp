@@ -55,6 +55,8 @@
 //   BM_GlassLattice              the glass demo's interactive frame with the glass lattice (the
 //                                default) against every cell traced (--glass-refinement 0),
 //                                interleaved: lattice_ratio(_cpu), glass_ms, paths, interpolated.
+//   BM_GlassSamples/0, /1        the same against fewer N-rooks samples inside glass
+//                                (--glass-sample-contrast 1/4, 1): sample_ratio(_cpu).
 //   BM_GlassPaths                where a glass path's CPU goes: the glass demo's exact paths (one per
 //                                pixel centre on glass) and each query kind alone, one thread
 //                                (path_ms, eye_ms, reflect_ms, exit_ms, events_per_path).
@@ -460,44 +462,66 @@ BENCHMARK_CAPTURE(BM_FrameCost, dsm_demo, std::string("dsm-demo"))
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// The glass lattice (RenderOptions::glassRefinement) on the glass demo's interactive frames: the default
-// frame against the same with every cell traced (glassRefinement 0, the image before the lattice),
-// each with a RenderCache of its own and the camera orbiting, interleaved. lattice_ratio = frame /
-// every_cell (wall; _cpu: process CPU), glass_ms and every_glass_ms the glass pass, paths and
-// every_paths the glass paths traced per frame, interpolated the cells interpolated per frame.
-void BM_GlassLattice(benchmark::State& state) {
+// The glass demo's interactive frames with the default options against `other`, each with a
+// RenderCache of its own and the camera orbiting, interleaved: <ratio> = frame / other_ms (wall;
+// <ratio>_cpu: process CPU), glass_ms and other_glass_ms the glass pass, paths and other_paths the
+// glass paths traced per frame, interpolated the cells whose light through the glass was
+// interpolated (default frame).
+void glassAgainst(benchmark::State& state, const RenderOptions& other, const std::string& ratio,
+                  const std::string& label) {
     const BenchScene& b = benchScene("glass");
     const RenderOptions options = frameOptions(b.scene);
-    RenderOptions every = options;
-    every.glassRefinement = 0;
-    PassSums lattice, all;
-    double paths = 0, everyPaths = 0, interpolated = 0;
-    auto into = [&](const RenderOptions& o, PassSums& sums, double& pathSum) {
+    RenderOptions o2 = options;
+    o2.glassRefinement = other.glassRefinement;
+    o2.glassSampleContrast = other.glassSampleContrast;
+    PassSums mine, theirs;
+    double paths = 0, otherPaths = 0, interpolated = 0;
+    auto into = [&](const RenderOptions& o, PassSums& sums, double& pathSum, bool counts) {
         FrameFn frame = cachedFrames(b, o);
-        return [&sums, &pathSum, &interpolated, frame, cells = o.glassRefinement > 0](bool timed) {
+        return [&sums, &pathSum, &interpolated, frame, counts](bool timed) {
             const double cpu0 = processCpuMs();
             const RenderResult r = frame();
             benchmark::DoNotOptimize(r.image.pixels.data());
             if (!timed) return;
             sums.add(r, processCpuMs() - cpu0);
             pathSum += double(r.glass.paths);
-            if (cells) interpolated += double(r.glass.interpolated);
+            if (counts) interpolated += double(r.glass.interpolated);
         };
     };
-    interleaved(state, {into(options, lattice, paths), into(every, all, everyPaths)});
+    interleaved(state, {into(options, mine, paths, true), into(o2, theirs, otherPaths, false)});
     const double n = double(state.iterations());
-    state.counters["frame_ms"] = lattice.total / n;
-    state.counters["every_cell_ms"] = all.total / n;
-    state.counters["glass_ms"] = lattice.pass("glass") / n;
-    state.counters["every_glass_ms"] = all.pass("glass") / n;
-    state.counters["lattice_ratio"] = lattice.total / all.total;
-    state.counters["lattice_ratio_cpu"] = lattice.cpu / all.cpu;
+    state.counters["frame_ms"] = mine.total / n;
+    state.counters["other_ms"] = theirs.total / n;
+    state.counters["glass_ms"] = mine.pass("glass") / n;
+    state.counters["other_glass_ms"] = theirs.pass("glass") / n;
+    state.counters[ratio] = mine.total / theirs.total;
+    state.counters[ratio + "_cpu"] = mine.cpu / theirs.cpu;
     state.counters["paths"] = paths / n;
-    state.counters["every_paths"] = everyPaths / n;
+    state.counters["other_paths"] = otherPaths / n;
     state.counters["interpolated"] = interpolated / n;
-    state.SetLabel("glass: default against --glass-refinement 0; 1280x720, cached, orbiting");
+    state.SetLabel("glass: default against " + label + "; 1280x720, cached, orbiting");
+}
+
+// The glass lattice (RenderOptions::glassRefinement): the default frame against every cell and
+// every anti-aliasing sample traced (glassRefinement 0, the image before the lattice).
+void BM_GlassLattice(benchmark::State& state) {
+    RenderOptions every;
+    every.glassRefinement = 0;
+    glassAgainst(state, every, "lattice_ratio", "--glass-refinement 0");
 }
 BENCHMARK(BM_GlassLattice)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Anti-aliasing inside glass (RenderOptions::glassSampleContrast): the default frame (N-rooks samples
+// where the glass's light bends by more than 1/32) against fewer samples, where it bends by more than
+// 1/4 or 1 (none): what the option buys (the image's error against a supersampled reference:
+// BENCHMARKS.md, "N-rooks samples inside glass against a supersampled reference").
+void BM_GlassSamples(benchmark::State& state) {
+    RenderOptions coarse;
+    coarse.glassSampleContrast = state.range(0) == 0 ? 1.0 / 4 : 1.0;
+    glassAgainst(state, coarse, "sample_ratio",
+                 state.range(0) == 0 ? "--glass-sample-contrast 1/4" : "--glass-sample-contrast 1");
+}
+BENCHMARK(BM_GlassSamples)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Where a glass path's CPU goes, on the glass demo's camera paths (one per pixel centre at 1280x720
 // that meets glass, the demo's first camera), each query kind timed alone, one at a time, on one

@@ -192,6 +192,13 @@ struct RenderOptions {
     /// from a straight line through their lattice neighbours' by more than this; elsewhere the light
     /// through the glass is interpolated from them (two or four). 0: every pixel traced.
     double glassRefinement = 1.0 / 32;
+    /// Glass, adaptive anti-aliasing (antiAliasing adaptive or full): a glass pixel shaded once gets
+    /// its N-rooks samples where its shown light (luma, 0..1) departs from the straight line through
+    /// its neighbours' by more than this (a bend or a step inside the glass). The default is the
+    /// smallest step the post-process blends (1/32, as volumes); larger values trade accuracy for
+    /// speed (BENCHMARKS.md, frames-glass7: on the glass demo 1/4 takes about a tenth off the cached
+    /// frame and leaves a 16-sample reference 8 % further away in mean shown luma; 1 takes none).
+    double glassSampleContrast = 1.0 / 32;
     /// Radiance around the scene: shown as the background, seen through and in glass, and the ambient
     /// light. Null: the procedural sky (Environment::sky), or the flat `background` (sky = flat).
     std::shared_ptr<const Environment> environment;

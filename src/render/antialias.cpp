@@ -150,7 +150,7 @@ std::size_t neighbourShowing(const FrameState& f, int64_t cx, int64_t cy, uint32
     return kNoSample;
 }
 
-bool curvesAcrossNeighbours(const FrameState& f, int64_t cx, int64_t cy) {
+bool curvesAcrossNeighbours(const FrameState& f, int64_t cx, int64_t cy, float contrast) {
     const int a = f.adaptive;
     const int64_t cw = f.width / a, ch = f.height / a;
     const ToneMap tm = f.options.toneMap;
@@ -160,8 +160,8 @@ bool curvesAcrossNeighbours(const FrameState& f, int64_t cx, int64_t cy) {
         return x < 0 || y < 0 || x >= cw || y >= ch ? own
                                                     : shownLuma(f.shaded[representativeSample(f, x, y)], tm);
     };
-    return std::abs(at(cx - 1, cy) + at(cx + 1, cy) - 2 * own) > kRefineContrast ||
-           std::abs(at(cx, cy - 1) + at(cx, cy + 1) - 2 * own) > kRefineContrast;
+    return std::abs(at(cx - 1, cy) + at(cx + 1, cy) - 2 * own) > contrast ||
+           std::abs(at(cx, cy - 1) + at(cx, cy + 1) - 2 * own) > contrast;
 }
 
 int cellSamples(const FrameState& f, int64_t cx, int64_t cy, std::array<std::size_t, 64>& out) {

@@ -47,12 +47,14 @@ std::size_t neighbourShowing(const FrameState& frame, int64_t cx, int64_t cy, ui
 float shownLuma(const Vec3f& c, ToneMap t);
 
 /// Whether the shown luma of cell (cx, cy)'s representative departs from the straight line through
-/// its two neighbours' along x or along y by more than kRefineContrast (the second difference
+/// its two neighbours' along x or along y by more than `contrast` (the second difference
 /// |l(-1) + l(+1) - 2 l(0)|; a neighbour past the image's side counts as the cell): light that
 /// varies linearly across a cell averages to its centre's value, so only a bend or a step (an edge
 /// inside glass or a volume) needs more samples. The glass pass (glass shaded once, N-rooks samples)
-/// and the volume pass (every sample) refine by it.
-bool curvesAcrossNeighbours(const FrameState& frame, int64_t cx, int64_t cy);
+/// (at RenderOptions::glassSampleContrast) and the volume pass (every sample, at kRefineContrast) refine
+/// by it.
+bool curvesAcrossNeighbours(const FrameState& frame, int64_t cx, int64_t cy,
+                            float contrast = kRefineContrast);
 
 /// The cells a cell of an image-space refinement lattice at spacing h takes its value from (the glass
 /// and volume passes' lattices, after Levoy 1990): the two along x where cy is a multiple of 2h

@@ -390,20 +390,22 @@ void traceCells(FrameState& f, const GlassSetup& setup, const ShowsGlass& showsG
 }
 
 // Adaptive anti-aliasing inside glass: a glass cell shaded once (no edge) whose light through it
-// bends or steps between its neighbours' (curvesAcrossNeighbours, on the traced representatives) gets its
-// N-rooks samples, each shaded as a surface and traced. The cells decide on representatives only,
+// bends or steps between its neighbours' by more than RenderOptions::glassSampleContrast
+// (curvesAcrossNeighbours, on the traced representatives) gets its N-rooks samples, each shaded as a
+// surface and traced. The cells decide on representatives only,
 // which no cell changes, so the order does not matter.
 template <class ShowsGlass, class Trace>
 void addRookSamples(FrameState& f, const ShowsGlass& showsGlass, const Trace& trace) {
     const int a = f.adaptive;
     const int64_t W = f.width, cw = W / a, ch = f.height / a;
     const Vec3d eye = f.gbuffer.frame.eye();
+    const float contrast = float(f.options.glassSampleContrast);
     parallelFor(0, ch, 4, [&](int64_t y0, int64_t y1) {
         for (int64_t cy = y0; cy < y1; ++cy)
             for (int64_t cx = 0; cx < cw; ++cx) {
                 uint8_t& kind = f.refined[size_t(cy * cw + cx)];
                 const size_t rep = representativeSample(f, cx, cy);
-                if (kind != 0 || !showsGlass(rep) || !curvesAcrossNeighbours(f, cx, cy)) continue;
+                if (kind != 0 || !showsGlass(rep) || !curvesAcrossNeighbours(f, cx, cy, contrast)) continue;
                 kind = kRookSamples;
                 const float occlusion =
                     f.screenOcclusion.empty() ? 1.0f : f.screenOcclusion[size_t(cy * cw + cx)];

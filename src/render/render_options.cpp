@@ -74,6 +74,12 @@ std::span<const OptionField<RenderOptions>> RenderOptions::fields() {
             "straight line by more than this (shown luma, 0..1); interpolate elsewhere (0: trace every "
             "pixel)",
             0, 1),
+        numberOption<O, &O::glassSampleContrast>(
+            "glassSampleContrast",
+            "glass, adaptive anti-aliasing: a glass pixel gets its N-rooks samples where its shown light "
+            "departs from the straight line through its neighbours' by more than this (shown luma, 0..1; "
+            "smaller steps are left to the post-process)",
+            0, 1),
         nameOption<O, parseVolumeShading, optionName<VolumeShading>, &O::volumeShading>(
             "volumeShading",
             "volumes: phong (DSM sec. 3.2) lights each sample by Blinn-Phong about its gradient normal "
