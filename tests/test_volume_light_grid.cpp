@@ -68,6 +68,20 @@ VlgSmoke vlgSmoke(bool turned, Vec3i dims = {24, 20, 16}) {
     return s;
 }
 
+// Calls f(corner, weight) for the eight voxel corners around voxel coordinate u of `volume` (dims n),
+// with u's trilinear weights: the interpolation the grids are checked against, written out.
+template <class F> void forEachCorner(const Volume& volume, const Vec3i& n, const Vec3d& u, const F& f) {
+    const int64_t i0[3] = {std::min<int64_t>(int64_t(u.x), n.x - 1), std::min<int64_t>(int64_t(u.y), n.y - 1),
+                           std::min<int64_t>(int64_t(u.z), n.z - 1)};
+    const double t[3] = {u.x - double(i0[0]), u.y - double(i0[1]), u.z - double(i0[2])};
+    for (int c = 0; c < 8; ++c) {
+        const int d[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};
+        double w = 1;
+        for (int a = 0; a < 3; ++a) w *= d[a] ? t[a] : 1 - t[a];
+        f(volume.worldFromVoxel({double(i0[0] + d[0]), double(i0[1] + d[1]), double(i0[2] + d[2])}), w);
+    }
+}
+
 // The grid at p is the trilinear interpolation of the map's lookups at the eight voxel corners
 // around p (recomputed here from the volume's placement, in double): within float rounding.
 TEST(VolumeLightGridTest, TheGridIsTheMapsLookupAtTheVoxelCornersInterpolated) {
@@ -89,23 +103,14 @@ TEST(VolumeLightGridTest, TheGridIsTheMapsLookupAtTheVoxelCornersInterpolated) {
         for (int k = 0; k < 2000; ++k) {
             const Vec3d u{U(rng) * double(n.x), U(rng) * double(n.y), U(rng) * double(n.z)};
             const Vec3d p = s.volume->worldFromVoxel(u);
-            const int64_t i0[3] = {std::min<int64_t>(int64_t(u.x), n.x - 1),
-                                   std::min<int64_t>(int64_t(u.y), n.y - 1),
-                                   std::min<int64_t>(int64_t(u.z), n.z - 1)};
-            const double t[3] = {u.x - double(i0[0]), u.y - double(i0[1]), u.z - double(i0[2])};
             Vec3d want{0, 0, 0};
             double wantTexel = 0;
-            for (int c = 0; c < 8; ++c) {
-                const int d[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};
-                double w = 1;
-                for (int a = 0; a < 3; ++a) w *= d[a] ? t[a] : 1 - t[a];
-                const Vec3d corner = s.volume->worldFromVoxel(
-                    {double(i0[0] + d[0]), double(i0[1] + d[1]), double(i0[2] + d[2])});
+            forEachCorner(*s.volume, n, u, [&](const Vec3d& corner, double w) {
                 double texel = 0;
                 const Vec3f v = vlgLookup(deep, s.light, corner, step, texel);
                 want = want + Vec3d(v) * w;
                 wantTexel += texel * w;
-            }
+            });
             Vec3f got;
             double gotTexel = 0;
             // A point within a ten-thousandth of a voxel of the box's faces may fall either side.
@@ -158,23 +163,14 @@ TEST(VolumeLightGridTest, ThePrelitVolumeIsTheLightAtTheVoxelCornersInterpolated
         for (int k = 0; k < 2000; ++k) {
             const Vec3d u{U(rng) * double(n.x), U(rng) * double(n.y), U(rng) * double(n.z)};
             const Vec3d p = s.volume->worldFromVoxel(u);
-            const int64_t i0[3] = {std::min<int64_t>(int64_t(u.x), n.x - 1),
-                                   std::min<int64_t>(int64_t(u.y), n.y - 1),
-                                   std::min<int64_t>(int64_t(u.z), n.z - 1)};
-            const double t[3] = {u.x - double(i0[0]), u.y - double(i0[1]), u.z - double(i0[2])};
             Vec3d want{0, 0, 0};
-            for (int c = 0; c < 8; ++c) {
-                const int d[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};
-                double w = 1;
-                for (int a = 0; a < 3; ++a) w *= d[a] ? t[a] : 1 - t[a];
-                const Vec3d corner = s.volume->worldFromVoxel(
-                    {double(i0[0] + d[0]), double(i0[1] + d[1]), double(i0[2] + d[2])});
+            forEachCorner(*s.volume, n, u, [&](const Vec3d& corner, double w) {
                 Vec3d toLight;
                 const Vec3f e = detail::lightIrradiance(s.light, corner, toLight);
                 double texel = 0;
                 const Vec3f v = deep.visibility(corner + toLight * step, toLight, texel);
                 want = want + Vec3d(e) * Vec3d(v) * (ownOf(corner, toLight, texel) * w);
-            }
+            });
             Vec3f got;
             ASSERT_TRUE(grid.lookupLight(p, got)) << u.x << " " << u.y << " " << u.z;
             worst = std::max(worst, length(Vec3d(got) - want));
