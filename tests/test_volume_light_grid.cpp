@@ -68,6 +68,13 @@ VlgSmoke vlgSmoke(bool turned, Vec3i dims = {24, 20, 16}) {
     return s;
 }
 
+// The smoke's deep shadow map at 128 x 128 texels.
+DeepShadow vlgDeepShadow(const VlgSmoke& s) {
+    DeepShadowOptions o;
+    o.resolution = 128;
+    return DeepShadow::build(s.scene, s.light, o);
+}
+
 // Calls f(corner, weight) for the eight voxel corners around voxel coordinate u of `volume` (dims n),
 // with u's trilinear weights: the interpolation the grids are checked against, written out.
 template <class F> void forEachCorner(const Volume& volume, const Vec3i& n, const Vec3d& u, const F& f) {
@@ -87,9 +94,7 @@ template <class F> void forEachCorner(const Volume& volume, const Vec3i& n, cons
 TEST(VolumeLightGridTest, TheGridIsTheMapsLookupAtTheVoxelCornersInterpolated) {
     for (const bool turned : {false, true}) {
         const VlgSmoke s = vlgSmoke(turned);
-        DeepShadowOptions o;
-        o.resolution = 128;
-        const DeepShadow deep = DeepShadow::build(s.scene, s.light, o);
+        const DeepShadow deep = vlgDeepShadow(s);
         const double step = 0.05;
         const LightVisibilityGrid grid =
             LightVisibilityGrid::build(*s.volume, deep, s.light, LightCone(s.light), step);
@@ -142,9 +147,7 @@ TEST(VolumeLightGridTest, TheGridIsTheMapsLookupAtTheVoxelCornersInterpolated) {
 TEST(VolumeLightGridTest, ThePrelitVolumeIsTheLightAtTheVoxelCornersInterpolated) {
     for (const bool turned : {false, true}) {
         const VlgSmoke s = vlgSmoke(turned);
-        DeepShadowOptions o;
-        o.resolution = 128;
-        const DeepShadow deep = DeepShadow::build(s.scene, s.light, o);
+        const DeepShadow deep = vlgDeepShadow(s);
         const double step = 0.05;
         // Any function of the corner, the direction and the footprint: one that varies with all three.
         const auto ownOf = [&](const Vec3d& c, const Vec3d& toLight, double texel) {
@@ -193,9 +196,7 @@ TEST(VolumeLightGridTest, ThePrelitVolumeIsTheLightAtTheVoxelCornersInterpolated
 // value, bit for bit; elsewhere it may return false (the volume pass then looks the map up).
 TEST(VolumeLightGridTest, NodesAwayFromMatterAreLeftToTheMapAndTheRestAreTheFullGrids) {
     const VlgSmoke s = vlgSmoke(false, {64, 56, 48}); // bricks enough that some lie far from matter
-    DeepShadowOptions o;
-    o.resolution = 128;
-    const DeepShadow deep = DeepShadow::build(s.scene, s.light, o);
+    const DeepShadow deep = vlgDeepShadow(s);
     const VolumeSceneObject& obj = s.scene.volumeScene->objects[0];
     const EmptySpace skip(*s.volume, obj.transfer);
     const double step = s.volume->spacing().x; // the march's step: a voxel
