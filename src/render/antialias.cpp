@@ -154,14 +154,10 @@ bool curvesAcrossNeighbours(const FrameState& f, int64_t cx, int64_t cy, float c
     const int a = f.adaptive;
     const int64_t cw = f.width / a, ch = f.height / a;
     const ToneMap tm = f.options.toneMap;
-    const float own = shownLuma(f.shaded[representativeSample(f, cx, cy)], tm);
-    // A neighbour past the image's side counts as the cell itself (a one-sided difference).
-    const auto at = [&](int64_t x, int64_t y) {
-        return x < 0 || y < 0 || x >= cw || y >= ch ? own
-                                                    : shownLuma(f.shaded[representativeSample(f, x, y)], tm);
+    const auto luma = [&](int64_t x, int64_t y) {
+        return shownLuma(f.shaded[representativeSample(f, x, y)], tm);
     };
-    return std::abs(at(cx - 1, cy) + at(cx + 1, cy) - 2 * own) > contrast ||
-           std::abs(at(cx, cy - 1) + at(cx, cy + 1) - 2 * own) > contrast;
+    return curvesAcross(luma, cx, cy, cw, ch, contrast);
 }
 
 int cellSamples(const FrameState& f, int64_t cx, int64_t cy, std::array<std::size_t, 64>& out) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -55,6 +56,19 @@ float shownLuma(const Vec3f& c, ToneMap t);
 /// by it.
 bool curvesAcrossNeighbours(const FrameState& frame, int64_t cx, int64_t cy,
                             float contrast = kRefineContrast);
+
+/// The test of curvesAcrossNeighbours on lumas given per cell (luma(x, y) of a cell inside the
+/// cw x ch cells): for a caller that has them already (the volume pass's AA round).
+template <class Luma>
+bool curvesAcross(const Luma& luma, int64_t cx, int64_t cy, int64_t cw, int64_t ch, float contrast) {
+    const float own = luma(cx, cy);
+    // A neighbour past the image's side counts as the cell itself (a one-sided difference).
+    const auto at = [&](int64_t x, int64_t y) {
+        return x < 0 || y < 0 || x >= cw || y >= ch ? own : luma(x, y);
+    };
+    return std::abs(at(cx - 1, cy) + at(cx + 1, cy) - 2 * own) > contrast ||
+           std::abs(at(cx, cy - 1) + at(cx, cy + 1) - 2 * own) > contrast;
+}
 
 /// The cells a cell of an image-space refinement lattice at spacing h takes its value from (the glass
 /// and volume passes' lattices, after Levoy 1990): the two along x where cy is a multiple of 2h

@@ -6,6 +6,7 @@
 #include "render/frame_passes.hpp"
 #include "render/render_cache.hpp"
 #include "render/screen_space_ao.hpp"
+#include "render/shading.hpp"
 #include "voxfx/ambient_occlusion.hpp"
 #include "voxfx/parallel.hpp"
 #include "voxfx/render.hpp"
@@ -21,8 +22,7 @@ namespace {
 void screenOcclusion(FrameState& f, const FieldOcclusionSetup& setup) {
     const int a = f.adaptive;
     std::vector<uint8_t>& opaque = f.cache.screen.opaque;
-    opaque.resize(f.scene.materials.size());
-    for (std::size_t m = 0; m < opaque.size(); ++m) opaque[m] = f.scene.materials[m].isOpaque();
+    opaqueMaterials(f.scene, opaque);
     f.screenOcclusion.resize(size_t((f.width / a) * (f.height / a)));
     ScreenSpaceOcclusionOptions so;
     so.radius = setup.radius;

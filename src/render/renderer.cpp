@@ -48,9 +48,9 @@ void flattenPass(FrameState& f, Progress*) {
     f.cache.geometryKey.reset();
     f.geometry = flattenScene(f.scene, f.options.creaseAngle);
     f.triangleBases = detail::triangleBases(f.geometry);
-    // The compact records, with the occlusion's rule of what occludes (Material::isOpaque).
-    std::vector<uint8_t> opaque(f.scene.materials.size());
-    for (std::size_t m = 0; m < opaque.size(); ++m) opaque[m] = f.scene.materials[m].isOpaque();
+    // The compact records, with the occlusion's rule of what occludes.
+    std::vector<uint8_t> opaque;
+    detail::opaqueMaterials(f.scene, opaque);
     f.cache.triangleTags = detail::triangleTags(f.geometry, f.triangleBases, opaque);
     f.cache.geometryKey = h.get();
 }

@@ -33,7 +33,7 @@ Vec3f lightIrradiance(const Light& light, const LightCone& cone, const Vec3d& p,
     }
     const Vec3d d = light.towards(p);
     const double dist2 = std::max(dot(d, d), 1e-12);
-    toLight = dividedBy(d, std::sqrt(dist2));
+    toLight = directionToLight(light, p);
     double falloff = 1.0 / dist2;
     if (light.type == LightType::Spot) {
         // Smoothstep between the outer and inner cone in the angle's cosine: continuous with a
@@ -217,6 +217,11 @@ std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry) {
         }
     });
     return out;
+}
+
+void opaqueMaterials(const Scene& scene, std::vector<uint8_t>& out) {
+    out.resize(scene.materials.size());
+    for (std::size_t m = 0; m < out.size(); ++m) out[m] = scene.materials[m].isOpaque();
 }
 
 std::vector<TriangleTag> triangleTags(const SceneGeometry& geometry, std::span<const TriangleBasis> bases,

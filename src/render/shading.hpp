@@ -1,11 +1,14 @@
 // voxfx — the deferred shading pass (internal): Blinn–Phong per light times the light's shadow.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <span>
 #include <vector>
 
 #include "render/frame_state.hpp"
+#include "render/vec_simd.hpp"
 
 namespace voxfx::detail {
 
@@ -17,6 +20,12 @@ struct LightCone {
     LightCone() = default;
     explicit LightCone(const Light& light);
 };
+
+/// The unit direction from p towards the light (for a directional light, against its direction).
+inline Vec3d directionToLight(const Light& light, const Vec3d& p) {
+    const Vec3d d = light.towards(p);
+    return light.positioned() ? dividedBy(d, std::sqrt(std::max(dot(d, d), 1e-12))) : d;
+}
 
 /// Irradiance the light delivers at p without shadow (spot cone and 1/d^2 falloff included), and the
 /// unit direction from p towards the light; `cone` is LightCone(light).
@@ -45,6 +54,10 @@ float specularPower(float ndh, const ShadeMaterial& m);
 
 /// Per triangle of the flattened scene, its TriangleBasis (render/render_cache.hpp).
 std::vector<TriangleBasis> triangleBases(const SceneGeometry& geometry);
+
+/// Per material of `scene`, 1 where it occludes (Material::isOpaque): the occlusion's rule, which
+/// triangleTags and the screen-space occlusion read.
+void opaqueMaterials(const Scene& scene, std::vector<uint8_t>& out);
 
 /// Per triangle of the flattened scene, its TriangleTag (render/screen_space_ao.hpp) from its basis,
 /// and whether it occludes from opaqueMaterial (per material index; past it: not).

@@ -436,10 +436,8 @@ struct VolumeComposite {
             if (single >= 0 && prelit && grids[l] &&
                 grids[l]->objects[std::size_t(single)].lookupLight(p, ev)) {
                 if (ev.x <= 0 && ev.y <= 0 && ev.z <= 0) continue;
-                const Vec3d d = sceneLights[l].towards(p);
-                toLight = sceneLights[l].positioned() ? d * (1 / std::sqrt(std::max(dot(d, d), 1e-12))) : d;
                 unshaded += ev * float(1.0 / M_PI);
-                lights.push_back({ev, toLight});
+                lights.push_back({ev, directionToLight(sceneLights[l], p)});
                 continue;
             }
             const Vec3f e = lightIrradiance(sceneLights[l], cones[l], p, toLight);
@@ -766,13 +764,9 @@ bool volumeEdge(const FrameState& f, const SampleCaster& c, const ColumnCrossing
     if (!crossed) return false;
     // curvesAcrossNeighbours(f, cx, cy), its shown lumas read from `lumas` (per cell, its
     // representative's: the round changes no representative).
-    const int64_t cw = W / a, ch = f.height / a;
-    const float mine = lumas[std::size_t(cy * cw + cx)];
-    const auto at = [&](int64_t x, int64_t y) {
-        return x < 0 || y < 0 || x >= cw || y >= ch ? mine : lumas[std::size_t(y * cw + x)];
-    };
-    return std::abs(at(cx - 1, cy) + at(cx + 1, cy) - 2 * mine) > kRefineContrast ||
-           std::abs(at(cx, cy - 1) + at(cx, cy + 1) - 2 * mine) > kRefineContrast;
+    const int64_t cw = W / a;
+    const auto luma = [&](int64_t x, int64_t y) { return lumas[std::size_t(y * cw + x)]; };
+    return curvesAcross(luma, cx, cy, cw, f.height / a, kRefineContrast);
 }
 
 // The volume pass's setup for this frame's scene and options: from the cache while the meshes,
