@@ -41,6 +41,67 @@ Vec3d outwardNormal(const Mesh& mesh, uint32_t t) {
 
 } // namespace
 
+// The medium's coarse occupancy (MediumTriangles::occupied): about kCellsPerAxis cells along the
+// reach's longest side, as many along the others as keep them near cubes; each triangle's bounds
+// grown by `grow` (three epsilons: the query reaches one) set the cells they overlap. Indices are
+// clamped into the grid both here and in mayTouch, so a point on a cell's face is never lost.
+void ExactGlass::markOccupied(MediumTriangles& mt, const Mesh& sub, double grow) {
+    constexpr double kCellsPerAxis = 64;
+    const Vec3d extent = mt.reach.extent();
+    const double side = std::max({extent.x, extent.y, extent.z});
+    if (!(side > 0)) return; // no grid: every crossing in reach is queried
+    for (int k = 0; k < 3; ++k) {
+        const double e = k == 0 ? extent.x : k == 1 ? extent.y : extent.z;
+        mt.cells[size_t(k)] = std::clamp(int(std::ceil(kCellsPerAxis * e / side)), 1, int(kCellsPerAxis));
+    }
+    mt.cellScale = {mt.cells[0] / std::max(extent.x, 1e-300), mt.cells[1] / std::max(extent.y, 1e-300),
+                    mt.cells[2] / std::max(extent.z, 1e-300)};
+    const auto cellOf = [&](double v, double lo, double scale, int n) {
+        return std::clamp(int(std::floor((v - lo) * scale)), 0, n - 1);
+    };
+    const size_t nx = size_t(mt.cells[0]), ny = size_t(mt.cells[1]);
+    mt.occupied.assign((nx * ny * size_t(mt.cells[2]) + 63) / 64, 0);
+    for (size_t t = 0; t < sub.triangleCount(); ++t) {
+        Box3d b;
+        for (int k = 0; k < 3; ++k) b.extend(Vec3d(sub.positions[sub.indices[3 * t + size_t(k)]]));
+        int lo[3], hi[3];
+        for (int k = 0; k < 3; ++k) {
+            const double l = k == 0   ? b.lo.x
+                             : k == 1 ? b.lo.y
+                                      : b.lo.z,
+                         h = k == 0   ? b.hi.x
+                             : k == 1 ? b.hi.y
+                                      : b.hi.z,
+                         o = k == 0   ? mt.reach.lo.x
+                             : k == 1 ? mt.reach.lo.y
+                                      : mt.reach.lo.z,
+                         s = k == 0   ? mt.cellScale.x
+                             : k == 1 ? mt.cellScale.y
+                                      : mt.cellScale.z;
+            lo[k] = cellOf(l - grow, o, s, mt.cells[size_t(k)]);
+            hi[k] = cellOf(h + grow, o, s, mt.cells[size_t(k)]);
+        }
+        for (int z = lo[2]; z <= hi[2]; ++z)
+            for (int y = lo[1]; y <= hi[1]; ++y)
+                for (int x = lo[0]; x <= hi[0]; ++x) {
+                    const size_t c = (size_t(z) * ny + size_t(y)) * nx + size_t(x);
+                    mt.occupied[c / 64] |= uint64_t(1) << (c % 64);
+                }
+    }
+}
+
+bool ExactGlass::MediumTriangles::mayTouch(const Vec3d& x) const {
+    if (occupied.empty()) return true;
+    const auto cellOf = [](double v, double lo, double scale, int n) {
+        return std::clamp(int(std::floor((v - lo) * scale)), 0, n - 1);
+    };
+    const size_t c = (size_t(cellOf(x.z, reach.lo.z, cellScale.z, cells[2])) * size_t(cells[1]) +
+                      size_t(cellOf(x.y, reach.lo.y, cellScale.y, cells[1]))) *
+                         size_t(cells[0]) +
+                     size_t(cellOf(x.x, reach.lo.x, cellScale.x, cells[0]));
+    return (occupied[c / 64] >> (c % 64)) & 1;
+}
+
 ExactGlass ExactGlass::build(const GlassInput& input, const ExactGlassOptions& options) {
     ExactGlass g(input.mesh, input.vertexNormals, input.triangleMedium, input.media);
     g.maxEvents_ = options.maxEvents;
@@ -90,6 +151,7 @@ ExactGlass::ExactGlass(const MeshView& mesh, std::vector<Vec3f> vertexNormals,
         const double grow = 2 * tracer_->epsilon();
         mt.reach.lo = mt.reach.lo - Vec3d{grow, grow, grow};
         mt.reach.hi = mt.reach.hi + Vec3d{grow, grow, grow};
+        markOccupied(mt, sub, 1.5 * grow);
         byMedium_.push_back(std::move(mt));
     }
 }
@@ -175,6 +237,7 @@ void ExactGlass::facesAt(const Vec3d& x, const Vec3d& d, uint32_t t, std::vector
         const Box3d& r = mt.reach;
         if (x.x < r.lo.x || x.y < r.lo.y || x.z < r.lo.z || x.x > r.hi.x || x.y > r.hi.y || x.z > r.hi.z)
             continue;
+        if (!mt.mayTouch(x)) continue;
         const TriangleTracer::Hit c = mt.tracer->intersect(x - d * epsilon, d, 0, 2 * epsilon);
         if (c.hit) {
             const uint32_t ct = mt.triangle[c.triangle];
