@@ -84,6 +84,7 @@ private:
         Vec3d cellScale{0, 0, 0}; ///< cells per world unit along each axis
         std::vector<uint64_t> occupied;
         bool mayTouch(const Vec3d& x) const;
+        int cellAlong(int axis, double v) const; ///< the grid's cell index of coordinate v, clamped
     };
     std::vector<MediumTriangles> byMedium_;
     static void markOccupied(MediumTriangles& mt, const Mesh& sub, double grow);

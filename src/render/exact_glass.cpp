@@ -50,15 +50,9 @@ void ExactGlass::markOccupied(MediumTriangles& mt, const Mesh& sub, double grow)
     const Vec3d extent = mt.reach.extent();
     const double side = std::max({extent.x, extent.y, extent.z});
     if (!(side > 0)) return; // no grid: every crossing in reach is queried
-    for (int k = 0; k < 3; ++k) {
-        const double e = k == 0 ? extent.x : k == 1 ? extent.y : extent.z;
-        mt.cells[size_t(k)] = std::clamp(int(std::ceil(kCellsPerAxis * e / side)), 1, int(kCellsPerAxis));
-    }
-    mt.cellScale = {mt.cells[0] / std::max(extent.x, 1e-300), mt.cells[1] / std::max(extent.y, 1e-300),
-                    mt.cells[2] / std::max(extent.z, 1e-300)};
-    const auto cellOf = [&](double v, double lo, double scale, int n) {
-        return std::clamp(int(std::floor((v - lo) * scale)), 0, n - 1);
-    };
+    for (int k = 0; k < 3; ++k)
+        mt.cells[size_t(k)] =
+            std::clamp(int(std::ceil(kCellsPerAxis * extent[k] / side)), 1, int(kCellsPerAxis));
     const size_t nx = size_t(mt.cells[0]), ny = size_t(mt.cells[1]);
     mt.occupied.assign((nx * ny * size_t(mt.cells[2]) + 63) / 64, 0);
     for (size_t t = 0; t < sub.triangleCount(); ++t) {
@@ -66,20 +60,8 @@ void ExactGlass::markOccupied(MediumTriangles& mt, const Mesh& sub, double grow)
         for (int k = 0; k < 3; ++k) b.extend(Vec3d(sub.positions[sub.indices[3 * t + size_t(k)]]));
         int lo[3], hi[3];
         for (int k = 0; k < 3; ++k) {
-            const double l = k == 0   ? b.lo.x
-                             : k == 1 ? b.lo.y
-                                      : b.lo.z,
-                         h = k == 0   ? b.hi.x
-                             : k == 1 ? b.hi.y
-                                      : b.hi.z,
-                         o = k == 0   ? mt.reach.lo.x
-                             : k == 1 ? mt.reach.lo.y
-                                      : mt.reach.lo.z,
-                         s = k == 0   ? mt.cellScale.x
-                             : k == 1 ? mt.cellScale.y
-                                      : mt.cellScale.z;
-            lo[k] = cellOf(l - grow, o, s, mt.cells[size_t(k)]);
-            hi[k] = cellOf(h + grow, o, s, mt.cells[size_t(k)]);
+            lo[k] = mt.cellAlong(k, b.lo[k] - grow);
+            hi[k] = mt.cellAlong(k, b.hi[k] + grow);
         }
         for (int z = lo[2]; z <= hi[2]; ++z)
             for (int y = lo[1]; y <= hi[1]; ++y)
@@ -90,15 +72,16 @@ void ExactGlass::markOccupied(MediumTriangles& mt, const Mesh& sub, double grow)
     }
 }
 
+int ExactGlass::MediumTriangles::cellAlong(int axis, double v) const {
+    const int n = cells[size_t(axis)];
+    return std::clamp(int(std::floor((v - reach.lo[axis]) * cellScale[axis])), 0, n - 1);
+}
+
 bool ExactGlass::MediumTriangles::mayTouch(const Vec3d& x) const {
     if (occupied.empty()) return true;
-    const auto cellOf = [](double v, double lo, double scale, int n) {
-        return std::clamp(int(std::floor((v - lo) * scale)), 0, n - 1);
-    };
-    const size_t c = (size_t(cellOf(x.z, reach.lo.z, cellScale.z, cells[2])) * size_t(cells[1]) +
-                      size_t(cellOf(x.y, reach.lo.y, cellScale.y, cells[1]))) *
-                         size_t(cells[0]) +
-                     size_t(cellOf(x.x, reach.lo.x, cellScale.x, cells[0]));
+    const size_t c =
+        (size_t(cellAlong(2, x.z)) * size_t(cells[1]) + size_t(cellAlong(1, x.y))) * size_t(cells[0]) +
+        size_t(cellAlong(0, x.x));
     return (occupied[c / 64] >> (c % 64)) & 1;
 }
 
