@@ -55,8 +55,9 @@
 //   BM_GlassLattice              the glass demo's interactive frame with the glass lattice (the
 //                                default) against every cell traced (--glass-refinement 0),
 //                                interleaved: lattice_ratio(_cpu), glass_ms, paths, interpolated.
-//   BM_GlassSamples/0, /1        the same against fewer N-rooks samples inside glass
-//                                (--glass-sample-contrast 1/4, 1): sample_ratio(_cpu).
+//   BM_GlassSamples/0, /1, /2    the same against fewer N-rooks samples inside glass
+//                                (--glass-sample-contrast 1/4, 1), or more (1/32, the default before
+//                                frames-glass8): sample_ratio(_cpu).
 //   BM_GlassPaths                where a glass path's CPU goes: the glass demo's exact paths (one per
 //                                pixel centre on glass) and each query kind alone, one thread
 //                                (path_ms, eye_ms, reflect_ms, exit_ms, events_per_path).
@@ -512,16 +513,19 @@ void BM_GlassLattice(benchmark::State& state) {
 BENCHMARK(BM_GlassLattice)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Anti-aliasing inside glass (RenderOptions::glassSampleContrast): the default frame (N-rooks samples
-// where the glass's light bends by more than 1/32) against fewer samples, where it bends by more than
-// 1/4 or 1 (none): what the option buys (the image's error against a supersampled reference:
-// BENCHMARKS.md, "N-rooks samples inside glass against a supersampled reference").
+// where the glass's light bends by more than 1/16) against fewer samples, where it bends by more than
+// 1/4 or 1 (none), or more, by more than 1/32 (the default before frames-glass8): what the option buys
+// (the image's error against a supersampled reference: BENCHMARKS.md, "N-rooks samples inside glass
+// against a supersampled reference" and frames-glass8).
 void BM_GlassSamples(benchmark::State& state) {
-    RenderOptions coarse;
-    coarse.glassSampleContrast = state.range(0) == 0 ? 1.0 / 4 : 1.0;
-    glassAgainst(state, coarse, "sample_ratio",
-                 state.range(0) == 0 ? "--glass-sample-contrast 1/4" : "--glass-sample-contrast 1");
+    static constexpr double kContrast[3] = {1.0 / 4, 1.0, 1.0 / 32};
+    static const char* const kLabel[3] = {"--glass-sample-contrast 1/4", "--glass-sample-contrast 1",
+                                          "--glass-sample-contrast 1/32"};
+    RenderOptions other;
+    other.glassSampleContrast = kContrast[state.range(0)];
+    glassAgainst(state, other, "sample_ratio", kLabel[state.range(0)]);
 }
-BENCHMARK(BM_GlassSamples)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GlassSamples)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Where a glass path's CPU goes, on the glass demo's camera paths (one per pixel centre at 1280x720
 // that meets glass, the demo's first camera), each query kind timed alone, one at a time, on one

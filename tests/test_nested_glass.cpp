@@ -234,6 +234,79 @@ TEST(NestedGlassTest, ExactTracerCrossesIntoATouchingGlassAtTheRimOfItsBounds) {
     }
 }
 
+TEST(NestedGlassTest, ExactTracerFindsATouchingFaceWhereverItLiesInTheMediumsCoarseGrid) {
+    // The tracer queries another medium's faces at a crossing only where that medium's coarse
+    // occupancy grid (64 cells along its bounds' longest side) holds one of its triangles. Medium B is
+    // a block (|x|, |y| <= 1, 0 <= z <= hB) whose bottom is 16 x 16 squares of 2 triangles each,
+    // standing on a wide slab A (-hA <= z <= 0), and a far block of B (20..21, 5..6, -1..1) that
+    // stretches B's grid unevenly along x, y and z (cells of about 0.34, most of them clear). Crossings
+    // of z = 0 at 84 points over the block's bottom (across its triangles and the grid's cells) must
+    // each be one interface from B into A (the touching slabs' closed form); crossings of A's top in
+    // B's bounds but clear cells cross A alone.
+    const double hA = 0.4, hB = 0.5;
+    const Mesh a = test::makeBox({-5, -5, -hA}, {5, 5, 0});
+    Mesh b = test::makeBox({-1, -1, 0}, {1, 1, hB});
+    {
+        std::vector<uint32_t> kept; // the box's walls and top; its bottom tessellated below
+        for (size_t t = 0; t < b.triangleCount(); ++t) {
+            bool bottom = true;
+            for (int k = 0; k < 3; ++k) bottom = bottom && b.positions[b.indices[3 * t + size_t(k)]].z == 0;
+            if (bottom) continue;
+            for (int k = 0; k < 3; ++k) kept.push_back(b.indices[3 * t + size_t(k)]);
+        }
+        b.indices = kept;
+        constexpr int n = 16;
+        const auto base = uint32_t(b.positions.size());
+        for (int j = 0; j <= n; ++j)
+            for (int i = 0; i <= n; ++i)
+                b.positions.push_back({float(-1 + 2.0 * i / n), float(-1 + 2.0 * j / n), 0.0f});
+        const auto at = [&](int i, int j) { return base + uint32_t(j * (n + 1) + i); };
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) // facing -z (outward, counter-clockwise seen from below)
+                for (const uint32_t v :
+                     {at(i, j), at(i, j + 1), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i + 1, j)})
+                    b.indices.push_back(v);
+    }
+    const Mesh far = test::makeBox({20, 5, -1}, {21, 6, 1});
+    TwoMedia t = nest(a, b);
+    const auto base = uint32_t(t.mesh.positions.size());
+    t.mesh.positions.insert(t.mesh.positions.end(), far.positions.begin(), far.positions.end());
+    for (const uint32_t i : far.indices) t.mesh.indices.push_back(base + i);
+    t.medium.resize(t.mesh.triangleCount(), 1);
+    const GlassMedium A = nestedMedium(1.5, 0.3), B = nestedMedium(1.9, 1.0);
+    const ExactGlass glass(t.mesh.view(), {}, t.medium, {A, B});
+    const double angle = 0.5;
+    const Vec3d d = nestedDirAt(angle);
+    const double tA = std::asin(std::sin(angle) / 1.5), tB = std::asin(std::sin(angle) / 1.9);
+    const double fresnel = (1 - fresnelDielectric(std::cos(angle), 1, 1.9)) *
+                           (1 - fresnelDielectric(std::cos(tB), 1.9, 1.5)) *
+                           (1 - fresnelDielectric(std::cos(tA), 1.5, 1));
+    const double want = fresnel * std::exp(-1.0 * hB / std::cos(tB) - 0.3 * hA / std::cos(tA));
+    int crossings = 0;
+    for (int k = 0; k <= 20; ++k)
+        for (const double y : {-0.93, -0.31, 0.3, 0.77}) {
+            const double cross = -0.85 + 0.09 * k; // where the ray crosses z = 0 (entering B's top)
+            const Vec3d entry{cross - hB * std::tan(tB), y, hB};
+            const GlassPath p = glass.trace(entry - d * 2.0, d, 16);
+            ASSERT_TRUE(p.hit);
+            EXPECT_EQ(p.events, 3) << cross << " " << y;
+            const Vec3d exitPoint{cross + hA * std::tan(tA), y, -hA};
+            EXPECT_NEAR(length(p.exitPoint - exitPoint), 0, 1e-4) << cross << " " << y;
+            EXPECT_NEAR(p.throughput.x, want, 1e-4) << cross << " " << y;
+            ++crossings;
+        }
+    EXPECT_EQ(crossings, 84);
+    for (const Vec3d entry : {Vec3d{3, 3, 0}, Vec3d{4, 4.5, 0}, Vec3d{2.5, -0.5, 0}}) {
+        const GlassPath p = glass.trace(entry - d * 2.0, d, 16);
+        ASSERT_TRUE(p.hit);
+        EXPECT_EQ(p.events, 2) << entry.x << " " << entry.y;
+        const double alone = (1 - fresnelDielectric(std::cos(angle), 1, 1.5)) *
+                             (1 - fresnelDielectric(std::cos(tA), 1.5, 1)) *
+                             std::exp(-0.3 * hA / std::cos(tA));
+        EXPECT_NEAR(p.throughput.x, alone, 1e-4) << entry.x << " " << entry.y;
+    }
+}
+
 // The exit direction of a ray along -x at height b through concentric spheres as a tracer that
 // treats every interface as glass against air would give it (what both tracers did before media
 // were tracked): into B with 1 / nB, out of B into "air", A's far side then passed as a back face

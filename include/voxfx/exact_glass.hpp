@@ -16,6 +16,7 @@
 // Thread-safety: read-only after construction; trace may run from any number of threads.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -76,8 +77,17 @@ private:
         /// Its triangles' bounds grown by twice the glass tracer's epsilon: a crossing farther out
         /// cannot lie on one of them, and is not queried.
         Box3d reach;
+        /// A coarse grid over `reach` (cells per axis in `cells`, a bit per cell, x fastest): set
+        /// where a triangle's bounds, grown by three epsilons, overlap the cell. A crossing in a clear
+        /// cell is not queried either (the query reaches one epsilon from it).
+        std::array<int, 3> cells{0, 0, 0};
+        Vec3d cellScale{0, 0, 0}; ///< cells per world unit along each axis
+        std::vector<uint64_t> occupied;
+        bool mayTouch(const Vec3d& x) const;
+        int cellAlong(int axis, double v) const; ///< the grid's cell index of coordinate v, clamped
     };
     std::vector<MediumTriangles> byMedium_;
+    static void markOccupied(MediumTriangles& mt, const Mesh& sub, double grow);
     /// One face of a crossing: its medium and whether the ray enters its object there.
     struct CrossedFace {
         uint32_t medium;

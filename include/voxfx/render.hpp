@@ -194,11 +194,14 @@ struct RenderOptions {
     double glassRefinement = 1.0 / 32;
     /// Glass, adaptive anti-aliasing (antiAliasing adaptive or full): a glass pixel shaded once gets
     /// its N-rooks samples where its shown light (luma, 0..1) departs from the straight line through
-    /// its neighbours' by more than this (a bend or a step inside the glass). The default is the
-    /// smallest step the post-process blends (1/32, as volumes); larger values trade accuracy for
-    /// speed (BENCHMARKS.md, frames-glass7: on the glass demo 1/4 takes about a tenth off the cached
-    /// frame and leaves a 16-sample reference 8 % further away in mean shown luma; 1 takes none).
-    double glassSampleContrast = 1.0 / 32;
+    /// its neighbours' by more than this (a bend or a step inside the glass). The default, 1/16, is
+    /// the cut with the least error per path saved (BENCHMARKS.md, frames-glass8: against 1/32, the
+    /// smallest step the post-process blends, 4 % fewer glass paths on the glass demo for 1.7 % more
+    /// mean shown-luma error against a 16-sample reference, still below the post-process alone's
+    /// there and on the glass ball test); larger values trade more accuracy for speed (frames-glass7:
+    /// 1/4 takes about a tenth off the cached frame and leaves the reference 11 % further away; 1
+    /// takes none).
+    double glassSampleContrast = 1.0 / 16;
     /// Radiance around the scene: shown as the background, seen through and in glass, and the ambient
     /// light. Null: the procedural sky (Environment::sky), or the flat `background` (sky = flat).
     std::shared_ptr<const Environment> environment;

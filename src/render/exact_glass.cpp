@@ -41,6 +41,50 @@ Vec3d outwardNormal(const Mesh& mesh, uint32_t t) {
 
 } // namespace
 
+// The medium's coarse occupancy (MediumTriangles::occupied): about kCellsPerAxis cells along the
+// reach's longest side, as many along the others as keep them near cubes; each triangle's bounds
+// grown by `grow` (three epsilons: the query reaches one) set the cells they overlap. Indices are
+// clamped into the grid both here and in mayTouch, so a point on a cell's face is never lost.
+void ExactGlass::markOccupied(MediumTriangles& mt, const Mesh& sub, double grow) {
+    constexpr double kCellsPerAxis = 64;
+    const Vec3d extent = mt.reach.extent();
+    const double side = std::max({extent.x, extent.y, extent.z});
+    if (!(side > 0)) return; // no grid: every crossing in reach is queried
+    for (int k = 0; k < 3; ++k)
+        mt.cells[size_t(k)] =
+            std::clamp(int(std::ceil(kCellsPerAxis * extent[k] / side)), 1, int(kCellsPerAxis));
+    const size_t nx = size_t(mt.cells[0]), ny = size_t(mt.cells[1]);
+    mt.occupied.assign((nx * ny * size_t(mt.cells[2]) + 63) / 64, 0);
+    for (size_t t = 0; t < sub.triangleCount(); ++t) {
+        Box3d b;
+        for (int k = 0; k < 3; ++k) b.extend(Vec3d(sub.positions[sub.indices[3 * t + size_t(k)]]));
+        int lo[3], hi[3];
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = mt.cellAlong(k, b.lo[k] - grow);
+            hi[k] = mt.cellAlong(k, b.hi[k] + grow);
+        }
+        for (int z = lo[2]; z <= hi[2]; ++z)
+            for (int y = lo[1]; y <= hi[1]; ++y)
+                for (int x = lo[0]; x <= hi[0]; ++x) {
+                    const size_t c = (size_t(z) * ny + size_t(y)) * nx + size_t(x);
+                    mt.occupied[c / 64] |= uint64_t(1) << (c % 64);
+                }
+    }
+}
+
+int ExactGlass::MediumTriangles::cellAlong(int axis, double v) const {
+    const int n = cells[size_t(axis)];
+    return std::clamp(int(std::floor((v - reach.lo[axis]) * cellScale[axis])), 0, n - 1);
+}
+
+bool ExactGlass::MediumTriangles::mayTouch(const Vec3d& x) const {
+    if (occupied.empty()) return true;
+    const size_t c =
+        (size_t(cellAlong(2, x.z)) * size_t(cells[1]) + size_t(cellAlong(1, x.y))) * size_t(cells[0]) +
+        size_t(cellAlong(0, x.x));
+    return (occupied[c / 64] >> (c % 64)) & 1;
+}
+
 ExactGlass ExactGlass::build(const GlassInput& input, const ExactGlassOptions& options) {
     ExactGlass g(input.mesh, input.vertexNormals, input.triangleMedium, input.media);
     g.maxEvents_ = options.maxEvents;
@@ -90,6 +134,7 @@ ExactGlass::ExactGlass(const MeshView& mesh, std::vector<Vec3f> vertexNormals,
         const double grow = 2 * tracer_->epsilon();
         mt.reach.lo = mt.reach.lo - Vec3d{grow, grow, grow};
         mt.reach.hi = mt.reach.hi + Vec3d{grow, grow, grow};
+        markOccupied(mt, sub, 1.5 * grow);
         byMedium_.push_back(std::move(mt));
     }
 }
@@ -175,6 +220,7 @@ void ExactGlass::facesAt(const Vec3d& x, const Vec3d& d, uint32_t t, std::vector
         const Box3d& r = mt.reach;
         if (x.x < r.lo.x || x.y < r.lo.y || x.z < r.lo.z || x.x > r.hi.x || x.y > r.hi.y || x.z > r.hi.z)
             continue;
+        if (!mt.mayTouch(x)) continue;
         const TriangleTracer::Hit c = mt.tracer->intersect(x - d * epsilon, d, 0, 2 * epsilon);
         if (c.hit) {
             const uint32_t ct = mt.triangle[c.triangle];
