@@ -846,6 +846,60 @@ TEST(VolumePrelitTest, PiecesInsideTwoVolumesStayWithinTheStatedShownLumaOfPerPi
     EXPECT_EQ(prelit.volumeSamples, perPiece.volumeSamples);
 }
 
+// A second volume over the whole head whose matter is a small ball of fog in a corner of its box:
+// the head's pieces lie in that volume's empty bricks, where its grid is not filled; they take the
+// head's pre-lit light times 1 for it (its own transmittance there, as the per-piece path's smaller
+// extinction of the step's ends gives), not the per-piece path. Against setVolumePrelit(false) the
+// head's shown luma stays within what the head alone shows (VolumePrelitTest above: mean 0.00046
+// over its pixels), and so does the rest.
+TEST(VolumePrelitTest, PiecesInAnotherVolumesEmptyBricksTakeThePrelitLight) {
+    Scene s = ctLikeScene();
+    auto fog =
+        std::make_shared<Volume>(Vec3i{24, 24, 24}, Vec3d{-1, 0, -1}, Vec3d{2.0 / 24, 2.0 / 24, 2.0 / 24});
+    const Vec3d ball{0.7, 1.7, 0.6};
+    for (int64_t k = 0; k < 24; ++k)
+        for (int64_t j = 0; j < 24; ++j)
+            for (int64_t i = 0; i < 24; ++i)
+                fog->at(i, j, k) =
+                    length(fog->voxelCenter(i, j, k) - ball) < 0.25 ? 0.8f : 0.0f; // outside: transparent
+    auto vs = std::make_shared<VolumeScene>(*s.volumeScene);
+    vs->addVolumeBox(fog, dsmrSmokeTransfer(), 0.1, "fog");
+    s.volumeScene = vs;
+    const RenderOptions o = ctLikeOptions(0, AntiAliasing::Off);
+    RenderResult perPiece;
+    {
+        struct Restore {
+            ~Restore() { detail::setVolumePrelit(true); }
+        } restore;
+        detail::setVolumePrelit(false);
+        perPiece = render(s, s.cameras[0], o);
+    }
+    const RenderResult prelit = render(s, s.cameras[0], o);
+    const Frame cam = cameraFrame(s.cameras[0], o.width, o.height);
+    double sum = 0, worst = 0, headSum = 0;
+    int64_t head = 0;
+    for (int64_t y = 0; y < o.height; ++y)
+        for (int64_t x = 0; x < o.width; ++x) {
+            const double d =
+                std::abs(detail::shownLuma(prelit.image.at(x, o.height - 1 - y), ToneMap::Filmic) -
+                         detail::shownLuma(perPiece.image.at(x, o.height - 1 - y), ToneMap::Filmic));
+            sum += d, worst = std::max(worst, d);
+            const Vec3d eye = cam.eye(),
+                        dir = normalize(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - eye);
+            const Vec3d c = kHeadCentre - eye;
+            if (length(c - dir * dot(c, dir)) < kHeadRadius) headSum += d, ++head;
+        }
+    const double mean = sum / double(prelit.image.pixels.size()), headMean = headSum / double(head);
+    std::printf("head inside a mostly empty fog volume, pre-lit against per-piece lighting: shown luma mean "
+                "%.5f (head, %lld pixels: %.5f), worst %.4f\n",
+                mean, (long long)head, headMean, worst);
+    EXPECT_GT(head, 2000);
+    EXPECT_GT(headMean, 0.0001); // the head's pieces were pre-lit (per piece they would match exactly)
+    EXPECT_LT(mean, 0.0002);
+    EXPECT_LT(headMean, 0.0015);
+    EXPECT_LT(worst, 0.05);
+}
+
 // The volume's silhouette against what lies behind it is marched at full resolution: without
 // anti-aliasing, every pixel whose ray clearly meets the head's matter while a lattice neighbour's
 // clearly misses it (or the other way round) is cast, identical to the image with every pixel

@@ -467,26 +467,35 @@ struct VolumeComposite {
         return ambient;
     }
 
-    // The pre-lit light at p inside the volume objects `inside`, the first of them `first`: one
-    // trilinear lookup of that volume's pre-lit grid (its light, the map's lookup and its own
-    // transmittance), and where p lies inside others too (`several`), times each other's own
-    // transmittance from its grid (the per-piece path's ownTransmittance over every volume inside,
-    // each made at its own voxel corners with its own lookup's texel footprint). False where a
-    // grid has no pre-lit value at p: the caller lights the piece itself.
-    // `u`: p's voxel coordinates in the first volume.
-    static bool prelitLight(const VolumeLightGrids& g, const Vec3d& p, const Vec3d& u,
-                            std::span<const uint8_t> inside, int first, bool several, Vec3f& light) {
-        if (!g.objects[std::size_t(first)].lookupLightVoxel(u, light)) return false;
-        for (std::size_t o = std::size_t(first) + 1; several && o < inside.size(); ++o) {
-            if (!inside[o] || !g.objects[o].prelit()) {
-                if (inside[o] && g.objects[o].nodeCounts().x > 0) return false; // a volume lit per piece
-                continue;
-            }
-            Vec3f other;
-            float own = 0;
-            if (!g.objects[o].lookupLight(p, other, &own)) return false;
-            light = light * own;
+    // The pre-lit light at p inside the volume objects `inside`, the first of them `first` (`u`: p's
+    // voxel coordinates in it): one trilinear lookup of its pre-lit grid (its light, the map's lookup
+    // and its own transmittance). Where p lies inside other volumes too (`several`), the light of the
+    // first of them whose grid has a value at p (the per-piece path's visibility is the first grid's
+    // that covers p) times each other's own transmittance: from its grid, or 1 where p lies in one of
+    // its empty bricks, where its grid is not filled (the per-piece path takes the smaller extinction
+    // of the step's two ends, 0 at p). False where that is not known (a volume of another shape, or
+    // no grid has a value): the caller lights the piece itself.
+    bool prelitLight(const VolumeLightGrids& g, const Vec3d& p, const Vec3d& u,
+                     std::span<const uint8_t> inside, int first, bool several, Vec3f& light) const {
+        if (!several) return g.objects[std::size_t(first)].lookupLightVoxel(u, light);
+        bool lit = false;
+        float own = 1;
+        for (std::size_t o = std::size_t(first); o < inside.size(); ++o) {
+            if (!inside[o] || vs.objects[o].kind != ObjectKind::Volume) continue;
+            const LightVisibilityGrid& grid = g.objects[o];
+            if (!grid.prelit()) return false; // a volume lit per piece
+            Vec3f l;
+            float t = 1;
+            const bool found = int(o) == first ? grid.lookupLightVoxel(u, l, &t) : grid.lookupLight(p, l, &t);
+            if (found && !lit)
+                light = l, lit = true;
+            else if (found)
+                own *= t;
+            else if (!emptySpace[o].empty(p))
+                return false;
         }
+        if (!lit) return false;
+        light = light * own;
         return true;
     }
 
