@@ -3,7 +3,9 @@
 // Oracles: trilinear interpolation written here as the eight-corner weighted sum (not the nested
 // lerps of the library); the property that trilinear interpolation reproduces affine functions;
 // the Frame's own cell centres; smoke properties (determinism, range, shape).
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <random>
 
 #include "test_util.hpp"
@@ -61,6 +63,65 @@ TEST(Volume, TrilinearSampleMatchesTheEightCornerFormula) {
         }
         EXPECT_NEAR(v.sample(p), expected, 1e-4)
             << "at voxel coordinates " << c.x << ", " << c.y << ", " << c.z;
+    }
+}
+
+// VolumeView::sampleVoxel at voxelCoordinates(p), which the volume pass calls once per sample and
+// shares with the empty-space and light-grid lookups, against the trilinear formula as sample()
+// computed it before (per axis: outside the box `outside`, clamped to the outermost centres within
+// half a voxel of a face, else the centre below and the next; lerps in double along x, then y, then
+// z): bit for bit, at random points inside and around the box, on its faces and voxel boundaries,
+// for an upright and a turned volume with one axis of a single voxel; and sample(p) gives the same.
+TEST(Volume, SampleFromVoxelCoordinatesIsTheClampedTrilinearBitForBit) {
+    const Volume upright = randomVolume({5, 1, 4}, {1, -2, 0.5}, {0.5, 1.5, 0.75}, 17);
+    Volume turned = upright;
+    const double c = std::cos(0.4), s = std::sin(0.4);
+    turned.setAxes({c, 0, -s}, {0, 1, 0}, {s, 0, c});
+    const auto reference = [](const VolumeView& v, const Vec3d& p, float outside) {
+        const int64_t n[3] = {v.nx, v.ny, v.nz};
+        int64_t i0[3], i1[3];
+        double t[3];
+        for (int a = 0; a < 3; ++a) {
+            const double u = v.voxelCoordinate(p, a);
+            if (!(u >= 0 && u <= double(n[a]))) return outside;
+            const double l = u - 0.5;
+            if (l <= 0) {
+                i0[a] = i1[a] = 0, t[a] = 0;
+            } else if (l >= double(n[a] - 1)) {
+                i0[a] = i1[a] = n[a] - 1, t[a] = 0;
+            } else {
+                i0[a] = int64_t(std::floor(l)), i1[a] = std::min(i0[a] + 1, n[a] - 1),
+                t[a] = l - double(i0[a]);
+            }
+        }
+        const auto at = [&](int dx, int dy, int dz) {
+            return double(v.at(dx ? i1[0] : i0[0], dy ? i1[1] : i0[1], dz ? i1[2] : i0[2]));
+        };
+        const auto lerp = [](double a, double b, double f) { return a + (b - a) * f; };
+        const double x00 = lerp(at(0, 0, 0), at(1, 0, 0), t[0]), x10 = lerp(at(0, 1, 0), at(1, 1, 0), t[0]);
+        const double x01 = lerp(at(0, 0, 1), at(1, 0, 1), t[0]), x11 = lerp(at(0, 1, 1), at(1, 1, 1), t[0]);
+        return float(lerp(lerp(x00, x10, t[1]), lerp(x01, x11, t[1]), t[2]));
+    };
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u01(0, 1);
+    for (const Volume* v : {&upright, static_cast<const Volume*>(&turned)}) {
+        const VolumeView view = v->view();
+        const Vec3i d = v->dims();
+        int64_t inside = 0;
+        for (int k = 0; k < 20000; ++k) {
+            // Voxel coordinates up to a voxel beyond each face, some snapped to a voxel boundary.
+            Vec3d w{u01(rng) * (d.x + 2) - 1, u01(rng) * (d.y + 2) - 1, u01(rng) * (d.z + 2) - 1};
+            if (k % 3 == 0) w[k % 9 / 3] = std::round(w[k % 9 / 3] * 2) / 2;
+            const Vec3d p = v->worldFromVoxel(w);
+            const float want = reference(view, p, -7.0f);
+            const float got = view.sampleVoxel(view.voxelCoordinates(p), -7.0f);
+            ASSERT_EQ(std::bit_cast<uint32_t>(got), std::bit_cast<uint32_t>(want))
+                << w.x << " " << w.y << " " << w.z;
+            ASSERT_EQ(std::bit_cast<uint32_t>(v->sample(p, -7.0f)), std::bit_cast<uint32_t>(want));
+            inside += want != -7.0f;
+        }
+        EXPECT_GT(inside, 2000); // a third of the points lie inside the box (its one-voxel axis)
+        EXPECT_EQ(view.sampleVoxel(view.voxelCoordinates({std::nan(""), 0, 0}), 3.0f), 3.0f);
     }
 }
 

@@ -143,7 +143,8 @@ TEST(VolumeLightGridTest, TheGridIsTheMapsLookupAtTheVoxelCornersInterpolated) {
 // over the eight voxel corners around p, of the light's irradiance x the map's lookup x that function
 // at the corner (recomputed here: lightIrradiance, the map's lookup, the function; in double), within
 // float rounding relative to the largest light; the function is given the corner, the direction to
-// the light and the lookup's texel footprint. Without the function there is no pre-lit volume.
+// the light and the lookup's texel footprint; the own transmittance alone is that function at the
+// corners interpolated (within float rounding). Without the function there is no pre-lit volume.
 TEST(VolumeLightGridTest, ThePrelitVolumeIsTheLightAtTheVoxelCornersInterpolated) {
     for (const bool turned : {false, true}) {
         const VlgSmoke s = vlgSmoke(turned);
@@ -162,20 +163,26 @@ TEST(VolumeLightGridTest, ThePrelitVolumeIsTheLightAtTheVoxelCornersInterpolated
         const Vec3i n = s.volume->dims();
         std::mt19937_64 rng(13);
         std::uniform_real_distribution<double> U(0, 1);
-        double worst = 0, largest = 0, lo = 1e30;
+        double worst = 0, largest = 0, lo = 1e30, worstOwn = 0, ownLo = 1, ownHi = 0;
         for (int k = 0; k < 2000; ++k) {
             const Vec3d u{U(rng) * double(n.x), U(rng) * double(n.y), U(rng) * double(n.z)};
             const Vec3d p = s.volume->worldFromVoxel(u);
             Vec3d want{0, 0, 0};
+            double wantOwn = 0;
             forEachCorner(*s.volume, n, u, [&](const Vec3d& corner, double w) {
                 Vec3d toLight;
                 const Vec3f e = detail::lightIrradiance(s.light, corner, toLight);
                 double texel = 0;
                 const Vec3f v = deep.visibility(corner + toLight * step, toLight, texel);
                 want = want + Vec3d(e) * Vec3d(v) * (ownOf(corner, toLight, texel) * w);
+                wantOwn += ownOf(corner, toLight, texel) * w;
             });
             Vec3f got;
-            ASSERT_TRUE(grid.lookupLight(p, got)) << u.x << " " << u.y << " " << u.z;
+            float ownGot = -1;
+            ASSERT_TRUE(grid.lookupLight(p, got, &ownGot)) << u.x << " " << u.y << " " << u.z;
+            // The own transmittance alone (what a sample inside this volume and another takes from it).
+            worstOwn = std::max(worstOwn, std::abs(double(ownGot) - wantOwn));
+            ownLo = std::min(ownLo, wantOwn), ownHi = std::max(ownHi, wantOwn);
             worst = std::max(worst, length(Vec3d(got) - want));
             largest = std::max(largest, length(want));
             lo = std::min(lo, length(want));
@@ -185,6 +192,16 @@ TEST(VolumeLightGridTest, ThePrelitVolumeIsTheLightAtTheVoxelCornersInterpolated
                     turned ? "turned" : "upright", worst, largest, lo);
         EXPECT_GT(largest, 2 * lo); // the light varies: the comparison sees more than a constant
         EXPECT_LT(worst, 2e-6 * largest);
+        std::printf("  own transmittance against the corners' interpolated: worst %.3g (values %.3f-%.3f)\n",
+                    worstOwn, ownLo, ownHi);
+        EXPECT_LT(worstOwn, 2e-6);
+        EXPECT_GT(ownHi, 1.5 * ownLo); // it varies
+        // Through the voxel-coordinate entry the same values.
+        const Vec3d pm = s.volume->worldFromVoxel({3.3, 2.7, 5.1});
+        Vec3f a, b;
+        ASSERT_TRUE(grid.lookupLight(pm, a));
+        ASSERT_TRUE(grid.lookupLightVoxel(s.volume->view().voxelCoordinates(pm), b));
+        EXPECT_EQ(a, b);
         Vec3f v;
         EXPECT_FALSE(grid.lookupLight(s.volume->worldFromVoxel({-0.01, 1, 1}), v));
         EXPECT_FALSE(grid.lookupLight(Vec3d{std::nan(""), 0, 0}, v));

@@ -58,14 +58,36 @@ public:
     /// farther apart than a brick are never both "empty" here unless outside.
     bool emptyBetween(const Vec3d& p, const Vec3d& q) const {
         if (empty_.empty()) return outsideEmpty_;
+        return emptyBetweenVoxel(place_.voxelCoordinates(p), place_.voxelCoordinates(q));
+    }
+    /// emptyBetween(p, q) given the volume's voxel coordinates of p and q (VolumeView::
+    /// voxelCoordinates of the volume it was made for): the same answer.
+    bool emptyBetweenVoxel(const Vec3d& up, const Vec3d& uq) const {
+        if (empty_.empty()) return outsideEmpty_;
         int64_t a[3] = {0, 0, 0}, b[3] = {0, 0, 0};
-        const bool inP = brickOf(p, a), inQ = brickOf(q, b);
+        const bool inP = brickOfVoxel(up, a), inQ = brickOfVoxel(uq, b);
         if (!inP && !inQ) return outsideEmpty_;
         if (inP != inQ) return false;
         for (int k = 0; k < 3; ++k)
             if (a[k] - b[k] > 1 || b[k] - a[k] > 1) return false;
         return empty_[std::size_t(a[0] + bricks_[0] * (a[1] + bricks_[1] * a[2]))] != 0 &&
                empty_[std::size_t(b[0] + bricks_[0] * (b[1] + bricks_[1] * b[2]))] != 0;
+    }
+    /// Finer than the bricks, for a march that samples the volume anyway: true when both points lie
+    /// in the volume's box (voxel coordinates up and uq, VolumeView::voxelCoordinates) in cells of
+    /// the sample lattice (the 2 x 2 x 2 voxel centres a trilinear sample there interpolates) that
+    /// share a centre and whose centres' values all have opacity 0 over their range: every value of
+    /// a linear ramp between the two samples then lies in one of the two ranges, which overlap, so
+    /// the pre-integrated interval between them is exactly transparent (the march need not sample
+    /// its ends). False wherever that is not known.
+    bool transparentBetweenVoxel(const Vec3d& up, const Vec3d& uq) const {
+        if (transparent_.empty()) return false;
+        int64_t a[3], b[3];
+        if (!cellOfVoxel(up, a) || !cellOfVoxel(uq, b)) return false;
+        for (int k = 0; k < 3; ++k)
+            if (a[k] - b[k] > 1 || b[k] - a[k] > 1) return false;
+        return transparent_[std::size_t(a[0] + cells_[0] * (a[1] + cells_[1] * a[2]))] != 0 &&
+               transparent_[std::size_t(b[0] + cells_[0] * (b[1] + cells_[1] * b[2]))] != 0;
     }
     /// How far the ray p + dir s (s >= 0, in the units of `dir`) runs through empty bricks from p:
     /// the s at which it enters the first brick that is not empty or leaves the volume's box (a
@@ -77,11 +99,22 @@ public:
     double emptyFraction() const;
 
 private:
-    bool brickOf(const Vec3d& p, int64_t b[3]) const {
+    bool brickOfVoxel(const Vec3d& uv, int64_t b[3]) const {
         for (int a = 0; a < 3; ++a) {
-            const double u = place_.voxelCoordinate(p, a);
+            const double u = uv[a];
             if (!(u >= 0 && u <= double(voxels_[a]))) return false;
             b[a] = std::min(int64_t(u) / kBrick, bricks_[a] - 1);
+        }
+        return true;
+    }
+    // The sample lattice's cell at voxel coordinates uv (the lower of the centres a trilinear sample
+    // interpolates along each axis, clamped as VolumeView::sampleVoxel clamps); false outside the box.
+    bool cellOfVoxel(const Vec3d& uv, int64_t c[3]) const {
+        for (int a = 0; a < 3; ++a) {
+            const double u = uv[a];
+            if (!(u >= 0 && u <= double(voxels_[a]))) return false;
+            const double l = u - 0.5;
+            c[a] = l <= 0 ? 0 : std::min(int64_t(l), cells_[a] - 1);
         }
         return true;
     }
@@ -89,6 +122,8 @@ private:
     int64_t voxels_[3] = {0, 0, 0}, bricks_[3] = {0, 0, 0};
     bool outsideEmpty_ = false;
     std::vector<uint8_t> empty_;
+    int64_t cells_[3] = {0, 0, 0};     ///< sample lattice cells per axis: voxels - 1, at least 1
+    std::vector<uint8_t> transparent_; ///< per lattice cell, x fastest: its centres' opacity is 0
 };
 
 /// Deterministic noise in [0, 1) for pixel or texel (x, y) and a salt naming the pass: the phase

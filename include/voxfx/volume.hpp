@@ -63,39 +63,51 @@ struct VolumeView {
         return (d.x * axes[a].x + d.y * axes[a].y + d.z * axes[a].z) * invSpacing[a];
     }
 
+    /// The continuous voxel coordinates of world point p along the three voxel axes
+    /// (voxelCoordinate of each): what sampleVoxel takes, so that a march that also asks other
+    /// lattices of the same placement (empty bricks, light grids) computes them once.
+    VOXFX_HOSTDEV Vec3d voxelCoordinates(const Vec3d& p) const {
+        return {voxelCoordinate(p, 0), voxelCoordinate(p, 1), voxelCoordinate(p, 2)};
+    }
+
     /// Trilinear interpolation of the voxel-centre samples at world point p: clamped to the nearest
     /// centres within half a voxel of the box's faces, `outside` beyond the box or for a NaN p.
     VOXFX_HOSTDEV float sample(const Vec3d& p, float outside = 0.0f) const {
         if (values == nullptr) return outside;
+        return sampleVoxel(voxelCoordinates(p), outside);
+    }
+
+    /// sample() at the point of voxel coordinates u (voxelCoordinates(p)): the same value, bit for bit.
+    VOXFX_HOSTDEV float sampleVoxel(const Vec3d& u, float outside = 0.0f) const {
+        if (values == nullptr) return outside;
         const int64_t n[3] = {nx, ny, nz};
-        int64_t i0[3], i1[3];
+        int64_t i0[3], d[3]; // the lower centre and 1 where the upper one is the next (0: clamped)
         double t[3];
         for (int a = 0; a < 3; ++a) {
             // Continuous index of the sample lattice: voxel centres sit at integers. Written so
             // that a NaN coordinate fails both comparisons and lands outside.
-            const double u = voxelCoordinate(p, a);
-            if (!(u >= 0 && u <= double(n[a]))) return outside;
-            const double c = u - 0.5;
+            if (!(u[a] >= 0 && u[a] <= double(n[a]))) return outside;
+            const double c = u[a] - 0.5;
             if (c <= 0) {
-                i0[a] = i1[a] = 0;
+                i0[a] = 0, d[a] = 0;
                 t[a] = 0;
             } else if (c >= double(n[a] - 1)) {
-                i0[a] = i1[a] = n[a] - 1;
+                i0[a] = n[a] - 1, d[a] = 0;
                 t[a] = 0;
             } else {
                 i0[a] = int64_t(c); // c > 0: truncation is floor
-                i1[a] = i0[a] + 1 < n[a] ? i0[a] + 1 : n[a] - 1;
+                d[a] = i0[a] + 1 < n[a] ? 1 : 0;
                 t[a] = c - double(i0[a]);
             }
         }
-        const auto v = [&](int dx, int dy, int dz) {
-            return double(at(dx ? i1[0] : i0[0], dy ? i1[1] : i0[1], dz ? i1[2] : i0[2]));
-        };
-        const auto lerp = [](double a, double b, double s) { return a + (b - a) * s; };
-        const double x00 = lerp(v(0, 0, 0), v(1, 0, 0), t[0]);
-        const double x10 = lerp(v(0, 1, 0), v(1, 1, 0), t[0]);
-        const double x01 = lerp(v(0, 0, 1), v(1, 0, 1), t[0]);
-        const double x11 = lerp(v(0, 1, 1), v(1, 1, 1), t[0]);
+        // The eight centres from one base index and the strides (at(): i + nx (j + ny k)).
+        const float* b = values + (i0[0] + nx * (i0[1] + ny * i0[2]));
+        const int64_t ox = d[0], oy = d[1] * nx, oz = d[2] * nx * ny;
+        const auto lerp = [](double a, double c, double s) { return a + (c - a) * s; };
+        const double x00 = lerp(double(b[0]), double(b[ox]), t[0]);
+        const double x10 = lerp(double(b[oy]), double(b[oy + ox]), t[0]);
+        const double x01 = lerp(double(b[oz]), double(b[oz + ox]), t[0]);
+        const double x11 = lerp(double(b[oz + oy]), double(b[oz + oy + ox]), t[0]);
         return float(lerp(lerp(x00, x10, t[1]), lerp(x01, x11, t[1]), t[2]));
     }
 

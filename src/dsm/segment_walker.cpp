@@ -49,6 +49,26 @@ EmptySpace::EmptySpace(const Volume& volume, const TransferFunction& transfer) :
                         transfer.maxOpacity(double(mn), double(mx)) <= 0;
                 }
     });
+    // The sample lattice's cells: centres i and i + 1 (clamped) along each axis.
+    for (int a = 0; a < 3; ++a) cells_[a] = std::max<int64_t>(n[a] - 1, 1);
+    const int64_t cx = cells_[0], cy = cells_[1], cz = cells_[2];
+    transparent_.assign(std::size_t(cx * cy * cz), 0);
+    parallelFor(0, cz, 4, [&](int64_t k0, int64_t k1) {
+        for (int64_t k = k0; k < k1; ++k)
+            for (int64_t j = 0; j < cy; ++j)
+                for (int64_t i = 0; i < cx; ++i) {
+                    float mn = std::numeric_limits<float>::infinity(), mx = -mn;
+                    for (int c = 0; c < 8; ++c) {
+                        const float v =
+                            volume.at(std::min(i + (c & 1), n[0] - 1), std::min(j + ((c >> 1) & 1), n[1] - 1),
+                                      std::min(k + (c >> 2), n[2] - 1));
+                        mn = std::min(mn, v);
+                        mx = std::max(mx, v);
+                    }
+                    transparent_[std::size_t(i + cx * (j + cy * k))] =
+                        transfer.maxOpacity(double(mn), double(mx)) <= 0;
+                }
+    });
 }
 
 std::vector<EmptySpace> emptySpaceOf(const VolumeScene& scene) {

@@ -71,8 +71,9 @@ LightVisibilityGrid LightVisibilityGrid::build(const Volume& volume, const DeepS
                     const Vec3f v = shadow.visibility(c + toLight * step, toLight, texel);
                     g.nodes_[n] = {{v.x, v.y, v.z, float(texel)}};
                     if (own) {
-                        const Vec3f l = e * v * float((*own)(c, toLight, texel));
-                        g.lit_[n] = {{l.x, l.y, l.z, 0}};
+                        const double t = (*own)(c, toLight, texel);
+                        const Vec3f l = e * v * float(t);
+                        g.lit_[n] = {{l.x, l.y, l.z, float(t)}};
                     }
                 }
     });

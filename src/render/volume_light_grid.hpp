@@ -17,6 +17,8 @@
 // irradiance x the lookup x the own transmittance, at the same corners, read back by one trilinear
 // lookup (lookupLight). It trades the own term's fall within a voxel at a dense front for one
 // lookup per piece: blurred by a voxel there (the error is measured in BENCHMARKS.md, frames-dsm7).
+// Its nodes keep the own transmittance alone too, so that a sample inside two volumes takes the
+// first one's pre-lit light times the second one's own term (frames-dsm8).
 #pragma once
 
 #include <algorithm>
@@ -55,7 +57,7 @@ public:
     /// not filled.
     bool lookup(const Vec3d& p, Vec3f& visibility, double& texel) const {
         float out[4];
-        if (!interpolate(nodes_, p, out)) return false;
+        if (nodes_.empty() || !interpolate(nodes_, place_.voxelCoordinates(p), out)) return false;
         visibility = {out[0], out[1], out[2]};
         texel = double(out[3]);
         return true;
@@ -63,12 +65,18 @@ public:
 
     /// The pre-lit volume (built with `own`): the light's irradiance times the map's lookup times the
     /// volume's own transmittance over the lookup's step and offsets, all evaluated at the voxel
-    /// corners, interpolated at p. False where lookup() is, and where the grid was built without
-    /// `own`.
-    bool lookupLight(const Vec3d& p, Vec3f& light) const {
+    /// corners, interpolated at p; with `own`, that own transmittance alone as well (its corners'
+    /// values interpolated: what a sample inside this volume and another one takes from this one).
+    /// False where lookup() is, and where the grid was built without `own`.
+    bool lookupLight(const Vec3d& p, Vec3f& light, float* own = nullptr) const {
+        return !lit_.empty() && lookupLightVoxel(place_.voxelCoordinates(p), light, own);
+    }
+    /// lookupLight at the point of the volume's voxel coordinates u (VolumeView::voxelCoordinates).
+    bool lookupLightVoxel(const Vec3d& u, Vec3f& light, float* own = nullptr) const {
         float out[4];
-        if (!interpolate(lit_, p, out)) return false;
+        if (!interpolate(lit_, u, out)) return false;
         light = {out[0], out[1], out[2]};
+        if (own) *own = out[3];
         return true;
     }
     bool prelit() const { return !lit_.empty(); }
@@ -81,20 +89,22 @@ public:
 
 private:
     struct Node {
-        float v[4]; ///< visibility r, g, b; the texel footprint (lit_: the light r, g, b; 0)
+        float v[4]; ///< visibility r, g, b; the texel footprint (lit_: the light r, g, b; the own
+                    ///< transmittance)
     };
     VolumeView place_;        ///< the volume's placement (no values): voxelCoordinate and voxel counts
     std::vector<Node> nodes_; ///< x fastest: i + (nx + 1) (j + (ny + 1) k)
     std::vector<Node> lit_;   ///< the pre-lit volume, the same nodes (empty without `own`)
 
-    // Trilinear interpolation of `nodes` at p; false outside the box, at NaN p or an unfilled node.
-    bool interpolate(const std::vector<Node>& nodes, const Vec3d& p, float (&out)[4]) const {
+    // Trilinear interpolation of `nodes` at the point of voxel coordinates uv; false outside the box,
+    // at a NaN point or an unfilled node.
+    bool interpolate(const std::vector<Node>& nodes, const Vec3d& uv, float (&out)[4]) const {
         if (nodes.empty()) return false;
         const int64_t n[3] = {place_.nx, place_.ny, place_.nz};
         int64_t i[3];
         float t[3];
         for (int a = 0; a < 3; ++a) {
-            const double u = place_.voxelCoordinate(p, a);
+            const double u = uv[a];
             if (!(u >= 0 && u <= double(n[a]))) return false;
             i[a] = std::min(int64_t(u), n[a] - 1); // u >= 0: truncation is floor
             t[a] = float(u - double(i[a]));
@@ -129,12 +139,16 @@ public:
     explicit GradientGrid(const Volume& volume);
 
     bool lookup(const Vec3d& p, Vec3d& gradient) const {
+        return !nodes_.empty() && lookupVoxel(place_.voxelCoordinates(p), gradient);
+    }
+    /// lookup at the point of the volume's voxel coordinates u (VolumeView::voxelCoordinates).
+    bool lookupVoxel(const Vec3d& u, Vec3d& gradient) const {
         if (nodes_.empty()) return false;
         const int64_t n[3] = {place_.nx, place_.ny, place_.nz};
         int64_t i[3];
         float t[3];
         for (int a = 0; a < 3; ++a) {
-            const double c = place_.voxelCoordinate(p, a) - 0.5;
+            const double c = u[a] - 0.5;
             if (!(c >= 1 && c < double(n[a] - 2))) return false;
             i[a] = int64_t(c); // c >= 1: truncation is floor; i + 1 <= n - 2
             t[a] = float(c - double(i[a]));

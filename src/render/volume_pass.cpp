@@ -145,6 +145,10 @@ struct ObjectInterval {
     /// the next interval's start), and whether they are there (empty intervals skip the sample).
     double value = 0, cumulative = 0;
     bool have = false;
+    /// The volume's voxel coordinates (VolumeView::voxelCoordinates) of the interval's end and the
+    /// length along the segment they are at (NaN: none yet): the next interval's start reuses them.
+    Vec3d u{0, 0, 0};
+    double uAt = std::numeric_limits<double>::quiet_NaN();
     double sigma = 0; ///< the interval's extinction (0: transparent or not inside)
     Vec3f color;      ///< its pre-integrated colour
     double alpha = 0; ///< the opacity of each of the interval's pieces
@@ -187,6 +191,7 @@ struct VolumeSetup {
     ObjectSurfaces surfaces;
     std::vector<EmptySpace> emptySpace;
     std::vector<PreintegratedTransfer> preintegrated; ///< per Volume object
+    std::vector<VolumeView> views;                    ///< per Volume object, its volume's (else empty)
     /// World length between the samples of the shadow lookup's step towards the light: the smallest
     /// volume's (volumeStep of the smallest voxel spacing of any volume).
     double step;
@@ -212,7 +217,7 @@ struct VolumeSetup {
                 bool deep)
         : owner(std::move(chosen)), vs(*owner), materials(objectMaterials(scene, vs)), surfaces(vs),
           emptySpace(options.skipEmptySpace ? emptySpaceOf(vs) : std::vector<EmptySpace>(vs.objects.size())),
-          preintegrated(preintegrate(vs)), step(sampleStep(vs) * options.volumeStep),
+          preintegrated(preintegrate(vs)), views(volumeViews(vs)), step(sampleStep(vs) * options.volumeStep),
           objectStep(objectSteps(vs, options.volumeStep)), boxShape(boxShapes(vs)),
           fullGradient(fullGradients(vs)) {
         bool otherShape = false;
@@ -302,6 +307,14 @@ struct VolumeSetup {
                 const Vec3d h = v.spacing();
                 if (range > 0) out[o] = kFullShadingChange * range / std::min({h.x, h.y, h.z});
             }
+        return out;
+    }
+
+    static std::vector<VolumeView> volumeViews(const VolumeScene& vs) {
+        std::vector<VolumeView> out(vs.objects.size());
+        for (std::size_t o = 0; o < vs.objects.size(); ++o)
+            if (vs.objects[o].kind == ObjectKind::Volume)
+                out[o] = vs.volumes[std::size_t(vs.objects[o].volume)]->view();
         return out;
     }
 
@@ -419,11 +432,13 @@ struct VolumeComposite {
     // was brighter by exp(sigma * the offset), 8 %). `unshaded` is the ambient plus every light's
     // irradiance / pi: the light a sample takes without a normal.
     //
-    // Where p lies inside one volume object only (`single`, else -1) and a deep-shadowed light's
-    // grids hold the pre-lit volume (LightVisibilityGrid::lookupLight, built for volumes whose shape
-    // is their box: irradiance, the map's lookup and the volume's own transmittance made at the
-    // voxel corners), that light's term is read from it by one trilinear lookup instead.
-    Vec3f lightAt(const Vec3d& p, std::span<const uint8_t> inside, int single,
+    // Where p lies inside volume objects (`first`, the first of them, else -1; `several`: more than
+    // one) and a deep-shadowed light's grids hold the pre-lit volume of each (LightVisibilityGrid::
+    // lookupLight, built for volumes whose shape is their box: irradiance, the map's lookup and the
+    // volume's own transmittance made at the voxel corners), that light's term is read from them
+    // instead (prelitLight).
+    // `u`: p's voxel coordinates in the first volume's (when first >= 0).
+    Vec3f lightAt(const Vec3d& p, const Vec3d& u, std::span<const uint8_t> inside, int first, bool several,
                   std::vector<LightSample>& lights, Vec3f& unshaded) const {
         const std::span<const Light> sceneLights = frame.lights;
         const Vec3f ambient = frame.options.ambient + frame.environment->sphericalHarmonics()[0] *
@@ -433,8 +448,8 @@ struct VolumeComposite {
         for (std::size_t l = 0; l < sceneLights.size(); ++l) {
             Vec3d toLight;
             Vec3f ev;
-            if (single >= 0 && prelit && grids[l] &&
-                grids[l]->objects[std::size_t(single)].lookupLight(p, ev)) {
+            if (first >= 0 && prelit && grids[l] &&
+                prelitLight(*grids[l], p, u, inside, first, several, ev)) {
                 if (ev.x <= 0 && ev.y <= 0 && ev.z <= 0) continue;
                 unshaded += ev * float(1.0 / M_PI);
                 lights.push_back({ev, directionToLight(sceneLights[l], p)});
@@ -450,6 +465,38 @@ struct VolumeComposite {
             lights.push_back({ev, toLight});
         }
         return ambient;
+    }
+
+    // The pre-lit light at p inside the volume objects `inside`, the first of them `first` (`u`: p's
+    // voxel coordinates in it): one trilinear lookup of its pre-lit grid (its light, the map's lookup
+    // and its own transmittance). Where p lies inside other volumes too (`several`), the light of the
+    // first of them whose grid has a value at p (the per-piece path's visibility is the first grid's
+    // that covers p) times each other's own transmittance: from its grid, or 1 where p lies in one of
+    // its empty bricks, where its grid is not filled (the per-piece path takes the smaller extinction
+    // of the step's two ends, 0 at p). False where that is not known (a volume of another shape, or
+    // no grid has a value): the caller lights the piece itself.
+    bool prelitLight(const VolumeLightGrids& g, const Vec3d& p, const Vec3d& u,
+                     std::span<const uint8_t> inside, int first, bool several, Vec3f& light) const {
+        if (!several) return g.objects[std::size_t(first)].lookupLightVoxel(u, light);
+        bool lit = false;
+        float own = 1;
+        for (std::size_t o = std::size_t(first); o < inside.size(); ++o) {
+            if (!inside[o] || vs.objects[o].kind != ObjectKind::Volume) continue;
+            const LightVisibilityGrid& grid = g.objects[o];
+            if (!grid.prelit()) return false; // a volume lit per piece
+            Vec3f l;
+            float t = 1;
+            const bool found = int(o) == first ? grid.lookupLightVoxel(u, l, &t) : grid.lookupLight(p, l, &t);
+            if (found && !lit)
+                light = l, lit = true;
+            else if (found)
+                own *= t;
+            else if (!emptySpace[o].empty(p))
+                return false;
+        }
+        if (!lit) return false;
+        light = light * own;
+        return true;
     }
 
     // The shadow of volume sample p (see lightAt): looked up at q, a step towards the light; under
@@ -488,10 +535,14 @@ struct VolumeComposite {
     // and the specular radiance (white), blended with the unshaded light by the gradient's
     // magnitude: s = min(1, |g| / fullGradient); diffuse = ambient + sum E ((1 - s) + s max(0, n.l)) / pi,
     // specular = s sum E ks (m + 8) / (8 pi) max(0, n.h)^m max(0, n.l) with n = -g / |g|.
-    void phong(const Vec3d& p, std::size_t o, const Vec3d& eye, const std::vector<LightSample>& lights,
-               const Vec3f& ambient, const Vec3f& unshaded, Vec3f& diffuse, Vec3f& specular) const {
+    // `u`: p's voxel coordinates in o's volume, where the caller has them (else null).
+    void phong(const Vec3d& p, const Vec3d* u, std::size_t o, const Vec3d& eye,
+               const std::vector<LightSample>& lights, const Vec3f& ambient, const Vec3f& unshaded,
+               Vec3f& diffuse, Vec3f& specular) const {
         Vec3d g;
-        if (!setup.gradients[o].lookup(p, g)) g = vs.volumes[std::size_t(vs.objects[o].volume)]->gradient(p);
+        const GradientGrid& grid = setup.gradients[o];
+        if (!(u ? grid.lookupVoxel(*u, g) : grid.lookup(p, g)))
+            g = vs.volumes[std::size_t(vs.objects[o].volume)]->gradient(p);
         const double gm = length(g);
         const double s = std::min(1.0, gm / fullGradient[o]);
         specular = {0, 0, 0};
@@ -545,15 +596,18 @@ struct VolumeComposite {
         z1 = std::min(z1, r.zMax);
         const double worldLength = (z1 - z0) * r.lengthPerDepth;
         const double depthPerLength = (z1 - z0) / worldLength;
-        for (ObjectInterval& w : *r.objects) w.have = false;
+        for (ObjectInterval& w : *r.objects) w.have = false, w.uAt = std::numeric_limits<double>::quiet_NaN();
         double segmentStep = std::numeric_limits<double>::infinity();
         for (std::size_t o = 0; o < inside.size(); ++o)
             if (inside[o]) segmentStep = std::min(segmentStep, setup.objectStep[o]);
         if (!(segmentStep < std::numeric_limits<double>::infinity())) segmentStep = step; // no volume
-        int single = -1; // the only volume object inside, if one
+        int first = -1; // the first volume object inside, if any
+        bool several = false;
         for (std::size_t o = 0; o < inside.size(); ++o)
-            if (inside[o] && vs.objects[o].kind == ObjectKind::Volume) single = single == -1 ? int(o) : -2;
-        single = std::max(single, -1);
+            if (inside[o] && vs.objects[o].kind == ObjectKind::Volume) {
+                several = first >= 0;
+                if (first < 0) first = int(o);
+            }
         double l0 = 0;
         for (int64_t j = 0; l0 < worldLength; ++j) {
             const double l1 = std::min(worldLength, (double(j) + r.jitter) * segmentStep);
@@ -568,22 +622,32 @@ struct VolumeComposite {
             for (std::size_t o = 0; o < inside.size(); ++o) {
                 ObjectInterval& w = (*r.objects)[o];
                 w.sigma = 0;
-                const VolumeSceneObject& obj = vs.objects[o];
-                if (!inside[o] || obj.kind != ObjectKind::Volume) continue;
-                if (emptySpace[o].emptyBetween(p0, p1)) { // would be transparent
+                if (!inside[o] || vs.objects[o].kind != ObjectKind::Volume) continue;
+                // The ends' voxel coordinates, once for the empty bricks and the samples: the start's
+                // are the last interval's end's (the same point, bit for bit) where it was computed.
+                const VolumeView& view = setup.views[o];
+                const Vec3d u0 = w.uAt == l0 ? w.u : view.voxelCoordinates(p0);
+                const Vec3d u1 = view.voxelCoordinates(p1);
+                w.u = u1, w.uAt = l1;
+                if (emptySpace[o].emptyBetweenVoxel(u0, u1)) { // would be transparent
                     w.have = false;
                     continue;
                 }
                 allEmpty = false;
-                const Volume& volume = *vs.volumes[std::size_t(obj.volume)];
+                // Transparent lattice cells (not a whole brick): the interval's extinction is exactly 0
+                // without its samples (the next interval samples its start again: the same value).
+                if (emptySpace[o].transparentBetweenVoxel(u0, u1)) {
+                    w.have = false;
+                    continue;
+                }
                 const PreintegratedTransfer& pre = preintegrated[o];
                 if (!w.have) {
-                    w.value = volume.sample(p0);
+                    w.value = view.sampleVoxel(u0);
                     w.cumulative = pre.cumulative(w.value);
                     ++r.samples;
                 }
                 const double a = w.value, ca = w.cumulative;
-                w.value = volume.sample(p1);
+                w.value = view.sampleVoxel(u1);
                 w.cumulative = pre.cumulative(w.value);
                 w.have = true;
                 ++r.samples;
@@ -615,8 +679,11 @@ struct VolumeComposite {
             }
             for (int64_t k = 0; k < pieces && r.transmittance >= kOpaque; ++k) {
                 const Vec3d p = p0 + (p1 - p0) * ((double(k) * pl + lightDepth) / dl);
+                // p's voxel coordinates in the first volume inside, for its grids' lookups.
+                const Vec3d u =
+                    first >= 0 ? setup.views[std::size_t(first)].voxelCoordinates(p) : Vec3d{0, 0, 0};
                 Vec3f unshaded;
-                const Vec3f ambient = lightAt(p, inside, single, *r.lights, unshaded);
+                const Vec3f ambient = lightAt(p, u, inside, first, several, *r.lights, unshaded);
                 Vec3f lit{0, 0, 0}; // the last object's light per unit opacity
                 for (std::size_t o = 0; o < inside.size(); ++o) {
                     const ObjectInterval& w = (*r.objects)[o];
@@ -625,7 +692,8 @@ struct VolumeComposite {
                     const float weight = float(alpha * r.transmittance * frame.options.exposure);
                     if (shaded) {
                         Vec3f diffuse, specular;
-                        phong(p, o, r.eye, *r.lights, ambient, unshaded, diffuse, specular);
+                        phong(p, int(o) == first ? &u : nullptr, o, r.eye, *r.lights, ambient, unshaded,
+                              diffuse, specular);
                         lit = w.color * diffuse + specular;
                     } else {
                         lit = w.color * unshaded;

@@ -161,9 +161,9 @@ double PreintegratedTransfer::pointExtinction(double v) const {
 double PreintegratedTransfer::cumulative(double v) const {
     if (tf_.opacityPoints().empty() || std::isnan(v)) return 0;
     const std::vector<OpacityPoint>& op = tf_.opacityPoints();
-    if (v <= op.front().value) return preintegratedOpticalDepth(op.front().opacity) * (v - op.front().value);
-    if (v >= op.back().value)
-        return prefix_.back() + preintegratedOpticalDepth(op.back().opacity) * (v - op.back().value);
+    // Beyond the points the opacity is constant: its optical depth kept per point (no logarithm).
+    if (v <= op.front().value) return depthAt_.front() * (v - op.front().value);
+    if (v >= op.back().value) return prefix_.back() + depthAt_.back() * (v - op.back().value);
     // The piece [op[i].value, op[i + 1].value) holding v (the last of equal values: steps).
     const auto it = std::upper_bound(op.begin(), op.end(), v,
                                      [](double x, const OpacityPoint& p) { return x < p.value; });
@@ -190,8 +190,14 @@ double PreintegratedTransfer::extinction(double a, double b) const {
 
 double PreintegratedTransfer::extinction(double a, double ca, double b, double cb) const {
     if (tf_.opacityPoints().empty() || std::isnan(a) || std::isnan(b)) return 0;
-    if (std::abs(b - a) <= 1e-6 * std::max({1.0, std::abs(a), std::abs(b)}))
-        return pointExtinction(0.5 * (a + b));
+    if (std::abs(b - a) <= 1e-6 * std::max({1.0, std::abs(a), std::abs(b)})) {
+        // pointExtinction, without the search and the logarithm beyond the points (the same bits).
+        const std::vector<OpacityPoint>& op = tf_.opacityPoints();
+        const double v = 0.5 * (a + b);
+        if (v < op.front().value) return depthAt_.front() / opacityLength_;
+        if (v >= op.back().value) return depthAt_.back() / opacityLength_;
+        return pointExtinction(v);
+    }
     return std::max(0.0, (cb - ca) / (b - a)) / opacityLength_;
 }
 
