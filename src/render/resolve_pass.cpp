@@ -92,9 +92,11 @@ void resolvePass(FrameState& f, Progress*) {
     const ToneMap toneMap = toneMapForImage(o.toneMap, {});
     const int cells = o.supersample; // cells of a x a samples per pixel side
     const float scale = f.autoExposure ? autoExposureScale(f) : 1.0f;
+    std::vector<float>& luma = scratch.luma;
+    if (post) luma.resize(size_t(w * h));
     r.exposure = f.autoExposure ? scale : o.exposure;
     parallelFor(0, h, 16, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y)
+        for (int64_t y = y0; y < y1; ++y) {
             for (int64_t x = 0; x < w; ++x) {
                 Vec3f sum;
                 uint8_t every = 0;
@@ -110,6 +112,11 @@ void resolvePass(FrameState& f, Progress*) {
                 if (post) r.image.at(x, h - 1 - y) = c;
                 refined[size_t((h - 1 - y) * w + x)] = every;
             }
+            // The post-process's luma of the row, made here while it is in the cache.
+            if (post)
+                for (std::size_t i = size_t((h - 1 - y) * w), e = i + size_t(w); i < e; ++i)
+                    luma[i] = postLuma(filtered.pixels[i]);
+        }
     });
     for (const uint8_t v : refined) r.refinedPixels += v;
     if (post) {
@@ -138,7 +145,7 @@ void resolvePass(FrameState& f, Progress*) {
                 }
             });
         }
-        postAntiAlias(filtered, skip, r.image, scratch.luma);
+        postAntiAlias(filtered, skip, r.image, luma, true);
     }
     if (f.glassSamples.empty()) return;
     r.glassMask.assign(size_t(w * h), 0);

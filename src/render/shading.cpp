@@ -354,6 +354,14 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
     const auto shadeRound = [&](int round) {
         parallelFor(0, blocks, 1, [&](int64_t b0, int64_t b1) {
             std::array<std::size_t, 64> samples;
+            // Round 1's work in a block: the samples to shade and the copies (to, from).
+            struct Shade {
+                std::size_t sample;
+                uint32_t triangle;
+                float occlusion;
+            };
+            std::vector<Shade> shades;
+            std::vector<std::pair<std::size_t, std::size_t>> copies;
             for (int64_t b = b0; b < b1 && !steps.cancelled(); ++b) {
                 for (int64_t cy = b * kRows; cy < std::min(ch, (b + 1) * kRows); ++cy)
                     for (int64_t cx = 0; cx < cw; ++cx) {
@@ -387,13 +395,38 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                             int same = 0;
                             while (same < k && gbuffer.triangle[samples[size_t(same)]] != tri) ++same;
                             if (same < k) {
-                                out[i] = out[samples[size_t(same)]];
+                                copies.push_back({i, samples[size_t(same)]});
                                 continue;
                             }
                             const std::size_t proxy = neighbourShowing(frame, cx, cy, tri);
-                            out[i] = proxy != kNoSample ? out[proxy] : shadeSample(frame, i, occlusion);
+                            if (proxy != kNoSample) {
+                                copies.push_back({i, proxy});
+                                continue;
+                            }
+                            copies.push_back({i, i}); // its own shading, below
+                            shades.push_back({i, tri, occlusion});
                         }
                     }
+                if (round == 1) {
+                    // The block's samples that take a shading of their own, their triangles' bases
+                    // fetched a few ahead (edge samples' triangles are mostly shown by no
+                    // representative: cold in the cache); then the copies in the order they were
+                    // listed (a copy's source is a representative, a sample shaded here or one
+                    // copied earlier in its cell). The same values as shading them in turn.
+                    for (std::size_t k = 0; k < shades.size(); ++k) {
+                        if (k + kAhead < shades.size() && shades[k + kAhead].triangle != GBuffer::kNone) {
+                            const char* basis =
+                                reinterpret_cast<const char*>(&frame.triangleBases[shades[k + kAhead].triangle]);
+                            __builtin_prefetch(basis);
+                            __builtin_prefetch(basis + sizeof(TriangleBasis) - 1);
+                        }
+                        out[shades[k].sample] = shadeSample(frame, shades[k].sample, shades[k].occlusion);
+                    }
+                    for (const auto& [to, from] : copies)
+                        if (to != from) out[to] = out[from];
+                    shades.clear();
+                    copies.clear();
+                }
                 steps.step();
             }
         });
