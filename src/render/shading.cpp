@@ -10,6 +10,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <mutex>
 
 #include "render/antialias.hpp"
@@ -382,11 +383,42 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                             shadeRepresentative(frame, cellOcclusion, cx, cy, rep);
                             continue;
                         }
-                        // A cell shaded once has its representative only, done in round 0.
-                        if (frame.refined[size_t(cy * cw + cx)] == 0) continue;
-                        const int n = cellSamples(frame, cx, cy, samples);
+                        // A cell shaded once has its representative only, done in round 0 (eight
+                        // such cells at a time skipped: most are).
+                        const uint8_t* refined = &frame.refined[size_t(cy * cw)];
+                        if (cx + 8 <= cw) {
+                            uint64_t eight;
+                            std::memcpy(&eight, refined + cx, 8);
+                            if (eight == 0) {
+                                cx += 7;
+                                continue;
+                            }
+                        }
+                        if (refined[cx] == 0) continue;
                         const float occlusion =
                             screenOcclusion.empty() ? 1.0f : screenOcclusion[size_t(cy * cw + cx)];
+                        // Its samples other than the representative, in cellSamples' order.
+                        int n;
+                        if (a == 2 && refined[cx] == kEveryRefinedSample) {
+                            const std::size_t base = size_t(2 * cy * W + 2 * cx);
+                            samples[0] = base + size_t(W) + 1, samples[1] = base + 1, samples[2] = base + size_t(W),
+                            samples[3] = base;
+                            n = 4;
+                        } else {
+                            n = cellSamples(frame, cx, cy, samples);
+                        }
+                        // The neighbours' representatives, in neighbourShowing's order, where all
+                        // eight lie inside the image (2 x 2 cells).
+                        const bool inside = a == 2 && cx > 0 && cy > 0 && cx + 1 < cw && cy + 1 < ch;
+                        const auto showing = [&](uint32_t tri) {
+                            if (!inside) return neighbourShowing(frame, cx, cy, tri);
+                            const std::size_t r = samples[0], row = size_t(2 * W);
+                            const std::size_t around[8] = {r - 2,       r + 2,       r - row,     r + row,
+                                                           r - row - 2, r - row + 2, r + row - 2, r + row + 2};
+                            for (const std::size_t k : around)
+                                if (gbuffer.triangle[k] == tri) return k;
+                            return kNoSample;
+                        };
                         for (int k = 1; k < n; ++k) {
                             const std::size_t i = samples[size_t(k)];
                             const uint32_t tri = gbuffer.triangle[i];
@@ -398,7 +430,7 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                                 copies.push_back({i, samples[size_t(same)]});
                                 continue;
                             }
-                            const std::size_t proxy = neighbourShowing(frame, cx, cy, tri);
+                            const std::size_t proxy = showing(tri);
                             if (proxy != kNoSample) {
                                 copies.push_back({i, proxy});
                                 continue;
