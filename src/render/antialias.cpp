@@ -114,15 +114,18 @@ int64_t markRows(FrameState& f, int64_t cy0, int64_t cy1) {
                     _mm256_cmpeq_epi32(r0, r1),
                     _mm256_cmpeq_epi32(r0, _mm256_shuffle_epi32(r0, _MM_SHUFFLE(2, 3, 0, 1))));
                 const unsigned one = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(same)));
-                const unsigned empty0 = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(r0, none))));
-                const unsigned empty1 = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(r1, none))));
+                const unsigned empty0 =
+                    unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(r0, none))));
+                const unsigned empty1 =
+                    unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(r1, none))));
                 covered += 16 - std::popcount(empty0) - std::popcount(empty1);
                 if (one == 0xffu) { // the four cells each show one triangle (or the background)
                     std::memset(out + cx, 0, 4);
                     continue;
                 }
                 for (int k = 0; k < 4; ++k)
-                    out[cx + k] = ((one >> (2 * k)) & 3u) == 3u || !refineCell(cx + k, cy) ? 0 : kEveryRefinedSample;
+                    out[cx + k] =
+                        ((one >> (2 * k)) & 3u) == 3u || !refineCell(cx + k, cy) ? 0 : kEveryRefinedSample;
             }
 #endif
             for (; cx < cw; ++cx) {
@@ -235,19 +238,46 @@ bool shadedSample(const FrameState& f, int64_t x, int64_t y) {
     }
 }
 
-namespace {
-
-// The post-process's first test at pixel x of a row (its luma `row`, the rows above and below):
-// lists x in `candidates` where its contrast passes and `skip` leaves it.
-[[maybe_unused]] void postListed(std::vector<int64_t>& candidates, int64_t x, const float* row, const float* above,
-                             const float* below, const uint8_t* skipRow, int64_t W, int64_t& count) {
-    const float m = row[x], n = above[x], s = below[x], e = row[x + 1 < W ? x + 1 : W - 1], w = row[x > 0 ? x - 1 : 0];
-    const float hi = std::max({m, n, s, e, w}), lo = std::min({m, n, s, e, w});
-    candidates[size_t(count)] = x;
-    count += int64_t(!(hi - lo < std::max(1.0f / 32, hi / 8))) & int64_t(!skipRow || !skipRow[x]);
+int64_t postCandidates(const float* row, const float* above, const float* below, const uint8_t* skipRow,
+                       int64_t W, int64_t* out) {
+    // The scalar test at pixel x (a neighbour past the row's end: the pixel at the end).
+    const auto test = [&](int64_t x, int64_t& count) {
+        const float m = row[x], n = above[x], s = below[x], e = row[x + 1 < W ? x + 1 : W - 1],
+                    w = row[x > 0 ? x - 1 : 0];
+        const float hi = std::max({m, n, s, e, w}), lo = std::min({m, n, s, e, w});
+        out[count] = x; // listed without a branch (whether it passes is as good as random on foliage)
+        count += int64_t(!(hi - lo < std::max(1.0f / 32, hi / 8))) & int64_t(!skipRow || !skipRow[x]);
+    };
+    int64_t count = 0, x = 0;
+#ifdef __AVX2__
+    // Eight pixels at a time inside the row (x - 1 and x + 8 in it): the same test in lanes (max,
+    // min, hi / 8 as a product by 1/8, all exact), except that a lane with a NaN among its lumas is
+    // listed (std::max / std::min would take it or not by its place).
+    if (W >= 10) {
+        const __m256 floor = _mm256_set1_ps(1.0f / 32), eighth = _mm256_set1_ps(1.0f / 8);
+        test(0, count); // its west neighbour is itself
+        for (x = 1; x + 8 <= W - 1; x += 8) {
+            const __m256 m = _mm256_loadu_ps(row + x), n = _mm256_loadu_ps(above + x),
+                         s = _mm256_loadu_ps(below + x), e = _mm256_loadu_ps(row + x + 1),
+                         w = _mm256_loadu_ps(row + x - 1);
+            const __m256 hi = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(m, n), _mm256_max_ps(s, e)), w);
+            const __m256 lo = _mm256_min_ps(_mm256_min_ps(_mm256_min_ps(m, n), _mm256_min_ps(s, e)), w);
+            const __m256 limit = _mm256_max_ps(floor, _mm256_mul_ps(hi, eighth));
+            const __m256 all = _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(m, n), _mm256_add_ps(s, e)), w);
+            unsigned bits = unsigned(
+                _mm256_movemask_ps(_mm256_or_ps(_mm256_cmp_ps(_mm256_sub_ps(hi, lo), limit, _CMP_NLT_UQ),
+                                                _mm256_cmp_ps(all, all, _CMP_UNORD_Q))));
+            if (skipRow) { // the lanes whose skip byte is 0
+                const __m128i skipped = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(skipRow + x));
+                bits &= unsigned(_mm_movemask_epi8(_mm_cmpeq_epi8(skipped, _mm_setzero_si128()))) & 0xffu;
+            }
+            for (; bits != 0; bits &= bits - 1) out[count++] = x + std::countr_zero(bits);
+        }
+    }
+#endif
+    for (; x < W; ++x) test(x, count);
+    return count;
 }
-
-} // namespace
 
 Image postAntiAlias(const Image& in, const std::vector<uint8_t>& skip) {
     Image out = in;
@@ -282,42 +312,7 @@ void postAntiAlias(const Image& in, const std::vector<uint8_t>& skip, Image& out
             const float* above = &luma[size_t(std::min(y + 1, H - 1) * W)];
             const float* below = &luma[size_t(std::max<int64_t>(y - 1, 0) * W)];
             const uint8_t* skipRow = skip.empty() ? nullptr : &skip[size_t(y * W)];
-            int64_t count = 0;
-            int64_t x0 = 0;
-#ifdef __AVX2__
-            // Eight pixels at a time inside the row (x - 1 and x + 8 in it): the same test in
-            // lanes, except that a lane is listed wherever the scalar test could list it (a NaN
-            // luma: always); the loop below tests every listed pixel's contrast again.
-            if (W >= 10) {
-                const __m256 floor = _mm256_set1_ps(1.0f / 32), eighth = _mm256_set1_ps(1.0f / 8);
-                postListed(candidates, 0, row, above, below, skipRow, W, count); // x = 0 (clamped)
-                for (x0 = 1; x0 + 8 <= W - 1; x0 += 8) {
-                    const __m256 m = _mm256_loadu_ps(row + x0), n = _mm256_loadu_ps(above + x0),
-                                 so = _mm256_loadu_ps(below + x0), e = _mm256_loadu_ps(row + x0 + 1),
-                                 w = _mm256_loadu_ps(row + x0 - 1);
-                    const __m256 hi = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(m, n), _mm256_max_ps(so, e)), w);
-                    const __m256 lo = _mm256_min_ps(_mm256_min_ps(_mm256_min_ps(m, n), _mm256_min_ps(so, e)), w);
-                    // hi / 8 as a product by 1/8: exact (a power of two) as the division.
-                    const __m256 limit = _mm256_max_ps(floor, _mm256_mul_ps(hi, eighth));
-                    const __m256 all = _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(m, n), _mm256_add_ps(so, e)), w);
-                    unsigned bits = unsigned(_mm256_movemask_ps(
-                        _mm256_or_ps(_mm256_cmp_ps(_mm256_sub_ps(hi, lo), limit, _CMP_NLT_UQ),
-                                     _mm256_cmp_ps(all, all, _CMP_UNORD_Q))));
-                    for (; bits != 0; bits &= bits - 1) {
-                        const int64_t x = x0 + std::countr_zero(bits);
-                        candidates[size_t(count)] = x;
-                        count += int64_t(!skipRow || !skipRow[x]);
-                    }
-                }
-            }
-#endif
-            for (int64_t x = x0; x < W; ++x) {
-                const float m = row[x], n = above[x], s = below[x], e = row[x + 1 < W ? x + 1 : W - 1],
-                            w = row[x > 0 ? x - 1 : 0];
-                const float hi = std::max({m, n, s, e, w}), lo = std::min({m, n, s, e, w});
-                candidates[size_t(count)] = x;
-                count += int64_t(!(hi - lo < std::max(1.0f / 32, hi / 8))) & int64_t(!skipRow || !skipRow[x]);
-            }
+            const int64_t count = postCandidates(row, above, below, skipRow, W, candidates.data());
             for (int64_t c = 0; c < count; ++c) {
                 const int64_t x = candidates[size_t(c)];
                 const float m = L(x, y), n = L(x, y + 1), s = L(x, y - 1), e = L(x + 1, y), w = L(x - 1, y);

@@ -148,6 +148,15 @@ Image postAntiAlias(const Image& image, const std::vector<uint8_t>& skip);
 void postAntiAlias(const Image& image, const std::vector<uint8_t>& skip, Image& out, std::vector<float>& luma,
                    bool lumaGiven);
 
+/// The post-process's first test on one row of lumas W wide (`row`, and `above` and `below`, the
+/// rows next to it, each the row itself at the image's top or bottom): lists into `out` (W entries),
+/// in increasing x, the pixels where max - min of the luma and its four neighbours' (a neighbour past
+/// the row's end: the pixel at the end) is not below max(1/32, max / 8) and `skipRow` (null: none)
+/// is 0. A pixel with a NaN among those lumas may be listed whatever the test says (postAntiAlias
+/// tests each listed pixel's contrast again). Returns the count.
+int64_t postCandidates(const float* row, const float* above, const float* below, const uint8_t* skipRow,
+                       int64_t W, int64_t* out);
+
 /// The post-process's luma of a pixel: perceptual (gamma 2), of values clamped to [0, 1].
 inline float postLuma(const Vec3f& c) {
     const float r = std::clamp(c.x, 0.0f, 1.0f), g = std::clamp(c.y, 0.0f, 1.0f),

@@ -401,8 +401,8 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                         int n;
                         if (a == 2 && refined[cx] == kEveryRefinedSample) {
                             const std::size_t base = size_t(2 * cy * W + 2 * cx);
-                            samples[0] = base + size_t(W) + 1, samples[1] = base + 1, samples[2] = base + size_t(W),
-                            samples[3] = base;
+                            samples[0] = base + size_t(W) + 1, samples[1] = base + 1,
+                            samples[2] = base + size_t(W), samples[3] = base;
                             n = 4;
                         } else {
                             n = cellSamples(frame, cx, cy, samples);
@@ -413,8 +413,9 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                         const auto showing = [&](uint32_t tri) {
                             if (!inside) return neighbourShowing(frame, cx, cy, tri);
                             const std::size_t r = samples[0], row = size_t(2 * W);
-                            const std::size_t around[8] = {r - 2,       r + 2,       r - row,     r + row,
-                                                           r - row - 2, r - row + 2, r + row - 2, r + row + 2};
+                            const std::size_t around[8] = {r - 2,       r + 2,       r - row,
+                                                           r + row,     r - row - 2, r - row + 2,
+                                                           r + row - 2, r + row + 2};
                             for (const std::size_t k : around)
                                 if (gbuffer.triangle[k] == tri) return k;
                             return kNoSample;
@@ -447,8 +448,8 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                     // copied earlier in its cell). The same values as shading them in turn.
                     for (std::size_t k = 0; k < shades.size(); ++k) {
                         if (k + kAhead < shades.size() && shades[k + kAhead].triangle != GBuffer::kNone) {
-                            const char* basis =
-                                reinterpret_cast<const char*>(&frame.triangleBases[shades[k + kAhead].triangle]);
+                            const char* basis = reinterpret_cast<const char*>(
+                                &frame.triangleBases[shades[k + kAhead].triangle]);
                             __builtin_prefetch(basis);
                             __builtin_prefetch(basis + sizeof(TriangleBasis) - 1);
                         }
