@@ -286,16 +286,14 @@ Image postAntiAlias(const Image& in, const std::vector<uint8_t>& skip) {
     return out;
 }
 
-void postAntiAlias(const Image& in, const std::vector<uint8_t>& skip, Image& out, std::vector<float>& luma,
-                   bool lumaGiven) {
+namespace {
+
+// The post-process over `in` with its lumas `luma`, handing each blended pixel to
+// write(y0, x, y, value) (y0: the first row of the 16 its row is processed with); reads `in` only.
+template <class Write>
+void postAntiAliasRows(const Image& in, const std::vector<uint8_t>& skip, const std::vector<float>& luma,
+                       Write&& write) {
     const int64_t W = in.width, H = in.height;
-    if (W < 3 || H < 3) return;
-    if (!lumaGiven) {
-        luma.resize(in.pixels.size());
-        parallelFor(0, H, 64, [&](int64_t y0, int64_t y1) {
-            for (std::size_t i = size_t(y0 * W); i < size_t(y1 * W); ++i) luma[i] = lumaOf(in.pixels[i]);
-        });
-    }
     auto L = [&](int64_t x, int64_t y) {
         return luma[size_t(std::clamp<int64_t>(y, 0, H - 1) * W + std::clamp<int64_t>(x, 0, W - 1))];
     };
@@ -366,9 +364,41 @@ void postAntiAlias(const Image& in, const std::vector<uint8_t>& skip, Image& out
                 const float sub2 = (-2 * sub1 + 3) * sub1 * sub1;
                 offset = std::clamp(std::max(offset, sub2 * sub2 * 0.75f), 0.0f, 1.0f);
                 const Vec3f across = isHorizontal ? C(x, y + side) : C(x + side, y);
-                out.at(x, y) = in.at(x, y) * (1 - offset) + across * offset;
+                write(y0, x, y, in.at(x, y) * (1 - offset) + across * offset);
             }
         }
+    });
+}
+
+} // namespace
+
+void postAntiAlias(const Image& in, const std::vector<uint8_t>& skip, Image& out, std::vector<float>& luma,
+                   bool lumaGiven) {
+    const int64_t W = in.width, H = in.height;
+    if (W < 3 || H < 3) return;
+    if (!lumaGiven) {
+        luma.resize(in.pixels.size());
+        parallelFor(0, H, 64, [&](int64_t y0, int64_t y1) {
+            for (std::size_t i = size_t(y0 * W); i < size_t(y1 * W); ++i) luma[i] = lumaOf(in.pixels[i]);
+        });
+    }
+    postAntiAliasRows(in, skip, luma,
+                      [&](int64_t, int64_t x, int64_t y, const Vec3f& v) { out.at(x, y) = v; });
+}
+
+void postAntiAliasInPlace(Image& image, const std::vector<uint8_t>& skip, const std::vector<float>& luma,
+                          std::vector<std::vector<std::pair<std::size_t, Vec3f>>>& blends) {
+    const int64_t W = image.width, H = image.height;
+    if (W < 3 || H < 3) return;
+    // Each band of 16 rows keeps its blends until every band has read its neighbours' pixels.
+    blends.resize(size_t((H + 15) / 16));
+    for (auto& b : blends) b.clear();
+    postAntiAliasRows(image, skip, luma, [&](int64_t y0, int64_t x, int64_t y, const Vec3f& v) {
+        blends[size_t(y0 / 16)].push_back({size_t(y * W + x), v});
+    });
+    parallelFor(0, int64_t(blends.size()), 1, [&](int64_t b0, int64_t b1) {
+        for (int64_t b = b0; b < b1; ++b)
+            for (const auto& [i, v] : blends[size_t(b)]) image.pixels[i] = v;
     });
 }
 

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "render/frame_state.hpp"
@@ -147,6 +148,11 @@ Image postAntiAlias(const Image& image, const std::vector<uint8_t>& skip);
 /// pixel of `image` already (the resolve pass makes it as it writes them).
 void postAntiAlias(const Image& image, const std::vector<uint8_t>& skip, Image& out, std::vector<float>& luma,
                    bool lumaGiven);
+/// The same over `image` itself, `luma` holding postLuma of each of its pixels: the blended pixels
+/// are kept in `blends` (scratch, reused between frames) until every pixel has been read, then
+/// written (the same image as postAntiAlias into a copy).
+void postAntiAliasInPlace(Image& image, const std::vector<uint8_t>& skip, const std::vector<float>& luma,
+                          std::vector<std::vector<std::pair<std::size_t, Vec3f>>>& blends);
 
 /// The post-process's first test on one row of lumas W wide (`row`, and `above` and `below`, the
 /// rows next to it, each the row itself at the image's top or bottom): lists into `out` (W entries),

@@ -77,13 +77,9 @@ void resolvePass(FrameState& f, Progress*) {
     RenderResult& r = f.result;
     RenderCacheData::Resolve& scratch = f.cache.resolve;
     const bool post = o.antiAliasing == AntiAliasing::Post || o.antiAliasing == AntiAliasing::Full;
-    // The box-filtered image: the result, or (post-process) its input, kept between frames.
+    // The box-filtered image, which the post-process then blends in place.
     r.image = Image(w, h);
-    Image& filtered = post ? scratch.filtered : r.image;
-    if (post) {
-        filtered.width = w, filtered.height = h;
-        filtered.pixels.resize(size_t(w * h));
-    }
+    Image& filtered = r.image;
     // Per output pixel (image rows): 1 where a cell of it was shaded at every sample.
     std::vector<uint8_t>& refined = scratch.refined;
     refined.resize(size_t(w * h));
@@ -109,7 +105,6 @@ void resolvePass(FrameState& f, Progress*) {
                     }
                 const Vec3f c = sum * norm;
                 filtered.at(x, h - 1 - y) = c;
-                if (post) r.image.at(x, h - 1 - y) = c;
                 refined[size_t((h - 1 - y) * w + x)] = every;
             }
             // The post-process's luma of the row, made here while it is in the cache.
@@ -145,7 +140,7 @@ void resolvePass(FrameState& f, Progress*) {
                 }
             });
         }
-        postAntiAlias(filtered, skip, r.image, luma, true);
+        postAntiAliasInPlace(r.image, skip, luma, scratch.blends);
     }
     if (f.glassSamples.empty()) return;
     r.glassMask.assign(size_t(w * h), 0);
