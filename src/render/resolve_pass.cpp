@@ -2,6 +2,7 @@
 // image.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "render/antialias.hpp"
@@ -25,15 +26,25 @@ Vec3f toneMapped(const Vec3f& c, ToneMap t) {
 // all a x a of a refined cell; the mean of its N-rooks samples (glass inside), or its one
 // representative sample, a x a times, elsewhere (adaptive anti-aliasing left the others unshaded).
 // Without a tone map (`t` null): the linear sum.
-Vec3f cellSum(const FrameState& f, int64_t cx, int64_t cy, const ToneMap* t, float scale) {
+[[gnu::always_inline]] inline Vec3f cellSum(const FrameState& f, int64_t cx, int64_t cy, const ToneMap* t,
+                                            float scale) {
     const int a = f.adaptive;
     const int64_t W = f.width, sx = cx * a, sy = cy * a;
     const uint8_t kind = f.refined.empty() ? kEveryRefinedSample : f.refined[size_t(cy * (W / a) + cx)];
     auto out = [&](const Vec3f& c) { return t ? toneMapped(c * scale, *t) : c * scale; };
     Vec3f sum;
     if (kind == kEveryRefinedSample) {
+        // A sample with the same shading as the one before it (the shading pass copies a shading
+        // to the samples showing its triangle) reuses its transform: the same terms summed.
+        const Vec3f* last = nullptr;
+        Vec3f mapped;
         for (int dy = 0; dy < a; ++dy)
-            for (int dx = 0; dx < a; ++dx) sum += out(f.shaded[size_t((sy + dy) * W + sx + dx)]);
+            for (int dx = 0; dx < a; ++dx) {
+                const Vec3f& c = f.shaded[size_t((sy + dy) * W + sx + dx)];
+                if (!last || std::memcmp(&c, last, sizeof(Vec3f)) != 0) mapped = out(c);
+                last = &c;
+                sum += mapped;
+            }
         return sum;
     }
     if (kind == kRookSamples) {
