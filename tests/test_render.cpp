@@ -11,6 +11,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <random>
 #include <set>
 #include <sstream>
@@ -19,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include "demo/demo_scenes.hpp"
+#include "render/antialias.hpp"
 #include "support/ground_scenes.hpp"
 #include "test_util.hpp"
 #include "voxfx/gbuffer.hpp"
@@ -111,6 +113,59 @@ TEST(RenderTest, GBufferOfAForestAtTwiceTheResolutionIsTheNearestFragmentOfEachS
     }
     EXPECT_GT(covered, int64_t(depth.size()) / 4);
     EXPECT_EQ(mismatches, 0);
+}
+
+TEST(RenderTest, GBufferInTilesOfWholeCellRowsIsTheSameAndGivesEachRowOnceItIsFinal) {
+    // detail::renderGBufferTiles (adaptive anti-aliasing marks each tile's cells as soon as its rows
+    // are done): against the nearest fragment kept one at a time, bit for bit, with tiles of a
+    // multiple of 2 rows and of 3; the callback gets every row once, tiles start at multiples of the
+    // alignment, and the rows it is given already hold their final values.
+    demo::ForestOptions fo;
+    fo.trees = 16;
+    fo.leavesPerTree = 300;
+    const Scene scene = demo::makeForestScene(fo);
+    const SceneGeometry geo = flattenScene(scene);
+    const Frame f = cameraFrame(sceneCamera(scene, 0, 16.0 / 9), 2 * 160, 2 * 90);
+    const int64_t W = f.width(), H = f.height();
+    std::vector<float> depth(size_t(f.columnCount()), std::numeric_limits<float>::infinity());
+    std::vector<uint32_t> triangle(depth.size(), GBuffer::kNone);
+    NearestOneByOne reference{W, f.nearDepth(), &depth, &triangle};
+    MeshView drawn = geo.mesh.view();
+    drawn.triangleCount = geo.drawnTriangles;
+    rasterize(f, drawn, RasterOptions{}, reference);
+    const auto same = [&](const GBuffer& g, std::size_t i) {
+        return g.triangle[i] == triangle[i] && std::memcmp(&g.depth[i], &depth[i], sizeof(float)) == 0;
+    };
+    for (const int64_t align : {2, 3}) {
+        GBuffer g;
+        std::mutex m;
+        std::vector<int> seen(size_t(H), 0);
+        int64_t calls = 0, misaligned = 0, notFinal = 0;
+        detail::renderGBufferTiles(geo, f, g, align, nullptr, [&](int64_t y0, int64_t y1) {
+            int64_t differ = 0;
+            for (std::size_t i = size_t(y0 * W); i < size_t(y1 * W); ++i) differ += !same(g, i);
+            const std::lock_guard<std::mutex> lock(m);
+            ++calls;
+            misaligned += y0 % align != 0 || (y1 < H && (y1 - y0) % align != 0);
+            notFinal += differ;
+            for (int64_t y = y0; y < y1; ++y) ++seen[size_t(y)];
+        });
+        int64_t mismatches = 0;
+        for (std::size_t i = 0; i < depth.size(); ++i) mismatches += !same(g, i);
+        EXPECT_EQ(mismatches, 0) << align;
+        EXPECT_GT(calls, 8) << align;
+        EXPECT_EQ(misaligned, 0) << align;
+        EXPECT_EQ(notFinal, 0) << align;
+        EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), H) << align;
+    }
+    // Nothing drawn: the cleared buffer, every row in one call.
+    GBuffer g;
+    std::vector<std::pair<int64_t, int64_t>> rows;
+    detail::renderGBufferTiles(SceneGeometry{}, f, g, 2, nullptr,
+                               [&](int64_t y0, int64_t y1) { rows.emplace_back(y0, y1); });
+    ASSERT_EQ(rows.size(), 1u);
+    EXPECT_EQ(rows[0], std::make_pair(int64_t(0), H));
+    EXPECT_EQ(std::count(g.triangle.begin(), g.triangle.end(), GBuffer::kNone), W * H);
 }
 
 TEST(RenderTest, GBufferMatchesBruteForceRayCasting) {

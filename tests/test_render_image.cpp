@@ -9,12 +9,14 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "demo/demo_scenes.hpp"
+#include "render/antialias.hpp"
 #include "render/shading.hpp"
 #include "render/vec_simd.hpp"
 #include "support/ground_scenes.hpp"
@@ -382,6 +384,87 @@ TEST(RenderImageTest, AntiAliasingIsDeterministicForEveryThreadCount) {
     o.threads = 3;
     const Image three = render(e.scene, e.camera, o).image;
     EXPECT_EQ(one.pixels, three.pixels);
+}
+
+// The default anti-aliasing over a forest (every kind of edge cell: samples shaded, copied from their
+// cell and from neighbours): the same image whatever the thread count.
+TEST(RenderImageTest, AdaptiveAntiAliasingOfAForestIsTheSameOnOneTwoAndThreeThreads) {
+    demo::ForestOptions fo;
+    fo.trees = 16;
+    fo.leavesPerTree = 300;
+    const Scene scene = demo::makeForestScene(fo);
+    RenderOptions o = renderOptionsFor(scene);
+    o.width = 160, o.height = 90;
+    const Camera camera = sceneCamera(scene, 0, double(o.width) / double(o.height));
+    o.threads = 1;
+    const RenderResult one = render(scene, camera, o);
+    EXPECT_GT(one.refinedPixels, o.width * o.height / 20);
+    for (const int threads : {2, 3}) {
+        o.threads = threads;
+        EXPECT_EQ(render(scene, camera, o).image.pixels, one.image.pixels) << threads;
+    }
+}
+
+// detail::postCandidates (eight pixels at a time where it can) against the post-process's first test
+// written out per pixel: max - min of the luma and its four neighbours' not below max(1/32, max / 8),
+// the pixel not skipped. Rows of random lumas with exact zeros of both signs, ones, pairs on the
+// threshold and NaNs (a pixel near a NaN may be listed or not: the post-process tests it again).
+TEST(RenderImageTest, PostProcessCandidatesAreThePixelsWhoseContrastPasses) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    int64_t listed = 0, checked = 0;
+    for (const int64_t W : {3, 9, 10, 11, 17, 64, 1283})
+        for (int trial = 0; trial < 40; ++trial) {
+            std::vector<float> rows[3];
+            for (auto& r : rows) {
+                r.resize(size_t(W));
+                for (float& v : r) {
+                    const float pick = u(rng);
+                    v = pick < 0.1f    ? 0.0f
+                        : pick < 0.15f ? -0.0f
+                        : pick < 0.2f  ? 1.0f
+                        : pick < 0.3f  ? 0.5f // with 0.5 * 7/8: a contrast exactly max / 8
+                        : pick < 0.35f ? 0.4375f
+                        : pick < 0.5f  ? 0.3f + 0.01f * u(rng) // low contrast
+                                       : u(rng);
+                    if (trial % 4 == 3 && u(rng) < 0.02f) v = std::numeric_limits<float>::quiet_NaN();
+                }
+            }
+            std::vector<uint8_t> skip(static_cast<size_t>(W));
+            for (uint8_t& b : skip) b = u(rng) < 0.2f ? uint8_t(1 + (rng() % 255)) : 0;
+            const float *row = rows[0].data(), *above = rows[1].data(), *below = rows[2].data();
+            for (const bool skipping : {false, true}) {
+                std::vector<int64_t> got(size_t(W) + 1);
+                const int64_t n = detail::postCandidates(row, above, below, skipping ? skip.data() : nullptr,
+                                                         W, got.data());
+                ASSERT_LE(n, W);
+                std::vector<char> in(size_t(W), 0);
+                for (int64_t k = 0; k < n; ++k) {
+                    ASSERT_TRUE(got[size_t(k)] >= 0 && got[size_t(k)] < W);
+                    if (k > 0) { ASSERT_LT(got[size_t(k - 1)], got[size_t(k)]); }
+                    in[size_t(got[size_t(k)])] = 1;
+                }
+                listed += n;
+                for (int64_t x = 0; x < W; ++x) {
+                    const float l[5] = {row[x], above[x], below[x], row[std::min(x + 1, W - 1)],
+                                        row[std::max<int64_t>(x - 1, 0)]};
+                    bool nan = false;
+                    float hi = -std::numeric_limits<float>::infinity(),
+                          lo = std::numeric_limits<float>::infinity();
+                    for (const float v : l) {
+                        nan |= std::isnan(v);
+                        if (v > hi) hi = v;
+                        if (v < lo) lo = v;
+                    }
+                    if (nan) continue;
+                    const float limit = hi / 8 > 1.0f / 32 ? hi / 8 : 1.0f / 32;
+                    const bool pass = !(hi - lo < limit) && !(skipping && skip[size_t(x)] != 0);
+                    EXPECT_EQ(bool(in[size_t(x)]), pass) << W << " " << trial << " x " << x;
+                    ++checked;
+                }
+            }
+        }
+    EXPECT_GT(listed, checked / 10);
 }
 
 TEST(RenderImageTest, FilmicToneMapIsMonotoneFromZeroAndRollsOffBelowOne) {

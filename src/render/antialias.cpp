@@ -2,8 +2,14 @@
 #include "render/antialias.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
+
+#ifdef __AVX2__
+#include <immintrin.h>
+#endif
 
 #include "render/render_cache.hpp"
 #include "render/vec_simd.hpp"
@@ -36,13 +42,15 @@ float filmicToneMap(float x) {
 
 namespace detail {
 
-int64_t markRefinedCells(FrameState& f) {
+namespace {
+
+// Fills f.refined for cell rows [cy0, cy1) (f.refined sized to the cells) from the G-buffer's
+// samples of those rows; returns the number of those samples showing geometry.
+int64_t markRows(FrameState& f, int64_t cy0, int64_t cy1) {
     const int s = f.adaptive;
-    if (s <= 1) return -1;
     const GBuffer& g = f.gbuffer;
     const SceneGeometry& geo = f.geometry;
-    const int64_t W = f.width, cw = f.width / s, ch = f.height / s;
-    f.refined.resize(size_t(cw * ch));
+    const int64_t W = f.width, cw = f.width / s;
     // The face normals and meshes from the compact per-triangle records (16 bytes a triangle, kept
     // with the geometry) rather than the 84-byte bases: a random read per triangle that stays in the
     // cache beside the 4x G-buffer.
@@ -87,68 +95,97 @@ int64_t markRefinedCells(FrameState& f) {
     };
     // One pass over the samples: each cell's refinement and the samples showing geometry (the
     // G-buffer pass's count, which would otherwise read them again).
-    return parallelReduce(
-        int64_t(0), ch, int64_t(8), int64_t(0),
-        [&](int64_t y0, int64_t y1) {
-            int64_t covered = 0;
-            for (int64_t cy = y0; cy < y1; ++cy) {
-                uint8_t* out = &f.refined[size_t(cy * cw)];
-                if (s == 2) { // the default: one triangle over the cell needs no depth (most cells)
-                    const uint32_t* row0 = &g.triangle[size_t(cy * 2 * W)];
-                    const uint32_t* row1 = row0 + W;
-                    for (int64_t cx = 0; cx < cw; ++cx) {
-                        const uint32_t a = row0[2 * cx], b = row0[2 * cx + 1], c = row1[2 * cx],
-                                       d = row1[2 * cx + 1];
-                        covered += int64_t(a != kNone) + int64_t(b != kNone) + int64_t(c != kNone) +
-                                   int64_t(d != kNone);
-                        out[cx] =
-                            (a == b && a == c && a == d) || !refineCell(cx, cy) ? 0 : kEveryRefinedSample;
-                    }
+    int64_t covered = 0;
+    for (int64_t cy = cy0; cy < cy1; ++cy) {
+        uint8_t* out = &f.refined[size_t(cy * cw)];
+        if (s == 2) { // the default: one triangle over the cell needs no depth (most cells)
+            const uint32_t* row0 = &g.triangle[size_t(cy * 2 * W)];
+            const uint32_t* row1 = row0 + W;
+            int64_t cx = 0;
+#ifdef __AVX2__
+            // Four cells at a time: whether each shows one triangle (a == b, a == c, b == d) and the
+            // samples showing geometry, in vector compares; refineCell only for the others.
+            const __m256i none = _mm256_set1_epi32(int(kNone));
+            for (; cx + 4 <= cw; cx += 4) {
+                const __m256i r0 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row0 + 2 * cx));
+                const __m256i r1 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row1 + 2 * cx));
+                // Lane 2k: a == c, 2k + 1: b == d; with the pair swapped, a == b in both.
+                const __m256i same = _mm256_and_si256(
+                    _mm256_cmpeq_epi32(r0, r1),
+                    _mm256_cmpeq_epi32(r0, _mm256_shuffle_epi32(r0, _MM_SHUFFLE(2, 3, 0, 1))));
+                const unsigned one = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(same)));
+                const unsigned empty0 =
+                    unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(r0, none))));
+                const unsigned empty1 =
+                    unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(r1, none))));
+                covered += 16 - std::popcount(empty0) - std::popcount(empty1);
+                if (one == 0xffu) { // the four cells each show one triangle (or the background)
+                    std::memset(out + cx, 0, 4);
                     continue;
                 }
-                for (int64_t cx = 0; cx < cw; ++cx) {
-                    for (int dy = 0; dy < s; ++dy)
-                        for (int dx = 0; dx < s; ++dx)
-                            covered += g.triangle[size_t((cy * s + dy) * W + cx * s + dx)] != kNone;
-                    out[cx] = refineCell(cx, cy) ? kEveryRefinedSample : 0;
-                }
+                for (int k = 0; k < 4; ++k)
+                    out[cx + k] =
+                        ((one >> (2 * k)) & 3u) == 3u || !refineCell(cx + k, cy) ? 0 : kEveryRefinedSample;
             }
-            return covered;
-        },
+#endif
+            for (; cx < cw; ++cx) {
+                const uint32_t a = row0[2 * cx], b = row0[2 * cx + 1], c = row1[2 * cx], d = row1[2 * cx + 1];
+                covered +=
+                    int64_t(a != kNone) + int64_t(b != kNone) + int64_t(c != kNone) + int64_t(d != kNone);
+                out[cx] = (a == b && a == c && a == d) || !refineCell(cx, cy) ? 0 : kEveryRefinedSample;
+            }
+            continue;
+        }
+        for (int64_t cx = 0; cx < cw; ++cx) {
+            for (int dy = 0; dy < s; ++dy)
+                for (int dx = 0; dx < s; ++dx)
+                    covered += g.triangle[size_t((cy * s + dy) * W + cx * s + dx)] != kNone;
+            out[cx] = refineCell(cx, cy) ? kEveryRefinedSample : 0;
+        }
+    }
+    return covered;
+}
+
+} // namespace
+
+int64_t markRefinedCells(FrameState& f) {
+    const int s = f.adaptive;
+    if (s <= 1) return -1;
+    f.refined.resize(size_t((f.width / s) * (f.height / s)));
+    return parallelReduce(
+        int64_t(0), f.height / s, int64_t(8), int64_t(0),
+        [&](int64_t y0, int64_t y1) { return markRows(f, y0, y1); },
         [](int64_t a, int64_t b) { return a + b; });
+}
+
+int64_t renderGBufferAndMark(FrameState& f, const Frame& camera, Progress* progress) {
+    const int s = f.adaptive;
+    if (s <= 1) {
+        renderGBuffer(f.geometry, camera, f.gbuffer, progress);
+        return -1;
+    }
+    const int64_t ch = f.height / s;
+    f.refined.resize(size_t((f.width / s) * ch));
+    // Each tile's cells marked as its rows are done, while its samples are still in the cache
+    // (tiles of whole cell rows); the covered counts summed per tile, in order.
+    std::vector<int64_t> covered(size_t(ch), 0);
+    renderGBufferTiles(f.geometry, camera, f.gbuffer, s, progress, [&](int64_t y0, int64_t y1) {
+        const int64_t cy0 = y0 / s, cy1 = std::min(ch, y1 / s);
+        if (cy0 < cy1) covered[size_t(cy0)] = markRows(f, cy0, cy1);
+    });
+    int64_t sum = 0;
+    for (const int64_t c : covered) sum += c;
+    return sum;
 }
 
 namespace {
 
-float lumaOf(const Vec3f& c) {
-    const float r = std::clamp(c.x, 0.0f, 1.0f), g = std::clamp(c.y, 0.0f, 1.0f),
-                b = std::clamp(c.z, 0.0f, 1.0f);
-    return std::sqrt(0.299f * r + 0.587f * g + 0.114f * b); // perceptual (gamma 2) luma
-}
+float lumaOf(const Vec3f& c) { return postLuma(c); }
 
 } // namespace
 
 // The perceptual luma of a shaded sample as the image shows it (after the output transform).
 float shownLuma(const Vec3f& c, ToneMap t) { return lumaOf(t == ToneMap::Clamp ? c : filmicToneMapped(c)); }
-
-std::size_t representativeSample(const FrameState& f, int64_t cx, int64_t cy) {
-    const int a = f.adaptive;
-    return std::size_t((cy * a + a / 2) * f.width + cx * a + a / 2);
-}
-
-std::size_t neighbourShowing(const FrameState& f, int64_t cx, int64_t cy, uint32_t triangle) {
-    const int a = f.adaptive;
-    const int64_t cw = f.width / a, ch = f.height / a;
-    // The four sides first, then the corners.
-    constexpr int kX[8] = {-1, 1, 0, 0, -1, 1, -1, 1}, kY[8] = {0, 0, -1, 1, -1, -1, 1, 1};
-    for (int k = 0; k < 8; ++k) {
-        const int64_t nx = cx + kX[k], ny = cy + kY[k];
-        if (nx < 0 || ny < 0 || nx >= cw || ny >= ch) continue;
-        const std::size_t r = representativeSample(f, nx, ny);
-        if (f.gbuffer.triangle[r] == triangle) return r;
-    }
-    return kNoSample;
-}
 
 bool curvesAcrossNeighbours(const FrameState& f, int64_t cx, int64_t cy, float contrast) {
     const int a = f.adaptive;
@@ -201,20 +238,62 @@ bool shadedSample(const FrameState& f, int64_t x, int64_t y) {
     }
 }
 
+int64_t postCandidates(const float* row, const float* above, const float* below, const uint8_t* skipRow,
+                       int64_t W, int64_t* out) {
+    // The scalar test at pixel x (a neighbour past the row's end: the pixel at the end).
+    const auto test = [&](int64_t x, int64_t& count) {
+        const float m = row[x], n = above[x], s = below[x], e = row[x + 1 < W ? x + 1 : W - 1],
+                    w = row[x > 0 ? x - 1 : 0];
+        const float hi = std::max({m, n, s, e, w}), lo = std::min({m, n, s, e, w});
+        out[count] = x; // listed without a branch (whether it passes is as good as random on foliage)
+        count += int64_t(!(hi - lo < std::max(1.0f / 32, hi / 8))) & int64_t(!skipRow || !skipRow[x]);
+    };
+    int64_t count = 0, x = 0;
+#ifdef __AVX2__
+    // Eight pixels at a time inside the row (x - 1 and x + 8 in it): the same test in lanes (max,
+    // min, hi / 8 as a product by 1/8, all exact), except that a lane with a NaN among its lumas is
+    // listed (std::max / std::min would take it or not by its place).
+    if (W >= 10) {
+        const __m256 floor = _mm256_set1_ps(1.0f / 32), eighth = _mm256_set1_ps(1.0f / 8);
+        test(0, count); // its west neighbour is itself
+        for (x = 1; x + 8 <= W - 1; x += 8) {
+            const __m256 m = _mm256_loadu_ps(row + x), n = _mm256_loadu_ps(above + x),
+                         s = _mm256_loadu_ps(below + x), e = _mm256_loadu_ps(row + x + 1),
+                         w = _mm256_loadu_ps(row + x - 1);
+            const __m256 hi = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(m, n), _mm256_max_ps(s, e)), w);
+            const __m256 lo = _mm256_min_ps(_mm256_min_ps(_mm256_min_ps(m, n), _mm256_min_ps(s, e)), w);
+            const __m256 limit = _mm256_max_ps(floor, _mm256_mul_ps(hi, eighth));
+            const __m256 all = _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(m, n), _mm256_add_ps(s, e)), w);
+            unsigned bits = unsigned(
+                _mm256_movemask_ps(_mm256_or_ps(_mm256_cmp_ps(_mm256_sub_ps(hi, lo), limit, _CMP_NLT_UQ),
+                                                _mm256_cmp_ps(all, all, _CMP_UNORD_Q))));
+            if (skipRow) { // the lanes whose skip byte is 0
+                const __m128i skipped = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(skipRow + x));
+                bits &= unsigned(_mm_movemask_epi8(_mm_cmpeq_epi8(skipped, _mm_setzero_si128()))) & 0xffu;
+            }
+            for (; bits != 0; bits &= bits - 1) out[count++] = x + std::countr_zero(bits);
+        }
+    }
+#endif
+    for (; x < W; ++x) test(x, count);
+    return count;
+}
+
 Image postAntiAlias(const Image& in, const std::vector<uint8_t>& skip) {
     Image out = in;
     std::vector<float> luma;
-    postAntiAlias(in, skip, out, luma);
+    postAntiAlias(in, skip, out, luma, false);
     return out;
 }
 
-void postAntiAlias(const Image& in, const std::vector<uint8_t>& skip, Image& out, std::vector<float>& luma) {
+namespace {
+
+// The post-process over `in` with its lumas `luma`, handing each blended pixel to
+// write(y0, x, y, value) (y0: the first row of the 16 its row is processed with); reads `in` only.
+template <class Write>
+void postAntiAliasRows(const Image& in, const std::vector<uint8_t>& skip, const std::vector<float>& luma,
+                       Write&& write) {
     const int64_t W = in.width, H = in.height;
-    if (W < 3 || H < 3) return;
-    luma.resize(in.pixels.size());
-    parallelFor(0, H, 64, [&](int64_t y0, int64_t y1) {
-        for (std::size_t i = size_t(y0 * W); i < size_t(y1 * W); ++i) luma[i] = lumaOf(in.pixels[i]);
-    });
     auto L = [&](int64_t x, int64_t y) {
         return luma[size_t(std::clamp<int64_t>(y, 0, H - 1) * W + std::clamp<int64_t>(x, 0, W - 1))];
     };
@@ -231,14 +310,7 @@ void postAntiAlias(const Image& in, const std::vector<uint8_t>& skip, Image& out
             const float* above = &luma[size_t(std::min(y + 1, H - 1) * W)];
             const float* below = &luma[size_t(std::max<int64_t>(y - 1, 0) * W)];
             const uint8_t* skipRow = skip.empty() ? nullptr : &skip[size_t(y * W)];
-            int64_t count = 0;
-            for (int64_t x = 0; x < W; ++x) {
-                const float m = row[x], n = above[x], s = below[x], e = row[x + 1 < W ? x + 1 : W - 1],
-                            w = row[x > 0 ? x - 1 : 0];
-                const float hi = std::max({m, n, s, e, w}), lo = std::min({m, n, s, e, w});
-                candidates[size_t(count)] = x;
-                count += int64_t(!(hi - lo < std::max(1.0f / 32, hi / 8))) & int64_t(!skipRow || !skipRow[x]);
-            }
+            const int64_t count = postCandidates(row, above, below, skipRow, W, candidates.data());
             for (int64_t c = 0; c < count; ++c) {
                 const int64_t x = candidates[size_t(c)];
                 const float m = L(x, y), n = L(x, y + 1), s = L(x, y - 1), e = L(x + 1, y), w = L(x - 1, y);
@@ -292,9 +364,41 @@ void postAntiAlias(const Image& in, const std::vector<uint8_t>& skip, Image& out
                 const float sub2 = (-2 * sub1 + 3) * sub1 * sub1;
                 offset = std::clamp(std::max(offset, sub2 * sub2 * 0.75f), 0.0f, 1.0f);
                 const Vec3f across = isHorizontal ? C(x, y + side) : C(x + side, y);
-                out.at(x, y) = in.at(x, y) * (1 - offset) + across * offset;
+                write(y0, x, y, in.at(x, y) * (1 - offset) + across * offset);
             }
         }
+    });
+}
+
+} // namespace
+
+void postAntiAlias(const Image& in, const std::vector<uint8_t>& skip, Image& out, std::vector<float>& luma,
+                   bool lumaGiven) {
+    const int64_t W = in.width, H = in.height;
+    if (W < 3 || H < 3) return;
+    if (!lumaGiven) {
+        luma.resize(in.pixels.size());
+        parallelFor(0, H, 64, [&](int64_t y0, int64_t y1) {
+            for (std::size_t i = size_t(y0 * W); i < size_t(y1 * W); ++i) luma[i] = lumaOf(in.pixels[i]);
+        });
+    }
+    postAntiAliasRows(in, skip, luma,
+                      [&](int64_t, int64_t x, int64_t y, const Vec3f& v) { out.at(x, y) = v; });
+}
+
+void postAntiAliasInPlace(Image& image, const std::vector<uint8_t>& skip, const std::vector<float>& luma,
+                          std::vector<std::vector<std::pair<std::size_t, Vec3f>>>& blends) {
+    const int64_t W = image.width, H = image.height;
+    if (W < 3 || H < 3) return;
+    // Each band of 16 rows keeps its blends until every band has read its neighbours' pixels.
+    blends.resize(size_t((H + 15) / 16));
+    for (auto& b : blends) b.clear();
+    postAntiAliasRows(image, skip, luma, [&](int64_t y0, int64_t x, int64_t y, const Vec3f& v) {
+        blends[size_t(y0 / 16)].push_back({size_t(y * W + x), v});
+    });
+    parallelFor(0, int64_t(blends.size()), 1, [&](int64_t b0, int64_t b1) {
+        for (int64_t b = b0; b < b1; ++b)
+            for (const auto& [i, v] : blends[size_t(b)]) image.pixels[i] = v;
     });
 }
 

@@ -3,11 +3,14 @@
 // filmic tone map (see render.hpp).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "render/frame_state.hpp"
@@ -31,8 +34,22 @@ inline constexpr float kRefineContrast = 1.0f / 32;
 /// -1 without adaptive anti-aliasing (frame.adaptive 1: nothing to mark).
 int64_t markRefinedCells(FrameState& frame);
 
+/// renderGBuffer (voxfx/gbuffer.hpp) into frame.gbuffer with camera `camera`, then what
+/// markRefinedCells does, each tile of the rasterizer's cells marked as soon as its rows are done
+/// (its samples still in the cache): the same G-buffer, marks and count.
+int64_t renderGBufferAndMark(FrameState& frame, const Frame& camera, Progress* progress);
+
+/// renderGBuffer (voxfx/gbuffer.hpp) in tiles of a multiple of `rowAlign` rows, calling
+/// rowsDone(y0, y1) on a tile's thread once its rows [y0, y1) hold their final values (every row of
+/// the frame once, in some order; the whole frame once when nothing is drawn). The same G-buffer.
+void renderGBufferTiles(const SceneGeometry& geometry, const Frame& camera, GBuffer& out, int64_t rowAlign,
+                        Progress* progress, const std::function<void(int64_t, int64_t)>& rowsDone);
+
 /// The index of cell (cx, cy)'s representative sample (adaptive / 2, adaptive / 2).
-std::size_t representativeSample(const FrameState& frame, int64_t cx, int64_t cy);
+inline std::size_t representativeSample(const FrameState& frame, int64_t cx, int64_t cy) {
+    const int a = frame.adaptive;
+    return std::size_t((cy * a + a / 2) * frame.width + cx * a + a / 2);
+}
 
 inline constexpr std::size_t kNoSample = ~std::size_t(0);
 
@@ -41,7 +58,19 @@ inline constexpr std::size_t kNoSample = ~std::size_t(0);
 /// edge cell's sample of another triangle than its representative's only where no neighbour shows
 /// it: elsewhere the neighbour's shading, a cell away, stands for it (shading varies little over a
 /// cell; what anti-aliasing needs at an edge is which surface covers each sample).
-std::size_t neighbourShowing(const FrameState& frame, int64_t cx, int64_t cy, uint32_t triangle);
+inline std::size_t neighbourShowing(const FrameState& frame, int64_t cx, int64_t cy, uint32_t triangle) {
+    const int a = frame.adaptive;
+    const int64_t cw = frame.width / a, ch = frame.height / a;
+    // The four sides first, then the corners.
+    constexpr int kX[8] = {-1, 1, 0, 0, -1, 1, -1, 1}, kY[8] = {0, 0, -1, 1, -1, -1, 1, 1};
+    for (int k = 0; k < 8; ++k) {
+        const int64_t nx = cx + kX[k], ny = cy + kY[k];
+        if (nx < 0 || ny < 0 || nx >= cw || ny >= ch) continue;
+        const std::size_t r = representativeSample(frame, nx, ny);
+        if (frame.gbuffer.triangle[r] == triangle) return r;
+    }
+    return kNoSample;
+}
 
 /// The perceptual luma (gamma 2, of values clamped to [0, 1]) of linear radiance `c` as the image
 /// shows it, after the output transform `t`.
@@ -115,8 +144,30 @@ int rookColumn(int s, int dy);
 /// `skip` is empty or one byte per pixel (row-major). Deterministic; rows in parallel.
 Image postAntiAlias(const Image& image, const std::vector<uint8_t>& skip);
 /// The same into `out`, which holds `image`'s pixels on entry (those it does not blend stay);
-/// `luma` is scratch memory (reused between frames).
-void postAntiAlias(const Image& image, const std::vector<uint8_t>& skip, Image& out,
-                   std::vector<float>& luma);
+/// `luma` is scratch memory (reused between frames), or with `lumaGiven` holds postLuma of every
+/// pixel of `image` already (the resolve pass makes it as it writes them).
+void postAntiAlias(const Image& image, const std::vector<uint8_t>& skip, Image& out, std::vector<float>& luma,
+                   bool lumaGiven);
+/// The same over `image` itself, `luma` holding postLuma of each of its pixels: the blended pixels
+/// are kept in `blends` (scratch, reused between frames) until every pixel has been read, then
+/// written (the same image as postAntiAlias into a copy).
+void postAntiAliasInPlace(Image& image, const std::vector<uint8_t>& skip, const std::vector<float>& luma,
+                          std::vector<std::vector<std::pair<std::size_t, Vec3f>>>& blends);
+
+/// The post-process's first test on one row of lumas W wide (`row`, and `above` and `below`, the
+/// rows next to it, each the row itself at the image's top or bottom): lists into `out` (W entries),
+/// in increasing x, the pixels where max - min of the luma and its four neighbours' (a neighbour past
+/// the row's end: the pixel at the end) is not below max(1/32, max / 8) and `skipRow` (null: none)
+/// is 0. A pixel with a NaN among those lumas may be listed whatever the test says (postAntiAlias
+/// tests each listed pixel's contrast again). Returns the count.
+int64_t postCandidates(const float* row, const float* above, const float* below, const uint8_t* skipRow,
+                       int64_t W, int64_t* out);
+
+/// The post-process's luma of a pixel: perceptual (gamma 2), of values clamped to [0, 1].
+inline float postLuma(const Vec3f& c) {
+    const float r = std::clamp(c.x, 0.0f, 1.0f), g = std::clamp(c.y, 0.0f, 1.0f),
+                b = std::clamp(c.z, 0.0f, 1.0f);
+    return std::sqrt(0.299f * r + 0.587f * g + 0.114f * b); // perceptual (gamma 2) luma
+}
 
 } // namespace voxfx::detail

@@ -163,9 +163,9 @@ struct RenderCacheData {
         ScreenSpaceOcclusionScratch scratch;
     } screen;
     struct Resolve {
-        Image filtered; ///< the box-filtered image before the post-process
         std::vector<uint8_t> refined, skip, rows;
-        std::vector<float> luma;
+        std::vector<float> luma; ///< the post-process's, of the box-filtered image
+        std::vector<std::vector<std::pair<std::size_t, Vec3f>>> blends; ///< the post-process's, per band
     } resolve;
 };
 

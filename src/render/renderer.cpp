@@ -56,9 +56,10 @@ void flattenPass(FrameState& f, Progress*) {
 }
 
 void gbufferPass(FrameState& f, Progress* progress) {
-    renderGBuffer(f.geometry, cameraFrame(f.camera, f.width, f.height), f.gbuffer, progress);
     // Adaptive anti-aliasing counts the covered samples as it marks the cells to refine.
-    if ((f.result.coveredPixels = detail::markRefinedCells(f)) >= 0) return;
+    if ((f.result.coveredPixels =
+             detail::renderGBufferAndMark(f, cameraFrame(f.camera, f.width, f.height), progress)) >= 0)
+        return;
     const std::vector<uint32_t>& tri = f.gbuffer.triangle;
     f.result.coveredPixels = parallelReduce(
         0, int64_t(tri.size()), int64_t(1) << 16, int64_t(0),

@@ -2,6 +2,7 @@
 // image.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "render/antialias.hpp"
@@ -25,15 +26,25 @@ Vec3f toneMapped(const Vec3f& c, ToneMap t) {
 // all a x a of a refined cell; the mean of its N-rooks samples (glass inside), or its one
 // representative sample, a x a times, elsewhere (adaptive anti-aliasing left the others unshaded).
 // Without a tone map (`t` null): the linear sum.
-Vec3f cellSum(const FrameState& f, int64_t cx, int64_t cy, const ToneMap* t, float scale) {
+[[gnu::always_inline]] inline Vec3f cellSum(const FrameState& f, int64_t cx, int64_t cy, const ToneMap* t,
+                                            float scale) {
     const int a = f.adaptive;
     const int64_t W = f.width, sx = cx * a, sy = cy * a;
     const uint8_t kind = f.refined.empty() ? kEveryRefinedSample : f.refined[size_t(cy * (W / a) + cx)];
     auto out = [&](const Vec3f& c) { return t ? toneMapped(c * scale, *t) : c * scale; };
     Vec3f sum;
     if (kind == kEveryRefinedSample) {
+        // A sample with the same shading as the one before it (the shading pass copies a shading
+        // to the samples showing its triangle) reuses its transform: the same terms summed.
+        const Vec3f* last = nullptr;
+        Vec3f mapped;
         for (int dy = 0; dy < a; ++dy)
-            for (int dx = 0; dx < a; ++dx) sum += out(f.shaded[size_t((sy + dy) * W + sx + dx)]);
+            for (int dx = 0; dx < a; ++dx) {
+                const Vec3f& c = f.shaded[size_t((sy + dy) * W + sx + dx)];
+                if (!last || std::memcmp(&c, last, sizeof(Vec3f)) != 0) mapped = out(c);
+                last = &c;
+                sum += mapped;
+            }
         return sum;
     }
     if (kind == kRookSamples) {
@@ -77,13 +88,9 @@ void resolvePass(FrameState& f, Progress*) {
     RenderResult& r = f.result;
     RenderCacheData::Resolve& scratch = f.cache.resolve;
     const bool post = o.antiAliasing == AntiAliasing::Post || o.antiAliasing == AntiAliasing::Full;
-    // The box-filtered image: the result, or (post-process) its input, kept between frames.
+    // The box-filtered image, which the post-process then blends in place.
     r.image = Image(w, h);
-    Image& filtered = post ? scratch.filtered : r.image;
-    if (post) {
-        filtered.width = w, filtered.height = h;
-        filtered.pixels.resize(size_t(w * h));
-    }
+    Image& filtered = r.image;
     // Per output pixel (image rows): 1 where a cell of it was shaded at every sample.
     std::vector<uint8_t>& refined = scratch.refined;
     refined.resize(size_t(w * h));
@@ -92,9 +99,11 @@ void resolvePass(FrameState& f, Progress*) {
     const ToneMap toneMap = toneMapForImage(o.toneMap, {});
     const int cells = o.supersample; // cells of a x a samples per pixel side
     const float scale = f.autoExposure ? autoExposureScale(f) : 1.0f;
+    std::vector<float>& luma = scratch.luma;
+    if (post) luma.resize(size_t(w * h));
     r.exposure = f.autoExposure ? scale : o.exposure;
     parallelFor(0, h, 16, [&](int64_t y0, int64_t y1) {
-        for (int64_t y = y0; y < y1; ++y)
+        for (int64_t y = y0; y < y1; ++y) {
             for (int64_t x = 0; x < w; ++x) {
                 Vec3f sum;
                 uint8_t every = 0;
@@ -107,9 +116,13 @@ void resolvePass(FrameState& f, Progress*) {
                     }
                 const Vec3f c = sum * norm;
                 filtered.at(x, h - 1 - y) = c;
-                if (post) r.image.at(x, h - 1 - y) = c;
                 refined[size_t((h - 1 - y) * w + x)] = every;
             }
+            // The post-process's luma of the row, made here while it is in the cache.
+            if (post)
+                for (std::size_t i = size_t((h - 1 - y) * w), e = i + size_t(w); i < e; ++i)
+                    luma[i] = postLuma(filtered.pixels[i]);
+        }
     });
     for (const uint8_t v : refined) r.refinedPixels += v;
     if (post) {
@@ -138,7 +151,7 @@ void resolvePass(FrameState& f, Progress*) {
                 }
             });
         }
-        postAntiAlias(filtered, skip, r.image, scratch.luma);
+        postAntiAliasInPlace(r.image, skip, luma, scratch.blends);
     }
     if (f.glassSamples.empty()) return;
     r.glassMask.assign(size_t(w * h), 0);

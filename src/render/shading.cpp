@@ -10,6 +10,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <mutex>
 
 #include "render/antialias.hpp"
@@ -354,6 +355,14 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
     const auto shadeRound = [&](int round) {
         parallelFor(0, blocks, 1, [&](int64_t b0, int64_t b1) {
             std::array<std::size_t, 64> samples;
+            // Round 1's work in a block: the samples to shade and the copies (to, from).
+            struct Shade {
+                std::size_t sample;
+                uint32_t triangle;
+                float occlusion;
+            };
+            std::vector<Shade> shades;
+            std::vector<std::pair<std::size_t, std::size_t>> copies;
             for (int64_t b = b0; b < b1 && !steps.cancelled(); ++b) {
                 for (int64_t cy = b * kRows; cy < std::min(ch, (b + 1) * kRows); ++cy)
                     for (int64_t cx = 0; cx < cw; ++cx) {
@@ -374,11 +383,43 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                             shadeRepresentative(frame, cellOcclusion, cx, cy, rep);
                             continue;
                         }
-                        // A cell shaded once has its representative only, done in round 0.
-                        if (frame.refined[size_t(cy * cw + cx)] == 0) continue;
-                        const int n = cellSamples(frame, cx, cy, samples);
+                        // A cell shaded once has its representative only, done in round 0 (eight
+                        // such cells at a time skipped: most are).
+                        const uint8_t* refined = &frame.refined[size_t(cy * cw)];
+                        if (cx + 8 <= cw) {
+                            uint64_t eight;
+                            std::memcpy(&eight, refined + cx, 8);
+                            if (eight == 0) {
+                                cx += 7;
+                                continue;
+                            }
+                        }
+                        if (refined[cx] == 0) continue;
                         const float occlusion =
                             screenOcclusion.empty() ? 1.0f : screenOcclusion[size_t(cy * cw + cx)];
+                        // Its samples other than the representative, in cellSamples' order.
+                        int n;
+                        if (a == 2 && refined[cx] == kEveryRefinedSample) {
+                            const std::size_t base = size_t(2 * cy * W + 2 * cx);
+                            samples[0] = base + size_t(W) + 1, samples[1] = base + 1,
+                            samples[2] = base + size_t(W), samples[3] = base;
+                            n = 4;
+                        } else {
+                            n = cellSamples(frame, cx, cy, samples);
+                        }
+                        // The neighbours' representatives, in neighbourShowing's order, where all
+                        // eight lie inside the image (2 x 2 cells).
+                        const bool inside = a == 2 && cx > 0 && cy > 0 && cx + 1 < cw && cy + 1 < ch;
+                        const auto showing = [&](uint32_t tri) {
+                            if (!inside) return neighbourShowing(frame, cx, cy, tri);
+                            const std::size_t r = samples[0], row = size_t(2 * W);
+                            const std::size_t around[8] = {r - 2,       r + 2,       r - row,
+                                                           r + row,     r - row - 2, r - row + 2,
+                                                           r + row - 2, r + row + 2};
+                            for (const std::size_t k : around)
+                                if (gbuffer.triangle[k] == tri) return k;
+                            return kNoSample;
+                        };
                         for (int k = 1; k < n; ++k) {
                             const std::size_t i = samples[size_t(k)];
                             const uint32_t tri = gbuffer.triangle[i];
@@ -387,13 +428,38 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                             int same = 0;
                             while (same < k && gbuffer.triangle[samples[size_t(same)]] != tri) ++same;
                             if (same < k) {
-                                out[i] = out[samples[size_t(same)]];
+                                copies.push_back({i, samples[size_t(same)]});
                                 continue;
                             }
-                            const std::size_t proxy = neighbourShowing(frame, cx, cy, tri);
-                            out[i] = proxy != kNoSample ? out[proxy] : shadeSample(frame, i, occlusion);
+                            const std::size_t proxy = showing(tri);
+                            if (proxy != kNoSample) {
+                                copies.push_back({i, proxy});
+                                continue;
+                            }
+                            copies.push_back({i, i}); // its own shading, below
+                            shades.push_back({i, tri, occlusion});
                         }
                     }
+                if (round == 1) {
+                    // The block's samples that take a shading of their own, their triangles' bases
+                    // fetched a few ahead (edge samples' triangles are mostly shown by no
+                    // representative: cold in the cache); then the copies in the order they were
+                    // listed (a copy's source is a representative, a sample shaded here or one
+                    // copied earlier in its cell). The same values as shading them in turn.
+                    for (std::size_t k = 0; k < shades.size(); ++k) {
+                        if (k + kAhead < shades.size() && shades[k + kAhead].triangle != GBuffer::kNone) {
+                            const char* basis = reinterpret_cast<const char*>(
+                                &frame.triangleBases[shades[k + kAhead].triangle]);
+                            __builtin_prefetch(basis);
+                            __builtin_prefetch(basis + sizeof(TriangleBasis) - 1);
+                        }
+                        out[shades[k].sample] = shadeSample(frame, shades[k].sample, shades[k].occlusion);
+                    }
+                    for (const auto& [to, from] : copies)
+                        if (to != from) out[to] = out[from];
+                    shades.clear();
+                    copies.clear();
+                }
                 steps.step();
             }
         });
