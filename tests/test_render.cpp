@@ -89,23 +89,38 @@ struct NearestOneByOne {
     Sink tile(const Tile&) const { return {this}; }
 };
 
-TEST(RenderTest, GBufferOfAForestAtTwiceTheResolutionIsTheNearestFragmentOfEachSample) {
-    // What adaptive anti-aliasing rasterizes (2 x 2 samples per pixel) over thousands of leaves at
-    // every depth: renderGBuffer (four neighbours of a row per depth test) against the nearest
-    // fragment kept one at a time, bit for bit.
+// What adaptive anti-aliasing rasterizes (2 x 2 samples per pixel of 160 x 90) over thousands of
+// leaves at every depth: a forest of 16 trees of 300 leaves, and the nearest fragment of each sample
+// kept one at a time (NearestOneByOne), the reference for the G-buffer.
+struct ForestSamples {
+    SceneGeometry geo;
+    Frame f;
+    std::vector<float> depth;
+    std::vector<uint32_t> triangle;
+};
+ForestSamples forestNearestOneByOne() {
     demo::ForestOptions fo;
     fo.trees = 16;
     fo.leavesPerTree = 300;
     const Scene scene = demo::makeForestScene(fo);
-    const SceneGeometry geo = flattenScene(scene);
-    const Frame f = cameraFrame(sceneCamera(scene, 0, 16.0 / 9), 2 * 160, 2 * 90);
-    const GBuffer g = renderGBuffer(geo, f);
-    std::vector<float> depth(size_t(f.columnCount()), std::numeric_limits<float>::infinity());
-    std::vector<uint32_t> triangle(depth.size(), GBuffer::kNone);
-    NearestOneByOne reference{f.width(), f.nearDepth(), &depth, &triangle};
-    MeshView drawn = geo.mesh.view();
-    drawn.triangleCount = geo.drawnTriangles;
-    rasterize(f, drawn, RasterOptions{}, reference);
+    ForestSamples r{
+        flattenScene(scene), cameraFrame(sceneCamera(scene, 0, 16.0 / 9), 2 * 160, 2 * 90), {}, {}};
+    r.depth.assign(size_t(r.f.columnCount()), std::numeric_limits<float>::infinity());
+    r.triangle.assign(r.depth.size(), GBuffer::kNone);
+    NearestOneByOne reference{r.f.width(), r.f.nearDepth(), &r.depth, &r.triangle};
+    MeshView drawn = r.geo.mesh.view();
+    drawn.triangleCount = r.geo.drawnTriangles;
+    rasterize(r.f, drawn, RasterOptions{}, reference);
+    return r;
+}
+
+TEST(RenderTest, GBufferOfAForestAtTwiceTheResolutionIsTheNearestFragmentOfEachSample) {
+    // renderGBuffer (four neighbours of a row per depth test) against the nearest fragment kept one
+    // at a time, bit for bit.
+    const ForestSamples forest = forestNearestOneByOne();
+    const std::vector<float>& depth = forest.depth;
+    const std::vector<uint32_t>& triangle = forest.triangle;
+    const GBuffer g = renderGBuffer(forest.geo, forest.f);
     int64_t covered = 0, mismatches = 0;
     for (std::size_t i = 0; i < depth.size(); ++i) {
         covered += triangle[i] != GBuffer::kNone;
@@ -120,19 +135,12 @@ TEST(RenderTest, GBufferInTilesOfWholeCellRowsIsTheSameAndGivesEachRowOnceItIsFi
     // are done): against the nearest fragment kept one at a time, bit for bit, with tiles of a
     // multiple of 2 rows and of 3; the callback gets every row once, tiles start at multiples of the
     // alignment, and the rows it is given already hold their final values.
-    demo::ForestOptions fo;
-    fo.trees = 16;
-    fo.leavesPerTree = 300;
-    const Scene scene = demo::makeForestScene(fo);
-    const SceneGeometry geo = flattenScene(scene);
-    const Frame f = cameraFrame(sceneCamera(scene, 0, 16.0 / 9), 2 * 160, 2 * 90);
+    const ForestSamples forest = forestNearestOneByOne();
+    const SceneGeometry& geo = forest.geo;
+    const Frame& f = forest.f;
+    const std::vector<float>& depth = forest.depth;
+    const std::vector<uint32_t>& triangle = forest.triangle;
     const int64_t W = f.width(), H = f.height();
-    std::vector<float> depth(size_t(f.columnCount()), std::numeric_limits<float>::infinity());
-    std::vector<uint32_t> triangle(depth.size(), GBuffer::kNone);
-    NearestOneByOne reference{W, f.nearDepth(), &depth, &triangle};
-    MeshView drawn = geo.mesh.view();
-    drawn.triangleCount = geo.drawnTriangles;
-    rasterize(f, drawn, RasterOptions{}, reference);
     const auto same = [&](const GBuffer& g, std::size_t i) {
         return g.triangle[i] == triangle[i] && std::memcmp(&g.depth[i], &depth[i], sizeof(float)) == 0;
     };

@@ -224,18 +224,30 @@ TEST(RenderImageTest, AdaptiveAntiAliasingOfAForestIsCloseToBruteForce) {
     compareWithBruteForce("forest", demo::makeForestScene(fo), 0.65);
 }
 
+// A forest of 16 trees of 300 leaves (edges everywhere) and its default options at 160 x 90.
+struct SmallForest {
+    Scene scene;
+    RenderOptions o;
+};
+SmallForest smallForest() {
+    demo::ForestOptions fo;
+    fo.trees = 16;
+    fo.leavesPerTree = 300;
+    SmallForest f{demo::makeForestScene(fo), {}};
+    f.o = renderOptionsFor(f.scene);
+    f.o.width = 160, f.o.height = 90;
+    return f;
+}
+
 // Which cells adaptive anti-aliasing shades at every sample, against its rules applied here by brute
 // force to a G-buffer of 2 x 2 samples per pixel: a cell whose samples show the background and
 // geometry, two meshes or materials, faces more than 30 degrees apart (either side), or depths more
 // than 2 % apart (of the first sample's triangle's and the others'). The render's count of refined
 // pixels and of covered samples must be these, exactly.
 TEST(RenderImageTest, TheCellsAdaptiveAntiAliasingRefinesFollowItsRules) {
-    demo::ForestOptions fo;
-    fo.trees = 16;
-    fo.leavesPerTree = 300;
-    const Scene scene = demo::makeForestScene(fo);
-    RenderOptions o = renderOptionsFor(scene);
-    o.width = 160, o.height = 90;
+    SmallForest forest = smallForest();
+    const Scene& scene = forest.scene;
+    RenderOptions& o = forest.o;
     o.ambientOcclusion = Occlusion::Off;
     const Camera camera = sceneCamera(scene, 0, double(o.width) / double(o.height));
     const RenderResult r = render(scene, camera, o);
@@ -389,12 +401,9 @@ TEST(RenderImageTest, AntiAliasingIsDeterministicForEveryThreadCount) {
 // The default anti-aliasing over a forest (every kind of edge cell: samples shaded, copied from their
 // cell and from neighbours): the same image whatever the thread count.
 TEST(RenderImageTest, AdaptiveAntiAliasingOfAForestIsTheSameOnOneTwoAndThreeThreads) {
-    demo::ForestOptions fo;
-    fo.trees = 16;
-    fo.leavesPerTree = 300;
-    const Scene scene = demo::makeForestScene(fo);
-    RenderOptions o = renderOptionsFor(scene);
-    o.width = 160, o.height = 90;
+    SmallForest forest = smallForest();
+    const Scene& scene = forest.scene;
+    RenderOptions& o = forest.o;
     const Camera camera = sceneCamera(scene, 0, double(o.width) / double(o.height));
     o.threads = 1;
     const RenderResult one = render(scene, camera, o);

@@ -741,6 +741,49 @@ TEST(VolumeRefinementTest, ACtLikeVolumeStaysWithinTheStatedShownLumaOfEveryCell
     EXPECT_LT(worst, 0.06);
 }
 
+// The same frame of s lit per piece (detail::setVolumePrelit(false), switched back on whatever
+// happens: the switch is process-wide) and pre-lit, and their difference in shown luma (filmic) per
+// pixel: mean and worst over the image, the pixels over 1/255, and mean and worst over the pixels
+// whose camera ray (eye, unit direction) `inRegion` picks.
+struct PrelitAgainstPerPiece {
+    RenderResult prelit, perPiece;
+    double mean = 0, worst = 0, regionMean = 0, regionWorst = 0;
+    int64_t over = 0, region = 0;
+};
+template <class Region>
+PrelitAgainstPerPiece prelitAgainstPerPiece(const Scene& s, const RenderOptions& o, const Region& inRegion) {
+    PrelitAgainstPerPiece r;
+    {
+        struct Restore {
+            ~Restore() { detail::setVolumePrelit(true); }
+        } restore;
+        detail::setVolumePrelit(false);
+        r.perPiece = render(s, s.cameras[0], o);
+    }
+    r.prelit = render(s, s.cameras[0], o);
+    const Frame cam = cameraFrame(s.cameras[0], o.width, o.height);
+    double sum = 0, regionSum = 0;
+    for (int64_t y = 0; y < o.height; ++y)
+        for (int64_t x = 0; x < o.width; ++x) {
+            const double d =
+                std::abs(detail::shownLuma(r.prelit.image.at(x, o.height - 1 - y), ToneMap::Filmic) -
+                         detail::shownLuma(r.perPiece.image.at(x, o.height - 1 - y), ToneMap::Filmic));
+            sum += d, r.worst = std::max(r.worst, d), r.over += d > 1.0 / 255;
+            const Vec3d eye = cam.eye(),
+                        dir = normalize(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - eye);
+            if (inRegion(eye, dir)) regionSum += d, r.regionWorst = std::max(r.regionWorst, d), ++r.region;
+        }
+    r.mean = sum / double(r.prelit.image.pixels.size());
+    r.regionMean = r.region > 0 ? regionSum / double(r.region) : 0;
+    return r;
+}
+
+// The CT-like head's pixels: rays passing within its radius of its centre.
+bool rayThroughHead(const Vec3d& eye, const Vec3d& dir) {
+    const Vec3d c = kHeadCentre - eye;
+    return length(c - dir * dot(c, dir)) < kHeadRadius;
+}
+
 // The pre-lit volume (the light x the deep shadow map's lookup x the volume's own transmittance over
 // the lookup's step, made at the voxel corners and interpolated) against the same frame lit per piece
 // (detail::setVolumePrelit(false): the light, the map's grid and the own transmittance at each lit
@@ -753,42 +796,18 @@ TEST(VolumePrelitTest, ACtLikeVolumeLitFromThePrelitVolumeStaysWithinTheStatedSh
     const Scene s = ctLikeScene();
     const RenderOptions o = ctLikeOptions(0, AntiAliasing::Off);
     ASSERT_TRUE(detail::volumePrelit()); // the default
-    RenderResult perPiece;
-    {
-        struct Restore { // the switch is process-wide: back on whatever happens
-            ~Restore() { detail::setVolumePrelit(true); }
-        } restore;
-        detail::setVolumePrelit(false);
-        perPiece = render(s, s.cameras[0], o);
-    }
-    const RenderResult prelit = render(s, s.cameras[0], o);
-    const Frame cam = cameraFrame(s.cameras[0], o.width, o.height);
-    double sum = 0, worst = 0, headSum = 0;
-    int64_t over = 0, head = 0;
-    for (int64_t y = 0; y < o.height; ++y)
-        for (int64_t x = 0; x < o.width; ++x) {
-            const double d =
-                std::abs(detail::shownLuma(prelit.image.at(x, o.height - 1 - y), ToneMap::Filmic) -
-                         detail::shownLuma(perPiece.image.at(x, o.height - 1 - y), ToneMap::Filmic));
-            sum += d, worst = std::max(worst, d), over += d > 1.0 / 255;
-            // The head's pixels: rays passing within its radius of its centre.
-            const Vec3d eye = cam.eye(),
-                        dir = normalize(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - eye);
-            const Vec3d c = kHeadCentre - eye;
-            if (length(c - dir * dot(c, dir)) < kHeadRadius) headSum += d, ++head;
-        }
-    const double mean = sum / double(prelit.image.pixels.size()), headMean = headSum / double(head);
+    const PrelitAgainstPerPiece r = prelitAgainstPerPiece(s, o, rayThroughHead);
     std::printf(
         "CT-like volume, pre-lit against per-piece lighting: shown luma mean %.5f (head, %lld pixels: "
         "%.5f), worst %.4f, %lld pixels over 1/255\n",
-        mean, (long long)head, headMean, worst, (long long)over);
-    EXPECT_GT(head, 2000);
-    EXPECT_GT(worst, 0.0); // the pre-lit path was taken
+        r.mean, (long long)r.region, r.regionMean, r.worst, (long long)r.over);
+    EXPECT_GT(r.region, 2000);
+    EXPECT_GT(r.worst, 0.0); // the pre-lit path was taken
     // Measured: mean 0.00005, over the head 0.00046, worst 0.022 (118 pixels over 1/255).
-    EXPECT_LT(mean, 0.0002);
-    EXPECT_LT(headMean, 0.0015);
-    EXPECT_LT(worst, 0.05);
-    EXPECT_EQ(prelit.volumeSamples, perPiece.volumeSamples);
+    EXPECT_LT(r.mean, 0.0002);
+    EXPECT_LT(r.regionMean, 0.0015);
+    EXPECT_LT(r.worst, 0.05);
+    EXPECT_EQ(r.prelit.volumeSamples, r.perPiece.volumeSamples);
 }
 
 // Pieces inside two volumes (the DSM demo's skull inside its smoke): lit from the pre-lit grids, the
@@ -808,42 +827,21 @@ TEST(VolumePrelitTest, PiecesInsideTwoVolumesStayWithinTheStatedShownLumaOfPerPi
     vs->addVolumeBox(smoke, dsmrSmokeTransfer(), 0.1, "smoke");
     s.volumeScene = vs;
     const RenderOptions o = ctLikeOptions(0, AntiAliasing::Off);
-    RenderResult perPiece;
-    {
-        struct Restore {
-            ~Restore() { detail::setVolumePrelit(true); }
-        } restore;
-        detail::setVolumePrelit(false);
-        perPiece = render(s, s.cameras[0], o);
-    }
-    const RenderResult prelit = render(s, s.cameras[0], o);
-    const Frame cam = cameraFrame(s.cameras[0], o.width, o.height);
     const Box3d both{{0.0, 0.6, -0.8},
                      {1.0, 1.8, 0.4}}; // the head's box [-1, 1] x [0, 2] x [-1, 1] and the smoke's
-    double sum = 0, worst = 0, bothSum = 0, bothWorst = 0;
-    int64_t crossing = 0;
-    for (int64_t y = 0; y < o.height; ++y)
-        for (int64_t x = 0; x < o.width; ++x) {
-            const double d =
-                std::abs(detail::shownLuma(prelit.image.at(x, o.height - 1 - y), ToneMap::Filmic) -
-                         detail::shownLuma(perPiece.image.at(x, o.height - 1 - y), ToneMap::Filmic));
-            sum += d, worst = std::max(worst, d);
-            const Vec3d eye = cam.eye(), p = cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0});
-            if (rayBoxGap(eye, p - eye, both) < 0)
-                bothSum += d, bothWorst = std::max(bothWorst, d), ++crossing;
-        }
-    const double mean = sum / double(prelit.image.pixels.size()), bothMean = bothSum / double(crossing);
+    const PrelitAgainstPerPiece r = prelitAgainstPerPiece(
+        s, o, [&](const Vec3d& eye, const Vec3d& dir) { return rayBoxGap(eye, dir, both) < 0; });
     std::printf("head and smoke, pre-lit against per-piece lighting: shown luma mean %.5f, worst %.4f; over "
                 "the %lld pixels crossing both boxes mean %.5f, worst %.4f\n",
-                mean, worst, (long long)crossing, bothMean, bothWorst);
-    EXPECT_GT(crossing, 2000);
-    EXPECT_GT(bothWorst, 0.0); // the pre-lit path was taken there
+                r.mean, r.worst, (long long)r.region, r.regionMean, r.regionWorst);
+    EXPECT_GT(r.region, 2000);
+    EXPECT_GT(r.regionWorst, 0.0); // the pre-lit path was taken there
     // Measured: mean 0.00004, worst 0.021; crossing both boxes mean 0.00011, worst 0.020 (without the
     // second volume's own transmittance, 0.00041 there).
-    EXPECT_LT(mean, 0.0002);
-    EXPECT_LT(bothMean, 0.00025);
-    EXPECT_LT(worst, 0.05);
-    EXPECT_EQ(prelit.volumeSamples, perPiece.volumeSamples);
+    EXPECT_LT(r.mean, 0.0002);
+    EXPECT_LT(r.regionMean, 0.00025);
+    EXPECT_LT(r.worst, 0.05);
+    EXPECT_EQ(r.prelit.volumeSamples, r.perPiece.volumeSamples);
 }
 
 // A second volume over the whole head whose matter is a small ball of fog in a corner of its box:
@@ -866,38 +864,15 @@ TEST(VolumePrelitTest, PiecesInAnotherVolumesEmptyBricksTakeThePrelitLight) {
     vs->addVolumeBox(fog, dsmrSmokeTransfer(), 0.1, "fog");
     s.volumeScene = vs;
     const RenderOptions o = ctLikeOptions(0, AntiAliasing::Off);
-    RenderResult perPiece;
-    {
-        struct Restore {
-            ~Restore() { detail::setVolumePrelit(true); }
-        } restore;
-        detail::setVolumePrelit(false);
-        perPiece = render(s, s.cameras[0], o);
-    }
-    const RenderResult prelit = render(s, s.cameras[0], o);
-    const Frame cam = cameraFrame(s.cameras[0], o.width, o.height);
-    double sum = 0, worst = 0, headSum = 0;
-    int64_t head = 0;
-    for (int64_t y = 0; y < o.height; ++y)
-        for (int64_t x = 0; x < o.width; ++x) {
-            const double d =
-                std::abs(detail::shownLuma(prelit.image.at(x, o.height - 1 - y), ToneMap::Filmic) -
-                         detail::shownLuma(perPiece.image.at(x, o.height - 1 - y), ToneMap::Filmic));
-            sum += d, worst = std::max(worst, d);
-            const Vec3d eye = cam.eye(),
-                        dir = normalize(cam.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 1.0}) - eye);
-            const Vec3d c = kHeadCentre - eye;
-            if (length(c - dir * dot(c, dir)) < kHeadRadius) headSum += d, ++head;
-        }
-    const double mean = sum / double(prelit.image.pixels.size()), headMean = headSum / double(head);
+    const PrelitAgainstPerPiece r = prelitAgainstPerPiece(s, o, rayThroughHead);
     std::printf("head inside a mostly empty fog volume, pre-lit against per-piece lighting: shown luma mean "
                 "%.5f (head, %lld pixels: %.5f), worst %.4f\n",
-                mean, (long long)head, headMean, worst);
-    EXPECT_GT(head, 2000);
-    EXPECT_GT(headMean, 0.0001); // the head's pieces were pre-lit (per piece they would match exactly)
-    EXPECT_LT(mean, 0.0002);
-    EXPECT_LT(headMean, 0.0015);
-    EXPECT_LT(worst, 0.05);
+                r.mean, (long long)r.region, r.regionMean, r.worst);
+    EXPECT_GT(r.region, 2000);
+    EXPECT_GT(r.regionMean, 0.0001); // the head's pieces were pre-lit (per piece they would match exactly)
+    EXPECT_LT(r.mean, 0.0002);
+    EXPECT_LT(r.regionMean, 0.0015);
+    EXPECT_LT(r.worst, 0.05);
 }
 
 // The volume's silhouette against what lies behind it is marched at full resolution: without
