@@ -10,6 +10,43 @@
 
 namespace voxfx {
 
+namespace {
+
+// Per block of a lattice over the volume's voxels (`count[a]` blocks along axis a, x fastest; block b
+// covers voxels b stride + from .. b stride + to along each axis, clamped to the volume): 1 where the
+// transfer function is transparent over every value between the block's smallest and largest.
+std::vector<uint8_t> transparentBlocks(const Volume& volume, const TransferFunction& transfer,
+                                       const int64_t (&count)[3], int64_t stride, int64_t from, int64_t to) {
+    const Vec3i d = volume.dims();
+    const int64_t n[3] = {d.x, d.y, d.z};
+    std::vector<uint8_t> out(std::size_t(count[0] * count[1] * count[2]), 0);
+    parallelFor(0, count[2], 1, [&](int64_t k0, int64_t k1) {
+        for (int64_t kb = k0; kb < k1; ++kb)
+            for (int64_t jb = 0; jb < count[1]; ++jb)
+                for (int64_t ib = 0; ib < count[0]; ++ib) {
+                    float mn = std::numeric_limits<float>::infinity(), mx = -mn;
+                    const int64_t b[3] = {ib, jb, kb};
+                    int64_t first[3], last[3];
+                    for (int a = 0; a < 3; ++a) {
+                        first[a] = std::clamp<int64_t>(b[a] * stride + from, 0, n[a] - 1);
+                        last[a] = std::clamp<int64_t>(b[a] * stride + to, 0, n[a] - 1);
+                    }
+                    for (int64_t k = first[2]; k <= last[2]; ++k)
+                        for (int64_t j = first[1]; j <= last[1]; ++j)
+                            for (int64_t i = first[0]; i <= last[0]; ++i) {
+                                const float v = volume.at(i, j, k);
+                                mn = std::min(mn, v);
+                                mx = std::max(mx, v);
+                            }
+                    out[std::size_t(ib + count[0] * (jb + count[1] * kb))] =
+                        transfer.maxOpacity(double(mn), double(mx)) <= 0;
+                }
+    });
+    return out;
+}
+
+} // namespace
+
 EmptySpace::EmptySpace(const Volume& volume, const TransferFunction& transfer) : place_(volume.view()) {
     place_.values = nullptr;
     const Vec3i d = volume.dims();
@@ -23,52 +60,12 @@ EmptySpace::EmptySpace(const Volume& volume, const TransferFunction& transfer) :
         bricks_[0] = bricks_[1] = bricks_[2] = 0;
         return;
     }
-    const int64_t bx = bricks_[0], by = bricks_[1], bz = bricks_[2];
     // A sample in brick b (continuous voxel coordinate u in [b B, (b + 1) B]) interpolates voxels
     // floor(u - 0.5) and the next one: voxels b B - 1 .. (b + 1) B, clamped to the volume.
-    empty_.assign(std::size_t(bx * by * bz), 0);
-    parallelFor(0, bz, 1, [&](int64_t k0, int64_t k1) {
-        for (int64_t kb = k0; kb < k1; ++kb)
-            for (int64_t jb = 0; jb < by; ++jb)
-                for (int64_t ib = 0; ib < bx; ++ib) {
-                    float mn = std::numeric_limits<float>::infinity(), mx = -mn;
-                    const int64_t b[3] = {ib, jb, kb};
-                    int64_t first[3], last[3];
-                    for (int a = 0; a < 3; ++a) {
-                        first[a] = std::max<int64_t>(b[a] * kBrick - 1, 0);
-                        last[a] = std::min((b[a] + 1) * kBrick, n[a] - 1);
-                    }
-                    for (int64_t k = first[2]; k <= last[2]; ++k)
-                        for (int64_t j = first[1]; j <= last[1]; ++j)
-                            for (int64_t i = first[0]; i <= last[0]; ++i) {
-                                const float v = volume.at(i, j, k);
-                                mn = std::min(mn, v);
-                                mx = std::max(mx, v);
-                            }
-                    empty_[std::size_t(ib + bx * (jb + by * kb))] =
-                        transfer.maxOpacity(double(mn), double(mx)) <= 0;
-                }
-    });
+    empty_ = transparentBlocks(volume, transfer, bricks_, kBrick, -1, kBrick);
     // The sample lattice's cells: centres i and i + 1 (clamped) along each axis.
     for (int a = 0; a < 3; ++a) cells_[a] = std::max<int64_t>(n[a] - 1, 1);
-    const int64_t cx = cells_[0], cy = cells_[1], cz = cells_[2];
-    transparent_.assign(std::size_t(cx * cy * cz), 0);
-    parallelFor(0, cz, 4, [&](int64_t k0, int64_t k1) {
-        for (int64_t k = k0; k < k1; ++k)
-            for (int64_t j = 0; j < cy; ++j)
-                for (int64_t i = 0; i < cx; ++i) {
-                    float mn = std::numeric_limits<float>::infinity(), mx = -mn;
-                    for (int c = 0; c < 8; ++c) {
-                        const float v =
-                            volume.at(std::min(i + (c & 1), n[0] - 1), std::min(j + ((c >> 1) & 1), n[1] - 1),
-                                      std::min(k + (c >> 2), n[2] - 1));
-                        mn = std::min(mn, v);
-                        mx = std::max(mx, v);
-                    }
-                    transparent_[std::size_t(i + cx * (j + cy * k))] =
-                        transfer.maxOpacity(double(mn), double(mx)) <= 0;
-                }
-    });
+    transparent_ = transparentBlocks(volume, transfer, cells_, 1, 0, 1);
 }
 
 std::vector<EmptySpace> emptySpaceOf(const VolumeScene& scene) {
