@@ -55,9 +55,10 @@ FragmentLists FragmentLists::build(const Frame& frame, const MeshView& mesh, Pro
 }
 
 void FragmentLists::rebuild(const Frame& frame, const MeshView& mesh, Progress* progress) {
+    // A row entry keeps the column in 31 bits (RowEntry::columnFront).
+    if (frame.width() >= int64_t(1) << 31) throw Error("FragmentLists: the frame is too wide");
     width_ = frame.width();
     height_ = frame.height();
-    if (width_ >= int64_t(1) << 31) throw Error("FragmentLists: the frame is too wide");
     std::vector<std::vector<RowEntry>>& rows = rows_;
     rows.resize(std::size_t(height_));
     for (auto& row : rows) row.clear();
