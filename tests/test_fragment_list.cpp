@@ -1,8 +1,13 @@
 // Tests of fragment lists (voxfx/fragment_list.hpp): every crossing of each column kept, sorted and
 // alternating on a closed mesh against brute-force ray-triangle crossings
 // (tests/support/volume_reference.hpp), and independent of the thread count.
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -98,6 +103,82 @@ TEST(FragmentListTest, ListsRebuiltInPlaceAreThoseOfAFreshBuild) {
     expectSame(reused, FragmentLists::build(small, torus.view()));
     reused.rebuild(large, ball.view());
     expectSame(reused, FragmentLists::build(large, ball.view()));
+}
+
+// Columns of many fragments and of ties: a stack of 24 squares (two triangles each) across the
+// frame's slices, every third one twice (the same corners, so the same depths), some slanted, seen
+// along their normal. Each column's list against a brute-force one: per square, the triangle
+// whose interior holds the column's centre (centres on a diagonal skipped), at the depth where
+// the column meets the square's plane, ordered by (depth, triangle). Columns of more than 16
+// fragments (the lists' std::sort) and of fewer (their insertion sort), for one thread and all.
+TEST(FragmentListTest, ColumnsOfManyFragmentsAndTiesAreInDepthThenTriangleOrder) {
+    Mesh mesh;
+    struct Square {
+        double z0, slope; // z = z0 + slope * x over the square
+        double lo, hi;    // x and y extent
+    };
+    std::vector<Square> squares;
+    for (int k = 0; k < 24; ++k) {
+        const double z0 = 0.9 - 0.07 * k, slope = k % 4 == 1 ? 0.02 * (k % 3 - 1) : 0.0;
+        const double lo = -0.95 + 0.012 * k, hi = 0.95 - 0.009 * k;
+        for (int copy = 0; copy < (k % 3 == 0 ? 2 : 1); ++copy) {
+            squares.push_back({z0, slope, lo, hi});
+            const uint32_t b = uint32_t(mesh.positions.size());
+            for (const auto& [x, y] :
+                 std::initializer_list<std::pair<double, double>>{{lo, lo}, {hi, lo}, {hi, hi}, {lo, hi}})
+                mesh.positions.push_back(Vec3f(Vec3d{x, y, z0 + slope * x}));
+            for (const uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) mesh.indices.push_back(b + i);
+        }
+    }
+    const int64_t N = 48;
+    const Frame frame = Frame::orthographic({{-1, -1, -1}, {1, 1, 1}}, Axis::Z, N, N, 64);
+    FragmentLists one, all;
+    withThreads(1, [&] { one = FragmentLists::build(frame, mesh.view()); });
+    withThreads(0, [&] { all = FragmentLists::build(frame, mesh.view()); });
+    int64_t checked = 0, many = 0, ties = 0;
+    for (int64_t y = 0; y < N; ++y)
+        for (int64_t x = 0; x < N; ++x) {
+            const Vec3d c = frame.worldFromGrid({double(x) + 0.5, double(y) + 0.5, 0.0});
+            std::vector<std::pair<double, uint32_t>> expected; // (depth, triangle)
+            bool skip = false;
+            for (std::size_t q = 0; q < squares.size(); ++q) {
+                const Square& s = squares[q];
+                const double eps = 1e-9;
+                if (c.x < s.lo - eps || c.x > s.hi + eps || c.y < s.lo - eps || c.y > s.hi + eps) continue;
+                const double u = (c.x - s.lo) / (s.hi - s.lo), v = (c.y - s.lo) / (s.hi - s.lo);
+                if (std::abs(u - v) < 1e-6 || u < 1e-6 || v < 1e-6 || u > 1 - 1e-6 || v > 1 - 1e-6) {
+                    skip = true; // on an edge or the diagonal: the rasterizer's tie rule decides
+                    break;
+                }
+                const uint32_t triangle = uint32_t(2 * q + (u > v ? 0 : 1)); // (0,1,2) below the diagonal
+                const Vec3d p{c.x, c.y, s.z0 + s.slope * c.x};
+                expected.push_back({frame.gridFromWorld(p).z, triangle});
+            }
+            if (skip) continue;
+            std::sort(expected.begin(), expected.end(), [](const auto& a, const auto& b) {
+                return std::abs(a.first - b.first) > 1e-7 ? a.first < b.first : a.second < b.second;
+            });
+            const auto got = one.column(x, y), other = all.column(x, y);
+            ASSERT_EQ(got.size(), expected.size()) << x << ", " << y;
+            ASSERT_EQ(other.size(), got.size());
+            for (std::size_t i = 0; i < got.size(); ++i) {
+                EXPECT_NEAR(got[i].depth, expected[i].first, 1e-4) << x << ", " << y << " #" << i;
+                EXPECT_EQ(got[i].triangle, expected[i].second) << x << ", " << y << " #" << i;
+                EXPECT_EQ(other[i].depth, got[i].depth);
+                EXPECT_EQ(other[i].triangle, got[i].triangle);
+                if (i > 0) {
+                    EXPECT_TRUE(got[i - 1].depth < got[i].depth ||
+                                (got[i - 1].depth == got[i].depth && got[i - 1].triangle < got[i].triangle));
+                    ties += got[i - 1].depth == got[i].depth;
+                }
+            }
+            many += got.size() > 16;
+            ++checked;
+        }
+    EXPECT_GT(checked, 1500);
+    EXPECT_GT(many, 500);  // std::sort's columns
+    EXPECT_GT(ties, 5000); // equal depths, lower triangle first
+    EXPECT_GT(one.maxPerColumn(), 30);
 }
 
 } // namespace

@@ -51,9 +51,14 @@ public:
     int64_t maxPerColumn() const;
 
 private:
+    /// A fragment while its row is gathered (16 bytes: the rows are written and read twice, and
+    /// the lists run to millions of fragments): depth, triangle, and column x * 2 + front.
     struct RowEntry {
-        int64_t x;
-        ListFragment f;
+        double depth;
+        uint32_t triangle;
+        uint32_t columnFront;
+        int64_t x() const { return int64_t(columnFront >> 1); }
+        ListFragment fragment() const { return {depth, triangle, (columnFront & 1u) != 0}; }
     };
     std::vector<std::vector<RowEntry>> rows_; ///< scratch of rebuild: each row's fragments, unsorted
     int64_t width_ = 0, height_ = 0;
