@@ -27,7 +27,8 @@
 //                                and the camera orbiting a degree per frame (the view-dependent
 //                                passes made anew, the scene's builds reused).
 //   BM_FrameCost/<scene>         cached frames with every default, with --aa off and with --ao off,
-//                                interleaved: aa_ratio (target <= 1.3), ao_share (target <= 0.15).
+//                                interleaved: aa_ratio (target <= 1.3), ao_share (target <= 0.15);
+//                                take --benchmark_min_time=6 (the default gives one or two frames).
 //   BM_ForestShadows/<kind>/leavesPerTree:<L>
 //                                the forest of 64 trees of L leaf quads (2L triangles) each: the
 //                                default frame with shadows <kind>, with exact shadows and with
