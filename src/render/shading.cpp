@@ -322,6 +322,96 @@ void shadeRepresentative(FrameState& frame, const CellOcclusion* cells, int64_t 
                           : shadeSample(frame, i, occlusion, covered ? &s : nullptr);
 }
 
+constexpr int64_t kBasesAhead = 4; // samples ahead whose triangle's basis is fetched
+
+// Fetches triangle t's basis ahead of its use (a random read: its miss overlaps the work before).
+void prefetchBasis(const FrameState& frame, uint32_t t) {
+    if (t == GBuffer::kNone) return;
+    const char* basis = reinterpret_cast<const char*>(&frame.triangleBases[t]);
+    __builtin_prefetch(basis);
+    __builtin_prefetch(basis + sizeof(TriangleBasis) - 1);
+}
+
+// Round 1's work in a block of cell rows: the edge samples that take a shading of their own, and the
+// copies (to, from) of every edge sample in the order they were listed ((i, i): its own shading).
+struct EdgeWork {
+    struct Shade {
+        std::size_t sample;
+        uint32_t triangle;
+        float occlusion;
+    };
+    std::vector<Shade> shades;
+    std::vector<std::pair<std::size_t, std::size_t>> copies;
+};
+
+// The representatives of the eight cells around a 2 x 2 cell whose representative is r, in
+// neighbourShowing's order, where all of them lie inside the image: the first showing triangle tri,
+// else kNoSample.
+std::size_t neighbourShowing2x2(const GBuffer& g, std::size_t r, int64_t W, uint32_t tri) {
+    const std::size_t row = size_t(2 * W);
+    const std::size_t around[8] = {r - 2,       r + 2,       r - row,     r + row,
+                                   r - row - 2, r - row + 2, r + row - 2, r + row + 2};
+    for (const std::size_t k : around)
+        if (g.triangle[k] == tri) return k;
+    return kNoSample;
+}
+
+// Lists refined cell (cx, cy)'s samples other than its representative into `work`: samples of a cell
+// showing one triangle (or the background) share its shading, as multisampling does, the first one's;
+// else a neighbouring cell's representative showing the triangle lends its shading; else the sample
+// takes one of its own, with the cell's occlusion.
+void listEdgeCell(const FrameState& frame, int64_t cx, int64_t cy, float occlusion, EdgeWork& work) {
+    const GBuffer& gbuffer = frame.gbuffer;
+    const int a = frame.adaptive;
+    const int64_t W = frame.width, cw = W / a, ch = frame.height / a;
+    std::array<std::size_t, 64> samples;
+    int n;
+    if (a == 2 && frame.refined[size_t(cy * cw + cx)] == kEveryRefinedSample) {
+        // cellSamples' order, without its bounds.
+        const std::size_t base = size_t(2 * cy * W + 2 * cx);
+        samples[0] = base + size_t(W) + 1, samples[1] = base + 1, samples[2] = base + size_t(W),
+        samples[3] = base;
+        n = 4;
+    } else {
+        n = cellSamples(frame, cx, cy, samples);
+    }
+    const bool inside = a == 2 && cx > 0 && cy > 0 && cx + 1 < cw && cy + 1 < ch;
+    for (int k = 1; k < n; ++k) {
+        const std::size_t i = samples[size_t(k)];
+        const uint32_t tri = gbuffer.triangle[i];
+        int same = 0;
+        while (same < k && gbuffer.triangle[samples[size_t(same)]] != tri) ++same;
+        if (same < k) {
+            work.copies.push_back({i, samples[size_t(same)]});
+            continue;
+        }
+        const std::size_t proxy =
+            inside ? neighbourShowing2x2(gbuffer, samples[0], W, tri) : neighbourShowing(frame, cx, cy, tri);
+        if (proxy != kNoSample) {
+            work.copies.push_back({i, proxy});
+            continue;
+        }
+        work.copies.push_back({i, i});
+        work.shades.push_back({i, tri, occlusion});
+    }
+}
+
+// Round 1's listed work: the samples that take a shading of their own, their triangles' bases fetched
+// a few ahead (edge samples' triangles are mostly shown by no representative: cold in the cache);
+// then the copies in the order they were listed (a copy's source is a representative, a sample
+// shaded here or one copied earlier in its cell). The same values as shading them in turn.
+void shadeEdgeWork(FrameState& frame, EdgeWork& work) {
+    std::vector<Vec3f>& out = frame.shaded;
+    for (std::size_t k = 0; k < work.shades.size(); ++k) {
+        if (k + kBasesAhead < work.shades.size()) prefetchBasis(frame, work.shades[k + kBasesAhead].triangle);
+        out[work.shades[k].sample] = shadeSample(frame, work.shades[k].sample, work.shades[k].occlusion);
+    }
+    for (const auto& [to, from] : work.copies)
+        if (to != from) out[to] = out[from];
+    work.shades.clear();
+    work.copies.clear();
+}
+
 } // namespace
 
 bool glassReplacesShading(const FrameState& frame, uint32_t m) {
@@ -346,40 +436,22 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
     // cell's surface point; round 1 and the passes after read the cells' values.
     const std::vector<float>& screenOcclusion = frame.screenOcclusion;
     const CellOcclusion* cellOcclusion = frame.cellOcclusion.get();
-    constexpr int64_t kRows = 4;  // cell rows per step
-    constexpr int64_t kAhead = 4; // cells ahead whose triangle's basis is fetched
+    constexpr int64_t kRows = 4; // cell rows per step
     const int64_t blocks = (ch + kRows - 1) / kRows;
     const int rounds = a > 1 ? 2 : 1;
     ProgressSteps steps(progress, rounds * blocks);
     // Round 0: the first sample of each cell (its representative); round 1: the others.
     const auto shadeRound = [&](int round) {
         parallelFor(0, blocks, 1, [&](int64_t b0, int64_t b1) {
-            std::array<std::size_t, 64> samples;
-            // Round 1's work in a block: the samples to shade and the copies (to, from).
-            struct Shade {
-                std::size_t sample;
-                uint32_t triangle;
-                float occlusion;
-            };
-            std::vector<Shade> shades;
-            std::vector<std::pair<std::size_t, std::size_t>> copies;
+            EdgeWork work;
             for (int64_t b = b0; b < b1 && !steps.cancelled(); ++b) {
                 for (int64_t cy = b * kRows; cy < std::min(ch, (b + 1) * kRows); ++cy)
                     for (int64_t cx = 0; cx < cw; ++cx) {
                         if (round == 0) {
                             const std::size_t rep =
                                 a > 1 ? representativeSample(frame, cx, cy) : size_t(cy * W + cx);
-                            // The basis of the triangle a few cells on (a random read: its miss
-                            // overlaps this cell's shading).
-                            if (cx + kAhead < cw) {
-                                const uint32_t ahead = gbuffer.triangle[rep + size_t(kAhead * a)];
-                                if (ahead != GBuffer::kNone) {
-                                    const char* basis =
-                                        reinterpret_cast<const char*>(&frame.triangleBases[ahead]);
-                                    __builtin_prefetch(basis);
-                                    __builtin_prefetch(basis + sizeof(TriangleBasis) - 1);
-                                }
-                            }
+                            if (cx + kBasesAhead < cw)
+                                prefetchBasis(frame, gbuffer.triangle[rep + size_t(kBasesAhead * a)]);
                             shadeRepresentative(frame, cellOcclusion, cx, cy, rep);
                             continue;
                         }
@@ -395,71 +467,11 @@ void shadeGBuffer(FrameState& frame, Progress* progress) {
                             }
                         }
                         if (refined[cx] == 0) continue;
-                        const float occlusion =
-                            screenOcclusion.empty() ? 1.0f : screenOcclusion[size_t(cy * cw + cx)];
-                        // Its samples other than the representative, in cellSamples' order.
-                        int n;
-                        if (a == 2 && refined[cx] == kEveryRefinedSample) {
-                            const std::size_t base = size_t(2 * cy * W + 2 * cx);
-                            samples[0] = base + size_t(W) + 1, samples[1] = base + 1,
-                            samples[2] = base + size_t(W), samples[3] = base;
-                            n = 4;
-                        } else {
-                            n = cellSamples(frame, cx, cy, samples);
-                        }
-                        // The neighbours' representatives, in neighbourShowing's order, where all
-                        // eight lie inside the image (2 x 2 cells).
-                        const bool inside = a == 2 && cx > 0 && cy > 0 && cx + 1 < cw && cy + 1 < ch;
-                        const auto showing = [&](uint32_t tri) {
-                            if (!inside) return neighbourShowing(frame, cx, cy, tri);
-                            const std::size_t r = samples[0], row = size_t(2 * W);
-                            const std::size_t around[8] = {r - 2,       r + 2,       r - row,
-                                                           r + row,     r - row - 2, r - row + 2,
-                                                           r + row - 2, r + row + 2};
-                            for (const std::size_t k : around)
-                                if (gbuffer.triangle[k] == tri) return k;
-                            return kNoSample;
-                        };
-                        for (int k = 1; k < n; ++k) {
-                            const std::size_t i = samples[size_t(k)];
-                            const uint32_t tri = gbuffer.triangle[i];
-                            // Samples of a cell showing one triangle (or the background) share its
-                            // shading, as multisampling does: the first one's.
-                            int same = 0;
-                            while (same < k && gbuffer.triangle[samples[size_t(same)]] != tri) ++same;
-                            if (same < k) {
-                                copies.push_back({i, samples[size_t(same)]});
-                                continue;
-                            }
-                            const std::size_t proxy = showing(tri);
-                            if (proxy != kNoSample) {
-                                copies.push_back({i, proxy});
-                                continue;
-                            }
-                            copies.push_back({i, i}); // its own shading, below
-                            shades.push_back({i, tri, occlusion});
-                        }
+                        listEdgeCell(frame, cx, cy,
+                                     screenOcclusion.empty() ? 1.0f : screenOcclusion[size_t(cy * cw + cx)],
+                                     work);
                     }
-                if (round == 1) {
-                    // The block's samples that take a shading of their own, their triangles' bases
-                    // fetched a few ahead (edge samples' triangles are mostly shown by no
-                    // representative: cold in the cache); then the copies in the order they were
-                    // listed (a copy's source is a representative, a sample shaded here or one
-                    // copied earlier in its cell). The same values as shading them in turn.
-                    for (std::size_t k = 0; k < shades.size(); ++k) {
-                        if (k + kAhead < shades.size() && shades[k + kAhead].triangle != GBuffer::kNone) {
-                            const char* basis = reinterpret_cast<const char*>(
-                                &frame.triangleBases[shades[k + kAhead].triangle]);
-                            __builtin_prefetch(basis);
-                            __builtin_prefetch(basis + sizeof(TriangleBasis) - 1);
-                        }
-                        out[shades[k].sample] = shadeSample(frame, shades[k].sample, shades[k].occlusion);
-                    }
-                    for (const auto& [to, from] : copies)
-                        if (to != from) out[to] = out[from];
-                    shades.clear();
-                    copies.clear();
-                }
+                if (round == 1) shadeEdgeWork(frame, work);
                 steps.step();
             }
         });

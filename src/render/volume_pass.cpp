@@ -585,6 +585,47 @@ struct VolumeComposite {
         return last > double(j) ? int64_t(last) : j;
     }
 
+    // Volume object o's interval from p0 to p1 (lengths l0, l1 along the segment): its extinction
+    // and colour into the ray's ObjectInterval (sigma 0: transparent), its end sampled. False where
+    // both ends lie in empty bricks (nothing sampled). The ends' voxel coordinates are computed once
+    // for the empty bricks and the samples: the start's are the last interval's end's (the same
+    // point, bit for bit) where it was computed.
+    bool sampleInterval(PixelRay& r, std::size_t o, const Vec3d& p0, const Vec3d& p1, double l0,
+                        double l1) const {
+        ObjectInterval& w = (*r.objects)[o];
+        const VolumeView& view = setup.views[o];
+        const Vec3d u0 = w.uAt == l0 ? w.u : view.voxelCoordinates(p0);
+        const Vec3d u1 = view.voxelCoordinates(p1);
+        w.u = u1, w.uAt = l1;
+        if (emptySpace[o].emptyBetweenVoxel(u0, u1)) { // would be transparent
+            w.have = false;
+            return false;
+        }
+        // Transparent lattice cells (not a whole brick): the interval's extinction is exactly 0
+        // without its samples (the next interval samples its start again: the same value).
+        if (emptySpace[o].transparentBetweenVoxel(u0, u1)) {
+            w.have = false;
+            return true;
+        }
+        const PreintegratedTransfer& pre = preintegrated[o];
+        if (!w.have) {
+            w.value = view.sampleVoxel(u0);
+            w.cumulative = pre.cumulative(w.value);
+            ++r.samples;
+        }
+        const double a = w.value, ca = w.cumulative;
+        w.value = view.sampleVoxel(u1);
+        w.cumulative = pre.cumulative(w.value);
+        w.have = true;
+        ++r.samples;
+        w.sigma = pre.extinction(a, ca, w.value, w.cumulative);
+        if (w.sigma > 0) {
+            const Vec3d c = pre.color(a, w.value);
+            w.color = Vec3f{float(c.x), float(c.y), float(c.z)};
+        }
+        return true;
+    }
+
     // The segment [z0, z1) inside the volume objects `inside`, composited front to back; false
     // stops the walk. Its samples lie at the segment's ends and at z0 + (j + jitter) steps between
     // them, the step of the finest volume inside (segmentStep: the smoke, 48³ over 1.8 units, is not
@@ -623,39 +664,7 @@ struct VolumeComposite {
                 ObjectInterval& w = (*r.objects)[o];
                 w.sigma = 0;
                 if (!inside[o] || vs.objects[o].kind != ObjectKind::Volume) continue;
-                // The ends' voxel coordinates, once for the empty bricks and the samples: the start's
-                // are the last interval's end's (the same point, bit for bit) where it was computed.
-                const VolumeView& view = setup.views[o];
-                const Vec3d u0 = w.uAt == l0 ? w.u : view.voxelCoordinates(p0);
-                const Vec3d u1 = view.voxelCoordinates(p1);
-                w.u = u1, w.uAt = l1;
-                if (emptySpace[o].emptyBetweenVoxel(u0, u1)) { // would be transparent
-                    w.have = false;
-                    continue;
-                }
-                allEmpty = false;
-                // Transparent lattice cells (not a whole brick): the interval's extinction is exactly 0
-                // without its samples (the next interval samples its start again: the same value).
-                if (emptySpace[o].transparentBetweenVoxel(u0, u1)) {
-                    w.have = false;
-                    continue;
-                }
-                const PreintegratedTransfer& pre = preintegrated[o];
-                if (!w.have) {
-                    w.value = view.sampleVoxel(u0);
-                    w.cumulative = pre.cumulative(w.value);
-                    ++r.samples;
-                }
-                const double a = w.value, ca = w.cumulative;
-                w.value = view.sampleVoxel(u1);
-                w.cumulative = pre.cumulative(w.value);
-                w.have = true;
-                ++r.samples;
-                w.sigma = pre.extinction(a, ca, w.value, w.cumulative);
-                if (w.sigma > 0) {
-                    const Vec3d c = pre.color(a, w.value);
-                    w.color = Vec3f{float(c.x), float(c.y), float(c.z)};
-                }
+                if (sampleInterval(r, o, p0, p1, l0, l1)) allEmpty = false;
                 sigmaSum += w.sigma;
             }
             if (!(sigmaSum > 0)) {
